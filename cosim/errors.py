@@ -1,0 +1,52 @@
+"""Errors every suscosim component raises for bad input.
+
+A `ScenarioError` names the key, the value and what was expected; the CLI turns it into a
+one-line message and exit code 2. A `WireError` is a message on the bus that does not decode
+or does not fit the schema; nodes count and log it and carry on.
+"""
+
+from __future__ import annotations
+
+
+class SuscosimError(Exception):
+    """Base of every error that should reach the user as a clear message, not a traceback."""
+
+    exit_code = 1
+
+
+class ScenarioError(SuscosimError, ValueError):
+    """A scenario (or configuration) key has a bad value.
+
+    Args:
+        key: dotted key, e.g. ``"vehicle.sprung_mass"``.
+        value: the offending value (``None`` when the key is missing).
+        expected: what would have been accepted, in words.
+    """
+
+    exit_code = 2
+
+    def __init__(self, key: str, value: object, expected: str) -> None:
+        self.key, self.value, self.expected = key, value, expected
+        super().__init__(f"scenario key '{key}': got {value!r}, expected {expected}")
+
+
+class InputFileError(SuscosimError, ValueError):
+    """A user-supplied file (CSV profile, damper curve, FE table...) is malformed.
+
+    The message names the file, the line (1-based, when known) and what is wrong.
+    """
+
+    exit_code = 2
+
+    def __init__(self, path: str, problem: str, line: int | None = None) -> None:
+        self.path, self.problem, self.line = path, problem, line
+        where = f"{path}:{line}" if line is not None else path
+        super().__init__(f"{where}: {problem}")
+
+
+class WireError(SuscosimError):
+    """A bus message that does not decode or does not fit the schema."""
+
+
+class RunError(SuscosimError):
+    """A run that had to stop: dead node, stall, abort. The message names the node."""
