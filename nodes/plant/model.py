@@ -1,0 +1,71 @@
+"""The contract every PyBullet plant model fulfils, so one plant node can drive any of them.
+
+A plant model owns a PyBullet world (its own ``DIRECT`` client) holding the vehicle's rigid
+bodies, joints and internal springs. It starts at **static equilibrium** (no settling run): the
+internal springs carry their static preload, and the tyre force that balances gravity is
+reported by :meth:`PlantModel.static_tyre_load` so the tyre node can add it.
+
+Everything that crosses the bus is per **corner** (1 for a quarter car; 4 for a full vehicle in
+the order FL, FR, RL, RR), in SI units, ISO 8855 axes (z up), displacements from static
+equilibrium:
+
+* inputs, held (or extrapolated by the plant node) over a substep:
+  ``F_t`` tyre force on the wheel, compressive-positive, >= 0 [N];
+  ``F_d`` damper force on the body at the corner, upward positive; the wheel gets ``-F_d`` [N].
+* state: ``z_b`` body displacement at the corner [m], ``v_b`` [m/s], ``z_w`` wheel centre
+  displacement [m], ``v_w`` [m/s]; full-vehicle models add ``heave`` [m], ``pitch``, ``roll``
+  [rad], ``v_heave`` [m/s], ``w_pitch``, ``w_roll`` [rad/s] (arrays of length 1).
+* loads: component loads the fatigue worker superposes, e.g. ``arm`` -> {``ball_joint_x``: N,...}.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+GRAVITY = 9.81
+"""g [m/s^2], the value the thesis uses."""
+
+
+class PlantModel(ABC):
+    """A vehicle model in PyBullet that the plant node steps.
+
+    The node calls, every communication step k:
+    ``state()`` -> publish; receive ``F_t, F_d``; ``substep(dt, F_t, F_d)`` ``n`` times (the
+    node may change the forces between substeps: extrapolation or Jacobian coupling);
+    ``loads()`` after the first substep gives the joint loads at t_k.
+    """
+
+    n_corners: int = 1
+    name: str = "plant"
+
+    @abstractmethod
+    def static_tyre_load(self) -> np.ndarray:
+        """Static vertical tyre load per corner [N] (what balances gravity at equilibrium)."""
+
+    @abstractmethod
+    def state(self) -> dict[str, np.ndarray]:
+        """Current state; keys ``z_b, v_b, z_w, v_w`` (per corner) at least."""
+
+    @abstractmethod
+    def spring_force(self) -> np.ndarray:
+        """Suspension spring force per corner on the body, upward positive, dynamic part [N]."""
+
+    @abstractmethod
+    def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
+        """Apply the tyre and damper forces (held during ``dt``) and integrate ``dt`` seconds."""
+
+    def loads(self) -> dict[str, dict[str, float]]:
+        """Component loads after the latest substep, by channel, e.g. ``{"arm": {...}}``."""
+        return {}
+
+    def info(self) -> dict[str, object]:
+        """Static facts other nodes need at start (sent in the ready handshake)."""
+        return {
+            "n_corners": self.n_corners,
+            "static_tyre_load": [float(x) for x in self.static_tyre_load()],
+        }
+
+    def close(self) -> None:  # noqa: B027 - optional hook
+        """Release the PyBullet client."""
