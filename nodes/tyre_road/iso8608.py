@@ -1,0 +1,110 @@
+"""Random road profiles of the ISO 8608 roughness classes A-H (a substitute for the thesis's
+proprietary MIRA and LTC pavé measurements, Ch. 4 Sec. 4.5; flagged as a deviation).
+
+ISO 8608 describes a road by the one-sided displacement PSD in spatial frequency n [cycles/m]
+
+    G_d(n) = G_d(n0) (n / n0)^(-w),   n0 = 0.1 cycles/m,  w = 2,
+
+with the class geometric-mean values G_d(n0) [m^3] below (class A 16e-6 ... H 262144e-6; each
+class is a factor 4 above the previous one and spans a factor 2 either side of its mean).
+(The thesis's Eq. 4.10, S(n) = G n^-2.5, is the same family with a different waviness.)
+
+Method: **sum of sinusoids with random phases on an FFT grid** (deterministic amplitudes)
+
+    z(x) = sum_k sqrt(2 G_d(n_k) dn) cos(2 pi n_k x + phi_k),   n_min <= n_k <= n_max,
+
+with n_k = k dn, dn = 1 / L_gen, phases phi_k uniform on [0, 2 pi) from a seeded
+``numpy.random.Generator`` (PCG64), so a (class, seed, band, length) quadruple always gives the
+same road. It is evaluated on a uniform grid of spacing dx <= 1 / (20 n_max) by an inverse real
+FFT and linearly interpolated between grid points (the interpolation attenuates the PSD by less
+than 1 % at n_max). Each track is shifted so that z(0) = 0 (no step at t = 0).
+
+Left/right tracks (``correlation``):
+
+* ``"identical"``  the right track is the left track (pure heave/pitch input);
+* ``"independent"`` the right track has its own phases (coherence 0);
+* a number rho in [0, 1]: z_R = rho z_L + sqrt(1 - rho^2) z_indep. Each track keeps the class
+  PSD (in expectation) and the left/right coherence is rho^2 at every n.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .roads import SampledRoad
+
+N0 = 0.1
+"""Reference spatial frequency n0 [cycles/m]."""
+
+WAVINESS = 2.0
+"""ISO 8608 waviness w (slope of log G_d against log n)."""
+
+GD_N0 = {
+    "A": 16e-6, "B": 64e-6, "C": 256e-6, "D": 1024e-6,
+    "E": 4096e-6, "F": 16384e-6, "G": 65536e-6, "H": 262144e-6,
+}
+"""ISO 8608 class geometric-mean G_d(n0) [m^3]."""
+
+DEFAULT_N_MIN = 0.011
+DEFAULT_N_MAX = 2.83
+"""ISO 8608 classification band [cycles/m] (at 34 km/h: 0.1-26.7 Hz, the ride band)."""
+
+
+def iso8608_psd(n: np.ndarray, road_class: str) -> np.ndarray:
+    """G_d(n) [m^3] of the class's geometric mean at spatial frequencies ``n`` [cycles/m]."""
+    return GD_N0[road_class] * (np.asarray(n, dtype=float) / N0) ** (-WAVINESS)
+
+
+def _random_track(gd: np.ndarray, rng: np.random.Generator, n_grid: int) -> np.ndarray:
+    """Inverse-rFFT of sqrt(2 G dn) amplitudes with random phases -> heights on the grid."""
+    phases = rng.uniform(0.0, 2.0 * np.pi, size=gd.size)
+    amp = np.sqrt(2.0 * gd)  # gd already multiplied by dn
+    spec = amp * np.exp(1j * phases)
+    # irfft computes (1/N) sum c_k e^{i...} over the Hermitian spectrum -> factor N/2 per side
+    return np.fft.irfft(spec * n_grid / 2.0, n=n_grid)
+
+
+def iso8608_profile(road_class: str, length: float, seed: int,
+                    correlation: str | float = "independent",
+                    n_min: float = DEFAULT_N_MIN, n_max: float = DEFAULT_N_MAX,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Heights (x, z_left, z_right) [m] of a random ISO 8608 road at least ``length`` m long.
+
+    The generated length L_gen >= max(length, 2 / n_min) so that the lowest frequency of the
+    band is represented by at least two spectral lines.
+    """
+    if road_class not in GD_N0:
+        raise ValueError(f"ISO 8608 class must be one of A-H, got {road_class!r}")
+    if not 0 < n_min < n_max:
+        raise ValueError(f"need 0 < n_min < n_max, got {n_min}, {n_max}")
+    dx = 1.0 / (20.0 * n_max)
+    l_gen = max(float(length), 2.0 / n_min)
+    n_grid = int(2 ** np.ceil(np.log2(l_gen / dx)))
+    dn = 1.0 / (n_grid * dx)
+    n = np.arange(n_grid // 2 + 1) * dn
+    band = (n >= n_min) & (n <= n_max)
+    gd = np.where(band, iso8608_psd(np.where(n > 0, n, 1.0), road_class) * dn, 0.0)
+    rng = np.random.default_rng(seed)
+    z_l = _random_track(gd, rng, n_grid)
+    if correlation == "identical":
+        z_r = z_l.copy()
+    else:
+        z_ind = _random_track(gd, rng, n_grid)
+        if correlation == "independent":
+            z_r = z_ind
+        else:
+            rho = float(correlation)
+            if not 0.0 <= rho <= 1.0:
+                raise ValueError(f"correlation must be in [0, 1], got {rho}")
+            z_r = rho * z_l + np.sqrt(1.0 - rho * rho) * z_ind
+    x = np.arange(n_grid) * dx
+    return x, z_l - z_l[0], z_r - z_r[0]
+
+
+def iso8608_road(road_class: str, length: float, speed: float, seed: int,
+                 correlation: str | float = "independent",
+                 n_min: float = DEFAULT_N_MIN, n_max: float = DEFAULT_N_MAX) -> SampledRoad:
+    """A :class:`SampledRoad` of class ``road_class`` (A-H), ``length`` m, driven at ``speed``."""
+    x, zl, zr = iso8608_profile(road_class, length, seed, correlation, n_min, n_max)
+    return SampledRoad(x=x, z_left=zl, z_right=zr, speed=speed, length=length,
+                       name=f"iso8608_{road_class}")
