@@ -1,0 +1,1 @@
+"""suscosim's shared core: wire format, bus, lock-step participant, scenario schema."""

@@ -1,0 +1,226 @@
+"""The bus: a thin layer over a Zenoh session, and an in-memory twin for the monolithic mode.
+
+Both offer the same five verbs, so node code never knows which one it runs on:
+``publisher(key)``, ``subscribe(keyexpr, callback)``, ``token(key)`` (liveliness),
+``watch(keyexpr, callback)`` (liveliness changes), ``serve(key, reply)`` / ``query(key)``.
+
+Callbacks receive ``(key: str, payload: bytes)`` and run on the bus's own thread: they must
+only hand the bytes over (to a queue), never block.
+
+Default transport is embedded: Zenoh in peer mode, listening on loopback only, multicast
+scouting off. Peers find each other through the endpoint they connect to (gossip).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+from collections.abc import Callable, Iterable
+from typing import Any
+
+log = logging.getLogger("suscosim.bus")
+
+Callback = Callable[[str, bytes], None]
+LiveCallback = Callable[[str, bool], None]
+
+LOOPBACK_LISTEN = "tcp/127.0.0.1:0"
+
+
+def free_loopback_endpoint() -> str:
+    """A TCP endpoint on loopback with a port that is free right now."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return f"tcp/127.0.0.1:{s.getsockname()[1]}"
+
+
+def zenoh_config(
+    connect: Iterable[str] = (),
+    listen: Iterable[str] | None = None,
+    lowlatency: bool = False,
+    lease_ms: int = 2000,
+    config_file: str | None = None,
+) -> Any:
+    """A Zenoh configuration for a suscosim participant.
+
+    Args:
+        connect: endpoints to connect to (the orchestrator's, or a router's), e.g.
+            ``["tcp/192.168.1.10:7447"]``.
+        listen: endpoints to listen on; default loopback only on a free port.
+        lowlatency: Zenoh's low-latency transport (lower step latency; every peer of the
+            session must use it, so it is only used in the embedded default, never with a
+            router of unknown configuration).
+        lease_ms: how long a silent peer is kept; bounds how fast a partitioned node is seen
+            as gone (Zenoh's default is 10 s).
+        config_file: a Zenoh JSON5 configuration file to start from (TLS, access control).
+    """
+    import zenoh
+
+    conf = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
+    conf.insert_json5("mode", '"peer"')
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    conf.insert_json5("listen/endpoints", json.dumps(list(listen or [LOOPBACK_LISTEN])))
+    conf.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+    if lowlatency:
+        conf.insert_json5("transport/unicast/lowlatency", "true")
+        conf.insert_json5("transport/unicast/qos/enabled", "false")
+    return conf
+
+
+class ZenohBus:
+    """A Zenoh session with suscosim's defaults (reliable, blocking congestion control)."""
+
+    def __init__(self, config: Any) -> None:
+        import zenoh
+
+        self._z = zenoh
+        self.session = zenoh.open(config)
+        self._keep: list[Any] = []
+
+    def publisher(self, key: str) -> Callable[[bytes], None]:
+        pub = self.session.declare_publisher(
+            key,
+            congestion_control=self._z.CongestionControl.BLOCK,
+            reliability=self._z.Reliability.RELIABLE,
+            express=True,
+        )
+        self._keep.append(pub)
+        return pub.put
+
+    def put(self, key: str, payload: bytes) -> None:
+        self.session.put(key, payload, congestion_control=self._z.CongestionControl.BLOCK)
+
+    def subscribe(self, keyexpr: str, callback: Callback) -> Any:
+        def on_sample(sample: Any) -> None:
+            callback(str(sample.key_expr), sample.payload.to_bytes())
+
+        sub = self.session.declare_subscriber(keyexpr, on_sample)
+        self._keep.append(sub)
+        return sub
+
+    def token(self, key: str) -> Any:
+        tok = self.session.liveliness().declare_token(key)
+        self._keep.append(tok)
+        return tok
+
+    def watch(self, keyexpr: str, callback: LiveCallback) -> Any:
+        def on_sample(sample: Any) -> None:
+            callback(str(sample.key_expr), sample.kind == self._z.SampleKind.PUT)
+
+        sub = self.session.liveliness().declare_subscriber(keyexpr, on_sample, history=True)
+        self._keep.append(sub)
+        return sub
+
+    def serve(self, key: str, reply: Callable[[], bytes]) -> Any:
+        def on_query(query: Any) -> None:
+            query.reply(key, reply())
+
+        q = self.session.declare_queryable(key, on_query)
+        self._keep.append(q)
+        return q
+
+    def query(self, key: str, timeout: float = 1.0) -> bytes | None:
+        for r in self.session.get(key, timeout=timeout):
+            if r.ok is not None:
+                return r.ok.payload.to_bytes()
+        return None
+
+    def close(self) -> None:
+        for obj in reversed(self._keep):
+            try:
+                obj.undeclare()
+            except Exception:  # already gone with a closing session
+                pass
+        self._keep.clear()
+        self.session.close()
+
+
+def _chunks_match(pattern: list[str], key: list[str]) -> bool:
+    if not pattern:
+        return not key
+    head, rest = pattern[0], pattern[1:]
+    if head == "**":
+        return any(_chunks_match(rest, key[i:]) for i in range(len(key) + 1))
+    if not key:
+        return False
+    return (head == "*" or head == key[0]) and _chunks_match(rest, key[1:])
+
+
+def keyexpr_matches(keyexpr: str, key: str) -> bool:
+    """Zenoh key-expression matching for ``*`` (one chunk) and ``**`` (any chunks)."""
+    return _chunks_match(keyexpr.split("/"), key.split("/"))
+
+
+class MemoryBus:
+    """In-process bus for the monolithic mode: same verbs as :class:`ZenohBus`, no network.
+
+    Delivery is synchronous in the publisher's thread, in publication order.
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._subs: list[tuple[str, Callback]] = []
+        self._watchers: list[tuple[str, LiveCallback]] = []
+        self._tokens: set[str] = set()
+        self._served: dict[str, Callable[[], bytes]] = {}
+
+    def publisher(self, key: str) -> Callable[[bytes], None]:
+        return lambda payload: self.put(key, payload)
+
+    def put(self, key: str, payload: bytes) -> None:
+        with self._lock:
+            targets = [cb for kx, cb in self._subs if keyexpr_matches(kx, key)]
+        for cb in targets:
+            cb(key, payload)
+
+    def subscribe(self, keyexpr: str, callback: Callback) -> Any:
+        with self._lock:
+            self._subs.append((keyexpr, callback))
+        return (keyexpr, callback)
+
+    def token(self, key: str) -> Any:
+        with self._lock:
+            self._tokens.add(key)
+            targets = [cb for kx, cb in self._watchers if keyexpr_matches(kx, key)]
+        for cb in targets:
+            cb(key, True)
+        return _MemoryToken(self, key)
+
+    def _drop_token(self, key: str) -> None:
+        with self._lock:
+            self._tokens.discard(key)
+            targets = [cb for kx, cb in self._watchers if keyexpr_matches(kx, key)]
+        for cb in targets:
+            cb(key, False)
+
+    def watch(self, keyexpr: str, callback: LiveCallback) -> Any:
+        with self._lock:
+            self._watchers.append((keyexpr, callback))
+            alive = [k for k in self._tokens if keyexpr_matches(keyexpr, k)]
+        for k in alive:
+            callback(k, True)
+        return (keyexpr, callback)
+
+    def serve(self, key: str, reply: Callable[[], bytes]) -> Any:
+        with self._lock:
+            self._served[key] = reply
+        return key
+
+    def query(self, key: str, timeout: float = 1.0) -> bytes | None:
+        with self._lock:
+            reply = self._served.get(key)
+        return reply() if reply else None
+
+    def close(self) -> None:
+        pass
+
+
+class _MemoryToken:
+    def __init__(self, bus: MemoryBus, key: str) -> None:
+        self.bus, self.key = bus, key
+
+    def undeclare(self) -> None:
+        self.bus._drop_token(self.key)

@@ -1,0 +1,40 @@
+"""The data channels of a run and their fields (SI units). Schema version: see cosim.wire.
+
+Per-corner fields are a number for a quarter car and a list of 4 (FL, FR, RL, RR) for a full
+vehicle. Every channel carries one message per communication step k = 0..N (N = t_end / h).
+
+====================  ===========  ==========================================================
+channel               field        meaning
+====================  ===========  ==========================================================
+plant/state           z_b, z_w     body (at the corner) and wheel displacement from static
+                                   equilibrium [m], at t_k
+                      v_b, v_w     their velocities [m/s]
+                      (full veh.)  heave [m], pitch, roll [rad], v_heave [m/s], w_pitch,
+                                   w_roll [rad/s]
+plant/response        a_b, a_w     accelerations at t_k [m/s^2], from PyBullet's forward
+                                   dynamics under the forces of step k
+                      F_t, F_d     the tyre and damper forces the plant applied at t_k [N]
+                      F_s          suspension spring force on the body, dynamic part [N]
+plant/arm             <pt>_<ax>    force ON the lower arm at point pt (ball_joint,
+                                   damper_mount, bush_front, bush_rear), axis x/y/z of the
+                                   arm frame [N] (realistic models only)
+tyre_road/force       F_t          tyre force, compressive-positive, >= 0, absolute [N]
+                      k_t          dF_t/d(z_g - z_w), 0 when lifted off [N/m] (for coupling)
+                      z_g          road height under the wheel [m]
+controller/force      F_d          damper force on the body, upward positive [N]
+                      c_eff        dF_d/d(v_w - v_b) [N s/m] (for coupling)
+                      (law extras) e.g. I [A] MR current, state (1 hard / 0 soft)
+====================  ===========  ==========================================================
+"""
+
+from __future__ import annotations
+
+PLANT, TYRE_ROAD, CONTROLLER, RECORDER = "plant", "tyre_road", "controller", "recorder"
+STATE, RESPONSE, ARM, FORCE = "state", "response", "arm", "force"
+
+NODES = (PLANT, TYRE_ROAD, CONTROLLER, RECORDER)
+"""The nodes of a run, in start order."""
+
+STATE_FIELDS = ("z_b", "v_b", "z_w", "v_w")
+TYRE_FIELDS = ("F_t", "k_t", "z_g")
+DAMPER_FIELDS = ("F_d", "c_eff")

@@ -1,0 +1,213 @@
+"""The lock-step participant: what every node does around its model.
+
+Life of a node (see DESIGN.md, "Lock-step co-simulation"):
+
+1. **Declare**: a liveliness token ``suscosim/<run>/<node>/alive``; fetch the resolved scenario
+   from the orchestrator's queryable.
+2. **Handshake** (start barrier): publish ``hello`` on every output channel every 50 ms and
+   listen to every input channel. A node is *ready* once it has heard every input (so the data
+   path from each producer is proven live: Zenoh delivers reliably and in order from then on);
+   it then publishes ``ready`` (with facts other nodes need, e.g. static tyre loads) until the
+   orchestrator's ``start`` arrives. ``start`` carries every node's facts.
+3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived (the
+   step barrier); :meth:`Participant.publish` sends outputs. Progress goes to the orchestrator
+   at most every 0.1 s.
+4. **End**: ``done`` after the last step; an ``abort`` from the orchestrator, or an input that
+   does not come within the stall timeout, ends the node with :class:`RunError`.
+
+A message that does not decode or does not fit the schema (or lacks a field the node needs)
+is rejected: logged, counted, never a crash.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import time
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+from . import keys
+from .errors import RunError, WireError
+from .wire import Message, decode, encode
+
+log = logging.getLogger("suscosim.node")
+
+Channel = tuple[str, str]
+"""(node, channel) of an input."""
+
+_CLOCK_TAG: Channel = (keys.ORCHESTRATOR, keys.CLOCK)
+HELLO_PERIOD_S = 0.05
+PROGRESS_PERIOD_S = 0.1
+
+
+class Participant:
+    """One node's side of the lock-step protocol, on any bus."""
+
+    def __init__(self, bus: Any, run: str, node: str, stall_timeout_s: float = 10.0) -> None:
+        self.bus, self.run, self.node = bus, keys.check_name("run", run), node
+        self.stall_timeout_s = stall_timeout_s
+        self.inbox: queue.SimpleQueue[tuple[Channel, bytes]] = queue.SimpleQueue()
+        self.mailbox: dict[Channel, dict[int, Message]] = {}
+        self.required: dict[Channel, tuple[str, ...]] = {}
+        self.rejected = 0
+        self._outputs: dict[str, Any] = {}
+        self._ctl = bus.publisher(keys.key(run, node, keys.CTL))
+        self._last_progress = 0.0
+        self._token = bus.token(keys.key(run, node, keys.ALIVE))
+        self._listen(_CLOCK_TAG)
+
+    # ---- wiring -------------------------------------------------------------------------
+    def _listen(self, tag: Channel) -> None:
+        put = self.inbox.put
+        self.bus.subscribe(keys.key(self.run, *tag), lambda _k, raw: put((tag, raw)))
+
+    def listen(self, node: str, channel: str, required: Iterable[str] = ()) -> Channel:
+        """Subscribe to an input; ``required`` fields must be present or the message is rejected."""
+        tag = (node, channel)
+        if tag not in self.mailbox:
+            self.mailbox[tag] = {}
+            self.required[tag] = tuple(required)
+            self._listen(tag)
+        return tag
+
+    def output(self, channel: str) -> None:
+        """Declare an output channel (a publisher on ``suscosim/<run>/<node>/<channel>``)."""
+        self._outputs[channel] = self.bus.publisher(keys.key(self.run, self.node, channel))
+
+    def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
+        """The resolved scenario, from the orchestrator's queryable (retried until it answers)."""
+        deadline = time.monotonic() + timeout_s
+        key = keys.key(self.run, keys.ORCHESTRATOR, keys.SCENARIO)
+        while time.monotonic() < deadline:
+            raw = self.bus.query(key, timeout=1.0)
+            if raw is not None:
+                return decode(raw).d
+            time.sleep(0.1)
+        raise RunError(f"{self.node}: no orchestrator answered for run '{self.run}' "
+                       f"within {timeout_s:.0f} s (is it running, and is --connect right?)")
+
+    # ---- messages -----------------------------------------------------------------------
+    def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any]) -> None:
+        self._outputs[channel](encode("data", k, t, dict(data)))
+
+    def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: Any) -> None:
+        """A control message to the orchestrator (ready, progress, done, error)."""
+        self._ctl(encode(kind, k, t, d))
+
+    def progress(self, k: int, t: float) -> None:
+        now = time.monotonic()
+        if now - self._last_progress >= PROGRESS_PERIOD_S:
+            self._last_progress = now
+            self.ctl("progress", k, t, rejected=self.rejected)
+
+    def _reject(self, tag: Channel, why: str) -> None:
+        self.rejected += 1
+        if self.rejected <= 10 or self.rejected % 1000 == 0:
+            log.warning("%s: rejected message #%d on %s/%s: %s",
+                        self.node, self.rejected, tag[0], tag[1], why)
+
+    def _take(self, timeout: float) -> Message | None:
+        """Move one inbox item into the mailbox; return it if it is a clock message."""
+        return self.handle(*self.inbox.get(timeout=timeout))
+
+    def handle(self, tag: Channel, raw: bytes) -> Message | None:
+        """Decode and file one received message; return it if it is a clock message."""
+        try:
+            msg = decode(raw)
+        except WireError as exc:
+            self._reject(tag, str(exc))
+            return None
+        if tag == _CLOCK_TAG:
+            if msg.kind == "abort":
+                raise RunError(f"run aborted by the orchestrator: {msg.d.get('reason', '?')}")
+            return msg
+        if msg.kind == "hello":
+            self.mailbox[tag].setdefault(-1, msg)
+            return None
+        if msg.kind != "data":
+            self._reject(tag, f"unexpected kind '{msg.kind}' on a data channel")
+            return None
+        missing = [f for f in self.required[tag] if f not in msg.d]
+        if missing:
+            self._reject(tag, f"step {msg.k}: missing field(s) {', '.join(missing)}")
+            return None
+        box = self.mailbox[tag]
+        if msg.k in box and msg.k >= 0:
+            self._reject(tag, f"duplicate message for step {msg.k}")
+            return None
+        box[msg.k] = msg
+        return None
+
+    def wait(self, needs: Mapping[Channel, int]) -> dict[Channel, Message]:
+        """Block until every ``(input) -> step`` in ``needs`` has arrived (the step barrier).
+
+        Older messages of those inputs are dropped. Raises :class:`RunError` on abort or
+        when an input is late by more than the stall timeout (naming the input's node).
+        """
+        deadline = None
+        while True:
+            if all(k in self.mailbox[tag] for tag, k in needs.items()):
+                out = {}
+                for tag, k in needs.items():
+                    box = self.mailbox[tag]
+                    out[tag] = box[k]
+                    for old in [j for j in box if j < k]:
+                        del box[old]
+                return out
+            now = time.monotonic()
+            if deadline is None:
+                deadline = now + self.stall_timeout_s
+            elif now >= deadline:
+                late = sorted({t[0] for t, k in needs.items() if k not in self.mailbox[t]})
+                raise RunError(f"{self.node}: no input from {', '.join(late)} for "
+                               f"{self.stall_timeout_s:.1f} s (step {max(needs.values())})")
+            try:
+                self._take(timeout=min(0.5, deadline - now))
+            except queue.Empty:
+                continue
+
+    def handshake(self, info: Mapping[str, Any] | None = None,
+                  timeout_s: float = 60.0) -> dict[str, Any]:
+        """The start barrier. Returns the ``start`` payload (``n_steps``, ``h``, ``info``)."""
+        deadline = time.monotonic() + timeout_s
+        next_send = 0.0
+        while True:
+            now = time.monotonic()
+            if now >= deadline:
+                silent = [f"{n}/{c}" for (n, c), box in self.mailbox.items() if -1 not in box]
+                raise RunError(f"{self.node}: not started within {timeout_s:.0f} s"
+                               + (f"; never heard {', '.join(silent)}" if silent else ""))
+            if now >= next_send:
+                next_send = now + HELLO_PERIOD_S
+                for pub in self._outputs.values():
+                    pub(encode("hello", -1, 0.0, {}))
+                if all(-1 in box or box for box in self.mailbox.values()):
+                    self.ctl("ready", info={"outputs": list(self._outputs), **(info or {})})
+            try:
+                msg = self._take(timeout=max(0.0, min(HELLO_PERIOD_S, next_send - now)))
+            except queue.Empty:
+                continue
+            if msg is not None and msg.kind == "start":
+                self.ctl("progress", -1, 0.0, rejected=self.rejected)
+                return msg.d
+
+    def finish(self, k: int, t: float, linger_s: float = 5.0, **extra: Any) -> None:
+        """Report ``done`` and wait (briefly) for the orchestrator to close the run."""
+        self.ctl("done", k, t, rejected=self.rejected, **extra)
+        deadline = time.monotonic() + linger_s
+        while time.monotonic() < deadline:
+            try:
+                msg = self._take(timeout=0.1)
+            except queue.Empty:
+                continue
+            except RunError:
+                return
+            if msg is not None and msg.kind == "done":
+                return
+
+    def close(self) -> None:
+        try:
+            self._token.undeclare()
+        except Exception:
+            pass

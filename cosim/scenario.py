@@ -1,0 +1,166 @@
+"""Scenario files: one TOML file, validated before anything starts.
+
+The common sections are checked here; the model sections (``vehicle``, ``tyre``, ``road``,
+``controller``, ``fatigue``) are checked by the model factories of the nodes that own them
+(the orchestrator runs those checks in a preflight, before starting any node). An error names
+the dotted key, the value and what was expected, and the CLI exits with code 2.
+
+Example (Chapter 3 step)::
+
+    [run]
+    t_end = 4.0            # s
+    h = 0.001              # communication step [s]
+    exchange = "sequential"
+    [vehicle]
+    model = "quarter_car_lumped"
+    [tyre]
+    model = "point_contact"
+    stiffness = 192000.0   # N/m
+    [road]
+    type = "step"
+    height = 0.02          # m
+    t_start = 0.5          # s
+    [controller]
+    law = "passive"
+    c = 1500.0             # N s/m
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .errors import InputFileError, ScenarioError
+from .keys import check_name
+
+SECTIONS = ("run", "vehicle", "tyre", "road", "controller", "fatigue", "sweep", "report")
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of a common section: its type, default and allowed values."""
+
+    kind: type
+    default: Any
+    choices: tuple[Any, ...] | None = None
+    positive: bool = False
+    doc: str = ""
+
+
+RUN_KEYS: dict[str, Key] = {
+    "name": Key(str, "run", doc="run name; the run id is <name>-<timestamp> unless run.id"),
+    "id": Key(str, "", doc="explicit run id (letters, digits, _ . -)"),
+    "t_end": Key(float, 0.0, doc="simulated time [s]; 0 = from road length / speed"),
+    "h": Key(float, 0.001, positive=True, doc="communication step [s]"),
+    "exchange": Key(str, "sequential", ("sequential", "parallel"),
+                    doc="sequential: thesis scheme (plant, then forces at the same t_k); "
+                        "parallel: Jacobi, everybody on the previous step's inputs"),
+    "coupling": Key(str, "jacobian", ("hold", "linear", "jacobian"),
+                    doc="how the plant treats the force inputs between two communication "
+                        "steps: hold (zero-order hold, the thesis), linear (extrapolate from "
+                        "the last two steps), jacobian (linearise with dF/dz, dF/dv sent by "
+                        "the force nodes)"),
+    "substeps": Key(int, 4, positive=True, doc="plant integration substeps per step"),
+    "mode": Key(str, "distributed", ("distributed", "monolithic", "reference"),
+                doc="distributed: one process per node over Zenoh; monolithic: one process, "
+                    "in-memory bus; reference: SciPy solve_ivp of the lumped model"),
+    "stall_timeout_s": Key(float, 5.0, positive=True,
+                           doc="a node that makes no progress this long ends the run [s]"),
+    "start_timeout_s": Key(float, 60.0, positive=True,
+                           doc="how long to wait for every node to be ready [s]"),
+    "rtol": Key(float, 1e-10, positive=True, doc="reference mode: solve_ivp relative tolerance"),
+}
+
+
+RESOLVED_RUN_KEYS = ("dir", "n_steps", "nodes", "t_end_source")
+"""Keys the orchestrator adds when it resolves a scenario (not for users to set)."""
+
+
+def _typed(key: str, value: Any, spec: Key) -> Any:
+    if spec.kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, spec.kind) or isinstance(value, bool) and spec.kind is not bool:
+        raise ScenarioError(key, value, f"a {spec.kind.__name__}")
+    if spec.kind is float and not math.isfinite(value):
+        raise ScenarioError(key, value, "a finite number")
+    if spec.choices is not None and value not in spec.choices:
+        raise ScenarioError(key, value, "one of " + ", ".join(map(repr, spec.choices)))
+    if spec.positive and value <= 0:
+        raise ScenarioError(key, value, "a number > 0")
+    return value
+
+
+def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
+    """Check the section names and the ``run`` section; fill defaults. Returns a new dict."""
+    out = copy.deepcopy(scenario)
+    for name, value in out.items():
+        if name not in SECTIONS:
+            raise ScenarioError(name, "(section)", "one of the sections " + ", ".join(SECTIONS))
+        if not isinstance(value, dict):
+            raise ScenarioError(name, value, "a table")
+    run = out.setdefault("run", {})
+    for key in run:
+        if key not in RUN_KEYS and key not in RESOLVED_RUN_KEYS:
+            raise ScenarioError(f"run.{key}", run[key], "one of " + ", ".join(RUN_KEYS))
+    for key, spec in RUN_KEYS.items():
+        run[key] = _typed(f"run.{key}", run.get(key, spec.default), spec)
+    if run["id"]:
+        check_name("run.id", run["id"])
+    check_name("run.name", run["name"])
+    if run["t_end"] < 0:
+        raise ScenarioError("run.t_end", run["t_end"], "a duration >= 0 s")
+    for section in ("vehicle", "tyre", "road", "controller"):
+        out.setdefault(section, {})
+    return out
+
+
+def n_steps(t_end: float, h: float) -> int:
+    """Number of communication steps N so that t_N = t_end (k = 0..N)."""
+    n = int(round(t_end / h))
+    if n < 1:
+        raise ScenarioError("run.t_end", t_end, f"at least one step of h = {h} s")
+    return n
+
+
+def parse_value(text: str) -> Any:
+    """A ``--set`` value in TOML syntax (``0.002``, ``true``, ``"tss1"``), else a plain string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_override(scenario: dict[str, Any], assignment: str) -> None:
+    """Apply one ``KEY=VALUE`` (dotted key) in place."""
+    if "=" not in assignment:
+        raise ScenarioError(assignment, None, "KEY=VALUE, e.g. run.h=0.002")
+    dotted, text = assignment.split("=", 1)
+    parts = dotted.strip().split(".")
+    if len(parts) < 2 or not all(parts):
+        raise ScenarioError(dotted, text, "a dotted key section.key, e.g. run.h")
+    node = scenario
+    for part in parts[:-1]:
+        node = node.setdefault(part, {})
+        if not isinstance(node, dict):
+            raise ScenarioError(dotted, text, f"'{part}' to be a table")
+    node[parts[-1]] = parse_value(text.strip())
+
+
+def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[str, Any]:
+    """Read a scenario TOML file, apply ``--set`` overrides, validate the common sections."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise InputFileError(str(path), f"cannot read scenario ({exc.strerror})") from None
+    try:
+        scenario = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputFileError(str(path), f"not valid TOML: {exc}") from None
+    for assignment in overrides:
+        apply_override(scenario, assignment)
+    return validate_common(scenario)

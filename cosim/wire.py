@@ -1,0 +1,96 @@
+"""The wire format: every bus message is one msgpack map, versioned, SI units.
+
+Schema (version 1)::
+
+    {"v": 1,            # schema version (int); a node refuses versions it does not know
+     "kind": "data",    # data | hello | ready | start | progress | done | abort | error
+     "k": 42,           # communication step index (int, -1 before the run starts)
+     "t": 0.042,        # time t_k of that step [s]
+     "d": {...}}        # payload
+
+For ``kind == "data"`` the payload maps field names to a number or a list of numbers (one per
+corner for per-corner quantities; a quarter car sends plain numbers). Field names and units of
+each channel are listed in :mod:`cosim.channels`. Control kinds carry a free msgpack map.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import msgpack
+import numpy as np
+
+from .errors import WireError
+
+SCHEMA_VERSION = 1
+KINDS = frozenset({"data", "hello", "ready", "start", "progress", "done", "abort", "error"})
+
+
+@dataclass(frozen=True)
+class Message:
+    """A decoded bus message."""
+
+    kind: str
+    k: int
+    t: float
+    d: dict[str, Any] = field(default_factory=dict)
+
+    def array(self, name: str) -> np.ndarray:
+        """Field ``name`` as a float array (length 1 for a scalar)."""
+        try:
+            return np.atleast_1d(np.asarray(self.d[name], dtype=float))
+        except KeyError:
+            raise WireError(f"message k={self.k} has no field '{name}'") from None
+
+
+def _plain(value: Any) -> Any:
+    """numpy -> msgpack-able; a length-1 array becomes a plain float."""
+    if isinstance(value, np.ndarray):
+        return float(value[0]) if value.size == 1 else [float(x) for x in value.ravel()]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def encode(kind: str, k: int, t: float, d: dict[str, Any] | None = None) -> bytes:
+    """Encode one message. ``d`` values may be numpy arrays."""
+    payload = {name: _plain(v) for name, v in (d or {}).items()}
+    return msgpack.packb(
+        {"v": SCHEMA_VERSION, "kind": kind, "k": int(k), "t": float(t), "d": payload},
+        use_bin_type=True,
+    )
+
+
+def _is_number(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def decode(raw: bytes) -> Message:
+    """Decode and validate one message; raise :class:`WireError` saying what is wrong."""
+    try:
+        obj = msgpack.unpackb(raw, raw=False, strict_map_key=True)
+    except Exception as exc:  # msgpack raises several unrelated types
+        raise WireError(f"not msgpack ({type(exc).__name__}: {exc})") from None
+    if not isinstance(obj, dict):
+        raise WireError(f"expected a map, got {type(obj).__name__}")
+    version = obj.get("v")
+    if version != SCHEMA_VERSION:
+        raise WireError(f"unknown schema version {version!r} (this node speaks {SCHEMA_VERSION})")
+    kind, k, t, d = obj.get("kind"), obj.get("k"), obj.get("t"), obj.get("d")
+    if kind not in KINDS:
+        raise WireError(f"unknown kind {kind!r}")
+    if not isinstance(k, int) or isinstance(k, bool) or k < -1:
+        raise WireError(f"bad step index k={k!r} (expected int >= -1)")
+    if not _is_number(t) or not np.isfinite(t):
+        raise WireError(f"bad time t={t!r} (expected a finite number, s)")
+    if not isinstance(d, dict):
+        raise WireError(f"bad payload d of type {type(d).__name__} (expected a map)")
+    if kind == "data":
+        for name, value in d.items():
+            ok = _is_number(value) or (
+                isinstance(value, list) and value and all(_is_number(x) for x in value)
+            )
+            if not ok:
+                raise WireError(f"data field '{name}'={value!r} is not a number or list of numbers")
+    return Message(kind=kind, k=k, t=float(t), d=d)

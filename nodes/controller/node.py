@@ -1,0 +1,40 @@
+"""The controller node: damper model and semi-active control law on the bus.
+
+Every step k it waits for the plant's ``state`` (of step k in the sequential exchange, of
+step k-1 in the parallel one), runs the law, and publishes ``force``: F_d [N] (on the body,
+upward positive), c_eff = dF_d/d(v_w - v_b) [N s/m] for the plant's coupling, and the law's
+extras (MR current, switching state...).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from cosim import channels as ch
+from cosim.participant import Participant
+
+from .laws import build_controller
+
+
+def run(part: Participant, scenario: dict[str, Any]) -> None:
+    """Run the controller node until the last step (or until the run is aborted)."""
+    run_cfg = scenario["run"]
+    h, lag = run_cfg["h"], 0 if run_cfg["exchange"] == "sequential" else 1
+    part.output(ch.FORCE)
+    state = part.listen(ch.PLANT, ch.STATE, required=ch.STATE_FIELDS)
+    start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
+    n_corners = int(start["info"][ch.PLANT]["n_corners"])
+    law = build_controller(scenario["controller"], n_corners, h)
+    n = int(start["n_steps"])
+    for k in range(n + 1):
+        t = k * h
+        msg = part.wait({state: max(k - lag, 0)})[state]
+        out = law.step(t, {name: msg.array(name) for name in msg.d})
+        part.publish(ch.FORCE, k, t, {"F_d": out.F_d, "c_eff": out.c_eff, **out.extra})
+        part.progress(k, t)
+    part.finish(n, n * h)
+
+
+def static_check(scenario: dict[str, Any], n_corners: int) -> None:
+    """Preflight: build the law once (raises ScenarioError on a bad ``controller`` section)."""
+    build_controller(scenario["controller"], n_corners, scenario["run"]["h"])

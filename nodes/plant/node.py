@@ -1,0 +1,74 @@
+"""The plant node: a PyBullet vehicle model on the bus.
+
+Every step k: publish ``state`` at t_k; wait for ``tyre_road/force`` and ``controller/force``
+of step k (the step barrier); take the first substep and publish ``response`` (accelerations
+at t_k from PyBullet's forward dynamics, the applied forces) and, for realistic models, the
+component loads (``arm``); integrate the remaining substeps to t_{k+1}.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from cosim import channels as ch
+from cosim.participant import Participant
+
+from .coupling import StepInputs, substep_forces
+from .models import build_plant_model
+
+
+def run(part: Participant, scenario: dict[str, Any]) -> None:
+    """Run the plant node until the last step (or until the run is aborted)."""
+    run_cfg = scenario["run"]
+    h, n_sub, mode = run_cfg["h"], run_cfg["substeps"], run_cfg["coupling"]
+    model = build_plant_model(scenario["vehicle"])
+    try:
+        outputs = [ch.STATE, ch.RESPONSE, *model.loads().keys()]
+        for name in outputs:
+            part.output(name)
+        tyre = part.listen(ch.TYRE_ROAD, ch.FORCE, required=("F_t", "k_t"))
+        damper = part.listen(ch.CONTROLLER, ch.FORCE, required=("F_d", "c_eff"))
+        info = dict(model.info(), outputs=outputs)
+        start = part.handshake(info=info, timeout_s=run_cfg["start_timeout_s"])
+        n = int(start["n_steps"])
+        dt = h / n_sub
+        before: StepInputs | None = None
+        for k in range(n + 1):
+            t = k * h
+            st = model.state()
+            part.publish(ch.STATE, k, t, st)
+            msgs = part.wait({tyre: k, damper: k})
+            v_rel = st["v_w"] - st["v_b"]
+            now = StepInputs(
+                F_t=msgs[tyre].array("F_t"), k_t=msgs[tyre].array("k_t"),
+                F_d=msgs[damper].array("F_d"), c_eff=msgs[damper].array("c_eff"),
+                z_w=st["z_w"], v_rel=v_rel,
+            )
+            F_s = model.spring_force()
+            model.substep(dt, now.F_t, now.F_d)
+            after = model.state()
+            part.publish(ch.RESPONSE, k, t, {
+                "a_b": (after["v_b"] - st["v_b"]) / dt,
+                "a_w": (after["v_w"] - st["v_w"]) / dt,
+                "F_t": now.F_t, "F_d": now.F_d, "F_s": F_s,
+            })
+            for name, values in model.loads().items():
+                part.publish(name, k, t, values)
+            part.progress(k, t)
+            if k == n:
+                break
+            for j in range(1, n_sub):
+                cur = model.state()
+                F_t, F_d = substep_forces(mode, now, before, j * dt, h,
+                                          cur["z_w"], cur["v_w"] - cur["v_b"])
+                model.substep(dt, F_t, F_d)
+            before = now
+        part.finish(n, n * h)
+    finally:
+        model.close()
+
+
+def static_check(scenario: dict[str, Any]) -> None:
+    """Preflight: build the model once (raises ScenarioError on a bad ``vehicle`` section)."""
+    build_plant_model(scenario["vehicle"]).close()
+

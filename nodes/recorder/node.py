@@ -1,0 +1,115 @@
+"""The recorder node: every data channel of a run into the journal, then the run's table.
+
+It subscribes to every producer node of the run (``suscosim/<run>/<node>/*``), appends each
+valid data message to the append-only journal as it arrives, and once every channel has
+delivered every step 0..N, exports ``table.csv`` / ``table.parquet`` and reports per-channel
+statistics to the orchestrator. On an abort it flushes, exports what is complete, and stops.
+"""
+
+from __future__ import annotations
+
+import queue
+import time
+from pathlib import Path
+from typing import Any
+
+from cosim import keys
+from cosim.errors import RunError, WireError
+from cosim.participant import HELLO_PERIOD_S, Participant
+from cosim.wire import decode
+
+from .journal import JournalWriter, read_journal
+from .table import build_table, channel_stats, export
+
+FLUSH_PERIOD_S = 0.05
+_DATA = "~data"
+
+
+def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
+    """Table, exports and stats from a journal on disk (also used after a crash)."""
+    contents = read_journal(journal_path)
+    table, bad = build_table(contents.records)
+    files = export(table, folder) if len(table["t"]) else {}
+    return {"stats": channel_stats(table), "files": files, "rows": int(len(table["t"])),
+            "torn": contents.torn, "undecodable": bad}
+
+
+def run(part: Participant, scenario: dict[str, Any]) -> None:
+    """Record the run until every channel is complete (or the run is aborted)."""
+    run_cfg = scenario["run"]
+    folder = Path(run_cfg["dir"])
+    journal_path = folder / "journal.msgpack"
+    journal = JournalWriter(journal_path, part.run)
+    producers = [n for n in run_cfg["nodes"] if n != part.node]
+    put = part.inbox.put
+    for node in producers:
+        part.bus.subscribe(keys.key(part.run, node, "*"),
+                           lambda key, raw: put(((_DATA, key), raw)))
+    heard: set[str] = set()
+    expected: set[str] = set()
+    got: dict[str, set[int]] = {}
+    n_steps = None
+    last_flush = last_data = time.monotonic()
+    next_ready = 0.0
+    deadline = time.monotonic() + run_cfg["start_timeout_s"]
+    try:
+        while True:
+            now = time.monotonic()
+            if n_steps is None:
+                if now >= deadline:
+                    raise RunError(f"recorder: not started; heard {sorted(heard)} of {producers}")
+                if now >= next_ready:
+                    next_ready = now + HELLO_PERIOD_S
+                    if heard.issuperset(producers):
+                        part.ctl("ready", info={"outputs": []})
+            elif now - last_data > part.stall_timeout_s:
+                missing = sorted(c for c in expected if len(got.get(c, ())) <= n_steps)
+                raise RunError(f"recorder: no data for {part.stall_timeout_s:.1f} s; "
+                               f"incomplete: {', '.join(missing)}")
+            if now - last_flush >= FLUSH_PERIOD_S:
+                journal.flush()
+                last_flush = now
+            try:
+                tag, raw = part.inbox.get(timeout=0.05)
+            except queue.Empty:
+                continue
+            if tag[0] != _DATA:
+                msg = part.handle(tag, raw)  # the clock: raises RunError on abort
+                if msg is not None and msg.kind == "start":
+                    n_steps = int(msg.d["n_steps"])
+                    for node, info in msg.d["info"].items():
+                        expected.update(f"{node}/{c}" for c in info.get("outputs", []))
+                    part.ctl("progress", -1, 0.0, rejected=part.rejected)
+                    last_data = time.monotonic()
+                continue
+            _, node, channel = keys.parse_key(tag[1])
+            if channel == keys.CTL:
+                continue
+            try:
+                msg = decode(raw)
+            except WireError as exc:
+                part._reject((node, channel), str(exc))
+                continue
+            heard.add(node)
+            if msg.kind != "data" or msg.k < 0:
+                continue
+            name = f"{node}/{channel}"
+            seen = got.setdefault(name, set())
+            if msg.k in seen:
+                part._reject((node, channel), f"duplicate message for step {msg.k}")
+                continue
+            seen.add(msg.k)
+            journal.append(name, raw)
+            last_data = time.monotonic()
+            if n_steps is not None:
+                done_k = min(len(got.get(c, ())) for c in expected) - 1
+                part.progress(done_k, done_k * run_cfg["h"])
+                if done_k >= n_steps:
+                    break
+    except RunError:
+        journal.close()
+        finalize(journal_path, folder)
+        raise
+    journal.close()
+    result = finalize(journal_path, folder)
+    part.finish(n_steps, n_steps * run_cfg["h"], **result)

@@ -1,0 +1,119 @@
+"""From journal records to a table of every channel against time, and its statistics.
+
+Columns: ``k``, ``t`` [s], then ``<node>/<channel>/<field>`` (a per-corner list field becomes
+``<field>[i]``). A row is a communication step; a step some channel never delivered (a run
+that ended early) is left out of the table, so every row is complete.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from cosim.errors import WireError
+from cosim.wire import decode
+
+Table = dict[str, np.ndarray]
+
+
+def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
+    """Table of the data records (hello/control and undecodable records are skipped).
+
+    Returns (table, number of skipped undecodable records).
+    """
+    per_channel: dict[str, dict[int, dict]] = {}
+    times: dict[int, float] = {}
+    bad = 0
+    for channel, payload in records:
+        try:
+            msg = decode(payload)
+        except WireError:
+            bad += 1
+            continue
+        if msg.kind != "data" or msg.k < 0:
+            continue
+        per_channel.setdefault(channel, {}).setdefault(msg.k, msg.d)
+        times.setdefault(msg.k, msg.t)
+    if not per_channel:
+        return {"k": np.zeros(0, dtype=int), "t": np.zeros(0)}, bad
+    ks = sorted(set.intersection(*(set(v) for v in per_channel.values())))
+    table: Table = {"k": np.asarray(ks, dtype=np.int64),
+                    "t": np.asarray([times[k] for k in ks], dtype=float)}
+    for channel in sorted(per_channel):
+        rows = per_channel[channel]
+        fields = rows[ks[0]] if ks else {}
+        for name, first in fields.items():
+            if isinstance(first, list):
+                arr = np.asarray([rows[k][name] for k in ks], dtype=float)
+                for i in range(arr.shape[1]):
+                    table[f"{channel}/{name}[{i}]"] = arr[:, i]
+            else:
+                table[f"{channel}/{name}"] = np.asarray([rows[k][name] for k in ks], dtype=float)
+    return table, bad
+
+
+def write_csv(table: Table, path: str | Path) -> None:
+    """CSV with a header row; numbers in full precision (repr)."""
+    cols = list(table)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(cols)
+        n = len(table["t"])
+        data = [table[c].tolist() for c in cols]
+        for i in range(n):
+            w.writerow([col[i] for col in data])
+
+
+def write_parquet(table: Table, path: str | Path) -> None:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    pq.write_table(pa.table({c: pa.array(v) for c, v in table.items()}), path)
+
+
+def read_table(path: str | Path) -> Table:
+    """Read a table written by :func:`write_parquet` or :func:`write_csv`."""
+    path = Path(path)
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        t = pq.read_table(path)
+        return {c: t.column(c).to_numpy() for c in t.column_names}
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    cols = rows[0]
+    arr = np.asarray(rows[1:], dtype=float).reshape(len(rows) - 1, len(cols))
+    return {c: arr[:, i] for i, c in enumerate(cols)}
+
+
+def channel_stats(table: Table) -> dict[str, dict[str, float]]:
+    """Per column: max, min, peak (largest magnitude, signed), mean, rms, std."""
+    out: dict[str, dict[str, float]] = {}
+    for name, x in table.items():
+        if name in ("k", "t") or x.size == 0:
+            continue
+        i = int(np.argmax(np.abs(x)))
+        out[name] = {
+            "max": float(x.max()), "min": float(x.min()), "peak": float(x[i]),
+            "t_peak": float(table["t"][i]), "mean": float(x.mean()),
+            "rms": float(math.sqrt(np.mean(x * x))), "std": float(x.std()),
+        }
+    return out
+
+
+def export(table: Table, folder: str | Path) -> dict[str, str]:
+    """Write ``table.csv`` and ``table.parquet`` in ``folder``; return their paths."""
+    folder = Path(folder)
+    paths = {"csv": str(folder / "table.csv"), "parquet": str(folder / "table.parquet")}
+    write_csv(table, paths["csv"])
+    write_parquet(table, paths["parquet"])
+    return paths
+
+
+def dump_json(obj: object, path: str | Path) -> None:
+    Path(path).write_text(json.dumps(obj, indent=2, sort_keys=True) + "\n")
