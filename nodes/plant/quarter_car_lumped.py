@@ -131,6 +131,18 @@ class LumpedQuarterCar(PlantModel):
         p.stepSimulation(physicsClientId=self.client)
         self._read()
 
+    def info(self) -> dict[str, object]:
+        """Adds the wheel-path geometry: one corner, named FR, on the right track (the thesis
+        runs its realistic QVM on the right-hand path), at the front axle (wheel_x = 0)."""
+        pr = self.params
+        d = super().info()
+        d.update({
+            "model": self.name, "corner_names": ["FR"], "wheel_x": [0.0], "wheel_track": [1],
+            "sprung_mass": pr.sprung_mass, "unsprung_mass": [pr.unsprung_mass],
+            "spring_stiffness": [pr.spring_stiffness],
+        })
+        return d
+
     def close(self) -> None:
         if p.isConnected(self.client):
             p.disconnect(self.client)
