@@ -113,6 +113,8 @@ class Participant:
 
     def handle(self, tag: Channel, raw: bytes) -> Message | None:
         """Decode and file one received message; return it if it is a clock message."""
+        if tag != _CLOCK_TAG and tag not in self.mailbox:
+            return None  # not an input of this node (e.g. the recorder's raw feed)
         try:
             msg = decode(raw)
         except WireError as exc:

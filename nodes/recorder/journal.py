@@ -29,7 +29,7 @@ class JournalWriter:
     def __init__(self, path: str | Path, run_id: str) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+        self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_APPEND, 0o644)
         self._buf: list[bytes] = []
         self._packer = msgpack.Packer(use_bin_type=True)
         self._buf.append(self._packer.pack([MAGIC, VERSION, run_id]))

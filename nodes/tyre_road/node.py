@@ -16,27 +16,20 @@ import numpy as np
 from cosim import channels as ch
 from cosim.participant import Participant
 
-from .roads import build_road
-from .tyres import build_tyre
+from .config import build_road, build_tyre
+from .wheel_paths import road_heights
 
 
-def wheel_geometry(info: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(static tyre load W [N], wheel x offset [m], track index) per corner from plant facts."""
+def wheel_geometry(info: dict[str, Any]) -> dict[str, Any]:
+    """Static tyre load W [N] and wheel path facts per corner, from the plant's facts."""
     W = np.atleast_1d(np.asarray(info["static_tyre_load"], dtype=float))
     n = W.size
-    x = np.atleast_1d(np.asarray(info.get("wheel_x", [0.0] * n), dtype=float))
-    track = np.atleast_1d(np.asarray(info.get("wheel_track", [1] * n), dtype=int))
-    return W, x, track
-
-
-def road_under_wheels(road: Any, s_contact: np.ndarray, track: np.ndarray) -> np.ndarray:
-    """Road heights z_g [m], shape (corners, points), for contact distances ``s_contact``."""
-    z = np.empty_like(s_contact)
-    for tr in (0, 1):
-        rows = track == tr
-        if rows.any():
-            z[rows] = road.height(s_contact[rows], tr)
-    return z
+    return {
+        "W": W,
+        "wheel_x": info.get("wheel_x", [0.0] * n),
+        "wheel_track": info.get("wheel_track", [1] * n),
+        "corner_names": info.get("corner_names"),
+    }
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
@@ -48,16 +41,16 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     part.output(ch.FORCE)
     state = part.listen(ch.PLANT, ch.STATE, required=("z_w",))
     start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
-    W, x_wheel, track = wheel_geometry(start["info"][ch.PLANT])
+    geo = wheel_geometry(start["info"][ch.PLANT])
     offsets = np.asarray(tyre.contact_offsets, dtype=float)
     centre = int(np.argmin(np.abs(offsets)))
     n = int(start["n_steps"])
     for k in range(n + 1):
         t = k * h
         msg = part.wait({state: max(k - lag, 0)})[state]
-        s = road.speed * t + x_wheel[:, None] + offsets[None, :]
-        z_g = road_under_wheels(road, s, track)
-        F_t, k_eff = tyre.force(msg.array("z_w"), z_g, W)
+        z_g = road_heights(road, t, geo["wheel_x"], geo["wheel_track"], offsets,
+                           geo["corner_names"])
+        F_t, k_eff = tyre.force(msg.array("z_w"), z_g, geo["W"])
         part.publish(ch.FORCE, k, t, {"F_t": F_t, "k_t": k_eff, "z_g": z_g[:, centre]})
         part.progress(k, t)
     part.finish(n, n * h)

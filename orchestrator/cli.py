@@ -1,0 +1,121 @@
+"""``suscosim``: the command line.
+
+    suscosim run SCENARIO.toml [--out DIR] [--set KEY=VALUE ...] [--mode MODE]
+    suscosim node NAME --run ID [--connect ENDPOINT]
+    suscosim export JOURNAL [--out DIR]
+    suscosim fatigue RUN_DIR [...]
+
+Exit codes: 0 success, 1 the run failed (dead node, stall, abort), 2 bad input (scenario,
+file, arguments).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from cosim import scenario as sc
+from cosim.errors import SuscosimError
+
+
+def _print_summary(summary: dict) -> None:
+    print(f"run {summary['run_id']}: {summary['status']}  mode={summary['mode']} "
+          f"exchange={summary['exchange']} coupling={summary['coupling']} h={summary['h']} s "
+          f"steps={summary['n_steps']}")
+    print(f"  wall {summary['wall_s']:.2f} s, {summary['steps_per_s']:.0f} coupled steps/s")
+    chans = summary.get("channels", {})
+    if chans:
+        print(f"  {'channel':<34} {'peak':>12} {'rms':>12}")
+        for name, st in chans.items():
+            print(f"  {name:<34} {st['peak']:>12.5g} {st['rms']:>12.5g}")
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from .runner import resolve, run_scenario
+
+    overrides = list(args.set or [])
+    if args.mode:
+        overrides.append(f'run.mode="{args.mode}"')
+    scenario = resolve(sc.load(args.scenario, overrides), args.out)
+    print(f"suscosim: run {scenario['run']['id']} -> {scenario['run']['dir']}", flush=True)
+    summary = run_scenario(scenario, connect=args.connect, external=args.external,
+                           quiet=args.quiet, zenoh_config_file=args.zenoh_config)
+    _print_summary(summary)
+    print(f"  summary: {Path(scenario['run']['dir']) / 'summary.json'}")
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from nodes.recorder.node import finalize
+
+    journal = Path(args.journal)
+    out = Path(args.out) if args.out else journal.parent
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        res = finalize(journal, out)
+    except (OSError, ValueError) as exc:
+        print(f"suscosim export: {exc}", file=sys.stderr)
+        return 2
+    print(json.dumps({k: res[k] for k in ("rows", "files", "torn", "undecodable")}, indent=2))
+    return 0
+
+
+def _delegate(module: str, argv: list[str]) -> int:
+    import importlib
+
+    return int(importlib.import_module(module).main(argv) or 0)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="suscosim", description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run a scenario")
+    r.add_argument("scenario", help="scenario TOML file")
+    r.add_argument("--out", help="run folder (default runs/<run id>)")
+    r.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a scenario value, e.g. --set run.h=0.002")
+    r.add_argument("--mode", choices=["distributed", "monolithic", "reference"])
+    r.add_argument("--connect", action="append",
+                   help="Zenoh router endpoint (default: embedded peer mode on loopback)")
+    r.add_argument("--external", action="append", metavar="NODE",
+                   help="do not start NODE here: it is started elsewhere with 'suscosim node'")
+    r.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=cmd_run)
+    e = sub.add_parser("export", help="table.csv/.parquet from a journal (e.g. after a crash)")
+    e.add_argument("journal")
+    e.add_argument("--out")
+    e.set_defaults(func=cmd_export)
+    for name, module, text in (
+        ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
+        ("fatigue", "nodes.fatigue.cli", "fatigue life of the lower arm from a finished run"),
+        ("equivalent-lumped", "nodes.plant.equivalent_lumped",
+         "equivalent lumped quarter car of the realistic corner (log decrement)"),
+        ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
+    ):
+        p = sub.add_parser(name, help=text, add_help=False)
+        p.add_argument("rest", nargs=argparse.REMAINDER)
+        p.set_defaults(func=None, module=module)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    try:
+        if args.func is None:
+            return _delegate(args.module, args.rest)
+        return args.func(args)
+    except SuscosimError as exc:
+        print(f"suscosim: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("suscosim: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,177 @@
+"""The barrier-synchronised clock: start barrier, progress, end of run, stall and death.
+
+The clock does not grant every step (that would double the messages per step): the step
+barrier is data-driven inside each node (see cosim.participant). The clock
+
+* serves the resolved scenario to the nodes (a Zenoh queryable);
+* waits until every node of the scenario is present (liveliness token) and ready, then
+  publishes ``start`` (n_steps, h, and every node's facts) until every node has started;
+* follows every node's last completed step (progress messages), for the progress bar;
+* ends the run when every node is done, or aborts it (publishing ``abort`` so the others stop)
+  when a node reports an error, loses its liveliness token (killed, partitioned) or makes no
+  progress for the stall timeout. The error names the node.
+"""
+
+from __future__ import annotations
+
+import queue
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from cosim import keys
+from cosim.errors import RunError, ScenarioError, WireError
+from cosim.wire import decode, encode
+
+START_PERIOD_S = 0.05
+
+
+@dataclass
+class NodeStatus:
+    """What the clock knows of one node."""
+
+    alive: bool = False
+    ready: bool = False
+    started: bool = False
+    done: bool = False
+    k: int = -1
+    last_seen: float = 0.0
+    rejected: int = 0
+    info: dict[str, Any] = field(default_factory=dict)
+    result: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class ClockResult:
+    nodes: dict[str, NodeStatus]
+    wall_s: float
+    run_wall_s: float
+
+
+class Clock:
+    """Supervise one run on a bus (Zenoh or in-memory)."""
+
+    def __init__(self, bus: Any, run: str, nodes: list[str], scenario: dict[str, Any],
+                 on_progress: Callable[[int, int], None] | None = None,
+                 check_processes: Callable[[], str | None] | None = None) -> None:
+        self.bus, self.run_id, self.scenario = bus, run, scenario
+        self.status = {n: NodeStatus() for n in nodes}
+        self.n_steps = int(scenario["run"]["n_steps"])
+        self.on_progress = on_progress or (lambda k, n: None)
+        self.check_processes = check_processes or (lambda: None)
+        self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
+        self.rejected = 0
+        self._clock = bus.publisher(keys.key(run, keys.ORCHESTRATOR, keys.CLOCK))
+        blob = encode("start", -1, 0.0, scenario)
+        bus.serve(keys.key(run, keys.ORCHESTRATOR, keys.SCENARIO), lambda: blob)
+        bus.subscribe(keys.key(run, "*", keys.CTL),
+                      lambda k, raw: self.events.put(("ctl", k, raw)))
+        bus.watch(keys.key(run, "*", keys.ALIVE),
+                  lambda k, alive: self.events.put(("alive", k, alive)))
+
+    # ---- events -------------------------------------------------------------------------
+    def _node_of(self, key: str) -> str | None:
+        try:
+            _, node, _ = keys.parse_key(key)
+        except ValueError:
+            return None
+        return node if node in self.status else None
+
+    def _pump(self, timeout: float) -> None:
+        """Handle the events that arrive within ``timeout`` seconds."""
+        end = time.monotonic() + timeout
+        while True:
+            try:
+                what, key, payload = self.events.get(timeout=max(0.0, end - time.monotonic()))
+            except queue.Empty:
+                return
+            node = self._node_of(key)
+            if node is None:
+                continue
+            st = self.status[node]
+            now = time.monotonic()
+            if what == "alive":
+                st.alive = bool(payload)
+                st.last_seen = now
+                if not payload and not st.done:
+                    self.abort(f"node '{node}' is gone (its liveliness token dropped: the "
+                               f"process died or the network to it failed) at step {st.k}")
+                continue
+            try:
+                msg = decode(payload)
+            except WireError as exc:
+                self.rejected += 1
+                if self.rejected <= 10:
+                    print(f"suscosim: rejected control message from {node}: {exc}")
+                continue
+            st.last_seen = now
+            st.rejected = int(msg.d.get("rejected", st.rejected) or 0)
+            if msg.kind == "ready":
+                st.ready, st.info = True, dict(msg.d.get("info", {}))
+            elif msg.kind == "progress":
+                st.started = st.started or st.ready
+                st.k = max(st.k, msg.k)
+            elif msg.kind == "done":
+                st.done, st.k, st.result = True, msg.k, dict(msg.d)
+            elif msg.kind == "error":
+                code = int(msg.d.get("exit_code", 1))
+                err: RunError | ScenarioError = RunError(f"node '{node}': {msg.d.get('message')}")
+                if code == 2:
+                    err.exit_code = 2
+                self.abort(str(err), err)
+            if now - self._last_tick > 0.1:
+                self._tick()
+            if time.monotonic() >= end:
+                return
+
+    def _tick(self) -> None:
+        self._last_tick = time.monotonic()
+        dead = self.check_processes()
+        if dead:
+            self.abort(dead)
+        ks = [st.k for st in self.status.values()]
+        self.on_progress(min(ks), self.n_steps)
+
+    def abort(self, reason: str, err: Exception | None = None) -> None:
+        """Tell every node to stop, then raise (the error names the node)."""
+        for _ in range(3):
+            self._clock(encode("abort", -1, 0.0, {"reason": reason}))
+        raise err if err is not None else RunError(reason)
+
+    # ---- the run --------------------------------------------------------------------------
+    def run(self) -> ClockResult:
+        t0 = time.monotonic()
+        self._last_tick = t0
+        cfg = self.scenario["run"]
+        deadline = t0 + cfg["start_timeout_s"]
+        while not all(st.ready for st in self.status.values()):
+            if time.monotonic() > deadline:
+                missing = [n for n, st in self.status.items() if not st.ready]
+                self.abort(f"not ready within {cfg['start_timeout_s']:.0f} s: "
+                           + ", ".join(f"'{n}'" + ("" if self.status[n].alive else " (absent)")
+                                       for n in missing))
+            self._pump(0.05)
+            self._tick()
+        info = {n: st.info for n, st in self.status.items()}
+        start = encode("start", -1, 0.0, {"n_steps": self.n_steps, "h": cfg["h"], "info": info})
+        t_run = time.monotonic()
+        while not all(st.started or st.done for st in self.status.values()):
+            self._clock(start)
+            self._pump(START_PERIOD_S)
+            if time.monotonic() - t_run > cfg["start_timeout_s"]:
+                self.abort("nodes did not start: " + ", ".join(
+                    n for n, st in self.status.items() if not st.started))
+        stall = cfg["stall_timeout_s"]
+        while not all(st.done for st in self.status.values()):
+            self._pump(0.1)
+            self._tick()
+            now = time.monotonic()
+            for node, st in self.status.items():
+                if not st.done and now - st.last_seen > stall:
+                    self.abort(f"node '{node}' made no progress for {stall:.1f} s "
+                               f"(stalled at step {st.k} of {self.n_steps})")
+        run_wall = time.monotonic() - t_run
+        for _ in range(3):
+            self._clock(encode("done", self.n_steps, self.n_steps * cfg["h"], {}))
+        return ClockResult(self.status, time.monotonic() - t0, run_wall)

@@ -1,0 +1,75 @@
+"""Start one node: ``suscosim node NAME --run ID [--connect ENDPOINT]``.
+
+The node opens its own Zenoh session, fetches the resolved scenario from the orchestrator of
+that run, and runs. It can live on any machine that reaches the orchestrator (or a router).
+Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario or input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+import traceback
+
+from cosim.bus import ZenohBus, zenoh_config
+from cosim.errors import RunError, SuscosimError
+from cosim.participant import Participant
+
+NODE_MODULES = {
+    "plant": "nodes.plant.node",
+    "tyre_road": "nodes.tyre_road.node",
+    "controller": "nodes.controller.node",
+    "recorder": "nodes.recorder.node",
+}
+
+
+def run_node(bus, run_id: str, name: str, scenario: dict | None = None) -> int:
+    """Run node ``name`` on ``bus``; report errors to the orchestrator; return an exit code."""
+    log = logging.getLogger(f"suscosim.{name}")
+    part = Participant(bus, run_id, name)
+    try:
+        if scenario is None:
+            scenario = part.fetch_scenario()
+        part.stall_timeout_s = float(scenario["run"]["stall_timeout_s"])
+        module = importlib.import_module(NODE_MODULES[name])
+        module.run(part, scenario)
+        return 0
+    except SuscosimError as exc:
+        if not (isinstance(exc, RunError) and "aborted by the orchestrator" in str(exc)):
+            part.ctl("error", message=str(exc), exit_code=exc.exit_code)
+        log.error("%s", exc)
+        return exc.exit_code
+    except Exception as exc:  # a bug: say where, tell the orchestrator, never hang
+        log.error("internal error: %s\n%s", exc, traceback.format_exc())
+        part.ctl("error", message=f"internal error: {type(exc).__name__}: {exc}", exit_code=1)
+        return 1
+    finally:
+        part.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="suscosim node", description=__doc__.splitlines()[0])
+    ap.add_argument("name", choices=sorted(NODE_MODULES))
+    ap.add_argument("--run", required=True, help="run id (printed by 'suscosim run')")
+    ap.add_argument("--connect", action="append", default=[],
+                    help="Zenoh endpoint of the orchestrator or a router, e.g. tcp/10.0.0.1:7447")
+    ap.add_argument("--listen", action="append", default=None,
+                    help="endpoint to listen on (default: loopback only)")
+    ap.add_argument("--lowlatency", action="store_true",
+                    help="Zenoh low-latency transport (every peer must use it)")
+    ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    args = ap.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format=f"%(asctime)s {args.name}: %(message)s",
+                        stream=sys.stderr)
+    bus = ZenohBus(zenoh_config(args.connect, args.listen, args.lowlatency,
+                                config_file=args.zenoh_config))
+    try:
+        return run_node(bus, args.run, args.name)
+    finally:
+        bus.close()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

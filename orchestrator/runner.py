@@ -1,0 +1,220 @@
+"""Run one scenario: resolve it, start the nodes, run the clock, write the run folder.
+
+Modes (``run.mode``):
+
+* ``distributed``: one process per node, real Zenoh sessions (embedded peer mode on
+  loopback, or through a router given with ``--connect``);
+* ``monolithic``: the same node code in one process, threads on an in-memory bus ("purely
+  multi-body" in the thesis);
+* ``reference``: the lumped model solved by SciPy ``solve_ivp`` at tight tolerance ("purely
+  mathematical").
+
+The run folder holds ``scenario.json`` (as resolved), ``journal.msgpack``, ``table.csv``,
+``table.parquet``, ``summary.json`` and ``logs/``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import secrets
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from cosim import channels as ch
+from cosim import scenario as sc
+from cosim.bus import MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.errors import RunError, ScenarioError, SuscosimError
+
+from .clock import Clock, ClockResult
+from .progress import ProgressBar
+
+
+def new_run_id(name: str) -> str:
+    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    return f"{name}-{stamp}-{secrets.token_hex(2)}"
+
+
+def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str, Any]:
+    """Preflight every model section and fill the derived run keys (id, dir, t_end, N)."""
+    from nodes.controller import node as controller_node
+    from nodes.plant.models import build_plant_model
+    from nodes.tyre_road import node as tyre_node
+
+    run = scenario["run"]
+    model = build_plant_model(scenario["vehicle"])
+    try:
+        info = model.info()
+    finally:
+        model.close()
+    duration = tyre_node.static_check(scenario)
+    controller_node.static_check(scenario, int(info["n_corners"]))
+    if run["t_end"] == 0:
+        if duration is None:
+            raise ScenarioError("run.t_end", 0, "a duration > 0 s (or a road with length_m "
+                                "and speed_kmh to derive it from)")
+        run["t_end"], run["t_end_source"] = float(duration), "road length / speed"
+    run["n_steps"] = sc.n_steps(run["t_end"], run["h"])
+    run["id"] = run["id"] or new_run_id(run["name"])
+    run["dir"] = str(Path(out) if out else Path("runs") / run["id"])
+    run["nodes"] = list(ch.NODES)
+    return scenario
+
+
+def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float,
+             rec: dict[str, Any], status: str, error: str = "") -> dict[str, Any]:
+    run = scenario["run"]
+    n = run["n_steps"]
+    return {
+        "status": status, "error": error, "run_id": run["id"], "mode": run["mode"],
+        "exchange": run["exchange"], "coupling": run["coupling"], "h": run["h"],
+        "substeps": run["substeps"], "t_end": run["t_end"], "n_steps": n,
+        "nodes": run["nodes"] if run["mode"] != "reference" else ["reference"],
+        "wall_s": wall_s,
+        "run_wall_s": result.run_wall_s if result else wall_s,
+        "steps_per_s": (n / result.run_wall_s) if result and result.run_wall_s > 0 else
+        (n / wall_s if status == "ok" and wall_s > 0 else 0.0),
+        "rejected_messages": {k: v.rejected for k, v in result.nodes.items()} if result else {},
+        "rows": rec.get("rows", 0), "files": rec.get("files", {}),
+        "channels": rec.get("stats", {}),
+    }
+
+
+class LocalNodes:
+    """Node processes started on this machine, their logs, and their fate."""
+
+    def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
+                 log_dir: Path, zenoh_config_file: str | None = None) -> None:
+        self.procs: dict[str, subprocess.Popen] = {}
+        log_dir.mkdir(parents=True, exist_ok=True)
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        for name in names:
+            cmd = [sys.executable, "-m", "orchestrator", "node", name, "--run", run_id]
+            for ep in connect:
+                cmd += ["--connect", ep]
+            if lowlatency:
+                cmd.append("--lowlatency")
+            if zenoh_config_file:
+                cmd += ["--zenoh-config", zenoh_config_file]
+            log = open(log_dir / f"{name}.log", "wb")
+            self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                                stdin=subprocess.DEVNULL, env=env)
+            log.close()
+
+    def dead(self) -> str | None:
+        """A message naming a node process that exited with an error, if any."""
+        for name, p in self.procs.items():
+            code = p.poll()
+            if code not in (None, 0):
+                return f"node '{name}' exited with code {code} (see logs/{name}.log)"
+        return None
+
+    def stop(self, grace_s: float = 5.0) -> None:
+        deadline = time.monotonic() + grace_s
+        for p in self.procs.values():
+            try:
+                p.wait(timeout=max(0.05, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                p.terminate()
+        for p in self.procs.values():
+            try:
+                p.wait(timeout=2)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
+                 external: list[str] | None = None, quiet: bool = False,
+                 zenoh_config_file: str | None = None) -> dict[str, Any]:
+    """Run a resolved scenario; write and return the summary. Raises SuscosimError on failure
+    (after writing a ``failed`` summary)."""
+    run = scenario["run"]
+    folder = Path(run["dir"])
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "scenario.json").write_text(json.dumps(scenario, indent=2, sort_keys=True))
+    t0 = time.monotonic()
+    if run["mode"] == "reference":
+        from .reference import run_reference
+
+        rec = run_reference(scenario, folder)
+        summary = _summary(scenario, None, time.monotonic() - t0, rec, "ok")
+        (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
+        return summary
+    bar = ProgressBar(run["id"]) if not quiet else (lambda k, n: None)
+    result: ClockResult | None = None
+    local: LocalNodes | None = None
+    threads: list[threading.Thread] = []
+    if run["mode"] == "distributed":
+        embedded = not connect
+        endpoint = free_loopback_endpoint() if embedded else None
+        bus = ZenohBus(zenoh_config(connect or [], [endpoint] if embedded else None,
+                                    lowlatency=embedded, config_file=zenoh_config_file))
+        names = [n for n in run["nodes"] if n not in (external or [])]
+        local = LocalNodes(run["id"], names, [endpoint] if embedded else list(connect or []),
+                           embedded, folder / "logs", zenoh_config_file)
+        check = local.dead
+    else:
+        from .node_main import run_node
+
+        bus = MemoryBus()
+        codes: dict[str, int] = {}
+
+        def body(name: str) -> None:
+            codes[name] = run_node(bus, run["id"], name, scenario)
+
+        check = lambda: next((f"node '{n}' failed (exit code {c})"  # noqa: E731
+                              for n, c in codes.items() if c), None)
+    clock = Clock(bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,
+                  check_processes=check)
+    if run["mode"] == "monolithic":
+        threads = [threading.Thread(target=body, args=(n,), daemon=True, name=n)
+                   for n in run["nodes"]]
+        for th in threads:
+            th.start()
+    try:
+        result = clock.run()
+    except SuscosimError as exc:
+        if hasattr(bar, "close"):
+            bar.close()
+        if local:
+            local.stop(grace_s=3.0)
+        for th in threads:
+            th.join(timeout=3.0)
+        rec = _recover(folder)
+        summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", str(exc))
+        (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
+        bus.close()
+        raise
+    if hasattr(bar, "close"):
+        bar.close()
+    if local:
+        local.stop()
+    for th in threads:
+        th.join(timeout=5.0)
+    bus.close()
+    rec = result.nodes[ch.RECORDER].result
+    summary = _summary(scenario, result, time.monotonic() - t0, rec, "ok")
+    (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
+    return summary
+
+
+def _recover(folder: Path) -> dict[str, Any]:
+    """After a failed run: whatever the journal holds, as a table (if the recorder did not)."""
+    journal = folder / "journal.msgpack"
+    if not journal.exists():
+        return {}
+    from nodes.recorder.node import finalize
+
+    try:
+        return finalize(journal, folder)
+    except (OSError, ValueError) as exc:
+        return {"error": f"journal unreadable: {exc}"}
+
+
+__all__ = ["resolve", "run_scenario", "RunError"]
