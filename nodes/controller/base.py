@@ -1,0 +1,204 @@
+"""What every controller shares: the output record, the base class and the config reader.
+
+Sign convention (whole package), per corner:
+
+* ``v_rel = v_w - v_b`` (m/s), positive in compression (wheel moving up toward the body);
+* ``F_d`` (N) is the damper force **on the body, upward positive**; the wheel gets ``-F_d``;
+* a passive linear damper gives ``F_d = c * v_rel``;
+* a semi-active (dissipative) damper can only give ``F_d * v_rel >= 0``.
+
+The thesis writes its laws with the extension-positive velocity ``z_b' - z_w'``; each law's
+docstring gives the thesis form and its translation into the convention above.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from cosim.errors import ScenarioError
+
+#: Keys every ``state`` mapping passed to :meth:`Controller.step` carries (per corner).
+CORNER_KEYS = ("z_b", "v_b", "z_w", "v_w")
+#: Extra keys present for a full vehicle (one value each, as length-1 arrays or scalars).
+BODY_KEYS = ("v_heave", "w_pitch", "w_roll", "pitch", "roll")
+
+
+@dataclass
+class ControlOutput:
+    """What a controller returns at each communication step.
+
+    Attributes:
+        F_d: damper force on the body per corner, upward positive (N), shape (n_corners,).
+        c_eff: local slope dF_d/dv_rel per corner (N·s/m) that the plant may use to linearise
+            the force between communication steps: ``F ≈ F_d + c_eff * (v_rel(t) - v_rel(t_k))``.
+        extra: further per-corner channels to record (e.g. ``I`` current in A, ``state``
+            1 = hard / 0 = soft, ``F_demand`` in N).
+    """
+
+    F_d: np.ndarray
+    c_eff: np.ndarray
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+class Controller(ABC):
+    """One instance drives every corner of a vehicle, vectorised over ``n_corners``.
+
+    Args:
+        n_corners: 1 (quarter car) or 4 (full vehicle, order FL, FR, RL, RR).
+        h: communication step (s).
+    """
+
+    #: registry name of the law (set by subclasses)
+    law: str = ""
+
+    def __init__(self, n_corners: int, h: float) -> None:
+        self.n = int(n_corners)
+        self.h = float(h)
+
+    @abstractmethod
+    def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
+        """Return the damper forces at time ``t`` (s) for the plant state at ``t``."""
+
+    def corners(self, state: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(v_b, v_w, v_rel) per corner in m/s, validated against ``n_corners``."""
+        v_b = corner_array(state, "v_b", self.n)
+        v_w = corner_array(state, "v_w", self.n)
+        return v_b, v_w, v_w - v_b
+
+
+def corner_array(state: Mapping[str, Any], key: str, n: int) -> np.ndarray:
+    """``state[key]`` as a float array of shape (n,); a scalar is broadcast."""
+    try:
+        raw = state[key]
+    except KeyError:
+        raise ValueError(f"controller state has no '{key}' (keys: {sorted(state)})") from None
+    arr = np.asarray(raw, dtype=float)
+    if arr.ndim == 0:
+        return np.full(n, float(arr))
+    arr = arr.reshape(-1)
+    if arr.size == 1 and n != 1:
+        return np.full(n, float(arr[0]))
+    if arr.size != n:
+        raise ValueError(f"controller state '{key}' has {arr.size} values, expected {n}")
+    return arr
+
+
+def body_scalar(state: Mapping[str, Any], key: str) -> float:
+    """A full-vehicle scalar (``w_pitch`` ...) given as a scalar or a length-1 array."""
+    try:
+        arr = np.asarray(state[key], dtype=float).reshape(-1)
+    except KeyError:
+        raise ValueError(
+            f"controller state has no '{key}' (needed by a full-vehicle law)"
+        ) from None
+    if arr.size != 1:
+        raise ValueError(f"controller state '{key}' has {arr.size} values, expected 1")
+    return float(arr[0])
+
+
+_REQUIRED = object()
+
+
+class ConfigReader:
+    """Reads one scenario table, naming the dotted key in every error.
+
+    Unknown keys are an error (they are almost always typos).
+
+    Args:
+        cfg: the table (mapping).
+        prefix: dotted path of the table, e.g. ``"controller"``.
+        allowed: accepted key names.
+    """
+
+    def __init__(self, cfg: Mapping[str, Any], prefix: str, allowed: Iterable[str]) -> None:
+        if not isinstance(cfg, Mapping):
+            raise ScenarioError(prefix, cfg, "a table")
+        self.cfg = cfg
+        self.prefix = prefix
+        self.allowed = set(allowed)
+        for key in cfg:
+            if key not in self.allowed:
+                raise ScenarioError(
+                    self.key(str(key)), cfg[key], f"one of the keys {sorted(self.allowed)}"
+                )
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}.{name}" if self.prefix else name
+
+    def has(self, name: str) -> bool:
+        return name in self.cfg
+
+    def number(
+        self,
+        name: str,
+        default: Any = _REQUIRED,
+        *,
+        lo: float | None = None,
+        hi: float | None = None,
+        lo_open: bool = False,
+        unit: str = "",
+    ) -> float:
+        """A finite real number in [lo, hi] (or (lo, hi] when ``lo_open``)."""
+        if name not in self.cfg:
+            if default is _REQUIRED:
+                expected = f"a number{_range(lo, hi, lo_open, unit)}"
+                raise ScenarioError(self.key(name), None, expected)
+            return float(default)
+        value = self.cfg[name]
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if ok:
+            x = float(value)
+            ok = math.isfinite(x)
+            if ok and lo is not None:
+                ok = x > lo if lo_open else x >= lo
+            if ok and hi is not None:
+                ok = x <= hi
+        if not ok:
+            raise ScenarioError(self.key(name), value, f"a number{_range(lo, hi, lo_open, unit)}")
+        return float(value)
+
+    def choice(self, name: str, options: Iterable[str], default: Any = _REQUIRED) -> str:
+        opts = list(options)
+        if name not in self.cfg:
+            if default is _REQUIRED:
+                raise ScenarioError(self.key(name), None, f"one of {opts}")
+            return str(default)
+        value = self.cfg[name]
+        if value not in opts:
+            raise ScenarioError(self.key(name), value, f"one of {opts}")
+        return str(value)
+
+    def boolean(self, name: str, default: bool) -> bool:
+        value = self.cfg.get(name, default)
+        if not isinstance(value, bool):
+            raise ScenarioError(self.key(name), value, "true or false")
+        return value
+
+    def string(self, name: str) -> str:
+        value = self.cfg.get(name)
+        if not isinstance(value, str) or not value:
+            raise ScenarioError(self.key(name), value, "a non-empty string")
+        return value
+
+    def table(self, name: str) -> Mapping[str, Any]:
+        value = self.cfg.get(name, {})
+        if not isinstance(value, Mapping):
+            raise ScenarioError(self.key(name), value, "a table")
+        return value
+
+
+def _range(lo: float | None, hi: float | None, lo_open: bool, unit: str) -> str:
+    u = f" {unit}" if unit else ""
+    if lo is not None and hi is not None:
+        return f" in {'(' if lo_open else '['}{lo:g}, {hi:g}]{u}"
+    if lo is not None:
+        return f" {'>' if lo_open else '>='} {lo:g}{u}"
+    if hi is not None:
+        return f" <= {hi:g}{u}"
+    return u and f" ({u.strip()})"

@@ -1,0 +1,47 @@
+"""Groundhook laws (thesis Eq 2.4, Ahmadian [78]): damp the wheel against the ground.
+
+The ideal groundhook force on the *wheel* is ``-c_gnd * v_w``; the wheel gets ``-F_d``, so the
+demanded ``F_d = c_gnd * v_w``. It is dissipative when ``v_w * v_rel > 0``, i.e.
+``-z_w' (z_b' - z_w') > 0`` in the thesis's notation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodes.controller.dampers import semi_active_force
+
+
+def groundhook_condition(v_w: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
+    """True where the groundhook force is dissipative: ``v_w * v_rel > 0``."""
+    return np.asarray(v_w, dtype=float) * np.asarray(v_rel, dtype=float) > 0.0
+
+
+def groundhook_on_off(
+    v_w: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two-state groundhook: ``c = c_hard if v_w * v_rel > 0 else c_soft``, ``F_d = c v_rel``.
+
+    Returns:
+        (F_d in N, c in N·s/m, hard flag).
+    """
+    hard = groundhook_condition(v_w, v_rel)
+    c = np.where(hard, c_hard, c_soft)
+    return c * np.asarray(v_rel, dtype=float), c, hard
+
+
+def groundhook_continuous(
+    v_w: np.ndarray, v_rel: np.ndarray, c_gnd: float, c_min: float, c_max: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Continuous groundhook clipped to a variable damper: demand ``F_d = c_gnd * v_w``.
+
+    Args:
+        v_w: wheel (unsprung-mass) vertical velocity (m/s).
+        v_rel: v_w - v_b (m/s).
+        c_gnd: groundhook gain (N·s/m).
+        c_min, c_max: damper coefficient range (N·s/m).
+
+    Returns:
+        (F_d in N, c in N·s/m).
+    """
+    return semi_active_force(c_gnd * np.asarray(v_w, dtype=float), v_rel, c_min, c_max)

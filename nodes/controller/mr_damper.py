@@ -1,0 +1,213 @@
+"""MR damper of thesis Table 5.1 (Carrera MagneShock): bi-viscous law with fluid stiffness and mass.
+
+Static law (thesis Eq 5.2, body lost in the OCR; the standard continuous bi-viscous form of
+Stanway/Wereley is used)::
+
+    F_bv(v, I) = c_pre * v                          if |v| <= v_y(I)
+               = F_y(I) * sgn(v) + c_post(I) * v    if |v| >  v_y(I)
+    v_y(I)     = F_y(I) / (c_pre - c_post(I))       (the two branches meet: continuous)
+
+``F_y`` is the *intercept* of the post-yield line (the Bingham yield force). This keeps the
+meaning of the published polynomials, which are Bingham fits of the post-yield data; the other
+convention (F_y = force at the knee, v_y = F_y/c_pre) would lower every post-yield force by
+``F_y * c_post / c_pre`` (about 100 N at 0.6 A). See docs/control.md.
+
+Current dependence (Table 5.1, valid for 0 <= I <= 0.6 A)::
+
+    c_post(I) = -5257.3 I^2 + 7671.5 I + 3203.3                      (N·s/m)
+    F_y(I)    = -13417 I^4 + 25233 I^3 - 17787 I^2 + 6145.8 I + 1.33  (N)
+    c_pre = 55.76 kN·s/m,  K_f = 1.29 MN/m,  M_f = 1.5 kg  (constant)
+
+Dynamics (topology of Sims et al. [113], not printed in the thesis; chosen here): the fluid
+compliance K_f in series with a fluid mass M_f that drives the bi-viscous element::
+
+    s   = x_d - x_f                     spring deflection (m), x_d the damper stroke
+    F   = K_f * s                       force transmitted by the damper (N)
+    M_f x_f'' = K_f * s - F_bv(x_f', I)
+
+In steady flow (constant velocity) ``F -> F_bv(v, I)``. The equations are stiff (pre-yield
+pole ``M_f / c_pre`` ~ 27 us) and are integrated with backward Euler in substeps, each solved
+exactly because ``F_bv`` is piecewise linear and increasing in ``x_f'``.
+
+Motion ratio ``r`` (damper stroke velocity / wheel relative velocity): ``x_d' = r * v_rel`` and
+the force at the wheel is ``F_d = r * F``. ``r = 1`` (default) mounts the damper vertically at
+the wheel; the thesis's realistic QVM damper is oblique, its lumped models scale the damping by
+1500/3800 = 0.395 (r ~ 0.628) — the thesis does not say whether the MR force was scaled.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from nodes.controller.base import ConfigReader
+
+#: Table 5.1 polynomial coefficients, highest power first (numpy.polyval order).
+C_POST_POLY = (-5257.3, 7671.5, 3203.3)
+F_Y_POLY = (-13417.0, 25233.0, -17787.0, 6145.8, 1.33)
+
+
+@dataclass(frozen=True)
+class MRParams:
+    """MR damper parameters (thesis Table 5.1 unless noted).
+
+    Attributes:
+        c_pre: pre-yield damping (N·s/m), 55.76 kN·s/m.
+        K_f: fluid stiffness (N/m), 1.29 MN/m.
+        M_f: fluid mass (kg), 1.5 kg.
+        I_max: upper end of the current range (A) over which the fits hold, 0.6 A.
+        motion_ratio: damper velocity / wheel relative velocity (-), 1.0 (not in the thesis).
+        dynamics: integrate the K_f/M_f dynamics (True) or use the static bi-viscous law.
+        substep: internal integration step (s) for the dynamics; not in the thesis.
+        c_post_poly, F_y_poly: Table 5.1 polynomials in I (A), highest power first.
+    """
+
+    c_pre: float = 55760.0
+    K_f: float = 1.29e6
+    M_f: float = 1.5
+    I_max: float = 0.6
+    motion_ratio: float = 1.0
+    dynamics: bool = True
+    substep: float = 5e-5
+    c_post_poly: tuple[float, ...] = C_POST_POLY
+    F_y_poly: tuple[float, ...] = F_Y_POLY
+
+    @classmethod
+    def from_config(cls, cfg: Mapping[str, Any], prefix: str) -> MRParams:
+        """Overrides from a scenario table (``[controller.damper]``); unknown keys are errors."""
+        r = ConfigReader(
+            cfg, prefix, ("c_pre", "K_f", "M_f", "I_max", "motion_ratio", "dynamics", "substep")
+        )
+        d = cls()
+        return replace(
+            d,
+            c_pre=r.number("c_pre", d.c_pre, lo=0.0, lo_open=True, unit="N·s/m"),
+            K_f=r.number("K_f", d.K_f, lo=0.0, lo_open=True, unit="N/m"),
+            M_f=r.number("M_f", d.M_f, lo=0.0, lo_open=True, unit="kg"),
+            I_max=r.number("I_max", d.I_max, lo=0.0, hi=0.6, lo_open=True, unit="A"),
+            motion_ratio=r.number("motion_ratio", d.motion_ratio, lo=0.0, lo_open=True),
+            dynamics=r.boolean("dynamics", d.dynamics),
+            substep=r.number("substep", d.substep, lo=0.0, hi=1e-3, lo_open=True, unit="s"),
+        )
+
+
+def c_post(I: np.ndarray | float, p: MRParams = MRParams()) -> np.ndarray:
+    """Post-yield damping c_post(I) (N·s/m) of Table 5.1, damper frame."""
+    return np.polyval(p.c_post_poly, np.asarray(I, dtype=float))
+
+
+def yield_force(I: np.ndarray | float, p: MRParams = MRParams()) -> np.ndarray:
+    """Yield force F_y(I) (N) of Table 5.1, damper frame."""
+    return np.polyval(p.F_y_poly, np.asarray(I, dtype=float))
+
+
+def yield_velocity(I: np.ndarray | float, p: MRParams = MRParams()) -> np.ndarray:
+    """Knee velocity v_y = F_y / (c_pre - c_post) (m/s), damper frame."""
+    return yield_force(I, p) / (p.c_pre - c_post(I, p))
+
+
+def bi_viscous_force(
+    v: np.ndarray | float, I: np.ndarray | float, p: MRParams = MRParams()
+) -> np.ndarray:
+    """Static bi-viscous force F_bv(v, I) (N) at damper velocity v (m/s), damper frame."""
+    v = np.asarray(v, dtype=float)
+    cp = c_post(I, p)
+    Fy = yield_force(I, p)
+    vy = Fy / (p.c_pre - cp)
+    return np.where(np.abs(v) <= vy, p.c_pre * v, Fy * np.sign(v) + cp * v)
+
+
+#: A current schedule inside one communication step: (fraction of the step in (0, 1],
+#: damper force at the wheel before the substep (N)) -> current (A) per corner.
+CurrentFn = Callable[[float, np.ndarray], np.ndarray]
+
+
+class MRDamper:
+    """MR damper per corner with fluid dynamics, in the wheel frame of the controller.
+
+    Call :meth:`advance` once per communication step with the relative velocities at the
+    start and end of the step; the velocity is interpolated linearly inside the step and the
+    current can be recomputed at every substep (the thesis's Simulink block ran the
+    controller and the damper model at its own, finer rate).
+
+    Args:
+        n: number of corners.
+        params: :class:`MRParams`.
+    """
+
+    def __init__(self, n: int, params: MRParams = MRParams()) -> None:
+        self.p = params
+        self.n = n
+        self.s = np.zeros(n)  # spring deflection (m), damper frame
+        self.v_f = np.zeros(n)  # fluid-mass velocity (m/s), damper frame
+        self.I = np.zeros(n)  # current applied in the last substep (A)
+        self._static_F = np.zeros(n)  # force at the wheel when dynamics is off (N)
+        self.started = False
+
+    def static_force(self, v_rel: np.ndarray | float, I: np.ndarray | float) -> np.ndarray:
+        """Steady-flow force at the wheel (N): ``r * F_bv(r * v_rel, I)``."""
+        r = self.p.motion_ratio
+        return r * bi_viscous_force(r * np.asarray(v_rel, dtype=float), I, self.p)
+
+    @property
+    def force(self) -> np.ndarray:
+        """Current damper force at the wheel (N), on the body upward positive."""
+        if not self.p.dynamics:
+            return self._static_F
+        return self.p.motion_ratio * self.p.K_f * self.s
+
+    def c_eff(self, I: np.ndarray | float) -> np.ndarray:
+        """Post-yield damping at the wheel, ``r^2 c_post(I)`` (N·s/m): the linearisation given
+        to the plant (the pre-yield slope c_pre acts only through the stiff fluid spring)."""
+        return self.p.motion_ratio**2 * c_post(I, self.p)
+
+    def start(self, v_rel: np.ndarray, I: np.ndarray) -> np.ndarray:
+        """Put the fluid in steady flow at ``v_rel`` (m/s) and current ``I`` (A); return force."""
+        I = np.clip(np.broadcast_to(np.asarray(I, dtype=float), (self.n,)), 0.0, self.p.I_max)
+        v_d = self.p.motion_ratio * np.asarray(v_rel, dtype=float)
+        self.v_f = v_d.copy()
+        self.s = bi_viscous_force(v_d, I, self.p) / self.p.K_f
+        self.I = I.copy()
+        self._static_F = self.static_force(v_rel, I)
+        self.started = True
+        return self.force
+
+    def advance(
+        self, v_rel0: np.ndarray, v_rel1: np.ndarray, duration: float, current: CurrentFn
+    ) -> np.ndarray:
+        """Integrate over ``duration`` (s) with v_rel going linearly from v_rel0 to v_rel1.
+
+        Returns the force at the wheel (N) at the end of the interval.
+        """
+        p = self.p
+        if not p.dynamics or duration <= 0.0:
+            I = self._current(current, 1.0, self.force)
+            self._static_F = self.static_force(v_rel1, I)
+            return self.force
+        m = max(1, int(np.ceil(duration / p.substep - 1e-9)))
+        dt = duration / m
+        r = p.motion_ratio
+        a = p.M_f / dt + p.K_f * dt  # BE left-hand side without the dashpot
+        for j in range(1, m + 1):
+            frac = j / m
+            I = self._current(current, frac, self.force)
+            v_d = r * (v_rel0 + frac * (v_rel1 - v_rel0))
+            cp = c_post(I, p)
+            Fy = yield_force(I, p)
+            vy = Fy / (p.c_pre - cp)
+            rhs = p.M_f / dt * self.v_f + p.K_f * (self.s + dt * v_d)
+            v_pre = rhs / (a + p.c_pre)
+            v_post = (rhs - Fy * np.sign(rhs)) / (a + cp)
+            v_new = np.where(np.abs(v_pre) <= vy, v_pre, v_post)
+            self.s = self.s + dt * (v_d - v_new)
+            self.v_f = v_new
+        return self.force
+
+    def _current(self, current: CurrentFn, frac: float, F_now: np.ndarray) -> np.ndarray:
+        I = np.asarray(current(frac, F_now), dtype=float)
+        I = np.clip(np.broadcast_to(I, (self.n,)), 0.0, self.p.I_max)
+        self.I = I
+        return I
