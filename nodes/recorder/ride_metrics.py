@@ -1,0 +1,250 @@
+"""Ride metrics of a recorded run: RMS, PSD band RMS, ISO 2631-1 Wk weighting, suspension
+working space, dynamic tyre load, jerk; and a comparison table of runs (thesis Tables 5.3-5.6).
+
+Pure functions over numpy arrays. Sampling is given as ``fs`` (Hz) or taken from a run
+table's ``t`` column (s). Frequency bands are in Hz, never in bin indices.
+
+* RMS from a PSD (thesis App. IV / Eq 4.9): one-sided periodogram (rectangular window, mean
+  removed), integrated with the trapezoidal rule over ``[f1, f2]``, square root.
+* ``% improvement`` (thesis Eq 5.13): ``(baseline - run) / baseline * 100``; positive = less.
+* ISO 2631-1:1997 Wk (vertical, seated/standing/recumbent): band limiting (high-pass 0.4 Hz,
+  low-pass 100 Hz, both 2nd-order Butterworth, Q = 1/sqrt(2)) times the acceleration-velocity
+  transition (f3 = f4 = 12.5 Hz, Q4 = 0.63) times the upward step (f5 = 2.37 Hz, Q5 = 0.91,
+  f6 = 3.35 Hz, Q6 = 0.91), applied exactly in the frequency domain (zero-padded FFT).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from scipy.integrate import trapezoid
+from scipy.signal import periodogram
+
+Table = Mapping[str, np.ndarray]
+
+# ISO 2631-1:1997 Annex A, Table A.1, weighting Wk
+WK_F1, WK_F2 = 0.4, 100.0  # Hz, band limits
+WK_Q12 = 1.0 / np.sqrt(2.0)
+WK_F3, WK_F4, WK_Q4 = 12.5, 12.5, 0.63  # acceleration-velocity transition
+WK_F5, WK_Q5, WK_F6, WK_Q6 = 2.37, 0.91, 3.35, 0.91  # upward step
+
+
+# ----------------------------------------------------------------------------- basics
+
+
+def rms(x: np.ndarray) -> float:
+    """Root mean square of ``x`` (same unit as x)."""
+    x = np.asarray(x, dtype=float)
+    if x.size == 0:
+        raise ValueError("rms of an empty signal")
+    return float(np.sqrt(np.mean(x * x)))
+
+
+def sample_rate(t: np.ndarray) -> float:
+    """Sampling frequency (Hz) of a uniformly sampled time column ``t`` (s)."""
+    t = np.asarray(t, dtype=float)
+    if t.size < 2:
+        raise ValueError("need at least 2 samples to know the sampling rate")
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    if step <= 0.0 or np.max(np.abs(dt - step)) > 0.01 * step:
+        raise ValueError("time column is not uniformly sampled (a run with missing steps?)")
+    return 1.0 / step
+
+
+def psd(
+    x: np.ndarray, fs: float, band_hz: tuple[float, float] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided periodogram PSD of ``x`` (unit²/Hz), mean removed, rectangular window.
+
+    Args:
+        x: signal sampled at ``fs`` (Hz).
+        band_hz: keep only frequencies ``f1 <= f <= f2`` (Hz).
+
+    Returns:
+        (f in Hz, P in unit²/Hz).
+    """
+    f, P = periodogram(np.asarray(x, dtype=float), fs=fs, window="boxcar", detrend="constant")
+    if band_hz is not None:
+        f1, f2 = _check_band(band_hz, fs)
+        keep = (f >= f1) & (f <= f2)
+        f, P = f[keep], P[keep]
+    return f, P
+
+
+def band_rms(x: np.ndarray, fs: float, band_hz: tuple[float, float]) -> float:
+    """RMS in a frequency band, ``sqrt(integral of PSD over [f1, f2])`` (thesis Eq 4.9)."""
+    f, P = psd(x, fs, band_hz)
+    if f.size < 2:
+        raise ValueError(f"band {band_hz} Hz holds fewer than 2 frequency bins; record too short")
+    return float(np.sqrt(trapezoid(P, f)))
+
+
+def _check_band(band_hz: tuple[float, float], fs: float) -> tuple[float, float]:
+    f1, f2 = (float(b) for b in band_hz)
+    if not (0.0 <= f1 < f2):
+        raise ValueError(f"frequency band must be 0 <= f1 < f2 Hz, got {band_hz}")
+    if f1 > fs / 2:
+        raise ValueError(f"band {band_hz} Hz starts above the Nyquist frequency {fs / 2:g} Hz")
+    return f1, f2
+
+
+# --------------------------------------------------------------------- ISO 2631-1 Wk
+
+
+def wk_response(f_hz: np.ndarray | float) -> np.ndarray:
+    """Complex frequency response H(j 2 pi f) of the ISO 2631-1 Wk weighting (-)."""
+    s = 2j * np.pi * np.asarray(f_hz, dtype=float)
+    w1, w2, w3, w4, w5, w6 = (2 * np.pi * f for f in (WK_F1, WK_F2, WK_F3, WK_F4, WK_F5, WK_F6))
+    high = s**2 / (s**2 + w1 * s / WK_Q12 + w1**2)
+    low = w2**2 / (s**2 + w2 * s / WK_Q12 + w2**2)
+    transition = (1 + s / w3) / (1 + s / (WK_Q4 * w4) + (s / w4) ** 2)
+    step = (
+        (1 + s / (WK_Q5 * w5) + (s / w5) ** 2)
+        / (1 + s / (WK_Q6 * w6) + (s / w6) ** 2)
+        * (w5 / w6) ** 2
+    )
+    return high * low * transition * step
+
+
+def iso2631_wk(a: np.ndarray, fs: float) -> np.ndarray:
+    """Acceleration ``a`` (m/s²) sampled at ``fs`` (Hz) weighted by Wk (m/s²).
+
+    Applied exactly in the frequency domain on a zero-padded FFT (no bilinear warping near
+    the Nyquist frequency).
+    """
+    a = np.asarray(a, dtype=float)
+    n = a.size
+    nfft = 1 << int(np.ceil(np.log2(max(2 * n, 2))))
+    spectrum = np.fft.rfft(a, nfft)
+    f = np.fft.rfftfreq(nfft, 1.0 / fs)
+    return np.fft.irfft(spectrum * wk_response(f), nfft)[:n]
+
+
+def iso2631_wk_weighted_rms(a: np.ndarray, fs: float) -> float:
+    """Frequency-weighted RMS acceleration a_w (m/s²), ISO 2631-1 Wk (vertical)."""
+    return rms(iso2631_wk(a, fs))
+
+
+# --------------------------------------------------------------- suspension and tyre
+
+
+def suspension_deflection(z_b: np.ndarray, z_w: np.ndarray) -> np.ndarray:
+    """Suspension compression ``z_w - z_b`` (m), positive in bump, from static equilibrium."""
+    return np.asarray(z_w, dtype=float) - np.asarray(z_b, dtype=float)
+
+
+def working_space(z_b: np.ndarray, z_w: np.ndarray) -> float:
+    """Suspension working space used (m): max minus min of the deflection ``z_w - z_b``."""
+    d = suspension_deflection(z_b, z_w)
+    return float(np.max(d) - np.min(d))
+
+
+def dynamic_tyre_load(F_t: np.ndarray, F_static: float | None = None) -> np.ndarray:
+    """Dynamic tyre load ``F_t - F_static`` (N); the static load defaults to the mean of F_t."""
+    F_t = np.asarray(F_t, dtype=float)
+    return F_t - (float(np.mean(F_t)) if F_static is None else float(F_static))
+
+
+def jerk(a: np.ndarray, fs: float) -> np.ndarray:
+    """Jerk da/dt (m/s³) by central differences (one-sided at the ends)."""
+    return np.gradient(np.asarray(a, dtype=float), 1.0 / fs)
+
+
+# ------------------------------------------------------------------------ run tables
+
+
+def columns(table: Table, name: str) -> list[tuple[str, np.ndarray]]:
+    """The per-corner columns of ``name`` (e.g. ``plant/response/a_b``): ``[(label, array)]``
+    with label ``""`` for a scalar field and ``"[i]"`` for list fields; empty if absent."""
+    if name in table:
+        return [("", np.asarray(table[name], dtype=float))]
+    out = []
+    i = 0
+    while f"{name}[{i}]" in table:
+        out.append((f"[{i}]", np.asarray(table[f"{name}[{i}]"], dtype=float)))
+        i += 1
+    return out
+
+
+def run_metrics(table: Table, band_hz: tuple[float, float] = (0.0, 20.0)) -> dict[str, float]:
+    """Every ride metric a run table allows, per corner, in SI units.
+
+    Uses (when present) ``plant/response/a_b`` (body acceleration: RMS, band RMS, Wk RMS, jerk
+    RMS), ``plant/response/a_w`` (wheel acceleration RMS), ``plant/state/z_b``/``z_w``
+    (working space, deflection RMS), ``tyre_road/force/F_t`` (dynamic tyre load RMS) and
+    ``controller/force/F_d`` (damper force RMS).
+    """
+    fs = sample_rate(table["t"])
+    f1, f2 = band_hz
+    m: dict[str, float] = {}
+    for lab, a in columns(table, "plant/response/a_b"):
+        m[f"a_b{lab} RMS [m/s2]"] = rms(a)
+        m[f"a_b{lab} RMS {f1:g}-{f2:g} Hz [m/s2]"] = band_rms(a, fs, band_hz)
+        m[f"a_b{lab} Wk RMS [m/s2]"] = iso2631_wk_weighted_rms(a, fs)
+        m[f"jerk_b{lab} RMS [m/s3]"] = rms(jerk(a, fs))
+    for lab, a in columns(table, "plant/response/a_w"):
+        m[f"a_w{lab} RMS [m/s2]"] = rms(a)
+    zb, zw = columns(table, "plant/state/z_b"), columns(table, "plant/state/z_w")
+    for (lab, b), (_, w) in zip(zb, zw, strict=False):
+        m[f"SWS{lab} [mm]"] = 1e3 * working_space(b, w)
+        m[f"defl{lab} RMS [mm]"] = 1e3 * rms(suspension_deflection(b, w))
+    for lab, F in columns(table, "tyre_road/force/F_t"):
+        m[f"DTL{lab} RMS [N]"] = rms(dynamic_tyre_load(F))
+    for lab, F in columns(table, "controller/force/F_d"):
+        m[f"F_d{lab} RMS [N]"] = rms(F)
+    return m
+
+
+def improvement(baseline: float, value: float) -> float:
+    """Thesis Eq 5.13: ``(baseline - value) / baseline * 100`` (%), positive = reduction."""
+    return float("nan") if baseline == 0.0 else (baseline - value) / baseline * 100.0
+
+
+def ride_table(
+    runs: Mapping[str, Table],
+    baseline: str | None = None,
+    band_hz: tuple[float, float] = (0.0, 20.0),
+    metrics: Sequence[str] | None = None,
+) -> str:
+    """Text table comparing runs, laid out like thesis Tables 5.5/5.6: one row per metric, the
+    baseline's value, then for every other run its value and the % improvement (Eq 5.13).
+
+    Args:
+        runs: run name -> run table (``t`` plus ``<node>/<channel>/<field>`` columns).
+        baseline: run the others are compared with (default: the first).
+        band_hz: band of the PSD-based RMS (Hz).
+        metrics: row names to keep (default: those every run has, in the first run's order).
+    """
+    if not runs:
+        raise ValueError("no runs to compare")
+    names = list(runs)
+    base = names[0] if baseline is None else baseline
+    if base not in runs:
+        raise ValueError(f"baseline {base!r} is not one of the runs {names}")
+    order = [base] + [n for n in names if n != base]
+    values = {n: run_metrics(runs[n], band_hz) for n in order}
+    rows = (
+        list(metrics)
+        if metrics is not None
+        else [k for k in values[base] if all(k in values[n] for n in order)]
+    )
+    header = ["metric", base]
+    for n in order[1:]:
+        header += [n, "%"]
+    body = []
+    for key in rows:
+        b = values[base].get(key, float("nan"))
+        line = [key, f"{b:.4g}"]
+        for n in order[1:]:
+            v = values[n].get(key, float("nan"))
+            line += [f"{v:.4g}", f"{improvement(b, v):.1f}"]
+        body.append(line)
+    widths = [max(len(r[i]) for r in [header, *body]) for i in range(len(header))]
+    fmt = lambda r: "  ".join(  # noqa: E731
+        c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True))
+    )
+    rule = "  ".join("-" * w for w in widths)
+    note = f"% = (({base}) - run) / ({base}) x 100, positive = reduction (thesis Eq 5.13)"
+    return "\n".join([fmt(header), rule, *(fmt(r) for r in body), note])

@@ -1,0 +1,122 @@
+"""Ride metrics against numbers known independently (sines, ISO 2631-1 Table 3 values)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.recorder.ride_metrics import (
+    band_rms,
+    dynamic_tyre_load,
+    improvement,
+    iso2631_wk_weighted_rms,
+    jerk,
+    psd,
+    ride_table,
+    rms,
+    run_metrics,
+    sample_rate,
+    wk_response,
+    working_space,
+)
+
+# ISO 2631-1:1997 Table 3, weighting Wk (factor x 1000) at nominal one-third-octave frequencies
+ISO_WK = {
+    0.5: 418, 1.0: 482, 2.0: 531, 4.0: 967, 5.0: 1039, 6.3: 1054,
+    10.0: 988, 16.0: 768, 20.0: 636, 31.5: 405, 50.0: 246, 100.0: 88.7,
+}  # fmt: skip
+
+
+def sine(f, amp, fs, duration):
+    t = np.arange(0.0, duration, 1.0 / fs)
+    return t, amp * np.sin(2 * np.pi * f * t)
+
+
+def test_rms_of_a_sine():
+    _, x = sine(3.0, 2.0, 500.0, 10.0)
+    assert rms(x) == pytest.approx(2.0 / np.sqrt(2.0), rel=1e-6)
+
+
+def test_band_rms_separates_two_tones_by_hz_not_by_index():
+    for fs in (500.0, 200.0):
+        t, a = sine(1.0, 0.6, fs, 20.0)
+        a = a + 1.5 * np.sin(2 * np.pi * 8.0 * t)
+        assert band_rms(a, fs, (0.0, 4.0)) == pytest.approx(0.6 / np.sqrt(2), rel=1e-3)
+        assert band_rms(a, fs, (5.0, 20.0)) == pytest.approx(1.5 / np.sqrt(2), rel=1e-3)
+        f, P = psd(a, fs, (5.0, 20.0))
+        assert f[0] >= 5.0 and f[-1] <= 20.0
+        assert f[np.argmax(P)] == pytest.approx(8.0)
+
+
+@pytest.mark.parametrize(("f", "gain"), sorted(ISO_WK.items()))
+def test_wk_gain_matches_iso_table(f, gain):
+    assert abs(wk_response(f)) * 1000 == pytest.approx(gain, rel=5e-3)
+
+
+@pytest.mark.parametrize("f", [1.0, 4.0, 10.0])
+def test_wk_weighted_rms_of_a_sine(f):
+    fs = 500.0
+    _, a = sine(f, 1.0, fs, 30.0)
+    expected = ISO_WK[f] / 1000 / np.sqrt(2)
+    assert iso2631_wk_weighted_rms(a, fs) == pytest.approx(expected, rel=0.01)
+
+
+def test_working_space_and_dynamic_tyre_load():
+    z_b = np.array([0.00, 0.01, -0.01, 0.00])
+    z_w = np.array([0.00, 0.03, -0.04, 0.01])
+    # deflection z_w - z_b = 0, 0.02, -0.03, 0.01 -> used space 0.05 m
+    assert working_space(z_b, z_w) == pytest.approx(0.05)
+    _, F = sine(2.0, 300.0, 500.0, 5.0)
+    assert rms(dynamic_tyre_load(5000.0 + F)) == pytest.approx(300 / np.sqrt(2), rel=1e-6)
+    np.testing.assert_allclose(dynamic_tyre_load([5100.0, 4900.0], 5000.0), [100.0, -100.0])
+
+
+def test_jerk_peak_of_a_sine_is_w3_x0():
+    # thesis Eq 2.1: x = x0 sin(wt) has peak jerk w^3 x0
+    fs, f, x0 = 2000.0, 2.0, 0.01
+    w = 2 * np.pi * f
+    t, _ = sine(f, 1.0, fs, 2.0)
+    a = -x0 * w**2 * np.sin(w * t)
+    assert np.max(np.abs(jerk(a, fs))) == pytest.approx(w**3 * x0, rel=1e-3)
+
+
+def test_sample_rate_rejects_gaps():
+    assert sample_rate(np.arange(0, 1, 0.002)) == pytest.approx(500.0)
+    with pytest.raises(ValueError, match="uniformly"):
+        sample_rate(np.array([0.0, 0.002, 0.004, 0.010, 0.012]))
+
+
+def make_run(scale):
+    fs, duration = 500.0, 10.0
+    t = np.arange(0.0, duration, 1.0 / fs)
+    a0 = scale * np.sin(2 * np.pi * 1.0 * t)
+    return {
+        "k": np.arange(t.size),
+        "t": t,
+        "plant/response/a_b[0]": a0,
+        "plant/response/a_b[1]": 0.5 * a0,
+        "plant/state/z_b": 0.01 * np.sin(2 * np.pi * t),
+        "plant/state/z_w": np.zeros_like(t),
+        "tyre_road/force/F_t": 5000.0 + scale * 100.0 * np.sin(2 * np.pi * 5 * t),
+    }
+
+
+def test_run_metrics_and_ride_table():
+    passive, semi = make_run(1.0), make_run(0.8)
+    m = run_metrics(passive)
+    assert m["a_b[0] RMS [m/s2]"] == pytest.approx(1 / np.sqrt(2), rel=1e-6)
+    assert m["a_b[1] RMS 0-20 Hz [m/s2]"] == pytest.approx(0.5 / np.sqrt(2), rel=1e-3)
+    assert m["SWS [mm]"] == pytest.approx(20.0, rel=1e-3)
+    assert m["DTL RMS [N]"] == pytest.approx(100 / np.sqrt(2), rel=1e-6)
+    text = ride_table({"passive": passive, "TSS1": semi})
+    lines = text.splitlines()
+    assert lines[0].split() == ["metric", "passive", "TSS1", "%"]
+    row = next(line for line in lines if line.startswith("a_b[0] RMS [m/s2]"))
+    assert row.split()[-1] == "20.0"  # (1 - 0.8) / 1 x 100
+    dtl = next(line for line in lines if line.startswith("DTL RMS"))
+    assert dtl.split()[-1] == "20.0"
+    # the baseline can be any run: TSS1 as baseline makes passive 25 % worse
+    text = ride_table({"passive": passive, "TSS1": semi}, baseline="TSS1")
+    row = next(line for line in text.splitlines() if line.startswith("a_b[0] RMS [m/s2]"))
+    assert row.split()[-1] == "-25.0"
+    assert improvement(0.8981, 0.7112) == pytest.approx(20.81, abs=0.01)  # Table 5.3 TSS1
