@@ -352,3 +352,17 @@ def test_state_with_wrong_corner_count_is_rejected():
     ctl = build_controller({"law": "tss1"}, 4, 0.001)
     with pytest.raises(ValueError, match="expected 4"):
         ctl.step(0.0, state([0.1, 0.2], [0.0, 0.0]))
+
+
+def test_mr_laws_run_their_loop_at_the_substep_not_the_communication_step():
+    # on a prescribed motion the MR force at t does not depend on the communication step,
+    # because the damper and the current rule are integrated in substeps between calls
+    for cfg in ({"law": "tss2", "preset": "realistic"}, {"law": "tss3"}):
+        fine = sine_run(cfg, 5.0, h=5e-4)
+        coarse = sine_run(cfg, 5.0, h=2e-3)
+        t_fine = np.arange(len(fine)) * 5e-4
+        t_coarse = np.arange(len(coarse)) * 2e-3
+        n = len(coarse) // 3
+        ref = np.interp(t_coarse, t_fine, fine[:, 2])
+        err = np.sqrt(np.mean((coarse[n:, 2] - ref[n:]) ** 2))
+        assert err < 0.02 * np.sqrt(np.mean(ref[n:] ** 2))
