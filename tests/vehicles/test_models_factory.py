@@ -33,6 +33,7 @@ def test_builds_full_vehicle_axle_basis():
     ({"model": "quarter_car_lumped", "sprung_mass": "heavy"}, "vehicle.sprung_mass"),
     ({"model": "quarter_car_lumped", "spring_rate": 1}, "vehicle.spring_rate"),
     ({"model": "full_vehicle_7dof", "mass_basis": "wheel"}, "vehicle.mass_basis"),
+    ({"model": "quarter_car_double_wishbone", "body_mas": 535}, "vehicle.body_mas"),
 ])
 def test_bad_vehicle_config(cfg, key):
     with pytest.raises(ScenarioError) as e:
