@@ -39,11 +39,12 @@ of this **front-left** corner (outboard = +y, so the arm frame below has z up).
 
 **Damper force convention**: ``F_d`` is the damper's axial force, compression-positive as a
 force on the body (pushes the top mount up along the axis); the arm gets -F_d along the axis.
-Its vertical component on the body is F_d * cos(lean) = 0.995 F_d. Because the damper moves at
-about MR = 0.63 of the wheel, the state also gives ``z_damper`` (compression from static) and
-``v_damper`` (compression velocity, positive when the damper shortens): a controller that
-computes F_d = c * v_damper with the physical c = 3800 N s/m reproduces the thesis's damper;
-one that uses v_w - v_b should use the equivalent c_s = 1500 N s/m instead (Table 4.3).
+Its vertical component on the body is F_d * cos(lean) = 0.996 F_d (lean 4.9 deg). Because
+the damper moves at about MR = 0.61 of the wheel, the state also gives ``z_damper``
+(compression from static) and ``v_damper`` (compression velocity, positive when the damper
+shortens): a controller that computes F_d = c * v_damper with the physical c = 3800 N s/m
+reproduces the thesis's damper; one that uses v_w - v_b should use an equivalent c_s instead
+(1500 N s/m in Table 4.3; 1250 N s/m identified for this geometry, docs/vehicles_roads.md).
 
 **Arm loads** (``loads()["arm"]``): forces ON the lower arm, in the arm frame (origin at the
 midpoint of the two body bushes, x along the pivot axis forward, y outward toward the ball
