@@ -9,8 +9,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from nodes.recorder.table import Table
 
 TABLE_3_3_SIGNALS = {

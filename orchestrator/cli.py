@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -41,7 +42,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     scenario = resolve(sc.load(args.scenario, overrides), args.out)
     print(f"suscosim: run {scenario['run']['id']} -> {scenario['run']['dir']}", flush=True)
     summary = run_scenario(scenario, connect=args.connect, external=args.external,
-                           quiet=args.quiet, zenoh_config_file=args.zenoh_config)
+                           quiet=args.quiet, zenoh_config_file=args.zenoh_config,
+                           listen=args.listen, lowlatency=args.lowlatency)
     _print_summary(summary)
     print(f"  summary: {Path(scenario['run']['dir']) / 'summary.json'}")
     return 0
@@ -79,6 +81,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--mode", choices=["distributed", "monolithic", "reference"])
     r.add_argument("--connect", action="append",
                    help="Zenoh router endpoint (default: embedded peer mode on loopback)")
+    r.add_argument("--listen", action="append",
+                   help="endpoint the orchestrator listens on (default: a free loopback port)")
+    r.add_argument("--lowlatency", action="store_true",
+                   help="Zenoh low-latency transport for every session of the run (faster "
+                        "steps; every peer, taps included, must then use it too)")
     r.add_argument("--external", action="append", metavar="NODE",
                    help="do not start NODE here: it is started elsewhere with 'suscosim node'")
     r.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
@@ -115,6 +122,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("suscosim: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # a bug: one line for the user, the details for a report
+        import traceback
+
+        print(f"suscosim: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        if os.environ.get("SUSCOSIM_DEBUG"):
+            traceback.print_exc()
+        return 1
 
 
 if __name__ == "__main__":

@@ -131,7 +131,8 @@ class LocalNodes:
 
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                  external: list[str] | None = None, quiet: bool = False,
-                 zenoh_config_file: str | None = None) -> dict[str, Any]:
+                 zenoh_config_file: str | None = None, listen: list[str] | None = None,
+                 lowlatency: bool = False) -> dict[str, Any]:
     """Run a resolved scenario; write and return the summary. Raises SuscosimError on failure
     (after writing a ``failed`` summary)."""
     run = scenario["run"]
@@ -151,13 +152,12 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     local: LocalNodes | None = None
     threads: list[threading.Thread] = []
     if run["mode"] == "distributed":
-        embedded = not connect
-        endpoint = free_loopback_endpoint() if embedded else None
-        bus = ZenohBus(zenoh_config(connect or [], [endpoint] if embedded else None,
-                                    lowlatency=embedded, config_file=zenoh_config_file))
+        listen = list(listen or [free_loopback_endpoint()])
+        bus = ZenohBus(zenoh_config(connect or [], listen, lowlatency=lowlatency,
+                                    config_file=zenoh_config_file))
         names = [n for n in run["nodes"] if n not in (external or [])]
-        local = LocalNodes(run["id"], names, [endpoint] if embedded else list(connect or []),
-                           embedded, folder / "logs", zenoh_config_file)
+        local = LocalNodes(run["id"], names, list(connect or listen), lowlatency,
+                           folder / "logs", zenoh_config_file)
         check = local.dead
     else:
         from .node_main import run_node
@@ -179,7 +179,7 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
             th.start()
     try:
         result = clock.run()
-    except SuscosimError as exc:
+    except BaseException as exc:
         if hasattr(bar, "close"):
             bar.close()
         if local:
@@ -187,9 +187,13 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
         for th in threads:
             th.join(timeout=3.0)
         rec = _recover(folder)
-        summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", str(exc))
+        summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed",
+                           str(exc) or type(exc).__name__)
         (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
         bus.close()
+        if not isinstance(exc, SuscosimError | KeyboardInterrupt):
+            raise RunError(f"internal error in the orchestrator: {type(exc).__name__}: {exc}") \
+                from exc
         raise
     if hasattr(bar, "close"):
         bar.close()
@@ -213,8 +217,8 @@ def _recover(folder: Path) -> dict[str, Any]:
 
     try:
         return finalize(journal, folder)
-    except (OSError, ValueError) as exc:
-        return {"error": f"journal unreadable: {exc}"}
+    except Exception as exc:  # the run already failed: report, do not mask that error
+        return {"error": f"journal unreadable: {type(exc).__name__}: {exc}"}
 
 
 __all__ = ["resolve", "run_scenario", "RunError"]

@@ -94,11 +94,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             if msg.kind != "data" or msg.k < 0:
                 continue
             name = f"{node}/{channel}"
-            seen = got.setdefault(name, set())
-            if msg.k in seen:
-                part._reject((node, channel), f"duplicate message for step {msg.k}")
-                continue
-            seen.add(msg.k)
+            # Everything valid is journaled, duplicates included: the table keeps, per step,
+            # the first message that has the channel's fields (see table.build_table).
+            got.setdefault(name, set()).add(msg.k)
             journal.append(name, raw)
             last_data = time.monotonic()
             if n_steps is not None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -24,10 +25,11 @@ Table = dict[str, np.ndarray]
 def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
     """Table of the data records (hello/control and undecodable records are skipped).
 
-    Returns (table, number of skipped undecodable records).
+    A channel's fields are those most of its messages carry; for each step the first message
+    that carries them all is used, so a stray or forged message (wrong fields) on a channel
+    cannot displace the real one. Returns (table, number of records left out as bad).
     """
-    per_channel: dict[str, dict[int, dict]] = {}
-    times: dict[int, float] = {}
+    per_channel: dict[str, list] = {}
     bad = 0
     for channel, payload in records:
         try:
@@ -35,25 +37,38 @@ def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
         except WireError:
             bad += 1
             continue
-        if msg.kind != "data" or msg.k < 0:
-            continue
-        per_channel.setdefault(channel, {}).setdefault(msg.k, msg.d)
-        times.setdefault(msg.k, msg.t)
-    if not per_channel:
+        if msg.kind == "data" and msg.k >= 0:
+            per_channel.setdefault(channel, []).append(msg)
+    rows: dict[str, dict[int, dict]] = {}
+    fields_of: dict[str, tuple[str, ...]] = {}
+    times: dict[int, float] = {}
+    for channel, msgs in per_channel.items():
+        fields = Counter(tuple(sorted(m.d)) for m in msgs).most_common(1)[0][0]
+        fields_of[channel] = fields
+        box = rows.setdefault(channel, {})
+        for m in msgs:
+            if m.k in box or not all(f in m.d for f in fields):
+                bad += 1
+                continue
+            if any(isinstance(m.d[f], list) != isinstance(msgs[0].d[f], list) for f in fields):
+                bad += 1
+                continue
+            box[m.k] = m.d
+            times.setdefault(m.k, m.t)
+    if not rows:
         return {"k": np.zeros(0, dtype=int), "t": np.zeros(0)}, bad
-    ks = sorted(set.intersection(*(set(v) for v in per_channel.values())))
+    ks = sorted(set.intersection(*(set(v) for v in rows.values())))
     table: Table = {"k": np.asarray(ks, dtype=np.int64),
                     "t": np.asarray([times[k] for k in ks], dtype=float)}
-    for channel in sorted(per_channel):
-        rows = per_channel[channel]
-        fields = rows[ks[0]] if ks else {}
-        for name, first in fields.items():
-            if isinstance(first, list):
-                arr = np.asarray([rows[k][name] for k in ks], dtype=float)
+    for channel in sorted(rows):
+        box = rows[channel]
+        for name in fields_of[channel]:
+            arr = np.asarray([box[k][name] for k in ks], dtype=float)
+            if arr.ndim == 2:
                 for i in range(arr.shape[1]):
                     table[f"{channel}/{name}[{i}]"] = arr[:, i]
             else:
-                table[f"{channel}/{name}"] = np.asarray([rows[k][name] for k in ks], dtype=float)
+                table[f"{channel}/{name}"] = arr
     return table, bad
 
 

@@ -1,0 +1,31 @@
+"""Shared helpers: run the CLI as a real process, the Chapter 3 scenario path."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+CH3_STEP = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
+
+
+def suscosim(*args: str, timeout: float = 120.0, **kw) -> subprocess.CompletedProcess:
+    """Run ``python -m orchestrator ARGS`` (the ``suscosim`` command) and capture its output."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, "-m", "orchestrator", *args], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=timeout, **kw)
+
+
+def popen_suscosim(*args: str) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.Popen([sys.executable, "-m", "orchestrator", *args], cwd=ROOT, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.fixture
+def ch3_step() -> Path:
+    return CH3_STEP
