@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import json
+import os
 import signal
-import subprocess
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -93,9 +94,19 @@ def test_monolithic_equals_distributed_and_parallel_differs(tmp_path_factory, tm
 
 
 def _pids_of(run_id: str, node: str) -> list[int]:
-    out = subprocess.run(["pgrep", "-f", f"orchestrator node {node} --run {run_id}"],
-                         capture_output=True, text=True).stdout
-    return [int(x) for x in out.split()]
+    """PIDs of the node processes of a run (read from /proc, no external tools)."""
+    want = ["orchestrator", "node", node, "--run", run_id]
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            argv = (entry / "cmdline").read_bytes().decode().split("\0")
+        except OSError:
+            continue
+        if any(argv[i:i + len(want)] == want for i in range(len(argv))):
+            pids.append(int(entry.name))
+    return pids
 
 
 def test_killed_node_ends_run_with_error_naming_it(tmp_path, ch3_step):
@@ -115,8 +126,6 @@ def test_killed_node_ends_run_with_error_naming_it(tmp_path, ch3_step):
         pids = _pids_of("killtest", "controller")
         assert pids, "controller process not found"
         for pid in pids:
-            import os
-
             os.kill(pid, signal.SIGKILL)
         stdout, stderr = proc.communicate(timeout=60)
     finally:
