@@ -7,6 +7,14 @@ Sign convention (whole package), per corner:
 * a passive linear damper gives ``F_d = c * v_rel``;
 * a semi-active (dissipative) damper can only give ``F_d * v_rel >= 0``.
 
+Damper velocity (``velocity = "damper"`` in the ``[controller]`` table): a plant whose damper
+is oblique (the double-wishbone corner) also publishes ``v_damper``, the damper's own
+compression velocity (m/s, positive when it shortens), and applies ``F_d`` along the damper
+axis (positive pushing the body). With ``velocity = "damper"`` every law reads ``v_damper`` in
+place of ``v_w - v_b`` (so a physical damper coefficient such as 3800 N·s/m applies as is),
+and the slope it hands to the plant is converted back to dF_d/d(v_w - v_b) with the current
+motion ratio ``v_damper / (v_w - v_b)`` (see :meth:`Controller.plant_slope`).
+
 The thesis writes its laws with the extension-positive velocity ``z_b' - z_w'``; each law's
 docstring gives the thesis form and its translation into the convention above.
 """
@@ -25,6 +33,10 @@ from cosim.errors import ScenarioError
 
 #: Keys every ``state`` mapping passed to :meth:`Controller.step` carries (per corner).
 CORNER_KEYS = ("z_b", "v_b", "z_w", "v_w")
+#: Values of the generic ``velocity`` key: which velocity the laws use as ``v_rel``.
+VELOCITY_SOURCES = ("relative", "damper")
+#: Below this |v_w - v_b| (m/s) the motion-ratio estimate is not updated (ill-conditioned).
+RATIO_MIN_SPEED = 0.01
 #: Extra keys present for a full vehicle (one value each, as length-1 arrays or scalars).
 BODY_KEYS = ("v_heave", "w_pitch", "w_roll", "pitch", "roll")
 
@@ -56,20 +68,44 @@ class Controller(ABC):
 
     #: registry name of the law (set by subclasses)
     law: str = ""
+    #: "relative" (v_rel = v_w - v_b) or "damper" (v_rel = the plant's v_damper); set by
+    #: :func:`nodes.controller.laws.build_controller` from the ``velocity`` key.
+    velocity: str = "relative"
 
     def __init__(self, n_corners: int, h: float) -> None:
         self.n = int(n_corners)
         self.h = float(h)
+        self._ratio = np.ones(self.n)
 
     @abstractmethod
     def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
         """Return the damper forces at time ``t`` (s) for the plant state at ``t``."""
 
     def corners(self, state: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(v_b, v_w, v_rel) per corner in m/s, validated against ``n_corners``."""
+        """(v_b, v_w, v_rel) per corner in m/s, validated against ``n_corners``.
+
+        ``v_rel`` is ``v_w - v_b``, or the plant's ``v_damper`` when ``velocity = "damper"``.
+        """
         v_b = corner_array(state, "v_b", self.n)
         v_w = corner_array(state, "v_w", self.n)
+        if self.velocity == "damper":
+            return v_b, v_w, corner_array(state, "v_damper", self.n)
         return v_b, v_w, v_w - v_b
+
+    def plant_slope(self, c_eff: np.ndarray, state: Mapping[str, Any]) -> np.ndarray:
+        """The law's slope dF_d/dv_rel (N·s/m) as the plant's dF_d/d(v_w - v_b).
+
+        Unchanged for ``velocity = "relative"``. For ``"damper"`` it is multiplied by the
+        motion ratio r = v_damper / (v_w - v_b) (-), re-estimated whenever
+        |v_w - v_b| > :data:`RATIO_MIN_SPEED` and held otherwise (1.0 until the first estimate).
+        """
+        if self.velocity != "damper":
+            return c_eff
+        v_rel = corner_array(state, "v_w", self.n) - corner_array(state, "v_b", self.n)
+        v_d = corner_array(state, "v_damper", self.n)
+        ok = np.abs(v_rel) > RATIO_MIN_SPEED
+        self._ratio = np.where(ok, v_d / np.where(ok, v_rel, 1.0), self._ratio)
+        return np.asarray(c_eff, dtype=float) * self._ratio
 
 
 def corner_array(state: Mapping[str, Any], key: str, n: int) -> np.ndarray:

@@ -22,6 +22,10 @@ hybrid               alpha (required, 0..1), G (required) N·s/m; preset, c_min,
 pnr (tss1_pnr)       preset, c_soft, c_hard, angular_acc ["rates" | "corners"], wheelbase, track
 ==================== ==========================================================================
 
+Every law also accepts ``velocity`` ["relative" | "damper"]: "damper" makes the law use the
+plant's ``v_damper`` (damper compression velocity, m/s, published by the double-wishbone
+corner) instead of ``v_w - v_b``; see :mod:`nodes.controller.base`.
+
 MR overrides (``damper`` table): c_pre, K_f, M_f, I_max, motion_ratio, dynamics, substep —
 see :class:`nodes.controller.mr_damper.MRParams`.
 """
@@ -35,7 +39,13 @@ from typing import Any
 import numpy as np
 
 from cosim.errors import ScenarioError
-from nodes.controller.base import ConfigReader, Controller, ControlOutput, body_scalar
+from nodes.controller.base import (
+    VELOCITY_SOURCES,
+    ConfigReader,
+    Controller,
+    ControlOutput,
+    body_scalar,
+)
 from nodes.controller.dampers import PassiveCurve
 from nodes.controller.full_vehicle import pnr_select
 from nodes.controller.groundhook import groundhook_continuous, groundhook_on_off
@@ -346,5 +356,8 @@ def build_controller(
     if law not in LAWS:
         raise ScenarioError(f"{key_prefix}.law", law, f"one of {sorted(LAWS)}")
     builder, keys = LAWS[law]
-    reader = ConfigReader(cfg, key_prefix, ("law", *keys))
-    return builder(reader, int(n_corners), float(h))
+    reader = ConfigReader(cfg, key_prefix, ("law", "velocity", *keys))
+    velocity = reader.choice("velocity", VELOCITY_SOURCES, "relative")
+    controller = builder(reader, int(n_corners), float(h))
+    controller.velocity = velocity
+    return controller

@@ -4,6 +4,11 @@ Every step k it waits for the plant's ``state`` (of step k in the sequential exc
 step k-1 in the parallel one), runs the law, and publishes ``force``: F_d [N] (on the body,
 upward positive), c_eff = dF_d/d(v_w - v_b) [N s/m] for the plant's coupling, and the law's
 extras (MR current, switching state...).
+
+With ``velocity = "damper"`` in the ``[controller]`` table the laws use the plant's
+``v_damper`` (damper compression velocity, m/s; the double-wishbone corner publishes it and
+applies F_d along the damper axis) and ``c_eff`` is converted to dF_d/d(v_w - v_b) with the
+current motion ratio; a plant without ``v_damper`` ends the run with a clear error.
 """
 
 from __future__ import annotations
@@ -11,6 +16,7 @@ from __future__ import annotations
 from typing import Any
 
 from cosim import channels as ch
+from cosim.errors import RunError, ScenarioError
 from cosim.participant import Participant
 
 from .laws import build_controller
@@ -29,12 +35,28 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     for k in range(n + 1):
         t = k * h
         msg = part.wait({state: max(k - lag, 0)})[state]
-        out = law.step(t, {name: msg.array(name) for name in msg.d})
-        part.publish(ch.FORCE, k, t, {"F_d": out.F_d, "c_eff": out.c_eff, **out.extra})
+        values = {name: msg.array(name) for name in msg.d}
+        if law.velocity == "damper" and "v_damper" not in values:
+            model = start["info"][ch.PLANT].get("model", "?")
+            raise RunError(f"controller.velocity = 'damper' but the plant model '{model}' "
+                           "publishes no v_damper (only the double-wishbone corner does)")
+        out = law.step(t, values)
+        c_eff = law.plant_slope(out.c_eff, values)
+        part.publish(ch.FORCE, k, t, {"F_d": out.F_d, "c_eff": c_eff, **out.extra})
         part.progress(k, t)
     part.finish(n, n * h)
 
 
+#: Plant models whose state carries ``v_damper`` (for ``controller.velocity = "damper"``).
+DAMPER_VELOCITY_MODELS = ("quarter_car_double_wishbone",)
+
+
 def static_check(scenario: dict[str, Any], n_corners: int) -> None:
-    """Preflight: build the law once (raises ScenarioError on a bad ``controller`` section)."""
-    build_controller(scenario["controller"], n_corners, scenario["run"]["h"])
+    """Preflight: build the law once (raises ScenarioError on a bad ``controller`` section,
+    or on ``velocity = "damper"`` with a plant model that has no damper velocity)."""
+    law = build_controller(scenario["controller"], n_corners, scenario["run"]["h"])
+    model = scenario.get("vehicle", {}).get("model")
+    if law.velocity == "damper" and model not in DAMPER_VELOCITY_MODELS:
+        raise ScenarioError("controller.velocity", "damper",
+                            f"'relative' for vehicle.model = {model!r} (only "
+                            f"{', '.join(DAMPER_VELOCITY_MODELS)} publishes v_damper)")
