@@ -25,6 +25,10 @@ from cosim.errors import RunError, ScenarioError, WireError
 from cosim.wire import decode, encode
 
 START_PERIOD_S = 0.05
+LIVELINESS_GRACE_S = 1.0
+"""A dropped liveliness token must stay dropped this long to count as a dead node: Zenoh can
+drop and re-declare a token while its peer links reorganise (seen under heavy CPU load).
+A local node process that exits is seen at once through its exit code."""
 
 
 @dataclass
@@ -40,6 +44,7 @@ class NodeStatus:
     rejected: int = 0
     info: dict[str, Any] = field(default_factory=dict)
     result: dict[str, Any] = field(default_factory=dict)
+    gone_since: float | None = None
 
 
 @dataclass
@@ -94,9 +99,7 @@ class Clock:
             if what == "alive":
                 st.alive = bool(payload)
                 st.last_seen = now
-                if not payload and not st.done:
-                    self.abort(f"node '{node}' is gone (its liveliness token dropped: the "
-                               f"process died or the network to it failed) at step {st.k}")
+                st.gone_since = None if payload else (st.gone_since or now)
                 continue
             try:
                 msg = decode(payload)
@@ -126,10 +129,15 @@ class Clock:
                 return
 
     def _tick(self) -> None:
-        self._last_tick = time.monotonic()
+        now = self._last_tick = time.monotonic()
         dead = self.check_processes()
         if dead:
             self.abort(dead)
+        for node, st in self.status.items():
+            if st.gone_since is not None and not st.done \
+                    and now - st.gone_since > LIVELINESS_GRACE_S:
+                self.abort(f"node '{node}' is gone (its liveliness token dropped: the "
+                           f"process died or the network to it failed) at step {st.k}")
         ks = [st.k for st in self.status.values()]
         self.on_progress(min(ks), self.n_steps)
 
@@ -167,10 +175,12 @@ class Clock:
             self._pump(0.1)
             self._tick()
             now = time.monotonic()
-            for node, st in self.status.items():
-                if not st.done and now - st.last_seen > stall:
-                    self.abort(f"node '{node}' made no progress for {stall:.1f} s "
-                               f"(stalled at step {st.k} of {self.n_steps})")
+            stale = [(st.k, node) for node, st in self.status.items()
+                     if not st.done and now - st.last_seen > stall]
+            if stale:  # the one furthest behind is the one holding the others up
+                k, node = min(stale)
+                self.abort(f"node '{node}' made no progress for {stall:.1f} s "
+                           f"(stalled at step {k} of {self.n_steps})")
         run_wall = time.monotonic() - t_run
         for _ in range(3):
             self._clock(encode("done", self.n_steps, self.n_steps * cfg["h"], {}))
