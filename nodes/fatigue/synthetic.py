@@ -1,0 +1,41 @@
+"""Synthetic lower-arm load histories for tests and benchmarks (not a road model).
+
+Ball-joint forces of a front MPV corner on a rough (pavé-like) road: a static vertical load
+plus band-limited random parts (0.5-30 Hz), and the damper/spring force at the arm mount that
+balances the vertical ball-joint load about the pivot axis (lever ratio y_bj / y_dm), so that
+the bush reactions stay moderate. Newtons, arm frame (see `arm_geometry`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import butter, sosfiltfilt
+
+from . import arm_geometry as geo
+
+
+def _band_noise(rng: np.random.Generator, n: int, fs: float, lo: float, hi: float) -> np.ndarray:
+    sos = butter(4, [lo, hi], btype="band", fs=fs, output="sos")
+    x = sosfiltfilt(sos, rng.normal(size=n + 2000))[1000:-1000]
+    return x / x.std()
+
+
+def pave_like_loads(duration_s: float = 37.0, fs: float = 500.0, seed: int = 0,
+                    static_n: float = 4000.0, rms_n: float = 1500.0) -> tuple[np.ndarray, dict]:
+    """(t, {channel: force N}) with channels ``plant/arm/<point>_<axis>``."""
+    rng = np.random.default_rng(seed)
+    n = int(round(duration_s * fs))
+    t = np.arange(n) / fs
+    fz = static_n + rms_n * _band_noise(rng, n, fs, 0.5, 30.0)
+    fx = 0.25 * rms_n * _band_noise(rng, n, fs, 0.5, 20.0)
+    fy = -0.1 * static_n + 0.3 * rms_n * _band_noise(rng, n, fs, 0.5, 20.0)
+    lever = geo.BALL_JOINT[1] / geo.DAMPER_MOUNT[1]
+    loads = {
+        "plant/arm/ball_joint_x": fx,
+        "plant/arm/ball_joint_y": fy,
+        "plant/arm/ball_joint_z": fz,
+        "plant/arm/damper_mount_x": np.zeros(n),
+        "plant/arm/damper_mount_y": np.zeros(n),
+        "plant/arm/damper_mount_z": -lever * fz,
+    }
+    return t, loads

@@ -1,0 +1,164 @@
+"""Worker: config validation, imported tables, batch == live, run folder and CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from cosim.errors import InputFileError, ScenarioError
+from nodes.fatigue.cli import main
+from nodes.fatigue.config import FatigueConfig
+from nodes.fatigue.synthetic import pave_like_loads
+from nodes.fatigue.worker import LiveFatigue, analyse
+
+COARSE = {"mesh_size_m": 0.03}
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("SUSCOSIM_CACHE", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+@pytest.mark.parametrize("d,key", [
+    ({"method": "magic"}, "fatigue.method"),
+    ({"equivalent": "tresca"}, "fatigue.equivalent"),
+    ({"mean_stress": "walker"}, "fatigue.mean_stress"),
+    ({"material": {"Su": -1}}, "fatigue.material.Su"),
+    ({"material": {"zz": 1}}, "fatigue.material.zz"),
+    ({"mesh_size_m": "fine"}, "fatigue.mesh_size_m"),
+    ({"influence": "tables/", "mapping": {}}, "fatigue.mapping"),
+    ({"block_samples": 0}, "fatigue.block_samples"),
+    ({"colour": "red"}, "fatigue.colour"),
+])
+def test_config_errors_name_the_key(d, key):
+    with pytest.raises(ScenarioError) as e:
+        FatigueConfig.from_dict(d)
+    assert e.value.key == key
+
+
+def test_config_material_override():
+    cfg = FatigueConfig.from_dict({"material": {"sf'": 2.0e9, "Se": 5e8}})
+    assert cfg.material.sf == 2.0e9 and cfg.material.Se == 5e8
+
+
+@pytest.mark.parametrize("kw", [
+    {}, {"equivalent": "signed_von_mises", "method": "strain_life", "mean_stress": "swt",
+         "residue": "half_cycles"}])
+def test_live_equals_batch_random_blocks(kw):
+    cfg = FatigueConfig.from_dict({**COARSE, **kw})
+    t, loads = pave_like_loads(4.0, seed=2, static_n=6000, rms_n=4000)
+    batch = analyse(t, loads, cfg, 40.0)
+    channels = list(loads)
+    live = LiveFatigue(cfg, channels, track_length_m=40.0)
+    rng = np.random.default_rng(5)
+    i = 0
+    arr = np.stack([loads[c] for c in channels], axis=1)
+    while i < t.size:
+        b = int(rng.integers(1, 700))
+        if rng.random() < 0.5:
+            live.update(t[i:i + b], arr[i:i + b])
+        else:
+            live.update(t[i:i + b], {c: loads[c][i:i + b] for c in channels})
+        i += b
+    res = live.result()
+    assert batch.max_damage > 0
+    np.testing.assert_allclose(res.damage, batch.damage, rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(res.n_cycles, batch.n_cycles)
+    assert res.critical_node == batch.critical_node
+    assert res.life_km == pytest.approx(batch.life_km, rel=1e-12)
+    assert res.duration_s == pytest.approx(batch.duration_s)
+
+
+def test_life_scales_and_critical_node_at_notch():
+    cfg = FatigueConfig.from_dict({**COARSE, "repeats_basis_m": 100.0})
+    t, loads = pave_like_loads(3.0, seed=1, static_n=6000, rms_n=4000)
+    r = analyse(t, loads, cfg, 30.0)
+    assert r.life_repeats == pytest.approx(1 / r.damage.max())
+    assert r.life_km == pytest.approx(r.life_repeats * 0.030)
+    assert r.life_repeats_basis == pytest.approx(r.life_km * 10)
+    # doubling every load raises damage by more than 2^(-1/b) ... at least strictly
+    r2 = analyse(t, {k: 2 * v for k, v in loads.items()}, cfg, 30.0)
+    assert r2.max_damage > 2**8 * r.max_damage
+    # the critical node is at the lightening hole's outboard corner (the notch)
+    x, y, _ = r.critical_xyz
+    corner = geo_notch()
+    assert np.hypot(x - corner[0], y - corner[1]) < 0.03
+    json.loads(r.to_json())
+
+
+def geo_notch():
+    from nodes.fatigue import arm_geometry as geo
+    return geo.HOLE_CORNERS[2] + np.array([0.0, geo.HOLE_FILLET_RADIUS])
+
+
+def _write_case(path, stresses, header=True):
+    lines = ["NODE,SX,SY,SZ,SXY,SYZ,SXZ"] if header else []
+    lines += [f"{i + 1}," + ",".join(f"{v:.9e}" for v in row) for i, row in enumerate(stresses)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_imported_tables_appendix_v_mapping(tmp_path):
+    # Three cases as in App V: ANSYS FX <-> load FY, FZ <-> FX, FY <-> FZ.
+    rng = np.random.default_rng(0)
+    c = rng.normal(size=(3, 42, 6)) * 1e4
+    _write_case(tmp_path / "LCase1-CompStress12FX.csv", c[0])
+    _write_case(tmp_path / "LCase2-CompStress12FZ.csv", c[1])
+    _write_case(tmp_path / "LCase3-CompStress12FY.csv", c[2], header=False)
+    cfg = FatigueConfig.from_dict({
+        "influence": str(tmp_path), "nodes": "all", "mean_stress": "none",
+        "equivalent": "signed_von_mises",
+        "mapping": {"plant/arm/ball_joint_y": "LCase1-CompStress12FX.csv",
+                    "plant/arm/ball_joint_x": "LCase2-CompStress12FZ.csv",
+                    "plant/arm/ball_joint_z": {"file": "LCase3-CompStress12FY.csv",
+                                               "scale": 1.0}}})
+    t = np.arange(2000) * 0.002
+    FX, FY, FZ = (rng.normal(size=t.size) * 1e3 for _ in range(3))
+    r = analyse(t, {"plant/arm/ball_joint_x": FX, "plant/arm/ball_joint_y": FY,
+                    "plant/arm/ball_joint_z": FZ}, cfg, 10.0)
+    # independent: App V loop, Sxt(:, i) = SxLC1(i) FY + SxLC2(i) FX + SxLC3(i) FZ
+    from nodes.fatigue.counting import count_series
+    from nodes.fatigue.damage import miner_per_node
+    from nodes.fatigue.equivalent_stress import signed_von_mises
+    node = 5
+    s = c[0, node] * FY[:, None] + c[1, node] * FX[:, None] + c[2, node] * FZ[:, None]
+    cyc = count_series(signed_von_mises(s), "repeated")
+    d = miner_per_node(cyc, 1, cfg.material, "stress_life", "none")[0]
+    assert r.damage[node] == pytest.approx(d, rel=1e-10)
+
+
+def test_imported_bad_csv(tmp_path):
+    (tmp_path / "a.csv").write_text("SX,SY\n1,2,3,4,5,6\n1,2,3,x,5,6\n")
+    cfg = FatigueConfig.from_dict({"influence": str(tmp_path), "mapping": {"ball_joint_z":
+                                                                           "a.csv"}})
+    with pytest.raises(InputFileError) as e:
+        analyse(np.arange(3.0), {"ball_joint_z": np.zeros(3)}, cfg, 1.0)
+    assert e.value.line == 3
+    (tmp_path / "a.csv").write_text("1,2,3\n")
+    with pytest.raises(InputFileError):
+        analyse(np.arange(3.0), {"ball_joint_z": np.zeros(3)}, cfg, 1.0)
+
+
+def test_run_dir_and_cli(tmp_path, capsys):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    t, loads = pave_like_loads(2.0, seed=3)
+    pq.write_table(pa.table({"t": t, **loads}), tmp_path / "table.parquet")
+    (tmp_path / "scenario.json").write_text(json.dumps(
+        {"road": {"speed_kmh": 36.0}, "run": {"t_end": 2.0}, "fatigue": COARSE}))
+    assert main([str(tmp_path), "--mean-stress", "swt"]) == 0
+    out = capsys.readouterr().out
+    assert "min life" in out
+    summary = json.loads((tmp_path / "fatigue" / "summary.json").read_text())
+    assert summary["track_length_m"] == pytest.approx(20.0)
+    assert summary["config"]["mean_stress"] == "swt"
+    rows = (tmp_path / "fatigue" / "damage_per_node.csv").read_text().splitlines()
+    assert len(rows) == summary["n_nodes"] + 1
+    assert (tmp_path / "fatigue" / "damage_map.png").stat().st_size > 10_000
+    assert main([str(tmp_path), "--set", "material.b=0.2"]) == 2
+    assert main([str(tmp_path / "missing")]) == 2
+    (tmp_path / "scenario.json").write_text("{not json")
+    assert main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("\n") == 3
