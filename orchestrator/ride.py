@@ -1,0 +1,92 @@
+"""``suscosim ride``: ride metrics of finished runs, side by side (thesis Tables 5.3-5.6).
+
+    suscosim ride RUN_DIR [RUN_DIR ...] [--baseline NAME] [--band LO HI]
+
+Reads each run folder's ``table.parquet`` (written by the recorder) and prints
+:func:`nodes.recorder.ride_metrics.ride_table`: body RMS acceleration [m/s²] (whole record and
+PSD band ``LO``-``HI`` Hz), ISO 2631-1 Wk-weighted RMS [m/s²], body jerk RMS [m/s³], wheel RMS
+acceleration [m/s²], suspension working space and deflection RMS [mm], dynamic tyre load RMS
+[N], damper force RMS [N]; every run after the baseline with its % change against it
+(thesis Eq 5.13, positive = reduction).
+
+A run is named by its folder name (``passive`` for ``/tmp/ch5/passive``); ``--baseline``
+takes such a name (default: the first run). Exit codes: 0 printed, 2 bad input (a missing
+folder or table, an unknown baseline, a bad band) with one line on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+TABLE = "table.parquet"
+
+
+def run_names(dirs: list[Path]) -> list[str]:
+    """A unique display name per run folder: its name, or ``parent/name`` when two clash."""
+    names = [d.name or str(d) for d in dirs]
+    if len(set(names)) == len(names):
+        return names
+    full = [f"{d.parent.name}/{d.name}" for d in dirs]
+    return full if len(set(full)) == len(full) else [str(d) for d in dirs]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="suscosim ride",
+                                 description="ride metrics of finished runs, side by side")
+    ap.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders (with table.parquet)")
+    ap.add_argument("--baseline", metavar="NAME",
+                    help="run (folder name) the others are compared with; default the first")
+    ap.add_argument("--band", nargs=2, type=float, metavar=("LO", "HI"), default=(0.0, 20.0),
+                    help="band of the PSD-based body RMS [Hz] (default 0 20)")
+    return ap
+
+
+def _fail(message: str) -> int:
+    print(f"suscosim ride: {message}", file=sys.stderr)
+    return 2
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print the ride table of the run folders in ``argv``; return the exit code (0 or 2)."""
+    ap = build_parser()
+    try:
+        args = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as exc:  # argparse already printed its one-line usage error
+        return 0 if exc.code == 0 else 2
+    lo, hi = args.band
+    if not (0.0 <= lo < hi):
+        return _fail(f"--band {lo:g} {hi:g}: expected 0 <= LO < HI [Hz]")
+    dirs = [Path(r) for r in args.runs]
+    for d in dirs:
+        if not d.is_dir():
+            return _fail(f"{d}: no such run folder")
+        if not (d / TABLE).is_file():
+            return _fail(f"{d}: no {TABLE} (unfinished run? try 'suscosim export "
+                         f"{d / 'journal.msgpack'}')")
+    from nodes.recorder.ride_metrics import ride_table
+    from nodes.recorder.table import read_table
+
+    names = run_names(dirs)
+    runs = {}
+    for name, d in zip(names, dirs, strict=True):
+        try:
+            table = read_table(d / TABLE)
+        except Exception as exc:  # a corrupt or foreign parquet file: one line, exit 2
+            return _fail(f"{d / TABLE}: unreadable ({type(exc).__name__}: {exc})")
+        if "t" not in table or len(table["t"]) < 2:
+            return _fail(f"{d / TABLE}: no time column 't' with at least two samples")
+        runs[name] = table
+    if args.baseline is not None and args.baseline not in runs:
+        return _fail(f"--baseline {args.baseline!r}: not one of the runs {names}")
+    try:
+        text = ride_table(runs, baseline=args.baseline, band_hz=(lo, hi))
+    except (ValueError, KeyError) as exc:
+        return _fail(str(exc))
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
