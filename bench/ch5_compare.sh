@@ -15,6 +15,7 @@ shift || true
 mkdir -p "$out"
 for law in passive tss1 tss2 tss3; do
   python -m orchestrator run "scenarios/ch5_qvm_${law}_random.toml" --out "$out/$law" \
-    --mode monolithic --quiet "$@" | head -n 2
+    --mode monolithic --quiet "$@" > "$out/$law.log" 2>&1 || { cat "$out/$law.log"; exit 1; }
+  grep -E "^run |wall" "$out/$law.log"
 done
 python -m orchestrator ride "$out/passive" "$out/tss1" "$out/tss2" "$out/tss3" --baseline passive
