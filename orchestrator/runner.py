@@ -60,6 +60,7 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
                                 "and speed_kmh to derive it from)")
         run["t_end"], run["t_end_source"] = float(duration), "road length / speed"
     run["n_steps"] = sc.n_steps(run["t_end"], run["h"])
+    run["t_end"] = run["n_steps"] * run["h"]  # what is simulated: a whole number of steps
     run["id"] = run["id"] or new_run_id(run["name"])
     run["dir"] = str(Path(out) if out else Path("runs") / run["id"])
     run["nodes"] = list(ch.NODES)
