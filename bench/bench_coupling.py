@@ -16,7 +16,7 @@ import numpy as np
 
 from cosim import scenario as sc
 from nodes.recorder.table import read_table
-from orchestrator.accuracy import peak_errors
+from orchestrator.accuracy import peak_errors, worst
 from orchestrator.reference import reference_solution
 from orchestrator.runner import resolve, run_scenario
 
@@ -42,8 +42,7 @@ def main() -> None:
                 run_scenario(s, quiet=True)
                 e = peak_errors(read_table(d / "table.parquet"), ref, t_from=0.4)
                 flat = [e[k][m] for k in e for m in e[k]]
-                worst = max(abs(v) for v in flat)
-                print(f"{exchange:>10} {coupling:>9} {h:>6} {worst:8.3f}   "
+                print(f"{exchange:>10} {coupling:>9} {h:>6} {worst(e):8.3f}   "
                       + " ".join(f"{v:+.2f}" for v in flat))
 
 
