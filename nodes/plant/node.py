@@ -67,8 +67,3 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     finally:
         model.close()
 
-
-def static_check(scenario: dict[str, Any]) -> None:
-    """Preflight: build the model once (raises ScenarioError on a bad ``vehicle`` section)."""
-    build_plant_model(scenario["vehicle"]).close()
-
