@@ -4,6 +4,8 @@
     suscosim node NAME --run ID [--connect ENDPOINT]
     suscosim export JOURNAL [--out DIR]
     suscosim fatigue RUN_DIR [...]
+    suscosim tap [RUN] [PATTERN] | replay JOURNAL | runs [DIR] | router
+    suscosim sweep SWEEP.toml | report RUN_OR_SWEEP_DIR
 
 Exit codes: 0 success, 1 the run failed (dead node, stall, abort), 2 bad input (scenario,
 file, arguments).
@@ -101,6 +103,12 @@ def build_parser() -> argparse.ArgumentParser:
         ("equivalent-lumped", "nodes.plant.equivalent_lumped",
          "equivalent lumped quarter car of the realistic corner (log decrement)"),
         ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
+        ("tap", "orchestrator.tap", "print the messages of a running run, live"),
+        ("replay", "orchestrator.replay", "republish a recorded journal on the bus"),
+        ("runs", "orchestrator.runs", "list runs and their state from the run folders"),
+        ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
+        ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
+        ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
     ):
         p = sub.add_parser(name, help=text, add_help=False)
         p.add_argument("rest", nargs=argparse.REMAINDER)
