@@ -161,6 +161,28 @@ def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[
         scenario = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputFileError(str(path), f"not valid TOML: {exc}") from None
+    absolute_paths(scenario, path.resolve().parent)
     for assignment in overrides:
         apply_override(scenario, assignment)
+    absolute_paths(scenario, Path.cwd())  # paths given with --set: relative to where typed
     return validate_common(scenario)
+
+
+PATH_KEYS = (("road", "path"), ("controller", "curve"), ("fatigue", "influence"))
+"""Keys holding file paths: relative ones are relative to the scenario file's folder."""
+
+
+def absolute_paths(scenario: dict[str, Any], folder: Path) -> None:
+    """Make the relative file paths of a scenario absolute against ``folder`` (in place), so
+    a node started in any working directory (or on another machine with the same mount) finds
+    them. ``fatigue.influence = "builtin"`` is not a path."""
+    for section, key in PATH_KEYS:
+        sec = scenario.get(section)
+        if not isinstance(sec, dict):
+            continue
+        value = sec.get(key)
+        if not isinstance(value, str) or not value or value == "builtin":
+            continue
+        p = Path(value).expanduser()
+        if not p.is_absolute():
+            sec[key] = str(folder / p)

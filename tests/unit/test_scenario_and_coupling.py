@@ -53,3 +53,19 @@ def test_coupling_modes():
     # lift-off within the step: the tyre cannot pull
     F_t, _ = substep_forces("jacobian", now, None, 5e-4, 1e-3, np.array([0.01]), v)
     assert F_t[0] == 0.0
+
+
+def test_relative_paths_resolve_against_scenario_folder_and_cwd(tmp_path, monkeypatch):
+    from cosim import scenario as sc
+
+    sub = tmp_path / "study"
+    sub.mkdir()
+    (sub / "s.toml").write_text(
+        '[road]\ntype = "csv"\npath = "data/road.csv"\nspeed_kmh = 30.0\n'
+        '[fatigue]\ninfluence = "builtin"\n')
+    monkeypatch.chdir(tmp_path)
+    s = sc.load(sub / "s.toml")
+    assert s["road"]["path"] == str(sub.resolve() / "data" / "road.csv")
+    assert s["fatigue"]["influence"] == "builtin"
+    s = sc.load(sub / "s.toml", ['road.path="other.csv"'])
+    assert s["road"]["path"] == str(tmp_path / "other.csv")
