@@ -140,14 +140,16 @@ def apply_override(scenario: dict[str, Any], assignment: str) -> None:
         raise ScenarioError(assignment, None, "KEY=VALUE, e.g. run.h=0.002")
     dotted, text = assignment.split("=", 1)
     parts = dotted.strip().split(".")
-    if len(parts) < 2 or not all(parts):
-        raise ScenarioError(dotted, text, "a dotted key section.key, e.g. run.h")
+    value = parse_value(text.strip())
+    if not all(parts) or (len(parts) < 2 and not isinstance(value, dict)):
+        raise ScenarioError(dotted, text, "a dotted key section.key, e.g. run.h (or a whole "
+                            "section as a table, e.g. 'controller={law=\"tss1\"}')")
     node = scenario
     for part in parts[:-1]:
         node = node.setdefault(part, {})
         if not isinstance(node, dict):
             raise ScenarioError(dotted, text, f"'{part}' to be a table")
-    node[parts[-1]] = parse_value(text.strip())
+    node[parts[-1]] = value  # a table replaces the whole table at that key
 
 
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[str, Any]:
