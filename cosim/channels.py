@@ -25,15 +25,34 @@ controller/force      F_d          damper force on the body, upward positive [N]
                       c_eff        dF_d/d(v_w - v_b) [N s/m] (for coupling)
                       (law extras) e.g. I [A] MR current, state (1 hard / 0 soft)
 ====================  ===========  ==========================================================
+
+Block channels (not one message per step; published only when the fatigue node is in the run,
+and not recorded in the table: they repeat or summarise recorded data):
+
+====================  ===========  ==========================================================
+recorder/loads        k0, k        a block of steps k0..k of the load channel (``plant/arm``)
+                                   in step order, no gaps; ``k`` of the message = last step
+                      t            (n,) times of the steps [s]
+                      <pt>_<ax>    (n,) each field of ``plant/arm`` [N]
+fatigue/damage        max_damage   largest Miner damage of any node for the history so far,
+                                   residue closed as at the end of a run [-]
+                      critical_node_id, distance_m (road covered so far [m]),
+                      life_km      projected minimum life: distance_m / max_damage / 1000
+====================  ===========  ==========================================================
 """
 
 from __future__ import annotations
 
 PLANT, TYRE_ROAD, CONTROLLER, RECORDER = "plant", "tyre_road", "controller", "recorder"
 STATE, RESPONSE, ARM, FORCE = "state", "response", "arm", "force"
+FATIGUE, LOADS, DAMAGE = "fatigue", "loads", "damage"
 
 NODES = (PLANT, TYRE_ROAD, CONTROLLER, RECORDER)
-"""The nodes of a run, in start order."""
+"""The nodes of every run, in start order."""
+OPTIONAL_NODES = (FATIGUE,)
+"""Nodes a run may add: the live fatigue worker (fed by the recorder's load blocks)."""
+LOAD_CHANNEL = (PLANT, ARM)
+"""The channel the recorder streams to the fatigue node in blocks."""
 
 STATE_FIELDS = ("z_b", "v_b", "z_w", "v_w")
 TYRE_FIELDS = ("F_t", "k_t", "z_g")

@@ -91,6 +91,11 @@ class Participant:
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any]) -> None:
         self._outputs[channel](encode("data", k, t, dict(data)))
 
+    def publish_hello(self) -> None:
+        """``hello`` on every output (the start handshake's proof that a data path is live)."""
+        for pub in self._outputs.values():
+            pub(encode("hello", -1, 0.0, {}))
+
     def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: Any) -> None:
         """A control message to the orchestrator (ready, progress, done, error)."""
         self._ctl(encode(kind, k, t, d))
@@ -182,8 +187,7 @@ class Participant:
                                + (f"; never heard {', '.join(silent)}" if silent else ""))
             if now >= next_send:
                 next_send = now + HELLO_PERIOD_S
-                for pub in self._outputs.values():
-                    pub(encode("hello", -1, 0.0, {}))
+                self.publish_hello()
                 if all(-1 in box or box for box in self.mailbox.values()):
                     self.ctl("ready", info={"outputs": list(self._outputs), **(info or {})})
             try:

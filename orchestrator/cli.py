@@ -33,6 +33,15 @@ def _print_summary(summary: dict) -> None:
         print(f"  {'channel':<34} {'peak':>12} {'rms':>12}")
         for name, st in chans.items():
             print(f"  {name:<34} {st['peak']:>12.5g} {st['rms']:>12.5g}")
+    fat = summary.get("fatigue")
+    if fat:
+        print(f"  fatigue (live): lower-arm min life {_num(fat['min_life_km'])} km = "
+              f"{_num(fat['min_life_repeats'])} repeats, critical node "
+              f"{fat['critical_node_id']}  ({fat['files']})")
+
+
+def _num(x: float | str) -> str:
+    return x if isinstance(x, str) else f"{x:.4g}"
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -119,10 +128,14 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     ap = build_parser()
-    args = ap.parse_args(argv)
+    # parse_known_args: a delegated subcommand's leading options ('router --listen X') are
+    # not taken by its REMAINDER argument; they come back here, in order, before the rest.
+    args, unknown = ap.parse_known_args(argv)
+    if unknown and args.func is not None:
+        ap.error(f"unrecognized arguments: {' '.join(unknown)}")
     try:
         if args.func is None:
-            return _delegate(args.module, args.rest)
+            return _delegate(args.module, unknown + args.rest)
         return args.func(args)
     except SuscosimError as exc:
         print(f"suscosim: error: {exc}", file=sys.stderr)

@@ -22,6 +22,7 @@ NODE_MODULES = {
     "tyre_road": "nodes.tyre_road.node",
     "controller": "nodes.controller.node",
     "recorder": "nodes.recorder.node",
+    "fatigue": "nodes.fatigue.node",
 }
 
 

@@ -43,6 +43,7 @@ def new_run_id(name: str) -> str:
 def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str, Any]:
     """Preflight every model section and fill the derived run keys (id, dir, t_end, N)."""
     from nodes.controller import node as controller_node
+    from nodes.fatigue.config import FatigueConfig
     from nodes.plant.models import build_plant_model
     from nodes.tyre_road import node as tyre_node
 
@@ -50,8 +51,15 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
     model = build_plant_model(scenario["vehicle"])
     try:
         info = model.info()
+        load_channels = set(model.loads())
     finally:
         model.close()
+    fatigue = FatigueConfig.from_dict(scenario.get("fatigue"))  # validated before anything
+    live_fatigue = run["mode"] != "reference" and (
+        fatigue.live is True or (fatigue.live == "auto" and ch.LOAD_CHANNEL[1] in load_channels))
+    if fatigue.live is True and ch.LOAD_CHANNEL[1] not in load_channels:
+        raise ScenarioError("fatigue.live", True, "false or \"auto\": this vehicle model "
+                            "reports no lower-arm loads (use the realistic corner)")
     duration = tyre_node.static_check(scenario)
     controller_node.static_check(scenario, int(info["n_corners"]))
     if run["t_end"] == 0:
@@ -63,7 +71,7 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
     run["t_end"] = run["n_steps"] * run["h"]  # what is simulated: a whole number of steps
     run["id"] = run["id"] or new_run_id(run["name"])
     run["dir"] = str(Path(out) if out else Path("runs") / run["id"])
-    run["nodes"] = list(ch.NODES)
+    run["nodes"] = list(ch.NODES) + ([ch.FATIGUE] if live_fatigue else [])
     return scenario
 
 
@@ -205,6 +213,9 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     bus.close()
     rec = result.nodes[ch.RECORDER].result
     summary = _summary(scenario, result, time.monotonic() - t0, rec, "ok")
+    if ch.FATIGUE in result.nodes:  # the live fatigue node's headline (files in fatigue/)
+        summary["fatigue"] = {k: v for k, v in result.nodes[ch.FATIGUE].result.items()
+                              if k != "rejected"}
     (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
     return summary
 

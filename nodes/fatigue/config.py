@@ -23,6 +23,8 @@ nodes                  "surface"            "surface" or "all" nodes analysed
 track_length_m         none                 length of one pass (m); else from the road/run
 repeats_basis_m        none                 also give life in repeats of this length (m)
 block_samples          500                  live: samples per update block
+live                   "auto"               run the fatigue node during the run (true /
+                                            false; "auto": when the plant reports arm loads)
 =====================  ===================  =================================================
 """
 
@@ -62,6 +64,7 @@ class FatigueConfig:
     track_length_m: float | None = None
     repeats_basis_m: float | None = None
     block_samples: int = 500
+    live: bool | str = "auto"
     base_dir: str = field(default=".", compare=False)
 
     @property
@@ -148,6 +151,9 @@ class FatigueConfig:
         endurance = d.pop("endurance_limit", False)
         if not isinstance(endurance, bool):
             raise ScenarioError(key("endurance_limit"), endurance, "true or false")
+        live = d.pop("live", "auto")
+        if live not in (True, False, "auto"):
+            raise ScenarioError(key("live"), live, 'true, false or "auto"')
         block = d.pop("block_samples", 500)
         if isinstance(block, bool) or not isinstance(block, int) or block < 1:
             raise ScenarioError(key("block_samples"), block, "an integer >= 1")
@@ -166,6 +172,7 @@ class FatigueConfig:
             track_length_m=number("track_length_m", None, optional=True),
             repeats_basis_m=number("repeats_basis_m", None, optional=True),
             block_samples=block,
+            live=live,
             base_dir=str(base_dir),
         )
         if not 0.002 <= cfg.mesh_size_m <= 0.1:
@@ -175,5 +182,5 @@ class FatigueConfig:
             raise ScenarioError(key(k), d[k], "no such key (known: influence, mapping, "
                                 "stress_scale, equivalent, method, mean_stress, residue, "
                                 "endurance_limit, material, mesh_size_m, nodes, track_length_m, "
-                                "repeats_basis_m, block_samples)")
+                                "repeats_basis_m, block_samples, live)")
         return cfg

@@ -69,6 +69,7 @@ class FatigueResult:
     influence_meta: dict = field(default_factory=dict)
     missing_channels: list[str] = field(default_factory=list)
     repeats_basis_m: float | None = None
+    source: str = "batch"  # "batch" (a finished run's table) or "live" (during the run)
 
     @property
     def critical_node(self) -> int:
@@ -137,6 +138,7 @@ class FatigueResult:
             "missing_channels": list(self.missing_channels),
             "config": self.config,
             "influence": self.influence_meta,
+            "source": self.source,
         }
 
     def to_json(self) -> str:

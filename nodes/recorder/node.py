@@ -4,6 +4,10 @@ It subscribes to every producer node of the run (``suscosim/<run>/<node>/*``), a
 valid data message to the append-only journal as it arrives, and once every channel has
 delivered every step 0..N, exports ``table.csv`` / ``table.parquet`` and reports per-channel
 statistics to the orchestrator. On an abort it flushes, exports what is complete, and stops.
+
+When the run has a live fatigue node, the recorder also streams the load channel
+(``plant/arm``) to it as blocks on ``recorder/loads`` (see cosim.channels): steps in order,
+no gaps, ``fatigue.block_samples`` steps per block, the last block at the end of the run.
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from cosim import channels as ch
 from cosim import keys
 from cosim.errors import RunError, WireError
 from cosim.participant import HELLO_PERIOD_S, Participant
@@ -34,13 +39,53 @@ def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
             "torn": contents.torn, "undecodable": bad}
 
 
+class LoadStreamer:
+    """Cuts the load channel into consecutive blocks as its steps arrive (in any order)."""
+
+    def __init__(self, block_steps: int) -> None:
+        self.block_steps = max(1, int(block_steps))
+        self.pending: dict[int, tuple[float, dict[str, Any]]] = {}
+        self.next_k = 0
+
+    def add(self, k: int, t: float, fields: dict[str, Any]) -> None:
+        """Keep the first message of each step (as the table does), from next_k on."""
+        if k >= self.next_k and k not in self.pending:
+            self.pending[k] = (t, fields)
+
+    def blocks(self, last_k: int | None) -> list[dict[str, Any]]:
+        """Full blocks available now; with ``last_k`` (the run's last step) also the final
+        partial block once every step up to it is there."""
+        out = []
+        while True:
+            n = 0
+            while self.next_k + n in self.pending and n < self.block_steps:
+                n += 1
+            final = last_k is not None and n > 0 and self.next_k + n - 1 == last_k
+            if n < self.block_steps and not final:
+                return out
+            ks = range(self.next_k, self.next_k + n)
+            rows = [self.pending.pop(k) for k in ks]
+            names = [f for f in rows[0][1] if f not in ("k0", "t")]
+            block: dict[str, Any] = {"k0": self.next_k, "t": [r[0] for r in rows]}
+            for f in names:
+                block[f] = [float(r[1].get(f, float("nan"))) for r in rows]
+            out.append(block)
+            self.next_k += n
+
+
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Record the run until every channel is complete (or the run is aborted)."""
     run_cfg = scenario["run"]
     folder = Path(run_cfg["dir"])
     journal_path = folder / "journal.msgpack"
     journal = JournalWriter(journal_path, part.run)
-    producers = [n for n in run_cfg["nodes"] if n != part.node]
+    producers = [n for n in run_cfg["nodes"] if n in ch.NODES and n != part.node]
+    streamer: LoadStreamer | None = None
+    if ch.FATIGUE in run_cfg["nodes"]:
+        part.output(ch.LOADS)
+        block = (scenario.get("fatigue") or {}).get("block_samples", 500)
+        streamer = LoadStreamer(block)
+    load_name = "/".join(ch.LOAD_CHANNEL)
     put = part.inbox.put
     for node in producers:
         part.bus.subscribe(keys.key(part.run, node, "*"),
@@ -60,6 +105,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                     raise RunError(f"recorder: not started; heard {sorted(heard)} of {producers}")
                 if now >= next_ready:
                     next_ready = now + HELLO_PERIOD_S
+                    if streamer is not None:
+                        part.publish_hello()
                     if heard.issuperset(producers):
                         part.ctl("ready", info={"outputs": []})
             elif now - last_data > part.stall_timeout_s:
@@ -78,6 +125,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 if msg is not None and msg.kind == "start":
                     n_steps = int(msg.d["n_steps"])
                     for node, info in msg.d["info"].items():
+                        if node not in producers:
+                            continue  # e.g. the fatigue node: not a per-step channel
                         expected.update(f"{node}/{c}" for c in info.get("outputs", []))
                     part.ctl("progress", -1, 0.0, rejected=part.rejected)
                     last_data = time.monotonic()
@@ -99,6 +148,11 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             got.setdefault(name, set()).add(msg.k)
             journal.append(name, raw)
             last_data = time.monotonic()
+            if streamer is not None and name == load_name:
+                streamer.add(msg.k, msg.t, msg.d)
+                for blk in streamer.blocks(n_steps):
+                    k_last = blk["k0"] + len(blk["t"]) - 1
+                    part.publish(ch.LOADS, k_last, blk["t"][-1], blk)
             if n_steps is not None:
                 done_k = min(len(got.get(c, ())) for c in expected) - 1
                 part.progress(done_k, done_k * run_cfg["h"])

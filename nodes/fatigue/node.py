@@ -1,0 +1,100 @@
+"""The fatigue node: damage of the lower arm computed while the run goes on.
+
+It listens to the recorder's load blocks (``recorder/loads``: the ``plant/arm`` channel, in
+step order), feeds them to :class:`LiveFatigue` block by block, and publishes the damage so
+far on ``fatigue/damage`` (any tap can follow the arm's projected life live). After the block
+that ends at the run's last step it writes ``<run dir>/fatigue/`` (damage per node CSV,
+summary.json, damage map PNG) — the same files, and the same numbers, as the batch
+``suscosim fatigue RUN_DIR`` on the recorded table.
+"""
+
+from __future__ import annotations
+
+import queue
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cosim import channels as ch
+from cosim.errors import RunError
+from cosim.participant import Participant
+
+from .config import FatigueConfig
+from .run_dir import track_length, write_results
+from .worker import LiveFatigue, load_influence
+
+
+def run(part: Participant, scenario: dict[str, Any]) -> None:
+    """Consume load blocks until the last step, then write the run's fatigue results."""
+    run_cfg = scenario["run"]
+    cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
+    load_influence(cfg)  # FE solve or cache read: before ready, not inside the run
+    tag = part.listen(ch.RECORDER, ch.LOADS, required=("k0", "t"))
+    part.output(ch.DAMAGE)
+    start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
+    n_steps = int(start["n_steps"])
+    h = float(run_cfg["h"])
+    L = cfg.track_length_m if cfg.track_length_m is not None else \
+        track_length(scenario, np.array([0.0, run_cfg["t_end"]]))
+    live: LiveFatigue | None = None
+    next_k = 0
+    box = part.mailbox[tag]
+    last_input = time.monotonic()
+    while next_k <= n_steps:
+        try:
+            part.handle(*part.inbox.get(timeout=0.05))  # files the block; raises on abort
+        except queue.Empty:
+            pass
+        now = time.monotonic()
+        while box:
+            k = min(box)
+            msg = box.pop(k)
+            if k < 0:
+                continue  # hello
+            d = msg.d
+            if int(d["k0"]) != next_k:
+                raise RunError(f"fatigue: load block starts at step {d['k0']}, expected "
+                               f"{next_k} (a block was lost)")
+            t = np.asarray(d["t"], dtype=float)
+            channels = [f"{ch.PLANT}/{ch.ARM}/{f}" for f in d if f not in ("k0", "t")]
+            if live is None:
+                live = LiveFatigue(cfg, channels, L)
+            try:
+                loads = np.column_stack([np.asarray(d[c.rsplit("/", 1)[1]], dtype=float)
+                                         for c in live.channels])
+            except (KeyError, ValueError) as exc:
+                raise RunError(f"fatigue: malformed load block at step {d['k0']}: "
+                               f"{type(exc).__name__}: {exc}") from None
+            if loads.shape[0] != t.size:
+                raise RunError(f"fatigue: load block at step {d['k0']} has "
+                               f"{loads.shape[0]} rows for {t.size} times")
+            live.update(t, loads)
+            next_k = k + 1
+            last_input = now
+            res = live.result()
+            distance = L * next_k / (n_steps + 1)
+            part.publish(ch.DAMAGE, k, float(t[-1]), {
+                "max_damage": res.max_damage,
+                "critical_node_id": res.critical_node_id,
+                "distance_m": distance,
+                "life_km": distance / res.max_damage / 1000.0 if res.max_damage > 0
+                else float("inf"),
+            })
+        part.progress(next_k - 1, (next_k - 1) * h)
+        if now - last_input > max(30.0, 6.0 * part.stall_timeout_s):  # orchestrator gone too
+            raise RunError(f"fatigue: no load block from the recorder after step {next_k - 1}")
+    assert live is not None
+    result = live.result()
+    result.source = "live"
+    out = Path(run_cfg["dir"]) / "fatigue"
+    write_results(result, out)
+    part.finish(n_steps, n_steps * h, min_life_km=_finite(result.life_km),
+                min_life_repeats=_finite(result.life_repeats),
+                max_damage=result.max_damage, critical_node_id=result.critical_node_id,
+                files=str(out))
+
+
+def _finite(x: float) -> float | str:
+    return x if np.isfinite(x) else "inf"

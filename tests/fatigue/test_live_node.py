@@ -1,0 +1,87 @@
+"""The live fatigue node: the recorder streams arm loads in blocks while the run goes on;
+at the end the live result equals the batch worker on the recorded table."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nodes.fatigue.config import FatigueConfig
+from nodes.fatigue.run_dir import read_table, track_length
+from nodes.fatigue.worker import analyse
+from nodes.recorder.node import LoadStreamer
+from tests.conftest import ROOT, suscosim
+
+REALISTIC = ROOT / "scenarios" / "ch4_qvm_realistic_bump_pothole.toml"
+
+
+def test_load_streamer_cuts_ordered_gapless_blocks_from_any_arrival_order() -> None:
+    s = LoadStreamer(block_steps=3)
+    order = [1, 0, 4, 2, 2, 3, 6, 5]  # out of order, one duplicate
+    out = []
+    for k in order:
+        s.add(k, 0.01 * k, {"a": float(k) if k != 2 else 2.0, "b": -float(k)})
+        out += s.blocks(last_k=None)
+    assert [b["k0"] for b in out] == [0, 3]
+    assert out[0]["a"] == [0.0, 1.0, 2.0] and out[1]["b"] == [-3.0, -4.0, -5.0]
+    assert s.blocks(last_k=7) == []  # step 7 not there yet: no final block
+    s.add(7, 0.07, {"a": 7.0, "b": -7.0})
+    last = s.blocks(last_k=7)
+    assert [b["k0"] for b in last] == [6] and last[0]["t"] == [0.06, 0.07]
+    s.add(3, 9.9, {"a": 99.0, "b": 0.0})  # a late duplicate of a sent step is ignored
+    assert s.pending == {}
+
+
+def _damage_csv(path: Path) -> dict[int, float]:
+    with open(path, newline="") as fh:
+        return {int(r["node_id"]): float(r["damage_per_pass"]) for r in csv.DictReader(fh)}
+
+
+@pytest.mark.integration
+@pytest.mark.parametrize("mode", ["distributed", "monolithic"])
+def test_live_fatigue_equals_batch_on_the_recorded_loads(mode: str, tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    res = suscosim("run", str(REALISTIC), "--out", str(out), "--quiet", "--mode", mode,
+                   "--set", "run.t_end=1.2", "--set", "fatigue.block_samples=97",
+                   timeout=240)
+    assert res.returncode == 0, res.stdout + res.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert "fatigue" in summary["nodes"]
+    live = json.loads((out / "fatigue" / "summary.json").read_text())
+    assert live["source"] == "live"
+    assert live["n_samples"] == summary["n_steps"] + 1  # every step, once
+    # batch on the same loads, from the table the recorder wrote
+    scenario = json.loads((out / "scenario.json").read_text())
+    cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
+    t, loads = read_table(out)
+    batch = analyse(t, loads, cfg, track_length(scenario, t))
+    assert batch.max_damage > 0
+    assert live["max_damage_per_pass"] == pytest.approx(batch.max_damage, rel=1e-9)
+    assert live["critical_node_id"] == batch.critical_node_id
+    assert live["min_life_km"] == pytest.approx(batch.life_km, rel=1e-9)
+    per_node = _damage_csv(out / "fatigue" / "damage_per_node.csv")
+    expect = dict(zip(batch.node_ids.tolist(), batch.damage.tolist(), strict=True))
+    assert per_node.keys() == expect.keys()
+    ids = sorted(expect)
+    np.testing.assert_allclose([per_node[i] for i in ids], [expect[i] for i in ids],
+                               rtol=2e-6, atol=1e-30)
+    assert summary["fatigue"]["critical_node_id"] == batch.critical_node_id
+    assert "fatigue (live)" in res.stdout
+
+
+@pytest.mark.integration
+def test_live_fatigue_off_and_refused_on_a_plant_without_arm_loads(tmp_path: Path) -> None:
+    out = tmp_path / "off"
+    res = suscosim("run", str(REALISTIC), "--out", str(out), "--quiet", "--mode", "monolithic",
+                   "--set", "run.t_end=0.2", "--set", "fatigue.live=false")
+    assert res.returncode == 0, res.stderr
+    assert "fatigue" not in json.loads((out / "summary.json").read_text())["nodes"]
+    assert not (out / "fatigue").exists()
+    bad = suscosim("run", str(ROOT / "scenarios" / "ch3_step_quarter_car.toml"),
+                   "--out", str(tmp_path / "bad"), "--set", "fatigue.live=true")
+    assert bad.returncode == 2
+    assert "fatigue.live" in bad.stderr and "arm loads" in bad.stderr
