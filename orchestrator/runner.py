@@ -148,6 +148,11 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     folder = Path(run["dir"])
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "scenario.json").write_text(json.dumps(scenario, indent=2, sort_keys=True))
+    if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go
+        listen = list(listen or [free_loopback_endpoint()])
+    from .runs import write_run_json
+
+    write_run_json(folder, run["id"], listen or [], connect or [], lowlatency)
     t0 = time.monotonic()
     if run["mode"] == "reference":
         from .reference import run_reference

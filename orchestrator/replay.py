@@ -1,0 +1,210 @@
+"""``suscosim replay``: republish a recorded journal on the bus, as if the run were live.
+
+    suscosim replay JOURNAL [--run NEW_ID] [--speed X | --fast] [--connect EP ...]
+                    [--listen EP ...] [--wait S] [--lowlatency]
+
+``JOURNAL`` is a recorder journal (``journal.msgpack``) or a run folder holding one. Every
+record (``"<node>/<channel>"`` and the message bytes exactly as the recorder received them) is
+published on ``suscosim/<run>/<node>/<channel>``, in the journal's order, at the recorded pace
+(message time ``t`` against the wall clock; ``--speed 2`` is twice as fast) or, with
+``--fast``, as fast as the bus takes it. The default run id is ``<original>-replay``, so a
+replay never mixes with a live run of the same id; taps, the fatigue worker or any Zenoh
+subscriber listen to it as to a live run. Only data messages are in a journal: there is no
+clock, no liveliness token, no handshake.
+
+Endpoints: with neither ``--connect`` nor ``--listen`` the replay listens on
+``tcp/127.0.0.1:7447`` (where a bare ``suscosim tap`` connects). Before the first message it
+waits up to ``--wait`` s (default 5) for a subscriber to appear, so a tap started just before
+or after does not miss the beginning; it publishes anyway after that.
+
+Exit codes: 0 replayed, 2 bad input (no such file, not a journal, bad run id, bad endpoint),
+130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from cosim import keys
+from cosim.errors import ScenarioError, WireError
+from cosim.wire import decode
+
+DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+LINGER_S = 0.5
+"""Kept open this long after the last message, so Zenoh sends what it still holds."""
+
+
+class ReplayInputError(ValueError):
+    """Bad replay input: exit code 2 with this message."""
+
+
+def load(path: str | Path) -> tuple[str, list[tuple[str, str, bytes, float]], int, str]:
+    """Read a journal (or a run folder's): (run id, [(node, channel, raw, t)], skipped, problem).
+
+    ``skipped`` counts records that do not decode or whose channel is not ``node/channel``
+    (none in a journal the recorder wrote); ``problem`` says whether the tail was torn.
+    """
+    from nodes.recorder.journal import read_journal
+
+    p = Path(path)
+    if p.is_dir():
+        p = p / "journal.msgpack"
+    if not p.is_file():
+        raise ReplayInputError(f"{p}: no such journal file")
+    try:
+        contents = read_journal(p)
+    except (OSError, ValueError) as exc:
+        raise ReplayInputError(str(exc)) from None
+    records: list[tuple[str, str, bytes, float]] = []
+    skipped = 0
+    for channel, raw in contents.records:
+        parts = channel.split("/")
+        try:
+            if len(parts) != 2:
+                raise ValueError(channel)
+            keys.check_name("node", parts[0])
+            keys.check_name("channel", parts[1])
+            t = decode(raw).t
+        except (ValueError, ScenarioError, WireError):
+            skipped += 1
+            continue
+        records.append((parts[0], parts[1], raw, t))
+    return contents.run_id, records, skipped, contents.problem
+
+
+def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
+    """Wait until one of the publishers has a matching subscriber (or ``wait_s`` passes)."""
+    objs = [getattr(put, "__self__", None) for put in pubs]
+    objs = [o for o in objs if o is not None and hasattr(o, "matching_status")]
+    deadline = time.monotonic() + wait_s
+    while time.monotonic() < deadline:
+        if not objs:  # no matching API: give discovery a moment
+            time.sleep(min(1.0, wait_s))
+            return False
+        if any(o.matching_status.matching for o in objs):
+            time.sleep(0.05)  # let the other declarations of that peer arrive too
+            return True
+        time.sleep(0.02)
+    return False
+
+
+def replay(bus: Any, run_id: str, records: list[tuple[str, str, bytes, float]],
+           speed: float | None, wait_s: float = 5.0,
+           log: Any = None) -> tuple[int, float]:
+    """Publish ``records`` under ``run_id`` on ``bus``; ``speed`` None = as fast as possible.
+
+    Returns (messages published, wall seconds from the first to the last).
+    """
+    log = log or (lambda text: None)
+    pubs: dict[tuple[str, str], Any] = {}
+    for node, channel, _raw, _t in records:
+        if (node, channel) not in pubs:
+            pubs[node, channel] = bus.publisher(keys.key(run_id, node, channel))
+    if wait_s > 0 and not _wait_for_subscriber(list(pubs.values()), wait_s):
+        log(f"no subscriber after {wait_s:g} s: publishing anyway")
+    t_first = records[0][3]
+    start = time.monotonic()
+    sent = 0
+    for node, channel, raw, t in records:
+        if speed is not None:
+            ahead = start + (t - t_first) / speed - time.monotonic()
+            if ahead > 0.0005:
+                time.sleep(ahead)
+        pubs[node, channel](raw)
+        sent += 1
+    return sent, time.monotonic() - start
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="suscosim replay",
+                                 description="republish a recorded journal on the bus")
+    ap.add_argument("journal", help="journal.msgpack, or a run folder holding one")
+    ap.add_argument("--run", metavar="ID", help="run id to publish under "
+                    "(default: <original>-replay)")
+    pace = ap.add_mutually_exclusive_group()
+    pace.add_argument("--speed", type=float, default=1.0, metavar="X",
+                      help="pace factor against the recorded time (default 1 = real time)")
+    pace.add_argument("--fast", action="store_true", help="as fast as possible")
+    ap.add_argument("--connect", action="append", metavar="EP",
+                    help="Zenoh endpoint to connect to (a run's, a router's, a tap's)")
+    ap.add_argument("--listen", action="append", metavar="EP",
+                    help=f"endpoint to listen on (default {DEFAULT_LISTEN} when no --connect)")
+    ap.add_argument("--wait", type=float, default=5.0, metavar="S",
+                    help="wait up to S s for a subscriber before publishing (default 5)")
+    ap.add_argument("--lowlatency", action="store_true",
+                    help="Zenoh low-latency transport (every peer must use it)")
+    ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    return ap
+
+
+def _fail(message: str) -> int:
+    print(f"suscosim replay: {message}", file=sys.stderr)
+    return 2
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Replay a journal; return the exit code (0 done, 2 bad input, 130 interrupted)."""
+    ap = build_parser()
+    try:
+        args = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as exc:
+        return 0 if exc.code == 0 else 2
+    if not args.fast and not args.speed > 0:
+        return _fail(f"--speed {args.speed:g}: expected a factor > 0")
+    if args.wait < 0:
+        return _fail(f"--wait {args.wait:g}: expected a time >= 0 s")
+    try:
+        original, records, skipped, problem = load(args.journal)
+    except ReplayInputError as exc:
+        return _fail(str(exc))
+    if not records:
+        return _fail(f"{args.journal}: the journal holds no data message to replay")
+    run_id = args.run or f"{original}-replay"
+    try:
+        keys.check_name("run", run_id)
+    except ScenarioError:
+        return _fail(f"run id {run_id!r}: 1-64 letters, digits, '_', '.', '-' (give one with "
+                     "--run)")
+    if problem:
+        print(f"suscosim replay: note: {problem}; replaying the {len(records)} records "
+              "before it", file=sys.stderr)
+    if skipped:
+        print(f"suscosim replay: note: skipped {skipped} undecodable record(s)", file=sys.stderr)
+    from cosim.bus import ZenohBus, zenoh_config
+
+    connect = list(args.connect or [])
+    listen = args.listen or (None if connect else [DEFAULT_LISTEN])
+    try:
+        bus = ZenohBus(zenoh_config(connect, listen, lowlatency=args.lowlatency,
+                                    config_file=args.zenoh_config))
+    except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, bad config file
+        return _fail(f"cannot open a Zenoh session (listen {listen or 'loopback'}, connect "
+                     f"{connect}): {exc}")
+    where = ", ".join(connect or listen or [])
+    n_ch = len({(n, c) for n, c, _r, _t in records})
+    pace = "as fast as possible" if args.fast else f"at {args.speed:g}x the recorded pace"
+    print(f"suscosim replay: {len(records)} messages on {n_ch} channels of run {original} as "
+          f"suscosim/{run_id}/** via {where}, {pace}", file=sys.stderr, flush=True)
+    sent, wall = 0, 0.0
+    try:
+        sent, wall = replay(bus, run_id, records, None if args.fast else args.speed,
+                            args.wait, log=lambda text: print(f"suscosim replay: {text}",
+                                                              file=sys.stderr, flush=True))
+        time.sleep(LINGER_S)
+    except KeyboardInterrupt:
+        print("suscosim replay: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        bus.close()
+    t_span = records[-1][3] - records[0][3]
+    print(f"replayed {sent} messages as run {run_id}: {t_span:.4g} s of run time in "
+          f"{wall:.3g} s wall")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
