@@ -682,6 +682,9 @@ def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:
     if _is_num(fs.get("eq_stress_max_pa")) and _is_num(fs.get("eq_stress_min_pa")):
         pairs.append(("equivalent stress, max / min over the arm [MPa]",
                       [fs["eq_stress_max_pa"] / 1e6, fs["eq_stress_min_pa"] / 1e6]))
+    if fs.get("source"):
+        pairs.append(("computed", f"{fs['source']} (live: during the run; batch: "
+                                  "suscosim fatigue)"))
     for k, lab in (("n_nodes", "nodes analysed"), ("n_samples", "samples"),
                    ("duration_s", "duration [s]"), ("track_length_m", "track length [m]")):
         if k in fs:
