@@ -412,9 +412,19 @@ def time_history_panels(table: dict[str, np.ndarray]) -> tuple[list[tuple], list
 
 def plot_panels(t: np.ndarray, panels: list[tuple], width: float = 11.0) -> str:
     fig, axes = _figure(len(panels), width=width, sharex=True)
+    styles = ("-", "--", ":", "-.")
     for ax, (title, unit, lines) in zip(axes, panels, strict=True):
-        for lab, y in lines:
-            ax.plot(*decimate(t, y), lw=0.9, label=lab)
+        quantities: list[str] = []
+        for i, (lab, y) in enumerate(lines):
+            head, _, last = lab.rpartition(" ")
+            if last in CORNERS and head:  # full vehicle: colour = corner, style = quantity
+                if head not in quantities:
+                    quantities.append(head)
+                style = dict(color=f"C{CORNERS.index(last)}",
+                             ls=styles[quantities.index(head) % len(styles)])
+            else:
+                style = dict(color=f"C{i % 10}")
+            ax.plot(*decimate(t, y), lw=0.9, label=lab, **style)
         ax.set_title(title, fontsize=10, loc="left")
         ax.set_ylabel(unit)
         ax.grid(alpha=0.3)
