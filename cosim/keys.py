@@ -3,7 +3,8 @@
 So runs on one network never mix: a node only ever subscribes under its own run id.
 Control traffic uses the same scheme: ``<node>/ctl`` (ready, progress, done, error from a
 node), ``orchestrator/clock`` (start, abort), ``orchestrator/scenario`` (queryable),
-``<node>/alive`` (liveliness token).
+``<node>/alive`` (liveliness token). ``<node>/records`` carries a node's data messages to the
+recorder in batches (see cosim.wire).
 """
 
 from __future__ import annotations
@@ -45,4 +46,5 @@ CTL = "ctl"
 CLOCK = "clock"
 SCENARIO = "scenario"
 ALIVE = "alive"
+RECORDS = "records"
 ORCHESTRATOR = "orchestrator"

@@ -11,7 +11,11 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
    orchestrator's ``start`` arrives. ``start`` carries every node's facts.
 3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived (the
    step barrier); :meth:`Participant.publish` sends outputs. Progress goes to the orchestrator
-   at most every 0.1 s.
+   at most every 0.1 s. Every published data message is also kept, as published, for the
+   recorder, which gets them in batches on ``<node>/records`` (at most ``RECORD_BATCH``
+   messages or ``RECORD_PERIOD_S`` old): one message per batch instead of one per step keeps
+   the recorder off the per-step critical path (it would otherwise take as much CPU per step
+   as the plant on a 2-core machine).
 4. **End**: ``done`` after the last step; an ``abort`` from the orchestrator, or an input that
    does not come within the stall timeout, ends the node with :class:`RunError`.
 
@@ -29,7 +33,7 @@ from typing import Any
 
 from . import keys
 from .errors import RunError, WireError
-from .wire import Message, decode, encode
+from .wire import Message, decode, encode, encode_records
 
 log = logging.getLogger("suscosim.node")
 
@@ -39,6 +43,8 @@ Channel = tuple[str, str]
 _CLOCK_TAG: Channel = (keys.ORCHESTRATOR, keys.CLOCK)
 HELLO_PERIOD_S = 0.05
 PROGRESS_PERIOD_S = 0.1
+RECORD_BATCH = 64
+RECORD_PERIOD_S = 0.05
 
 
 class Participant:
@@ -52,6 +58,9 @@ class Participant:
         self.required: dict[Channel, tuple[str, ...]] = {}
         self.rejected = 0
         self._outputs: dict[str, Any] = {}
+        self._records: list[tuple[str, bytes]] = []
+        self._records_pub: Any = None
+        self._records_k, self._records_t, self._records_since = -1, 0.0, time.monotonic()
         self._ctl = bus.publisher(keys.key(run, node, keys.CTL))
         self._last_progress = 0.0
         self._token = bus.token(keys.key(run, node, keys.ALIVE))
@@ -74,6 +83,8 @@ class Participant:
     def output(self, channel: str) -> None:
         """Declare an output channel (a publisher on ``suscosim/<run>/<node>/<channel>``)."""
         self._outputs[channel] = self.bus.publisher(keys.key(self.run, self.node, channel))
+        if self._records_pub is None:
+            self._records_pub = self.bus.publisher(keys.key(self.run, self.node, keys.RECORDS))
 
     def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
         """The resolved scenario, from the orchestrator's queryable (retried until it answers)."""
@@ -88,13 +99,33 @@ class Participant:
                        f"within {timeout_s:.0f} s (is it running, and is --connect right?)")
 
     # ---- messages -----------------------------------------------------------------------
-    def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any]) -> None:
-        self._outputs[channel](encode("data", k, t, dict(data)))
+    def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
+                record: bool = True) -> None:
+        """Publish one data message; keep it for the recorder unless ``record`` is false."""
+        raw = encode("data", k, t, dict(data))
+        self._outputs[channel](raw)
+        if record:
+            self._records.append((channel, raw))
+            self._records_k, self._records_t = k, t
+            if len(self._records) >= RECORD_BATCH or \
+                    time.monotonic() - self._records_since >= RECORD_PERIOD_S:
+                self.flush_records()
+
+    def flush_records(self) -> None:
+        """Send the kept data messages to the recorder (at the end, and before giving up)."""
+        self._records_since = time.monotonic()
+        if self._records and self._records_pub is not None:
+            batch, self._records = self._records, []
+            self._records_pub(encode_records(batch, self._records_k, self._records_t))
 
     def publish_hello(self) -> None:
-        """``hello`` on every output (the start handshake's proof that a data path is live)."""
+        """``hello`` on every output and the records feed (the start handshake's proof that
+        a data path is live)."""
+        hello = encode("hello", -1, 0.0, {})
         for pub in self._outputs.values():
-            pub(encode("hello", -1, 0.0, {}))
+            pub(hello)
+        if self._records_pub is not None:
+            self._records_pub(hello)
 
     def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: Any) -> None:
         """A control message to the orchestrator (ready, progress, done, error)."""
@@ -200,6 +231,7 @@ class Participant:
 
     def finish(self, k: int, t: float, linger_s: float = 5.0, **extra: Any) -> None:
         """Report ``done`` and wait (briefly) for the orchestrator to close the run."""
+        self.flush_records()
         self.ctl("done", k, t, rejected=self.rejected, **extra)
         deadline = time.monotonic() + linger_s
         while time.monotonic() < deadline:

@@ -4,6 +4,7 @@ Schema (version 1)::
 
     {"v": 1,            # schema version (int); a node refuses versions it does not know
      "kind": "data",    # data | hello | ready | start | progress | done | abort | error
+                        # | records
      "k": 42,           # communication step index (int, -1 before the run starts)
      "t": 0.042,        # time t_k of that step [s]
      "d": {...}}        # payload
@@ -11,6 +12,10 @@ Schema (version 1)::
 For ``kind == "data"`` the payload maps field names to a number or a list of numbers (one per
 corner for per-corner quantities; a quarter car sends plain numbers). Field names and units of
 each channel are listed in :mod:`cosim.channels`. Control kinds carry a free msgpack map.
+
+``kind == "records"`` is the recorder's feed (``suscosim/<run>/<node>/records``): a node's
+data messages of the last few steps, exactly as published, ``d = {"records": [[channel,
+raw message bytes], ...]}`` in publication order; ``k``/``t`` are those of the last one.
 """
 
 from __future__ import annotations
@@ -24,7 +29,8 @@ import numpy as np
 from .errors import WireError
 
 SCHEMA_VERSION = 1
-KINDS = frozenset({"data", "hello", "ready", "start", "progress", "done", "abort", "error"})
+KINDS = frozenset({"data", "hello", "ready", "start", "progress", "done", "abort", "error",
+                   "records"})
 
 
 @dataclass(frozen=True)
@@ -93,4 +99,19 @@ def decode(raw: bytes) -> Message:
             )
             if not ok:
                 raise WireError(f"data field '{name}'={value!r} is not a number or list of numbers")
+    if kind == "records":
+        recs = d.get("records")
+        if not isinstance(recs, list) or not all(
+                isinstance(r, list) and len(r) == 2 and isinstance(r[0], str)
+                and isinstance(r[1], bytes) for r in recs):
+            raise WireError("records payload is not a list of [channel, bytes] pairs")
     return Message(kind=kind, k=k, t=float(t), d=d)
+
+
+def encode_records(records: list[tuple[str, bytes]], k: int, t: float) -> bytes:
+    """A ``records`` message: ``(channel, raw message)`` pairs as published."""
+    return msgpack.packb(
+        {"v": SCHEMA_VERSION, "kind": "records", "k": int(k), "t": float(t),
+         "d": {"records": [[c, raw] for c, raw in records]}},
+        use_bin_type=True,
+    )

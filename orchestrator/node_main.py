@@ -47,6 +47,10 @@ def run_node(bus, run_id: str, name: str, scenario: dict | None = None) -> int:
         part.ctl("error", message=f"internal error: {type(exc).__name__}: {exc}", exit_code=1)
         return 1
     finally:
+        try:
+            part.flush_records()  # what this node computed stays recorded, even on an error
+        except Exception:
+            pass
         part.close()
 
 
@@ -61,11 +65,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--lowlatency", action="store_true",
                     help="Zenoh low-latency transport (every peer must use it)")
     ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    ap.add_argument("--mode", choices=["client", "peer"],
+                    help="Zenoh mode (default: the config file's, else client: everything "
+                         "through the router or orchestrator given by --connect; the "
+                         "orchestrator starts its local nodes as peers)")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format=f"%(asctime)s {args.name}: %(message)s",
                         stream=sys.stderr)
-    bus = ZenohBus(zenoh_config(args.connect, args.listen, args.lowlatency,
-                                config_file=args.zenoh_config))
+    try:
+        bus = ZenohBus(zenoh_config(args.connect, args.listen, args.lowlatency,
+                                    config_file=args.zenoh_config, mode=args.mode,
+                                    default_mode="client"))
+    except Exception as exc:  # unreachable router, bad config file or certificate
+        text = " ".join(str(exc).split())
+        print(f"suscosim node {args.name}: cannot open the Zenoh session "
+              f"(--connect {' '.join(args.connect) or '-'}): {text}", file=sys.stderr)
+        return 1
     try:
         return run_node(bus, args.run, args.name)
     finally:

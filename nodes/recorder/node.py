@@ -74,7 +74,11 @@ class LoadStreamer:
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
-    """Record the run until every channel is complete (or the run is aborted)."""
+    """Record the run until every channel is complete (or the run is aborted).
+
+    Producers send their data messages, exactly as they published them, in batches on
+    ``<node>/records`` (see cosim.participant); each one is validated and journaled.
+    """
     run_cfg = scenario["run"]
     folder = Path(run_cfg["dir"])
     journal_path = folder / "journal.msgpack"
@@ -88,12 +92,48 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     load_name = "/".join(ch.LOAD_CHANNEL)
     put = part.inbox.put
     for node in producers:
-        part.bus.subscribe(keys.key(part.run, node, "*"),
+        part.bus.subscribe(keys.key(part.run, node, keys.RECORDS),
                            lambda key, raw: put(((_DATA, key), raw)))
     heard: set[str] = set()
     expected: set[str] = set()
     got: dict[str, set[int]] = {}
     n_steps = None
+
+    def record(node: str, channel: str, raw: bytes) -> None:
+        """Validate and journal one data message of ``node/channel``."""
+        try:
+            msg = decode(raw)
+        except WireError as exc:
+            part._reject((node, channel), str(exc))
+            return
+        if msg.kind != "data" or msg.k < 0:
+            return
+        name = f"{node}/{channel}"
+        # Everything valid is journaled, duplicates included: the table keeps, per step,
+        # the first message that has the channel's fields (see table.build_table).
+        got.setdefault(name, set()).add(msg.k)
+        journal.append(name, raw)
+        if streamer is not None and name == load_name:
+            streamer.add(msg.k, msg.t, msg.d)
+            for blk in streamer.blocks(n_steps):
+                k_last = blk["k0"] + len(blk["t"]) - 1
+                part.publish(ch.LOADS, k_last, blk["t"][-1], blk, record=False)
+
+    def feed(key: str, raw: bytes) -> bool:
+        """One ``records`` message; True if it held data."""
+        _, node, _ = keys.parse_key(key)
+        try:
+            batch = decode(raw)
+        except WireError as exc:
+            part._reject((node, keys.RECORDS), str(exc))
+            return False
+        heard.add(node)
+        if batch.kind != "records":
+            return False
+        for channel, one in batch.d["records"]:
+            record(node, channel, one)
+        return True
+
     last_flush = last_data = time.monotonic()
     next_ready = 0.0
     deadline = time.monotonic() + run_cfg["start_timeout_s"]
@@ -131,37 +171,31 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                     part.ctl("progress", -1, 0.0, rejected=part.rejected)
                     last_data = time.monotonic()
                 continue
-            _, node, channel = keys.parse_key(tag[1])
-            if channel == keys.CTL:
+            if not feed(tag[1], raw):
                 continue
-            try:
-                msg = decode(raw)
-            except WireError as exc:
-                part._reject((node, channel), str(exc))
-                continue
-            heard.add(node)
-            if msg.kind != "data" or msg.k < 0:
-                continue
-            name = f"{node}/{channel}"
-            # Everything valid is journaled, duplicates included: the table keeps, per step,
-            # the first message that has the channel's fields (see table.build_table).
-            got.setdefault(name, set()).add(msg.k)
-            journal.append(name, raw)
             last_data = time.monotonic()
-            if streamer is not None and name == load_name:
-                streamer.add(msg.k, msg.t, msg.d)
-                for blk in streamer.blocks(n_steps):
-                    k_last = blk["k0"] + len(blk["t"]) - 1
-                    part.publish(ch.LOADS, k_last, blk["t"][-1], blk)
             if n_steps is not None:
                 done_k = min(len(got.get(c, ())) for c in expected) - 1
                 part.progress(done_k, done_k * run_cfg["h"])
                 if done_k >= n_steps:
                     break
     except RunError:
+        _drain(part, feed)  # the other nodes' last batches, sent as they stop
         journal.close()
         finalize(journal_path, folder)
         raise
     journal.close()
     result = finalize(journal_path, folder)
     part.finish(n_steps, n_steps * run_cfg["h"], **result)
+
+
+def _drain(part: Participant, feed: Any, quiet_s: float = 0.3, limit_s: float = 1.5) -> None:
+    """After an abort: keep journaling the records that still arrive, until the bus is quiet."""
+    end = time.monotonic() + limit_s
+    while time.monotonic() < end:
+        try:
+            tag, raw = part.inbox.get(timeout=quiet_s)
+        except queue.Empty:
+            return
+        if tag[0] == _DATA:
+            feed(tag[1], raw)

@@ -50,3 +50,20 @@ def test_keyexpr_matching_of_memory_bus():
     assert keyexpr_matches("suscosim/r1/*/ctl", "suscosim/r1/plant/ctl")
     assert not keyexpr_matches("suscosim/r1/*/ctl", "suscosim/r2/plant/ctl")
     assert not keyexpr_matches("suscosim/r1/plant/*", "suscosim/r1/plant/state/x")
+
+
+def test_records_batch_round_trips_the_raw_messages_and_rejects_bad_payloads():
+    import msgpack
+    import pytest
+
+    from cosim.errors import WireError
+    from cosim.wire import decode, encode, encode_records
+
+    raws = [("state", encode("data", k, 0.001 * k, {"z_b": 0.1 * k})) for k in range(3)]
+    msg = decode(encode_records(raws, 2, 0.002))
+    assert msg.kind == "records" and msg.k == 2
+    assert [tuple(r) for r in msg.d["records"]] == raws  # byte for byte, in order
+    bad = msgpack.packb({"v": 1, "kind": "records", "k": 0, "t": 0.0,
+                         "d": {"records": [["state", "not bytes"]]}}, use_bin_type=True)
+    with pytest.raises(WireError, match="records payload"):
+        decode(bad)
