@@ -33,10 +33,16 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         n = int(start["n_steps"])
         dt = h / n_sub
         before: StepInputs | None = None
+        later: list[tuple[str, int, float, dict]] = []
         for k in range(n + 1):
             t = k * h
             st = model.state()
             part.publish(ch.STATE, k, t, st)
+            # last step's response and loads go out now, while the force nodes work on
+            # this state: off the critical path of the exchange
+            for name, kk, tt, values in later:
+                part.publish(name, kk, tt, values)
+            later.clear()
             msgs = part.wait({tyre: k, damper: k})
             v_rel = st["v_w"] - st["v_b"]
             now = StepInputs(
@@ -47,15 +53,16 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             F_s = model.spring_force()
             model.substep(dt, now.F_t, now.F_d)
             after = model.state()
-            part.publish(ch.RESPONSE, k, t, {
+            later.append((ch.RESPONSE, k, t, {
                 "a_b": (after["v_b"] - st["v_b"]) / dt,
                 "a_w": (after["v_w"] - st["v_w"]) / dt,
                 "F_t": now.F_t, "F_d": now.F_d, "F_s": F_s,
-            })
-            for name, values in model.loads().items():
-                part.publish(name, k, t, values)
+            }))
+            later.extend((name, k, t, values) for name, values in model.loads().items())
             part.progress(k, t)
             if k == n:
+                for name, kk, tt, values in later:
+                    part.publish(name, kk, tt, values)
                 break
             for j in range(1, n_sub):
                 cur = model.state()

@@ -1,7 +1,9 @@
 """The recorder node: every data channel of a run into the journal, then the run's table.
 
-It subscribes to every producer node of the run (``suscosim/<run>/<node>/*``), appends each
-valid data message to the append-only journal as it arrives, and once every channel has
+It subscribes to the records feed of every producer node of the run
+(``suscosim/<run>/<node>/records``: the node's data messages exactly as it published them, in
+batches of a few steps), appends each valid data message to the append-only journal as it
+arrives, and once every channel has
 delivered every step 0..N, exports ``table.csv`` / ``table.parquet`` and reports per-channel
 statistics to the orchestrator. On an abort it flushes, exports what is complete, and stops.
 
