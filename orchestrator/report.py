@@ -815,6 +815,26 @@ class Point:
     params: dict[str, Any]
     run_dir: Path
     run: RunData | None
+    overrides: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def law(self) -> str | None:
+        """The controller law: a ``controller.law`` parameter, else the point's overrides in
+        sweep.json (a variant axis such as ``strategy``), else the run's resolved scenario."""
+        if LAW_KEY in self.params:
+            return str(self.params[LAW_KEY])
+        ov = self.overrides
+        law = ov.get(LAW_KEY)
+        if law is None and isinstance(ov.get("controller"), dict):
+            law = ov["controller"].get("law")
+        if law is None and self.run is not None:
+            law = ((self.run.scenario or {}).get("controller") or {}).get("law")
+        return None if law is None else str(law)
+
+    @property
+    def short(self) -> str:
+        """The point's grid values joined by '/' (its id if it has none)."""
+        return "/".join(fmt(v) for v in self.params.values()) or self.id
 
     @property
     def status(self) -> str:
@@ -853,7 +873,8 @@ def load_sweep(d: Path) -> tuple[dict, list[Point]]:
             raise BadInput(f"{p}: points[{i}].params is not an object")
         rd = d / str(pt.get("run_dir") or f"runs/{pid}")
         run = load_run(rd) if rd.is_dir() and is_run_dir(rd) else None
-        points.append(Point(pid, params, rd, run))
+        ov = pt.get("overrides")
+        points.append(Point(pid, params, rd, run, ov if isinstance(ov, dict) else {}))
     return spec, points
 
 
@@ -904,16 +925,43 @@ def _rms_of(p: Point, bases: Sequence[str]) -> float | None:
     return None
 
 
+def law_axis(points: list[Point], keys: list[str]) -> str | None:
+    """The grid axis that sets the controller law: ``controller.law``, or an axis of named
+    variants (e.g. ``strategy``) whose every value gives one law, passive among them."""
+    if LAW_KEY in keys:
+        return LAW_KEY
+    for k in keys:
+        laws: dict[str, set] = {}
+        for p in points:
+            if k in p.params and p.law is not None:
+                laws.setdefault(json.dumps(p.params[k], sort_keys=True, default=str),
+                                set()).add(p.law)
+        distinct = set().union(*laws.values()) if laws else set()
+        if laws and all(len(v) == 1 for v in laws.values()) and len(distinct) > 1 \
+                and PASSIVE in distinct:
+            return k
+    return None
+
+
+def _is_passive(p: Point, axis: str) -> bool:
+    return p.law == PASSIVE or p.params.get(axis) == PASSIVE
+
+
 def vs_passive(points: list[Point], keys: list[str], value) -> dict[str, float]:
-    """``{point id: (value / value of the passive point of its grid cell - 1) * 100}``."""
-    if LAW_KEY not in keys:
+    """``{point id: (value / value of the passive point of its grid cell - 1) * 100}``, the
+    grid cell being the values of every axis but the law axis (empty without one)."""
+    axis = law_axis(points, keys)
+    if axis is None:
         return {}
-    others = [k for k in keys if k != LAW_KEY]
+    others = [k for k in keys if k != axis]
 
     def cell(p: Point) -> tuple:
-        return tuple(json.dumps(p.params.get(k), sort_keys=True) for k in others)
+        return tuple(json.dumps(p.params.get(k), sort_keys=True, default=str) for k in others)
 
-    base = {cell(p): value(p) for p in points if p.params.get(LAW_KEY) == PASSIVE}
+    base: dict[tuple, float | None] = {}
+    for p in points:
+        if _is_passive(p, axis) and cell(p) not in base:
+            base[cell(p)] = value(p)
     out = {}
     for p in points:
         b, v = base.get(cell(p)), value(p)
@@ -999,18 +1047,20 @@ def _bars(ax, labels: list[str], values: list[float | None], title: str, ylabel:
                         ha="center", va="bottom", fontsize=8, color="#888")
 
 
-def law_colours(points: list[Point]) -> dict[str, str]:
-    """A colour per controller law (passive first, C0), the same in every chart."""
-    laws = [str(x) for x in dict.fromkeys(p.params.get(LAW_KEY) for p in points)]
-    laws.sort(key=lambda law: law != PASSIVE)
-    return {law: f"C{i % 10}" for i, law in enumerate(laws)}
+def law_colours(points: list[Point], axis: str) -> dict[str, str]:
+    """A colour per value of the law axis (passive first, C0), the same in every chart."""
+    vals = [fmt(x) for x in dict.fromkeys(p.params.get(axis) for p in points)]
+    passive = {fmt(p.params.get(axis)) for p in points if _is_passive(p, axis)}
+    vals.sort(key=lambda v: v not in passive)
+    return {v: f"C{i % 10}" for i, v in enumerate(vals)}
 
 
 def _point_colours(points: list[Point], keys: list[str]) -> list[str] | None:
-    if LAW_KEY not in keys:
+    axis = law_axis(points, keys)
+    if axis is None:
         return None
-    colour = law_colours(points)
-    return [colour[str(p.params.get(LAW_KEY))] for p in points]
+    colour = law_colours(points, axis)
+    return [colour[fmt(p.params.get(axis))] for p in points]
 
 
 def _cell_label(p: Point, others: list[str]) -> str:
@@ -1021,13 +1071,15 @@ def _grouped_change(ax, points: list[Point], keys: list[str], change: dict[str, 
                     title: str) -> None:
     """Bars of ``change`` [%] per law (without passive), grouped by the grid cell of the other
     parameters (a single cell: one bar per law)."""
-    others = [k for k in keys if k != LAW_KEY]
-    colour = law_colours(points)
-    laws = [law for law in dict.fromkeys(p.params.get(LAW_KEY) for p in points)
-            if law != PASSIVE and any(q.id in change for q in points
-                                      if q.params.get(LAW_KEY) == law)]
+    axis = law_axis(points, keys) or LAW_KEY
+    others = [k for k in keys if k != axis]
+    colour = law_colours(points, axis)
+    laws = [law for law in dict.fromkeys(fmt(p.params.get(axis)) for p in points
+                                         if not _is_passive(p, axis))
+            if any(q.id in change for q in points if fmt(q.params.get(axis)) == law)]
     cells = list(dict.fromkeys(_cell_label(p, others) for p in points))
-    value = {(_cell_label(p, others), p.params.get(LAW_KEY)): change.get(p.id) for p in points}
+    value = {(_cell_label(p, others), fmt(p.params.get(axis))): change.get(p.id)
+             for p in points}
     nl = max(1, len(laws))
     width = min(0.8 / nl, 0.35)
     for j, law in enumerate(laws):
@@ -1056,7 +1108,7 @@ def _grouped_change(ax, points: list[Point], keys: list[str], change: dict[str, 
 def sweep_compare_section(points: list[Point], keys: list[str]) -> str:
     lives = [p.life_km for p in points]
     accs = [_rms_of(p, BODY_ACC) for p in points]
-    labels = [p.id for p in points]
+    labels = [p.short for p in points]
     life_change = vs_passive(points, keys, lambda p: p.life_km)
     acc_change = vs_passive(points, keys, lambda p: _rms_of(p, BODY_ACC))
     colours = _point_colours(points, keys)
@@ -1091,22 +1143,31 @@ def sweep_compare_section(points: list[Point], keys: list[str]) -> str:
     return section("compare", "Comparison", body)
 
 
-def sweep_overlay_section(points: list[Point]) -> str:
-    have = [p for p in points if p.run is not None and p.run.table is not None]
-    if not have:
-        return section("overlay", "PSDs and time histories of the points",
-                       note("no point has a table yet."))
-    # the corner with the largest body-acceleration RMS in the first point
-    ci = 0
-    _b, cols = first_present(have[0].run.table, BODY_ACC)
-    if len(cols) > 1:
-        ci = int(np.argmax([np.sqrt(np.mean(x * x)) for _c, x in cols]))
-    corner = ""
-    body = ""
-    fig, axes = _figure(1, 1, row_h=3.6)
+def overlay_groups(points: list[Point], keys: list[str]
+                   ) -> list[tuple[str, list[tuple[Point, str, str]]]]:
+    """Points to overlay: ``[(group title, [(point, legend label, colour)])]``. With a law
+    axis, one group per cell of the other axes (e.g. per road), coloured by law as in the
+    charts; without one, every point in one group."""
+    axis = law_axis(points, keys)
+    if axis is None:
+        return [("", [(p, p.short, f"C{j % 10}") for j, p in enumerate(points)])]
+    colour = law_colours(points, axis)
+    others = [k for k in keys if k != axis]
+    groups: dict[str, list[tuple[Point, str, str]]] = {}
+    for p in points:
+        v = fmt(p.params.get(axis))
+        groups.setdefault(_cell_label(p, others) if others else "", []).append(
+            (p, v, colour[v]))
+    return list(groups.items())
+
+
+def _overlay_figures(members: list[tuple[Point, str, str]], ci: int) -> str:
+    """PSD and time-history overlays of one group of points (corner index ``ci``)."""
+    out = ""
+    fig, axes = _figure(1, 1, row_h=3.4)
     ax = axes[0]
-    n_psd = 0
-    for j, p in enumerate(have):
+    corner, n_psd = "", 0
+    for p, lab, colour in members:
         tab = p.run.table
         fs = sample_rate(tab["t"])
         _b, cols = first_present(tab, BODY_ACC)
@@ -1115,8 +1176,7 @@ def sweep_overlay_section(points: list[Point]) -> str:
         corner, x = cols[ci]
         f, pp = welch_psd(x, fs)
         keep = (f > 0) & (f <= min(fs / 2, PSD_F_MAX_HZ))
-        ax.semilogy(f[keep], np.maximum(pp[keep], 1e-30), lw=1.0, color=f"C{j % 10}",
-                    label=p.id)
+        ax.semilogy(f[keep], np.maximum(pp[keep], 1e-30), lw=1.0, color=colour, label=lab)
         n_psd += 1
     if n_psd:
         ax.set_title("Body acceleration PSD" + (f" ({corner})" if corner else ""),
@@ -1125,24 +1185,41 @@ def sweep_overlay_section(points: list[Point]) -> str:
         ax.set_ylabel("(m/s²)²/Hz")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
-        body += img(fig_uri(fig), "overlaid body acceleration PSDs")
-    rows = [("Body acceleration", "m/s²", BODY_ACC, 1.0), ("Tyre force", "N", TYRE_FORCE, 1.0)]
-    if any(p.run.has_arm() for p in have):
-        rows.append(("Lower arm: ball joint z", "N", ("plant/arm/ball_joint_z",), 1.0))
-    fig, axes = _figure(len(rows), row_h=2.6, sharex=True)
-    for ax, (title, unit, bases, scale) in zip(axes, rows, strict=True):
-        for j, p in enumerate(have):
+        out += img(fig_uri(fig), "overlaid body acceleration PSDs")
+    rows = [("Body acceleration", "m/s²", BODY_ACC), ("Tyre force", "N", TYRE_FORCE)]
+    if any(p.run.has_arm() for p, _l, _c in members):
+        rows.append(("Lower arm: ball joint z", "N", ("plant/arm/ball_joint_z",)))
+    fig, axes = _figure(len(rows), row_h=2.4, sharex=True)
+    for ax, (title, unit, bases) in zip(axes, rows, strict=True):
+        for p, lab, colour in members:
             tab = p.run.table
             _b, cols = first_present(tab, bases)
             if len(cols) > ci:
-                ax.plot(*decimate(tab["t"], scale * cols[ci][1]), lw=0.9, color=f"C{j % 10}",
-                        label=p.id)
+                ax.plot(*decimate(tab["t"], cols[ci][1]), lw=0.8, color=colour, label=lab,
+                        alpha=0.85)
         ax.set_title(title + (f" ({corner})" if corner else ""), fontsize=10, loc="left")
         ax.set_ylabel(unit)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right", ncol=min(4, len(have)))
+        ax.legend(fontsize=7, loc="upper right", ncol=min(4, len(members)))
     axes[-1].set_xlabel("t [s]")
-    body += img(fig_uri(fig), "overlaid time histories")
+    return out + img(fig_uri(fig), "overlaid time histories")
+
+
+def sweep_overlay_section(points: list[Point], keys: list[str]) -> str:
+    have = [p for p in points if p.run is not None and p.run.table is not None]
+    if not have:
+        return section("overlay", "PSDs and time histories of the points",
+                       note("no point has a table yet."))
+    # the corner with the largest body-acceleration RMS in the first point (full vehicle)
+    ci = 0
+    _b, cols = first_present(have[0].run.table, BODY_ACC)
+    if len(cols) > 1:
+        ci = int(np.argmax([np.sqrt(np.mean(x * x)) for _c, x in cols]))
+    body = ""
+    for title, members in overlay_groups(have, keys):
+        if title:
+            body += f"<h3>{esc(title)}</h3>"
+        body += _overlay_figures(members, ci)
     return section("overlay", "PSDs and time histories of the points", body)
 
 
@@ -1224,7 +1301,7 @@ def render_sweep(d: Path) -> str:
     body = "".join(head) + nav(navs)
     body += sweep_results_section(spec, points, keys, d)
     body += sweep_compare_section(points, keys)
-    body += sweep_overlay_section(points)
+    body += sweep_overlay_section(points, keys)
     body += sweep_maps_section(points)
     body += section("points", "Points", "".join(point_section(p, d) for p in points))
     return page(f"suscosim sweep {name}", body)

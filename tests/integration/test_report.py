@@ -275,3 +275,22 @@ def test_screenshot_in_headless_chromium(runs, tmp_path):
         assert _near(img, (31, 119, 180)) > 200, f"{name}: no plot pixels in the screenshot"
     # the run page's green "ok" badge (#2f855a), at the top of the page
     assert _near(shots["run"][:300], (47, 133, 90)) > 100
+
+
+def test_life_change_vs_passive_on_a_variant_axis(tmp_path):
+    """A sweep whose law comes from a named-variant axis (``strategy``, as in
+    scenarios/thesis/ch6_fatigue.toml): the passive point of each road is the baseline."""
+    from orchestrator.report import Point, law_axis, vs_passive
+
+    life = {("pave", "passive"): 100.0, ("pave", "tss1"): 52.0, ("pave", "tss3"): 4.0,
+            ("bump", "passive"): 10.0, ("bump", "tss1"): 15.0, ("bump", "tss3"): None}
+    pts = [Point(f"{r}-{s}", {"road": r, "strategy": s}, tmp_path, None,
+                 {"road": {"type": r}, "controller": {"law": s}}) for r, s in life]
+    keys = ["road", "strategy"]
+    assert law_axis(pts, keys) == "strategy"
+    change = vs_passive(pts, keys, lambda p: life[(p.params["road"], p.params["strategy"])])
+    assert change == pytest.approx({"pave-passive": 0.0, "pave-tss1": -48.0,
+                                    "pave-tss3": -96.0, "bump-passive": 0.0,
+                                    "bump-tss1": 50.0})
+    no_passive = [p for p in pts if p.params["strategy"] != "passive"]
+    assert law_axis(no_passive, keys) is None and vs_passive(no_passive, keys, len) == {}
