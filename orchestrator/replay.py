@@ -1,7 +1,7 @@
 """``suscosim replay``: republish a recorded journal on the bus, as if the run were live.
 
     suscosim replay JOURNAL [--run NEW_ID] [--speed X | --fast] [--connect EP ...]
-                    [--listen EP ...] [--wait S] [--lowlatency]
+                    [--listen EP ...] [--wait S] [--lowlatency] [--mode auto|peer|client]
 
 ``JOURNAL`` is a recorder journal (``journal.msgpack``) or a run folder holding one. Every
 record (``"<node>/<channel>"`` and the message bytes exactly as the recorder received them) is
@@ -15,10 +15,12 @@ clock, no liveliness token, no handshake.
 Endpoints: with neither ``--connect`` nor ``--listen`` the replay listens on
 ``tcp/127.0.0.1:7447`` (where a bare ``suscosim tap`` connects). Before the first message it
 waits up to ``--wait`` s (default 5) for a subscriber to appear, so a tap started just before
-or after does not miss the beginning; it publishes anyway after that.
+or after does not miss the beginning; it publishes anyway after that. ``--mode auto``: a
+Zenoh peer when it listens or every endpoint is on loopback, a client otherwise (through a
+router, from another machine).
 
-Exit codes: 0 replayed, 2 bad input (no such file, not a journal, bad run id, bad endpoint),
-130 interrupted.
+Exit codes: 0 replayed, 1 the endpoint cannot be reached (client mode), 2 bad input (no such
+file, not a journal, bad run id, bad endpoint, port in use), 130 interrupted.
 """
 
 from __future__ import annotations
@@ -137,13 +139,16 @@ def build_parser() -> argparse.ArgumentParser:
                     help="wait up to S s for a subscriber before publishing (default 5)")
     ap.add_argument("--lowlatency", action="store_true",
                     help="Zenoh low-latency transport (every peer must use it)")
+    ap.add_argument("--mode", choices=["auto", "peer", "client"], default="auto",
+                    help="Zenoh session mode; auto: peer when listening or every endpoint is "
+                         "on loopback, client otherwise (through a router, from elsewhere)")
     ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
     return ap
 
 
-def _fail(message: str) -> int:
+def _fail(message: str, code: int = 2) -> int:
     print(f"suscosim replay: {message}", file=sys.stderr)
-    return 2
+    return code
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -176,19 +181,29 @@ def main(argv: list[str] | None = None) -> int:
         print(f"suscosim replay: note: skipped {skipped} undecodable record(s)", file=sys.stderr)
     from cosim.bus import ZenohBus, zenoh_config
 
+    from .tap import apply_mode, session_mode
+
     connect = list(args.connect or [])
     listen = args.listen or (None if connect else [DEFAULT_LISTEN])
+    if args.zenoh_config and args.mode == "auto":
+        mode = "configured"  # the configuration file's mode
+    else:
+        mode = session_mode(args.mode, connect, args.listen or ([] if connect else listen))
     try:
-        bus = ZenohBus(zenoh_config(connect, listen, lowlatency=args.lowlatency,
-                                    config_file=args.zenoh_config))
-    except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, bad config file
-        return _fail(f"cannot open a Zenoh session (listen {listen or 'loopback'}, connect "
-                     f"{connect}): {exc}")
+        conf = zenoh_config(connect, listen if mode != "client" else None,
+                            lowlatency=args.lowlatency, config_file=args.zenoh_config)
+        bus = ZenohBus(apply_mode(conf, mode))
+    except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, unreachable router
+        reason = " ".join(str(exc).split(" at /")[0].split())
+        code = 1 if "Unable to connect" in reason else 2
+        return _fail(f"cannot open a Zenoh {mode} session (listen {listen or 'loopback'}, "
+                     f"connect {connect}): {reason}", code)
     where = ", ".join(connect or listen or [])
     n_ch = len({(n, c) for n, c, _r, _t in records})
     pace = "as fast as possible" if args.fast else f"at {args.speed:g}x the recorded pace"
     print(f"suscosim replay: {len(records)} messages on {n_ch} channels of run {original} as "
-          f"suscosim/{run_id}/** via {where}, {pace}", file=sys.stderr, flush=True)
+          f"suscosim/{run_id}/** via {where} ({mode} session), {pace}", file=sys.stderr,
+          flush=True)
     sent, wall = 0, 0.0
     try:
         sent, wall = replay(bus, run_id, records, None if args.fast else args.speed,

@@ -2,6 +2,7 @@
 
     suscosim tap [RUN] [PATTERN] [--connect EP ...] [--listen EP ...] [--csv FILE]
                  [--duration S] [--count N] [--raw] [--interval S] [--lowlatency]
+                 [--mode auto|peer|client] [--zenoh-config FILE]
 
 The tap is a plain Zenoh subscriber on ``suscosim/<RUN>/<PATTERN>``: it declares no
 liveliness token and sends nothing, so the run neither waits for it nor sees it. Its callback
@@ -14,9 +15,13 @@ decoding and display happen in the main thread.
   for anything, e.g. ``plant/state``, ``*/force``, ``plant/*``; a single name is a node
   (``plant`` = ``plant/*``). A first argument with a ``/`` that is no folder is a pattern, so
   ``suscosim tap plant/state`` taps that channel of every run.
-* Endpoint: ``--connect`` (repeatable); default the run folder's endpoints, else
-  ``tcp/127.0.0.1:7447`` -- so a run started with ``--listen tcp/127.0.0.1:7447`` is tapped
-  by a bare ``suscosim tap``. ``suscosim runs`` shows where each running run listens.
+* Endpoint: ``--connect`` (repeatable); default the run folder's (its router if it has
+  one, else the orchestrator's listen endpoint), else ``tcp/127.0.0.1:7447`` -- so a run
+  started with ``--listen tcp/127.0.0.1:7447`` is tapped by a bare ``suscosim tap``.
+  ``suscosim runs`` shows where each running run listens.
+* Session mode (``--mode auto``): a Zenoh peer when every endpoint is on loopback (it joins
+  the run's mesh, data come straight from the nodes), a client otherwise (everything comes
+  through the one router or peer it connects to: what works from another machine).
 
 Display: per key, the message count and rate [msg/s], the last step ``k``, its time ``t``
 [s] and the last values (arrays shortened), redrawn every ``--interval`` s (on a terminal;
@@ -28,7 +33,8 @@ rewritten with the wider header (older rows get empty cells).
 
 Stops on Ctrl-C, SIGTERM, after ``--duration`` s or after ``--count`` data messages, with a
 final summary line ``tap: M messages (D data, C control), U undecodable on K key(s)``.
-Exit codes: 0 done, 2 bad input (run id, pattern, CSV file, endpoint).
+Exit codes: 0 done, 1 the endpoint cannot be reached (client mode, after 10 s), 2 bad input
+(run id, pattern, CSV file, endpoint).
 """
 
 from __future__ import annotations
@@ -41,6 +47,7 @@ import queue
 import re
 import shutil
 import signal
+import socket
 import sys
 import tempfile
 import time
@@ -98,6 +105,32 @@ class Target:
     note: str = ""
 
 
+def is_loopback(ep: str) -> bool:
+    """Whether a Zenoh endpoint (``tcp/127.0.0.1:7447``) is on this machine's loopback."""
+    host = ep.split("/", 1)[-1].rsplit(":", 1)[0].strip("[]").split("#")[0]
+    return host in ("localhost", "::1") or host.startswith("127.")
+
+
+def session_mode(mode: str, connect: list[str], listen: list[str] | None) -> str:
+    """``auto``: a peer (joins the run's mesh directly) when every endpoint is on loopback
+    or the session listens; a client (everything through the one endpoint) otherwise: a peer
+    on another machine is not relayed by a router, and the run's peers, listening on their
+    loopback, cannot connect back to it."""
+    if mode != "auto":
+        return mode
+    return "peer" if listen or all(is_loopback(e) for e in connect) else "client"
+
+
+def apply_mode(conf: Any, mode: str, connect_timeout_ms: int = 10000) -> Any:
+    """Make a :func:`cosim.bus.zenoh_config` a client's (no listening; keep trying to reach
+    the endpoint for ``connect_timeout_ms``), or leave it a peer's."""
+    if mode == "client":
+        conf.insert_json5("mode", '"client"')
+        conf.insert_json5("listen/endpoints", "[]")
+        conf.insert_json5("connect/timeout_ms", str(int(connect_timeout_ms)))
+    return conf
+
+
 def _local(ep: str) -> str:
     """A listen endpoint on every interface is reached on loopback from this machine."""
     for anyaddr in ("0.0.0.0", "[::]"):
@@ -127,9 +160,14 @@ def resolve_target(run: str | None, pattern: str | None,
         if not run:
             raise TapInputError(f"{folder}: no run id in run.json or scenario.json")
         eps = rj.get("endpoints") or {}
-        if not endpoints:
-            endpoints = [_local(e) for e in eps.get("listen", [])] + list(eps.get("connect", []))
+        if not endpoints:  # through the run's router if it has one, else to the orchestrator
+            endpoints = list(eps.get("connect", [])) or [_local(e) for e in eps.get("listen", [])]
             source = f"{folder / 'run.json'}" if endpoints else ""
+            host = rj.get("host")
+            if host and host != socket.gethostname() and endpoints and \
+                    all(is_loopback(e) for e in endpoints):
+                note = (f"the run is on host {host} and listens on loopback only: not "
+                        "reachable from here (start it with --listen tcp/0.0.0.0:PORT)")
         lowlatency = bool(rj.get("lowlatency", False))
         if rj and not endpoints:
             raise TapInputError(f"{folder}: run.json records no endpoint (a "
@@ -363,13 +401,16 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--lowlatency", action="store_true",
                     help="Zenoh low-latency transport (needed if the run uses it; read from "
                          "run.json when RUN is a run folder)")
+    ap.add_argument("--mode", choices=["auto", "peer", "client"], default="auto",
+                    help="Zenoh session mode; auto: peer when every endpoint is on loopback, "
+                         "client otherwise (through a router, from another machine)")
     ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
     return ap
 
 
-def _fail(message: str) -> int:
+def _fail(message: str, code: int = 2) -> int:
     print(f"suscosim tap: {message}", file=sys.stderr)
-    return 2
+    return code
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -400,12 +441,20 @@ def main(argv: list[str] | None = None) -> int:
 def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
     from cosim.bus import ZenohBus, zenoh_config
 
+    if args.zenoh_config and args.mode == "auto":
+        mode = "configured"  # the configuration file's mode
+    else:
+        mode = session_mode(args.mode, target.endpoints, args.listen)
     try:
-        bus = ZenohBus(zenoh_config(target.endpoints, args.listen,
-                                    lowlatency=args.lowlatency or target.lowlatency,
-                                    config_file=args.zenoh_config))
-    except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, bad config file
-        return _fail(f"cannot open a Zenoh session ({', '.join(target.endpoints)}): {exc}")
+        conf = zenoh_config(target.endpoints, args.listen,
+                            lowlatency=args.lowlatency or target.lowlatency,
+                            config_file=args.zenoh_config)
+        bus = ZenohBus(apply_mode(conf, mode))
+    except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, unreachable router
+        reason = " ".join(str(exc).split(" at /")[0].split())
+        code = 1 if "Unable to connect" in reason else 2
+        return _fail(f"cannot open a Zenoh {mode} session ({', '.join(target.endpoints)}): "
+                     f"{reason}", code)
     inbox: queue.SimpleQueue[tuple[str, bytes, float]] = queue.SimpleQueue()
     clock = time.monotonic
     stop: list[str] = []
@@ -422,8 +471,8 @@ def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
                                                else "")
         if target.note:
             print(f"suscosim tap: note: {target.note}", file=sys.stderr)
-        print(f"suscosim tap: tapping {target.keyexpr} via {where}", file=sys.stderr,
-              flush=True)
+        print(f"suscosim tap: tapping {target.keyexpr} via {where} ({mode} session)",
+              file=sys.stderr, flush=True)
         t0 = clock()
         end = t0 + args.duration if args.duration else float("inf")
         next_show, warned = t0 + args.interval, False

@@ -155,3 +155,31 @@ def test_tap_with_nobody_there_stops_after_duration(tmp_path) -> None:
                    timeout=60)
     assert res.returncode == 0, res.stderr
     assert "0 messages" in res.stdout and "Traceback" not in res.stderr
+
+
+def test_client_tap_through_a_replay_started_first(tmp_path, untapped) -> None:
+    """A client-mode tap (what a tap on another machine uses) gets everything through the
+    one peer it connects to; the replay waits for it before publishing."""
+    records = read_journal(untapped / "journal.msgpack").records
+    n = {ch: sum(1 for c, _ in records if c == ch) for ch in ("tyre_road/force",
+                                                           "controller/force")}
+    endpoint = free_loopback_endpoint()
+    rep = popen_suscosim("replay", str(untapped), "--fast", "--run", "clientrep", "--listen",
+                         endpoint, "--wait", "60")
+    try:
+        tap = suscosim("tap", "clientrep", "*/force", "--connect", endpoint, "--mode",
+                       "client", "--count", str(sum(n.values())), "--duration", "90", "--csv",
+                       str(tmp_path / "f.csv"), timeout=120)
+        rep_out, rep_err = rep.communicate(timeout=60)
+    finally:
+        if rep.poll() is None:
+            rep.kill()
+    assert tap.returncode == 0, tap.stdout + tap.stderr
+    assert "(client session)" in tap.stderr
+    assert rep.returncode == 0, rep_out + rep_err
+    rows = _rows(tmp_path / "f.csv")
+    by_key: dict[str, list[int]] = {}
+    for r in rows:
+        by_key.setdefault(r["key"], []).append(int(r["k"]))
+    assert by_key == {f"suscosim/clientrep/{ch}": list(range(count))
+                      for ch, count in n.items()}

@@ -56,7 +56,11 @@ def test_run_folder_gives_run_id_endpoint_and_lowlatency(tmp_path: Path) -> None
         "lowlatency": True}))
     t = tap.resolve_target(str(tmp_path), "plant/state", None)
     assert t.keyexpr == "suscosim/abc/plant/state"
-    assert t.endpoints == ["tcp/127.0.0.1:7500", "tcp/10.0.0.1:7447"] and t.lowlatency
+    assert t.endpoints == ["tcp/10.0.0.1:7447"] and t.lowlatency  # through the run's router
+    (tmp_path / "run.json").write_text(json.dumps({
+        "run_id": "abc", "endpoints": {"listen": ["tcp/0.0.0.0:7500"], "connect": []}}))
+    t = tap.resolve_target(str(tmp_path), None, None)
+    assert t.endpoints == ["tcp/127.0.0.1:7500"] and not t.lowlatency  # to the orchestrator
     # An explicit --connect wins over the recorded endpoints.
     assert tap.resolve_target(str(tmp_path), None, ["tcp/1.2.3.4:1"]).endpoints == \
         ["tcp/1.2.3.4:1"]
@@ -185,3 +189,14 @@ def test_raw_mode_prints_one_line_per_message() -> None:
     lines = out.getvalue().splitlines()
     assert lines[0] == 'r/plant/state data k=7 t=0.007 {"z_b":0.5}'
     assert lines[1].startswith("r/plant/state UNDECODABLE (not msgpack")
+
+
+def test_session_mode_peer_on_loopback_client_elsewhere() -> None:
+    assert tap.is_loopback("tcp/127.0.0.1:7447") and tap.is_loopback("tcp/localhost:1")
+    assert tap.is_loopback("tcp/[::1]:7447") and not tap.is_loopback("tcp/10.0.0.1:7447")
+    assert not tap.is_loopback("tls/router.example.org:7447")
+    assert tap.session_mode("auto", ["tcp/127.0.0.1:7447"], None) == "peer"
+    assert tap.session_mode("auto", ["tcp/10.0.0.1:7447"], None) == "client"
+    assert tap.session_mode("auto", ["tcp/10.0.0.1:7447"], ["tcp/0.0.0.0:7000"]) == "peer"
+    assert tap.session_mode("peer", ["tcp/10.0.0.1:7447"], None) == "peer"
+    assert tap.session_mode("client", ["tcp/127.0.0.1:7447"], None) == "client"
