@@ -2,6 +2,7 @@
 
     suscosim sweep SWEEP.toml [--out DIR] [--jobs N] [--connect EP] [--external NODE]
                               [--no-fatigue] [--list]
+    suscosim sweep SWEEP.toml --serve NODE --connect EP     (on another machine)
 
 A sweep file names a base scenario and a grid; every grid point is one run::
 
@@ -409,6 +410,7 @@ class Job:
     proc: subprocess.Popen
     t0: float
     log: Path
+    fresh: bool = True  # its run was (re)done in this session (counts in the step progress)
 
 
 def _child_env() -> dict[str, str]:
@@ -477,7 +479,8 @@ class Display:
     def update(self, jobs: list[Job], done: int, failed: int, pending: int,
                steps_done: int) -> None:
         elapsed = time.monotonic() - self.t0
-        steps = steps_done + sum(self._k(j) or 0 for j in jobs if j.phase == "run")
+        steps = steps_done + sum((self._k(j) or 0) if j.phase == "run" else j.point.n_steps
+                                 for j in jobs if j.phase == "run" or j.fresh)
         head = (f"sweep: {done}/{self.total} finished ({failed} failed), {len(jobs)} running, "
                 f"{pending} waiting; {100 * min(1.0, steps / self.n_steps_total):3.0f}% of "
                 f"the steps, {elapsed:5.0f} s")
@@ -575,7 +578,8 @@ class Runner:
         if job.phase == "run":
             summary = _read_json(job.run_dir / "summary.json")
             if code == 0 and isinstance(summary, dict) and summary.get("status") == "ok":
-                if self.sweep.fatigue:
+                live = _read_json(job.run_dir / "fatigue" / "summary.json")
+                if self.sweep.fatigue and not isinstance(live, dict):  # no live fatigue node
                     return self._start_fatigue(p)
                 self.status[p.id] = ("ok", "")
                 return None
@@ -611,8 +615,9 @@ class Runner:
             while queue or jobs:
                 while queue and len(jobs) < self.sweep.jobs:
                     p, state = queue.pop(0)
-                    jobs.append(self._start_run(p) if state == "todo"
-                                else self._start_fatigue(p))
+                    job = self._start_run(p) if state == "todo" else self._start_fatigue(p)
+                    job.fresh = state == "todo"
+                    jobs.append(job)
                 still: list[Job] = []
                 for job in jobs:
                     if job.proc.poll() is None:
@@ -698,7 +703,7 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
                 row[f"{c} peak"] = stats.get("peak")
                 row[f"{c} rms"] = stats.get("rms")
         if sweep.fatigue:
-            fat = fat if isinstance(fat, dict) else {}
+            fat = fat if isinstance(fat, dict) and st == "ok" else {}  # not of a partial run
             row["life_repeats"] = fat.get("min_life_repeats")
             row["life_km"] = fat.get("min_life_km")
             row["max_damage"] = fat.get("max_damage_per_pass")
@@ -760,6 +765,78 @@ def write_sweep_json(sweep: Sweep, out: Path) -> None:
     (out / "sweep.json").write_text(json.dumps(doc, indent=2, default=str))
 
 
+# --------------------------------------------------------------------------- other machines
+
+def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
+          stream: TextIO, poll_s: float = 1.0) -> int:
+    """The other machine's side of a sweep: start ``suscosim node NODE --run <id>`` for each
+    point of the sweep as soon as that point's orchestrator answers on the router, until every
+    point has been served to the end (or is done in ``out``, when the folder is shared).
+
+    Returns 0 when every point was served (or found done), 130 when interrupted.
+    """
+    from cosim import keys
+    from cosim.bus import ZenohBus, zenoh_config
+
+    ids = {p.id: p for p in sweep.points}
+    served_ok: set[str] = set()
+    running: dict[str, list[subprocess.Popen]] = {}
+    cooldown: dict[str, float] = {}  # a node that failed: wait before serving that id again
+    logs = out / "serve"
+    logs.mkdir(parents=True, exist_ok=True)
+    bus = ZenohBus(zenoh_config(connect, None))
+    pattern = keys.key("*", keys.ORCHESTRATOR, keys.SCENARIO)
+    stream.write(f"suscosim sweep {sweep.name}: serving {', '.join(nodes)} for "
+                 f"{len(ids)} points via {', '.join(connect)}\n")
+    stream.flush()
+    try:
+        while True:
+            for pid in ids:
+                if pid not in served_ok and point_state(ids[pid], out / "runs" / pid,
+                                                        sweep.fatigue) == "done":
+                    served_ok.add(pid)  # done in a shared sweep folder
+            if len(served_ok) == len(ids) and not running:
+                return 0
+            live: set[str] = set()
+            for reply in bus.session.get(pattern, timeout=min(0.5, poll_s)):
+                if reply.ok is not None:
+                    live.add(keys.parse_key(str(reply.ok.key_expr))[0])
+            now = time.monotonic()
+            for pid in sorted(live & ids.keys()):
+                if pid in served_ok or pid in running or cooldown.get(pid, 0.0) > now:
+                    continue
+                procs = []
+                for n in nodes:
+                    cmd = [sys.executable, "-m", "orchestrator", "node", n, "--run", pid]
+                    for ep in connect:
+                        cmd += ["--connect", ep]
+                    procs.append(_start(cmd, logs / f"{pid}.{n}.log"))
+                running[pid] = procs
+                stream.write(f"  {pid}: started {', '.join(nodes)}\n")
+                stream.flush()
+            for pid, procs in list(running.items()):
+                codes = [pr.poll() for pr in procs]
+                if any(c is None for c in codes):
+                    continue
+                del running[pid]
+                if all(c == 0 for c in codes):
+                    served_ok.add(pid)
+                    stream.write(f"  {pid}: done ({len(served_ok)}/{len(ids)})\n")
+                else:
+                    cooldown[pid] = time.monotonic() + 10.0
+                    stream.write(f"  {pid}: node exit codes {codes} (served again if the "
+                                 f"sweep reruns it)\n")
+                stream.flush()
+            time.sleep(poll_s)
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        for procs in running.values():
+            for pr in procs:
+                _kill_group(pr)
+        bus.close()
+
+
 # --------------------------------------------------------------------------- CLI
 
 def build_parser() -> argparse.ArgumentParser:
@@ -774,6 +851,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "runs; needed for --external)")
     ap.add_argument("--external", action="append", default=[], metavar="NODE",
                     help="do not start NODE: it is started elsewhere (docs/sweeps.md)")
+    ap.add_argument("--serve", action="append", default=[], metavar="NODE",
+                    help="on another machine: start NODE for every point's run as it "
+                         "appears on the router given by --connect (docs/sweeps.md)")
     ap.add_argument("--no-fatigue", action="store_true", help="skip the fatigue worker")
     ap.add_argument("--list", action="store_true",
                     help="validate and list the points (and whether they are done); run nothing")
@@ -785,9 +865,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.jobs is not None and args.jobs < 1:
         print("suscosim sweep: error: --jobs must be >= 1", file=sys.stderr)
         return 2
-    if args.external and not args.connect:
-        print("suscosim sweep: error: --external needs --connect (a router the other "
-              "machine reaches)", file=sys.stderr)
+    if (args.external or args.serve) and not args.connect:
+        print("suscosim sweep: error: --external and --serve need --connect (a router "
+              "both machines reach)", file=sys.stderr)
         return 2
     try:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
@@ -799,6 +879,15 @@ def main(argv: list[str] | None = None) -> int:
     except SuscosimError as exc:
         print(f"suscosim sweep: error: {exc}", file=sys.stderr)
         return exc.exit_code if exc.exit_code == 2 else 2
+    if args.serve:
+        from .node_main import NODE_MODULES
+
+        bad = [n for n in args.serve if n not in NODE_MODULES]
+        if bad:
+            print(f"suscosim sweep: error: --serve {bad[0]}: expected one of "
+                  + ", ".join(sorted(NODE_MODULES)), file=sys.stderr)
+            return 2
+        return serve(sweep, args.serve, args.connect, out, sys.stdout)
     out.mkdir(parents=True, exist_ok=True)
     states = {p.id: point_state(p, out / "runs" / p.id, sweep.fatigue) for p in sweep.points}
     if args.list:

@@ -238,3 +238,51 @@ def test_sweep_with_fatigue_on_a_short_realistic_run(tmp_path):
     assert res.returncode == 0, res.stdout + res.stderr
     assert run_summary.stat().st_mtime_ns == mtime
     assert (out / "runs" / row["point"] / "fatigue" / "summary.json").is_file()
+
+
+SERVE_SWEEP = f"""
+[sweep]
+name = "tserve"
+base = "{CH3_STEP}"
+jobs = 2
+[sweep.grid]
+"run.h" = [0.001, 0.002]
+[sweep.set]
+"run.t_end" = 0.4
+"""
+
+
+@pytest.mark.integration
+def test_sweep_through_a_router_with_the_plant_served_elsewhere(tmp_path):
+    """The multi-machine recipe of docs/sweeps.md on loopback: a router, a 'remote' side that
+    serves the plant node for every point, and the sweep with --external plant."""
+    from cosim.bus import free_loopback_endpoint
+
+    f = _write(tmp_path, "s.toml", SERVE_SWEEP)
+    ep = free_loopback_endpoint()
+    router = popen_suscosim("router", "--listen", ep)
+    server = None
+    try:
+        time.sleep(1.0)
+        assert router.poll() is None, router.stderr.read()
+        server = popen_suscosim("sweep", str(f), "--serve", "plant", "--connect", ep,
+                                "--out", str(tmp_path / "remote"))
+        res = suscosim("sweep", str(f), "--out", str(tmp_path / "sw"), "--connect", ep,
+                       "--external", "plant", timeout=300)
+        assert res.returncode == 0, res.stdout + res.stderr
+        out, err = server.communicate(timeout=60)  # it ends once every point was served
+        assert server.returncode == 0, out + err
+        for pid in ("tserve-0.001", "tserve-0.002"):
+            summary = json.loads((tmp_path / "sw" / "runs" / pid / "summary.json").read_text())
+            assert summary["status"] == "ok"
+            assert not (tmp_path / "sw" / "runs" / pid / "logs" / "plant.log").exists()
+            assert (tmp_path / "remote" / "serve" / f"{pid}.plant.log").is_file()
+            assert f"{pid}: done" in out
+    finally:
+        for p in (server, router):
+            if p is not None and p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+                try:
+                    p.wait(timeout=10)
+                except Exception:
+                    p.kill()
