@@ -152,7 +152,9 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
         listen = list(listen or [free_loopback_endpoint()])
     from .runs import write_run_json
 
-    write_run_json(folder, run["id"], listen or [], connect or [], lowlatency)
+    bus_eps = run["mode"] == "distributed"  # the other modes open no Zenoh session
+    write_run_json(folder, run["id"], listen if bus_eps else [], connect if bus_eps else [],
+                   lowlatency)
     t0 = time.monotonic()
     if run["mode"] == "reference":
         from .reference import run_reference

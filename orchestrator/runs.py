@@ -61,8 +61,8 @@ def _proc_start(pid: int) -> int | None:
         return None
 
 
-def write_run_json(folder: Path, run_id: str, listen: list[str], connect: list[str],
-                   lowlatency: bool = False) -> dict[str, Any]:
+def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
+                   connect: list[str] | None, lowlatency: bool = False) -> dict[str, Any]:
     """Record who runs ``folder`` and where its bus is (for ``suscosim runs`` and ``tap``)."""
     scenario_mode = ""
     try:
@@ -74,7 +74,7 @@ def write_run_json(folder: Path, run_id: str, listen: list[str], connect: list[s
         "host": socket.gethostname(),
         "started": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
         "mode": scenario_mode,
-        "endpoints": {"listen": list(listen), "connect": list(connect)},
+        "endpoints": {"listen": list(listen or []), "connect": list(connect or [])},
         "lowlatency": bool(lowlatency), "state": "started",
     }
     (Path(folder) / RUN_JSON).write_text(json.dumps(info, indent=2))
