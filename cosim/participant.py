@@ -41,6 +41,9 @@ Channel = tuple[str, str]
 """(node, channel) of an input."""
 
 _CLOCK_TAG: Channel = (keys.ORCHESTRATOR, keys.CLOCK)
+_ORCHESTRATOR_GONE_S = 2.0
+"""The orchestrator's liveliness token must stay dropped this long before a node gives up
+(Zenoh can drop and re-declare a token while links reorganise under heavy CPU load)."""
 HELLO_PERIOD_S = 0.05
 PROGRESS_PERIOD_S = 0.1
 RECORD_BATCH = 64
@@ -65,6 +68,24 @@ class Participant:
         self._last_progress = 0.0
         self._token = bus.token(keys.key(run, node, keys.ALIVE))
         self._listen(_CLOCK_TAG)
+        self._orchestrator_seen = False
+        self._orchestrator_gone: float | None = None
+        bus.watch(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE), self._on_orchestrator)
+
+    def _on_orchestrator(self, _key: str, alive: bool) -> None:
+        """Liveliness of the run's orchestrator (called on the bus's thread)."""
+        if alive:
+            self._orchestrator_seen, self._orchestrator_gone = True, None
+        elif self._orchestrator_seen and self._orchestrator_gone is None:
+            self._orchestrator_gone = time.monotonic()
+
+    def check_orchestrator(self) -> None:
+        """Raise RunError if the orchestrator is gone (killed, or the network to it failed):
+        without it nobody would end the run, and the nodes would step on for nothing."""
+        gone = self._orchestrator_gone
+        if gone is not None and time.monotonic() - gone > _ORCHESTRATOR_GONE_S:
+            raise RunError(f"{self.node}: the orchestrator of run '{self.run}' is gone "
+                           "(its liveliness token dropped)")
 
     # ---- wiring -------------------------------------------------------------------------
     def _listen(self, tag: Channel) -> None:
@@ -135,6 +156,7 @@ class Participant:
         now = time.monotonic()
         if now - self._last_progress >= PROGRESS_PERIOD_S:
             self._last_progress = now
+            self.check_orchestrator()
             self.ctl("progress", k, t, rejected=self.rejected)
 
     def _reject(self, tag: Channel, why: str) -> None:
@@ -200,6 +222,7 @@ class Participant:
                 late = sorted({t[0] for t, k in needs.items() if k not in self.mailbox[t]})
                 raise RunError(f"{self.node}: no input from {', '.join(late)} for "
                                f"{self.stall_timeout_s:.1f} s (step {max(needs.values())})")
+            self.check_orchestrator()
             try:
                 self._take(timeout=min(0.5, deadline - now))
             except queue.Empty:
@@ -218,6 +241,7 @@ class Participant:
                                + (f"; never heard {', '.join(silent)}" if silent else ""))
             if now >= next_send:
                 next_send = now + HELLO_PERIOD_S
+                self.check_orchestrator()
                 self.publish_hello()
                 if all(-1 in box or box for box in self.mailbox.values()):
                     self.ctl("ready", info={"outputs": list(self._outputs), **(info or {})})

@@ -68,6 +68,8 @@ class Clock:
         self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
         self.rejected = 0
         self._clock = bus.publisher(keys.key(run, keys.ORCHESTRATOR, keys.CLOCK))
+        # the nodes watch this token: a killed orchestrator ends its nodes too
+        self._token = bus.token(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE))
         blob = encode("start", -1, 0.0, scenario)
         bus.serve(keys.key(run, keys.ORCHESTRATOR, keys.SCENARIO), lambda: blob)
         bus.subscribe(keys.key(run, "*", keys.CTL),

@@ -142,6 +142,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     try:
         while True:
             now = time.monotonic()
+            part.check_orchestrator()
             if n_steps is None:
                 if now >= deadline:
                     raise RunError(f"recorder: not started; heard {sorted(heard)} of {producers}")

@@ -207,3 +207,36 @@ def test_reference_mode_cli(tmp_path, ch3_step):
     summary = _run(ch3_step, tmp_path / "ref", "--mode", "reference")
     assert summary["mode"] == "reference" and summary["rows"] == 4001
     assert summary["channels"]["plant/state/z_b"]["max"] == pytest.approx(0.03074, abs=2e-5)
+
+
+def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
+    """Nodes watch the orchestrator's liveliness token: killed, its nodes stop too (instead
+    of stepping on to the end of a long run), and the journal stays readable."""
+    out = tmp_path / "orphan"
+    proc = popen_suscosim("run", str(ch3_step), "--out", str(out), "--quiet",
+                          "--set", "run.t_end=120.0", "--set", 'run.id="orphantest"')
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (out / "journal.msgpack").exists():
+            time.sleep(0.1)
+        time.sleep(1.0)
+        nodes = {n: _pids_of("orphantest", n) for n in ("plant", "tyre_road", "controller",
+                                                           "recorder")}
+        assert all(nodes.values()), nodes
+        proc.kill()  # SIGKILL: no chance to tell anyone
+        proc.wait(timeout=10)
+        deadline = time.monotonic() + 30
+        alive = [pid for pids in nodes.values() for pid in pids]
+        while alive and time.monotonic() < deadline:
+            time.sleep(0.2)
+            alive = [pid for pid in alive if Path(f"/proc/{pid}").exists()
+                     and "Z" not in Path(f"/proc/{pid}/stat").read_text().split(")")[1][:3]]
+        assert not alive, f"node processes still running: {alive}"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    logs = {p.stem: p.read_text() for p in (out / "logs").glob("*.log")}
+    assert any("orchestrator" in text and "gone" in text for text in logs.values()), logs
+    table = read_table(out / "table.csv") if (out / "table.csv").exists() else None
+    assert read_journal(out / "journal.msgpack").records  # what was recorded is readable
+    assert table is None or len(table["t"]) > 0
