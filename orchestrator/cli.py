@@ -95,8 +95,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--listen", action="append",
                    help="endpoint the orchestrator listens on (default: a free loopback port)")
     r.add_argument("--lowlatency", action="store_true",
-                   help="Zenoh low-latency transport for every session of the run (faster "
-                        "steps; every peer, taps included, must then use it too)")
+                   help="Zenoh low-latency transport for every session of the run "
+                        "(experimental: every peer, taps included, must use it too, and on a "
+                        "loaded machine the start barrier often fails with it)")
     r.add_argument("--external", action="append", metavar="NODE",
                    help="do not start NODE here: it is started elsewhere with 'suscosim node'")
     r.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
