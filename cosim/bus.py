@@ -36,33 +36,60 @@ def free_loopback_endpoint() -> str:
         return f"tcp/127.0.0.1:{s.getsockname()[1]}"
 
 
+CLIENT_CONNECT_TIMEOUT_MS = 30000
+"""How long a client session keeps trying to reach its router before giving up [ms]."""
+
+
+def _unset(conf: Any, key: str) -> bool:
+    """True when ``key`` still holds Zenoh's own default (null, or a per-mode map)."""
+    value = json.loads(conf.get_json(key))
+    return value is None or isinstance(value, dict)
+
+
 def zenoh_config(
     connect: Iterable[str] = (),
     listen: Iterable[str] | None = None,
     lowlatency: bool = False,
     lease_ms: int = 2000,
     config_file: str | None = None,
+    mode: str | None = None,
+    default_mode: str = "peer",
 ) -> Any:
     """A Zenoh configuration for a suscosim participant.
 
     Args:
         connect: endpoints to connect to (the orchestrator's, or a router's), e.g.
-            ``["tcp/192.168.1.10:7447"]``.
-        listen: endpoints to listen on; default loopback only on a free port.
+            ``["tcp/192.168.1.10:7447"]``; added to the config file's own.
+        listen: endpoints to listen on; default the config file's, else loopback only on a
+            free port. Clients do not listen.
         lowlatency: Zenoh's low-latency transport (lower step latency; every peer of the
             session must use it, so it is only used in the embedded default, never with a
             router of unknown configuration).
         lease_ms: how long a silent peer is kept; bounds how fast a partitioned node is seen
             as gone (Zenoh's default is 10 s).
-        config_file: a Zenoh JSON5 configuration file to start from (TLS, access control).
+        config_file: a Zenoh JSON5 configuration file to start from (TLS, access control);
+            its mode, endpoints and scouting settings are kept unless given here.
+        mode: ``"peer"`` (the embedded mesh: sessions connect to each other directly) or
+            ``"client"`` (every message goes through the router or peer it connects to; what a
+            node on another machine uses, since Zenoh >= 1.9 routers do not relay between two
+            peers). Default: the config file's mode, else ``default_mode``.
+        default_mode: the mode when neither ``mode`` nor the config file gives one.
     """
     import zenoh
 
     conf = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
-    conf.insert_json5("mode", '"peer"')
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    conf.insert_json5("listen/endpoints", json.dumps(list(listen or [LOOPBACK_LISTEN])))
-    conf.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    mode = mode or json.loads(conf.get_json("mode")) or default_mode
+    conf.insert_json5("mode", json.dumps(mode))
+    if _unset(conf, "scouting/multicast/enabled"):
+        conf.insert_json5("scouting/multicast/enabled", "false")
+    if mode != "client" and (listen or _unset(conf, "listen/endpoints")):
+        conf.insert_json5("listen/endpoints", json.dumps(list(listen or [LOOPBACK_LISTEN])))
+    own = [] if _unset(conf, "connect/endpoints") else json.loads(
+        conf.get_json("connect/endpoints"))
+    conf.insert_json5("connect/endpoints", json.dumps(own + [c for c in connect
+                                                             if c not in own]))
+    if mode == "client" and _unset(conf, "connect/timeout_ms"):
+        conf.insert_json5("connect/timeout_ms", str(CLIENT_CONNECT_TIMEOUT_MS))
     conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
     if lowlatency:
         conf.insert_json5("transport/unicast/lowlatency", "true")

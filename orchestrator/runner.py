@@ -103,7 +103,8 @@ class LocalNodes:
         log_dir.mkdir(parents=True, exist_ok=True)
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         for name in names:
-            cmd = [sys.executable, "-m", "orchestrator", "node", name, "--run", run_id]
+            cmd = [sys.executable, "-m", "orchestrator", "node", name, "--run", run_id,
+                   "--mode", "peer"]  # the local mesh; nodes elsewhere are clients
             for ep in connect:
                 cmd += ["--connect", ep]
             if lowlatency:
