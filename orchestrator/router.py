@@ -1,0 +1,136 @@
+"""``suscosim router``: a Zenoh router in a Python process, until SIGTERM or Ctrl-C.
+
+    suscosim router [--listen ENDPOINT ...] [--config FILE.json5] [--lease-ms MS]
+
+The pip package ``eclipse-zenoh`` ships no ``zenohd`` binary; this is the same router (a
+Zenoh session opened in ``router`` mode) for tests and single machines where the
+``eclipse/zenoh`` image is not at hand. Nodes and the orchestrator reach it with
+``--connect tcp/HOST:7447`` (or ``tls/HOST:7447`` with the shipped TLS configuration,
+``deploy/zenoh/router.json5``).
+
+Defaults are safe: without ``--listen`` and without a listen endpoint in ``--config`` it
+listens on loopback only (``tcp/127.0.0.1:7447``); multicast scouting is off unless the
+configuration file turns it on. Give ``--listen tcp/0.0.0.0:7447`` (or a TLS endpoint) to
+accept other machines.
+
+Exit codes: 0 stopped by a signal, 1 the router could not start (e.g. port in use), 2 bad
+arguments or configuration file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+DEFAULT_LEASE_MS = 2000
+
+
+def _one_line(exc: BaseException) -> str:
+    """Zenoh's error text on one line, without the Rust source locations it appends."""
+    text = " ".join(str(exc).split())
+    return re.sub(r" at /\S+\.rs:\d+\.?", "", text).strip()
+
+
+def _is_unset(conf: Any, key: str) -> bool:
+    """True when ``key`` of a Zenoh config still holds Zenoh's own default (null / mode map)."""
+    value = json.loads(conf.get_json(key))
+    return value is None or isinstance(value, dict)
+
+
+def router_config(listen: list[str] | None = None, config_file: str | None = None,
+                  lease_ms: int = DEFAULT_LEASE_MS) -> tuple[Any, list[str]]:
+    """The Zenoh configuration of a router and the endpoints it listens on.
+
+    Args:
+        listen: endpoints to listen on; they replace the file's. Default: the file's, else
+            loopback only (:data:`DEFAULT_LISTEN`).
+        config_file: Zenoh JSON5 configuration (TLS, access control) to start from.
+        lease_ms: link lease announced to peers [ms]; a peer that the router stops hearing
+            from is dropped after the peer's own lease (suscosim nodes use 2000 ms).
+
+    Raises:
+        ValueError: the file does not load, or an endpoint is malformed.
+    """
+    import zenoh
+
+    try:
+        conf = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
+    except Exception as exc:  # zenoh raises its own error type with the parser's message
+        raise ValueError(f"{config_file}: not a valid Zenoh configuration: "
+                         f"{_one_line(exc)}") from exc
+    conf.insert_json5("mode", '"router"')
+    if _is_unset(conf, "scouting/multicast/enabled"):
+        conf.insert_json5("scouting/multicast/enabled", "false")
+    if listen:
+        endpoints = list(listen)
+    elif not _is_unset(conf, "listen/endpoints") and json.loads(
+            conf.get_json("listen/endpoints")):
+        endpoints = json.loads(conf.get_json("listen/endpoints"))
+    else:
+        endpoints = [DEFAULT_LISTEN]
+    try:
+        conf.insert_json5("listen/endpoints", json.dumps(endpoints))
+    except Exception as exc:
+        raise ValueError(f"listen endpoints {endpoints}: {_one_line(exc)}") from exc
+    conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+    return conf, endpoints
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="suscosim router", description=__doc__.splitlines()[0])
+    ap.add_argument("--listen", action="append", metavar="ENDPOINT",
+                    help=f"endpoint to listen on (repeatable; default {DEFAULT_LISTEN}, "
+                         "loopback only), e.g. tcp/0.0.0.0:7447 or tls/0.0.0.0:7447")
+    ap.add_argument("--config", metavar="FILE.json5",
+                    help="Zenoh configuration (e.g. deploy/zenoh/router.json5: TLS, "
+                         "access control)")
+    ap.add_argument("--lease-ms", type=int, default=DEFAULT_LEASE_MS,
+                    help=f"link lease announced to peers [ms] (default {DEFAULT_LEASE_MS})")
+    args = ap.parse_args(argv)
+    if args.config and not Path(args.config).is_file():
+        print(f"suscosim router: {args.config}: no such file", file=sys.stderr)
+        return 2
+    if args.lease_ms <= 0:
+        print(f"suscosim router: --lease-ms {args.lease_ms}: expected > 0", file=sys.stderr)
+        return 2
+    try:
+        conf, endpoints = router_config(args.listen, args.config, args.lease_ms)
+    except ValueError as exc:
+        print(f"suscosim router: {exc}", file=sys.stderr)
+        return 2
+
+    import zenoh
+
+    stop = threading.Event()
+    previous = {sig: signal.signal(sig, lambda *_: stop.set())
+                for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        try:
+            session = zenoh.open(conf)
+        except Exception as exc:  # bind failure, unreadable certificate...
+            print(f"suscosim router: cannot start on {', '.join(endpoints)}: {_one_line(exc)}",
+                  file=sys.stderr)
+            return 1
+        try:
+            print(f"suscosim router: {session.info.zid()} listening on "
+                  f"{', '.join(endpoints)}", flush=True)
+            while not stop.wait(0.5):
+                pass
+        finally:
+            session.close()
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    print("suscosim router: stopped", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
