@@ -94,6 +94,11 @@ def zenoh_config(
     if lowlatency:
         conf.insert_json5("transport/unicast/lowlatency", "true")
         conf.insert_json5("transport/unicast/qos/enabled", "false")
+    elif not config_file:  # a user's config file decides for itself
+        # No priority lanes: suscosim sends one priority only, and one lane instead of
+        # eight saves ~10-15 % CPU per coupled step (bench/bench_throughput.py). Peers with
+        # QoS on (a plain tap, a default router) still connect: QoS is negotiated per link.
+        conf.insert_json5("transport/unicast/qos/enabled", "false")
     return conf
 
 

@@ -1,0 +1,67 @@
+"""Coupled steps per second of the distributed Chapter 3 run, and CPU per coupled step.
+
+Four node processes (plant, tyre/road, controller, recorder) over Zenoh on loopback,
+h = 1 ms, both exchange orders. Wall-clock throughput depends on what else the 2 cores are
+doing; CPU per step (all processes, user + system, startup subtracted) is the steadier number.
+
+    python bench/bench_throughput.py [--repeats 3] [--t-end 8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
+
+
+def one_run(t_end: float, exchange: str, extra: list[str]) -> tuple[float, float]:
+    """(steps/s, CPU seconds of the whole run incl. every node process)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        subprocess.run([sys.executable, "-m", "orchestrator", "run", str(SCENARIO), "--out",
+                        tmp, "--quiet", "--set", f"run.t_end={t_end}",
+                        "--set", f'run.exchange="{exchange}"', *extra],
+                       cwd=ROOT, check=True, capture_output=True,
+                       env=dict(os.environ, PYTHONPATH=str(ROOT)))
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        summary = json.loads((Path(tmp) / "summary.json").read_text())
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return float(summary["steps_per_s"]), cpu
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--t-end", type=float, default=8.0)
+    ap.add_argument("--lowlatency", action="store_true")
+    args = ap.parse_args()
+    extra = ["--lowlatency"] if args.lowlatency else []
+    _, cpu0 = one_run(0.001, "sequential", extra)  # startup cost: imports, sessions, barrier
+    n = round(args.t_end / 0.001)
+    load = os.getloadavg()[0]
+    print(f"load average at start: {load:.1f}; startup CPU {cpu0:.2f} s")
+    print("| exchange | steps/s (median) | steps/s (all runs) | CPU per step (ms) |")
+    print("|---|---|---|---|")
+    for exchange in ("sequential", "parallel"):
+        rates, cpus = [], []
+        for _ in range(args.repeats):
+            r, c = one_run(args.t_end, exchange, extra)
+            rates.append(r)
+            cpus.append((c - cpu0) / n * 1e3)
+        print(f"| {exchange} | {statistics.median(rates):.0f} | "
+              f"{', '.join(f'{r:.0f}' for r in rates)} | {statistics.median(cpus):.2f} |",
+              flush=True)
+    print(f"load average at end: {os.getloadavg()[0]:.1f}")
+
+
+if __name__ == "__main__":
+    main()
