@@ -66,9 +66,6 @@ def _session(ep: str, config: Path | None, **kw) -> ZenohBus:
 def test_shipped_client_configs_cover_every_participant():
     names = {p.stem for p in (DEPLOY / "clients").glob("*.json5")}
     assert names == {"orchestrator", "observer", *ch.NODES, *ch.OPTIONAL_NODES}
-    text = (DEPLOY / "router.json5").read_text()
-    allowed = json.loads(text.split("cert_common_names:")[1].split("]")[0] + "]")
-    assert set(allowed) == {"orchestrator", *ch.NODES, *ch.OPTIONAL_NODES}  # not observer
     for name in names:
         conf = zenoh_config(config_file=str(DEPLOY / "clients" / f"{name}.json5"))
         assert conf.get_json("transport/link/tls/connect_certificate") == \
@@ -76,6 +73,12 @@ def test_shipped_client_configs_cover_every_participant():
         # nodes elsewhere are clients of the router; the orchestrator stays a peer so that
         # the nodes it starts on its machine join it directly
         assert conf.get_json("mode") == ('"peer"' if name == "orchestrator" else '"client"')
+    acl = json.loads(router_config(config_file=str(DEPLOY / "router.json5"))[0]
+                     .get_json("access_control"))
+    assert acl["enabled"] and acl["default_permission"] == "deny"
+    publishers = {s["id"]: s["cert_common_names"] for s in acl["subjects"]
+                  if s.get("cert_common_names")}
+    assert publishers == {n: [n] for n in ("orchestrator", *ch.NODES, *ch.OPTIONAL_NODES)}
 
 
 def test_router_defaults_to_loopback_and_bad_input_exits_2(tmp_path):
@@ -102,14 +105,15 @@ def test_router_port_in_use_exits_1():
     assert res.returncode == 1 and "cannot start" in res.stderr and "Traceback" not in res.stderr
 
 
-@pytest.mark.integration
-def test_only_run_participants_may_publish(tls, router):
-    tap = _session(router, tls / "observer.json5")
-    plant = _session(router, tls / "plant.json5")
-    intruder = _session(router, tls / "observer.json5")  # a valid certificate, not a node
+def _forgery_test(ep: str, tls: Path, key: str, cert: str) -> tuple[int, int, int]:
+    """``plant`` and ``cert`` both publish on ``key``: (real heard, forged heard, heard by
+    the forger) at an observer, once the real publisher has been heard 50 times."""
+    tap = _session(ep, tls / "observer.json5")
+    plant = _session(ep, tls / "plant.json5")
+    forger = _session(ep, tls / f"{cert}.json5")  # a valid certificate, not this key's node
     try:
         heard: list[bytes] = []
-        intruder_heard: list[bytes] = []
+        forger_heard: list[bytes] = []
         lock = threading.Lock()
 
         def on_tap(_k, payload):
@@ -117,13 +121,13 @@ def test_only_run_participants_may_publish(tls, router):
                 heard.append(payload)
 
         tap.subscribe("suscosim/**", on_tap)
-        intruder.subscribe("suscosim/**", lambda _k, p: intruder_heard.append(p))
-        good, bad = plant.publisher(KEY), intruder.publisher(KEY)
+        forger.subscribe("suscosim/**", lambda _k, p: forger_heard.append(p))
+        good, bad = plant.publisher(key), forger.publisher(key)
         deadline = time.monotonic() + 20
         n = 0
         while time.monotonic() < deadline:
             bad(b"forged %d" % n)
-            intruder.put(KEY, b"forged put %d" % n)
+            forger.put(key, b"forged put %d" % n)
             good(b"real %d" % n)
             n += 1
             time.sleep(0.02)
@@ -132,15 +136,24 @@ def test_only_run_participants_may_publish(tls, router):
                     break
         time.sleep(0.5)  # anything forged still in flight arrives by now
         with lock:
-            real = [p for p in heard if p.startswith(b"real")]
-            forged = [p for p in heard if p.startswith(b"forged")]
-        assert len(real) >= 50, f"the authorised publisher was not heard: {len(real)}"
-        assert forged == []
-        # the intruder is connected and may observe: it hears the plant
-        assert any(p.startswith(b"real") for p in intruder_heard)
+            return (sum(p.startswith(b"real") for p in heard),
+                    sum(p.startswith(b"forged") for p in heard),
+                    sum(p.startswith(b"real") for p in forger_heard))
     finally:
-        for s in (intruder, plant, tap):
+        for s in (forger, plant, tap):
             s.close()
+
+
+@pytest.mark.integration
+@pytest.mark.parametrize("cert", ["observer", "controller"])
+def test_only_the_keys_node_may_publish_on_them(tls, router, cert):
+    """A tap (observer certificate) and another node (controller) cannot publish on the
+    plant's keys; the plant can; both can still observe."""
+    real, forged, seen_by_forger = _forgery_test(router, tls, "suscosim/acltest/plant/state",
+                                                 cert)
+    assert real >= 50, f"the plant was not heard: {real}"
+    assert forged == 0
+    assert seen_by_forger > 0  # connected, and allowed to observe
 
 
 @pytest.mark.integration
@@ -154,26 +167,34 @@ def test_sessions_without_a_ca_certificate_are_refused(tls, router):
 
 @pytest.mark.integration
 def test_run_through_the_tls_router_and_an_impostor_plant(tls, router, tmp_path):
-    """A node on 'another machine' joins through the TLS router with its own certificate; a
-    plant node with the observer's certificate cannot take part (the run does not start)."""
+    """Every node on 'another machine', a client of the TLS router with its own certificate
+    (the docker-compose layout): the run completes. A plant node holding the observer's
+    certificate cannot take part: the run does not start."""
     for cert, run_id, start_s in (("plant", "tlsok", 60.0), ("observer", "tlsno", 6.0)):
-        node = popen_suscosim("node", "plant", "--run", run_id, "--connect", router,
-                              "--zenoh-config", str(tls / f"{cert}.json5"))
+        names = list(ch.NODES) if cert == "plant" else ["plant"]
+        nodes = [popen_suscosim("node", n, "--run", run_id, "--connect", router,
+                                "--zenoh-config",
+                                str(tls / f"{n if cert == 'plant' else cert}.json5"))
+                 for n in names]
         try:
             res = suscosim("run", str(CH3_STEP), "--quiet", "--out", str(tmp_path / run_id),
                            "--connect", router,
                            "--zenoh-config", str(tls / "orchestrator.json5"),
-                           "--external", "plant", "--set", f'run.id="{run_id}"',
+                           *[a for n in names for a in ("--external", n)],
+                           "--set", f'run.id="{run_id}"',
                            "--set", "run.t_end=0.5", "--set", f"run.start_timeout_s={start_s}",
                            timeout=120)
         finally:
-            if node.poll() is None:
-                node.terminate()
-            node.communicate(timeout=30)
+            for node in nodes:
+                if node.poll() is None:
+                    node.terminate()
+                node.communicate(timeout=30)
         summary = json.loads((tmp_path / run_id / "summary.json").read_text())
         if cert == "plant":
             assert res.returncode == 0, res.stdout + res.stderr
             assert summary["status"] == "ok" and summary["rows"] == 501
+            assert not (tmp_path / run_id / "logs").exists() or not any(
+                (tmp_path / run_id / "logs").iterdir())  # no node started here
         else:
             assert res.returncode == 1, res.stdout + res.stderr
             assert "not ready" in res.stderr and "'plant' (absent)" in res.stderr, res.stderr
