@@ -479,17 +479,18 @@ class Display:
     def update(self, jobs: list[Job], done: int, failed: int, pending: int,
                steps_done: int) -> None:
         elapsed = time.monotonic() - self.t0
+        if not self.tty and time.monotonic() - self.last_status < 30.0:
+            return
         steps = steps_done + sum((self._k(j) or 0) if j.phase == "run" else j.point.n_steps
                                  for j in jobs if j.phase == "run" or j.fresh)
         head = (f"sweep: {done}/{self.total} finished ({failed} failed), {len(jobs)} running, "
                 f"{pending} waiting; {100 * min(1.0, steps / self.n_steps_total):3.0f}% of "
                 f"the steps, {elapsed:5.0f} s")
         if not self.tty:
-            if time.monotonic() - self.last_status >= 30.0:
-                self.last_status = time.monotonic()
-                parts = [f"{j.point.id} {self._frac(j)}" for j in jobs]
-                self.stream.write(head + (": " + ", ".join(parts) if parts else "") + "\n")
-                self.stream.flush()
+            self.last_status = time.monotonic()
+            parts = [f"{j.point.id} {self._frac(j)}" for j in jobs]
+            self.stream.write(head + (": " + ", ".join(parts) if parts else "") + "\n")
+            self.stream.flush()
             return
         width = max((len(j.point.id) for j in jobs), default=0)
         rows = [head]
