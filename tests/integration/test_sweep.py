@@ -30,6 +30,7 @@ pc = {{ tyre = {{ model = "point_contact", stiffness = 192000.0 }} }}
 tyre = {{ model = "fixed_footprint", stiffness = 192000.0, n = 4, contact_length = 0.2 }}
 [sweep.set]
 "run.t_end" = 0.6
+"run.stall_timeout_s" = 30.0  # a shared 2-core machine can starve a node for > 5 s
 """
 
 
@@ -140,7 +141,7 @@ def test_sweep_2x2_results_then_resume_redoes_nothing(tmp_path):
     doc = json.loads((out / "sweep.json").read_text())
     assert doc["name"] == "t2x2" and doc["grid"] == {"run.h": [0.001, 0.002],
                                                      "tyre": ["pc", "ffp"]}
-    assert doc["set"] == {"run.t_end": 0.6}
+    assert doc["set"] == {"run.t_end": 0.6, "run.stall_timeout_s": 30.0}
     for p in doc["points"]:
         summary = json.loads((out / p["run_dir"] / "summary.json").read_text())
         assert summary["status"] == "ok" and summary["run_id"] == p["id"]
@@ -162,6 +163,8 @@ base = "{CH3_STEP}"
 jobs = 2
 [sweep.grid]
 "run.t_end" = [0.5, 6.0]
+[sweep.set]
+"run.stall_timeout_s" = 30.0
 """
 
 
@@ -214,6 +217,7 @@ fatigue = true
 "road.speed_kmh" = [34.0]
 [sweep.set]
 "run.t_end" = 0.4
+"run.stall_timeout_s" = 30.0
 """
 
 
@@ -249,6 +253,7 @@ jobs = 2
 "run.h" = [0.001, 0.002]
 [sweep.set]
 "run.t_end" = 0.4
+"run.stall_timeout_s" = 30.0
 """
 
 
