@@ -253,13 +253,16 @@ class Participant:
                 self.ctl("progress", -1, 0.0, rejected=self.rejected)
                 return msg.d
 
-    def finish(self, k: int, t: float, linger_s: float = 5.0, **extra: Any) -> None:
-        """Report ``done`` and wait (briefly) for the orchestrator to close the run."""
+    def finish(self, k: int, t: float, linger_s: float = 120.0, **extra: Any) -> None:
+        """Report ``done`` and stay until the orchestrator closes the run (or is gone, or
+        aborts it): what this node still has in flight on the bus (its last records batch,
+        the recorder's last load blocks) is only delivered while its session is open."""
         self.flush_records()
         self.ctl("done", k, t, rejected=self.rejected, **extra)
         deadline = time.monotonic() + linger_s
         while time.monotonic() < deadline:
             try:
+                self.check_orchestrator()
                 msg = self._take(timeout=0.1)
             except queue.Empty:
                 continue

@@ -25,6 +25,9 @@ from .config import FatigueConfig
 from .run_dir import track_length, write_results
 from .worker import LiveFatigue, load_influence
 
+REPORT_PERIOD_S = 0.5
+"""At most this often (wall time) the damage so far is published on ``fatigue/damage``."""
+
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Consume load blocks until the last step, then write the run's fatigue results."""
@@ -42,6 +45,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     next_k = 0
     box = part.mailbox[tag]
     last_input = time.monotonic()
+    last_report = 0.0
     while next_k <= n_steps:
         try:
             part.handle(*part.inbox.get(timeout=0.05))  # files the block; raises on abort
@@ -73,7 +77,11 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             live.update(t, loads)
             next_k = k + 1
             last_input = now
-            res = live.result()
+            part.progress(k, k * h)
+            if now - last_report < REPORT_PERIOD_S and next_k <= n_steps:
+                continue
+            last_report = now
+            res = live.result()  # residue closed: what the life would be if the run ended here
             distance = L * next_k / (n_steps + 1)
             part.publish(ch.DAMAGE, k, float(t[-1]), {
                 "max_damage": res.max_damage,
@@ -81,7 +89,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 "distance_m": distance,
                 "life_km": distance / res.max_damage / 1000.0 if res.max_damage > 0
                 else float("inf"),
-            })
+            }, record=False)  # a summary of recorded loads: not journaled
         part.progress(next_k - 1, (next_k - 1) * h)
         if now - last_input > max(30.0, 6.0 * part.stall_timeout_s):  # orchestrator gone too
             raise RunError(f"fatigue: no load block from the recorder after step {next_k - 1}")

@@ -15,6 +15,7 @@ no gaps, ``fatigue.block_samples`` steps per block, the last block at the end of
 from __future__ import annotations
 
 import queue
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -75,6 +76,30 @@ class LoadStreamer:
             self.next_k += n
 
 
+class BlockSender:
+    """Publishes load blocks from a thread of its own: a put to a busy fatigue node may block
+    (reliable, blocking congestion control), and the recorder must go on journaling."""
+
+    def __init__(self, part: Participant) -> None:
+        self.part = part
+        self.queue: queue.SimpleQueue[dict[str, Any] | None] = queue.SimpleQueue()
+        self.thread = threading.Thread(target=self._loop, name="load-blocks", daemon=True)
+        self.thread.start()
+
+    def send(self, blk: dict[str, Any]) -> None:
+        self.queue.put(blk)
+
+    def _loop(self) -> None:
+        while (blk := self.queue.get()) is not None:
+            k_last = blk["k0"] + len(blk["t"]) - 1
+            self.part.publish(ch.LOADS, k_last, blk["t"][-1], blk, record=False)
+
+    def close(self, timeout_s: float = 60.0) -> None:
+        """Let the queued blocks go out (bounded), then stop the thread."""
+        self.queue.put(None)
+        self.thread.join(timeout=timeout_s)
+
+
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Record the run until every channel is complete (or the run is aborted).
 
@@ -87,10 +112,12 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     journal = JournalWriter(journal_path, part.run)
     producers = [n for n in run_cfg["nodes"] if n in ch.NODES and n != part.node]
     streamer: LoadStreamer | None = None
+    sender: BlockSender | None = None
     if ch.FATIGUE in run_cfg["nodes"]:
         part.output(ch.LOADS)
         block = (scenario.get("fatigue") or {}).get("block_samples", 500)
         streamer = LoadStreamer(block)
+        sender = BlockSender(part)
     load_name = "/".join(ch.LOAD_CHANNEL)
     put = part.inbox.put
     for node in producers:
@@ -118,8 +145,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         if streamer is not None and name == load_name:
             streamer.add(msg.k, msg.t, msg.d)
             for blk in streamer.blocks(n_steps):
-                k_last = blk["k0"] + len(blk["t"]) - 1
-                part.publish(ch.LOADS, k_last, blk["t"][-1], blk, record=False)
+                sender.send(blk)
 
     def feed(key: str, raw: bytes) -> bool:
         """One ``records`` message; True if it held data."""
@@ -189,6 +215,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         raise
     journal.close()
     result = finalize(journal_path, folder)
+    if sender is not None:
+        sender.close()
     part.finish(n_steps, n_steps * run_cfg["h"], **result)
 
 
