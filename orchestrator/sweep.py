@@ -785,7 +785,7 @@ def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
     cooldown: dict[str, float] = {}  # a node that failed: wait before serving that id again
     logs = out / "serve"
     logs.mkdir(parents=True, exist_ok=True)
-    bus = ZenohBus(zenoh_config(connect, None))
+    bus = ZenohBus(zenoh_config(connect, None, mode="client"))  # through a router
     pattern = keys.key("*", keys.ORCHESTRATOR, keys.SCENARIO)
     stream.write(f"suscosim sweep {sweep.name}: serving {', '.join(nodes)} for "
                  f"{len(ids)} points via {', '.join(connect)}\n")
