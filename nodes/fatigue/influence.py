@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cosim.errors import InputFileError
+from cosim.errors import InputFileError, ScenarioError
 
 from . import arm_geometry as geo
 from .material import Material
@@ -123,7 +123,11 @@ def builtin_influence(mesh_size: float, mat: Material, use_cache: bool = True) -
                 )
         except (OSError, KeyError, ValueError):
             pass  # unreadable cache: rebuild
-    inf = solve_builtin(mesh_size, mat)
+    try:
+        inf = solve_builtin(mesh_size, mat)
+    except ValueError as exc:  # e.g. a mesh too coarse to put any node on a load patch
+        raise ScenarioError("fatigue.mesh_size_m", mesh_size,
+                            f"a finer mesh for the built-in arm ({exc})") from None
     if use_cache:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".tmp.npz")

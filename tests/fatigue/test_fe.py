@@ -92,3 +92,15 @@ def test_first_flexible_mode_far_above_road_band_and_mass():
     assert f[0] > 5 * 60.0  # quasi-static valid: >> 0-60 Hz (thesis: 362 Hz)
     assert np.all(np.diff(f) >= 0)
     assert 4.0 < fe.volume() * RHO < 12.0  # kg, same order as the thesis's 5 kg arm
+
+
+def test_a_mesh_too_coarse_for_the_load_patches_is_a_scenario_error_naming_the_key():
+    import pytest
+
+    from cosim.errors import ScenarioError
+    from nodes.fatigue.influence import builtin_influence
+    from nodes.fatigue.material import steel_817M40
+
+    with pytest.raises(ScenarioError, match="fatigue.mesh_size_m") as err:
+        builtin_influence(0.04, steel_817M40(), use_cache=False)
+    assert err.value.exit_code == 2
