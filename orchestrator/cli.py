@@ -44,8 +44,18 @@ def _num(x: float | str) -> str:
     return x if isinstance(x, str) else f"{x:.4g}"
 
 
+def _sigterm_as_interrupt(_signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt
+
+
 def cmd_run(args: argparse.Namespace) -> int:
+    import signal
+
     from .runner import resolve, run_scenario
+
+    # SIGTERM (docker compose down, a sweep stopping a run, kill) ends the run like Ctrl-C:
+    # the nodes are told to abort and summary.json says "failed: interrupted"
+    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
 
     overrides = list(args.set or [])
     if args.mode:

@@ -145,9 +145,13 @@ class Clock:
 
     def abort(self, reason: str, err: Exception | None = None) -> None:
         """Tell every node to stop, then raise (the error names the node)."""
+        self.announce_abort(reason)
+        raise err if err is not None else RunError(reason)
+
+    def announce_abort(self, reason: str) -> None:
+        """Publish ``abort`` (the nodes stop, the recorder exports what it has)."""
         for _ in range(3):
             self._clock(encode("abort", -1, 0.0, {"reason": reason}))
-        raise err if err is not None else RunError(reason)
 
     # ---- the run --------------------------------------------------------------------------
     def run(self) -> ClockResult:

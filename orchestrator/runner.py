@@ -197,6 +197,11 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     try:
         result = clock.run()
     except BaseException as exc:
+        if isinstance(exc, KeyboardInterrupt):  # Ctrl-C or SIGTERM: stop the nodes cleanly
+            try:
+                clock.announce_abort("the orchestrator was interrupted")
+            except Exception:
+                pass
         if hasattr(bar, "close"):
             bar.close()
         if local:
@@ -205,7 +210,9 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
             th.join(timeout=3.0)
         rec = _recover(folder)
         summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed",
-                           str(exc) or type(exc).__name__)
+                           "interrupted (Ctrl-C or SIGTERM)"
+                           if isinstance(exc, KeyboardInterrupt)
+                           else str(exc) or type(exc).__name__)
         (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
         bus.close()
         if not isinstance(exc, SuscosimError | KeyboardInterrupt):

@@ -240,3 +240,25 @@ def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
     table = read_table(out / "table.csv") if (out / "table.csv").exists() else None
     assert read_journal(out / "journal.msgpack").records  # what was recorded is readable
     assert table is None or len(table["t"]) > 0
+
+
+def test_sigterm_to_the_orchestrator_ends_the_run_with_a_failed_summary(tmp_path, ch3_step):
+    out = tmp_path / "term"
+    proc = popen_suscosim("run", str(ch3_step), "--out", str(out), "--quiet",
+                          "--set", "run.t_end=120.0", "--set", 'run.id="termtest"')
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (out / "journal.msgpack").exists():
+            time.sleep(0.1)
+        time.sleep(1.0)
+        proc.send_signal(signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, stdout + stderr
+    assert "Traceback" not in stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and "interrupted" in summary["error"]
+    assert summary["rows"] > 0  # what was recorded is in the table
+    assert not _pids_of("termtest", "plant")  # the nodes are gone too
