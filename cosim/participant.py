@@ -46,6 +46,7 @@ _ORCHESTRATOR_GONE_S = 2.0
 (Zenoh can drop and re-declare a token while links reorganise under heavy CPU load)."""
 HELLO_PERIOD_S = 0.05
 PROGRESS_PERIOD_S = 0.1
+WAITING_PERIOD_S = 1.0
 RECORD_BATCH = 64
 RECORD_PERIOD_S = 0.05
 
@@ -233,6 +234,7 @@ class Participant:
         """The start barrier. Returns the ``start`` payload (``n_steps``, ``h``, ``info``)."""
         deadline = time.monotonic() + timeout_s
         next_send = 0.0
+        next_waiting = time.monotonic() + WAITING_PERIOD_S
         while True:
             now = time.monotonic()
             if now >= deadline:
@@ -243,8 +245,13 @@ class Participant:
                 next_send = now + HELLO_PERIOD_S
                 self.check_orchestrator()
                 self.publish_hello()
-                if all(-1 in box or box for box in self.mailbox.values()):
+                silent = [f"{n}/{c}" for (n, c), box in self.mailbox.items()
+                          if not (-1 in box or box)]
+                if not silent:
                     self.ctl("ready", info={"outputs": list(self._outputs), **(info or {})})
+                elif now >= next_waiting:  # tell the orchestrator what holds this node up
+                    next_waiting = now + WAITING_PERIOD_S
+                    self.ctl("waiting", missing=silent)
             try:
                 msg = self._take(timeout=max(0.0, min(HELLO_PERIOD_S, next_send - now)))
             except queue.Empty:

@@ -3,8 +3,8 @@
 Schema (version 1)::
 
     {"v": 1,            # schema version (int); a node refuses versions it does not know
-     "kind": "data",    # data | hello | ready | start | progress | done | abort | error
-                        # | records
+     "kind": "data",    # data | hello | ready | waiting | start | progress | done | abort
+                        # | error | records
      "k": 42,           # communication step index (int, -1 before the run starts)
      "t": 0.042,        # time t_k of that step [s]
      "d": {...}}        # payload
@@ -29,8 +29,8 @@ import numpy as np
 from .errors import WireError
 
 SCHEMA_VERSION = 1
-KINDS = frozenset({"data", "hello", "ready", "start", "progress", "done", "abort", "error",
-                   "records"})
+KINDS = frozenset({"data", "hello", "ready", "waiting", "start", "progress", "done", "abort",
+                   "error", "records"})
 
 
 @dataclass(frozen=True)

@@ -45,6 +45,7 @@ class NodeStatus:
     info: dict[str, Any] = field(default_factory=dict)
     result: dict[str, Any] = field(default_factory=dict)
     gone_since: float | None = None
+    waiting_for: list[str] = field(default_factory=list)  # inputs not heard yet (start barrier)
 
 
 @dataclass
@@ -113,7 +114,9 @@ class Clock:
             st.last_seen = now
             st.rejected = int(msg.d.get("rejected", st.rejected) or 0)
             if msg.kind == "ready":
-                st.ready, st.info = True, dict(msg.d.get("info", {}))
+                st.ready, st.info, st.waiting_for = True, dict(msg.d.get("info", {})), []
+            elif msg.kind == "waiting":
+                st.waiting_for = [str(x) for x in msg.d.get("missing", [])][:8]
             elif msg.kind == "progress":
                 st.started = st.started or st.ready
                 st.k = max(st.k, msg.k)
@@ -148,6 +151,14 @@ class Clock:
         self.announce_abort(reason)
         raise err if err is not None else RunError(reason)
 
+    def _why_not_ready(self, node: str) -> str:
+        st = self.status[node]
+        if not st.alive:
+            return " (absent)"
+        if st.waiting_for:
+            return f" (never heard {', '.join(st.waiting_for)})"
+        return ""
+
     def announce_abort(self, reason: str) -> None:
         """Publish ``abort`` (the nodes stop, the recorder exports what it has)."""
         for _ in range(3):
@@ -163,8 +174,7 @@ class Clock:
             if time.monotonic() > deadline:
                 missing = [n for n, st in self.status.items() if not st.ready]
                 self.abort(f"not ready within {cfg['start_timeout_s']:.0f} s: "
-                           + ", ".join(f"'{n}'" + ("" if self.status[n].alive else " (absent)")
-                                       for n in missing))
+                           + ", ".join(f"'{n}'" + self._why_not_ready(n) for n in missing))
             self._pump(0.05)
             self._tick()
         info = {n: st.info for n, st in self.status.items()}

@@ -23,7 +23,7 @@ from typing import Any
 from cosim import channels as ch
 from cosim import keys
 from cosim.errors import RunError, WireError
-from cosim.participant import HELLO_PERIOD_S, Participant
+from cosim.participant import HELLO_PERIOD_S, WAITING_PERIOD_S, Participant
 from cosim.wire import decode
 
 from .journal import JournalWriter, read_journal
@@ -164,6 +164,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
 
     last_flush = last_data = time.monotonic()
     next_ready = 0.0
+    next_waiting = time.monotonic() + WAITING_PERIOD_S
     deadline = time.monotonic() + run_cfg["start_timeout_s"]
     try:
         while True:
@@ -178,6 +179,10 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                         part.publish_hello()
                     if heard.issuperset(producers):
                         part.ctl("ready", info={"outputs": []})
+                    elif now >= next_waiting:
+                        next_waiting = now + WAITING_PERIOD_S
+                        part.ctl("waiting", missing=[f"{n}/{keys.RECORDS}" for n in producers
+                                                     if n not in heard])
             elif now - last_data > part.stall_timeout_s:
                 missing = sorted(c for c in expected if len(got.get(c, ())) <= n_steps)
                 raise RunError(f"recorder: no data for {part.stall_timeout_s:.1f} s; "

@@ -262,3 +262,14 @@ def test_sigterm_to_the_orchestrator_ends_the_run_with_a_failed_summary(tmp_path
     assert summary["status"] == "failed" and "interrupted" in summary["error"]
     assert summary["rows"] > 0  # what was recorded is in the table
     assert not _pids_of("termtest", "plant")  # the nodes are gone too
+
+
+def test_start_barrier_timeout_says_which_input_each_node_never_heard(tmp_path, ch3_step):
+    res = suscosim("run", str(ch3_step), "--out", str(tmp_path / "nostart"), "--quiet",
+                   "--external", "plant", "--set", "run.start_timeout_s=4.0")
+    assert res.returncode == 1, res.stdout + res.stderr
+    err = res.stderr
+    assert "not ready within 4 s" in err and "'plant' (absent)" in err
+    assert "'tyre_road' (never heard plant/state)" in err
+    assert "'recorder' (never heard plant/records)" in err
+    assert "Traceback" not in err
