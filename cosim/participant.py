@@ -33,7 +33,7 @@ from typing import Any
 
 from . import keys
 from .errors import RunError, WireError
-from .wire import Message, decode, encode, encode_records
+from .wire import Message, decode, encode
 
 log = logging.getLogger("suscosim.node")
 
@@ -138,7 +138,8 @@ class Participant:
         self._records_since = time.monotonic()
         if self._records and self._records_pub is not None:
             batch, self._records = self._records, []
-            self._records_pub(encode_records(batch, self._records_k, self._records_t))
+            self._records_pub(encode("records", self._records_k, self._records_t,
+                                     {"records": batch}))
 
     def publish_hello(self) -> None:
         """``hello`` on every output and the records feed (the start handshake's proof that

@@ -107,11 +107,3 @@ def decode(raw: bytes) -> Message:
             raise WireError("records payload is not a list of [channel, bytes] pairs")
     return Message(kind=kind, k=k, t=float(t), d=d)
 
-
-def encode_records(records: list[tuple[str, bytes]], k: int, t: float) -> bytes:
-    """A ``records`` message: ``(channel, raw message)`` pairs as published."""
-    return msgpack.packb(
-        {"v": SCHEMA_VERSION, "kind": "records", "k": int(k), "t": float(t),
-         "d": {"records": [[c, raw] for c, raw in records]}},
-        use_bin_type=True,
-    )

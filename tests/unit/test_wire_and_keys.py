@@ -57,10 +57,10 @@ def test_records_batch_round_trips_the_raw_messages_and_rejects_bad_payloads():
     import pytest
 
     from cosim.errors import WireError
-    from cosim.wire import decode, encode, encode_records
+    from cosim.wire import decode, encode
 
     raws = [("state", encode("data", k, 0.001 * k, {"z_b": 0.1 * k})) for k in range(3)]
-    msg = decode(encode_records(raws, 2, 0.002))
+    msg = decode(encode("records", 2, 0.002, {"records": raws}))
     assert msg.kind == "records" and msg.k == 2
     assert [tuple(r) for r in msg.d["records"]] == raws  # byte for byte, in order
     bad = msgpack.packb({"v": 1, "kind": "records", "k": 0, "t": 0.0,
