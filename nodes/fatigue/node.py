@@ -23,7 +23,7 @@ from cosim.participant import Participant
 
 from .config import FatigueConfig
 from .run_dir import track_length, write_results
-from .worker import LiveFatigue, load_influence
+from .worker import FatigueResult, LiveFatigue, load_influence
 
 REPORT_PERIOD_S = 0.5
 """At most this often (wall time) the damage so far is published on ``fatigue/damage``."""
@@ -42,7 +42,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     L = cfg.track_length_m if cfg.track_length_m is not None else \
         track_length(scenario, np.array([0.0, run_cfg["t_end"]]))
     live: LiveFatigue | None = None
+    fields: list[str] = []  # the load fields of the blocks, in the order LiveFatigue takes
     next_k = 0
+    t_last = 0.0
     box = part.mailbox[tag]
     last_input = time.monotonic()
     last_report = 0.0
@@ -62,12 +64,11 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 raise RunError(f"fatigue: load block starts at step {d['k0']}, expected "
                                f"{next_k} (a block was lost)")
             t = np.asarray(d["t"], dtype=float)
-            channels = [f"{ch.PLANT}/{ch.ARM}/{f}" for f in d if f not in ("k0", "t")]
             if live is None:
-                live = LiveFatigue(cfg, channels, L)
+                fields = [f for f in d if f not in ("k0", "t")]
+                live = LiveFatigue(cfg, [f"{ch.PLANT}/{ch.ARM}/{f}" for f in fields], L)
             try:
-                loads = np.column_stack([np.asarray(d[c.rsplit("/", 1)[1]], dtype=float)
-                                         for c in live.channels])
+                loads = np.column_stack([np.asarray(d[f], dtype=float) for f in fields])
             except (KeyError, ValueError) as exc:
                 raise RunError(f"fatigue: malformed load block at step {d['k0']}: "
                                f"{type(exc).__name__}: {exc}") from None
@@ -75,33 +76,37 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 raise RunError(f"fatigue: load block at step {d['k0']} has "
                                f"{loads.shape[0]} rows for {t.size} times")
             live.update(t, loads)
-            next_k = k + 1
+            next_k, t_last = k + 1, float(t[-1])
             last_input = now
             part.progress(k, k * h)
-            if now - last_report < REPORT_PERIOD_S and next_k <= n_steps:
-                continue
-            last_report = now
-            res = live.result()  # residue closed: what the life would be if the run ended here
-            distance = L * next_k / (n_steps + 1)
-            part.publish(ch.DAMAGE, k, float(t[-1]), {
-                "max_damage": res.max_damage,
-                "critical_node_id": res.critical_node_id,
-                "distance_m": distance,
-                "life_km": distance / res.max_damage / 1000.0 if res.max_damage > 0
-                else float("inf"),
-            }, record=False)  # a summary of recorded loads: not journaled
+            if next_k <= n_steps and now - last_report >= REPORT_PERIOD_S:
+                last_report = now
+                # residue closed: what the life would be if the run ended here
+                _report(part, live.result(), k, t_last, L * next_k / (n_steps + 1))
         part.progress(next_k - 1, (next_k - 1) * h)
         if now - last_input > max(30.0, 6.0 * part.stall_timeout_s):  # orchestrator gone too
             raise RunError(f"fatigue: no load block from the recorder after step {next_k - 1}")
     assert live is not None
     result = live.result()
     result.source = "live"
+    _report(part, result, n_steps, t_last, L)
     out = Path(run_cfg["dir"]) / "fatigue"
     write_results(result, out)
     part.finish(n_steps, n_steps * h, min_life_km=_finite(result.life_km),
                 min_life_repeats=_finite(result.life_repeats),
                 max_damage=result.max_damage, critical_node_id=result.critical_node_id,
                 files=str(out))
+
+
+def _report(part: Participant, res: FatigueResult, k: int, t: float, distance_m: float) -> None:
+    """The damage so far on ``fatigue/damage`` (a summary of recorded loads: not journaled)."""
+    part.publish(ch.DAMAGE, k, t, {
+        "max_damage": res.max_damage,
+        "critical_node_id": res.critical_node_id,
+        "distance_m": distance_m,
+        "life_km": distance_m / res.max_damage / 1000.0 if res.max_damage > 0
+        else float("inf"),
+    }, record=False)
 
 
 def _finite(x: float) -> float | str:
