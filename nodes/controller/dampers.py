@@ -38,6 +38,18 @@ def passive_linear(v_rel: np.ndarray | float, c: float) -> np.ndarray:
     return c * np.asarray(v_rel, dtype=float)
 
 
+def two_state_force(
+    hard: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """A two-state damper: ``c = c_hard`` where ``hard`` else ``c_soft``; ``F_d = c v_rel``.
+
+    Returns:
+        (F_d in N, c in N·s/m).
+    """
+    c = np.where(hard, c_hard, c_soft)
+    return c * np.asarray(v_rel, dtype=float), c
+
+
 def semi_active_force(
     F_demand: np.ndarray, v_rel: np.ndarray, c_min: float, c_max: float
 ) -> tuple[np.ndarray, np.ndarray]:

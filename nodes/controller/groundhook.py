@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodes.controller.dampers import semi_active_force
+from nodes.controller.dampers import semi_active_force, two_state_force
 
 
 def groundhook_condition(v_w: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
@@ -26,8 +26,7 @@ def groundhook_on_off(
         (F_d in N, c in N·s/m, hard flag).
     """
     hard = groundhook_condition(v_w, v_rel)
-    c = np.where(hard, c_hard, c_soft)
-    return c * np.asarray(v_rel, dtype=float), c, hard
+    return (*two_state_force(hard, v_rel, c_soft, c_hard), hard)
 
 
 def groundhook_continuous(

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodes.controller.dampers import semi_active_force
+from nodes.controller.dampers import semi_active_force, two_state_force
 
 
 def skyhook_condition(v_b: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
@@ -39,8 +39,7 @@ def skyhook_on_off(
         (F_d in N, c in N·s/m, hard flag as bool array).
     """
     hard = skyhook_condition(v_b, v_rel)
-    c = np.where(hard, c_hard, c_soft)
-    return c * np.asarray(v_rel, dtype=float), c, hard
+    return (*two_state_force(hard, v_rel, c_soft, c_hard), hard)
 
 
 def skyhook_continuous(
