@@ -209,6 +209,14 @@ def test_reference_mode_cli(tmp_path, ch3_step):
     assert summary["channels"]["plant/state/z_b"]["max"] == pytest.approx(0.03074, abs=2e-5)
 
 
+def _wait_until_recording(out: Path, timeout_s: float = 60.0) -> None:
+    """Until the run's journal exists, then one more second: the run is under way."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and not (out / "journal.msgpack").exists():
+        time.sleep(0.1)
+    time.sleep(1.0)
+
+
 def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
     """Nodes watch the orchestrator's liveliness token: killed, its nodes stop too (instead
     of stepping on to the end of a long run), and the journal stays readable."""
@@ -216,10 +224,7 @@ def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
     proc = popen_suscosim("run", str(ch3_step), "--out", str(out), "--quiet",
                           "--set", "run.t_end=120.0", "--set", 'run.id="orphantest"')
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and not (out / "journal.msgpack").exists():
-            time.sleep(0.1)
-        time.sleep(1.0)
+        _wait_until_recording(out)
         nodes = {n: _pids_of("orphantest", n) for n in ("plant", "tyre_road", "controller",
                                                            "recorder")}
         assert all(nodes.values()), nodes
@@ -247,10 +252,7 @@ def test_sigterm_to_the_orchestrator_ends_the_run_with_a_failed_summary(tmp_path
     proc = popen_suscosim("run", str(ch3_step), "--out", str(out), "--quiet",
                           "--set", "run.t_end=120.0", "--set", 'run.id="termtest"')
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and not (out / "journal.msgpack").exists():
-            time.sleep(0.1)
-        time.sleep(1.0)
+        _wait_until_recording(out)
         proc.send_signal(signal.SIGTERM)
         stdout, stderr = proc.communicate(timeout=30)
     finally:
