@@ -168,8 +168,7 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     result: ClockResult | None = None
     local: LocalNodes | None = None
     threads: list[threading.Thread] = []
-    if run["mode"] == "distributed":
-        listen = list(listen or [free_loopback_endpoint()])
+    if run["mode"] == "distributed":  # listen: chosen above, before run.json
         bus = ZenohBus(zenoh_config(connect or [], listen, lowlatency=lowlatency,
                                     config_file=zenoh_config_file))
         names = [n for n in run["nodes"] if n not in (external or [])]
