@@ -43,6 +43,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--t-end", type=float, default=8.0)
     ap.add_argument("--lowlatency", action="store_true")
+    ap.add_argument("--exchange", choices=["sequential", "parallel"], action="append",
+                    help="exchange order(s) to measure (default both)")
     args = ap.parse_args()
     extra = ["--lowlatency"] if args.lowlatency else []
     _, cpu0 = one_run(0.001, "sequential", extra)  # startup cost: imports, sessions, barrier
@@ -51,7 +53,7 @@ def main() -> None:
     print(f"load average at start: {load:.1f}; startup CPU {cpu0:.2f} s")
     print("| exchange | steps/s (median) | steps/s (all runs) | CPU per step (ms) |")
     print("|---|---|---|---|")
-    for exchange in ("sequential", "parallel"):
+    for exchange in args.exchange or ("sequential", "parallel"):
         rates, cpus = [], []
         for _ in range(args.repeats):
             r, c = one_run(args.t_end, exchange, extra)

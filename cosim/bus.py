@@ -92,6 +92,8 @@ def zenoh_config(
         conf.insert_json5("connect/timeout_ms", str(CLIENT_CONNECT_TIMEOUT_MS))
     conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
     if lowlatency:
+        conf.insert_json5("scouting/gossip/autoconnect_strategy",
+                          '{peer: {to_router: "always", to_peer: "greater-zid"}}')
         conf.insert_json5("transport/unicast/lowlatency", "true")
         conf.insert_json5("transport/unicast/qos/enabled", "false")
     elif not config_file:  # a user's config file decides for itself

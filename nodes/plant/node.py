@@ -4,6 +4,11 @@ Every step k: publish ``state`` at t_k; wait for ``tyre_road/force`` and ``contr
 of step k (the step barrier); take the first substep and publish ``response`` (accelerations
 at t_k from PyBullet's forward dynamics, the applied forces) and, for realistic models, the
 component loads (``arm``); integrate the remaining substeps to t_{k+1}.
+
+In the ``parallel`` exchange the forces of step k were computed from the state of step k-1
+(one step of delay). With the ``jacobian`` coupling the plant linearises them about the state
+they were computed from, F(x_k) ~ F_k + dF/dx (x_k - x_{k-1}): this removes the delay's
+first-order error (all of it, for a linear tyre and damper).
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Run the plant node until the last step (or until the run is aborted)."""
     run_cfg = scenario["run"]
     h, n_sub, mode = run_cfg["h"], run_cfg["substeps"], run_cfg["coupling"]
+    lag = 0 if run_cfg["exchange"] == "sequential" else 1
     model = build_plant_model(scenario["vehicle"])
     try:
         outputs = [ch.STATE, ch.RESPONSE, *model.loads().keys()]
@@ -34,9 +40,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         dt = h / n_sub
         before: StepInputs | None = None
         later: list[tuple[str, int, float, dict]] = []
+        st = model.state()
         for k in range(n + 1):
             t = k * h
-            st = model.state()
+            # seen: the state the force nodes computed this step's forces from
+            seen, st = st, model.state()
+            if not lag:
+                seen = st
             part.publish(ch.STATE, k, t, st)
             # last step's response and loads go out now, while the force nodes work on
             # this state: off the critical path of the exchange
@@ -44,19 +54,20 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 part.publish(name, kk, tt, values)
             later.clear()
             msgs = part.wait({tyre: k, damper: k})
-            v_rel = st["v_w"] - st["v_b"]
             now = StepInputs(
                 F_t=msgs[tyre].array("F_t"), k_t=msgs[tyre].array("k_t"),
                 F_d=msgs[damper].array("F_d"), c_eff=msgs[damper].array("c_eff"),
-                z_w=st["z_w"], v_rel=v_rel,
+                z_w=seen["z_w"], v_rel=seen["v_w"] - seen["v_b"],
             )
+            F_t, F_d = substep_forces(mode, now, before, 0.0, h,
+                                      st["z_w"], st["v_w"] - st["v_b"])
             F_s = model.spring_force()
-            model.substep(dt, now.F_t, now.F_d)
+            model.substep(dt, F_t, F_d)
             after = model.state()
             later.append((ch.RESPONSE, k, t, {
                 "a_b": (after["v_b"] - st["v_b"]) / dt,
                 "a_w": (after["v_w"] - st["v_w"]) / dt,
-                "F_t": now.F_t, "F_d": now.F_d, "F_s": F_s,
+                "F_t": F_t, "F_d": F_d, "F_s": F_s,
             }))
             later.extend((name, k, t, values) for name, values in model.loads().items())
             part.progress(k, t)

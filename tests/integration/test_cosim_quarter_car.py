@@ -88,9 +88,28 @@ def test_monolithic_equals_distributed_and_parallel_differs(tmp_path_factory, tm
         assert np.array_equal(dist[col], mono[col]), col
     _run(ch3_step, tmp_path / "p", "--mode", "monolithic", "--set", 'run.exchange="parallel"')
     par = read_table(tmp_path / "p" / "table.parquet")
-    # Jacobi: the forces of step k are computed from the state of step k-1.
+    # Jacobi: the forces of step k are computed from the state of step k-1 ...
     assert not np.array_equal(par["tyre_road/force/F_t"], dist["tyre_road/force/F_t"])
-    assert np.argmax(par["tyre_road/force/F_t"]) == np.argmax(dist["tyre_road/force/F_t"])
+    lag = np.abs(par["tyre_road/force/F_t"] - dist["tyre_road/force/F_t"]).max()
+    assert lag > 100.0  # N: the wheel moves between two steps under the road step
+    # ... and the plant linearises them about that state (Jacobian coupling): for the linear
+    # tyre and damper of Chapter 3 the forces it applies are those of the sequential run.
+    applied = np.abs(par["plant/response/F_t"] - dist["plant/response/F_t"]).max()
+    assert applied < 1e-6 * lag, (applied, lag)
+    assert np.allclose(par["plant/state/z_w"], dist["plant/state/z_w"], rtol=0, atol=1e-12)
+
+
+def test_parallel_exchange_within_one_percent(tmp_path, ch3_step, reference):
+    """The parallel exchange, distributed, against the reference (Table 3.3's measure)."""
+    summary = _run(ch3_step, tmp_path / "r", "--set", 'run.exchange="parallel"')
+    assert summary["exchange"] == "parallel"
+    errors = peak_errors(read_table(tmp_path / "r" / "table.parquet"), reference, t_from=0.4)
+    assert worst(errors) < 1.0, errors
+    # The thesis's zero-order hold with the parallel exchange is an order of magnitude worse.
+    _run(ch3_step, tmp_path / "h", "--mode", "monolithic", "--set", 'run.exchange="parallel"',
+         "--set", 'run.coupling="hold"')
+    hold = peak_errors(read_table(tmp_path / "h" / "table.parquet"), reference, t_from=0.4)
+    assert worst(hold) > 5.0, hold
 
 
 def _pids_of(run_id: str, node: str) -> list[int]:
