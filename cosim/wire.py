@@ -29,6 +29,10 @@ import numpy as np
 from .errors import WireError
 
 SCHEMA_VERSION = 1
+MAX_MESSAGE_BYTES = 48 * 1024
+"""Largest message a node publishes [bytes]. Zenoh's low-latency transport (the embedded
+default) does not fragment: a message must fit one 64 KiB batch with its headers, or it is
+dropped. Data messages are far smaller; batches (records, load blocks) are cut to fit."""
 KINDS = frozenset({"data", "hello", "ready", "waiting", "start", "progress", "done", "abort",
                    "error", "records"})
 

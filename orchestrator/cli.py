@@ -104,10 +104,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="Zenoh router endpoint (default: embedded peer mode on loopback)")
     r.add_argument("--listen", action="append",
                    help="endpoint the orchestrator listens on (default: a free loopback port)")
-    r.add_argument("--lowlatency", action="store_true",
-                   help="Zenoh low-latency transport for every session of the run "
-                        "(experimental: every peer, taps included, must use it too, and on a "
-                        "loaded machine the start barrier often fails with it)")
+    r.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
+                   help="Zenoh's low-latency transport for the run's sessions (default: on "
+                        "for the embedded loopback mesh, off with --connect or "
+                        "--zenoh-config; peers without it still connect)")
     r.add_argument("--external", action="append", metavar="NODE",
                    help="do not start NODE here: it is started elsewhere with 'suscosim node'")
     r.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")

@@ -142,9 +142,15 @@ class LocalNodes:
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                  external: list[str] | None = None, quiet: bool = False,
                  zenoh_config_file: str | None = None, listen: list[str] | None = None,
-                 lowlatency: bool = False) -> dict[str, Any]:
+                 lowlatency: bool | None = None) -> dict[str, Any]:
     """Run a resolved scenario; write and return the summary. Raises SuscosimError on failure
-    (after writing a ``failed`` summary)."""
+    (after writing a ``failed`` summary).
+
+    ``lowlatency`` (Zenoh's low-latency transport; None: on for the embedded loopback mesh,
+    off through a router or with a user's Zenoh config file) cuts ~15 % off a coupled step.
+    """
+    if lowlatency is None:
+        lowlatency = not connect and not zenoh_config_file
     run = scenario["run"]
     folder = Path(run["dir"])
     folder.mkdir(parents=True, exist_ok=True)

@@ -34,7 +34,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     run_cfg = scenario["run"]
     cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
     load_influence(cfg)  # FE solve or cache read: before ready, not inside the run
-    tag = part.listen(ch.RECORDER, ch.LOADS, required=("k0", "t"))
+    tag = part.listen(ch.RECORDER, ch.LOADS, required=("k0", "t"), stepped=False)
     part.output(ch.DAMAGE)
     start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
     n_steps = int(start["n_steps"])

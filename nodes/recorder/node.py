@@ -24,7 +24,7 @@ from cosim import channels as ch
 from cosim import keys
 from cosim.errors import RunError, WireError
 from cosim.participant import HELLO_PERIOD_S, WAITING_PERIOD_S, Participant
-from cosim.wire import decode
+from cosim.wire import MAX_MESSAGE_BYTES, decode
 
 from .journal import JournalWriter, read_journal
 from .table import build_table, channel_stats, export
@@ -76,6 +76,19 @@ class LoadStreamer:
             self.next_k += n
 
 
+def wire_pieces(blk: dict[str, Any], max_bytes: int = MAX_MESSAGE_BYTES - 2048
+                ) -> list[dict[str, Any]]:
+    """A load block cut into consecutive pieces that each fit one bus message (a msgpack
+    float is 9 bytes); the fatigue worker takes blocks of any length."""
+    n = len(blk["t"])
+    fields = [f for f in blk if f != "k0"]
+    per = max(1, max_bytes // (9 * len(fields) + 16))
+    if n <= per:
+        return [blk]
+    return [{"k0": blk["k0"] + i, **{f: blk[f][i:i + per] for f in fields}}
+            for i in range(0, n, per)]
+
+
 class BlockSender:
     """Publishes load blocks from a thread of its own: a put to a busy fatigue node may block
     (reliable, blocking congestion control), and the recorder must go on journaling."""
@@ -91,8 +104,9 @@ class BlockSender:
 
     def _loop(self) -> None:
         while (blk := self.queue.get()) is not None:
-            k_last = blk["k0"] + len(blk["t"]) - 1
-            self.part.publish(ch.LOADS, k_last, blk["t"][-1], blk, record=False)
+            for piece in wire_pieces(blk):
+                k_last = piece["k0"] + len(piece["t"]) - 1
+                self.part.publish(ch.LOADS, k_last, piece["t"][-1], piece, record=False)
 
     def close(self, timeout_s: float = 60.0) -> None:
         """Let the queued blocks go out (bounded), then stop the thread."""

@@ -1,0 +1,113 @@
+"""The lock-step participant on the in-memory bus: step barrier, wake-ups, batches."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import msgpack
+import pytest
+
+from cosim import keys
+from cosim.bus import MemoryBus
+from cosim.errors import RunError
+from cosim.participant import Participant
+from cosim.wire import MAX_MESSAGE_BYTES, decode, encode
+from nodes.recorder.node import wire_pieces
+
+
+def _pair(stall_s: float = 10.0) -> tuple[MemoryBus, Participant]:
+    bus = MemoryBus()
+    bus.token(keys.key("r", keys.ORCHESTRATOR, keys.ALIVE))  # the orchestrator is there
+    return bus, Participant(bus, "r", "plant", stall_timeout_s=stall_s)
+
+
+def _put(bus: MemoryBus, node: str, channel: str, raw: bytes) -> None:
+    bus.put(keys.key("r", node, channel), raw)
+
+
+def test_wait_returns_the_step_asked_for_and_drops_older_ones() -> None:
+    bus, part = _pair()
+    tyre = part.listen("tyre_road", "force", required=("F_t",))
+    for k in (0, 1, 2):
+        _put(bus, "tyre_road", "force", encode("data", k, k * 1e-3, {"F_t": 10.0 * k}))
+    assert part.wait({tyre: 1})[tyre].d["F_t"] == 10.0
+    assert sorted(part.mailbox[tyre]) == [1]  # step 0 dropped; step 2 not read yet
+    assert part.wait({tyre: 2})[tyre].d["F_t"] == 20.0
+    late = threading.Timer(0.1, _put, (bus, "tyre_road", "force",
+                                        encode("data", 3, 3e-3, {"F_t": 30.0})))
+    late.start()  # arrives while the node is blocked on the input
+    assert part.wait({tyre: 3})[tyre].d["F_t"] == 30.0
+    part.close()
+
+
+def test_stall_timeout_wakes_a_blocked_node_and_names_the_silent_input() -> None:
+    bus, part = _pair(stall_s=0.3)
+    tyre = part.listen("tyre_road", "force")
+    damper = part.listen("controller", "force")
+    _put(bus, "tyre_road", "force", encode("data", 0, 0.0, {"F_t": 1.0}))
+    t0 = time.monotonic()
+    with pytest.raises(RunError, match="no input from controller") as err:
+        part.wait({tyre: 0, damper: 0})
+    assert "tyre_road" not in str(err.value)
+    assert 0.3 <= time.monotonic() - t0 < 2.0
+    part.close()
+
+
+def test_abort_reaches_a_node_blocked_on_an_input() -> None:
+    bus, part = _pair()
+    tyre = part.listen("tyre_road", "force")
+    abort = encode("abort", -1, 0.0, {"reason": "node 'controller' is gone"})
+    threading.Timer(0.2, _put, (bus, keys.ORCHESTRATOR, keys.CLOCK, abort)).start()
+    t0 = time.monotonic()
+    with pytest.raises(RunError, match="aborted.*controller"):
+        part.wait({tyre: 0})
+    assert time.monotonic() - t0 < 2.0  # not the 10 s stall timeout
+    part.close()
+
+
+def test_empty_and_malformed_messages_on_an_input_are_rejected_not_fatal() -> None:
+    bus, part = _pair()
+    tyre = part.listen("tyre_road", "force", required=("F_t",))
+    for raw in (b"", b"\xc1", encode("data", 0, 0.0, {"k_t": 1.0})):
+        _put(bus, "tyre_road", "force", raw)
+    _put(bus, "tyre_road", "force", encode("data", 0, 0.0, {"F_t": 5.0}))
+    assert part.wait({tyre: 0})[tyre].d["F_t"] == 5.0
+    assert part.rejected == 3
+    part.close()
+
+
+def test_records_batches_stay_under_the_message_limit() -> None:
+    bus, part = _pair()
+    part.output("arm")
+    batches: list[bytes] = []
+    bus.subscribe(keys.key("r", "plant", keys.RECORDS), lambda _k, raw: batches.append(raw))
+    fields = {f"f{i}": [0.1 * i] * 200 for i in range(10)}  # ~18 kB a message
+    for k in range(5):
+        part.publish("arm", k, k * 1e-3, fields)
+    part.flush_records()
+    sizes = [len(b) for b in batches]
+    assert len(batches) >= 2 and max(sizes) <= MAX_MESSAGE_BYTES, sizes
+    got = [decode(raw).k for b in batches for _, raw in decode(b).d["records"]]
+    assert got == list(range(5))
+    with pytest.raises(RunError, match="plant/arm.*bytes"):
+        part.publish("arm", 5, 5e-3, {"x": [1.0] * 10_000})
+    part.close()
+
+
+def test_load_blocks_are_cut_into_pieces_that_fit_one_message() -> None:
+    n, names = 500, [f"load_{i}" for i in range(13)]
+    blk = {"k0": 1000, "t": [1e-3 * (1000 + i) for i in range(n)],
+           **{f: [float(i * j) for i in range(n)] for j, f in enumerate(names)}}
+    pieces = wire_pieces(blk)
+    assert len(pieces) > 1
+    for p in pieces:
+        raw = encode("data", p["k0"] + len(p["t"]) - 1, p["t"][-1], p)
+        assert len(raw) <= MAX_MESSAGE_BYTES
+    assert [p["k0"] for p in pieces] == [1000 + sum(len(q["t"]) for q in pieces[:i])
+                                         for i in range(len(pieces))]
+    for f in ["t", *names]:
+        assert sum((p[f] for p in pieces), []) == blk[f]
+    small = {"k0": 0, "t": [0.0], "a": [1.0]}
+    assert wire_pieces(small) == [small]
+    assert msgpack.unpackb(encode("data", 0, 0.0, small))["d"]["a"] == [1.0]
