@@ -20,8 +20,8 @@ raw message bytes], ...]}`` in publication order; ``k``/``t`` are those of the l
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
+import math
+from typing import Any, NamedTuple
 
 import msgpack
 import numpy as np
@@ -37,27 +37,29 @@ KINDS = frozenset({"data", "hello", "ready", "waiting", "start", "progress", "do
                    "error", "records"})
 
 
-@dataclass(frozen=True)
-class Message:
-    """A decoded bus message."""
+class Message(NamedTuple):
+    """A decoded bus message (a named tuple: made for every message, so it must be cheap)."""
 
     kind: str
     k: int
     t: float
-    d: dict[str, Any] = field(default_factory=dict)
+    d: dict[str, Any]
 
     def array(self, name: str) -> np.ndarray:
         """Field ``name`` as a float array (length 1 for a scalar)."""
         try:
-            return np.atleast_1d(np.asarray(self.d[name], dtype=float))
+            value = self.d[name]
         except KeyError:
             raise WireError(f"message k={self.k} has no field '{name}'") from None
+        return np.array(value if type(value) is list else (value,), dtype=float)
 
 
 def _plain(value: Any) -> Any:
     """numpy -> msgpack-able; a length-1 array becomes a plain float."""
-    if isinstance(value, np.ndarray):
-        return float(value[0]) if value.size == 1 else [float(x) for x in value.ravel()]
+    if type(value) is np.ndarray:
+        if value.dtype.kind != "f":
+            value = value.astype(float)
+        return value.item() if value.size == 1 else value.ravel().tolist()
     if isinstance(value, np.generic):
         return value.item()
     return value
@@ -72,8 +74,11 @@ def encode(kind: str, k: int, t: float, d: dict[str, Any] | None = None) -> byte
     )
 
 
+_NUMBER_TYPES = (int, float)  # exact types: a bool is not a number here
+
+
 def _is_number(x: Any) -> bool:
-    return isinstance(x, (int, float)) and not isinstance(x, bool)
+    return type(x) in _NUMBER_TYPES
 
 
 def decode(raw: bytes) -> Message:
@@ -92,16 +97,16 @@ def decode(raw: bytes) -> Message:
         raise WireError(f"unknown kind {kind!r}")
     if not isinstance(k, int) or isinstance(k, bool) or k < -1:
         raise WireError(f"bad step index k={k!r} (expected int >= -1)")
-    if not _is_number(t) or not np.isfinite(t):
+    if not _is_number(t) or not math.isfinite(t):
         raise WireError(f"bad time t={t!r} (expected a finite number, s)")
     if not isinstance(d, dict):
         raise WireError(f"bad payload d of type {type(d).__name__} (expected a map)")
     if kind == "data":
         for name, value in d.items():
-            ok = _is_number(value) or (
-                isinstance(value, list) and value and all(_is_number(x) for x in value)
-            )
-            if not ok:
+            if type(value) in _NUMBER_TYPES:
+                continue
+            if not (type(value) is list and value
+                    and all(type(x) in _NUMBER_TYPES for x in value)):
                 raise WireError(f"data field '{name}'={value!r} is not a number or list of numbers")
     if kind == "records":
         recs = d.get("records")
@@ -109,5 +114,5 @@ def decode(raw: bytes) -> Message:
                 isinstance(r, list) and len(r) == 2 and isinstance(r[0], str)
                 and isinstance(r[1], bytes) for r in recs):
             raise WireError("records payload is not a list of [channel, bytes] pairs")
-    return Message(kind=kind, k=k, t=float(t), d=d)
+    return Message(kind, k, float(t), d)
 

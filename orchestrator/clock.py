@@ -20,6 +20,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from cosim import channels as ch
 from cosim import keys
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.wire import decode, encode
@@ -39,6 +40,7 @@ class NodeStatus:
     ready: bool = False
     started: bool = False
     done: bool = False
+    done_at: float | None = None  # time.monotonic() when its "done" came
     k: int = -1
     last_seen: float = 0.0
     rejected: int = 0
@@ -52,7 +54,12 @@ class NodeStatus:
 class ClockResult:
     nodes: dict[str, NodeStatus]
     wall_s: float
+    """From the clock's start to the end: start barrier, steps and every node's last work."""
     run_wall_s: float
+    """From ``start`` until every node is done (the recorder's table export included)."""
+    step_wall_s: float
+    """From ``start`` until the last node of the coupling (plant, tyre/road, controller) has
+    done its last step: what ``steps_per_s`` is measured on."""
 
 
 class Clock:
@@ -122,6 +129,7 @@ class Clock:
                 st.k = max(st.k, msg.k)
             elif msg.kind == "done":
                 st.done, st.k, st.result = True, msg.k, dict(msg.d)
+                st.done_at = st.done_at or now
             elif msg.kind == "error":
                 code = int(msg.d.get("exit_code", 1))
                 err: RunError | ScenarioError = RunError(f"node '{node}': {msg.d.get('message')}")
@@ -200,4 +208,7 @@ class Clock:
         run_wall = time.monotonic() - t_run
         for _ in range(3):
             self._clock(encode("done", self.n_steps, self.n_steps * cfg["h"], {}))
-        return ClockResult(self.status, time.monotonic() - t0, run_wall)
+        coupled = [st.done_at for n, st in self.status.items()
+                   if n in ch.COUPLED and st.done_at is not None]
+        step_wall = max(coupled) - t_run if coupled else run_wall
+        return ClockResult(self.status, time.monotonic() - t0, run_wall, step_wall)

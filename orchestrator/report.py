@@ -457,7 +457,8 @@ def sample_rate(t: np.ndarray) -> float | None:
 
 RUN_KEYS = ("name", "id", "mode", "exchange", "coupling", "h", "substeps", "t_end",
             "t_end_source", "n_steps", "nodes")
-SUMMARY_KEYS = ("status", "wall_s", "run_wall_s", "steps_per_s", "n_steps", "rows", "nodes")
+SUMMARY_KEYS = ("status", "wall_s", "run_wall_s", "step_wall_s", "steps_per_s", "n_steps", "rows",
+                "nodes")
 
 
 def run_header(r: RunData, title_prefix: str = "Run") -> str:
@@ -478,8 +479,10 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
         pairs = [("status", r.status)]
         if "wall_s" in s:
             pairs.append(("wall time [s]", s.get("wall_s")))
+        if "step_wall_s" in s:
+            pairs.append(("stepping wall time [s]", s.get("step_wall_s")))
         if "run_wall_s" in s:
-            pairs.append(("stepping wall time [s]", s.get("run_wall_s")))
+            pairs.append(("start to all nodes done [s]", s.get("run_wall_s")))
         if "steps_per_s" in s:
             pairs.append(("coupled steps per s", s.get("steps_per_s")))
         for k in ("n_steps", "rows", "mode", "exchange", "coupling", "h", "substeps", "t_end"):

@@ -86,7 +86,8 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
         "nodes": run["nodes"] if run["mode"] != "reference" else ["reference"],
         "wall_s": wall_s,
         "run_wall_s": result.run_wall_s if result else wall_s,
-        "steps_per_s": (n / result.run_wall_s) if result and result.run_wall_s > 0 else
+        "step_wall_s": result.step_wall_s if result else wall_s,
+        "steps_per_s": (n / result.step_wall_s) if result and result.step_wall_s > 0 else
         (n / wall_s if status == "ok" and wall_s > 0 else 0.0),
         "rejected_messages": {k: v.rejected for k, v in result.nodes.items()} if result else {},
         "rows": rec.get("rows", 0), "files": rec.get("files", {}),
