@@ -150,7 +150,7 @@ class Participant:
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
                 record: bool = True) -> None:
         """Publish one data message; keep it for the recorder unless ``record`` is false."""
-        raw = encode("data", k, t, dict(data))
+        raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "
                            f"(at most {MAX_MESSAGE_BYTES}: split it)")

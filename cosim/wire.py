@@ -21,6 +21,7 @@ raw message bytes], ...]}`` in publication order; ``k``/``t`` are those of the l
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import msgpack
@@ -65,7 +66,7 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def encode(kind: str, k: int, t: float, d: dict[str, Any] | None = None) -> bytes:
+def encode(kind: str, k: int, t: float, d: Mapping[str, Any] | None = None) -> bytes:
     """Encode one message. ``d`` values may be numpy arrays."""
     payload = {name: _plain(v) for name, v in (d or {}).items()}
     return msgpack.packb(

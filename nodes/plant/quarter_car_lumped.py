@@ -93,33 +93,36 @@ class LumpedQuarterCar(PlantModel):
         self._joints = [0, 1]
         free_joints(self.body, self._joints, self.client)
         self._dt = None
-        self._z = np.zeros(2)
-        self._v = np.zeros(2)
+        self._z_b = self._z_w = self._v_b = self._v_w = 0.0  # [m], [m/s] (plain floats:
+        # numpy's per-call cost dominates on two numbers, and this runs 4x per step)
 
     def static_tyre_load(self) -> np.ndarray:
         pr = self.params
         return np.array([(pr.sprung_mass + pr.unsprung_mass) * GRAVITY])
 
     def _read(self) -> None:
-        js = p.getJointStates(self.body, self._joints, physicsClientId=self.client)
-        self._z = np.array([js[0][0], js[1][0]])
-        self._v = np.array([js[0][1], js[1][1]])
+        (self._z_b, self._v_b, *_), (self._z_w, self._v_w, *_) = p.getJointStates(
+            self.body, self._joints, physicsClientId=self.client)
 
     def state(self) -> dict[str, np.ndarray]:
         return {
-            "z_b": self._z[:1].copy(), "v_b": self._v[:1].copy(),
-            "z_w": self._z[1:].copy(), "v_w": self._v[1:].copy(),
+            "z_b": np.array((self._z_b,)), "v_b": np.array((self._v_b,)),
+            "z_w": np.array((self._z_w,)), "v_w": np.array((self._v_w,)),
         }
 
+    def _spring(self) -> float:
+        """F_s = k_s (z_w - z_b) [N], on the body, upward positive (dynamic part)."""
+        return self.params.spring_stiffness * (self._z_w - self._z_b)
+
     def spring_force(self) -> np.ndarray:
-        return np.array([self.params.spring_stiffness * (self._z[1] - self._z[0])])
+        return np.array((self._spring(),))
 
     def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
         if dt != self._dt:
             p.setTimeStep(dt, physicsClientId=self.client)
             self._dt = dt
         pr = self.params
-        F_s = self.spring_force()[0]
+        F_s = self._spring()
         f_d = float(F_d[0])
         preload = pr.sprung_mass * GRAVITY  # static spring force holding the body up
         f_body = F_s + preload + f_d
