@@ -237,6 +237,7 @@ class MemoryBus:
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._subs: list[tuple[str, Callback]] = []
+        self._routes: dict[str, list[Callback]] = {}
         self._watchers: list[tuple[str, LiveCallback]] = []
         self._tokens: set[str] = set()
         self._served: dict[str, Callable[[], bytes]] = {}
@@ -246,13 +247,17 @@ class MemoryBus:
 
     def put(self, key: str, payload: bytes) -> None:
         with self._lock:
-            targets = [cb for kx, cb in self._subs if keyexpr_matches(kx, key)]
+            targets = self._routes.get(key)
+            if targets is None:  # matched once per key, until the subscriptions change
+                targets = self._routes[key] = [cb for kx, cb in self._subs
+                                               if keyexpr_matches(kx, key)]
         for cb in targets:
             cb(key, payload)
 
     def subscribe(self, keyexpr: str, callback: Callback) -> Any:
         with self._lock:
             self._subs.append((keyexpr, callback))
+            self._routes.clear()
         return (keyexpr, callback)
 
     def feed(self, key: str, capacity: int = 1024) -> _MemoryFeed:

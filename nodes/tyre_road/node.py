@@ -26,7 +26,7 @@ def wheel_geometry(info: dict[str, Any]) -> dict[str, Any]:
     n = W.size
     return {
         "W": W,
-        "wheel_x": info.get("wheel_x", [0.0] * n),
+        "wheel_x": np.asarray(info.get("wheel_x", [0.0] * n), dtype=float),
         "wheel_track": info.get("wheel_track", [1] * n),
         "corner_names": info.get("corner_names"),
     }

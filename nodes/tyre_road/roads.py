@@ -136,7 +136,7 @@ class EventRoad(Road):
     def height(self, s: np.ndarray, track: int) -> np.ndarray:
         _check_track(track)
         s = np.asarray(s, dtype=float)
-        z = np.zeros_like(s)
+        z = np.zeros(s.shape)
         for ev in self.events:
             if track in ev.tracks:
                 z = z + ev.height_at(s)

@@ -40,7 +40,7 @@ def road_heights(road: Road, t: float, wheel_x: Sequence[float], wheel_track: Se
     if contact_offsets is None:
         contact_offsets = np.zeros(1)
     s = contact_distances(t, road.speed, wheel_x, contact_offsets)
-    z = np.zeros_like(s)
+    z = np.zeros(s.shape)
     for i, track in enumerate(wheel_track):
         if road.corners is not None and corner_names is not None \
                 and corner_names[i] not in road.corners:
