@@ -22,12 +22,16 @@ from pathlib import Path
 from cosim import scenario as sc
 from cosim.errors import SuscosimError
 
+from .placement import PIN_MODES
+
 
 def _print_summary(summary: dict) -> None:
     print(f"run {summary['run_id']}: {summary['status']}  mode={summary['mode']} "
           f"exchange={summary['exchange']} coupling={summary['coupling']} h={summary['h']} s "
           f"steps={summary['n_steps']}")
     print(f"  wall {summary['wall_s']:.2f} s, {summary['steps_per_s']:.0f} coupled steps/s")
+    if summary.get("cores"):
+        print("  cores: " + ", ".join(f"{n} {c}" for n, c in summary["cores"].items()))
     chans = summary.get("channels", {})
     if chans:
         print(f"  {'channel':<34} {'peak':>12} {'rms':>12}")
@@ -64,7 +68,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     print(f"suscosim: run {scenario['run']['id']} -> {scenario['run']['dir']}", flush=True)
     summary = run_scenario(scenario, connect=args.connect, external=args.external,
                            quiet=args.quiet, zenoh_config_file=args.zenoh_config,
-                           listen=args.listen, lowlatency=args.lowlatency)
+                           listen=args.listen, lowlatency=args.lowlatency, pin_mode=args.pin)
     _print_summary(summary)
     print(f"  summary: {Path(scenario['run']['dir']) / 'summary.json'}")
     return 0
@@ -108,6 +112,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="Zenoh's low-latency transport for the run's sessions (default: on "
                         "for the embedded loopback mesh, off with --connect or "
                         "--zenoh-config; peers without it still connect)")
+    r.add_argument("--pin", choices=PIN_MODES, default="auto",
+                   help="pin the local node processes to cores (auto: on machines of 2-4 "
+                        "cores; see orchestrator/placement.py)")
     r.add_argument("--external", action="append", metavar="NODE",
                    help="do not start NODE here: it is started elsewhere with 'suscosim node'")
     r.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")

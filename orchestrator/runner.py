@@ -32,6 +32,7 @@ from cosim.bus import MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
 from cosim.errors import RunError, ScenarioError, SuscosimError
 
 from .clock import Clock, ClockResult
+from .placement import core_layout, pin, should_pin, usable_cores
 from .progress import ProgressBar
 
 
@@ -99,8 +100,10 @@ class LocalNodes:
     """Node processes started on this machine, their logs, and their fate."""
 
     def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
-                 log_dir: Path, zenoh_config_file: str | None = None) -> None:
+                 log_dir: Path, zenoh_config_file: str | None = None,
+                 cores: dict[str, int] | None = None) -> None:
         self.procs: dict[str, subprocess.Popen] = {}
+        self.cores: dict[str, int] = {}  # the core each node was pinned to
         log_dir.mkdir(parents=True, exist_ok=True)
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         for name in names:
@@ -116,6 +119,9 @@ class LocalNodes:
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)
             log.close()
+            # before its interpreter has started any thread: they all inherit the core
+            if name in (cores or {}) and pin(self.procs[name].pid, cores[name]):
+                self.cores[name] = cores[name]
 
     def dead(self) -> str | None:
         """A message naming a node process that exited with an error, if any."""
@@ -143,12 +149,14 @@ class LocalNodes:
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                  external: list[str] | None = None, quiet: bool = False,
                  zenoh_config_file: str | None = None, listen: list[str] | None = None,
-                 lowlatency: bool | None = None) -> dict[str, Any]:
+                 lowlatency: bool | None = None, pin_mode: str = "auto") -> dict[str, Any]:
     """Run a resolved scenario; write and return the summary. Raises SuscosimError on failure
     (after writing a ``failed`` summary).
 
     ``lowlatency`` (Zenoh's low-latency transport; None: on for the embedded loopback mesh,
     off through a router or with a user's Zenoh config file) cuts ~15 % off a coupled step.
+    ``pin_mode`` (``auto``, ``on``, ``off``) places the local node processes on cores (see
+    :mod:`orchestrator.placement`).
     """
     if lowlatency is None:
         lowlatency = not connect and not zenoh_config_file
@@ -179,8 +187,10 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
         bus = ZenohBus(zenoh_config(connect or [], listen, lowlatency=lowlatency,
                                     config_file=zenoh_config_file))
         names = [n for n in run["nodes"] if n not in (external or [])]
+        cores = usable_cores()
+        layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
         local = LocalNodes(run["id"], names, list(connect or listen), lowlatency,
-                           folder / "logs", zenoh_config_file)
+                           folder / "logs", zenoh_config_file, layout)
         check = local.dead
     else:
         from .node_main import run_node
@@ -219,6 +229,7 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                            "interrupted (Ctrl-C or SIGTERM)"
                            if isinstance(exc, KeyboardInterrupt)
                            else str(exc) or type(exc).__name__)
+        summary.update(_transport(local, lowlatency))
         (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
         bus.close()
         if not isinstance(exc, SuscosimError | KeyboardInterrupt):
@@ -234,11 +245,19 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     bus.close()
     rec = result.nodes[ch.RECORDER].result
     summary = _summary(scenario, result, time.monotonic() - t0, rec, "ok")
+    summary.update(_transport(local, lowlatency))
     if ch.FATIGUE in result.nodes:  # the live fatigue node's headline (files in fatigue/)
         summary["fatigue"] = {k: v for k, v in result.nodes[ch.FATIGUE].result.items()
                               if k != "rejected"}
     (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
     return summary
+
+
+def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
+    """How a distributed run's local processes talked and where they ran (for summary.json)."""
+    if local is None:
+        return {}
+    return {"lowlatency": bool(lowlatency), "cores": dict(local.cores)}
 
 
 def _recover(folder: Path) -> dict[str, Any]:

@@ -544,6 +544,8 @@ class Runner:
     def _run_cmd(self, p: Point) -> list[str]:
         cmd = [sys.executable, "-m", "orchestrator", "run", str(p.base),
                "--out", str(self.run_dir(p)), "--quiet"]
+        if self.sweep.jobs > 1:  # runs side by side: pinning each to the same cores hurts
+            cmd += ["--pin", "off"]
         for s in p.set_args:
             cmd += ["--set", s]
         for ep in self.connect:

@@ -12,11 +12,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cosim import channels as ch
 from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
 from cosim.wire import encode
 from nodes.recorder.journal import read_journal
 from nodes.recorder.table import build_table, read_table
 from orchestrator.accuracy import peak_errors, worst
+from orchestrator.placement import core_layout, usable_cores
 from orchestrator.reference import reference_solution
 
 from ..conftest import popen_suscosim, suscosim
@@ -264,6 +266,36 @@ def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
     table = read_table(out / "table.csv") if (out / "table.csv").exists() else None
     assert read_journal(out / "journal.msgpack").records  # what was recorded is readable
     assert table is None or len(table["t"]) > 0
+
+
+def _cores_of_every_thread(pid: int) -> set[str]:
+    """The Cpus_allowed_list of each thread of a process (Zenoh's threads included)."""
+    out = set()
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        for line in (task / "status").read_text().splitlines():
+            if line.startswith("Cpus_allowed_list:"):
+                out.add(line.split(":", 1)[1].strip())
+    return out
+
+
+def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_step):
+    cores = usable_cores()
+    if len(cores) < 2:
+        pytest.skip(f"pinning needs 2 usable cores, this machine has {len(cores)}")
+    out = tmp_path / "pinned"
+    proc = popen_suscosim("run", str(ch3_step), "--out", str(out), "--quiet", "--pin", "on",
+                          "--set", "run.t_end=60.0", "--set", 'run.id="pintest"')
+    try:
+        _wait_until_recording(out)
+        want = core_layout(ch.NODES, cores)
+        assert want["tyre_road"] != want["controller"]  # the two force nodes work at once
+        for node in ch.NODES:
+            (pid,) = _pids_of("pintest", node)
+            assert _cores_of_every_thread(pid) == {str(want[node])}, node
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=30)
+    assert json.loads((out / "summary.json").read_text())["cores"] == want
 
 
 def test_sigterm_to_the_orchestrator_ends_the_run_with_a_failed_summary(tmp_path, ch3_step):

@@ -1,0 +1,72 @@
+"""CPU placement of the local node processes (pure logic, plus one system call to apply it).
+
+On a small machine the node processes of a run, their Zenoh threads and the orchestrator
+share few cores. Left to the scheduler they migrate between cores at every wake-up of the
+lock-step exchange; pinning each process to one core, with the two force nodes on different
+cores (they compute at the same time, on the plant's state) and the plant on the
+controller's core (the plant waits while they compute), gave about +40 % coupled steps/s in
+the sequential exchange on the 2-core machine of docs/cosim.md (``bench/bench_throughput.py
+--pin off`` against the default).
+
+Layout by the number of usable cores n (``os.sched_getaffinity``), c0 < c1 < ... :
+
+==========  =====  =========  ==========  =========================================
+n           plant  tyre_road  controller  recorder, fatigue (and any other node)
+==========  =====  =========  ==========  =========================================
+1           (no pinning)
+2           c0     c1         c0          c1
+3           c0     c1         c2          c0
+>= 4        c0     c1         c2          c3
+==========  =====  =========  ==========  =========================================
+
+``auto`` pins on machines of 2 to ``AUTO_MAX_CORES`` usable cores, where the processes must
+share cores anyway; on a bigger machine the scheduler keeps each process on a core of its own
+and pinning every run to the same cores would only hurt runs side by side (a sweep with
+several jobs starts its runs with ``--pin off``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+
+PIN_MODES = ("auto", "on", "off")
+AUTO_MAX_CORES = 4
+
+
+def usable_cores() -> list[int]:
+    """The cores this process may run on (empty where the OS cannot tell, e.g. macOS)."""
+    try:
+        return sorted(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return []
+
+
+def core_layout(nodes: Iterable[str], cores: list[int]) -> dict[str, int]:
+    """The core of each node (see the table above); empty with fewer than 2 cores."""
+    n = len(cores)
+    if n < 2:
+        return {}
+    role = {"plant": cores[0], "tyre_road": cores[1],
+            "controller": cores[2] if n >= 3 else cores[0]}
+    other = cores[3] if n >= 4 else (cores[0] if n == 3 else cores[1])
+    return {node: role.get(node, other) for node in nodes}
+
+
+def should_pin(mode: str, cores: list[int]) -> bool:
+    """Whether to pin, for ``mode`` in :data:`PIN_MODES` and the usable ``cores``."""
+    if mode not in PIN_MODES:
+        raise ValueError(f"pin mode must be one of {', '.join(PIN_MODES)}, got {mode!r}")
+    if mode == "off" or len(cores) < 2:
+        return False
+    return mode == "on" or len(cores) <= AUTO_MAX_CORES
+
+
+def pin(pid: int, core: int) -> bool:
+    """Pin process ``pid`` to ``core`` (its threads started later inherit it); False if the
+    process is gone already or the OS refuses."""
+    try:
+        os.sched_setaffinity(pid, {core})
+        return True
+    except (AttributeError, OSError):
+        return False

@@ -1,0 +1,38 @@
+"""CPU placement of the local node processes (orchestrator.placement)."""
+
+from __future__ import annotations
+
+import pytest
+
+from cosim import channels as ch
+from orchestrator.placement import AUTO_MAX_CORES, core_layout, should_pin
+
+NODES = [*ch.NODES, ch.FATIGUE]
+
+
+def test_two_cores_split_the_force_nodes_and_put_the_plant_with_the_controller() -> None:
+    lay = core_layout(NODES, [4, 7])
+    assert lay == {"plant": 4, "controller": 4, "tyre_road": 7, "recorder": 7, "fatigue": 7}
+
+
+@pytest.mark.parametrize("cores", [[0, 1, 2], [0, 1, 2, 3], list(range(16))])
+def test_from_three_cores_each_coupled_node_has_its_own(cores: list[int]) -> None:
+    lay = core_layout(NODES, cores)
+    assert len({lay["plant"], lay["tyre_road"], lay["controller"]}) == 3
+    assert set(lay.values()) <= set(cores)
+    if len(cores) >= 4:  # the listeners keep off the coupled nodes' cores
+        assert lay["recorder"] == lay["fatigue"] == cores[3]
+
+
+def test_no_layout_on_one_core_and_unknown_nodes_go_with_the_listeners() -> None:
+    assert core_layout(NODES, [0]) == {} and core_layout(NODES, []) == {}
+    assert core_layout(["plant", "probe"], [0, 1])["probe"] == 1
+
+
+def test_auto_pins_only_small_machines() -> None:
+    assert should_pin("auto", [0, 1]) and should_pin("auto", list(range(AUTO_MAX_CORES)))
+    assert not should_pin("auto", list(range(AUTO_MAX_CORES + 1)))
+    assert should_pin("on", list(range(32))) and not should_pin("on", [0])
+    assert not should_pin("off", [0, 1])
+    with pytest.raises(ValueError, match="auto, on, off"):
+        should_pin("sometimes", [0, 1])
