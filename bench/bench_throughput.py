@@ -44,10 +44,12 @@ def main() -> None:
     ap.add_argument("--t-end", type=float, default=8.0)
     ap.add_argument("--no-lowlatency", action="store_true",
                     help="Zenoh's universal transport instead of the low-latency default")
+    ap.add_argument("--pin", choices=["auto", "on", "off"], default="auto",
+                    help="CPU placement of the node processes (suscosim run --pin)")
     ap.add_argument("--exchange", choices=["sequential", "parallel"], action="append",
                     help="exchange order(s) to measure (default both)")
     args = ap.parse_args()
-    extra = ["--no-lowlatency"] if args.no_lowlatency else []
+    extra = (["--no-lowlatency"] if args.no_lowlatency else []) + ["--pin", args.pin]
     _, cpu0 = one_run(0.001, "sequential", extra)  # startup cost: imports, sessions, barrier
     n = round(args.t_end / 0.001)
     load = os.getloadavg()[0]
