@@ -8,8 +8,10 @@ Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario or inp
 from __future__ import annotations
 
 import argparse
+import faulthandler
 import importlib
 import logging
+import signal
 import sys
 import traceback
 
@@ -72,6 +74,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format=f"%(asctime)s {args.name}: %(message)s",
                         stream=sys.stderr)
+    # a node stopped with SIGTERM (the orchestrator ending a run it holds up) says where it
+    # was: every thread's stack goes to its log, then the signal ends it as before
+    faulthandler.register(signal.SIGTERM, chain=True)
     try:
         bus = ZenohBus(zenoh_config(args.connect, args.listen, args.lowlatency,
                                     config_file=args.zenoh_config, mode=args.mode,
