@@ -1,10 +1,13 @@
 """Coupled steps per second of the distributed Chapter 3 run, and CPU per coupled step.
 
 Four node processes (plant, tyre/road, controller, recorder) over Zenoh on loopback,
-h = 1 ms, both exchange orders. Wall-clock throughput depends on what else the 2 cores are
-doing; CPU per step (all processes, user + system, startup subtracted) is the steadier number.
+h = 1 ms, both exchange orders. steps/s is summary.json's: from ``start`` to the last coupled
+node's ``done``; "incl. export" also counts the recorder's table export after the last step.
+Wall-clock throughput depends on what else the 2 cores are doing; CPU per step (all
+processes, user + system, startup subtracted) is the steadier number.
 
-    python bench/bench_throughput.py [--repeats 3] [--t-end 8]
+    python bench/bench_throughput.py [--repeats 3] [--t-end 8] [--pin auto|on|off]
+                                     [--no-lowlatency] [--exchange sequential|parallel]
 """
 
 from __future__ import annotations
@@ -23,8 +26,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
 
 
-def one_run(t_end: float, exchange: str, extra: list[str]) -> tuple[float, float]:
-    """(steps/s, CPU seconds of the whole run incl. every node process)."""
+def one_run(t_end: float, exchange: str, extra: list[str]) -> tuple[float, float, float]:
+    """(steps/s, steps/s incl. the export, CPU seconds of the whole run incl. every node)."""
     with tempfile.TemporaryDirectory() as tmp:
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         subprocess.run([sys.executable, "-m", "orchestrator", "run", str(SCENARIO), "--out",
@@ -35,7 +38,8 @@ def one_run(t_end: float, exchange: str, extra: list[str]) -> tuple[float, float
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         summary = json.loads((Path(tmp) / "summary.json").read_text())
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return float(summary["steps_per_s"]), cpu
+    with_export = summary["n_steps"] / summary["run_wall_s"]
+    return float(summary["steps_per_s"]), with_export, cpu
 
 
 def main() -> None:
@@ -50,21 +54,23 @@ def main() -> None:
                     help="exchange order(s) to measure (default both)")
     args = ap.parse_args()
     extra = (["--no-lowlatency"] if args.no_lowlatency else []) + ["--pin", args.pin]
-    _, cpu0 = one_run(0.001, "sequential", extra)  # startup cost: imports, sessions, barrier
+    _, _, cpu0 = one_run(0.001, "sequential", extra)  # startup cost: imports, sessions, barrier
     n = round(args.t_end / 0.001)
     load = os.getloadavg()[0]
     print(f"load average at start: {load:.1f}; startup CPU {cpu0:.2f} s")
-    print("| exchange | steps/s (median) | steps/s (all runs) | CPU per step (ms) |")
-    print("|---|---|---|---|")
+    print("| exchange | steps/s (median) | steps/s (all runs) | incl. export (median) "
+          "| CPU per step (ms) |")
+    print("|---|---|---|---|---|")
     for exchange in args.exchange or ("sequential", "parallel"):
-        rates, cpus = [], []
+        rates, exported, cpus = [], [], []
         for _ in range(args.repeats):
-            r, c = one_run(args.t_end, exchange, extra)
+            r, e, c = one_run(args.t_end, exchange, extra)
             rates.append(r)
+            exported.append(e)
             cpus.append((c - cpu0) / n * 1e3)
         print(f"| {exchange} | {statistics.median(rates):.0f} | "
-              f"{', '.join(f'{r:.0f}' for r in rates)} | {statistics.median(cpus):.2f} |",
-              flush=True)
+              f"{', '.join(f'{r:.0f}' for r in rates)} | {statistics.median(exported):.0f} | "
+              f"{statistics.median(cpus):.2f} |", flush=True)
     print(f"load average at end: {os.getloadavg()[0]:.1f}")
 
 

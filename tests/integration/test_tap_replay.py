@@ -93,6 +93,36 @@ def test_tap_sees_a_live_run_without_changing_it(tmp_path, untapped) -> None:
     assert (info["status"], info["steps"], info["n_steps"]) == ("ok", 3000, 3000)
 
 
+def test_a_plain_zenoh_session_taps_a_default_run(tmp_path) -> None:
+    """The README's "tap with plain Zenoh": a session with Zenoh's own defaults (QoS lanes
+    on, universal transport) joins a run whose own links are low-latency without QoS."""
+    import zenoh
+
+    out = tmp_path / "plain"
+    endpoint = free_loopback_endpoint()
+    conf = zenoh.Config()
+    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    got: list[int] = []
+    run = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
+                         endpoint, "--set", f"run.t_end={T_END}", "--set", 'run.id="plaintap"')
+    try:
+        _wait_for(out / "run.json", run)
+        assert json.loads((out / "run.json").read_text())["lowlatency"] is True
+        session = zenoh.open(conf)
+        session.declare_subscriber("suscosim/plaintap/plant/state",
+                                   lambda s: got.append(msgpack.unpackb(s.payload.to_bytes())["k"]))
+        stdout, stderr = run.communicate(timeout=180)
+        session.close()
+    finally:
+        if run.poll() is None:
+            run.kill()
+    assert run.returncode == 0, stdout + stderr
+    data = [k for k in got if k >= 0]  # after the start handshake's hellos (k = -1)
+    assert len(data) > 500, len(got)
+    assert data == list(range(data[0], data[0] + len(data)))  # in order, none missed
+
+
 def test_replay_reaches_a_tap_step_by_step_despite_bad_messages(tmp_path, untapped) -> None:
     journal = untapped / "journal.msgpack"
     n_state = sum(1 for ch, _ in read_journal(journal).records if ch == "plant/state")
