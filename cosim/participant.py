@@ -350,6 +350,9 @@ class Participant:
         self.ctl("done", k, t, rejected=self.rejected, **extra)
         deadline = time.monotonic() + linger_s
         while time.monotonic() < deadline:
+            for feed in self.feeds.values():  # inputs are no longer needed: keep the FIFOs
+                while feed.try_recv() is not None:  # from filling (a full one holds Zenoh's
+                    pass  # receive thread, and the clock's "done" behind it)
             try:
                 self.check_orchestrator()
                 msg = self._take(timeout=0.1)

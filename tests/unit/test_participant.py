@@ -111,3 +111,17 @@ def test_load_blocks_are_cut_into_pieces_that_fit_one_message() -> None:
     small = {"k0": 0, "t": [0.0], "a": [1.0]}
     assert wire_pieces(small) == [small]
     assert msgpack.unpackb(encode("data", 0, 0.0, small))["d"]["a"] == [1.0]
+
+
+def test_finish_keeps_draining_inputs_until_the_orchestrator_closes_the_run() -> None:
+    bus, part = _pair()
+    tyre = part.listen("tyre_road", "force")
+    for k in range(5):  # a producer still publishing after this node's last step
+        _put(bus, "tyre_road", "force", encode("data", k, k * 1e-3, {"F_t": 1.0}))
+    done = encode("done", 4, 4e-3, {})
+    threading.Timer(0.3, _put, (bus, keys.ORCHESTRATOR, keys.CLOCK, done)).start()
+    t0 = time.monotonic()
+    part.finish(4, 4e-3)
+    assert time.monotonic() - t0 < 5.0  # left on the orchestrator's "done", not the linger
+    assert part.feeds[tyre].try_recv() is None  # nothing left to fill the FIFO
+    part.close()
