@@ -31,6 +31,7 @@ is rejected: logged, counted, never a crash.
 from __future__ import annotations
 
 import logging
+import os
 import queue
 import threading
 import time
@@ -64,9 +65,15 @@ FEED_CAPACITY = 1024
 class Participant:
     """One node's side of the lock-step protocol, on any bus."""
 
-    def __init__(self, bus: Any, run: str, node: str, stall_timeout_s: float = 10.0) -> None:
+    def __init__(self, bus: Any, run: str, node: str, stall_timeout_s: float = 10.0,
+                 spin_s: float = 0.0) -> None:
         self.bus, self.run, self.node = bus, keys.check_name("run", run), node
         self.stall_timeout_s = stall_timeout_s
+        self.spin_s = spin_s
+        """How long :meth:`wait` polls an input (yielding the core between polls) before it
+        blocks [s]. For a node pinned to a core of its own or shared with one other node: the
+        core never idles between two steps, and waking an idle virtual CPU is what a hop
+        costs most on a small VM (see docs/cosim.md). 0: block at once."""
         self.inbox: queue.SimpleQueue[tuple[Channel, bytes]] = queue.SimpleQueue()
         self.feeds: dict[Channel, Any] = {}
         self.mailbox: dict[Channel, dict[int, Message]] = {}
@@ -203,6 +210,13 @@ class Participant:
         """Move one inbox item into the mailbox; return it if it is a clock message."""
         return self.handle(*self.inbox.get(timeout=timeout))
 
+    def _poll(self, feed: Any) -> bytes | None:
+        """The next message of ``feed`` if it comes within :attr:`spin_s`, else None."""
+        end = time.perf_counter() + self.spin_s
+        while (raw := feed.try_recv()) is None and time.perf_counter() < end:
+            os.sched_yield()  # the other node on this core runs if it can
+        return raw
+
     def _drain_feeds(self) -> None:
         """File whatever waits in the inputs' FIFOs (handshake: no blocking)."""
         for tag, feed in self.feeds.items():
@@ -290,9 +304,11 @@ class Participant:
         for tag, k in needs.items():
             box, feed = self.mailbox[tag], self.feeds[tag]
             while k not in box:
-                self._blocked = (feed, deadline)
-                raw = feed.recv()
-                self._blocked = None
+                raw = self._poll(feed) if self.spin_s else None
+                if raw is None:
+                    self._blocked = (feed, deadline)
+                    raw = feed.recv()
+                    self._blocked = None
                 self._receive(tag, raw)
                 if raw:
                     continue

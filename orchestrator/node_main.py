@@ -28,10 +28,11 @@ NODE_MODULES = {
 }
 
 
-def run_node(bus, run_id: str, name: str, scenario: dict | None = None) -> int:
+def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
+             spin_s: float = 0.0) -> int:
     """Run node ``name`` on ``bus``; report errors to the orchestrator; return an exit code."""
     log = logging.getLogger(f"suscosim.{name}")
-    part = Participant(bus, run_id, name)
+    part = Participant(bus, run_id, name, spin_s=spin_s)
     try:
         if scenario is None:
             scenario = part.fetch_scenario()
@@ -67,6 +68,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--lowlatency", action="store_true",
                     help="Zenoh low-latency transport (every peer must use it)")
     ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    ap.add_argument("--spin-us", type=float, default=0.0,
+                    help="poll an input this long before blocking on it [us] (the "
+                         "orchestrator sets it for nodes it pins to a core)")
     ap.add_argument("--mode", choices=["client", "peer"],
                     help="Zenoh mode (default: the config file's, else client: everything "
                          "through the router or orchestrator given by --connect; the "
@@ -87,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
               f"(--connect {' '.join(args.connect) or '-'}): {text}", file=sys.stderr)
         return 1
     try:
-        return run_node(bus, args.run, args.name)
+        return run_node(bus, args.run, args.name, spin_s=args.spin_us * 1e-6)
     finally:
         bus.close()
 

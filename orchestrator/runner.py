@@ -96,6 +96,11 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
     }
 
 
+PINNED_SPIN_US = 200
+"""How long a pinned node polls its input before blocking [us] (Participant.spin_s): +15 %
+coupled steps/s on the 2-core VM (docs/cosim.md); unpinned runs side by side got nothing."""
+
+
 class LocalNodes:
     """Node processes started on this machine, their logs, and their fate."""
 
@@ -115,6 +120,8 @@ class LocalNodes:
                 cmd.append("--lowlatency")
             if zenoh_config_file:
                 cmd += ["--zenoh-config", zenoh_config_file]
+            if name in (cores or {}):
+                cmd += ["--spin-us", str(PINNED_SPIN_US)]
             log = open(log_dir / f"{name}.log", "wb")
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)

@@ -65,8 +65,8 @@ def _node_config(monkeypatch, argv: list[str]) -> tuple[dict, object]:
         def close(self):
             pass
 
-    def fake_run_node(bus, run_id, name, scenario=None):
-        seen.update(run=run_id, name=name)
+    def fake_run_node(bus, run_id, name, scenario=None, spin_s=0.0):
+        seen.update(run=run_id, name=name, spin_s=spin_s)
         return 0
 
     monkeypatch.setattr(node_main, "ZenohBus", FakeBus)

@@ -292,6 +292,8 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
         for node in ch.NODES:
             (pid,) = _pids_of("pintest", node)
             assert _cores_of_every_thread(pid) == {str(want[node])}, node
+            argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
+            assert "--spin-us" in argv, argv  # a pinned node polls before it blocks
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)

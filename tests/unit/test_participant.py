@@ -125,3 +125,18 @@ def test_finish_keeps_draining_inputs_until_the_orchestrator_closes_the_run() ->
     assert time.monotonic() - t0 < 5.0  # left on the orchestrator's "done", not the linger
     assert part.feeds[tyre].try_recv() is None  # nothing left to fill the FIFO
     part.close()
+
+
+def test_a_spinning_node_still_gets_its_input_and_still_sees_a_stall() -> None:
+    bus, part = _pair(stall_s=0.5)
+    part.spin_s = 0.2  # polls 200 ms before blocking
+    tyre = part.listen("tyre_road", "force")
+    threading.Timer(0.05, _put, (bus, "tyre_road", "force",
+                                 encode("data", 0, 0.0, {"F_t": 7.0}))).start()
+    assert part.wait({tyre: 0})[tyre].d["F_t"] == 7.0  # arrives while polling
+    threading.Timer(0.3, _put, (bus, "tyre_road", "force",
+                                encode("data", 1, 1e-3, {"F_t": 8.0}))).start()
+    assert part.wait({tyre: 1})[tyre].d["F_t"] == 8.0  # arrives after the poll: blocked
+    with pytest.raises(RunError, match="no input from tyre_road"):
+        part.wait({tyre: 2})
+    part.close()
