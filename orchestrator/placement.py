@@ -19,6 +19,9 @@ n           plant  tyre_road  controller  recorder, fatigue (and any other node)
 >= 4        c0     c1         c2          c3
 ==========  =====  =========  ==========  =========================================
 
+A pinned node also polls its input for a short while before it blocks (``--spin-us``, see
+``Participant.spin_s``): its core then does not go idle between two steps.
+
 ``auto`` pins on machines of 2 to ``AUTO_MAX_CORES`` usable cores, where the processes must
 share cores anyway; on a bigger machine the scheduler keeps each process on a core of its own
 and pinning every run to the same cores would only hurt runs side by side (a sweep with
