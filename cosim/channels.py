@@ -48,9 +48,9 @@ STATE, RESPONSE, ARM, FORCE = "state", "response", "arm", "force"
 FATIGUE, LOADS, DAMAGE = "fatigue", "loads", "damage"
 
 NODES = (PLANT, TYRE_ROAD, CONTROLLER, RECORDER)
+"""The nodes of every run, in start order."""
 COUPLED = (PLANT, TYRE_ROAD, CONTROLLER)
 """The nodes of the lock-step exchange (the recorder and the fatigue worker only listen)."""
-"""The nodes of every run, in start order."""
 OPTIONAL_NODES = (FATIGUE,)
 """Nodes a run may add: the live fatigue worker (fed by the recorder's load blocks)."""
 LOAD_CHANNEL = (PLANT, ARM)
