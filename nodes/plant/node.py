@@ -40,13 +40,10 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         dt = h / n_sub
         before: StepInputs | None = None
         later: list[tuple[str, int, float, dict]] = []
-        st = model.state()
+        prev = st = model.state()
         for k in range(n + 1):
             t = k * h
-            # seen: the state the force nodes computed this step's forces from
-            seen, st = st, model.state()
-            if not lag:
-                seen = st
+            seen = prev if lag else st  # what the force nodes computed this step's forces from
             part.publish(ch.STATE, k, t, st)
             # last step's response and loads go out now, while the force nodes work on
             # this state: off the critical path of the exchange
@@ -75,12 +72,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 for name, kk, tt, values in later:
                     part.publish(name, kk, tt, values)
                 break
+            cur = after
             for j in range(1, n_sub):
-                cur = model.state()
                 F_t, F_d = substep_forces(mode, now, before, j * dt, h,
                                           cur["z_w"], cur["v_w"] - cur["v_b"])
                 model.substep(dt, F_t, F_d)
-            before = now
+                cur = model.state()
+            before, prev, st = now, st, cur  # cur: the state at t_{k+1}
         part.finish(n, n * h)
     finally:
         model.close()
