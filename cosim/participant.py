@@ -223,15 +223,13 @@ class Participant:
             while (raw := feed.try_recv()) is not None:
                 self._receive(tag, raw)
 
-    def _drain_inbox(self) -> Message | None:
-        """Handle every control message that came (raises on abort); return the last one."""
-        last = None
+    def _drain_inbox(self) -> None:
+        """Handle every control message that came (raises on abort)."""
         while True:
             try:
-                msg = self._take(timeout=0)
+                self._take(timeout=0)
             except queue.Empty:
-                return last
-            last = msg or last
+                return
 
     def _receive(self, tag: Channel, raw: bytes) -> None:
         """One message from an input's FIFO: an empty one is the watchdog's wake-up."""

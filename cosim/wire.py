@@ -75,11 +75,7 @@ def encode(kind: str, k: int, t: float, d: Mapping[str, Any] | None = None) -> b
     )
 
 
-_NUMBER_TYPES = (int, float)  # exact types: a bool is not a number here
-
-
-def _is_number(x: Any) -> bool:
-    return type(x) in _NUMBER_TYPES
+_NUMBER_TYPES = (int, float)  # exact types (``type(x) in``): a bool is not a number here
 
 
 def decode(raw: bytes) -> Message:
@@ -98,7 +94,7 @@ def decode(raw: bytes) -> Message:
         raise WireError(f"unknown kind {kind!r}")
     if not isinstance(k, int) or isinstance(k, bool) or k < -1:
         raise WireError(f"bad step index k={k!r} (expected int >= -1)")
-    if not _is_number(t) or not math.isfinite(t):
+    if type(t) not in _NUMBER_TYPES or not math.isfinite(t):
         raise WireError(f"bad time t={t!r} (expected a finite number, s)")
     if not isinstance(d, dict):
         raise WireError(f"bad payload d of type {type(d).__name__} (expected a map)")

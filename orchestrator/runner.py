@@ -120,15 +120,16 @@ class LocalNodes:
                 cmd.append("--lowlatency")
             if zenoh_config_file:
                 cmd += ["--zenoh-config", zenoh_config_file]
-            if name in (cores or {}):
+            core = (cores or {}).get(name)
+            if core is not None:
                 cmd += ["--spin-us", str(PINNED_SPIN_US)]
             log = open(log_dir / f"{name}.log", "wb")
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)
             log.close()
             # before its interpreter has started any thread: they all inherit the core
-            if name in (cores or {}) and pin(self.procs[name].pid, cores[name]):
-                self.cores[name] = cores[name]
+            if core is not None and pin(self.procs[name].pid, core):
+                self.cores[name] = core
 
     def dead(self) -> str | None:
         """A message naming a node process that exited with an error, if any."""
