@@ -66,7 +66,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--listen", action="append", default=None,
                     help="endpoint to listen on (default: loopback only)")
     ap.add_argument("--lowlatency", action="store_true",
-                    help="Zenoh low-latency transport (every peer must use it)")
+                    help="Zenoh low-latency transport (negotiated per link: peers without it "
+                         "still connect; the orchestrator sets it for its local nodes)")
     ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
     ap.add_argument("--spin-us", type=float, default=0.0,
                     help="poll an input this long before blocking on it [us] (the "

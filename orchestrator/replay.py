@@ -138,7 +138,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--wait", type=float, default=5.0, metavar="S",
                     help="wait up to S s for a subscriber before publishing (default 5)")
     ap.add_argument("--lowlatency", action="store_true",
-                    help="Zenoh low-latency transport (every peer must use it)")
+                    help="Zenoh low-latency transport (negotiated per link: peers without it "
+                         "still connect)")
     ap.add_argument("--mode", choices=["auto", "peer", "client"], default="auto",
                     help="Zenoh session mode; auto: peer when listening or every endpoint is "
                          "on loopback, client otherwise (through a router, from elsewhere)")

@@ -399,8 +399,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--interval", type=float, default=1.0, metavar="S",
                     help="display refresh period [s] (default 1)")
     ap.add_argument("--lowlatency", action="store_true",
-                    help="Zenoh low-latency transport (needed if the run uses it; read from "
-                         "run.json when RUN is a run folder)")
+                    help="Zenoh low-latency transport (as the run uses it, read from "
+                         "run.json when RUN is a run folder; negotiated per link, so a tap "
+                         "without it still connects)")
     ap.add_argument("--mode", choices=["auto", "peer", "client"], default="auto",
                     help="Zenoh session mode; auto: peer when every endpoint is on loopback, "
                          "client otherwise (through a router, from another machine)")
