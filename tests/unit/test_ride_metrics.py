@@ -11,11 +11,16 @@ from nodes.recorder.ride_metrics import (
     improvement,
     iso2631_wk_weighted_rms,
     jerk,
+    matlab_periodogram,
     psd,
+    resample_to,
     ride_table,
     rms,
     run_metrics,
     sample_rate,
+    thesis_band_rms,
+    thesis_jerk_rms,
+    thesis_wk_rms,
     wk_response,
     working_space,
 )
@@ -120,3 +125,76 @@ def test_run_metrics_and_ride_table():
     row = next(line for line in text.splitlines() if line.startswith("a_b[0] RMS [m/s2]"))
     assert row.split()[-1] == "-25.0"
     assert improvement(0.8981, 0.7112) == pytest.approx(20.81, abs=0.01)  # Table 5.3 TSS1
+
+
+# ------------------------------------------------------------ the thesis's metric
+
+
+def test_a_500_hz_record_passes_through_the_resampling_unchanged():
+    rng = np.random.default_rng(3)
+    t = np.arange(0, 5000) * 0.002
+    x = rng.standard_normal(t.size)
+    np.testing.assert_array_equal(resample_to(t, x), x)
+    f, P = matlab_periodogram(x, 500.0)
+    assert thesis_band_rms(t, x, (0.0, 20.0)) == pytest.approx(
+        float(np.sqrt(np.trapezoid(P[f <= 20.0], f[f <= 20.0]))), rel=1e-12)
+
+
+def test_periodogram_is_matlabs_default():
+    # nfft = max(256, 2^nextpow2(N)), no detrend: a constant shows at 0 Hz; the integral over
+    # 0..fs/2 of a sine's PSD is its mean square (Parseval with the one-sided doubling)
+    fs, n = 500.0, 1000
+    f, P = matlab_periodogram(np.full(n, 2.0), fs)
+    assert f.size == 1024 // 2 + 1 and f[1] == pytest.approx(fs / 1024)
+    assert P[0] == pytest.approx(4.0 * n / fs)  # |sum x|^2 / (fs N), DC not doubled
+    t = np.arange(n) / fs
+    f, P = matlab_periodogram(np.sin(2 * np.pi * 50.0 * t), fs)
+    assert np.sum(P) * (f[1] - f[0]) == pytest.approx(0.5, rel=1e-3)
+
+
+@pytest.mark.parametrize("fs", [500.0, 1000.0, 2000.0])
+def test_white_noise_band_rms_scales_with_the_band(fs):
+    # white noise of variance s^2 at the 500 Hz of the metric: 0-20 Hz holds sqrt(20/250) s;
+    # a faster run's noise spread over fs/2 keeps its density s^2/(fs/2) after the low-pass
+    rng = np.random.default_rng(11)
+    sigma, duration = 1.7, 200.0
+    t = np.arange(0.0, duration, 1.0 / fs)
+    x = sigma * rng.standard_normal(t.size)
+    for band in ((0.0, 20.0), (0.0, 16.0), (0.0, 100.0)):
+        expected = sigma * np.sqrt((band[1] - band[0]) / (fs / 2))
+        assert thesis_band_rms(t, x, band) == pytest.approx(expected, rel=0.03)
+
+
+@pytest.mark.parametrize("fs", [200.0, 500.0, 2000.0, 2000.0 / 0.6])
+def test_sine_of_known_amplitude_at_any_rate(fs):
+    t = np.arange(0.0, 20.0, 1.0 / fs)
+    x = 0.7 * np.sin(2 * np.pi * 3.0 * t) + 0.2 * np.sin(2 * np.pi * 45.0 * t)
+    assert thesis_band_rms(t, x, (0.0, 20.0)) == pytest.approx(0.7 / np.sqrt(2), rel=1e-3)
+    assert thesis_band_rms(t, x, (0.0, 16.0)) == pytest.approx(0.7 / np.sqrt(2), rel=1e-3)
+    if fs >= 500.0:
+        assert thesis_band_rms(t, x, (30.0, 60.0)) == pytest.approx(0.2 / np.sqrt(2), rel=2e-3)
+
+
+def test_chatter_above_250_hz_does_not_fold_into_the_band():
+    # a 2 kHz record with a 490 Hz tone (500 - 490 = 10 Hz if aliased without a filter)
+    fs = 2000.0
+    t = np.arange(0.0, 20.0, 1.0 / fs)
+    ride = 0.5 * np.sin(2 * np.pi * 1.2 * t)
+    x = ride + 3.0 * np.sin(2 * np.pi * 490.0 * t)
+    assert thesis_band_rms(t, x) == pytest.approx(0.5 / np.sqrt(2), rel=2e-3)
+    naive = x[::4]  # what dropping samples would count
+    assert thesis_band_rms(t[::4], naive) > 2.0
+
+
+def test_wk_and_jerk_on_the_resampled_signal_do_not_depend_on_the_rate():
+    f, amp = 4.0, 1.0
+    w = 2 * np.pi * f
+    out = {}
+    for fs in (500.0, 2000.0):
+        t = np.arange(0.0, 30.0, 1.0 / fs)
+        a = amp * np.sin(w * t)
+        out[fs] = (thesis_wk_rms(t, a), thesis_jerk_rms(t, a))
+    assert out[500.0][0] == pytest.approx(ISO_WK[4.0] / 1000 / np.sqrt(2), rel=0.01)
+    assert out[500.0][1] == pytest.approx(w * amp / np.sqrt(2), rel=0.01)
+    assert out[2000.0][0] == pytest.approx(out[500.0][0], rel=1e-3)
+    assert out[2000.0][1] == pytest.approx(out[500.0][1], rel=1e-3)
