@@ -2,7 +2,7 @@
 
 Road keys (``[road]``):
 
-* ``type``: step | ramp | bump | pothole | events | iso8608 | csv
+* ``type``: step | ramp | bump | pothole | events | iso8608 | power_law | csv
 * ``speed_kmh`` (> 0) forward speed; ``length_m`` (> 0) run distance; duration = length / speed
 * ``corners`` (optional): list of corner names seeing the road, e.g. ["FR"] (Ch. 4 FVM test)
 * events (step, ramp, bump, pothole): ``height`` [m] (pothole: ``depth`` [m], > 0),
@@ -12,6 +12,9 @@ Road keys (``[road]``):
   above (the Ch. 4 bump + pothole road)
 * iso8608: ``class`` (A-H), ``seed`` (int), ``correlation`` ("identical" | "independent" |
   number in [0, 1]), ``n_min``, ``n_max`` [cycles/m]
+* power_law (thesis Eq. 4.10, S(n) = G n^-p): ``G`` [m^(3-p)] (> 0; the thesis: 1e-7 smooth
+  motorway ... 5e-6 rough minor road), ``waviness`` p (default 2.5), ``seed``, ``correlation``
+  (as iso8608), ``band`` = [n_min, n_max] [cycles/m] (default [0.011, 2.83])
 * csv: ``path``, ``zero_start`` (bool, default true)
 
 Tyre keys (``[tyre]``): ``model`` (point_contact | fixed_footprint), ``stiffness`` [N/m],
@@ -27,12 +30,13 @@ from collections.abc import Mapping
 from cosim.errors import ScenarioError
 
 from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, GD_N0, iso8608_road
+from .power_law import DEFAULT_WAVINESS, power_law_road
 from .profile_csv import csv_road
 from .roads import KMH, EventRoad, Road, RoadEvent
 from .tyres import FixedFootprint, PointContact, Tyre
 
 _EVENT_TYPES = ("step", "ramp", "bump", "pothole")
-_ROAD_TYPES = _EVENT_TYPES + ("events", "iso8608", "csv")
+_ROAD_TYPES = _EVENT_TYPES + ("events", "iso8608", "power_law", "csv")
 _COMMON = {"type", "speed_kmh", "length_m", "corners"}
 _EVENT_KEYS = {
     "step": {"height", "x_start", "t_start", "tracks"},
@@ -63,6 +67,44 @@ def _check_keys(cfg: Mapping, allowed: set[str], prefix: str) -> None:
         if k not in allowed:
             raise ScenarioError(f"{prefix}.{k}", cfg[k],
                                 f"one of the keys {sorted(allowed)}")
+
+
+def _seed(cfg: Mapping, prefix: str, key: str = "seed") -> int:
+    seed = cfg.get(key, 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ScenarioError(f"{prefix}.{key}", seed, "an integer >= 0")
+    return seed
+
+
+def _correlation(cfg: Mapping, prefix: str) -> str | float:
+    corr = cfg.get("correlation", "independent")
+    if isinstance(corr, bool) or not (
+            corr in ("identical", "independent")
+            or (isinstance(corr, (int, float)) and 0.0 <= corr <= 1.0)):
+        raise ScenarioError(f"{prefix}.correlation", corr,
+                            "'identical', 'independent' or a number in [0, 1]")
+    return corr
+
+
+def _band(cfg: Mapping, prefix: str, key: str = "band") -> tuple[float, float]:
+    band = cfg.get(key, [DEFAULT_N_MIN, DEFAULT_N_MAX])
+    if (not isinstance(band, (list, tuple)) or len(band) != 2
+            or any(isinstance(b, bool) or not isinstance(b, (int, float)) for b in band)
+            or not 0 < band[0] < band[1]):
+        raise ScenarioError(f"{prefix}.{key}", band,
+                            "[n_min, n_max] in cycles/m with 0 < n_min < n_max")
+    return float(band[0]), float(band[1])
+
+
+_POWER_LAW_KEYS = {"G", "waviness", "seed", "correlation", "band"}
+
+
+def _power_law_keys(cfg: Mapping, prefix: str
+                    ) -> tuple[float, float, int, str | float, tuple[float, float]]:
+    """(G, waviness, seed, correlation, (n_min, n_max)) of an Eq. 4.10 road section."""
+    G = _number(cfg, "G", prefix, positive=True)
+    waviness = _number(cfg, "waviness", prefix, default=DEFAULT_WAVINESS, positive=True)
+    return G, waviness, _seed(cfg, prefix), _correlation(cfg, prefix), _band(cfg, prefix)
 
 
 def _event(cfg: Mapping, kind: str, speed: float, prefix: str) -> RoadEvent:
@@ -134,15 +176,8 @@ def build_road(cfg: Mapping, key_prefix: str = "road") -> Road:
         cls = cfg.get("class")
         if cls not in GD_N0:
             raise ScenarioError(f"{p}.class", cls, "an ISO 8608 class letter A-H")
-        seed = cfg.get("seed", 0)
-        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-            raise ScenarioError(f"{p}.seed", seed, "an integer >= 0")
-        corr = cfg.get("correlation", "independent")
-        if isinstance(corr, bool) or not (
-                corr in ("identical", "independent")
-                or (isinstance(corr, (int, float)) and 0.0 <= corr <= 1.0)):
-            raise ScenarioError(f"{p}.correlation", corr,
-                                "'identical', 'independent' or a number in [0, 1]")
+        seed = _seed(cfg, p)
+        corr = _correlation(cfg, p)
         n_min = _number(cfg, "n_min", p, default=DEFAULT_N_MIN, positive=True)
         n_max = _number(cfg, "n_max", p, default=DEFAULT_N_MAX, positive=True)
         if n_max <= n_min:
@@ -150,6 +185,12 @@ def build_road(cfg: Mapping, key_prefix: str = "road") -> Road:
         if length is None:
             raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for iso8608)")
         road = iso8608_road(cls, length, speed, seed, corr, n_min, n_max)
+    elif kind == "power_law":
+        _check_keys(cfg, _COMMON | _POWER_LAW_KEYS, p)
+        G, waviness, seed, corr, (n_min, n_max) = _power_law_keys(cfg, p)
+        if length is None:
+            raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for power_law)")
+        road = power_law_road(G, length, speed, seed, waviness, corr, n_min, n_max)
     else:  # csv
         _check_keys(cfg, _COMMON | {"path", "zero_start"}, p)
         path = cfg.get("path")

@@ -29,6 +29,8 @@ Left/right tracks (``correlation``):
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from .roads import SampledRoad
@@ -64,17 +66,18 @@ def _random_track(gd: np.ndarray, rng: np.random.Generator, n_grid: int) -> np.n
     return np.fft.irfft(spec * n_grid / 2.0, n=n_grid)
 
 
-def iso8608_profile(road_class: str, length: float, seed: int,
-                    correlation: str | float = "independent",
-                    n_min: float = DEFAULT_N_MIN, n_max: float = DEFAULT_N_MAX,
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Heights (x, z_left, z_right) [m] of a random ISO 8608 road at least ``length`` m long.
+def random_profile(psd: Callable[[np.ndarray], np.ndarray], length: float, seed: int,
+                   correlation: str | float = "independent",
+                   n_min: float = DEFAULT_N_MIN, n_max: float = DEFAULT_N_MAX,
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Heights (x, z_left, z_right) [m] of a random road with one-sided displacement PSD
+    ``psd(n)`` [m^3] (n [cycles/m], n > 0) on the band [n_min, n_max], at least ``length`` m long.
 
-    The generated length L_gen >= max(length, 2 / n_min) so that the lowest frequency of the
-    band is represented by at least two spectral lines.
+    The sum-of-sinusoids method of the module docstring; the generated length
+    L_gen >= max(length, 2 / n_min) so that the lowest frequency of the band is represented by at
+    least two spectral lines. Used by the ISO 8608 classes here and by the thesis's Eq. 4.10
+    power law (:mod:`nodes.tyre_road.power_law`).
     """
-    if road_class not in GD_N0:
-        raise ValueError(f"ISO 8608 class must be one of A-H, got {road_class!r}")
     if not 0 < n_min < n_max:
         raise ValueError(f"need 0 < n_min < n_max, got {n_min}, {n_max}")
     dx = 1.0 / (20.0 * n_max)
@@ -83,7 +86,7 @@ def iso8608_profile(road_class: str, length: float, seed: int,
     dn = 1.0 / (n_grid * dx)
     n = np.arange(n_grid // 2 + 1) * dn
     band = (n >= n_min) & (n <= n_max)
-    gd = np.where(band, iso8608_psd(np.where(n > 0, n, 1.0), road_class) * dn, 0.0)
+    gd = np.where(band, psd(np.where(n > 0, n, 1.0)) * dn, 0.0)
     rng = np.random.default_rng(seed)
     z_l = _random_track(gd, rng, n_grid)
     if correlation == "identical":
@@ -99,6 +102,18 @@ def iso8608_profile(road_class: str, length: float, seed: int,
             z_r = rho * z_l + np.sqrt(1.0 - rho * rho) * z_ind
     x = np.arange(n_grid) * dx
     return x, z_l - z_l[0], z_r - z_r[0]
+
+
+def iso8608_profile(road_class: str, length: float, seed: int,
+                    correlation: str | float = "independent",
+                    n_min: float = DEFAULT_N_MIN, n_max: float = DEFAULT_N_MAX,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Heights (x, z_left, z_right) [m] of a random ISO 8608 road at least ``length`` m long
+    (:func:`random_profile` with the class's PSD)."""
+    if road_class not in GD_N0:
+        raise ValueError(f"ISO 8608 class must be one of A-H, got {road_class!r}")
+    return random_profile(lambda n: iso8608_psd(n, road_class), length, seed, correlation,
+                          n_min, n_max)
 
 
 def iso8608_road(road_class: str, length: float, speed: float, seed: int,
