@@ -630,8 +630,9 @@ def ride_section(r: RunData) -> str:
     if not m:
         return section("ride", "Ride metrics", note("no ride channels in the table."))
     body = table_html(["metric", "value"], list(m.items()), cls="kv") + (
-        '<p class="meta">nodes.recorder.ride_metrics.run_metrics: RMS over the whole record, '
-        "band RMS from the periodogram (thesis Eq 4.9), ISO 2631-1 Wk weighting, suspension "
+        '<p class="meta">nodes.recorder.ride_metrics.run_metrics: band RMS as the thesis '
+        "computes it (resampled to 500 Hz, periodogram, Eq 4.8/4.9), full-band RMS at the "
+        "run's own rate, ISO 2631-1 Wk weighting, suspension "
         "working space (SWS), dynamic tyre load (DTL).</p>")
     return section("ride", "Ride metrics", body)
 

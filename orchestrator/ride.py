@@ -1,13 +1,23 @@
 """``suscosim ride``: ride metrics of finished runs, side by side (thesis Tables 5.3-5.6).
 
-    suscosim ride RUN_DIR [RUN_DIR ...] [--baseline NAME] [--band LO HI]
+    suscosim ride RUN_DIR [RUN_DIR ...] [--baseline NAME] [--band LO HI] [--json]
 
 Reads each run folder's ``table.parquet`` (written by the recorder) and prints
-:func:`nodes.recorder.ride_metrics.ride_table`: body RMS acceleration [m/s²] (whole record and
-PSD band ``LO``-``HI`` Hz), ISO 2631-1 Wk-weighted RMS [m/s²], body jerk RMS [m/s³], wheel RMS
-acceleration [m/s²], suspension working space and deflection RMS [mm], dynamic tyre load RMS
-[N], damper force RMS [N]; every run after the baseline with its % change against it
-(thesis Eq 5.13, positive = reduction).
+:func:`nodes.recorder.ride_metrics.ride_table`: body RMS acceleration [m/s²] as the thesis
+computes it (resampled to 500 Hz, periodogram, band ``LO``-``HI`` Hz, default 0-20; and
+0-16 Hz), the full-band RMS at the run's own rate, ISO 2631-1 Wk-weighted RMS [m/s²], body
+jerk RMS [m/s³], wheel RMS acceleration [m/s²], suspension working space and deflection RMS
+[mm], dynamic tyre load RMS [N], damper force RMS [N]; every run after the baseline with its
+% change against it (thesis Eq 5.13, positive = reduction).
+
+``--json`` prints every metric of every run instead
+(:func:`nodes.recorder.ride_metrics.ride_summary` plus each run's ``path``)::
+
+    {"baseline": "passive", "band_hz": [0, 20], "fs_metric_hz": 500, "units": {...},
+     "labels": {...}, "runs": [{"name": "passive", "path": "...",
+                                "metrics": {"a_b_rms": 0.89, ...}, "change_pct": {...}}]}
+
+(a change against a zero baseline is ``null``).
 
 A run is named by its folder name (``passive`` for ``/tmp/ch5/passive``); ``--baseline``
 takes such a name (default: the first run). Exit codes: 0 printed, 2 bad input (a missing
@@ -17,6 +27,8 @@ folder or table, an unknown baseline, a bad band) with one line on stderr.
 from __future__ import annotations
 
 import argparse
+import json
+import math
 import sys
 from pathlib import Path
 
@@ -40,7 +52,20 @@ def build_parser() -> argparse.ArgumentParser:
                     help="run (folder name) the others are compared with; default the first")
     ap.add_argument("--band", nargs=2, type=float, metavar=("LO", "HI"), default=(0.0, 20.0),
                     help="band of the PSD-based body RMS [Hz] (default 0 20)")
+    ap.add_argument("--json", action="store_true",
+                    help="print every metric of every run as JSON instead of the table")
     return ap
+
+
+def _finite_or_none(obj):
+    """``obj`` with every non-finite float replaced by None (JSON has no NaN)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite_or_none(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_finite_or_none(v) for v in obj]
+    return obj
 
 
 def _fail(message: str) -> int:
@@ -65,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
         if not (d / TABLE).is_file():
             return _fail(f"{d}: no {TABLE} (unfinished run? try 'suscosim export "
                          f"{d / 'journal.msgpack'}')")
-    from nodes.recorder.ride_metrics import ride_table
+    from nodes.recorder.ride_metrics import ride_summary, ride_table
     from nodes.recorder.table import read_table
 
     names = run_names(dirs)
@@ -81,7 +106,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.baseline is not None and args.baseline not in runs:
         return _fail(f"--baseline {args.baseline!r}: not one of the runs {names}")
     try:
-        text = ride_table(runs, baseline=args.baseline, band_hz=(lo, hi))
+        if args.json:
+            summary = ride_summary(runs, baseline=args.baseline, band_hz=(lo, hi))
+            summary["runs"] = [
+                {"name": e["name"], "path": str(d), "metrics": e["metrics"],
+                 "change_pct": e["change_pct"]}
+                for e, d in zip(summary["runs"], dirs, strict=True)]
+            text = json.dumps(_finite_or_none(summary), indent=1)
+        else:
+            text = ride_table(runs, baseline=args.baseline, band_hz=(lo, hi))
     except (ValueError, KeyError) as exc:
         return _fail(str(exc))
     print(text)

@@ -4,8 +4,15 @@ working space, dynamic tyre load, jerk; and a comparison table of runs (thesis T
 Pure functions over numpy arrays. Sampling is given as ``fs`` (Hz) or taken from a run
 table's ``t`` column (s). Frequency bands are in Hz, never in bin indices.
 
-* RMS from a PSD (thesis App. IV / Eq 4.9): one-sided periodogram (rectangular window, mean
-  removed), integrated with the trapezoidal rule over ``[f1, f2]``, square root.
+* The thesis's RMS (Eq 4.8/4.9, App. IV; :func:`thesis_band_rms`): the signal resampled
+  anti-aliased to 500 Hz (a 2 ms run passes unchanged; a 0.5 ms MR run is low-passed first,
+  so its switching chatter above 250 Hz is not counted), MATLAB's default periodogram
+  (rectangular window, no detrend, nfft = 2^nextpow2(N)), integrated with the trapezoidal
+  rule over the bins of ``[f1, f2]`` (0-20 Hz, or 0-16 Hz for Tables 5.7-5.10), square root.
+  This is the headline body RMS of a run (:func:`metric_values` key ``a_b_rms``); the
+  time-domain RMS at the run's own rate is ``a_b_rms_full``.
+* :func:`band_rms` / :func:`psd`: the same band integral at the signal's own rate, mean
+  removed (kept for signals that are not run tables).
 * ``% improvement`` (thesis Eq 5.13): ``(baseline - run) / baseline * 100``; positive = less.
 * ISO 2631-1:1997 Wk (vertical, seated/standing/recumbent): band limiting (high-pass 0.4 Hz,
   low-pass 100 Hz, both 2nd-order Butterworth, Q = 1/sqrt(2)) times the acceleration-velocity
@@ -254,33 +261,104 @@ def columns(table: Table, name: str) -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def run_metrics(table: Table, band_hz: tuple[float, float] = (0.0, 20.0)) -> dict[str, float]:
-    """Every ride metric a run table allows, per corner, in SI units.
+BAND_16 = (0.0, 16.0)  # Hz, the band of thesis Tables 5.7-5.10
 
-    Uses (when present) ``plant/response/a_b`` (body acceleration: RMS, band RMS, Wk RMS, jerk
-    RMS), ``plant/response/a_w`` (wheel acceleration RMS), ``plant/state/z_b``/``z_w``
-    (working space, deflection RMS), ``tyre_road/force/F_t`` (dynamic tyre load RMS) and
-    ``controller/force/F_d`` (damper force RMS).
+
+def metric_values(
+    table: Table, band_hz: tuple[float, float] = THESIS_BAND, fs_out: float = THESIS_FS
+) -> dict[str, tuple[float, str, str]]:
+    """Every ride metric a run table allows, per corner: ``{key: (value, unit, label)}``.
+
+    Keys are stable machine names (``a_b_rms``, ``a_b[2]_rms`` for corner 2 of a full
+    vehicle); labels are the text table's row names. Body and wheel accelerations use the
+    thesis's metric (:func:`thesis_band_rms`: resampled to ``fs_out``, periodogram, band
+    RMS), whatever the run's step:
+
+    * ``a_b_rms``: body RMS over ``band_hz`` (default 0-20 Hz, Table 5.3) -- the headline;
+    * ``a_b_rms_0_16``: body RMS over 0-16 Hz (Tables 5.7-5.10);
+    * ``a_b_rms_full``: time-domain RMS of the record at the run's own rate (all of its band,
+      up to the run's Nyquist frequency; grows with switching chatter at a fine step);
+    * ``a_b_wk_rms``: ISO 2631-1 Wk-weighted RMS, ``jerk_b_rms``: RMS jerk, both on the
+      ``fs_out`` signal;
+    * ``a_w_rms`` / ``a_w_rms_full``: wheel, the same two ways;
+    * ``sws`` (mm), ``defl_rms`` (mm), ``dtl_rms`` (N), ``f_d_rms`` (N): suspension working
+      space, deflection RMS, dynamic tyre load RMS, damper force RMS, at the run's own rate.
+
+    Uses (when present) ``plant/response/a_b``, ``plant/response/a_w``,
+    ``plant/state/z_b``/``z_w``, ``tyre_road/force/F_t`` and ``controller/force/F_d``.
     """
-    fs = sample_rate(table["t"])
-    f1, f2 = band_hz
-    m: dict[str, float] = {}
+    t = np.asarray(table["t"], dtype=float)
+    sample_rate(t)  # a non-uniform time column fails here, with its message
+    f1, f2 = (float(b) for b in band_hz)
+    m: dict[str, tuple[float, str, str]] = {}
     for lab, a in columns(table, "plant/response/a_b"):
-        m[f"a_b{lab} RMS [m/s2]"] = rms(a)
-        m[f"a_b{lab} RMS {f1:g}-{f2:g} Hz [m/s2]"] = band_rms(a, fs, band_hz)
-        m[f"a_b{lab} Wk RMS [m/s2]"] = iso2631_wk_weighted_rms(a, fs)
-        m[f"jerk_b{lab} RMS [m/s3]"] = rms(jerk(a, fs))
+        m[f"a_b{lab}_rms"] = (thesis_band_rms(t, a, (f1, f2), fs_out), "m/s2",
+                              f"a_b{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
+        if (f1, f2) != BAND_16:
+            m[f"a_b{lab}_rms_0_16"] = (thesis_band_rms(t, a, BAND_16, fs_out), "m/s2",
+                                       f"a_b{lab} RMS 0-16 Hz [m/s2]")
+        m[f"a_b{lab}_rms_full"] = (rms(a), "m/s2", f"a_b{lab} RMS full band [m/s2]")
+        m[f"a_b{lab}_wk_rms"] = (thesis_wk_rms(t, a, fs_out), "m/s2", f"a_b{lab} Wk RMS [m/s2]")
+        m[f"jerk_b{lab}_rms"] = (thesis_jerk_rms(t, a, fs_out), "m/s3",
+                                 f"jerk_b{lab} RMS [m/s3]")
     for lab, a in columns(table, "plant/response/a_w"):
-        m[f"a_w{lab} RMS [m/s2]"] = rms(a)
+        m[f"a_w{lab}_rms"] = (thesis_band_rms(t, a, (f1, f2), fs_out), "m/s2",
+                              f"a_w{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
+        m[f"a_w{lab}_rms_full"] = (rms(a), "m/s2", f"a_w{lab} RMS full band [m/s2]")
     zb, zw = columns(table, "plant/state/z_b"), columns(table, "plant/state/z_w")
     for (lab, b), (_, w) in zip(zb, zw, strict=False):
-        m[f"SWS{lab} [mm]"] = 1e3 * working_space(b, w)
-        m[f"defl{lab} RMS [mm]"] = 1e3 * rms(suspension_deflection(b, w))
+        m[f"sws{lab}"] = (1e3 * working_space(b, w), "mm", f"SWS{lab} [mm]")
+        m[f"defl{lab}_rms"] = (1e3 * rms(suspension_deflection(b, w)), "mm",
+                               f"defl{lab} RMS [mm]")
     for lab, F in columns(table, "tyre_road/force/F_t"):
-        m[f"DTL{lab} RMS [N]"] = rms(dynamic_tyre_load(F))
+        m[f"dtl{lab}_rms"] = (rms(dynamic_tyre_load(F)), "N", f"DTL{lab} RMS [N]")
     for lab, F in columns(table, "controller/force/F_d"):
-        m[f"F_d{lab} RMS [N]"] = rms(F)
+        m[f"f_d{lab}_rms"] = (rms(F), "N", f"F_d{lab} RMS [N]")
     return m
+
+
+def run_metrics(table: Table, band_hz: tuple[float, float] = THESIS_BAND) -> dict[str, float]:
+    """Every ride metric a run table allows, per corner, as ``{label: value}`` (the text
+    table's row names, units in brackets); see :func:`metric_values` for the definitions."""
+    return {label: value for value, _unit, label in metric_values(table, band_hz).values()}
+
+
+def ride_summary(
+    runs: Mapping[str, Table],
+    baseline: str | None = None,
+    band_hz: tuple[float, float] = THESIS_BAND,
+    fs_out: float = THESIS_FS,
+) -> dict:
+    """Every metric of every run, machine-readable (``suscosim ride --json``).
+
+    Returns:
+        ``{"baseline": name, "band_hz": [f1, f2], "fs_metric_hz": fs_out,
+        "units": {key: unit}, "labels": {key: label},
+        "runs": [{"name", "metrics": {key: value}, "change_pct": {key: %}}]}`` in the order
+        of ``runs``; ``change_pct`` (thesis Eq 5.13, positive = reduction) against the
+        baseline (default: the first run) for the keys both have; empty for the baseline.
+    """
+    if not runs:
+        raise ValueError("no runs to compare")
+    names = list(runs)
+    base = names[0] if baseline is None else baseline
+    if base not in runs:
+        raise ValueError(f"baseline {base!r} is not one of the runs {names}")
+    values = {n: metric_values(runs[n], band_hz, fs_out) for n in names}
+    units: dict[str, str] = {}
+    labels: dict[str, str] = {}
+    out_runs = []
+    for n in names:
+        for key, (_v, unit, label) in values[n].items():
+            units.setdefault(key, unit)
+            labels.setdefault(key, label)
+        metrics = {key: v for key, (v, _u, _l) in values[n].items()}
+        change = {} if n == base else {
+            key: improvement(values[base][key][0], v)
+            for key, v in metrics.items() if key in values[base]}
+        out_runs.append({"name": n, "metrics": metrics, "change_pct": change})
+    return {"baseline": base, "band_hz": [float(band_hz[0]), float(band_hz[1])],
+            "fs_metric_hz": float(fs_out), "units": units, "labels": labels, "runs": out_runs}
 
 
 def improvement(baseline: float, value: float) -> float:
@@ -332,5 +410,7 @@ def ride_table(
         c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True))
     )
     rule = "  ".join("-" * w for w in widths)
-    note = f"% = (({base}) - run) / ({base}) x 100, positive = reduction (thesis Eq 5.13)"
+    note = (f"% = (({base}) - run) / ({base}) x 100, positive = reduction (thesis Eq 5.13)\n"
+            f"band RMS, Wk, jerk: signal resampled to {THESIS_FS:g} Hz, periodogram, "
+            f"sqrt(trapz) over the band (thesis Eq 4.8/4.9); full band: the record's own rate")
     return "\n".join([fmt(header), rule, *(fmt(r) for r in body), note])

@@ -12,8 +12,10 @@ from nodes.recorder.ride_metrics import (
     iso2631_wk_weighted_rms,
     jerk,
     matlab_periodogram,
+    metric_values,
     psd,
     resample_to,
+    ride_summary,
     ride_table,
     rms,
     run_metrics,
@@ -109,20 +111,24 @@ def make_run(scale):
 def test_run_metrics_and_ride_table():
     passive, semi = make_run(1.0), make_run(0.8)
     m = run_metrics(passive)
-    assert m["a_b[0] RMS [m/s2]"] == pytest.approx(1 / np.sqrt(2), rel=1e-6)
+    assert m["a_b[0] RMS full band [m/s2]"] == pytest.approx(1 / np.sqrt(2), rel=1e-6)
+    assert m["a_b[0] RMS 0-20 Hz [m/s2]"] == pytest.approx(1 / np.sqrt(2), rel=1e-3)
     assert m["a_b[1] RMS 0-20 Hz [m/s2]"] == pytest.approx(0.5 / np.sqrt(2), rel=1e-3)
+    assert m["a_b[1] RMS 0-16 Hz [m/s2]"] == pytest.approx(0.5 / np.sqrt(2), rel=1e-3)
     assert m["SWS [mm]"] == pytest.approx(20.0, rel=1e-3)
     assert m["DTL RMS [N]"] == pytest.approx(100 / np.sqrt(2), rel=1e-6)
     text = ride_table({"passive": passive, "TSS1": semi})
     lines = text.splitlines()
     assert lines[0].split() == ["metric", "passive", "TSS1", "%"]
-    row = next(line for line in lines if line.startswith("a_b[0] RMS [m/s2]"))
+    assert lines[2].startswith("a_b[0] RMS 0-20 Hz [m/s2]")  # the headline comes first
+    row = next(line for line in lines if line.startswith("a_b[0] RMS 0-20 Hz [m/s2]"))
     assert row.split()[-1] == "20.0"  # (1 - 0.8) / 1 x 100
     dtl = next(line for line in lines if line.startswith("DTL RMS"))
     assert dtl.split()[-1] == "20.0"
     # the baseline can be any run: TSS1 as baseline makes passive 25 % worse
     text = ride_table({"passive": passive, "TSS1": semi}, baseline="TSS1")
-    row = next(line for line in text.splitlines() if line.startswith("a_b[0] RMS [m/s2]"))
+    row = next(line for line in text.splitlines()
+               if line.startswith("a_b[0] RMS full band [m/s2]"))
     assert row.split()[-1] == "-25.0"
     assert improvement(0.8981, 0.7112) == pytest.approx(20.81, abs=0.01)  # Table 5.3 TSS1
 
@@ -198,3 +204,34 @@ def test_wk_and_jerk_on_the_resampled_signal_do_not_depend_on_the_rate():
     assert out[500.0][1] == pytest.approx(w * amp / np.sqrt(2), rel=0.01)
     assert out[2000.0][0] == pytest.approx(out[500.0][0], rel=1e-3)
     assert out[2000.0][1] == pytest.approx(out[500.0][1], rel=1e-3)
+
+
+def test_the_headline_ignores_chatter_the_full_band_counts():
+    # the same 1 Hz ride at 2 kHz, with and without 600 Hz switching chatter
+    fs = 2000.0
+    t = np.arange(0.0, 10.0, 1.0 / fs)
+    ride = np.sin(2 * np.pi * 1.0 * t)
+    chatter = 0.8 * np.sin(2 * np.pi * 600.0 * t)
+    clean = metric_values({"t": t, "plant/response/a_b": ride})
+    noisy = metric_values({"t": t, "plant/response/a_b": ride + chatter})
+    assert noisy["a_b_rms"][0] == pytest.approx(clean["a_b_rms"][0], rel=1e-3)
+    assert noisy["a_b_rms_full"][0] == pytest.approx(np.sqrt(0.5 + 0.32), rel=1e-3)
+    assert clean["a_b_rms"][1] == "m/s2"
+
+
+def test_ride_summary_lists_every_metric_of_every_run():
+    passive, semi = make_run(1.0), make_run(0.8)
+    out = ride_summary({"passive": passive, "TSS1": semi})
+    assert out["baseline"] == "passive" and out["band_hz"] == [0.0, 20.0]
+    assert out["fs_metric_hz"] == 500.0
+    assert [r["name"] for r in out["runs"]] == ["passive", "TSS1"]
+    p, s = (r["metrics"] for r in out["runs"])
+    assert set(p) == set(s) == set(out["units"]) == set(out["labels"])
+    assert p["a_b[0]_rms"] == pytest.approx(1 / np.sqrt(2), rel=1e-3)
+    assert s["a_b[0]_rms"] == pytest.approx(0.8 / np.sqrt(2), rel=1e-3)
+    assert out["units"]["sws"] == "mm" and p["sws"] == pytest.approx(20.0, rel=1e-3)
+    assert out["runs"][0]["change_pct"] == {}
+    assert out["runs"][1]["change_pct"]["a_b[0]_rms"] == pytest.approx(20.0, abs=1e-6)
+    assert out["labels"]["a_b[0]_rms"] == "a_b[0] RMS 0-20 Hz [m/s2]"
+    with pytest.raises(ValueError, match="baseline"):
+        ride_summary({"passive": passive}, baseline="nope")
