@@ -2,7 +2,7 @@
 
 Road keys (``[road]``):
 
-* ``type``: step | ramp | bump | pothole | events | iso8608 | power_law | csv
+* ``type``: step | ramp | bump | pothole | events | iso8608 | power_law | pave | csv
 * ``speed_kmh`` (> 0) forward speed; ``length_m`` (> 0) run distance; duration = length / speed
 * ``corners`` (optional): list of corner names seeing the road, e.g. ["FR"] (Ch. 4 FVM test)
 * events (step, ramp, bump, pothole): ``height`` [m] (pothole: ``depth`` [m], > 0),
@@ -15,6 +15,10 @@ Road keys (``[road]``):
 * power_law (thesis Eq. 4.10, S(n) = G n^-p): ``G`` [m^(3-p)] (> 0; the thesis: 1e-7 smooth
   motorway ... 5e-6 rough minor road), ``waviness`` p (default 2.5), ``seed``, ``correlation``
   (as iso8608), ``band`` = [n_min, n_max] [cycles/m] (default [0.011, 2.83])
+* pave (synthetic Belgian block on long waves, :mod:`nodes.tyre_road.cobblestone`; every key
+  optional, defaults the calibrated pavé): ``seed``, ``stone_length``, ``stone_length_std``,
+  ``joint_width``, ``joint_depth``, ``stone_height_std``, ``crown`` [m]; long waves ``G``,
+  ``waviness``, ``band``, ``correlation`` (as power_law)
 * csv: ``path``, ``zero_start`` (bool, default true)
 
 Tyre keys (``[tyre]``): ``model`` (point_contact | fixed_footprint), ``stiffness`` [N/m],
@@ -29,6 +33,8 @@ from collections.abc import Mapping
 
 from cosim.errors import ScenarioError
 
+from .cobblestone import DEFAULTS as PAVE_DEFAULTS
+from .cobblestone import PaveParameters, pave_road
 from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, GD_N0, iso8608_road
 from .power_law import DEFAULT_WAVINESS, power_law_road
 from .profile_csv import csv_road
@@ -36,7 +42,10 @@ from .roads import KMH, EventRoad, Road, RoadEvent
 from .tyres import FixedFootprint, PointContact, Tyre
 
 _EVENT_TYPES = ("step", "ramp", "bump", "pothole")
-_ROAD_TYPES = _EVENT_TYPES + ("events", "iso8608", "power_law", "csv")
+_ROAD_TYPES = _EVENT_TYPES + ("events", "iso8608", "power_law", "pave", "csv")
+PAVE_KEYS = ("stone_length", "stone_length_std", "joint_width", "joint_depth",
+             "stone_height_std", "crown")
+"""Stone keys of a pave road (besides the long-wave keys of power_law)."""
 _COMMON = {"type", "speed_kmh", "length_m", "corners"}
 _EVENT_KEYS = {
     "step": {"height", "x_start", "t_start", "tracks"},
@@ -191,6 +200,21 @@ def build_road(cfg: Mapping, key_prefix: str = "road") -> Road:
         if length is None:
             raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for power_law)")
         road = power_law_road(G, length, speed, seed, waviness, corr, n_min, n_max)
+    elif kind == "pave":
+        _check_keys(cfg, _COMMON | _POWER_LAW_KEYS | set(PAVE_KEYS), p)
+        seed, corr = _seed(cfg, p), _correlation(cfg, p)
+        band = _band(cfg, p) if "band" in cfg else PAVE_DEFAULTS.band
+        vals = {k: _number(cfg, k, p, default=getattr(PAVE_DEFAULTS, k),
+                           positive=k in ("stone_length", "joint_width", "G", "waviness"),
+                           nonneg=True)
+                for k in PAVE_KEYS + ("G", "waviness")}
+        if vals["stone_length_std"] >= vals["stone_length"]:
+            raise ScenarioError(f"{p}.stone_length_std", vals["stone_length_std"],
+                                f"a number < stone_length ({vals['stone_length']})")
+        if length is None:
+            raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for pave)")
+        road = pave_road(length, speed, seed,
+                         PaveParameters(**vals, band=band, correlation=corr))
     else:  # csv
         _check_keys(cfg, _COMMON | {"path", "zero_start"}, p)
         path = cfg.get("path")

@@ -1,0 +1,185 @@
+"""A seeded synthetic pavé (Belgian block / cobblestone durability track) profile.
+
+The thesis's fatigue road is 100 m of the LTC (Leyland Technical Centre) pavé durability track,
+measured at 34 km/h and proprietary (Ch. 4 Sec. 4.5, Ch. 6 Sec. 6.4). This module builds a
+substitute (a deviation, flagged in the scenarios): square setts laid in courses across the
+road, crossed by each wheel path one after the other, on a base road with its own long waves.
+
+Profile of one wheel track, height z [m] against distance x [m]::
+
+    stone i: top from a_i to b_i = a_i + L_i, then a joint of width w to a_(i+1) = b_i + w
+    on the stone:  z = h_i + c * 4 u (1 - u),              u = (x - a_i) / L_i  in [0, 1]
+    in the joint:  z = (1 - v) h_i + v h_(i+1) - d (1 - cos 2 pi v) / 2,  v = (x - b_i) / w
+
+so the contact point rides over a crowned stone, drops into a smooth (cosine) joint of depth d
+below the chord between the two stone edges and comes up on the next stone, whose height may
+differ by a step h_(i+1) - h_i. The stone lengths L_i are Gamma distributed (mean L, standard
+deviation s_L: positive, with exactly that mean and scatter), the stone heights h_i are
+independent normal (0, s_h^2); the first stone starts at a random phase so that x = 0 is not a
+stone edge. The long waves z_lw(x) are a thesis Eq. 4.10 road, S(n) = G n^-p
+(:mod:`nodes.tyre_road.power_law`); the track is z_lw + z_stones, shifted so that z(0) = 0.
+Left and right tracks have their own stones (independent draws) and long waves with the
+``correlation`` of the power-law road.
+
+What reaches the 0-20 Hz ride band (n < 2.1 cycles/m at 34 km/h): the stone pitch (about
+0.165 m, 57 Hz at 34 km/h), the joints and the crowns lie far above it; in the band the stones
+act through their random heights, a piecewise-constant process whose one-sided PSD at low n is
+about 2 s_h^2 E[P^2] / E[P], P = L + w the pitch (flat, "white" displacement: 8.5e-6 m^3 for
+s_h = 5 mm; it drives the wheel hop; tests/roads/test_cobblestone.py), while the long
+waves drive the body. So the two parameters calibrated against Table 4.5 (hub and body 0-20 Hz
+RMS on the passive realistic corner, ``bench/calibrate_pave.py``, ``docs/vehicles_roads.md``)
+are s_h and G; the other parameters are fixed beforehand from the geometry of Belgian block:
+
+Parameters (defaults :data:`DEFAULTS`, their reasoning in :class:`PaveParameters`).
+
+Sampling: the profile is tabulated every :data:`DX` = 2 mm (at least 7 points across the 15 mm
+joint, the crown's parabola to 0.1 % of c) and linearly interpolated by
+:class:`~nodes.tyre_road.roads.SampledRoad`. A point-contact tyre sampled every coupled step
+h sees the joints only at the spacing v h (4.7 mm at 34 km/h and h = 0.5 ms; 18.9 mm at 2 ms,
+as the thesis's own 2 ms digitisation of the measured track).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN
+from .power_law import DEFAULT_WAVINESS, power_law_profile
+from .roads import SampledRoad
+
+DX = 0.002
+"""Tabulation step of the profile [m]."""
+
+
+@dataclass(frozen=True)
+class PaveParameters:
+    """Geometry of the synthetic pavé (SI units). Defaults and their reasoning:
+
+    Attributes:
+        stone_length: mean length L [m] of a stone's top along the wheel path. Belgian block
+            setts are about 0.10-0.20 m (the brief; 100 x 100 ... 150 x 200 mm setts): 0.15 m.
+        stone_length_std: scatter s_L [m] of the lengths. Hand-laid setts of one size class
+            differ by some 10-20 % (and a wheel path crosses the courses at slightly varying
+            angles): 0.03 m (20 %), Gamma distributed.
+        joint_width: width w [m] of the gap between two stones: the brief's 10-20 mm range,
+            middle value 0.015 m.
+        joint_depth: depth d [m] of the dip between the stone edges as followed by the contact
+            point. A worn sett joint is 10-20 mm deep but filled with sand or grit and
+            bridged by the tyre: a 15 mm gap under a tyre of radius 0.3 m lets a rigid ring
+            sink w^2 / (8 R) = 0.1 mm, the tread rubber locally a few mm. 0.005 m (a
+            point-contact tyre, which cannot bridge, would otherwise see the full geometric
+            depth 50 times a second).
+        stone_height_std: scatter s_h [m] of the height of a stone's top about the base road:
+            set (settled, tilted, worn stones) so that the step between neighbours,
+            sqrt(2) s_h in standard deviation, is a few mm to 15 mm. CALIBRATED (hub 0-20 Hz
+            RMS, Table 4.5): see :data:`DEFAULTS`.
+        crown: height c [m] of the convex top of a stone above its edges (parabolic).
+            Cobbles are domed or worn round at their edges; 0.003 m (3 mm over 0.15 m).
+        G: level of the long waves, S(n) = G n^-p [m^(3-p)] at n = 1 cycle/m. CALIBRATED
+            (body 0-20 Hz RMS, Table 4.5): see :data:`DEFAULTS`.
+        waviness: p of the long waves, the thesis's 2.5 (Eq. 4.10).
+        band: (n_min, n_max) of the long waves [cycles/m], the ISO 8608 band as the
+            power-law road's default.
+        correlation: left/right correlation of the long waves ("identical", "independent" or
+            rho in [0, 1]); the stones are always independent. Default "independent" (the
+            LTC tracks are distinct, so the body bounces, pitches and rolls, Sec. 4.5).
+    """
+
+    stone_length: float = 0.15
+    stone_length_std: float = 0.03
+    joint_width: float = 0.015
+    joint_depth: float = 0.005
+    stone_height_std: float = 0.004
+    crown: float = 0.003
+    G: float = 5e-6
+    waviness: float = DEFAULT_WAVINESS
+    band: tuple[float, float] = (DEFAULT_N_MIN, DEFAULT_N_MAX)
+    correlation: str | float = "independent"
+
+    def __post_init__(self) -> None:
+        for name in ("stone_length", "joint_width", "G", "waviness"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        for name in ("stone_length_std", "joint_depth", "stone_height_std", "crown"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+        if not 0 < self.band[0] < self.band[1]:
+            raise ValueError(f"band must be 0 < n_min < n_max, got {self.band}")
+
+
+DEFAULTS = PaveParameters()
+"""The calibrated pavé (``bench/calibrate_pave.py``; numbers in ``docs/vehicles_roads.md``)."""
+
+PARAMETER_NAMES = tuple(asdict(DEFAULTS))
+"""Scenario keys of a ``[road] type = "pave"`` section besides type, speed, length, seed."""
+
+
+def stone_layout(length: float, rng: np.random.Generator, p: PaveParameters
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stones covering [0, length]: start a_i [m], top length L_i [m], top height h_i [m].
+
+    The first stone starts at -U(0, L_0 + w) (a random phase); the last one starts beyond
+    ``length``.
+    """
+    n = int(np.ceil(length / (p.stone_length + p.joint_width) * 1.3)) + 8
+    if p.stone_length_std > 0:
+        k = (p.stone_length / p.stone_length_std) ** 2  # Gamma shape: mean L, std s_L
+        lengths = rng.gamma(k, p.stone_length / k, size=n)
+    else:
+        lengths = np.full(n, p.stone_length)
+    heights = rng.normal(0.0, p.stone_height_std, size=n) if p.stone_height_std > 0 \
+        else np.zeros(n)
+    phase = rng.uniform(0.0, lengths[0] + p.joint_width)
+    starts = np.concatenate(([0.0], np.cumsum(lengths[:-1] + p.joint_width))) - phase
+    beyond = np.flatnonzero(starts > length)
+    if beyond.size == 0:  # cannot happen with the 1.3 x margin on the count
+        raise RuntimeError("stone_layout: too few stones drawn")
+    keep = slice(0, beyond[0] + 1)  # up to the first stone starting beyond the end
+    return starts[keep], lengths[keep], heights[keep]
+
+
+def stone_heights(x: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
+                  heights: np.ndarray, p: PaveParameters) -> np.ndarray:
+    """Height [m] of the stone surface (stones + joints, no long waves) at distances ``x``."""
+    x = np.asarray(x, dtype=float)
+    i = np.clip(np.searchsorted(starts, x, side="right") - 1, 0, starts.size - 1)
+    local = x - starts[i]
+    on_stone = local <= lengths[i]
+    u = np.clip(local / lengths[i], 0.0, 1.0)
+    z_stone = heights[i] + p.crown * 4.0 * u * (1.0 - u)
+    v = np.clip((local - lengths[i]) / p.joint_width, 0.0, 1.0)
+    h_next = heights[np.minimum(i + 1, heights.size - 1)]
+    z_joint = (1.0 - v) * heights[i] + v * h_next \
+        - p.joint_depth * 0.5 * (1.0 - np.cos(2.0 * np.pi * v))
+    return np.where(on_stone, z_stone, z_joint)
+
+
+def pave_profile(length: float, seed: int, p: PaveParameters = DEFAULTS
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Heights (x, z_left, z_right) [m] of a pavé track ``length`` m long, every :data:`DX`.
+
+    Also returns the stone layouts ({"left": (starts, lengths, heights), "right": ...}) for
+    checks. ``seed`` draws the long waves (as the power-law road of that seed) and, from
+    independent streams, the stones of each track. z(0) = 0 on both tracks.
+    """
+    if not length > 0:
+        raise ValueError(f"length must be > 0, got {length}")
+    x_lw, lw_l, lw_r = power_law_profile(p.G, length, seed, p.waviness, p.correlation,
+                                         p.band[0], p.band[1])
+    x = np.arange(int(np.ceil(length / DX)) + 1) * DX
+    tracks, layouts = [], {}
+    for name, lw, stream in (("left", lw_l, 1), ("right", lw_r, 2)):
+        layout = stone_layout(x[-1], np.random.default_rng([seed, stream]), p)
+        z = np.interp(x, x_lw, lw) + stone_heights(x, *layout, p)
+        tracks.append(z - z[0])
+        layouts[name] = layout
+    return x, tracks[0], tracks[1], layouts
+
+
+def pave_road(length: float, speed: float, seed: int, p: PaveParameters = DEFAULTS
+              ) -> SampledRoad:
+    """A :class:`SampledRoad` of the synthetic pavé, ``length`` m, driven at ``speed`` m/s."""
+    x, zl, zr, _ = pave_profile(length, seed, p)
+    return SampledRoad(x=x, z_left=zl, z_right=zr, speed=speed, length=length, name="pave")
