@@ -3,6 +3,17 @@
 Miner (thesis Eq 2.6): D = Σ n_i / N_f,i, with n_i the count of cycle i (1 or 0.5) and N_f,i
 its cycles to failure from the stress-life or strain-life model with the chosen mean-stress
 correction. Life (Eq 2.7) = 1 / D passes of the loaded history.
+
+**Endurance limit: one rule for both methods.** A cycle's *equivalent fully reversed amplitude*
+σar (its amplitude corrected for its mean by the chosen mean-stress correction, Pa) is compared
+with the endurance limit Se of the S-N curve in use (``mat.sn``, the component curve, or the
+material's). σar is computed from the stresses the method works with: the elastic (FE) amplitude
+and mean in stress-life, the local Neuber amplitude and mean in strain-life (the two are equal
+below the cyclic yield stress, where Se lies). Below Se the treatment is the curve's
+``endurance`` (or the ``endurance_limit`` argument): "elementary" Miner (no damage), "haibach"
+(modified Miner, slope k' = 2k - 1 below the knee: N = N_D (Se/σar)^(2k-1), N_D the method's own
+life at σar = Se, k = -1/b) or "none" (the curve continued). SWT's σar is sqrt(σmax σa); with
+"none" as the correction σar = σa.
 """
 
 from __future__ import annotations
@@ -10,11 +21,39 @@ from __future__ import annotations
 import numpy as np
 
 from .counting import Cycles
-from .life_models import basquin_reversals, cmb_reversals, cyclic_strain, neuber, swt_reversals
-from .material import Material
+from .life_models import (
+    ENDURANCE_MODES,
+    SNCurve,
+    below_knee,
+    cmb_reversals,
+    cyclic_strain,
+    neuber,
+    swt_reversals,
+)
+from .material import Material, material_sn_curve
 from .mean_stress import equivalent_amplitude
 
 METHODS = ("stress_life", "strain_life")
+
+
+def _endurance(curve: SNCurve, endurance_limit: bool | str | None) -> str:
+    """The endurance treatment: the curve's, or the argument (True = "elementary",
+    False = "none", or a mode name)."""
+    if endurance_limit is None:
+        return curve.endurance
+    if endurance_limit is True:
+        return "elementary"
+    if endurance_limit is False:
+        return "none"
+    if endurance_limit not in ENDURANCE_MODES:
+        raise ValueError(f"endurance_limit must be a bool or one of {ENDURANCE_MODES}, "
+                         f"got {endurance_limit!r}")
+    return endurance_limit
+
+
+def sn_curve(mat: Material) -> SNCurve:
+    """The S-N curve damage uses for ``mat``: ``mat.sn`` or the material's Basquin line."""
+    return mat.sn if mat.sn is not None else material_sn_curve(mat)
 
 
 def cycle_reversals(
@@ -23,25 +62,32 @@ def cycle_reversals(
     mat: Material,
     method: str = "stress_life",
     mean_stress: str = "goodman",
-    endurance_limit: bool = False,
+    endurance_limit: bool | str | None = None,
 ) -> np.ndarray:
     """Reversals to failure 2Nf of cycles between turning points s1, s2 (elastic stress, Pa).
 
-    stress_life: σa = |s1 - s2|/2, σm = (s1 + s2)/2, σar by the mean-stress correction,
-    Basquin (with Se if ``endurance_limit``).
+    stress_life: σa = |s1 - s2|/2, σm = (s1 + s2)/2, σar by the mean-stress correction, then
+    the S-N curve (`sn_curve`: the component curve ``mat.sn`` if attached, else the material's
+    Basquin line).
 
     strain_life: Neuber converts the elastic amplitude to the local σa, εa (cyclic curve,
     Masing); the local mean follows from Neuber on the cycle's larger-magnitude extreme
     (first loading on the cyclic curve). Then CMB (none), CMB-Morrow, SWT, or for
-    Goodman/Gerber the equivalent amplitude σar mapped back to εar on the cyclic curve.
+    Goodman/Gerber the equivalent amplitude σar mapped back to εar on the cyclic curve. The
+    strain-life constants are the material's (σ'f, b, ε'f, c, K', n').
+
+    Both: the endurance rule of the module docstring, with Se of `sn_curve` (``endurance_limit``
+    None = the curve's own treatment; True/False = "elementary"/"none", as before).
     """
     s1 = np.asarray(s1, dtype=float)
     s2 = np.asarray(s2, dtype=float)
+    curve = sn_curve(mat)
+    mode = _endurance(curve, endurance_limit)
     sa_e = 0.5 * np.abs(s1 - s2)
     sm_e = 0.5 * (s1 + s2)
     if method == "stress_life":
         sar = equivalent_amplitude(sa_e, sm_e, mean_stress, mat.Su, mat.sf)
-        return basquin_reversals(sar, mat.sf, mat.b, mat.Se if endurance_limit else None)
+        return curve.with_endurance(mode).reversals(sar)
     if method != "strain_life":
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     sa = neuber(sa_e, mat)
@@ -51,6 +97,7 @@ def cycle_reversals(
     sign = np.where(peak_e >= 0.0, 1.0, -1.0)
     peak = sign * neuber(np.abs(peak_e), mat)
     sm = peak - sign * sa
+    sar = equivalent_amplitude(sa, sm, mean_stress, mat.Su, mat.sf)
     if mean_stress == "none":
         rev = cmb_reversals(ea, mat)
     elif mean_stress == "morrow":
@@ -59,17 +106,26 @@ def cycle_reversals(
         smax = sm + sa
         rev = np.where(smax > 0.0, swt_reversals(np.maximum(smax, 0.0), ea, mat), np.inf)
     else:
-        sar = equivalent_amplitude(sa, sm, mean_stress, mat.Su, mat.sf)
         finite = np.isfinite(sar)
         ear = np.where(finite, cyclic_strain(np.where(finite, sar, 0.0), mat), np.inf)
         rev = np.where(finite, cmb_reversals(np.where(finite, ear, 0.0), mat), 1.0)
-    if endurance_limit:
-        rev = np.where(sa_e < mat.Se, np.inf, rev)
+    if mode != "none":
+        rev = below_knee(rev, sar, curve.Se, strain_life_knee(curve.Se, mat, mean_stress),
+                         -1.0 / mat.b, mode)
     return np.where(sa_e > 0.0, rev, np.inf)
 
 
+def strain_life_knee(Se: float, mat: Material, mean_stress: str) -> float:
+    """2N_D of strain-life at the knee: the method's life of a fully reversed cycle whose local
+    amplitude is Se (Pa) (SWT's equation for "swt", Coffin-Manson-Basquin otherwise)."""
+    e = cyclic_strain(np.array([Se]), mat)
+    if mean_stress == "swt":
+        return float(swt_reversals(np.array([Se]), e, mat)[0])
+    return float(cmb_reversals(e, mat)[0])
+
+
 def cycle_damage(cycles: Cycles, mat: Material, method: str, mean_stress: str,
-                 endurance_limit: bool = False) -> np.ndarray:
+                 endurance_limit: bool | str | None = None) -> np.ndarray:
     """Miner damage of each cycle, n / Nf (Nf = 2Nf / 2)."""
     if len(cycles) == 0:
         return np.zeros(0)
@@ -79,7 +135,7 @@ def cycle_damage(cycles: Cycles, mat: Material, method: str, mean_stress: str,
 
 
 def miner_per_node(cycles: Cycles, n_nodes: int, mat: Material, method: str,
-                   mean_stress: str, endurance_limit: bool = False) -> np.ndarray:
+                   mean_stress: str, endurance_limit: bool | str | None = None) -> np.ndarray:
     """Palmgren-Miner damage D per node (sum of cycle damages)."""
     d = cycle_damage(cycles, mat, method, mean_stress, endurance_limit)
     return np.bincount(cycles.series, weights=d, minlength=n_nodes).astype(float)

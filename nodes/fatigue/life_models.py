@@ -3,6 +3,9 @@
 Lives are returned as reversals to failure 2Nf (Nf = cycles). Stresses in Pa, strains in m/m.
 
 * Basquin:  σar = σ'f (2Nf)^b, optionally no damage below the endurance limit Se.
+* `SNCurve`: a Basquin line with a knee (2N_D, Se), an endurance treatment below the knee
+  ("elementary" Miner: no damage; "haibach": slope k' = 2k - 1, k = -1/b; "none": the line
+  continued) and optionally a low-cycle segment (Shigley's line from (1 cycle, Su)).
 * Coffin-Manson-Basquin:  εa = (σ'f - σm)/E (2Nf)^b + ε'f (2Nf)^c   (σm = 0 unless Morrow).
 * Smith-Watson-Topper:  σmax εa = σ'f²/E (2Nf)^(2b) + σ'f ε'f (2Nf)^(b+c).
 * Neuber's rule on the cyclic curve εa = σa/E + (σa/K')^(1/n'):  σ ε = σe²/E, with σe the
@@ -12,9 +15,17 @@ Lives are returned as reversals to failure 2Nf (Nf = cycles). Stresses in Pa, st
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from .material import Material
+if TYPE_CHECKING:
+    from .material import Material
+
+ENDURANCE_MODES = ("haibach", "elementary", "none")
+"""Treatment of cycles whose equivalent amplitude σar is below the endurance limit Se."""
 
 MAX_REVERSALS = 1e30  # beyond this a cycle is treated as doing no damage (2Nf = inf)
 
@@ -28,6 +39,126 @@ def basquin_reversals(sar: np.ndarray, sf: float, b: float, Se: float | None = N
     if Se is not None:
         rev = np.where(sar < Se, np.inf, rev)
     return rev
+
+
+def below_knee(rev: np.ndarray, sar: np.ndarray, Se: float, knee_reversals: float, k: float,
+               endurance: str) -> np.ndarray:
+    """Apply the endurance treatment to reversals ``rev`` of cycles of equivalent amplitude σar.
+
+    For σar < Se: "elementary" (Palmgren-Miner elementary rule) -> inf (no damage);
+    "haibach" (Haibach's modified Miner rule) -> 2N = 2N_D (Se/σar)^(2k-1), the line through
+    the knee (2N_D, Se) with slope k' = 2k - 1, k = -1/b the slope above the knee;
+    "none" -> ``rev`` unchanged. σar >= Se is never changed. Stresses in Pa.
+    """
+    if endurance not in ENDURANCE_MODES:
+        raise ValueError(f"endurance must be one of {ENDURANCE_MODES}, got {endurance!r}")
+    rev = np.asarray(rev, dtype=float)
+    sar = np.asarray(sar, dtype=float)
+    if endurance == "none":
+        return rev
+    low = sar < Se
+    if endurance == "elementary":
+        return np.where(low, np.inf, rev)
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        hb = knee_reversals * (Se / sar) ** (2.0 * k - 1.0)
+    return np.where(low, np.where(sar > 0.0, hb, np.inf), rev)
+
+
+@dataclass(frozen=True)
+class SNCurve:
+    """A stress-life curve in Basquin form with a knee, validated when built.
+
+    σar = σ'f (2N)^b for σar between the knee (2N_D, Se) and, if ``lcf_Su`` is given, the
+    low-cycle point (``lcf_reversals``, σ'f lcf_reversals^b); above that point the log-log line
+    to (2 reversals, Su) (Shigley's low-cycle segment from (1 cycle, Sut) to (10³, f Sut));
+    below Se the ``endurance`` treatment of `below_knee`. Stresses in Pa, lives in reversals
+    2N. ``meta`` carries the factors the curve was derived from (for the summary).
+    """
+
+    sf: float
+    b: float
+    Se: float
+    knee_reversals: float
+    endurance: str = "haibach"
+    lcf_Su: float | None = None
+    lcf_reversals: float = 2.0e3
+    name: str = ""
+    meta: Mapping = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.sf) and self.sf > 0.0):
+            raise ValueError(f"sf must be > 0, got {self.sf!r}")
+        if not (np.isfinite(self.b) and self.b < 0.0):
+            raise ValueError(f"b must be negative, got {self.b!r}")
+        if not (np.isfinite(self.Se) and 0.0 < self.Se < self.sf):
+            raise ValueError(f"Se must be in (0, sf), got {self.Se!r}")
+        if not (np.isfinite(self.knee_reversals) and self.knee_reversals > 1.0):
+            raise ValueError(f"knee_reversals must be > 1, got {self.knee_reversals!r}")
+        if self.endurance not in ENDURANCE_MODES:
+            raise ValueError(f"endurance must be one of {ENDURANCE_MODES}, "
+                             f"got {self.endurance!r}")
+        if self.lcf_Su is not None and not (2.0 < self.lcf_reversals < self.knee_reversals
+                                             and self.lcf_Su > self.lcf_stress):
+            raise ValueError("the low-cycle point must lie between 2 reversals (at Su) and "
+                             "the knee, below Su")
+
+    @property
+    def k(self) -> float:
+        """S-N slope above the knee, k = -1/b (N ∝ σ^-k)."""
+        return -1.0 / self.b
+
+    @property
+    def k_haibach(self) -> float:
+        """Haibach's slope below the knee, k' = 2k - 1."""
+        return 2.0 * self.k - 1.0
+
+    @property
+    def lcf_stress(self) -> float:
+        """σar at the low-cycle point (f Sut for a Shigley curve)."""
+        return self.sf * self.lcf_reversals**self.b
+
+    def with_endurance(self, endurance: str) -> SNCurve:
+        """The same curve with another endurance treatment."""
+        from dataclasses import replace
+        return replace(self, endurance=endurance)
+
+    def reversals(self, sar: np.ndarray) -> np.ndarray:
+        """2N of equivalent fully reversed amplitudes σar (Pa); σar <= 0 -> inf."""
+        sar = np.asarray(sar, dtype=float)
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+            rev = (sar / self.sf) ** (1.0 / self.b)
+            if self.lcf_Su is not None:
+                s3 = self.lcf_stress
+                b_lcf = np.log(s3 / self.lcf_Su) / np.log(self.lcf_reversals / 2.0)
+                rev = np.where(sar > s3, 2.0 * (sar / self.lcf_Su) ** (1.0 / b_lcf), rev)
+        rev = below_knee(rev, sar, self.Se, self.knee_reversals, self.k, self.endurance)
+        return np.where(sar > 0.0, rev, np.inf)
+
+    def stress(self, reversals: np.ndarray) -> np.ndarray:
+        """σar (Pa) at lives 2N (the inverse of `reversals` where it is finite)."""
+        r = np.asarray(reversals, dtype=float)
+        s = self.sf * r**self.b
+        if self.lcf_Su is not None:
+            b_lcf = np.log(self.lcf_stress / self.lcf_Su) / np.log(self.lcf_reversals / 2.0)
+            s = np.where(r < self.lcf_reversals, self.lcf_Su * (r / 2.0) ** b_lcf, s)
+        if self.endurance == "haibach":
+            s = np.where(r > self.knee_reversals,
+                         self.Se * (r / self.knee_reversals) ** (-1.0 / self.k_haibach), s)
+        elif self.endurance == "elementary":
+            s = np.where(r > self.knee_reversals, self.Se, s)
+        return s
+
+    def as_dict(self) -> dict:
+        """JSON-able description (stresses in Pa)."""
+        return {"name": self.name, "sf_pa": self.sf, "b": self.b, "k": self.k,
+                "Se_pa": self.Se, "knee_reversals": self.knee_reversals,
+                "knee_cycles": 0.5 * self.knee_reversals, "endurance": self.endurance,
+                "k_below_knee": {"haibach": self.k_haibach, "elementary": None,
+                                 "none": self.k}[self.endurance],
+                "low_cycle_segment": None if self.lcf_Su is None else
+                {"from": [1.0, self.lcf_Su], "to": [0.5 * self.lcf_reversals,
+                                                    self.lcf_stress]},
+                **dict(self.meta)}
 
 
 def solve_two_power(
