@@ -16,7 +16,7 @@ Lives are returned as reversals to failure 2Nf (Nf = cycles). Stresses in Pa, st
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -119,7 +119,6 @@ class SNCurve:
 
     def with_endurance(self, endurance: str) -> SNCurve:
         """The same curve with another endurance treatment."""
-        from dataclasses import replace
         return replace(self, endurance=endurance)
 
     def reversals(self, sar: np.ndarray) -> np.ndarray:

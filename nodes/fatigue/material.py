@@ -19,7 +19,7 @@ steels:
     σ'f = 1.5 σu, b = -0.087, ε'f = 0.59 ψ, c = -0.58, K' = 1.65 σu, n' = 0.15,
     ψ = 1 if σu/E <= 0.003 else 1.375 - 125 σu/E.
 Its K', n' are nearly compatible with its σ'f, ε'f, b, c (`compatibility`: n' = b/c = 0.15
-exactly, σ'f/ε'f^(b/c) = 2252 MPa against 1.65 σu = 2107 MPa, 6.9 % apart). Table 6.2's
+exactly; σ'f/ε'f^(b/c) = 2252 MPa against 1.65 σu = 2107 MPa, 6.4 % below). Table 6.2's
 K' = 1166 MPa, n' = 0.0246 are **not** used by default: n' = 0.0246 means practically no cyclic
 hardening (a flat cyclic curve at ≈ 1000 MPa from 0.2 % strain on) and is incompatible with any
 b, c of a steel (b/c = 0.0246 would need c ≈ -3.5), and K' equal to σy to the MPa suggests a
@@ -297,18 +297,19 @@ class ComponentSpec:
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACE_FACTORS:
-            raise ValueError("surface")
+            raise ValueError(f"surface must be one of {tuple(SURFACE_FACTORS)}, "
+                             f"got {self.surface!r}")
         if self.loading not in LOADINGS:
-            raise ValueError("loading")
+            raise ValueError(f"loading must be one of {tuple(LOADINGS)}, got {self.loading!r}")
         if self.d_e_m is None:
             rectangle_equivalent_diameter(self.section_h_m, self.section_b_m)
         size_factor(self.equivalent_diameter_m, self.loading)
         reliability_factor(self.reliability)
         temperature_factor(self.temperature_c)
         if not (math.isfinite(self.kf) and 0.0 < self.kf <= 2.0):
-            raise ValueError("kf")
+            raise ValueError(f"kf must be in (0, 2], got {self.kf!r}")
         if not 1e5 <= self.knee_cycles <= 1e8:
-            raise ValueError("knee_cycles")
+            raise ValueError(f"knee_cycles must be 1e5-1e8, got {self.knee_cycles!r}")
 
     @property
     def equivalent_diameter_m(self) -> float:
