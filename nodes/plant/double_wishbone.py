@@ -1,5 +1,5 @@
 """Realistic quarter car: a double-wishbone front corner of an MPV in PyBullet (thesis Ch. 4
-Sec. 4.2, Table 4.2), closed kinematic loop included.
+Sec. 4.2, Table 4.2), closed kinematic loop and jounce bumper included.
 
 Parts (Table 4.2): body M_b 535 kg on a vertical translational joint; lower arm 5 kg and upper
 arm 2 kg on revolute joints (body bushes); hub (upright + wheel) 38.75 kg on a spherical joint
@@ -11,48 +11,82 @@ travel, and the (inert) spin of the tie rod about its own axis.
 Forces: the torsion spring K_theta = 46.74 N m/deg acts about the lower-arm pivot axis (a
 torsion bar; applied as the revolute joint's torque, preloaded with the static torque tau_0);
 the damper (c = 3800 N s/m, in the controller node) is a force actuator along the damper axis
-between the body mount and the lower-arm mount; the tyre force F_t (tyre node) is applied
-vertically at the wheel centre of the hub, as the thesis applies it.
+between the body mount and the lower-arm mount; the jounce bumper (:mod:`.bump_stop`) pushes
+the lower arm's pad down and the body up, along the body's vertical, once its clearance has
+closed; the tyre force F_t (tyre node) is applied vertically at the wheel centre of the hub,
+as the thesis applies it.
 
-**Hardpoints** (the thesis gives none; plausible values for a small MPV, our reasoning):
-corner frame = vehicle axes (x forward, y left, z up) with origin at the static wheel centre
-of this **front-left** corner (outboard = +y, so the arm frame below has z up).
+**Hardpoints** (the thesis gives none: "the actual dimensions of the arms are not available";
+plausible values for a small MPV, our reasoning). Corner frame = vehicle axes (x forward,
+y left, z up) with origin at the static wheel centre of this **front-left** corner (outboard
+= +y, so the arm frame has z up). Metres.
 
-* the lower arm is the fatigue worker's arm (``nodes/fatigue/arm_geometry.py``: bushes
-  +-0.16 m on the pivot axis, ball joint (0.03, 0.37, 0), damper seat (0.02, 0.225, 0) in the
-  arm frame, flat arm). We place its frame at (0, -0.43, -0.13) in the corner frame with axes
-  parallel to the corner frame (pivot axis along x: no anti-dive; arm plane horizontal at
-  static ride height), so the ball joint is 60 mm inboard of and 130 mm below the wheel
-  centre (inside the wheel rim); ``tests/vehicles/test_arm_geometry_consistent.py`` checks the
-  numbers agree;
-* consequences: arm lever 0.37 m, so the wheel rate is about K_theta / 0.37^2 ~ 20 kN/m, below
-  the Table 4.3 31 kN/m (which needs a 0.294 m lever); damper motion ratio 0.225/0.37 = 0.61,
-  close to the sqrt(1500/3800) = 0.63 that Table 4.3 implies;
-* damper: lower mount = the arm's seat (0.02, -0.205, -0.13), top mount (0.02, -0.25, 0.40):
-  4.9 deg inboard lean;
-* upper arm: shorter (0.24 m, camber gain), bushes at y = -0.34, z = 0.22, x = +-0.11; ball
-  joint at (0, -0.10, 0.20): kingpin inclination 6.9 deg, caster 5.2 deg;
-* tie rod 0.32 m long, 0.14 m behind the axle at z = -0.03 (rear steer), rack end y = -0.40.
-  Bump steer was not tuned;
-* half track 0.7055 m (t = 1.411 m, Ch. 4 extraction); the body's centre of mass is put on the
-  vehicle centreline (it only moves vertically, so its position has no effect).
+* *lower arm*: every point comes from :mod:`cosim.lower_arm`, the one definition the fatigue
+  worker's FE reads too (bushes (+-0.15, 0, 0), ball joint (0.025, 0.294, 0), damper seat
+  (0.010, 0.185, 0), bump-stop pad (-0.030, 0.215, 0) in the arm frame; frame origin
+  ``ARM_ORIGIN`` = (0, -0.354, -0.13) in the corner frame, axes parallel to the corner's: the
+  pivot axis along x, so no anti-dive, and the arm plane horizontal at static ride height).
+  The lever 0.294 m is what makes the torsion bar a 31 kN/m wheel rate (K_theta / L^2);
+  ``tests/vehicles/test_arm_geometry_consistent.py`` checks that the PyBullet corner puts the
+  arm's points where :mod:`cosim.lower_arm` says.
+* *upper arm*: bushes (+-0.12, -0.30, 0.18), ball joint (-0.005, -0.10, 0.20); 0.20 m long
+  in front view, 0.68 of the lower arm (a short-long arm: the short upper arm gives camber
+  gain). Its inner end is 20 mm lower than its outer end, so the two arms converge inboard:
+  in front view the upright's instant centre is where the lines of the arms meet,
+  y = -3.40 m, z = -0.13 m (front-view swing arm 3.4 m), which gives
+  - camber gain 1 / 3.4 m = 1.7 deg per 100 mm of jounce (wheel top inward), in the
+    1-2.5 deg/100 mm of passenger-car double wishbones;
+  - a roll centre 35 mm above the ground (the line from the contact patch, 0.30 m below the
+    wheel centre for a 15-16 in MPV wheel, to the instant centre, at the centreline);
+  - a wheel centre that rises 1.018 times as fast as the ball joint (it is 3.40 m from the
+    instant centre, the ball joint 3.34 m), so the effective lever is 0.2993 m and the wheel
+    rate K_theta / 0.2993^2 = 29.9 kN/m (Table 4.3: 31 kN/m, -3.5 %). Parallel arms would give
+    0.294 m and 31.0 kN/m, but no camber gain.
+  The bushes are 0.24 m apart (an A-arm spanning the damper, which passes between its legs).
+* *steering axis*: lower ball joint (0.025, -0.06, -0.13) to upper (-0.005, -0.10, 0.20):
+  kingpin inclination atan(0.04 / 0.33) = 6.9 deg, caster atan(0.03 / 0.33) = 5.2 deg, the
+  axis meeting the ground 39 mm inboard of the contact patch centre (positive scrub radius).
+* *damper*: lower mount = the arm's seat, (0.010, -0.169, -0.13); top mount (0.010, -0.206,
+  0.40): 0.53 m between mounts, leaning 4.0 deg inboard at the top (as front dampers lean to
+  clear the tyre). Its motion ratio to the ball joint is (0.185 / 0.294) cos(4.0 deg) = 0.628,
+  and the physical 3800 N s/m acts at the wheel as 3800 (0.185 cos 4 deg / 0.2993)^2
+  = 1445 N s/m (Table 4.3: 1500 N s/m).
+* *tie rod*: outer ball joint (-0.14, -0.072, -0.03) on the steering axis, 0.14 m behind the
+  axle (rear steer); inner (rack) end (-0.14, -0.338, -0.038), 0.266 m long. The inner end is
+  where the line from the upright's instant centre through the outer end meets the line
+  through the two arms' inner pivots: the tie rod then points at the instant centre, so its
+  length does not change to first order as the upright moves (no bump steer to first order),
+  and the arc it swings matches the upright's (the second-order condition).
+* *bump stop*: the jounce bumper on the body above the arm's pad; clearance, rate and the
+  wheel travel to first contact (about 45 mm) in :mod:`.bump_stop`.
+* *half track* 0.7055 m (t = 1.411 m, Ch. 4 extraction); the body's centre of mass is put on
+  the vehicle centreline (it only moves vertically, so its position has no effect).
+
+*Mass properties*: the lower arm's centre of mass is the centroid of its three joints; its
+inertia is that of half its mass spread as a uniform triangle and half lumped in the three
+bosses, over a 40 mm section depth (:func:`lower_arm_inertia`: I_xx 0.061, I_yy 0.048,
+I_zz 0.107 kg m^2 about the centre of mass; the product I_xy = -0.005 kg m^2 is neglected).
+The hub's inertia is a wheel's (spin axis y), the tie rod is a slender rod, the upper arm a
+small triangle.
 
 **Damper force convention**: ``F_d`` is the damper's axial force, compression-positive as a
 force on the body (pushes the top mount up along the axis); the arm gets -F_d along the axis.
-Its vertical component on the body is F_d * cos(lean) = 0.996 F_d (lean 4.9 deg). Because
-the damper moves at about MR = 0.61 of the wheel, the state also gives ``z_damper``
+Its vertical component on the body is F_d cos(lean) = 0.998 F_d (lean 4.0 deg). Because
+the damper moves at about MR = 0.62 of the wheel, the state also gives ``z_damper``
 (compression from static) and ``v_damper`` (compression velocity, positive when the damper
 shortens): a controller that computes F_d = c * v_damper with the physical c = 3800 N s/m
 reproduces the thesis's damper; one that uses v_w - v_b should use an equivalent c_s instead
-(1500 N s/m in Table 4.3; 1250 N s/m identified for this geometry, docs/vehicles_roads.md).
+(1500 N s/m in Table 4.3; identified for this geometry by ``suscosim equivalent-lumped``,
+docs/vehicles_roads.md).
 
-**Arm loads** (``loads()["arm"]``): forces ON the lower arm, in the arm frame (origin at the
+**Bump-stop force** ``F_bs`` [N] (in ``plant/response``, via :meth:`extra_response`):
+compression-positive, >= 0, the force the bumper applies on the body (upward) and on the
+arm's pad (downward), from the state at the start of the step, as the torsion-bar torque.
+
+**Arm loads** (``loads()["arm"]``): the loads ON the lower arm in the arm frame (origin at the
 midpoint of the two body bushes, x along the pivot axis forward, y outward toward the ball
-joint in the arm plane, z = x cross y), in N:
-``ball_joint_{x,y,z}`` from the hub, ``damper_mount_{x,y,z}`` from the damper,
-``bush_front_{x,y,z}`` and ``bush_rear_{x,y,z}`` from the body; plus ``torsion_bar_mx`` [N m],
-the torsion-bar moment on the arm about its x axis (static preload included).
-Extraction method: see :meth:`DoubleWishboneCorner.loads`.
+joint in the arm plane, z = x cross y; the frame turns with the arm), in N; see
+:func:`arm_loads` for where each acts and how it is extracted.
 """
 
 from __future__ import annotations
@@ -62,30 +96,37 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
+from cosim import lower_arm as la
+
+from .bump_stop import BumpStopParams, bump_stop_force, compression
 from .model import GRAVITY, PlantModel
 from .quarter_car_lumped import load_urdf_text, new_direct_client
 
 # ---- hardpoints in the corner frame [m] (see module docstring) ----
 WHEEL_CENTRE = np.array([0.0, 0.0, 0.0])
-ARM_ORIGIN = np.array([0.0, -0.43, -0.13])
+ARM_ORIGIN = la.ARM_ORIGIN
 """Lower-arm frame origin (bush midpoint) in the corner frame; arm axes = corner axes."""
-# lower arm = fatigue worker's arm_geometry (arm frame) + ARM_ORIGIN
-LOWER_BUSH_FRONT = ARM_ORIGIN + np.array([0.160, 0.0, 0.0])
-LOWER_BUSH_REAR = ARM_ORIGIN + np.array([-0.160, 0.0, 0.0])
-LOWER_BALL_JOINT = ARM_ORIGIN + np.array([0.030, 0.370, 0.0])
-DAMPER_LOWER = ARM_ORIGIN + np.array([0.020, 0.225, 0.0])
-DAMPER_UPPER = np.array([0.02, -0.25, 0.40])
-UPPER_BUSH_FRONT = np.array([0.11, -0.34, 0.22])
-UPPER_BUSH_REAR = np.array([-0.11, -0.34, 0.22])
-UPPER_BALL_JOINT = np.array([0.0, -0.10, 0.20])
-TIE_ROD_INNER = np.array([-0.14, -0.40, -0.03])
-TIE_ROD_OUTER = np.array([-0.14, -0.08, -0.03])
+# lower arm: cosim.lower_arm, arm frame -> corner frame
+LOWER_BUSH_FRONT = la.to_corner(la.BUSH_FRONT)
+LOWER_BUSH_REAR = la.to_corner(la.BUSH_REAR)
+LOWER_BALL_JOINT = la.to_corner(la.BALL_JOINT)
+DAMPER_LOWER = la.to_corner(la.DAMPER_MOUNT)
+BUMP_STOP_PAD = la.to_corner(la.BUMP_STOP_PAD)
+DAMPER_UPPER = np.array([0.010, -0.206, 0.40])
+UPPER_BUSH_FRONT = np.array([0.14, -0.34, 0.18])
+UPPER_BUSH_REAR = np.array([-0.14, -0.34, 0.18])
+UPPER_BALL_JOINT = np.array([-0.005, -0.10, 0.20])
+TIE_ROD_INNER = np.array([-0.14, -0.350, -0.037])
+TIE_ROD_OUTER = np.array([-0.14, -0.072, -0.03])
 HALF_TRACK = 0.7055
+
+LOWER_ARM_COM = (LOWER_BUSH_FRONT + LOWER_BUSH_REAR + LOWER_BALL_JOINT) / 3.0
+"""Lower arm's centre of mass (corner frame): the centroid of its three joints [m]."""
 
 
 def arm_frame() -> tuple[np.ndarray, np.ndarray]:
-    """(origin, R): the lower-arm frame in the corner frame; columns of R are the arm's x, y, z
-    axes, so p_arm = R.T @ (p_corner - origin)."""
+    """(origin, R): the lower-arm frame in the corner frame at static ride height; columns of
+    R are the arm's x, y, z axes, so p_arm = R.T @ (p_corner - origin)."""
     o = 0.5 * (LOWER_BUSH_FRONT + LOWER_BUSH_REAR)
     ex = LOWER_BUSH_FRONT - LOWER_BUSH_REAR
     ex /= np.linalg.norm(ex)
@@ -104,21 +145,38 @@ def to_arm_frame(point: np.ndarray) -> np.ndarray:
 ARM_POINTS = {
     "bush_front": LOWER_BUSH_FRONT, "bush_rear": LOWER_BUSH_REAR,
     "ball_joint": LOWER_BALL_JOINT, "damper_mount": DAMPER_LOWER,
+    "bump_stop": BUMP_STOP_PAD,
 }
 """The lower arm's load points (corner frame); :func:`to_arm_frame` gives them in the arm frame
-(the numbers the fatigue worker's FE uses)."""
+(equal to :data:`cosim.lower_arm.HARDPOINTS`, tested)."""
+
+_BS = BumpStopParams()
 
 
 @dataclass(frozen=True)
 class DoubleWishboneParams:
-    """Table 4.2 (unladen MPV)."""
+    """Table 4.2 (unladen MPV) and the jounce bumper (:mod:`.bump_stop`)."""
 
     body_mass: float = 535.0
+    """M_b [kg]."""
     hub_mass: float = 38.75
-    lower_arm_mass: float = 5.0
+    """M_h, upright and wheel [kg]."""
+    lower_arm_mass: float = la.MASS_KG
+    """M_la [kg]."""
     upper_arm_mass: float = 2.0
+    """M_ua [kg]."""
     tie_rod_mass: float = 2.0
+    """M_tr [kg]."""
     torsion_stiffness_nm_per_deg: float = 46.74
+    """K_theta [N m/deg]."""
+    bump_stop: bool = True
+    """Fit the jounce bumper (``false`` removes it)."""
+    bump_stop_clearance: float = _BS.clearance
+    """g, bumper tip to pad at static ride height, along the body's vertical [m]."""
+    bump_stop_initial_rate: float = _BS.initial_rate
+    """k_0, bumper rate at first contact [N/m]."""
+    bump_stop_stroke: float = _BS.stroke
+    """s_b, bumper block compression [m]."""
 
     @property
     def k_theta(self) -> float:
@@ -127,7 +185,17 @@ class DoubleWishboneParams:
 
     @property
     def unsprung_mass(self) -> float:
+        """Hub + arms + tie rod [kg] (Table 4.3's m_w)."""
         return self.hub_mass + self.lower_arm_mass + self.upper_arm_mass + self.tie_rod_mass
+
+    @property
+    def bump_stop_params(self) -> BumpStopParams | None:
+        """The bumper's parameters, or None without a bumper."""
+        if not self.bump_stop:
+            return None
+        return BumpStopParams(clearance=self.bump_stop_clearance,
+                              initial_rate=self.bump_stop_initial_rate,
+                              stroke=self.bump_stop_stroke)
 
 
 def _fmt(v) -> str:
@@ -136,14 +204,31 @@ def _fmt(v) -> str:
 
 def _link(name, m, com, inertia):
     return (f' <link name="{name}"><inertial><origin xyz="{_fmt(com)}"/><mass value="{m}"/>'
-            f'<inertia ixx="{inertia[0]}" iyy="{inertia[1]}" izz="{inertia[2]}" ixy="0" '
-            f'ixz="0" iyz="0"/></inertial></link>\n')
+            f'<inertia ixx="{inertia[0]:.9g}" iyy="{inertia[1]:.9g}" izz="{inertia[2]:.9g}" '
+            f'ixy="0" ixz="0" iyz="0"/></inertial></link>\n')
 
 
 def _joint(name, kind, parent, child, origin, axis="1 0 0"):
     return (f' <joint name="{name}" type="{kind}"><parent link="{parent}"/>'
             f'<child link="{child}"/><origin xyz="{_fmt(origin)}"/><axis xyz="{axis}"/>'
             f'<limit lower="-3" upper="3" effort="1e12" velocity="1e6"/></joint>\n')
+
+
+_ARM_DEPTH = 0.04
+"""Depth (z extent) of the lower arm's section for its inertia [m] (the ribs of the forged
+I-section in :mod:`cosim.lower_arm` are about 40 mm deep)."""
+
+
+def lower_arm_inertia(mass: float) -> np.ndarray:
+    """Principal-axis-aligned inertia (I_xx, I_yy, I_zz) of the lower arm about its centre of
+    mass [kg m^2]: in plan, half the mass a uniform triangle on the three joints (second
+    moment m/12 sum d d^T), half lumped at them (m/3 sum d d^T), d = joint - centroid; in
+    depth, uniform over the rib depth h (m h^2 / 12). Products of inertia are neglected."""
+    pts = np.array([LOWER_BUSH_FRONT, LOWER_BUSH_REAR, LOWER_BALL_JOINT])
+    d = pts - pts.mean(axis=0)
+    S = mass * (0.5 / 12.0 + 0.5 / 3.0) * (d.T @ d)  # second moments sum m x_i x_j
+    S[2, 2] = mass * _ARM_DEPTH ** 2 / 12.0  # uniform over the section's depth
+    return np.array([S[1, 1] + S[2, 2], S[0, 0] + S[2, 2], S[0, 0] + S[1, 1]])
 
 
 # link indices (joint index = child link index)
@@ -153,7 +238,6 @@ BODY, LOWER_ARM, HUB, UPPER_ARM, TIE_ROD = 0, 1, 2, 3, 4
 def _urdf(pr: DoubleWishboneParams) -> str:
     la_o = 0.5 * (LOWER_BUSH_FRONT + LOWER_BUSH_REAR)
     ua_o = 0.5 * (UPPER_BUSH_FRONT + UPPER_BUSH_REAR)
-    la_com = (LOWER_BUSH_FRONT + LOWER_BUSH_REAR + LOWER_BALL_JOINT) / 3.0
     ua_com = (UPPER_BUSH_FRONT + UPPER_BUSH_REAR + UPPER_BALL_JOINT) / 3.0
     tr_com = 0.5 * (TIE_ROD_INNER + TIE_ROD_OUTER)
     tr_len = float(np.linalg.norm(TIE_ROD_OUTER - TIE_ROD_INNER))
@@ -161,8 +245,9 @@ def _urdf(pr: DoubleWishboneParams) -> str:
     s = ""
     s += _link("ground", 0, [0, 0, 0], (0, 0, 0))
     s += _link("body", pr.body_mass, body_com, (100, 100, 100))
-    # lower arm: triangular plate ~0.34 x 0.30 m; upper arm smaller; hub+wheel ~ a disc
-    s += _link("lower_arm", pr.lower_arm_mass, la_com - la_o, (0.05, 0.04, 0.09))
+    s += _link("lower_arm", pr.lower_arm_mass, LOWER_ARM_COM - la_o,
+               lower_arm_inertia(pr.lower_arm_mass))
+    # hub + wheel ~ a disc about y; upper arm a small triangle
     s += _link("hub", pr.hub_mass, WHEEL_CENTRE - LOWER_BALL_JOINT, (1.2, 2.0, 1.2))
     s += _link("upper_arm", pr.upper_arm_mass, ua_com - ua_o, (0.012, 0.01, 0.02))
     # slender rod along y: I_perp = m L^2 / 12, I_axis = m r^2 / 2 with r = 10 mm
@@ -177,6 +262,10 @@ def _urdf(pr: DoubleWishboneParams) -> str:
     return f'<?xml version="1.0"?>\n<robot name="double_wishbone">\n{s}</robot>\n'
 
 
+def _rot(quat) -> np.ndarray:
+    return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+
+
 class DoubleWishboneCorner(PlantModel):
     """Double-wishbone front-left corner; one corner named "FL" on the left track."""
 
@@ -186,6 +275,7 @@ class DoubleWishboneCorner(PlantModel):
     def __init__(self, params: DoubleWishboneParams | None = None,
                  static_dt: float = 1e-3) -> None:
         self.params = pr = params or DoubleWishboneParams()
+        self.bump_stop = pr.bump_stop_params
         self.client = c = new_direct_client()
         p.setPhysicsEngineParameter(numSolverIterations=200, erp=0.2,
                                     solverResidualThreshold=1e-12, physicsClientId=c)
@@ -217,12 +307,15 @@ class DoubleWishboneCorner(PlantModel):
         self._dt: float | None = None
         self._F_t = 0.0
         self._F_d = 0.0
+        self._F_bs = 0.0
         self._tau = 0.0
         self._read()
         self._z_b0, self._z_w0, self._L0 = self._zb_abs, self._zw_abs, self._damper_len
         self._theta0 = self._theta
+        self._pad_z0 = float(self._pad[2])
         self.tau0 = self._static_torque(static_dt)
         self._read()
+        self._applied_pose = (self._R_arm, self._R_hub, self._u)
 
     # --- helpers ---
     def _read(self) -> None:
@@ -230,25 +323,31 @@ class DoubleWishboneCorner(PlantModel):
         js = p.getJointStates(b, [BODY, LOWER_ARM], physicsClientId=c)
         self._zb_abs, self._vb = js[0][0], js[0][1]
         self._theta, self._omega = js[1][0], js[1][1]
-        hub = p.getLinkState(b, HUB, computeLinkVelocity=1, physicsClientId=c)
+        hub = p.getLinkState(b, HUB, computeLinkVelocity=1, computeForwardKinematics=1,
+                             physicsClientId=c)
         self._zw_abs, self._vw = hub[0][2], hub[6][2]
         self._hub_pos = np.array(hub[0])
-        top = self._world(BODY, DAMPER_UPPER)
-        bot = self._world(LOWER_ARM, DAMPER_LOWER)
+        self._R_hub = _rot(hub[5])
+        body = p.getLinkState(b, BODY, computeLinkVelocity=1, computeForwardKinematics=1,
+                              physicsClientId=c)
+        arm = p.getLinkState(b, LOWER_ARM, computeLinkVelocity=1, computeForwardKinematics=1,
+                             physicsClientId=c)
+        self._R_arm = _rot(arm[5])
+        top = self._world(body, BODY, DAMPER_UPPER)
+        bot = self._world(arm, LOWER_ARM, DAMPER_LOWER)
+        self._pad = self._world(arm, LOWER_ARM, BUMP_STOP_PAD)
         d = top - bot
         self._damper_len = float(np.linalg.norm(d))
         self._u = d / self._damper_len  # unit vector arm mount -> body mount
-        v_top = self._point_velocity(BODY, top)
-        v_bot = self._point_velocity(LOWER_ARM, bot)
+        v_top = _point_velocity(body, top)
+        v_bot = _point_velocity(arm, bot)
         self._v_damper = -float(self._u @ (v_top - v_bot))  # compression rate
         self._top, self._bot = top, bot
 
-    def _world(self, link: int, corner_point: np.ndarray) -> np.ndarray:
-        """World position of a hardpoint (given in the static corner frame) fixed to ``link``."""
-        ls = p.getLinkState(self.body, link, computeForwardKinematics=1,
-                            physicsClientId=self.client)
-        pos, orn = np.array(ls[4]), ls[5]
-        R = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)
+    def _world(self, link_state, link: int, corner_point: np.ndarray) -> np.ndarray:
+        """World position of a hardpoint (given in the static corner frame) fixed to ``link``
+        (``link_state`` from getLinkState with forward kinematics)."""
+        pos, R = np.array(link_state[4]), _rot(link_state[5])
         local = self._link_local[link] @ np.append(corner_point, 1.0)
         return pos + R @ local
 
@@ -263,11 +362,19 @@ class DoubleWishboneCorner(PlantModel):
             self._ll = {k: np.hstack([np.eye(3), -o[:, None]]) for k, o in origins.items()}
         return self._ll
 
-    def _point_velocity(self, link: int, world_point: np.ndarray) -> np.ndarray:
-        ls = p.getLinkState(self.body, link, computeLinkVelocity=1,
-                            computeForwardKinematics=1, physicsClientId=self.client)
-        v, w, com = np.array(ls[6]), np.array(ls[7]), np.array(ls[0])
-        return v + np.cross(w, world_point - com)
+    def bump_stop_compression(self) -> float:
+        """Bumper compression delta [m] in the current state (< 0: clearance still open):
+        the pad's rise minus the body's rise minus the clearance (:mod:`.bump_stop`)."""
+        if self.bump_stop is None:
+            return -np.inf
+        return compression(float(self._pad[2]) - self._pad_z0, self._zb_abs - self._z_b0,
+                           self.bump_stop)
+
+    def bump_stop_force(self) -> float:
+        """Bumper force F_bs [N] (>= 0) in the current state: what the next substep applies."""
+        if self.bump_stop is None:
+            return 0.0
+        return bump_stop_force(self.bump_stop_compression(), self.bump_stop)
 
     def _apply(self) -> None:
         c, b = self.client, self.body
@@ -280,12 +387,18 @@ class DoubleWishboneCorner(PlantModel):
                              physicsClientId=c)
         p.applyExternalForce(b, LOWER_ARM, (-f).tolist(), self._bot.tolist(), p.WORLD_FRAME,
                              physicsClientId=c)
+        if self._F_bs > 0.0:  # bumper: up on the body, down on the arm's pad, at the pad
+            pad = self._pad.tolist()
+            p.applyExternalForce(b, BODY, [0.0, 0.0, self._F_bs], pad, p.WORLD_FRAME,
+                                 physicsClientId=c)
+            p.applyExternalForce(b, LOWER_ARM, [0.0, 0.0, -self._F_bs], pad, p.WORLD_FRAME,
+                                 physicsClientId=c)
 
     def _static_torque(self, dt: float) -> float:
         """Static solve at build time: the torsion-bar preload tau_0 for which the assembled
         corner, carrying its static tyre load, has zero acceleration. The arm's angular
         acceleration is affine in the torque, so two trial steps from rest (state restored
-        after each) give tau_0 exactly."""
+        after each) give tau_0 exactly. (The bumper is clear at ride height: F_bs = 0.)"""
         c = self.client
         p.setTimeStep(dt, physicsClientId=c)
         sid = p.saveState(physicsClientId=c)
@@ -295,7 +408,7 @@ class DoubleWishboneCorner(PlantModel):
         for tau in trials:
             p.restoreState(sid, physicsClientId=c)
             self._read()
-            self._F_t, self._F_d, self._tau = W, 0.0, tau
+            self._F_t, self._F_d, self._F_bs, self._tau = W, 0.0, 0.0, tau
             self._apply()
             p.stepSimulation(physicsClientId=c)
             omegas.append(p.getJointState(self.body, LOWER_ARM, physicsClientId=c)[1])
@@ -319,9 +432,15 @@ class DoubleWishboneCorner(PlantModel):
         }
 
     def spring_force(self) -> np.ndarray:
-        """Dynamic torsion-bar torque expressed as a vertical force at the wheel centre
-        (K_theta (theta - theta_0) / lever, lever = 0.37 m, the arm's), upward on the body."""
-        return np.array([self.params.k_theta * (self._theta - self._theta0) / 0.37])
+        """Dynamic torsion-bar torque expressed as a vertical force at the ball joint,
+        K_theta (theta - theta_0) / L with L = :func:`cosim.lower_arm.lever_ball_joint`
+        (0.294 m), upward on the body [N]."""
+        return np.array([self.params.k_theta * (self._theta - self._theta0)
+                         / la.lever_ball_joint()])
+
+    def extra_response(self) -> dict[str, np.ndarray]:
+        """``F_bs``: the jounce-bumper force [N] (>= 0) the next substep applies."""
+        return {"F_bs": np.array([self.bump_stop_force()])}
 
     def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
         if dt != self._dt:
@@ -329,6 +448,9 @@ class DoubleWishboneCorner(PlantModel):
             self._dt = dt
         self._F_t, self._F_d = float(F_t[0]), float(F_d[0])
         self._tau = self.tau0 - self.params.k_theta * (self._theta - self._theta0)
+        self._F_bs = self.bump_stop_force()
+        # the pose the forces of this substep are applied (and the joint sensors evaluated) in
+        self._applied_pose = (self._R_arm, self._R_hub, self._u)
         self._apply()
         p.stepSimulation(physicsClientId=self.client)
         self._read()
@@ -338,16 +460,27 @@ class DoubleWishboneCorner(PlantModel):
 
     def info(self) -> dict[str, object]:
         d = super().info()
+        bs = self.bump_stop
         d.update({"model": self.name, "corner_names": ["FL"], "wheel_x": [0.0],
                   "wheel_track": [0], "unsprung_mass": [self.params.unsprung_mass],
                   "torsion_preload_nm": self.tau0,
                   "arm_points": {k: [float(x) for x in to_arm_frame(v)]
-                                 for k, v in ARM_POINTS.items()}})
+                                 for k, v in ARM_POINTS.items()},
+                  "bump_stop": None if bs is None else {
+                      "clearance_m": bs.clearance, "initial_rate_n_per_m": bs.initial_rate,
+                      "stroke_m": bs.stroke}})
         return d
 
     def close(self) -> None:
         if p.isConnected(self.client):
             p.disconnect(self.client)
+
+
+def _point_velocity(link_state, world_point: np.ndarray) -> np.ndarray:
+    """World velocity of a point fixed to a link (``link_state`` with velocity and forward
+    kinematics): v_com + omega x (r - r_com)."""
+    v, w, com = np.array(link_state[6]), np.array(link_state[7]), np.array(link_state[0])
+    return v + np.cross(w, world_point - com)
 
 
 def _local(body: int, link: int, offset_from_link_origin: np.ndarray, client: int) -> list:
@@ -358,18 +491,43 @@ def _local(body: int, link: int, offset_from_link_origin: np.ndarray, client: in
 
 
 def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
-    """Forces ON the lower arm in the arm frame [N] (and the torsion-bar moment [N m]).
+    """Loads ON the lower arm during the latest substep, in the arm frame (which turns with
+    the arm) at the start of that substep, t_k [N, N m].
 
-    Extraction (verified in tests/vehicles/test_double_wishbone.py by the arm's equilibrium):
+    Where each acts (arm-frame points: :data:`cosim.lower_arm.HARDPOINTS`):
+
+    * ``ball_joint_{x,y,z}``: force from the hub at the ball joint;
+    * ``damper_mount_{x,y,z}``: force from the damper at its seat, -F_d along the damper axis;
+    * ``bush_front_{x,y,z}``, ``bush_rear_{x,y,z}``: forces from the body at the two bush
+      centres;
+    * ``bump_stop_y``, ``bump_stop_z``: force from the jounce bumper at the pad
+      (``BUMP_STOP_PAD``): (0, 0, -F_bs) in world axes, i.e. ``bump_stop_z`` = -F_bs cos(theta)
+      <= 0 (pushes the arm down) and ``bump_stop_y`` = -F_bs sin(theta) for an arm turned by
+      theta (jounce positive); its arm-frame x component is zero (the arm turns about x and
+      the body only heaves). Both are 0 while the bumper is clear;
+    * ``torsion_bar_mx`` [N m]: the torsion-bar moment about the arm's x axis (static preload
+      included). It is a pure moment and it enters the arm at the torsion-bar socket, the
+      **front bush eye** (:data:`cosim.lower_arm.TORSION_BAR_SOCKET`); for the rigid arm's
+      balance its point does not matter, for the FE it does.
+
+    These loads and the arm's weight are in equilibrium with its inertia: sum F + m g =
+    m a_com and sum (r x F) + M_x e_x = d(H)/dt (tested, static and in bumper contact, in
+    tests/vehicles/test_double_wishbone.py and test_bump_stop.py).
+
+    Extraction:
 
     * PyBullet's joint force-torque sensor (``enableJointForceTorqueSensor``,
       ``getJointState(...)[2]``; ``getJointStateMultiDof`` for spherical joints) reports the
       wrench that the **parent exerts on the child**, in the **child link frame**, the moment
       taken about the child's **centre of mass**, with the joint motor torque included. It
-      includes the forces of the loop-closing POINT2POINT constraints.
+      includes the forces of the loop-closing POINT2POINT constraints. The child frame is
+      the one at the **start** of the substep (where the step's forces are evaluated), so
+      every load is rotated with the arm's and hub's orientation at t_k, the time the loads
+      belong to (the orientation after the step misplaces them by omega dt: 0.2 % of the
+      joint forces at 4 rad/s and 0.5 ms, enough to spoil the dynamic balance).
     * ball joint: minus the lower-ball-joint sensor wrench's force (parent arm -> child hub),
       rotated from the hub frame to the arm frame;
-    * damper mount: -F_d along the damper axis (the actuator force we apply);
+    * damper mount and bump stop: the actuator forces we applied in that substep;
     * bushes: the lower-arm pivot sensor wrench (body -> arm), moved to the arm-frame origin
       (midpoint of the bushes): F, M_O = M_com + r_com x F. With the bushes at x = +-d/2 on the
       pivot axis, the moments about y and z split the force between them:
@@ -381,15 +539,13 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     """
     c, b = model.client, model.body
     R_af = arm_frame()[1]
-    arm = p.getLinkState(b, LOWER_ARM, computeForwardKinematics=1, physicsClientId=c)
-    R_arm = np.array(p.getMatrixFromQuaternion(arm[5])).reshape(3, 3)
-    hub = p.getLinkState(b, HUB, computeForwardKinematics=1, physicsClientId=c)
-    R_hub = np.array(p.getMatrixFromQuaternion(hub[5])).reshape(3, 3)
+    R_arm, R_hub, u = model._applied_pose  # the pose at the start of the substep
     to_arm = R_af.T @ R_arm.T  # world -> arm frame
+    r_com = np.array(p.getLinkState(b, LOWER_ARM, physicsClientId=c)[2])  # in the link frame
 
     w_pivot = np.array(p.getJointState(b, LOWER_ARM, physicsClientId=c)[2])
     F_link = w_pivot[:3]
-    M_link = w_pivot[3:] + np.cross(np.array(arm[2]), F_link)  # about the link origin = O
+    M_link = w_pivot[3:] + np.cross(r_com, F_link)  # about the link origin = O
     F = R_af.T @ F_link
     M = R_af.T @ M_link
     d = float(np.linalg.norm(LOWER_BUSH_FRONT - LOWER_BUSH_REAR))
@@ -398,12 +554,15 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
 
     w_bj = np.array(p.getJointStateMultiDof(b, HUB, physicsClientId=c)[2])
     ball = to_arm @ (-(R_hub @ w_bj[:3]))
-    damper = to_arm @ (-model._F_d * model._u)
+    damper = to_arm @ (-model._F_d * u)
+    bump = to_arm @ np.array([0.0, 0.0, -model._F_bs])
 
     out: dict[str, float] = {}
     for name, f in (("ball_joint", ball), ("damper_mount", damper), ("bush_front", front),
                     ("bush_rear", rear)):
         for axis, v in zip("xyz", f, strict=True):
             out[f"{name}_{axis}"] = float(v)
+    out["bump_stop_y"] = float(bump[1])
+    out["bump_stop_z"] = float(bump[2])
     out["torsion_bar_mx"] = float(M[0])
     return out

@@ -9,31 +9,48 @@ Procedure (the thesis does not say how it excited the decay; we use a road step)
 2. Take the successive extrema x_1, x_2, ... of z_b about its final value; the log decrement
    (A2.2/A2.3) is delta = ln(x_i / x_{i+1}) between extrema one period T apart, averaged; the
    half-period ratios are used as 2 ln(|x_i| / |x_{i+1}|) when the decay is too fast for full
-   periods (as with zeta ~ 0.2).
+   periods.
 3. zeta = delta / sqrt(4 pi^2 + delta^2) (A2.5), omega_d = 2 pi / T, omega_n = omega_d /
-   sqrt(1 - zeta^2), k_s = M_b omega_n^2 (single DOF: the tyre in series is ignored, as in the
-   thesis), c_c = 2 sqrt(k_s M_b), c_s = zeta c_c. M_b and k_t are kept; m_w = hub + arms + tie
-   rod. We also print k_s corrected for the tyre in series, k_s' = k k_t / (k_t - k).
-4. Check: run the realistic corner and the equivalent lumped model over the same road (the Ch. 4
+   sqrt(1 - zeta^2).
+4. Appendix II as printed: k_s = M_b omega_n^2 and c_s = zeta 2 sqrt(k_s M_b) (a single DOF:
+   the tyre in series and the wheel mass are ignored). ``k_s_app2`` and ``c_s_app2`` below.
+   For a body on a suspension *and a tyre* this k is the ride rate k_s k_t / (k_s + k_t)
+   (Table 4.3 states 27.4 kN/m for its 31 kN/m), and c is the damper as the body mode feels it
+   through the tyre, about (k_t / (k_s + k_t))^2 = 0.78 of c_s.
+5. The 2-DOF equivalent (``k_s``, ``c_s``, what Table 4.3 tabulates and the lumped model takes):
+   the k_s and c_s for which the lumped 2-DOF with M_b, m_w and k_t has the measured body mode,
+   eigenvalue s = -zeta omega_n + i omega_d. Its characteristic equation
+   det(s^2 M + s C + K) = 0 is m_b m_w s^4 + (m_b + m_w) s^2 q + m_b k_t s^2 + k_t q = 0
+   with q = c_s s + k_s, linear in q:
+   q = -m_b s^2 (m_w s^2 + k_t) / ((m_b + m_w) s^2 + k_t); c_s = Im(q) / omega_d,
+   k_s = Re(q) + c_s zeta omega_n (:func:`two_dof_equivalent`). M_b and k_t are kept;
+   m_w = hub + arms + tie rod.
+6. Check: run the realistic corner and the equivalent lumped model over the same road (the Ch. 4
    bump + pothole at 34 km/h, defined below) and compare the body displacements.
 
-Run: ``python -m nodes.plant.equivalent_lumped [--step 0.01] [--dt 0.001]``.
+Run: ``suscosim equivalent-lumped [--step 0.01] [--dt 0.001] [--json]``
+(or ``python -m nodes.plant.equivalent_lumped``).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 from collections.abc import Callable
 
 import numpy as np
 
-from .double_wishbone import DoubleWishboneCorner
+from cosim import lower_arm as la
+
+from .double_wishbone import DAMPER_LOWER, DAMPER_UPPER, DoubleWishboneCorner
 from .model import PlantModel
 from .quarter_car_lumped import LumpedQuarterCar, LumpedQuarterCarParams
 
 K_T = 239000.0
 C_DAMPER = 3800.0
-TABLE_4_3 = {"m_b": 535.0, "m_w": 47.75, "k_s": 31000.0, "c_s": 1500.0, "k_t": 239000.0}
+TABLE_4_3 = {"m_b": 535.0, "m_w": 47.75, "k_s": 31000.0, "c_s": 1500.0, "k_t": 239000.0,
+             "ride_rate": 27400.0}
+"""Table 4.3 (SI); ``ride_rate`` is the text's k_s k_t / (k_s + k_t) = 27.4 kN/m."""
 
 # Ch. 4 transient road (geometry not in the thesis; ours, see scenarios/ch4_bump_pothole.toml):
 # a 1-cos bump 50 mm x 1.0 m at x = 3 m, then a 1-cos pothole 40 mm x 0.6 m at x = 10 m,
@@ -69,7 +86,9 @@ def simulate(model: PlantModel, t_end: float, dt: float, z_g: Callable[[float], 
 
 def log_decrement(t: np.ndarray, x: np.ndarray) -> dict[str, float]:
     """Appendix II on a decaying response x(t) (about zero): delta, zeta, T, omega_n."""
-    i = np.where((np.abs(x[1:-1]) >= np.abs(x[:-2])) & (np.abs(x[1:-1]) > np.abs(x[2:]))
+    # turning points of |x|, rising strictly into them: a constant stretch before the input
+    # (the body still at rest when the road steps) is not an extremum of the decay
+    i = np.where((np.abs(x[1:-1]) > np.abs(x[:-2])) & (np.abs(x[1:-1]) >= np.abs(x[2:]))
                  & (np.sign(x[1:-1]) != 0))[0] + 1
     i = i[np.abs(x[i]) > 1e-3 * np.abs(x[i]).max()]
     # keep one extremum per half cycle (alternating signs)
@@ -94,25 +113,56 @@ def log_decrement(t: np.ndarray, x: np.ndarray) -> dict[str, float]:
             "n_extrema": float(len(ext))}
 
 
+def two_dof_equivalent(m_b: float, m_w: float, k_t: float, omega_n: float, zeta: float
+                       ) -> tuple[float, float]:
+    """(k_s [N/m], c_s [N s/m]) of the lumped 2-DOF quarter car (body m_b, wheel m_w [kg],
+    tyre k_t [N/m]) whose body mode has the natural frequency omega_n [rad/s] and damping ratio
+    zeta [-], i.e. the eigenvalue s = -zeta omega_n + i omega_n sqrt(1 - zeta^2) (step 5 of
+    the module docstring; exact for a linear 2-DOF)."""
+    w_d = omega_n * np.sqrt(1.0 - zeta ** 2)
+    s = complex(-zeta * omega_n, w_d)
+    q = -m_b * s ** 2 * (m_w * s ** 2 + k_t) / ((m_b + m_w) * s ** 2 + k_t)
+    c_s = q.imag / w_d
+    return float(q.real + c_s * zeta * omega_n), float(c_s)
+
+
+def geometric_estimates(dw: DoubleWishboneCorner) -> dict[str, float]:
+    """What the corner's geometry predicts at the ball joint: k = K_theta / L^2 [N/m] with
+    L = the ball-joint lever, c = C (MR cos(lean))^2 [N s/m] with MR = damper seat lever / L and
+    the damper's lean from the vertical in the plane normal to the pivot axis."""
+    L = la.lever_ball_joint()
+    axis = DAMPER_UPPER - DAMPER_LOWER
+    lean = float(np.arctan2(abs(axis[1]), axis[2]))
+    return {"k_s_lever": dw.params.k_theta / L ** 2,
+            "c_s_lever": C_DAMPER * (la.motion_ratio_damper() * np.cos(lean)) ** 2,
+            "lever_m": L, "damper_lean_deg": float(np.degrees(lean))}
+
+
 def identify(step: float = 0.01, dt: float = 1e-3, t_end: float = 4.0) -> dict[str, float]:
-    """Equivalent lumped parameters of the realistic corner (steps 1-3 of the module doc)."""
+    """Equivalent lumped parameters of the realistic corner (steps 1-5 of the module doc):
+    ``k_s``, ``c_s`` (2-DOF equivalent), ``k_s_app2``, ``c_s_app2`` (Appendix II as printed),
+    ``m_b``, ``m_w`` [kg], ``k_t``, the log decrement's ``delta``, ``zeta``, ``T`` [s],
+    ``omega_n`` [rad/s], ``f_n`` [Hz], and the geometric estimates."""
     dw = DoubleWishboneCorner()
     try:
         r = simulate(dw, t_end, dt, lambda t: step if t >= 0.05 else 0.0,
                      lambda st: C_DAMPER * float(st["v_damper"][0]))
         m_b, m_w = dw.params.body_mass, dw.params.unsprung_mass
+        geo = geometric_estimates(dw)
     finally:
         dw.close()
     x = r["z_b"] - step  # decay about the final position (the body ends on the step)
     ld = log_decrement(r["t"], x)
-    k_s = m_b * ld["omega_n"] ** 2
-    c_s = ld["zeta"] * 2 * np.sqrt(k_s * m_b)
+    k_app2 = m_b * ld["omega_n"] ** 2
+    c_app2 = ld["zeta"] * 2 * np.sqrt(k_app2 * m_b)
+    k_s, c_s = two_dof_equivalent(m_b, m_w, K_T, ld["omega_n"], ld["zeta"])
     return {"m_b": m_b, "m_w": m_w, "k_s": k_s, "c_s": c_s, "k_t": K_T,
-            "k_s_series": k_s * K_T / (K_T - k_s), **ld}
+            "k_s_app2": k_app2, "c_s_app2": c_app2,
+            "f_n": ld["omega_n"] / (2 * np.pi), **ld, **geo}
 
 
 def compare_on_road(eq: dict[str, float], dt: float = 1e-3,
-                    k_s_key: str = "k_s_series") -> dict[str, float]:
+                    k_s_key: str = "k_s") -> dict[str, float]:
     """Body and wheel displacement of the realistic corner vs its lumped equivalent on the
     Ch. 4 bump + pothole road (15 m at 34 km/h, run 3 s so the decay is seen)."""
     t_end = 3.0
@@ -147,22 +197,42 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--step", type=float, default=0.01, help="road step height [m]")
     ap.add_argument("--dt", type=float, default=1e-3, help="time step [s]")
     ap.add_argument("--no-compare", action="store_true", help="skip the road comparison")
+    ap.add_argument("--json", action="store_true",
+                    help="print one JSON object (SI units): k_s, c_s, m_s, m_u, ...")
     args = ap.parse_args(argv)
     eq = identify(args.step, args.dt)
+    cmp = None if args.no_compare else compare_on_road(eq, args.dt)
+    if args.json:
+        out = {"k_s": eq["k_s"], "c_s": eq["c_s"], "m_s": eq["m_b"], "m_u": eq["m_w"],
+               "k_t": eq["k_t"], "zeta": eq["zeta"], "f_n": eq["f_n"], "delta": eq["delta"],
+               "T": eq["T"], "k_s_app2": eq["k_s_app2"], "c_s_app2": eq["c_s_app2"],
+               "k_s_lever": eq["k_s_lever"], "c_s_lever": eq["c_s_lever"],
+               "k_s_error_pct": 100 * (eq["k_s"] / TABLE_4_3["k_s"] - 1),
+               "c_s_error_pct": 100 * (eq["c_s"] / TABLE_4_3["c_s"] - 1),
+               "table_4_3": {"k_s": TABLE_4_3["k_s"], "c_s": TABLE_4_3["c_s"],
+                             "m_s": TABLE_4_3["m_b"], "m_u": TABLE_4_3["m_w"],
+                             "k_t": TABLE_4_3["k_t"], "ride_rate": TABLE_4_3["ride_rate"]},
+               "step_m": args.step, "dt_s": args.dt}
+        if cmp is not None:
+            out["road_comparison"] = cmp
+        print(json.dumps(out, indent=1))
+        return 0
     print(f"log decrement: delta = {eq['delta']:.3f}, zeta = {eq['zeta']:.3f}, "
-          f"T = {eq['T']:.3f} s, f_n = {eq['omega_n'] / 2 / np.pi:.3f} Hz "
-          f"({int(eq['n_extrema'])} extrema)")
-    print(f"{'parameter':<32}{'identified':>12}{'Table 4.3':>12}")
+          f"T = {eq['T']:.3f} s, f_n = {eq['f_n']:.3f} Hz ({int(eq['n_extrema'])} extrema)")
+    print(f"{'parameter':<40}{'identified':>12}{'Table 4.3':>12}")
     rows = [("m_b [kg]", eq["m_b"], TABLE_4_3["m_b"]), ("m_w [kg]", eq["m_w"], TABLE_4_3["m_w"]),
-            ("k_s = M_b w_n^2 [N/m] (App. II)", eq["k_s"], TABLE_4_3["k_s"]),
-            ("k_s, tyre in series [N/m]", eq["k_s_series"], TABLE_4_3["k_s"]),
-            ("c_s [N s/m]", eq["c_s"], TABLE_4_3["c_s"]), ("k_t [N/m]", eq["k_t"],
-                                                            TABLE_4_3["k_t"])]
+            ("k_s, 2-DOF equivalent [N/m]", eq["k_s"], TABLE_4_3["k_s"]),
+            ("c_s, 2-DOF equivalent [N s/m]", eq["c_s"], TABLE_4_3["c_s"]),
+            ("M_b w_n^2 (App. II) [N/m] ~ ride rate", eq["k_s_app2"], TABLE_4_3["ride_rate"]),
+            ("zeta 2 sqrt(k M_b) (App. II) [N s/m]", eq["c_s_app2"], float("nan")),
+            ("k_t [N/m]", eq["k_t"], TABLE_4_3["k_t"])]
     for name, a, b in rows:
-        print(f"{name:<32}{a:>12.1f}{b:>12.1f}")
-    if not args.no_compare:
-        cmp = compare_on_road(eq, args.dt)
-        print("realistic vs equivalent lumped (k_s with tyre in series), Ch. 4 bump + pothole "
+        print(f"{name:<40}{a:>12.1f}{b:>12.1f}")
+    print(f"geometry at the ball joint: K_theta / L^2 = {eq['k_s_lever']:.0f} N/m "
+          f"(L = {eq['lever_m']:.3f} m), C (MR cos lean)^2 = {eq['c_s_lever']:.0f} N s/m "
+          f"(lean {eq['damper_lean_deg']:.1f} deg)")
+    if cmp is not None:
+        print("realistic vs equivalent lumped (2-DOF k_s, c_s), Ch. 4 bump + pothole "
               "at 34 km/h:")
         for key in ("z_b", "z_w"):
             print(f"  {key}: peak {cmp[f'{key}_peak_realistic'] * 1e3:.2f} mm realistic, "

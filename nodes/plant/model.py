@@ -34,7 +34,8 @@ class PlantModel(ABC):
     The node calls, every communication step k:
     ``state()`` -> publish; receive ``F_t, F_d``; ``substep(dt, F_t, F_d)`` ``n`` times (the
     node may change the forces between substeps: extrapolation or Jacobian coupling);
-    ``loads()`` after the first substep gives the joint loads at t_k.
+    ``spring_force()`` and ``extra_response()`` before the first substep and ``loads()`` after
+    it give the spring force, the model's extra response fields and the joint loads at t_k.
     """
 
     n_corners: int = 1
@@ -55,6 +56,12 @@ class PlantModel(ABC):
     @abstractmethod
     def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
         """Apply the tyre and damper forces (held during ``dt``) and integrate ``dt`` seconds."""
+
+    def extra_response(self) -> dict[str, np.ndarray]:
+        """Model-specific fields of ``plant/response`` at t_k, from the current state (what the
+        next substep applies), per corner; e.g. the double-wishbone corner's bump-stop force
+        ``F_bs`` [N]. Empty by default."""
+        return {}
 
     def loads(self) -> dict[str, dict[str, float]]:
         """Component loads after the latest substep, by channel, e.g. ``{"arm": {...}}``."""

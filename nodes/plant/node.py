@@ -2,7 +2,8 @@
 
 Every step k: publish ``state`` at t_k; wait for ``tyre_road/force`` and ``controller/force``
 of step k (the step barrier); take the first substep and publish ``response`` (accelerations
-at t_k from PyBullet's forward dynamics, the applied forces) and, for realistic models, the
+at t_k from PyBullet's forward dynamics, the applied forces, and the model's extra fields
+such as the bump-stop force ``F_bs``) and, for realistic models, the
 component loads (``arm``); integrate the remaining substeps to t_{k+1}.
 
 In the ``parallel`` exchange the forces of step k were computed from the state of step k-1
@@ -59,12 +60,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             F_t, F_d = substep_forces(mode, now, before, 0.0, h,
                                       st["z_w"], st["v_w"] - st["v_b"])
             F_s = model.spring_force()
+            extra = model.extra_response()
             model.substep(dt, F_t, F_d)
             after = model.state()
             later.append((ch.RESPONSE, k, t, {
                 "a_b": (after["v_b"] - st["v_b"]) / dt,
                 "a_w": (after["v_w"] - st["v_w"]) / dt,
-                "F_t": F_t, "F_d": F_d, "F_s": F_s,
+                "F_t": F_t, "F_d": F_d, "F_s": F_s, **extra,
             }))
             later.extend((name, k, t, values) for name, values in model.loads().items())
             part.progress(k, t)

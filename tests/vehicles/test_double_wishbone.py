@@ -1,12 +1,13 @@
-"""Double-wishbone corner: equilibrium at t = 0, arm-load extraction, closed loop."""
+"""Double-wishbone corner: equilibrium at t = 0, arm-load extraction, closed loop. (The arm's
+balance in bumper contact, with its inertia: test_bump_stop.py.)"""
 
 import numpy as np
 import pytest
 
 from nodes.plant.double_wishbone import (
     ARM_POINTS,
+    LOWER_ARM_COM,
     LOWER_BUSH_FRONT,
-    LOWER_BUSH_REAR,
     DoubleWishboneCorner,
     arm_frame,
     to_arm_frame,
@@ -36,24 +37,38 @@ def test_stays_in_static_equilibrium(corner):
         assert worst[key] < 2e-5, key
 
 
+def _point_forces(L: dict[str, float]) -> dict[str, np.ndarray]:
+    """The arm's point loads (arm frame) by load point; the bump stop has no x component."""
+    out = {}
+    for k in ARM_POINTS:
+        out[k] = np.array([L.get(f"{k}_{a}", 0.0) for a in "xyz"])
+    assert "bump_stop_x" not in L and {"bump_stop_y", "bump_stop_z"} <= set(L)
+    return out
+
+
 def test_static_arm_loads_balance_the_arm_weight(corner):
     corner.substep(1e-3, corner.static_tyre_load(), np.zeros(1))
     L = corner.loads()["arm"]
     pts = {k: to_arm_frame(v) for k, v in ARM_POINTS.items()}
-    F = {k: np.array([L[f"{k}_{a}"] for a in "xyz"]) for k in pts}
+    F = _point_forces(L)
     _, R = arm_frame()
     g_arm = R.T @ np.array([0.0, 0.0, -5.0 * 9.81])  # arm weight in the arm frame
     total = sum(F.values())
     assert np.allclose(total + g_arm, 0.0, atol=0.5)  # |F| ~ 5 kN: 1e-4 relative
     # moments about the arm origin close with the torsion-bar moment about x
-    com = to_arm_frame((LOWER_BUSH_FRONT + LOWER_BUSH_REAR + ARM_POINTS["ball_joint"]) / 3)
+    com = to_arm_frame(LOWER_ARM_COM)
     M = sum(np.cross(pts[k], F[k]) for k in pts) + np.cross(com, g_arm)
     M[0] += L["torsion_bar_mx"]
     assert np.allclose(M, 0.0, atol=0.5)
-    # the torsion bar carries the static preload, the ball joint the wheel load
+    # the torsion bar carries the static preload, the ball joint the wheel load; the jounce
+    # bumper is clear at ride height
     assert L["torsion_bar_mx"] == pytest.approx(corner.tau0, rel=1e-3)
     assert L["ball_joint_z"] > 4000.0
     assert L["bush_front_z"] + L["bush_rear_z"] < -4000.0
+    assert L["bump_stop_y"] == 0.0 and L["bump_stop_z"] == 0.0
+    # torsion-bar preload: the body's weight times the wheel-centre lever (0.2984 m from the
+    # front-view kinematics, docstring of double_wishbone); the linkage's weight adds ~1.4 %
+    assert corner.tau0 == pytest.approx(-535 * 9.81 * 0.2984, rel=0.03)
 
 
 def test_arm_frame_definition():
@@ -61,7 +76,7 @@ def test_arm_frame_definition():
     assert np.allclose(R.T @ R, np.eye(3))
     assert np.allclose(to_arm_frame(LOWER_BUSH_FRONT)[1:], 0.0)  # bushes on the x axis
     bj = to_arm_frame(ARM_POINTS["ball_joint"])
-    assert bj[1] > 0.3 and abs(bj[2]) < 1e-12  # y outward to the ball joint, in plane
+    assert bj[1] == pytest.approx(0.294) and abs(bj[2]) < 1e-12  # y out to the ball joint
     assert R[2, 2] > 0.99  # left corner: arm z is (nearly) up
 
 
