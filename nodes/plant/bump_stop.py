@@ -35,24 +35,31 @@ integrates with a fixed step; a pole at s_b would change sign there).
   the damper of C-segment cars and small MPVs); MCU compresses to about a third of its free
   length before it is solid, so the block compression is s_b = 40 mm;
 * *initial rate* k_0 = 80 kN/m = 80 N/mm at the pad. Seen at the wheel centre it is
-  k_0 (0.215 / 0.299)^2 = 41 kN/m, the order of the 31 kN/m suspension rate (MCU bumpers are
-  sized so that first contact is not felt as a knock). The characteristic then gives
-  F(15 mm) = 1.9 kN, F(20 mm) = 3.2 kN, F(30 mm) = 9.6 kN, F(34 mm) = 18.1 kN and
-  F(36 mm) = 28.8 kN: a few kN at 15-20 mm, above 15 kN near full compression, the shape of
-  the published force-deflection curves of MCU jounce bumpers (a long soft start, then a
-  steep wall in the last 10-15 % of the stroke);
-* *clearance* g = 32 mm at the pad. With the pad at 0.215 m and the ball joint at 0.294 m
-  from the pivot axis, first contact is at an arm rotation asin(0.032 / 0.215) = 8.6 deg,
-  i.e. about 45 mm of wheel jounce relative to the body from static ride height (the
-  corner's kinematics put the wheel centre 1.8 % further than the ball joint; the test
-  ``tests/vehicles/test_bump_stop.py`` measures it on the PyBullet corner against an
-  independent front-view four-bar solution). Passenger-car fronts have 40-60 mm of free
-  jounce before the bumper: enough that a smooth road does not reach it, little enough that
-  a cobbled durability track (the thesis's LTC pavé) does;
-* at the block (delta = 36 mm, r s_b) the pad has risen 68 mm, about 95 mm of wheel jounce
-  (total travel of a small MPV front: 80-100 mm), and the bumper carries 29 kN, about
-  21 kN at the wheel (3.7 times the static corner load of 5.7 kN; jounce bumpers are sized
-  for 3-4 g at the wheel).
+  k_0 (0.715)^2 = 41 kN/m (0.715 = the pad's vertical speed over the wheel centre's at first
+  contact), the order of the 31 kN/m suspension rate (MCU bumpers are sized so that first
+  contact is not felt as a knock). The characteristic then gives F(15 mm) = 1.9 kN,
+  F(20 mm) = 3.2 kN, F(30 mm) = 9.6 kN, F(34 mm) = 18.1 kN and F(36 mm) = 28.8 kN: a few kN
+  at 15-20 mm, above 15 kN near full compression, the shape of the published
+  force-deflection curves of MCU jounce bumpers (a long soft start, then a steep wall in the
+  last 10-15 % of the stroke);
+* *clearance* g = 42 mm at the pad. With the pad 0.215 m from the pivot axis, first contact
+  is at an arm rotation asin(0.042 / 0.215) = 11.3 deg, i.e. **58.5 mm of wheel jounce
+  relative to the body** from static ride height (front-view four-bar of the corner; the
+  PyBullet corner touches within 0.1 mm of it, ``tests/vehicles/test_bump_stop.py``). Why
+  that much: Table 4.2 is the *unladen* MPV, and a bumper is placed for the laden car; five
+  occupants and luggage put about 100 kg more on a front corner, 100 g / 31 kN/m = 32 mm of
+  sag, so 58 mm unladen is about 27 mm laden, the 25-40 mm of free jounce of passenger-car
+  fronts. It also reconciles the thesis's two statements on its bump + pothole: the passive
+  corner of Ch. 4's validation "did not engage" the bump stop ("low amplitude"), the
+  semi-active runs of Ch. 5 hit it on the bump. On our version of that road (1-cos bump
+  50 mm x 1.0 m at 34 km/h) the passive corner (3800 N s/m) reaches 53.7 mm of jounce, clear
+  of the bumper by 5 mm; with 2000 or 1000 N s/m (a soft semi-active state) it reaches 60
+  and 65 mm and touches (0.1 and 0.4 kN). A cobbled durability track with Table 4.5's hub levels reaches it
+  on its larger stones;
+* at the block (delta = 36 mm, r s_b) the pad has risen 78 mm: 109 mm of wheel jounce
+  unladen (about 77 mm laden; total jounce of a small MPV front: 80-110 mm), and the bumper
+  carries 28.8 kN, 20.4 kN at the wheel (3.6 times the static corner load of 5.7 kN;
+  jounce bumpers are sized for 3-4 g at the wheel).
 
 Not modelled: the bumper's hysteresis (MCU dissipates 10-20 % of the work in a cycle), its
 mass, and friction between its tip and the pad. The rebound stop (inside the damper) is not
@@ -70,7 +77,7 @@ class BumpStopParams:
 
     clearance: float = 0.042
     """g: gap between the bumper tip and the arm's pad at static ride height, along the body's
-    vertical [m]."""
+    vertical [m] (58.5 mm of wheel jounce on the default corner)."""
     initial_rate: float = 80.0e3
     """k_0: rate at first contact [N/m]."""
     stroke: float = 0.040

@@ -5,13 +5,16 @@
 * ``quarter_car_lumped`` (Ch. 3 Table 3.1 defaults; Ch. 4 Table 4.3 via the scenario):
   ``sprung_mass``, ``unsprung_mass``, ``spring_stiffness``.
 * ``quarter_car_double_wishbone`` (Table 4.2): ``body_mass``, ``hub_mass``,
-  ``lower_arm_mass``, ``upper_arm_mass``, ``tie_rod_mass``, ``torsion_stiffness_nm_per_deg``.
+  ``lower_arm_mass``, ``upper_arm_mass``, ``tie_rod_mass``, ``torsion_stiffness_nm_per_deg``;
+  its jounce bumper (:mod:`.bump_stop`): ``bump_stop`` (true/false, default true),
+  ``bump_stop_clearance`` [m], ``bump_stop_initial_rate`` [N/m], ``bump_stop_stroke`` [m].
 * ``full_vehicle_7dof`` (Table 4.4): ``sprung_mass_front``, ``sprung_mass_rear``,
   ``unsprung_mass``, ``spring_stiffness``, ``pitch_inertia``, ``roll_inertia``, ``wheelbase``,
   ``track``, ``mass_basis`` ("corner" | "axle").
 
-Missing parameters take the defaults of the model's params dataclass. Bad keys or values raise
-:class:`cosim.errors.ScenarioError`. (Damper and tyre live in the controller and tyre nodes.)
+Missing parameters take the defaults of the model's params dataclass. Numbers must be > 0,
+switches true or false. Bad keys or values raise :class:`cosim.errors.ScenarioError`.
+(Damper and tyre live in the controller and tyre nodes.)
 """
 
 from __future__ import annotations
@@ -39,6 +42,9 @@ def _params(cls, cfg: Mapping, prefix: str, choices: dict[str, tuple[str, ...]] 
             if value not in choices[key]:
                 raise ScenarioError(f"{prefix}.{key}", value, "one of " + ", ".join(
                     repr(c) for c in choices[key]))
+        elif isinstance(fields[key].default, bool):
+            if not isinstance(value, bool):
+                raise ScenarioError(f"{prefix}.{key}", value, "true or false")
         elif isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
             raise ScenarioError(f"{prefix}.{key}", value, "a number > 0")
         else:
