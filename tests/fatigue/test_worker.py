@@ -78,9 +78,10 @@ def test_life_scales_and_critical_node_at_notch():
     assert r.life_repeats == pytest.approx(1 / r.damage.max())
     assert r.life_km == pytest.approx(r.life_repeats * 0.030)
     assert r.life_repeats_basis == pytest.approx(r.life_km * 10)
-    # doubling every load raises damage by more than 2^(-1/b) ... at least strictly
+    # doubling every load raises damage by more than 2^k, k = -1/b: 3.32 on the default
+    # component curve (issue #12; 11.5 on the old material line, when this said 2**8)
     r2 = analyse(t, {k: 2 * v for k, v in loads.items()}, cfg, 30.0)
-    assert r2.max_damage > 2**8 * r.max_damage
+    assert r2.max_damage > 2**3.3 * r.max_damage
     # the critical node is at the lightening hole's outboard corner (the notch)
     x, y, _ = r.critical_xyz
     corner = geo_notch()
