@@ -54,8 +54,8 @@ integrates with a fixed step; a pole at s_b would change sign there).
   semi-active runs of Ch. 5 hit it on the bump. On our version of that road (1-cos bump
   50 mm x 1.0 m at 34 km/h) the passive corner (3800 N s/m) reaches 53.7 mm of jounce, clear
   of the bumper by 5 mm; with 2000 or 1000 N s/m (a soft semi-active state) it reaches 60
-  and 65 mm and touches (0.1 and 0.4 kN). A cobbled durability track with Table 4.5's hub levels reaches it
-  on its larger stones;
+  and 65 mm and touches (0.1 and 0.4 kN). A cobbled durability track with Table 4.5's hub
+  levels reaches it on its larger stones;
 * at the block (delta = 36 mm, r s_b) the pad has risen 78 mm: 109 mm of wheel jounce
   unladen (about 77 mm laden; total jounce of a small MPV front: 80-110 mm), and the bumper
   carries 28.8 kN, 20.4 kN at the wheel (3.6 times the static corner load of 5.7 kN;
