@@ -15,9 +15,18 @@ plant/response        a_b, a_w     accelerations at t_k [m/s^2], from PyBullet's
                                    dynamics under the forces of step k
                       F_t, F_d     the tyre and damper forces the plant applied at t_k [N]
                       F_s          suspension spring force on the body, dynamic part [N]
-plant/arm             <pt>_<ax>    force ON the lower arm at point pt (ball_joint,
-                                   damper_mount, bush_front, bush_rear), axis x/y/z of the
-                                   arm frame [N] (realistic models only)
+                      F_bs         jounce-bumper (bump-stop) force, compression-positive,
+                                   >= 0 [N]: up on the body, down on the lower arm's pad
+                                   (double-wishbone corner only; nodes/plant/bump_stop.py)
+plant/arm             <pt>_<ax>    load ON the lower arm at point pt (ball_joint,
+                                   damper_mount, bush_front, bush_rear: x/y/z), axis of the
+                                   arm frame at t_k (cosim/lower_arm.py) [N] (realistic
+                                   models only)
+                      bump_stop_y, the bumper's force on the arm at its pad, arm-frame y/z
+                      bump_stop_z  [N]: -F_bs sin(theta), -F_bs cos(theta) (z <= 0; no x)
+                      torsion_bar_ the torsion-bar moment on the arm about its x axis, static
+                      mx           preload included [N m]; it enters at the front bush eye
+                                   (the torsion-bar socket)
 tyre_road/force       F_t          tyre force, compressive-positive, >= 0, absolute [N]
                       k_t          dF_t/d(z_g - z_w), 0 when lifted off [N/m] (for coupling)
                       z_g          road height under the wheel [m]

@@ -224,10 +224,10 @@ def main(argv: list[str] | None = None) -> int:
             ("k_s, 2-DOF equivalent [N/m]", eq["k_s"], TABLE_4_3["k_s"]),
             ("c_s, 2-DOF equivalent [N s/m]", eq["c_s"], TABLE_4_3["c_s"]),
             ("M_b w_n^2 (App. II) [N/m] ~ ride rate", eq["k_s_app2"], TABLE_4_3["ride_rate"]),
-            ("zeta 2 sqrt(k M_b) (App. II) [N s/m]", eq["c_s_app2"], float("nan")),
+            ("zeta 2 sqrt(k M_b) (App. II) [N s/m]", eq["c_s_app2"], None),
             ("k_t [N/m]", eq["k_t"], TABLE_4_3["k_t"])]
     for name, a, b in rows:
-        print(f"{name:<40}{a:>12.1f}{b:>12.1f}")
+        print(f"{name:<40}{a:>12.1f}" + (f"{b:>12.1f}" if b is not None else f"{'-':>12}"))
     print(f"geometry at the ball joint: K_theta / L^2 = {eq['k_s_lever']:.0f} N/m "
           f"(L = {eq['lever_m']:.3f} m), C (MR cos lean)^2 = {eq['c_s_lever']:.0f} N s/m "
           f"(lean {eq['damper_lean_deg']:.1f} deg)")
