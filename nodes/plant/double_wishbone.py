@@ -29,36 +29,42 @@ y left, z up) with origin at the static wheel centre of this **front-left** corn
   The lever 0.294 m is what makes the torsion bar a 31 kN/m wheel rate (K_theta / L^2);
   ``tests/vehicles/test_arm_geometry_consistent.py`` checks that the PyBullet corner puts the
   arm's points where :mod:`cosim.lower_arm` says.
-* *upper arm*: bushes (+-0.12, -0.30, 0.18), ball joint (-0.005, -0.10, 0.20); 0.20 m long
-  in front view, 0.68 of the lower arm (a short-long arm: the short upper arm gives camber
+* *upper arm*: bushes (+-0.14, -0.34, 0.18), ball joint (-0.005, -0.10, 0.20); 0.24 m long
+  in front view, 0.82 of the lower arm (a short-long arm: the shorter upper arm gives camber
   gain). Its inner end is 20 mm lower than its outer end, so the two arms converge inboard:
   in front view the upright's instant centre is where the lines of the arms meet,
-  y = -3.40 m, z = -0.13 m (front-view swing arm 3.4 m), which gives
-  - camber gain 1 / 3.4 m = 1.7 deg per 100 mm of jounce (wheel top inward), in the
-    1-2.5 deg/100 mm of passenger-car double wishbones;
-  - a roll centre 35 mm above the ground (the line from the contact patch, 0.30 m below the
+  y = -4.06 m, z = -0.13 m (front-view swing arm 4.06 m), which gives
+  - camber gain 1 / 4.06 m = 1.4 deg per 100 mm of jounce at ride height (wheel top inward;
+    the PyBullet corner: 0.31 deg at 20 mm, 1.06 deg at 59 mm), in the 1-2.5 deg/100 mm of
+    passenger-car double wishbones;
+  - a roll centre 30 mm above the ground (the line from the contact patch, 0.30 m below the
     wheel centre for a 15-16 in MPV wheel, to the instant centre, at the centreline);
-  - a wheel centre that rises 1.018 times as fast as the ball joint (it is 3.40 m from the
-    instant centre, the ball joint 3.34 m), so the effective lever is 0.2993 m and the wheel
-    rate K_theta / 0.2993^2 = 29.9 kN/m (Table 4.3: 31 kN/m, -3.5 %). Parallel arms would give
-    0.294 m and 31.0 kN/m, but no camber gain.
-  The bushes are 0.24 m apart (an A-arm spanning the damper, which passes between its legs).
+  - a wheel centre that rises 1.015 times as fast as the ball joint (it is 4.06 m from the
+    instant centre, the ball joint 4.00 m), so the wheel-centre lever is 0.2984 m (the
+    PyBullet corner: 0.2984 m) and the wheel rate K_theta / 0.2984^2 = 30.1 kN/m (Table 4.3:
+    31 kN/m, -3 %; identified: 30.0 kN/m). Parallel arms would give 0.294 m and 31.0 kN/m,
+    but no camber gain. A shorter upper arm (0.20 m, swing arm 3.4 m) was tried first: 29.9
+    kN/m kinematically but 29.1 kN/m identified (its lever changes faster with the arm angle,
+    and the 1.6 kN m preload acting through that change softens the rate).
+  The bushes are 0.28 m apart (an A-arm whose legs straddle the damper, 50 mm in diameter,
+  which passes between them at y = -0.19 m).
 * *steering axis*: lower ball joint (0.025, -0.06, -0.13) to upper (-0.005, -0.10, 0.20):
   kingpin inclination atan(0.04 / 0.33) = 6.9 deg, caster atan(0.03 / 0.33) = 5.2 deg, the
   axis meeting the ground 39 mm inboard of the contact patch centre (positive scrub radius).
 * *damper*: lower mount = the arm's seat, (0.010, -0.169, -0.13); top mount (0.010, -0.206,
   0.40): 0.53 m between mounts, leaning 4.0 deg inboard at the top (as front dampers lean to
   clear the tyre). Its motion ratio to the ball joint is (0.185 / 0.294) cos(4.0 deg) = 0.628,
-  and the physical 3800 N s/m acts at the wheel as 3800 (0.185 cos 4 deg / 0.2993)^2
-  = 1445 N s/m (Table 4.3: 1500 N s/m).
+  and the physical 3800 N s/m acts at the wheel centre as 3800 (0.185 cos 4 deg / 0.2984)^2
+  = 1454 N s/m (Table 4.3: 1500 N s/m).
 * *tie rod*: outer ball joint (-0.14, -0.072, -0.03) on the steering axis, 0.14 m behind the
-  axle (rear steer); inner (rack) end (-0.14, -0.338, -0.038), 0.266 m long. The inner end is
+  axle (rear steer); inner (rack) end (-0.14, -0.350, -0.037), 0.278 m long. The inner end is
   where the line from the upright's instant centre through the outer end meets the line
   through the two arms' inner pivots: the tie rod then points at the instant centre, so its
   length does not change to first order as the upright moves (no bump steer to first order),
-  and the arc it swings matches the upright's (the second-order condition).
+  and the arc it swings matches the upright's (the second-order condition). The PyBullet
+  corner steers 0.002 deg at 20 mm and 0.024 deg at 59 mm of jounce.
 * *bump stop*: the jounce bumper on the body above the arm's pad; clearance, rate and the
-  wheel travel to first contact (about 45 mm) in :mod:`.bump_stop`.
+  wheel travel to first contact (58.5 mm) in :mod:`.bump_stop`.
 * *half track* 0.7055 m (t = 1.411 m, Ch. 4 extraction); the body's centre of mass is put on
   the vehicle centreline (it only moves vertically, so its position has no effect).
 
@@ -72,7 +78,7 @@ small triangle.
 **Damper force convention**: ``F_d`` is the damper's axial force, compression-positive as a
 force on the body (pushes the top mount up along the axis); the arm gets -F_d along the axis.
 Its vertical component on the body is F_d cos(lean) = 0.998 F_d (lean 4.0 deg). Because
-the damper moves at about MR = 0.62 of the wheel, the state also gives ``z_damper``
+the damper moves at about MR = 0.62 of the wheel centre, the state also gives ``z_damper``
 (compression from static) and ``v_damper`` (compression velocity, positive when the damper
 shortens): a controller that computes F_d = c * v_damper with the physical c = 3800 N s/m
 reproduces the thesis's damper; one that uses v_w - v_b should use an equivalent c_s instead
