@@ -518,7 +518,7 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
 
     These loads and the arm's weight are in equilibrium with its inertia: sum F + m g =
     m a_com and sum (r x F) + M_x e_x = d(H)/dt (tested, static and in bumper contact, in
-    tests/vehicles/test_double_wishbone.py and test_bump_stop.py).
+    tests/vehicles/test_double_wishbone.py).
 
     Extraction:
 

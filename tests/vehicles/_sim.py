@@ -6,6 +6,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import pybullet as p
+
+from cosim import lower_arm as la
+from nodes.plant import double_wishbone as dw
 
 
 def run_closed_loop(model, t_end: float, dt: float, k_t: float, c_s: float,
@@ -39,3 +43,59 @@ def peak_frequency(x: np.ndarray, dt: float, f_lo: float, f_hi: float) -> float:
     i = band[np.argmax(X[band])]
     a, b, c = np.log(X[i - 1:i + 2])
     return float(f[i] + 0.5 * (a - c) / (a - 2 * b + c) * (f[1] - f[0]))
+
+
+def _arm_link(m):
+    ls = p.getLinkState(m.body, dw.LOWER_ARM, computeLinkVelocity=1, computeForwardKinematics=1,
+                        physicsClientId=m.client)
+    R = np.array(p.getMatrixFromQuaternion(ls[5])).reshape(3, 3)
+    return np.array(ls[0]), np.array(ls[4]), R, np.array(ls[6]), np.array(ls[7])
+
+
+def big_bump_run(bump_stop: bool, dt: float = 5e-4, height: float = 0.10):
+    """The corner over a 1-cos bump ``height`` x 1.0 m at 34 km/h (passive 3800 N s/m on
+    v_damper); per substep: F_bs, the arm loads, and the arm's pose and velocities before and
+    after."""
+    m = dw.DoubleWishboneCorner(dw.DoubleWishboneParams(bump_stop=bump_stop))
+    W, v = m.static_tyre_load(), 34.0 / 3.6
+
+    def road(t):
+        u = (v * t - 1.0) / 1.0
+        return 0.5 * height * (1 - np.cos(2 * np.pi * u)) if 0 <= u <= 1 else 0.0
+
+    out = []
+    try:
+        for k in range(int(0.5 / dt)):
+            st = m.state()
+            F_t = np.maximum(0.0, W + 239000.0 * (road(k * dt) - st["z_w"]))
+            F_bs = float(m.extra_response()["F_bs"][0])
+            before = _arm_link(m)
+            m.substep(dt, F_t, 3800.0 * st["v_damper"])
+            out.append({"F_bs": F_bs, "L": m.loads()["arm"], "before": before,
+                        "after": _arm_link(m), "rel": float(st["z_w"][0] - st["z_b"][0]),
+                        "theta": float(st["arm_angle"][0])})
+    finally:
+        m.close()
+    return out, dt
+
+
+def arm_balance_residuals(rec, dt, with_bump=True):
+    """Newton-Euler residuals of the lower arm in world axes: sum F + m g - m a_com [N] and
+    sum (r - r_com) x F + M_x e_x - (I alpha + w x I w) [N m]; loads at the pose of t_k."""
+    mass = la.MASS_KG
+    I = np.diag(dw.lower_arm_inertia(mass))
+    com0, O0, R0, v0, w0 = rec["before"]
+    _, _, _, v1, w1 = rec["after"]
+    L = rec["L"]
+    F_tot = np.array([0.0, 0.0, -mass * 9.81])
+    M_tot = R0 @ np.array([L["torsion_bar_mx"], 0.0, 0.0])
+    for name, corner_pt in dw.ARM_POINTS.items():
+        if name == "bump_stop" and not with_bump:
+            continue
+        f = R0 @ np.array([L.get(f"{name}_{a}", 0.0) for a in "xyz"])
+        r = O0 + R0 @ dw.to_arm_frame(corner_pt)
+        F_tot += f
+        M_tot += np.cross(r - com0, f)
+    a, alpha = (v1 - v0) / dt, (w1 - w0) / dt
+    Iw = R0 @ I @ R0.T
+    return F_tot - mass * a, M_tot - (Iw @ alpha + np.cross(w0, Iw @ w0))

@@ -1,9 +1,9 @@
 """Jounce bumper: the force law against its closed form, first contact on the PyBullet corner
-against an independent front-view four-bar solution, and the arm's balance (with its inertia)
-while the bumper pushes on it."""
+against an independent front-view four-bar solution, the force on the arm over a big bump,
+the scenario keys. (The arm's balance with its inertia while the bumper pushes on it:
+test_double_wishbone.py.)"""
 
 import numpy as np
-import pybullet as p
 import pytest
 
 from cosim import lower_arm as la
@@ -11,6 +11,8 @@ from cosim.errors import ScenarioError
 from nodes.plant import double_wishbone as dw
 from nodes.plant.bump_stop import BumpStopParams, bump_stop_force, bump_stop_rate
 from nodes.plant.models import build_plant_model
+
+from ._sim import big_bump_run
 
 BS = BumpStopParams()
 
@@ -126,67 +128,6 @@ def test_first_contact_travel_matches_the_geometry():
                                  rel=1e-6)
 
 
-def _arm_link(m):
-    ls = p.getLinkState(m.body, dw.LOWER_ARM, computeLinkVelocity=1, computeForwardKinematics=1,
-                        physicsClientId=m.client)
-    R = np.array(p.getMatrixFromQuaternion(ls[5])).reshape(3, 3)
-    return np.array(ls[0]), np.array(ls[4]), R, np.array(ls[6]), np.array(ls[7])
-
-
-def _big_bump(bump_stop: bool, dt: float = 5e-4, height: float = 0.10):
-    """The corner over a 1-cos bump ``height`` x 1.0 m at 34 km/h (passive 3800 N s/m on
-    v_damper); per substep: F_bs, the arm loads, and the arm's pose and velocities before and
-    after."""
-    m = dw.DoubleWishboneCorner(dw.DoubleWishboneParams(bump_stop=bump_stop))
-    W, v = m.static_tyre_load(), 34.0 / 3.6
-
-    def road(t):
-        u = (v * t - 1.0) / 1.0
-        return 0.5 * height * (1 - np.cos(2 * np.pi * u)) if 0 <= u <= 1 else 0.0
-
-    out = []
-    try:
-        for k in range(int(0.5 / dt)):
-            st = m.state()
-            F_t = np.maximum(0.0, W + 239000.0 * (road(k * dt) - st["z_w"]))
-            F_bs = float(m.extra_response()["F_bs"][0])
-            before = _arm_link(m)
-            m.substep(dt, F_t, 3800.0 * st["v_damper"])
-            out.append({"F_bs": F_bs, "L": m.loads()["arm"], "before": before,
-                        "after": _arm_link(m), "rel": float(st["z_w"][0] - st["z_b"][0]),
-                        "theta": float(st["arm_angle"][0])})
-    finally:
-        m.close()
-    return out, dt
-
-
-@pytest.fixture(scope="module")
-def big_bump():
-    return _big_bump(True)
-
-
-def _residuals(rec, dt, with_bump=True):
-    """Newton-Euler residuals of the lower arm in world axes: sum F + m g - m a_com [N] and
-    sum (r - r_com) x F + M_x e_x - (I alpha + w x I w) [N m]; loads at the pose of t_k."""
-    mass = la.MASS_KG
-    I = np.diag(dw.lower_arm_inertia(mass))
-    com0, O0, R0, v0, w0 = rec["before"]
-    _, _, _, v1, w1 = rec["after"]
-    L = rec["L"]
-    F_tot = np.array([0.0, 0.0, -mass * 9.81])
-    M_tot = R0 @ np.array([L["torsion_bar_mx"], 0.0, 0.0])
-    for name, corner_pt in dw.ARM_POINTS.items():
-        if name == "bump_stop" and not with_bump:
-            continue
-        f = R0 @ np.array([L.get(f"{name}_{a}", 0.0) for a in "xyz"])
-        r = O0 + R0 @ dw.to_arm_frame(corner_pt)
-        F_tot += f
-        M_tot += np.cross(r - com0, f)
-    a, alpha = (v1 - v0) / dt, (w1 - w0) / dt
-    Iw = R0 @ I @ R0.T
-    return F_tot - mass * a, M_tot - (Iw @ alpha + np.cross(w0, Iw @ w0))
-
-
 def test_big_bump_hits_the_bumper_and_the_arm_sees_it(big_bump):
     recs, _ = big_bump
     F = np.array([r["F_bs"] for r in recs])
@@ -204,29 +145,9 @@ def test_big_bump_hits_the_bumper_and_the_arm_sees_it(big_bump):
     assert rel[F > 0].min() >= 0.058
 
 
-def test_arm_balance_with_its_inertia_in_bumper_contact(big_bump):
-    recs, dt = big_bump
-    resF, resM, resF_nobump = [], [], []
-    peak = 0.0
-    for r in recs:
-        f, mo = _residuals(r, dt)
-        resF.append(np.abs(f).max())
-        resM.append(np.abs(mo).max())
-        if r["F_bs"] > 1000.0:
-            resF_nobump.append(np.abs(_residuals(r, dt, with_bump=False)[0]).max())
-        peak = max(peak, abs(r["L"]["ball_joint_z"]))
-    # ball joint up to ~15 kN; the balance closes to 0.35 % of it (PyBullet's joint sensors
-    # carry a small velocity-dependent error, docs/vehicles_roads.md)
-    assert peak > 8000.0
-    assert max(resF) < 0.0035 * peak
-    assert max(resM) < 3.0
-    # leaving the bump-stop load out breaks the balance by kN: the check sees it
-    assert min(resF_nobump) > 20 * max(resF)
-
-
 def test_without_the_bumper_nothing_pushes_and_the_travel_is_larger(big_bump):
     recs, _ = big_bump
-    free, _ = _big_bump(False, dt=1e-3)
+    free, _ = big_bump_run(False, dt=1e-3)
     assert all(r["F_bs"] == 0.0 and r["L"]["bump_stop_z"] == 0.0 for r in free)
     assert max(r["rel"] for r in free) > max(r["rel"] for r in recs) + 0.005
 
