@@ -178,3 +178,19 @@ def test_bump_stop_from_the_vehicle_section():
         assert m.info()["bump_stop"]["clearance_m"] == 0.03
     finally:
         m.close()
+
+
+def test_passive_ch4_bump_pothole_stays_clear_and_soft_damping_touches():
+    """Thesis: the passive Ch. 4 validation on the bump + pothole did not engage the bump stop;
+    the semi-active runs of Ch. 5 (soft damping states) hit it on the bump."""
+    from nodes.plant.bump_stop_study import road_run
+    from nodes.plant.equivalent_lumped import SPEED, ch4_bump_pothole
+
+    def road(t):
+        return float(ch4_bump_pothole(SPEED * t))
+
+    passive = road_run(road, 3800.0, t_end=1.2, dt=2e-3)
+    soft = road_run(road, 1000.0, t_end=1.2, dt=2e-3)
+    assert passive["F_bs_max"] == 0.0
+    assert 0.045 < passive["jounce_max_m"] < 0.0585 - 0.003  # 3 mm or more to spare
+    assert soft["F_bs_max"] > 0.0

@@ -1,0 +1,103 @@
+"""Where the realistic corner meets its jounce bumper: the numbers of docs/vehicles_roads.md.
+
+1. *First contact*, quasi-statically: a damper-axis tension ramp (2 kN/s, damped by
+   30 000 N s/m on the damper's velocity, tyre on a flat road) pulls the suspension into
+   jounce; the wheel travel relative to the body, z_w - z_b [m], and the arm angle [deg] at the
+   first step with F_bs > 0.
+2. *The Ch. 4 bump + pothole* (:func:`nodes.plant.equivalent_lumped.ch4_bump_pothole`, 34 km/h,
+   3 s) with a linear damper of 3800 (the passive physical damper), 2000 and 1000 N s/m on the
+   damper's velocity: peak jounce [m] and peak F_bs [N].
+3. *A large bump*: 1-cos 100 mm x 1.0 m at 34 km/h, passive: peak jounce and peak F_bs.
+
+Run: ``python -m nodes.plant.bump_stop_study [--dt 0.001] [--json]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Callable
+
+import numpy as np
+
+from .double_wishbone import DoubleWishboneCorner, DoubleWishboneParams
+from .equivalent_lumped import K_T, SPEED, ch4_bump_pothole
+
+
+def first_contact(dt: float = 1e-3, params: DoubleWishboneParams | None = None
+                  ) -> dict[str, float]:
+    """Wheel travel ``jounce_m`` [m] and arm angle ``arm_angle_deg`` at the first bumper
+    contact of a slow pull into jounce (module docstring, 1)."""
+    m = DoubleWishboneCorner(params)
+    W = m.static_tyre_load()
+    try:
+        for k in range(int(round(6.0 / dt))):
+            st = m.state()
+            if m.bump_stop_force() > 0.0:
+                return {"jounce_m": float(st["z_w"][0] - st["z_b"][0]),
+                        "arm_angle_deg": float(np.degrees(st["arm_angle"][0]))}
+            F_t = np.maximum(0.0, W - K_T * st["z_w"])
+            m.substep(dt, F_t, 30000.0 * st["v_damper"] - 2000.0 * k * dt)
+    finally:
+        m.close()
+    raise RuntimeError("no bumper contact within the pull")
+
+
+def road_run(z_g: Callable[[float], float], c: float, t_end: float = 3.0, dt: float = 1e-3,
+             params: DoubleWishboneParams | None = None) -> dict[str, float]:
+    """Peak jounce ``jounce_max_m`` [m] and peak bumper force ``F_bs_max`` [N] of the corner
+    on the road z_g(t) [m] with a linear damper c [N s/m] on the damper's velocity."""
+    m = DoubleWishboneCorner(params)
+    W = m.static_tyre_load()
+    rel, fbs = 0.0, 0.0
+    try:
+        for k in range(int(round(t_end / dt))):
+            st = m.state()
+            rel = max(rel, float(st["z_w"][0] - st["z_b"][0]))
+            fbs = max(fbs, m.bump_stop_force())
+            F_t = np.maximum(0.0, W + K_T * (z_g(k * dt) - st["z_w"]))
+            m.substep(dt, F_t, c * st["v_damper"])
+    finally:
+        m.close()
+    return {"jounce_max_m": rel, "F_bs_max": fbs}
+
+
+def large_bump(s: float, height: float = 0.10, length: float = 1.0, x0: float = 1.0) -> float:
+    """A 1-cos bump ``height`` x ``length`` [m] starting at ``x0`` [m]: road height at s [m]."""
+    u = (s - x0) / length
+    return 0.5 * height * (1.0 - np.cos(2.0 * np.pi * u)) if 0.0 <= u <= 1.0 else 0.0
+
+
+def study(dt: float = 1e-3) -> dict[str, object]:
+    """Steps 1-3 of the module docstring."""
+    out: dict[str, object] = {"first_contact": first_contact(dt)}
+    out["ch4_bump_pothole"] = {
+        str(int(c)): road_run(lambda t: float(ch4_bump_pothole(SPEED * t)), c, dt=dt)
+        for c in (3800.0, 2000.0, 1000.0)}
+    out["bump_100mm"] = road_run(lambda t: large_bump(SPEED * t), 3800.0, t_end=1.0, dt=dt)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="bump-stop-study", description=__doc__.splitlines()[0])
+    ap.add_argument("--dt", type=float, default=1e-3, help="time step [s]")
+    ap.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    args = ap.parse_args(argv)
+    r = study(args.dt)
+    if args.json:
+        print(json.dumps(r, indent=1))
+        return 0
+    fc = r["first_contact"]
+    print(f"first contact: {fc['jounce_m'] * 1e3:.1f} mm of wheel jounce (relative to the "
+          f"body), arm angle {fc['arm_angle_deg']:.2f} deg")
+    for c, v in r["ch4_bump_pothole"].items():
+        print(f"Ch. 4 bump + pothole, c = {c} N s/m: jounce {v['jounce_max_m'] * 1e3:.1f} mm, "
+              f"F_bs max {v['F_bs_max']:.0f} N")
+    v = r["bump_100mm"]
+    print(f"100 mm x 1.0 m bump, c = 3800 N s/m: jounce {v['jounce_max_m'] * 1e3:.1f} mm, "
+          f"F_bs max {v['F_bs_max']:.0f} N")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
