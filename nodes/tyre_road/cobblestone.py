@@ -28,9 +28,8 @@ about 2 s_h^2 E[P^2] / E[P], P = L + w the pitch (flat, "white" displacement: 8.
 s_h = 5 mm; it drives the wheel hop; tests/roads/test_cobblestone.py), while the long
 waves drive the body. So the two parameters calibrated against Table 4.5 (hub and body 0-20 Hz
 RMS on the passive realistic corner, ``bench/calibrate_pave.py``, ``docs/vehicles_roads.md``)
-are s_h and G; the other parameters are fixed beforehand from the geometry of Belgian block:
-
-Parameters (defaults :data:`DEFAULTS`, their reasoning in :class:`PaveParameters`).
+are s_h and G; the others are fixed beforehand from the geometry of Belgian block (defaults
+:data:`DEFAULTS`, each with its reasoning in :class:`PaveParameters`).
 
 Sampling: the profile is tabulated every :data:`DX` = 2 mm (at least 7 points across the 15 mm
 joint, the crown's parabola to 0.1 % of c) and linearly interpolated by
@@ -41,7 +40,7 @@ as the thesis's own 2 ms digitisation of the measured track).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -120,9 +119,6 @@ metric) hub 59.6 +- 3.7 and body 3.22 +- 0.26 m/s^2 at (G, s_h) = (1.503e-5, 9.5
 Table 4.5: 59.2 / 3.23; fixed at the rounded (1.5e-5, 9.5 mm). The numbers per seed and the
 check of the rounded values: ``docs/vehicles_roads.md``. Only these two ride numbers were
 used: no fatigue life enters."""
-
-PARAMETER_NAMES = tuple(asdict(DEFAULTS))
-"""Scenario keys of a ``[road] type = "pave"`` section besides type, speed, length, seed."""
 
 
 def stone_layout(length: float, rng: np.random.Generator, p: PaveParameters
