@@ -130,6 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("equivalent-lumped", "nodes.plant.equivalent_lumped",
          "equivalent lumped quarter car of the realistic corner (log decrement)"),
         ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
+        ("arm", "orchestrator.arm_card", "the lower arm's model card (mass, modes, stresses)"),
         ("tap", "orchestrator.tap", "print the messages of a running run, live"),
         ("replay", "orchestrator.replay", "republish a recorded journal on the bus"),
         ("runs", "orchestrator.runs", "list runs and their state from the run folders"),

@@ -12,7 +12,19 @@ element stresses evaluated at each node and averaged over the elements sharing i
 A joint load is applied to the patch of nodes within a radius (in the arm plane) of the
 hardpoint, through all the thickness, distributed with the least-norm set of nodal forces whose
 resultant is the unit force (or moment) at the hardpoint (an RBE3-like spider; the thesis used
-stiff spider beams to hole-centre nodes). Supports: the body-bush patches are clamped.
+stiff spider beams to hole-centre nodes).
+
+Supports (:meth:`SolidModel.solve_free`), for a free part loaded at all its joints:
+
+* ``inertia_relief`` (the thesis's, Ch 6.2, as ANSYS and Nastran do it): each load vector f is
+  balanced by the rigid-body inertia forces it would cause, f_b = f - M Φ a with
+  a = (Φᵀ M Φ)⁻¹ Φᵀ f (Φ: the six rigid-body modes, M: the consistent mass matrix), so Φᵀ f_b = 0;
+  the balanced load is then solved on a statically determinate **3-2-1** set of six
+  constraints, whose reactions are zero to rounding, so the stresses do not depend on which
+  nodes carry them;
+* ``321``: the unbalanced unit load on the 3-2-1 set alone. A single case's stresses then
+  depend on the support nodes, but the superposition of a load set in equilibrium does not
+  (the recorded joint loads are, up to the arm's own inertia and weight).
 """
 
 from __future__ import annotations
@@ -23,75 +35,18 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.spatial import ConvexHull
 from skfem import Basis, ElementHex2, ElementVector, MeshHex
 from skfem.models.elasticity import lame_parameters
 
-from . import arm_geometry as geo
+INTORDER = 5
+"""Quadrature: 3 x 3 x 3 Gauss points (exact to degree 5 per direction), the full integration
+of 27-node bricks; scikit-fem's default for ElementHex2 uses 7 x 7 x 7 (12x the work)."""
+PERMC = "MMD_AT_PLUS_A"
+"""SuperLU column ordering: minimum degree on A^T + A suits the symmetric FE matrices (the
+default COLAMD fills 7x more and factors ~40x slower on the arm)."""
 
 #: stress component order (thesis Eq 6.1-6.6)
 COMPONENTS = ("sx", "sy", "sz", "sxy", "syz", "szx")
-
-
-# ---------------------------------------------------------------------------- geometry / mesh
-def hull_outline(centres: np.ndarray, radii: Sequence[float],
-                 n_per_circle: int = 720) -> np.ndarray:
-    """Counter-clockwise polygon (m, 2) of the convex hull of circles (m)."""
-    a = np.linspace(0.0, 2 * np.pi, n_per_circle, endpoint=False)
-    pts = np.vstack([np.c_[cx + r * np.cos(a), cy + r * np.sin(a)]
-                     for (cx, cy), r in zip(np.asarray(centres)[:, :2], radii, strict=True)])
-    hull = ConvexHull(pts)
-    return pts[hull.vertices]  # scipy gives 2-D hull vertices counter-clockwise
-
-
-def _resample_closed(poly: np.ndarray, centre: np.ndarray, n: int,
-                     theta0: float = -np.pi / 2) -> np.ndarray:
-    """n points along a closed star-shaped polygon, counter-clockwise from the ray at theta0.
-
-    Spacing blends equal angle about ``centre`` and equal arc length (both monotone), which
-    keeps radial lines of the mapped mesh from skewing where the outline is far off-centre.
-    """
-    ang = np.unwrap(np.arctan2(poly[:, 1] - centre[1], poly[:, 0] - centre[0]))
-    k0 = int(np.argmin(np.abs(((ang - theta0 + np.pi) % (2 * np.pi)) - np.pi)))
-    p = np.roll(poly, -k0, axis=0)
-    p = np.vstack([p, p[:1]])
-    ang = np.unwrap(np.arctan2(p[:, 1] - centre[1], p[:, 0] - centre[0]))
-    af = (ang - ang[0]) / (ang[-1] - ang[0])
-    seg = np.hypot(*np.diff(p, axis=0).T)
-    lf = np.r_[0.0, np.cumsum(seg)] / seg.sum()
-    w = 0.5 * (af + lf)
-    u = np.arange(n) / n
-    return np.c_[np.interp(u, w, p[:, 0]), np.interp(u, w, p[:, 1])]
-
-
-def annulus_hex_mesh(inner: np.ndarray, outer: np.ndarray, n_across: int, n_thick: int,
-                     thickness: float) -> MeshHex:
-    """Mapped hex mesh between two closed curves sampled at the same n points (m).
-
-    Node (i, j, k): (1 - j/n_across) inner[i] + (j/n_across) outer[i], z from -h/2 to h/2.
-    """
-    n_s = inner.shape[0]
-    base = MeshHex.init_tensor(np.arange(n_s + 1.0), np.arange(n_across + 1.0),
-                               np.arange(n_thick + 1.0))
-    ii, jj, kk = (np.rint(base.p[d]).astype(int) for d in range(3))
-    ii_wrapped = ii % n_s
-    key = (ii_wrapped * (n_across + 1) + jj) * (n_thick + 1) + kk
-    uniq, new_index = np.unique(key, return_inverse=True)
-    t = new_index[base.t]
-    first = np.zeros(uniq.size, dtype=int)
-    first[new_index] = np.arange(key.size)
-    i, j, k = ii_wrapped[first], jj[first], kk[first]
-    r = j / n_across
-    xy = (1 - r)[:, None] * inner[i] + r[:, None] * outer[i]
-    z = -0.5 * thickness + thickness * k / n_thick
-    p = np.vstack([xy.T, z])
-    # orientation: local vertex 0 -> 2 is +i, 0 -> 1 is +j, 0 -> 3 is +k
-    e0 = t[:, 0]
-    jac = np.stack([p[:, e0[2]] - p[:, e0[0]], p[:, e0[1]] - p[:, e0[0]],
-                    p[:, e0[3]] - p[:, e0[0]]])
-    if np.linalg.det(jac) < 0:
-        p[2] = -p[2]
-    return MeshHex(p, t)
 
 
 def box_hex_mesh(lx: float, ly: float, lz: float, nx: int, ny: int, nz: int) -> MeshHex:
@@ -100,39 +55,20 @@ def box_hex_mesh(lx: float, ly: float, lz: float, nx: int, ny: int, nz: int) -> 
                                np.linspace(-lz / 2, lz / 2, nz + 1))
 
 
-def arm_mesh_divisions(mesh_size: float) -> tuple[int, int, int]:
-    """(n_around, n_across, n_thick) of the default arm for a target element size (m)."""
-    outer = hull_outline(np.array([geo.BUSH_FRONT, geo.BUSH_REAR, geo.BALL_JOINT]),
-                         [geo.BUSH_BOSS_RADIUS, geo.BUSH_BOSS_RADIUS, geo.BALL_JOINT_BOSS_RADIUS])
-    perim = float(np.sum(np.hypot(*np.diff(np.vstack([outer, outer[:1]]), axis=0).T)))
-    n_around = max(16, int(np.ceil(perim / mesh_size / 4)) * 4)
-    n_across = max(2, int(np.ceil(0.075 / mesh_size)))
-    n_thick = max(1, int(np.ceil(geo.PLATE_THICKNESS / mesh_size)))
-    return n_around, n_across, n_thick
-
-
-def arm_mesh(mesh_size: float = 0.03) -> MeshHex:
-    """Hex mesh of the default arm (`arm_geometry`) with quadratic elements of ~mesh_size (m)."""
-    n_around, n_across, n_thick = arm_mesh_divisions(mesh_size)
-    outer = hull_outline(np.array([geo.BUSH_FRONT, geo.BUSH_REAR, geo.BALL_JOINT]),
-                         [geo.BUSH_BOSS_RADIUS, geo.BUSH_BOSS_RADIUS, geo.BALL_JOINT_BOSS_RADIUS])
-    hole = hull_outline(geo.HOLE_CORNERS, [geo.HOLE_FILLET_RADIUS] * 3)
-    centre = geo.HOLE_CORNERS.mean(axis=0)
-    inner_pts = _resample_closed(hole, centre, n_around)
-    outer_pts = _resample_closed(outer, centre, n_around)
-    return annulus_hex_mesh(inner_pts, outer_pts, n_across, n_thick, geo.PLATE_THICKNESS)
-
-
 # ---------------------------------------------------------------------------- the FE model
 @dataclass
 class LoadCase:
-    """A unit load at a point: force (N) and moment (N m) vectors, on a node patch."""
+    """A unit load at a point: force (N) and moment (N m) vectors, on a node patch of
+    ``radius`` (m) round the point. With ``points`` (k, 3) the load is divided equally among
+    k patches instead (a joint modelled by several nodes, as the thesis split its revolute
+    joints' loads over nodes A and B)."""
 
     name: str
     point: np.ndarray
     radius: float
     force: np.ndarray
     moment: np.ndarray
+    points: np.ndarray | None = None
 
 
 class SolidModel:
@@ -141,8 +77,8 @@ class SolidModel:
     def __init__(self, mesh: MeshHex, E: float, nu: float, rho: float) -> None:
         self.mesh, self.E, self.nu, self.rho = mesh, E, nu, rho
         self.elem = ElementHex2()
-        self.vbasis = Basis(mesh, ElementVector(self.elem))
-        self.sbasis = Basis(mesh, self.elem)
+        self.vbasis = Basis(mesh, ElementVector(self.elem), intorder=INTORDER)
+        self.sbasis = Basis(mesh, self.elem, intorder=INTORDER)
         self.lam, self.mu = lame_parameters(E, nu)
         self.node_xyz = self.sbasis.doflocs.T.copy()  # (n_nodes, 3)
         split = self.vbasis.split_indices()
@@ -215,10 +151,14 @@ class SolidModel:
         return f.reshape(n, 3)
 
     def load_vector(self, case: LoadCase) -> np.ndarray:
-        nodes = self.patch(case.point, case.radius)
-        f = self.spider_forces(nodes, case.point, case.force, case.moment)
+        """Nodal force vector (n_dofs,) [N] of a load case."""
+        points = [case.point] if case.points is None else list(case.points)
         b = np.zeros(self.K.shape[0])
-        b[self.node_dofs[nodes].ravel()] = f.ravel()
+        for pt in points:
+            nodes = self.patch(pt, case.radius)
+            f = self.spider_forces(nodes, pt, np.asarray(case.force) / len(points),
+                                   np.asarray(case.moment) / len(points))
+            np.add.at(b, self.node_dofs[nodes].ravel(), f.ravel())
         return b
 
     def solve(self, cases: Sequence[LoadCase], fixed_nodes: np.ndarray) -> np.ndarray:
@@ -226,7 +166,7 @@ class SolidModel:
         fixed = self.node_dofs[fixed_nodes].ravel()
         free = np.setdiff1d(np.arange(self.K.shape[0]), fixed)
         B = np.stack([self.load_vector(c) for c in cases], axis=1)
-        lu = spla.splu(self.K[free][:, free].tocsc())
+        lu = spla.splu(self.K[free][:, free].tocsc(), permc_spec=PERMC)
         U = np.zeros((len(cases), self.K.shape[0]))
         U[:, free] = lu.solve(B[free]).T
         return U
@@ -256,13 +196,88 @@ class SolidModel:
                                            minlength=self.n_nodes) / counts
         return out
 
+    # ------------------------------------------------------------- free part: supports
+    def rigid_body_modes(self, about: np.ndarray | None = None) -> np.ndarray:
+        """Φ (n_dofs, 6): unit translations x, y, z and unit rotations about x, y, z through
+        ``about`` (default: the centre of mass) [m per m, m per rad]."""
+        o = self.mass_properties()["centre_of_mass"] if about is None else np.asarray(about)
+        r = self.node_xyz - o
+        phi = np.zeros((self.K_size, 6))
+        for a in range(3):
+            phi[self.node_dofs[:, a], a] = 1.0
+        # rotation e_k: u = e_k × r
+        rot = [np.c_[np.zeros(len(r)), -r[:, 2], r[:, 1]], np.c_[r[:, 2], np.zeros(len(r)),
+               -r[:, 0]], np.c_[-r[:, 1], r[:, 0], np.zeros(len(r))]]
+        for k, u in enumerate(rot):
+            for a in range(3):
+                phi[self.node_dofs[:, a], 3 + k] = u[:, a]
+        return phi
+
+    def three_two_one(self, nodes: Sequence[int]) -> np.ndarray:
+        """The dofs of a 3-2-1 support on three nodes A, B, C (not collinear): A all three
+        translations, B the two normal to AB... chosen as the two axes most normal to AB,
+        C the axis most normal to the plane ABC. Returns 6 global dof indices."""
+        a, b, c = (int(n) for n in nodes)
+        pa, pb, pc = self.node_xyz[[a, b, c]]
+        ab = (pb - pa) / np.linalg.norm(pb - pa)
+        nrm = np.cross(pb - pa, pc - pa)
+        if np.linalg.norm(nrm) < 1e-9:
+            raise ValueError("3-2-1 support nodes are collinear")
+        nrm /= np.linalg.norm(nrm)
+        b_axes = np.argsort(np.abs(ab))[:2]  # the two axes least along AB
+        c_axis = int(np.argmax(np.abs(nrm)))
+        dofs = [self.node_dofs[a, k] for k in range(3)]
+        dofs += [self.node_dofs[b, k] for k in b_axes]
+        dofs.append(self.node_dofs[c, c_axis])
+        return np.asarray(dofs)
+
+    def solve_free(self, cases: Sequence[LoadCase], support_nodes: Sequence[int],
+                   method: str = "inertia_relief") -> tuple[np.ndarray, np.ndarray]:
+        """Static displacements (n_cases, n_dofs) of the free part on a 3-2-1 support, and the
+        support reactions (n_cases, 6) [N]; ``method`` "inertia_relief" or "321" (module
+        docstring)."""
+        fixed = self.three_two_one(support_nodes)
+        B = np.stack([self.load_vector(c) for c in cases], axis=1)
+        if method == "inertia_relief":
+            M = self.mass_matrix()
+            phi = self.rigid_body_modes()
+            MPhi = M @ phi
+            acc = np.linalg.solve(phi.T @ MPhi, phi.T @ B)  # (6, n_cases)
+            B = B - MPhi @ acc
+        elif method != "321":
+            raise ValueError(f"supports must be 'inertia_relief' or '321', got {method!r}")
+        free = np.setdiff1d(np.arange(self.K_size), fixed)
+        lu = spla.splu(self.K[free][:, free].tocsc(), permc_spec=PERMC)
+        U = np.zeros((len(cases), self.K_size))
+        U[:, free] = lu.solve(B[free]).T
+        reactions = (self.K[fixed] @ U.T).T - B[fixed].T
+        return U, reactions
+
+    def mass_properties(self) -> dict[str, np.ndarray | float]:
+        """Mass [kg], centre of mass [m] and inertia tensor about it [kg m^2] of the mesh."""
+        if not hasattr(self, "_massprops"):
+            x = self.sbasis.global_coordinates().value  # (3, e, q)
+            dm = self.rho * self.sbasis.dx
+            m = float(dm.sum())
+            com = np.array([(x[a] * dm).sum() for a in range(3)]) / m
+            r = x - com[:, None, None]
+            r2 = (r * r).sum(axis=0)
+            inertia = np.array([[((r2 if i == j else 0.0) - r[i] * r[j]) * dm
+                                 for j in range(3)] for i in range(3)])
+            inertia = inertia.sum(axis=(2, 3))
+            self._massprops = {"mass": m, "centre_of_mass": com, "inertia": inertia}
+        return self._massprops
+
     def mass_matrix(self) -> sp.csr_matrix:
         """Consistent mass matrix, M_(ai)(bj) = δij ∫ ρ Na Nb dV."""
+        if hasattr(self, "_M"):
+            return self._M
         nloc = len(self.sbasis.basis)
         N = np.stack([self.sbasis.basis[a][0].value for a in range(nloc)])  # (27, e, q)
         Me = self.rho * np.einsum("aeq,beq,eq->eab", N, N, self.sbasis.dx, optimize=True)
         Me = Me[:, :, None, :, None] * np.eye(3)[None, None, :, None, :]
-        return self._scatter(Me.reshape(Me.shape[0], 3 * nloc, 3 * nloc))
+        self._M = self._scatter(Me.reshape(Me.shape[0], 3 * nloc, 3 * nloc))
+        return self._M
 
     def volume(self) -> float:
         return float(np.sum(self.sbasis.dx))
@@ -271,7 +286,9 @@ class SolidModel:
         """First free-free flexible natural frequencies (Hz); the 6 rigid-body modes dropped."""
         M = self.mass_matrix()
         shift = -(2 * np.pi * 5.0) ** 2  # K - σM positive definite for σ < 0
-        vals = spla.eigsh(self.K, k=6 + n_flexible, M=M, sigma=shift, which="LM",
+        lu = spla.splu((self.K - shift * M).tocsc(), permc_spec=PERMC)
+        op = spla.LinearOperator(self.K.shape, matvec=lu.solve, dtype=float)
+        vals = spla.eigsh(self.K, k=6 + n_flexible, M=M, sigma=shift, which="LM", OPinv=op,
                           return_eigenvectors=False)
         omega2 = np.sort(np.maximum(vals, 0.0))
         return np.sqrt(omega2[6:]) / (2 * np.pi)

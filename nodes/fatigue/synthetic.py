@@ -3,7 +3,7 @@
 Ball-joint forces of a front MPV corner on a rough (pavé-like) road: a static vertical load
 plus band-limited random parts (0.5-30 Hz), and the damper/spring force at the arm mount that
 balances the vertical ball-joint load about the pivot axis (lever ratio y_bj / y_dm), so that
-the bush reactions stay moderate. Newtons, arm frame (see `arm_geometry`).
+the bush reactions stay moderate. Newtons, arm frame (see `cosim.lower_arm`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-from . import arm_geometry as geo
+from cosim import lower_arm as geo
 
 
 def _band_noise(rng: np.random.Generator, n: int, fs: float, lo: float, hi: float) -> np.ndarray:

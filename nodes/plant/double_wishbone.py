@@ -118,7 +118,7 @@ LOWER_BUSH_REAR = la.to_corner(la.BUSH_REAR)
 LOWER_BALL_JOINT = la.to_corner(la.BALL_JOINT)
 DAMPER_LOWER = la.to_corner(la.DAMPER_MOUNT)
 BUMP_STOP_PAD = la.to_corner(la.BUMP_STOP_PAD)
-DAMPER_UPPER = np.array([0.010, -0.206, 0.40])
+DAMPER_UPPER = np.array([DAMPER_LOWER[0], -0.206, 0.40])  # above the seat: no fore-aft lean
 UPPER_BUSH_FRONT = np.array([0.14, -0.34, 0.18])
 UPPER_BUSH_REAR = np.array([-0.14, -0.34, 0.18])
 UPPER_BALL_JOINT = np.array([-0.005, -0.10, 0.20])
@@ -126,8 +126,8 @@ TIE_ROD_INNER = np.array([-0.14, -0.350, -0.037])
 TIE_ROD_OUTER = np.array([-0.14, -0.072, -0.03])
 HALF_TRACK = 0.7055
 
-LOWER_ARM_COM = (LOWER_BUSH_FRONT + LOWER_BUSH_REAR + LOWER_BALL_JOINT) / 3.0
-"""Lower arm's centre of mass (corner frame): the centroid of its three joints [m]."""
+LOWER_ARM_COM = la.to_corner(np.array(la.MASS_PROPERTIES["centre_of_mass_m"]))
+"""Lower arm's centre of mass (corner frame) [m]: the FE arm's (cosim.lower_arm)."""
 
 
 def arm_frame() -> tuple[np.ndarray, np.ndarray]:
@@ -220,21 +220,14 @@ def _joint(name, kind, parent, child, origin, axis="1 0 0"):
             f'<limit lower="-3" upper="3" effort="1e12" velocity="1e6"/></joint>\n')
 
 
-_ARM_DEPTH = 0.04
-"""Depth (z extent) of the lower arm's section for its inertia [m] (the ribs of the forged
-I-section in :mod:`cosim.lower_arm` are about 40 mm deep)."""
-
 
 def lower_arm_inertia(mass: float) -> np.ndarray:
-    """Principal-axis-aligned inertia (I_xx, I_yy, I_zz) of the lower arm about its centre of
-    mass [kg m^2]: in plan, half the mass a uniform triangle on the three joints (second
-    moment m/12 sum d d^T), half lumped at them (m/3 sum d d^T), d = joint - centroid; in
-    depth, uniform over the rib depth h (m h^2 / 12). Products of inertia are neglected."""
-    pts = np.array([LOWER_BUSH_FRONT, LOWER_BUSH_REAR, LOWER_BALL_JOINT])
-    d = pts - pts.mean(axis=0)
-    S = mass * (0.5 / 12.0 + 0.5 / 3.0) * (d.T @ d)  # second moments sum m x_i x_j
-    S[2, 2] = mass * _ARM_DEPTH ** 2 / 12.0  # uniform over the section's depth
-    return np.array([S[1, 1] + S[2, 2], S[0, 0] + S[2, 2], S[0, 0] + S[1, 1]])
+    """(I_xx, I_yy, I_zz) of the lower arm about its centre of mass [kg m^2]: the FE arm's
+    inertia tensor (:data:`cosim.lower_arm.MASS_PROPERTIES`) scaled to ``mass``; its one
+    product of inertia (I_xy, 6 % of I_xx) is dropped (the URDF link is axis-aligned)."""
+    props = la.MASS_PROPERTIES
+    inertia = np.array(props["inertia_kg_m2"], dtype=float)
+    return np.diag(inertia) * mass / float(props["mass_kg"])
 
 
 # link indices (joint index = child link index)
@@ -511,10 +504,11 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
       <= 0 (pushes the arm down) and ``bump_stop_y`` = -F_bs sin(theta) for an arm turned by
       theta (jounce positive); its arm-frame x component is zero (the arm turns about x and
       the body only heaves). Both are 0 while the bumper is clear;
-    * ``torsion_bar_mx`` [N m]: the torsion-bar moment about the arm's x axis (static preload
-      included). It is a pure moment and it enters the arm at the torsion-bar socket, the
-      **front bush eye** (:data:`cosim.lower_arm.TORSION_BAR_SOCKET`); for the rigid arm's
-      balance its point does not matter, for the FE it does.
+    * ``torsion_bar_mx`` [N m]: the torsion-spring moment about the arm's x axis (static
+      preload included). It is a pure moment; it enters the arm through its pivot, half at each
+      bush eye (:data:`cosim.lower_arm.TORSION_SPRING_POINTS`, as the thesis split its
+      revolute joint's loads over nodes A and B); for the rigid arm's balance its point does
+      not matter, for the FE it does.
 
     These loads and the arm's weight are in equilibrium with its inertia: sum F + m g =
     m a_com and sum (r x F) + M_x e_x = d(H)/dt (tested, static and in bumper contact, in
