@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("sweep_dir", type=Path)
     ap.add_argument("--methods", action="store_true", help="also other fatigue settings")
     args = ap.parse_args(argv)
-    from nodes.fatigue.arm_geometry import HOLE_CORNERS
+    from cosim.lower_arm import HOLE_CORNERS
 
     doc = json.loads((args.sweep_dir / "sweep.json").read_text())
     notch_xy = HOLE_CORNERS[2]

@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
-from . import arm_geometry as geo  # noqa: E402
+from cosim import lower_arm as geo  # noqa: E402
 
 
 def plot_damage_map(result, path: Path, title: str = "") -> Path:
