@@ -69,7 +69,19 @@ for group, laws in table.items():
     order = [law for law in LAWS if law in laws] + [law for law in laws if law not in LAWS]
     print("| metric | " + " | ".join(order) + " |")
     print("|---|" + "---|" * len(order))
-    for key, label in KEYS:
+    first = next(iter(base.values())) if base else {}
+    rows = []
+    for key, label in KEYS:  # a full vehicle has the keys per corner: a_b[0]_rms ... a_b[3]_rms
+        if key in first:
+            rows.append((key, label))
+            continue
+        parts = key.split("_")
+        n = 2 if parts[0] in ("a", "jerk") else 1
+        for i, corner in enumerate(("FL", "FR", "RL", "RR")):
+            k = "_".join(parts[:n]) + f"[{i}]" + "".join("_" + q for q in parts[n:])
+            if k in first:
+                rows.append((k, f"{label} {corner}"))
+    for key, label in rows:
         cells = []
         for law in order:
             vals = np.array([laws[law][s][key] for s in seeds if s in laws[law]])
