@@ -91,7 +91,7 @@ def nominal_bending_stress(loads: dict[str, float], y_cut: float = NOMINAL_CUT_Y
 
 
 def fe_bending_stress(inf, loads: dict[str, float], y_cut: float = NOMINAL_CUT_Y,
-                      band: float = 0.006) -> float:
+                      band: float = 0.010) -> float:
     """The FE's bending stress [Pa] on the top of the ribs at the cut: the signed largest
     principal stress (at a rib's top fibre the stress is uniaxial along the leg) averaged over
     the top-surface nodes within ``band`` of y_cut whose depth is within 10 % of the deepest.

@@ -10,7 +10,7 @@ row each, then a tapered transition row (the forging's fillet) down to the web, 
 divided evenly. Through the depth, ``n_thick`` layers span the local depth (symmetric about
 z = 0): the rib depth on the rib rows, the web depth on the web rows, the boss depth
 (`cosim.lower_arm.boss_depth`) wherever it is larger. So one mesh carries web, ribs and
-bosses of an I-section forging without a free mesher; the element size sets ``n_around``,
+bosses of an H-section forging without a free mesher; the element size sets ``n_around``,
 the web divisions and ``n_thick`` (mesh convergence in tests/fatigue/test_arm_fe.py).
 
 Why not a free (tetrahedral) mesher such as gmsh: this shape is a 2.5-D forging whose every

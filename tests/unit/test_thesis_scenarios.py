@@ -37,11 +37,11 @@ def test_thesis_file_validates(path, tmp_path):
         assert scenario["run"]["n_steps"] > 0
 
 
-def test_ch6_sweep_is_both_roads_times_four_strategies():
+def test_ch6_sweep_is_three_pave_seeds_and_the_bump_times_four_strategies():
     sweep = load_sweep(THESIS / "ch6_fatigue.toml")
     assert sweep.fatigue
     combos = {(p.params["road"], p.params["strategy"]) for p in sweep.points}
-    assert combos == {(r, s) for r in ("pave", "bump_pothole")
+    assert combos == {(r, s) for r in ("pave_s1", "pave_s2", "pave_s3", "bump_pothole")
                       for s in ("passive", "tss1", "tss2", "tss3")}
     laws = {p.params["strategy"]: p.overrides["controller"]["law"] for p in sweep.points}
     assert laws == {"passive": "passive", "tss1": "tss1", "tss2": "tss2", "tss3": "tss3"}
