@@ -45,7 +45,9 @@ deep **hubs** at the bush eyes (their axis is x in reality; here a solid hub of 
 eye's mass), the ball joint, the damper seat and the bump-stop pad. :func:`rib_depth` and
 :func:`boss_depth` are the depth field the FE mesh follows. Web 3 mm; ribs 5-6 mm wide, 54 mm
 deep at the roots, 30 mm by the ball joint, 30 mm on the base; eyes 60 mm deep. The FE gives
-5.45 kg (Table 4.2: 5 kg) and its first free-free mode (``suscosim arm``).
+5.33-5.45 kg (Table 4.2: 5 kg; 20 and 15 mm meshes) and a first free-free mode of 594 Hz
+(Table 6.1: 362 Hz; the stiff sections are what carrying the torsion spring's moment takes,
+docs/fatigue.md) (``suscosim arm``).
 """
 
 from __future__ import annotations
@@ -146,8 +148,9 @@ MASS_PROPERTIES = {
     "inertia_kg_m2": ((0.0547, -0.0034, 0.0), (-0.0034, 0.0516, 0.0), (0.0, 0.0, 0.1050)),
 }
 """The FE arm's mass, centre of mass (arm frame) and inertia tensor about it (arm axes), from
-the default mesh; the plant's rigid lower arm takes the centre of mass and the inertia scaled
-to its Table 4.2 mass. Checked against the FE mesh in tests/fatigue/test_arm_fe.py."""
+the 15 mm mesh (the 20 mm default gives 5.33 kg); the plant's rigid lower arm takes the
+centre of mass and the inertia scaled to its Table 4.2 mass. Checked against the FE mesh in
+tests/fatigue/test_arm_fe.py."""
 
 
 def joint_zone_radius(name: str) -> float:

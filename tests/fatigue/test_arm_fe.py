@@ -94,8 +94,10 @@ def _sim_loads(n_steps: int = 1600) -> list[dict[str, float]]:
 
 def test_recorded_loads_are_nearly_balanced_so_321_and_inertia_relief_agree(fe, static_loads):
     """The joint loads the plant records balance each other up to the arm's own inertia and
-    weight: a statically determinate 3-2-1 support then reacts almost nothing, and its
-    stresses equal those of inertia relief, with either support set, within 1 %."""
+    weight (5 kg at up to ~20 m/s^2 here: ~100 N against kN): a statically determinate 3-2-1
+    support then reacts little, and its stresses equal those of inertia relief within 2 %
+    with either support set (the ~100 N of unbalanced inertia enter the 3-2-1 set as point
+    loads instead of being spread over the arm's mass)."""
     cases = unit_cases()
     C_ir = fe.nodal_stress(fe.solve_free(cases, support_nodes(fe))[0])
     U_a, R_a = fe.solve_free(cases, support_nodes(fe), "321")
@@ -108,22 +110,23 @@ def test_recorded_loads_are_nearly_balanced_so_321_and_inertia_relief_agree(fe, 
     for loads in samples:
         f = np.array([loads[c.name] for c in cases])
         reaction = np.abs(f @ R_a)
-        assert reaction.max() < 0.02 * max(abs(loads["ball_joint_z"]), 1.0)  # N vs N
+        assert reaction.max() < 0.03 * peak_bj  # N against the event's peak joint load
         s_ir, s_a, s_b = (von_mises(np.einsum("c,cnk->nk", f, C))[assessed]
                           for C in (C_ir, C_a, C_b))
         top = s_ir.max()
-        assert np.abs(s_a - s_ir).max() < 0.01 * top
-        assert np.abs(s_b - s_ir).max() < 0.01 * top
+        assert np.abs(s_a - s_ir).max() < 0.02 * top
+        assert np.abs(s_b - s_ir).max() < 0.02 * top
 
 
 def test_mass_and_mass_properties_agree_with_cosim_and_table_4_2():
-    inf = builtin_influence(MESH, MAT)
+    assert builtin_influence(MESH, MAT).meta["mass_kg"] == pytest.approx(geo.MASS_KG, rel=0.10)
+    inf = builtin_influence(0.015, MAT)  # the mesh cosim.lower_arm.MASS_PROPERTIES came from
     mp = geo.MASS_PROPERTIES
     assert inf.meta["mass_kg"] == pytest.approx(geo.MASS_KG, rel=0.10)  # Table 4.2: 5 kg
-    assert inf.meta["mass_kg"] == pytest.approx(mp["mass_kg"], rel=0.03)
+    assert inf.meta["mass_kg"] == pytest.approx(mp["mass_kg"], rel=0.01)
     np.testing.assert_allclose(inf.meta["centre_of_mass_m"], mp["centre_of_mass_m"], atol=3e-3)
     np.testing.assert_allclose(np.diag(inf.meta["inertia_kg_m2"]),
-                               np.diag(mp["inertia_kg_m2"]), rtol=0.05)
+                               np.diag(mp["inertia_kg_m2"]), rtol=0.02)
 
 
 def test_first_flexible_mode_far_above_the_road_band():
