@@ -22,8 +22,9 @@ y left, z up) with origin at the static wheel centre of this **front-left** corn
 = +y, so the arm frame has z up). Metres.
 
 * *lower arm*: every point comes from :mod:`cosim.lower_arm`, the one definition the fatigue
-  worker's FE reads too (bushes (+-0.15, 0, 0), ball joint (0.025, 0.294, 0), damper seat
-  (0.010, 0.185, 0), bump-stop pad (-0.030, 0.215, 0) in the arm frame; frame origin
+  worker's FE reads too (bushes (+-0.13, 0, 0), ball joint (0.025, 0.294, 0), damper seat
+  (0.064, 0.185, 0) on the front leg, bump-stop pad (-0.017, 0.215, 0) on the rear leg, in
+  the arm frame; frame origin
   ``ARM_ORIGIN`` = (0, -0.354, -0.13) in the corner frame, axes parallel to the corner's: the
   pivot axis along x, so no anti-dive, and the arm plane horizontal at static ride height).
   The lever 0.294 m is what makes the torsion bar a 31 kN/m wheel rate (K_theta / L^2);
@@ -51,9 +52,10 @@ y left, z up) with origin at the static wheel centre of this **front-left** corn
 * *steering axis*: lower ball joint (0.025, -0.06, -0.13) to upper (-0.005, -0.10, 0.20):
   kingpin inclination atan(0.04 / 0.33) = 6.9 deg, caster atan(0.03 / 0.33) = 5.2 deg, the
   axis meeting the ground 39 mm inboard of the contact patch centre (positive scrub radius).
-* *damper*: lower mount = the arm's seat, (0.010, -0.169, -0.13); top mount (0.010, -0.206,
-  0.40): 0.53 m between mounts, leaning 4.0 deg inboard at the top (as front dampers lean to
-  clear the tyre). Its motion ratio to the ball joint is (0.185 / 0.294) cos(4.0 deg) = 0.628,
+* *damper*: lower mount = the arm's seat, (0.064, -0.169, -0.13); top mount (0.064, -0.206,
+  0.40), straight above it in side view: 0.53 m between mounts, leaning 4.0 deg inboard at
+  the top (as front dampers lean to clear the tyre). Its motion ratio to the ball joint is
+  (0.185 / 0.294) cos(4.0 deg) = 0.628,
   and the physical 3800 N s/m acts at the wheel centre as 3800 (0.185 cos 4 deg / 0.2984)^2
   = 1454 N s/m (Table 4.3: 1500 N s/m).
 * *tie rod*: outer ball joint (-0.14, -0.072, -0.03) on the steering axis, 0.14 m behind the
