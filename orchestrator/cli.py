@@ -75,17 +75,42 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from nodes.recorder.node import finalize
+    """Table from a journal. Exit 0: every record intact (a torn last record, normal after a
+    crash, is only noted). Exit 2 with a message naming the journal: it is not one, it holds no
+    complete step, or records were lost in it (damaged records are skipped, the rest kept),
+    or the table already in the folder is larger; in the last two cases the table is written
+    alongside as ``table.recovered.csv/.parquet`` and ``table.*`` is left as it was."""
+    from nodes.recorder.journal import read_journal
+    from nodes.recorder.table import build_table, export_safely
 
     journal = Path(args.journal)
     out = Path(args.out) if args.out else journal.parent
-    out.mkdir(parents=True, exist_ok=True)
     try:
-        res = finalize(journal, out)
+        out.mkdir(parents=True, exist_ok=True)
+        contents = read_journal(journal)
+        table, bad = build_table(contents.records)
+        rows = int(len(table["t"]))
+        files, why = export_safely(table, out, contents.damaged) if rows else ({}, "")
     except (OSError, ValueError) as exc:
         print(f"suscosim export: {exc}", file=sys.stderr)
         return 2
-    print(json.dumps({k: res[k] for k in ("rows", "files", "torn", "undecodable")}, indent=2))
+    print(json.dumps({"rows": rows, "files": files, "torn": contents.torn, "undecodable": bad,
+                      "records": len(contents.records),
+                      "skipped_records": contents.skipped_records,
+                      "skipped": [vars(s) for s in contents.skipped]}, indent=2))
+    if contents.problem:
+        print(f"suscosim export: {journal}: {contents.problem}", file=sys.stderr)
+    if not rows:
+        print(f"suscosim export: {journal}: no complete step in the journal: nothing written",
+              file=sys.stderr)
+        return 2
+    if why:
+        lost = (f"{contents.skipped_records} damaged record(s) skipped, "
+                if contents.damaged else "")
+        print(f"suscosim export: {journal}: {lost}{rows} rows rebuilt; {why}: wrote "
+              f"{files['csv']} and .parquet alongside, {out / 'table.csv'} left as it was",
+              file=sys.stderr)
+        return 2
     return 0
 
 

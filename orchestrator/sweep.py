@@ -362,39 +362,23 @@ def point_state(p: Point, run_dir: Path, fatigue: bool) -> str:
 
 
 def journal_step(path: Path, tail_bytes: int = 32768) -> int | None:
-    """The step index of the last complete record of a run journal (cheap: reads its tail),
-    or None. Records are msgpack ``[channel, payload, crc32]``; a candidate is accepted only
-    when its CRC matches."""
-    import zlib
-
+    """The step index of the last intact record of a run journal that carries one (cheap:
+    reads its tail with the journal reader every command uses), or None."""
     import msgpack
 
+    from nodes.recorder.journal import read_journal
+
     try:
-        with open(path, "rb") as fh:
-            size = fh.seek(0, os.SEEK_END)
-            fh.seek(max(0, size - tail_bytes))
-            data = fh.read()
-    except OSError:
+        records = read_journal(path, tail_bytes=tail_bytes).records
+    except (OSError, ValueError):
         return None
-    pos = len(data)
-    for _ in range(400):
-        pos = data.rfind(b"\x93", 0, pos)
-        if pos < 0:
-            return None
-        unpacker = msgpack.Unpacker(raw=False)
-        unpacker.feed(data[pos:])
+    for _channel, raw in reversed(records):
         try:
-            rec = unpacker.unpack()
-        except Exception:  # not a record start (or a torn tail): try an earlier byte
+            msg = msgpack.unpackb(raw, raw=False)
+        except Exception:
             continue
-        if (isinstance(rec, list) and len(rec) == 3 and isinstance(rec[0], str)
-                and isinstance(rec[1], bytes) and rec[2] == zlib.crc32(rec[1])):
-            try:
-                msg = msgpack.unpackb(rec[1], raw=False)
-            except Exception:
-                continue
-            if isinstance(msg, dict) and isinstance(msg.get("k"), int):
-                return int(msg["k"])
+        if isinstance(msg, dict) and isinstance(msg.get("k"), int):
+            return int(msg["k"])
     return None
 
 

@@ -121,13 +121,56 @@ def channel_stats(table: Table) -> dict[str, dict[str, float]]:
     return out
 
 
-def export(table: Table, folder: str | Path) -> dict[str, str]:
-    """Write ``table.csv`` and ``table.parquet`` in ``folder``; return their paths."""
+def export(table: Table, folder: str | Path, stem: str = "table") -> dict[str, str]:
+    """Write ``<stem>.csv`` and ``<stem>.parquet`` in ``folder``; return their paths."""
     folder = Path(folder)
-    paths = {"csv": str(folder / "table.csv"), "parquet": str(folder / "table.parquet")}
+    paths = {"csv": str(folder / f"{stem}.csv"), "parquet": str(folder / f"{stem}.parquet")}
     write_csv(table, paths["csv"])
     write_parquet(table, paths["parquet"])
     return paths
+
+
+RECOVERED_STEM = "table.recovered"
+"""Where ``suscosim export`` writes a table it must not put in place of ``table.*``."""
+
+
+def table_rows(folder: str | Path, stem: str = "table") -> int | None:
+    """Rows of the table already in ``folder`` (its parquet metadata, else its CSV's lines),
+    or None when there is none (or it cannot be read)."""
+    folder = Path(folder)
+    pq_path, csv_path = folder / f"{stem}.parquet", folder / f"{stem}.csv"
+    if pq_path.is_file():
+        try:
+            import pyarrow.parquet as pq
+
+            return int(pq.ParquetFile(pq_path).metadata.num_rows)
+        except Exception:  # torn or foreign: try the CSV
+            pass
+    if csv_path.is_file():
+        try:
+            with open(csv_path, "rb") as f:
+                return max(0, sum(1 for line in f if line.strip()) - 1)
+        except OSError:
+            return None
+    return None
+
+
+def export_safely(table: Table, folder: str | Path, damaged: bool) -> tuple[dict[str, str], str]:
+    """Export a table rebuilt from a journal without ever replacing a table silently by a
+    smaller one: when the journal was ``damaged`` (records skipped in its middle), or when a
+    ``table.*`` with more rows is already in ``folder``, the table goes to
+    ``table.recovered.csv/.parquet`` alongside and ``table.*`` is left as it was.
+    Returns (paths written, why it went alongside: "" when it went to ``table.*``)."""
+    rows = len(table["t"])
+    before = table_rows(folder)
+    why = ""
+    if damaged:
+        why = "the journal is damaged"
+    elif before is not None and before > rows:
+        why = f"the table already there has more rows ({before} > {rows})"
+    if why:
+        return export(table, folder, RECOVERED_STEM), why
+    return export(table, folder), ""
 
 
 def dump_json(obj: object, path: str | Path) -> None:
