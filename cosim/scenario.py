@@ -3,7 +3,9 @@
 The common sections are checked here; the model sections (``vehicle``, ``tyre``, ``road``,
 ``controller``, ``fatigue``) are checked by the model factories of the nodes that own them
 (the orchestrator runs those checks in a preflight, before starting any node). An error names
-the dotted key, the value and what was expected, and the CLI exits with code 2.
+the dotted key, the value and what was expected, and the CLI exits with code 2. Every number
+of every section must be finite (:func:`check_finite`): ``inf`` and ``nan`` are refused here,
+whatever model reads them.
 
 Example (Chapter 3 step)::
 
@@ -94,9 +96,25 @@ def _typed(key: str, value: Any, spec: Key) -> Any:
     return value
 
 
+def check_finite(value: Any, key: str = "") -> None:
+    """Every number anywhere in a scenario must be finite: TOML's ``inf`` / ``nan`` (and
+    ``--set tyre.stiffness=inf``) are refused here, once for every section and every model,
+    naming the dotted key (``road.points[3]`` for an array element)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ScenarioError(key, value, "a finite number")
+    if isinstance(value, dict):
+        for k, v in value.items():
+            check_finite(v, f"{key}.{k}" if key else str(k))
+    elif isinstance(value, list | tuple):
+        for i, v in enumerate(value):
+            check_finite(v, f"{key}[{i}]")
+
+
 def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
-    """Check the section names and the ``run`` section; fill defaults. Returns a new dict."""
+    """Check the section names, that every number is finite, and the ``run`` section; fill
+    defaults. Returns a new dict."""
     out = copy.deepcopy(scenario)
+    check_finite(out)
     for name, value in out.items():
         if name not in SECTIONS:
             raise ScenarioError(name, "(section)", "one of the sections " + ", ".join(SECTIONS))

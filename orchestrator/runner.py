@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import math
 import os
 import secrets
 import subprocess
@@ -94,6 +95,34 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
         "rows": rec.get("rows", 0), "files": rec.get("files", {}),
         "channels": rec.get("stats", {}),
     }
+
+
+def strict_json(obj: Any, key: str = "", nulled: list[str] | None = None) -> Any:
+    """``obj`` with every non-finite float (NaN, +-inf: not JSON) replaced by None; the dotted
+    keys replaced are appended to ``nulled``."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        if nulled is not None:
+            nulled.append(key)
+        return None
+    if isinstance(obj, dict):
+        return {k: strict_json(v, f"{key}.{k}" if key else str(k), nulled) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [strict_json(v, f"{key}[{i}]", nulled) for i, v in enumerate(obj)]
+    return obj
+
+
+def write_summary(folder: Path, summary: dict[str, Any]) -> None:
+    """Write ``summary.json`` as strict JSON: a non-finite number (a channel that went NaN)
+    is written as null and its key listed in ``non_finite`` (also set in ``summary``)."""
+    nulled: list[str] = []
+    clean = strict_json(summary, nulled=nulled)
+    if nulled:
+        summary["non_finite"] = clean["non_finite"] = nulled
+        shown = ", ".join(nulled[:5]) + (f" and {len(nulled) - 5} more" if len(nulled) > 5 else "")
+        print(f"suscosim: warning: {folder / 'summary.json'}: {len(nulled)} non-finite "
+              f"value(s) written as null: {shown}", file=sys.stderr)
+    (folder / "summary.json").write_text(json.dumps(clean, indent=2, sort_keys=True,
+                                                    allow_nan=False))
 
 
 PINNED_SPIN_US = 200
@@ -185,7 +214,7 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
 
         rec = run_reference(scenario, folder)
         summary = _summary(scenario, None, time.monotonic() - t0, rec, "ok")
-        (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
+        write_summary(folder, summary)
         return summary
     bar = ProgressBar(run["id"]) if not quiet else (lambda k, n: None)
     result: ClockResult | None = None
@@ -238,7 +267,7 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                            if isinstance(exc, KeyboardInterrupt)
                            else str(exc) or type(exc).__name__)
         summary.update(_transport(local, lowlatency))
-        (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
+        write_summary(folder, summary)
         bus.close()
         if not isinstance(exc, SuscosimError | KeyboardInterrupt):
             raise RunError(f"internal error in the orchestrator: {type(exc).__name__}: {exc}") \
@@ -257,7 +286,7 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     if ch.FATIGUE in result.nodes:  # the live fatigue node's headline (files in fatigue/)
         summary["fatigue"] = {k: v for k, v in result.nodes[ch.FATIGUE].result.items()
                               if k != "rejected"}
-    (folder / "summary.json").write_text(json.dumps(summary, indent=2, sort_keys=True))
+    write_summary(folder, summary)
     return summary
 
 
