@@ -18,6 +18,15 @@ plant/response        a_b, a_w     accelerations at t_k [m/s^2], from PyBullet's
                       F_bs         jounce-bumper (bump-stop) force, compression-positive,
                                    >= 0 [N]: up on the body, down on the lower arm's pad
                                    (double-wishbone corner only; nodes/plant/bump_stop.py)
+                      a_arm_<pt>_  acceleration of a point of the lower arm (pt = loc1: 20
+                      <ax>         mm inboard of the ball joint, cg: its centre of mass,
+                                   loc2: 20 mm outboard of the bush midpoint; thesis Table
+                                   5.4), ax = x/y/z vehicle axes, at t_k [m/s^2], as a_b;
+                                   kinematic (0 at rest) (double-wishbone corner only;
+                                   ARM_ACCEL_POINTS in nodes/plant/double_wishbone.py)
+                      alpha_pitch, body pitch (about +y, nose down +) and roll (about +x,
+                      alpha_roll   left up +) accelerations at t_k [rad/s^2], as a_b
+                                   (7-DOF full vehicle only)
 plant/arm             <pt>_<ax>    load ON the lower arm at point pt (ball_joint,
                                    damper_mount, bush_front, bush_rear: x/y/z), axis of the
                                    arm frame at t_k (cosim/lower_arm.py) [N] (realistic

@@ -91,6 +91,13 @@ docs/vehicles_roads.md).
 compression-positive, >= 0, the force the bumper applies on the body (upward) and on the
 arm's pad (downward), from the state at the start of the step, as the torsion-bar torque.
 
+**Arm accelerations** ``a_arm_{loc1,cg,loc2}_{x,y,z}`` [m/s^2] (in ``plant/response``, via
+:meth:`response_velocities`): vehicle axes, of three points of the lower arm
+(:data:`ARM_ACCEL_POINTS`: 20 mm inboard of the ball joint, the centre of mass, 20 mm
+outboard of the bush midpoint; thesis Table 5.4's Loc1, CG, Loc2), computed as the plant
+node computes a_b and a_w: the change of the point's velocity over the step's first substep
+divided by its length.
+
 **Arm loads** (``loads()["arm"]``): the loads ON the lower arm in the arm frame (origin at the
 midpoint of the two body bushes, x along the pivot axis forward, y outward toward the ball
 joint in the arm plane, z = x cross y; the frame turns with the arm), in N; see
@@ -157,6 +164,28 @@ ARM_POINTS = {
 }
 """The lower arm's load points (corner frame); :func:`to_arm_frame` gives them in the arm frame
 (equal to :data:`cosim.lower_arm.HARDPOINTS`, tested)."""
+
+ARM_ACCEL_POINTS = {
+    "loc1": la.BALL_JOINT - np.array([0.0, 0.020, 0.0]),
+    "cg": np.array(la.MASS_PROPERTIES["centre_of_mass_m"], dtype=float),
+    "loc2": np.array([0.0, 0.020, 0.0]),
+}
+"""Points of the lower arm whose accelerations ``plant/response`` carries (thesis Table 5.4),
+in the arm frame [m]. The thesis names them only "Loc1" (near the hub), the arm's "CG" and
+"Loc2" (near the body pivot / gearbox); its arm drawing is not available, so:
+
+* ``loc1``: 20 mm inboard of the ball joint along the arm's y (toward the pivot axis),
+  (0.025, 0.274, 0): on the ball-joint boss's edge, the nearest arm material to the hub that
+  is not the joint itself, 0.274 m from the pivot axis;
+* ``cg``: the arm's centre of mass (:data:`cosim.lower_arm.MASS_PROPERTIES`), 0.085 m from
+  the pivot axis;
+* ``loc2``: 20 mm outboard of the bush midpoint (the arm-frame origin), (0, 0.020, 0): on the
+  base member between the bush eyes, 0.020 m from the pivot axis, so it moves almost with
+  the body.
+
+For an arm turning about its pivot axis (x) the vertical acceleration of a point is the
+body's plus the arm's angular acceleration times the point's distance from that axis, so
+it falls from Loc1 to the CG to Loc2, as in Table 5.4."""
 
 _BS = BumpStopParams()
 
@@ -334,6 +363,7 @@ class DoubleWishboneCorner(PlantModel):
         arm = p.getLinkState(b, LOWER_ARM, computeLinkVelocity=1, computeForwardKinematics=1,
                              physicsClientId=c)
         self._R_arm = _rot(arm[5])
+        self._arm_state = arm
         top = self._world(body, BODY, DAMPER_UPPER)
         bot = self._world(arm, LOWER_ARM, DAMPER_LOWER)
         self._pad = self._world(arm, LOWER_ARM, BUMP_STOP_PAD)
@@ -442,6 +472,22 @@ class DoubleWishboneCorner(PlantModel):
     def extra_response(self) -> dict[str, np.ndarray]:
         """``F_bs``: the jounce-bumper force [N] (>= 0) the next substep applies."""
         return {"F_bs": np.array([self.bump_stop_force()])}
+
+    def response_velocities(self) -> dict[str, np.ndarray]:
+        """World (vehicle-axes) velocities [m/s] of the lower arm's points
+        :data:`ARM_ACCEL_POINTS` in the current state, keyed by the acceleration fields the
+        plant node derives from them: ``a_arm_{loc1,cg,loc2}_{x,y,z}`` (x forward, y left,
+        z up; kinematic acceleration, gravity not included, 0 at static equilibrium). Each
+        velocity is that of the material point at its current position, v_com + omega x
+        (r - r_com), from the arm's link state that :meth:`_read` already fetched (no
+        PyBullet call: the dynamics are untouched)."""
+        arm = self._arm_state
+        out: dict[str, np.ndarray] = {}
+        for name, pt in ARM_ACCEL_POINTS.items():
+            v = _point_velocity(arm, self._world(arm, LOWER_ARM, la.to_corner(pt)))
+            for axis, val in zip("xyz", v, strict=True):
+                out[f"a_arm_{name}_{axis}"] = np.array([float(val)])
+        return out
 
     def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
         if dt != self._dt:

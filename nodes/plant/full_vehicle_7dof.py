@@ -159,6 +159,13 @@ class FullVehicle7DOF(PlantModel):
             "w_pitch": self._qd[1:2].copy(), "w_roll": self._qd[2:3].copy(),
         }
 
+    def response_velocities(self) -> dict[str, np.ndarray]:
+        """The body's pitch and roll rates [rad/s] (length 1), whose change over the first
+        substep the plant node publishes as ``alpha_pitch`` and ``alpha_roll`` in
+        ``plant/response`` [rad/s^2] (pitch about +y, nose down positive; roll about +x,
+        left side up positive), as it does a_b."""
+        return {"alpha_pitch": self._qd[1:2].copy(), "alpha_roll": self._qd[2:3].copy()}
+
     def spring_force(self) -> np.ndarray:
         zb, _, _ = self._corner_kinematics()
         return self.params.spring_stiffness * (self._q[3:] - zb)

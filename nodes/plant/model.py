@@ -63,6 +63,14 @@ class PlantModel(ABC):
         ``F_bs`` [N]. Empty by default."""
         return {}
 
+    def response_velocities(self) -> dict[str, np.ndarray]:
+        """Velocities in the current state whose rate of change ``plant/response`` carries,
+        keyed by the acceleration field's name, per corner or length 1: the plant node
+        publishes ``(after - before) / dt`` over the step's first substep, as it does a_b and
+        a_w (e.g. the double-wishbone arm points' ``a_arm_loc1_z`` [m/s^2], the full
+        vehicle's ``alpha_pitch`` [rad/s^2]). Empty by default."""
+        return {}
+
     def loads(self) -> dict[str, dict[str, float]]:
         """Component loads after the latest substep, by channel, e.g. ``{"arm": {...}}``."""
         return {}

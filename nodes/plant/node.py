@@ -3,7 +3,9 @@
 Every step k: publish ``state`` at t_k; wait for ``tyre_road/force`` and ``controller/force``
 of step k (the step barrier); take the first substep and publish ``response`` (accelerations
 at t_k from PyBullet's forward dynamics, the applied forces, and the model's extra fields
-such as the bump-stop force ``F_bs``) and, for realistic models, the
+such as the bump-stop force ``F_bs``, and the rates of the model's
+:meth:`~.model.PlantModel.response_velocities`: arm-point or pitch/roll accelerations) and,
+for realistic models, the
 component loads (``arm``); integrate the remaining substeps to t_{k+1}.
 
 In the ``parallel`` exchange the forces of step k were computed from the state of step k-1
@@ -61,12 +63,15 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                                       st["z_w"], st["v_w"] - st["v_b"])
             F_s = model.spring_force()
             extra = model.extra_response()
+            vel0 = model.response_velocities()
             model.substep(dt, F_t, F_d)
             after = model.state()
+            vel1 = model.response_velocities()
             later.append((ch.RESPONSE, k, t, {
                 "a_b": (after["v_b"] - st["v_b"]) / dt,
                 "a_w": (after["v_w"] - st["v_w"]) / dt,
                 "F_t": F_t, "F_d": F_d, "F_s": F_s, **extra,
+                **{key: (vel1[key] - v) / dt for key, v in vel0.items()},
             }))
             later.extend((name, k, t, values) for name, values in model.loads().items())
             part.progress(k, t)

@@ -268,6 +268,12 @@ def columns(table: Table, name: str) -> list[tuple[str, np.ndarray]]:
 
 
 BAND_16 = (0.0, 16.0)  # Hz, the band of thesis Tables 5.7-5.10
+ARM_ACCEL_FIELDS = tuple(f"a_arm_{loc}_{ax}" for loc in ("loc1", "cg", "loc2") for ax in "xyz")
+"""``plant/response`` fields of the lower arm's point accelerations [m/s^2] (double-wishbone
+corner; thesis Table 5.4's Loc1, CG, Loc2 in x, y, z)."""
+ROTATION_FIELDS = ("alpha_pitch", "alpha_roll")
+"""``plant/response`` fields of the full vehicle's body pitch and roll accelerations
+[rad/s^2] (7-DOF model; thesis Tables 5.7-5.10's x and y rows)."""
 
 
 def metric_values(
@@ -287,10 +293,15 @@ def metric_values(
     * ``a_b_wk_rms``: ISO 2631-1 Wk-weighted RMS, ``jerk_b_rms``: RMS jerk, both on the
       ``fs_out`` signal;
     * ``a_w_rms`` / ``a_w_rms_full``: wheel, the same two ways;
+    * ``a_arm_<loc>_<ax>_rms``: lower-arm point accelerations (``loc1``, ``cg``, ``loc2``;
+      ``x``, ``y``, ``z``; Table 5.4) over ``band_hz``;
+    * ``alpha_pitch_rms`` / ``alpha_roll_rms`` (rad/s²): the full vehicle's body pitch and roll
+      accelerations over ``band_hz``, and ``..._rms_0_16`` over 0-16 Hz (Tables 5.7-5.10);
     * ``sws`` (mm), ``defl_rms`` (mm), ``dtl_rms`` (N), ``f_d_rms`` (N): suspension working
       space, deflection RMS, dynamic tyre load RMS, damper force RMS, at the run's own rate.
 
-    Uses (when present) ``plant/response/a_b``, ``plant/response/a_w``,
+    Uses (when present) ``plant/response/a_b``, ``plant/response/a_w``, the arm-point and
+    pitch/roll fields above,
     ``plant/state/z_b``/``z_w``, ``tyre_road/force/F_t`` and ``controller/force/F_d``.
     """
     t = np.asarray(table["t"], dtype=float)
@@ -312,6 +323,18 @@ def metric_values(
         m[f"a_w{lab}_rms"] = (thesis_band_rms(t, a, (f1, f2), fs_out), "m/s2",
                               f"a_w{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
         m[f"a_w{lab}_rms_full"] = (rms(a), "m/s2", f"a_w{lab} RMS full band [m/s2]")
+    for name in ARM_ACCEL_FIELDS:
+        for lab, a in columns(table, f"plant/response/{name}"):
+            m[f"{name}{lab}_rms"] = (thesis_band_rms(t, a, (f1, f2), fs_out), "m/s2",
+                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
+    for name in ROTATION_FIELDS:
+        for lab, a in columns(table, f"plant/response/{name}"):
+            a5 = resample_to(t, a, fs_out)
+            m[f"{name}{lab}_rms"] = (periodogram_band_rms(a5, fs_out, (f1, f2)), "rad/s2",
+                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [rad/s2]")
+            if (f1, f2) != BAND_16:
+                m[f"{name}{lab}_rms_0_16"] = (periodogram_band_rms(a5, fs_out, BAND_16),
+                                              "rad/s2", f"{name}{lab} RMS 0-16 Hz [rad/s2]")
     zb, zw = columns(table, "plant/state/z_b"), columns(table, "plant/state/z_w")
     for (lab, b), (_, w) in zip(zb, zw, strict=False):
         m[f"sws{lab}"] = (1e3 * working_space(b, w), "mm", f"SWS{lab} [mm]")
