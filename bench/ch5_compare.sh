@@ -34,11 +34,17 @@ import numpy as np
 out = Path(sys.argv[1])
 points = json.loads((out / "sweep.json").read_text())["points"]
 ride = {Path(r["path"]).name: r["metrics"] for r in json.loads((out / "ride.json").read_text())["runs"]}
-LAWS = ("passive", "tss1", "tss2", "tss3")
+LAWS = ("passive", "tss1", "tss2", "tss3", "pnr")
 KEYS = [("a_b_rms", "body RMS 0-20 Hz [m/s2]"), ("a_b_rms_0_16", "body RMS 0-16 Hz [m/s2]"),
         ("a_b_rms_full", "body RMS full band [m/s2]"), ("a_b_wk_rms", "body Wk RMS [m/s2]"),
         ("jerk_b_rms", "body jerk RMS [m/s3]"), ("a_w_rms", "wheel RMS 0-20 Hz [m/s2]"),
-        ("sws", "working space [mm]"), ("dtl_rms", "dynamic tyre load RMS [N]")]
+        ("sws", "working space [mm]"), ("dtl_rms", "dynamic tyre load RMS [N]"),
+        ("alpha_pitch_rms", "body pitch acc. RMS 0-20 Hz [rad/s2]"),
+        ("alpha_pitch_rms_0_16", "body pitch acc. RMS 0-16 Hz [rad/s2]"),
+        ("alpha_roll_rms", "body roll acc. RMS 0-20 Hz [rad/s2]"),
+        ("alpha_roll_rms_0_16", "body roll acc. RMS 0-16 Hz [rad/s2]")]
+KEYS += [(f"a_arm_{loc}_{ax}_rms", f"arm {name} {ax} RMS 0-20 Hz [m/s2]")
+         for loc, name in (("loc1", "Loc1"), ("cg", "CG"), ("loc2", "Loc2")) for ax in "xyz"]
 
 
 def law_of(params):
@@ -89,7 +95,7 @@ for group, laws in table.items():
                 cells.append("-")
                 continue
             cell = f"{vals.mean():.4g} ± {vals.std(ddof=1) if vals.size > 1 else 0:.2g}"
-            if law != "passive":
+            if law != "passive" and all(base[s][key] for s in seeds):  # no % of a zero
                 pct = np.array([(base[s][key] - laws[law][s][key]) / base[s][key] * 100
                                 for s in seeds if s in laws[law]])
                 cell += (f" ({pct.mean():+.1f} ± {pct.std(ddof=1) if pct.size > 1 else 0:.1f} %,"
