@@ -16,6 +16,7 @@ The run folder holds ``scenario.json`` (as resolved), ``journal.msgpack``, ``tab
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import json
 import math
 import os
@@ -30,7 +31,7 @@ from typing import Any
 from cosim import channels as ch
 from cosim import scenario as sc
 from cosim.bus import MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
-from cosim.errors import RunError, ScenarioError, SuscosimError
+from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 
 from .clock import Clock, ClockResult
 from .placement import core_layout, pin, should_pin, usable_cores
@@ -121,8 +122,26 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> None:
         shown = ", ".join(nulled[:5]) + (f" and {len(nulled) - 5} more" if len(nulled) > 5 else "")
         print(f"suscosim: warning: {folder / 'summary.json'}: {len(nulled)} non-finite "
               f"value(s) written as null: {shown}", file=sys.stderr)
-    (folder / "summary.json").write_text(json.dumps(clean, indent=2, sort_keys=True,
-                                                    allow_nan=False))
+    text = json.dumps(clean, indent=2, sort_keys=True, allow_nan=False)
+    path, tmp = folder / "summary.json", folder / ".summary.json.tmp"
+    try:  # whole or not at all: a full disk leaves no truncated summary.json
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+        raise SummaryWriteError(path, exc) from None
+
+
+class SummaryWriteError(RunError):
+    """``summary.json`` could not be written (a full disk, an unwritable folder)."""
+
+    def __init__(self, path: Path, exc: OSError) -> None:
+        self.path, self.os_error = path, exc
+        super().__init__(f"cannot write {path}: {exc.strerror or exc}"
+                         + (" (the disk is full)" if exc.errno == errno.ENOSPC else ""))
 
 
 PINNED_SPIN_US = 200
@@ -199,15 +218,23 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
         lowlatency = not connect and not zenoh_config_file
     run = scenario["run"]
     folder = Path(run["dir"])
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "scenario.json").write_text(json.dumps(scenario, indent=2, sort_keys=True))
     if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go
         listen = list(listen or [free_loopback_endpoint()])
     from .runs import write_run_json
 
     bus_eps = run["mode"] == "distributed"  # the other modes open no Zenoh session
-    write_run_json(folder, run["id"], listen if bus_eps else [], connect if bus_eps else [],
-                   lowlatency)
+    try:  # before any node or bus: an unwritable folder or a full disk ends it here
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "scenario.json").write_text(json.dumps(scenario, indent=2, sort_keys=True))
+        if run["mode"] == "distributed":
+            (folder / "logs").mkdir(exist_ok=True)
+        write_run_json(folder, run["id"], listen if bus_eps else [],
+                       connect if bus_eps else [], lowlatency)
+    except OSError as exc:
+        full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
+        raise InputFileError(str(exc.filename or folder),
+                             f"cannot write the run folder: {exc.strerror or exc}{full}") \
+            from None
     t0 = time.monotonic()
     if run["mode"] == "reference":
         from .reference import run_reference
@@ -226,8 +253,13 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
         names = [n for n in run["nodes"] if n not in (external or [])]
         cores = usable_cores()
         layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
-        local = LocalNodes(run["id"], names, list(connect or listen), lowlatency,
-                           folder / "logs", zenoh_config_file, layout)
+        try:
+            local = LocalNodes(run["id"], names, list(connect or listen), lowlatency,
+                               folder / "logs", zenoh_config_file, layout)
+        except OSError as exc:  # a node log that cannot be opened: nothing has started yet
+            _close(bus)
+            raise InputFileError(str(exc.filename or folder / "logs"),
+                                 f"cannot write the node logs: {exc.strerror or exc}") from None
         check = local.dead
     else:
         from .node_main import run_node
@@ -255,20 +287,29 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                 clock.announce_abort("the orchestrator was interrupted")
             except Exception:
                 pass
-        if hasattr(bar, "close"):
-            bar.close()
-        if local:
-            local.stop(grace_s=3.0)
-        for th in threads:
-            th.join(timeout=3.0)
-        rec = _recover(folder)
-        summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed",
-                           "interrupted (Ctrl-C or SIGTERM)"
-                           if isinstance(exc, KeyboardInterrupt)
-                           else str(exc) or type(exc).__name__)
-        summary.update(_transport(local, lowlatency))
-        write_summary(folder, summary)
-        bus.close()
+        error = ("interrupted (Ctrl-C or SIGTERM)" if isinstance(exc, KeyboardInterrupt)
+                 else str(exc) or type(exc).__name__)
+        unwritten: SummaryWriteError | None = None
+        try:
+            if hasattr(bar, "close"):
+                bar.close()
+            if local:
+                local.stop(grace_s=3.0)
+            for th in threads:
+                th.join(timeout=3.0)
+            rec = _recover(folder)
+            summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", error)
+            summary.update(_transport(local, lowlatency))
+            write_summary(folder, summary)
+        except SummaryWriteError as werr:  # a full disk: say both, still end promptly
+            unwritten = werr
+        finally:
+            _close(bus)  # else the session's threads keep the orchestrator alive
+        if unwritten is not None:
+            if isinstance(exc, KeyboardInterrupt):
+                print(f"suscosim: {unwritten}", file=sys.stderr)
+                raise
+            raise RunError(f"{error}; and {unwritten}") from exc
         if not isinstance(exc, SuscosimError | KeyboardInterrupt):
             raise RunError(f"internal error in the orchestrator: {type(exc).__name__}: {exc}") \
                 from exc
@@ -290,6 +331,13 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     return summary
 
 
+def _close(bus: Any) -> None:
+    try:
+        bus.close()
+    except Exception:  # closing on an error path: the first error is the one to report
+        pass
+
+
 def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
     """How a distributed run's local processes talked and where they ran (for summary.json)."""
     if local is None:
@@ -298,16 +346,42 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
 
 
 def _recover(folder: Path) -> dict[str, Any]:
-    """After a failed run: whatever the journal holds, as a table (if the recorder did not)."""
+    """After a failed run: whatever the journal holds, as a table, never put in place of a
+    larger one (see :func:`nodes.recorder.table.export_target`); a table that cannot be
+    written (a full disk) is removed rather than left truncated."""
     journal = folder / "journal.msgpack"
     if not journal.exists():
         return {}
-    from nodes.recorder.node import finalize
+    from nodes.recorder.journal import read_journal
+    from nodes.recorder.table import build_table, channel_stats, export, export_target
 
     try:
-        return finalize(journal, folder)
+        contents = read_journal(journal)
+        table, bad = build_table(contents.records)
     except Exception as exc:  # the run already failed: report, do not mask that error
         return {"error": f"journal unreadable: {type(exc).__name__}: {exc}"}
+    rows = int(len(table["t"]))
+    rec: dict[str, Any] = {"stats": channel_stats(table), "files": {}, "rows": rows,
+                           "torn": contents.torn, "undecodable": bad,
+                           "skipped_records": contents.skipped_records}
+    if contents.problem:
+        rec["journal"] = contents.problem
+    if not rows:
+        return rec
+    stem = "table"
+    try:
+        stem, why = export_target(folder, rows, contents.damaged)
+        rec["files"] = export(table, folder, stem)
+        if why:
+            rec["note"] = f"table written as {stem}.*: {why}"
+    except OSError as exc:
+        for suffix in (".csv", ".parquet"):
+            try:
+                (folder / f"{stem}{suffix}").unlink(missing_ok=True)
+            except OSError:
+                pass
+        rec["error"] = f"table not written: {exc.strerror or exc}"
+    return rec
 
 
 __all__ = ["resolve", "run_scenario", "RunError"]

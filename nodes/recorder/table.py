@@ -155,22 +155,23 @@ def table_rows(folder: str | Path, stem: str = "table") -> int | None:
     return None
 
 
-def export_safely(table: Table, folder: str | Path, damaged: bool) -> tuple[dict[str, str], str]:
-    """Export a table rebuilt from a journal without ever replacing a table silently by a
-    smaller one: when the journal was ``damaged`` (records skipped in its middle), or when a
-    ``table.*`` with more rows is already in ``folder``, the table goes to
-    ``table.recovered.csv/.parquet`` alongside and ``table.*`` is left as it was.
-    Returns (paths written, why it went alongside: "" when it went to ``table.*``)."""
-    rows = len(table["t"])
+def export_target(folder: str | Path, rows: int, damaged: bool) -> tuple[str, str]:
+    """Where a table of ``rows`` rebuilt from a journal may go without ever replacing a
+    table silently by a smaller one: (stem, why). ``table`` (why = "") unless the journal was
+    ``damaged`` (records skipped in its middle) or a ``table.*`` with more rows is already in
+    ``folder``: then ``table.recovered``, alongside, and ``why`` says which."""
     before = table_rows(folder)
-    why = ""
     if damaged:
-        why = "the journal is damaged"
-    elif before is not None and before > rows:
-        why = f"the table already there has more rows ({before} > {rows})"
-    if why:
-        return export(table, folder, RECOVERED_STEM), why
-    return export(table, folder), ""
+        return RECOVERED_STEM, "the journal is damaged"
+    if before is not None and before > rows:
+        return RECOVERED_STEM, f"the table already there has more rows ({before} > {rows})"
+    return "table", ""
+
+
+def export_safely(table: Table, folder: str | Path, damaged: bool) -> tuple[dict[str, str], str]:
+    """:func:`export` to :func:`export_target`'s place: (paths written, why alongside)."""
+    stem, why = export_target(folder, len(table["t"]), damaged)
+    return export(table, folder, stem), why
 
 
 def dump_json(obj: object, path: str | Path) -> None:
