@@ -282,3 +282,42 @@ def test_the_same_run_at_2_ms_and_at_half_a_ms_gives_the_same_headline(tmp_path,
     assert ride.main([str(dirs[0.002]), str(dirs[0.0005]), "--json"]) == 0
     runs = json.loads(capsys.readouterr().out)["runs"]
     assert [r["metrics"]["a_b_rms"] for r in runs] == pytest.approx([coarse, fine], rel=1e-12)
+
+
+@pytest.mark.integration
+def test_the_headline_of_a_tss3_run_at_half_a_ms_is_the_thesis_metric_of_that_run(tmp_path,
+                                                                               capsys):
+    """Issue #13: a TSS3 (MR damper, constant-current switching) run at h = 0.5 ms: the headline
+    body RMS of `suscosim ride --json` is the thesis's computation of the same record, done
+    here independently: resample to 500 Hz (scipy.signal.resample_poly, 1 of every 4, with the
+    metric's anti-aliasing Kaiser window; scipy's default window differs by 0.04 %), MATLAB's
+    default one-sided periodogram (rectangular window, nfft = 2^nextpow2(N), no detrend),
+    sqrt(trapz) over 0-20 Hz selected by frequency."""
+    from scipy.signal import periodogram, resample_poly
+
+    from nodes.recorder.table import read_table
+    from orchestrator import ride
+
+    from ..conftest import ROOT, suscosim
+
+    out = tmp_path / "tss3"
+    res = suscosim("run", str(ROOT / "scenarios" / "ch5_qvm_tss3_random.toml"), "--out",
+                   str(out), "--mode", "monolithic", "--quiet", "--set", "run.h=0.0005",
+                   "--set", "run.t_end=4.0", "--set", "run.stall_timeout_s=120.0",
+                   timeout=300.0)
+    assert res.returncode == 0, res.stderr + res.stdout
+    tab = read_table(out / "table.parquet")
+    assert sample_rate(tab["t"]) == pytest.approx(2000.0)
+    a = np.asarray(tab["plant/response/a_b"], dtype=float)
+    from nodes.recorder import ride_metrics as rm
+
+    x = resample_poly(a, 1, 4, window=("kaiser", rm._AA_KAISER_BETA))
+    nfft = 1 << int(np.ceil(np.log2(x.size)))
+    f, P = periodogram(x, fs=500.0, window="boxcar", nfft=nfft, detrend=False,
+                       scaling="density")
+    band = f <= 20.0
+    thesis = float(np.sqrt(np.trapezoid(P[band], f[band])))
+    assert ride.main([str(out), "--json"]) == 0
+    headline = json.loads(capsys.readouterr().out)["runs"][0]["metrics"]["a_b_rms"]
+    assert thesis > 0.05
+    assert headline == pytest.approx(thesis, rel=1e-9)
