@@ -69,6 +69,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="Zenoh low-latency transport (negotiated per link: peers without it "
                          "still connect; the orchestrator sets it for its local nodes)")
     ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    ap.add_argument("--lease-ms", type=int, default=2000,
+                    help="Zenoh link lease [ms]: how long peers keep this node's links when it "
+                         "goes silent (default 2000; the orchestrator gives its local nodes "
+                         "the run's stall timeout)")
     ap.add_argument("--spin-us", type=float, default=0.0,
                     help="poll an input this long before blocking on it [us] (the "
                          "orchestrator sets it for nodes it pins to a core)")
@@ -77,6 +81,9 @@ def main(argv: list[str] | None = None) -> int:
                          "through the router or orchestrator given by --connect; the "
                          "orchestrator starts its local nodes as peers)")
     args = ap.parse_args(argv)
+    if args.lease_ms <= 0:
+        print(f"suscosim node: --lease-ms {args.lease_ms}: expected > 0", file=sys.stderr)
+        return 2
     logging.basicConfig(level=logging.INFO, format=f"%(asctime)s {args.name}: %(message)s",
                         stream=sys.stderr)
     # a node stopped with SIGTERM (the orchestrator ending a run it holds up) says where it
@@ -84,8 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     faulthandler.register(signal.SIGTERM, chain=True)
     try:
         bus = ZenohBus(zenoh_config(args.connect, args.listen, args.lowlatency,
-                                    config_file=args.zenoh_config, mode=args.mode,
-                                    default_mode="client"))
+                                    lease_ms=args.lease_ms, config_file=args.zenoh_config,
+                                    mode=args.mode, default_mode="client"))
     except Exception as exc:  # unreachable router, bad config file or certificate
         text = " ".join(str(exc).split())
         print(f"suscosim node {args.name}: cannot open the Zenoh session "

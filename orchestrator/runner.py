@@ -149,12 +149,24 @@ PINNED_SPIN_US = 200
 coupled steps/s on the 2-core VM (docs/cosim.md); unpinned runs side by side got nothing."""
 
 
+def local_lease_ms(stall_timeout_s: float) -> int:
+    """Zenoh link lease [ms] of the orchestrator and the nodes it starts: the run's stall
+    timeout, between 2 and 30 s (issue #15 item 8). A process starved of CPU for longer than
+    its lease loses its links: its liveliness token drops (the run was ended as "gone" after
+    a 3-4 s pause even with a 30 s stall timeout) and the messages sent to it meanwhile are
+    lost (the recorder then stalls). With the lease at the stall timeout a pause is judged by
+    one rule. A local node that dies is still seen at once (its exit code; its sockets close,
+    which ends its links whatever the lease); nodes started elsewhere keep their own lease
+    (``suscosim node --lease-ms``, default 2 s), so a partitioned machine is seen in ~2 s."""
+    return int(1000.0 * min(max(stall_timeout_s, 2.0), 30.0))
+
+
 class LocalNodes:
     """Node processes started on this machine, their logs, and their fate."""
 
     def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
                  log_dir: Path, zenoh_config_file: str | None = None,
-                 cores: dict[str, int] | None = None) -> None:
+                 cores: dict[str, int] | None = None, lease_ms: int = 2000) -> None:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
         log_dir.mkdir(parents=True, exist_ok=True)
@@ -168,6 +180,7 @@ class LocalNodes:
                 cmd.append("--lowlatency")
             if zenoh_config_file:
                 cmd += ["--zenoh-config", zenoh_config_file]
+            cmd += ["--lease-ms", str(int(lease_ms))]
             core = (cores or {}).get(name)
             if core is not None:
                 cmd += ["--spin-us", str(PINNED_SPIN_US)]
@@ -248,14 +261,15 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     local: LocalNodes | None = None
     threads: list[threading.Thread] = []
     if run["mode"] == "distributed":  # listen: chosen above, before run.json
+        lease = local_lease_ms(float(run["stall_timeout_s"]))
         bus = ZenohBus(zenoh_config(connect or [], listen, lowlatency=lowlatency,
-                                    config_file=zenoh_config_file))
+                                    lease_ms=lease, config_file=zenoh_config_file))
         names = [n for n in run["nodes"] if n not in (external or [])]
         cores = usable_cores()
         layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
         try:
             local = LocalNodes(run["id"], names, list(connect or listen), lowlatency,
-                               folder / "logs", zenoh_config_file, layout)
+                               folder / "logs", zenoh_config_file, layout, lease_ms=lease)
         except OSError as exc:  # a node log that cannot be opened: nothing has started yet
             _close(bus)
             raise InputFileError(str(exc.filename or folder / "logs"),
