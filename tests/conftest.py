@@ -26,6 +26,22 @@ def popen_suscosim(*args: str) -> subprocess.Popen:
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
+def node_pids(run_id: str, node: str) -> list[int]:
+    """PIDs of the node processes of a run (read from /proc, no external tools)."""
+    want = ["orchestrator", "node", node, "--run", run_id]
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            argv = (entry / "cmdline").read_bytes().decode().split("\0")
+        except OSError:
+            continue
+        if any(argv[i:i + len(want)] == want for i in range(len(argv))):
+            pids.append(int(entry.name))
+    return pids
+
+
 @pytest.fixture
 def ch3_step() -> Path:
     return CH3_STEP

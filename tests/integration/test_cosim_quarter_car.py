@@ -21,7 +21,7 @@ from orchestrator.accuracy import peak_errors, worst
 from orchestrator.placement import core_layout, usable_cores
 from orchestrator.reference import reference_solution
 
-from ..conftest import popen_suscosim, suscosim
+from ..conftest import node_pids, popen_suscosim, suscosim
 
 pytestmark = pytest.mark.integration
 
@@ -114,22 +114,6 @@ def test_parallel_exchange_within_one_percent(tmp_path, ch3_step, reference):
     assert worst(hold) > 5.0, hold
 
 
-def _pids_of(run_id: str, node: str) -> list[int]:
-    """PIDs of the node processes of a run (read from /proc, no external tools)."""
-    want = ["orchestrator", "node", node, "--run", run_id]
-    pids = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            argv = (entry / "cmdline").read_bytes().decode().split("\0")
-        except OSError:
-            continue
-        if any(argv[i:i + len(want)] == want for i in range(len(argv))):
-            pids.append(int(entry.name))
-    return pids
-
-
 def test_killed_node_ends_run_with_error_naming_it(tmp_path, ch3_step):
     out = tmp_path / "killed"
     proc = popen_suscosim("run", str(ch3_step), "--out", str(out), "--quiet",
@@ -144,7 +128,7 @@ def test_killed_node_ends_run_with_error_naming_it(tmp_path, ch3_step):
             time.sleep(0.1)
         else:
             pytest.fail("run did not start")
-        pids = _pids_of("killtest", "controller")
+        pids = node_pids("killtest", "controller")
         assert pids, "controller process not found"
         for pid in pids:
             os.kill(pid, signal.SIGKILL)
@@ -246,7 +230,7 @@ def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
                           "--set", "run.t_end=120.0", "--set", 'run.id="orphantest"')
     try:
         _wait_until_recording(out)
-        nodes = {n: _pids_of("orphantest", n) for n in ("plant", "tyre_road", "controller",
+        nodes = {n: node_pids("orphantest", n) for n in ("plant", "tyre_road", "controller",
                                                            "recorder")}
         assert all(nodes.values()), nodes
         proc.kill()  # SIGKILL: no chance to tell anyone
@@ -290,7 +274,7 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
         want = core_layout(ch.NODES, cores)
         assert want["tyre_road"] != want["controller"]  # the two force nodes work at once
         for node in ch.NODES:
-            (pid,) = _pids_of("pintest", node)
+            (pid,) = node_pids("pintest", node)
             assert _cores_of_every_thread(pid) == {str(want[node])}, node
             argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
             assert "--spin-us" in argv, argv  # a pinned node polls before it blocks
@@ -316,7 +300,7 @@ def test_sigterm_to_the_orchestrator_ends_the_run_with_a_failed_summary(tmp_path
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and "interrupted" in summary["error"]
     assert summary["rows"] > 0  # what was recorded is in the table
-    assert not _pids_of("termtest", "plant")  # the nodes are gone too
+    assert not node_pids("termtest", "plant")  # the nodes are gone too
 
 
 def test_start_barrier_timeout_says_which_input_each_node_never_heard(tmp_path, ch3_step):

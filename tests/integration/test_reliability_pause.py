@@ -8,31 +8,15 @@ import json
 import os
 import signal
 import time
-from pathlib import Path
 
 import pytest
 
 from nodes.recorder.table import read_table
 from orchestrator.runner import local_lease_ms
 
-from ..conftest import popen_suscosim
+from ..conftest import node_pids, popen_suscosim
 
 pytestmark = pytest.mark.integration
-
-
-def _pids_of(run_id: str, node: str) -> list[int]:
-    want = ["orchestrator", "node", node, "--run", run_id]
-    pids = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            argv = (entry / "cmdline").read_bytes().decode().split("\0")
-        except OSError:
-            continue
-        if any(argv[i:i + len(want)] == want for i in range(len(argv))):
-            pids.append(int(entry.name))
-    return pids
 
 
 def test_lease_follows_the_stall_timeout_within_bounds():
@@ -58,7 +42,7 @@ def test_a_paused_node_is_not_a_dead_node(tmp_path, ch3_step, node):
             time.sleep(0.05)
         else:
             pytest.fail("run did not get under way")
-        pids = _pids_of(run_id, node)
+        pids = node_pids(run_id, node)
         assert pids, f"{node} process not found"
         for pid in pids:
             os.kill(pid, signal.SIGSTOP)
