@@ -368,12 +368,7 @@ def ride_summary(
         of ``runs``; ``change_pct`` (thesis Eq 5.13, positive = reduction) against the
         baseline (default: the first run) for the keys both have; empty for the baseline.
     """
-    if not runs:
-        raise ValueError("no runs to compare")
-    names = list(runs)
-    base = names[0] if baseline is None else baseline
-    if base not in runs:
-        raise ValueError(f"baseline {base!r} is not one of the runs {names}")
+    names, base = _runs_and_baseline(runs, baseline)
     values = {n: metric_values(runs[n], band_hz, fs_out) for n in names}
     units: dict[str, str] = {}
     labels: dict[str, str] = {}
@@ -389,6 +384,17 @@ def ride_summary(
         out_runs.append({"name": n, "metrics": metrics, "change_pct": change})
     return {"baseline": base, "band_hz": [float(band_hz[0]), float(band_hz[1])],
             "fs_metric_hz": float(fs_out), "units": units, "labels": labels, "runs": out_runs}
+
+
+def _runs_and_baseline(runs: Mapping[str, Table], baseline: str | None) -> tuple[list[str], str]:
+    """The run names in order and the baseline's (default: the first); ValueError if none."""
+    if not runs:
+        raise ValueError("no runs to compare")
+    names = list(runs)
+    base = names[0] if baseline is None else baseline
+    if base not in runs:
+        raise ValueError(f"baseline {base!r} is not one of the runs {names}")
+    return names, base
 
 
 def improvement(baseline: float, value: float) -> float:
@@ -411,12 +417,7 @@ def ride_table(
         band_hz: band of the PSD-based RMS (Hz).
         metrics: row names to keep (default: those every run has, in the first run's order).
     """
-    if not runs:
-        raise ValueError("no runs to compare")
-    names = list(runs)
-    base = names[0] if baseline is None else baseline
-    if base not in runs:
-        raise ValueError(f"baseline {base!r} is not one of the runs {names}")
+    names, base = _runs_and_baseline(runs, baseline)
     order = [base] + [n for n in names if n != base]
     values = {n: run_metrics(runs[n], band_hz) for n in order}
     rows = (
