@@ -50,7 +50,7 @@ def section_depths(y_cut: float, n: int = 4001) -> tuple[np.ndarray, np.ndarray]
     x = np.linspace(-0.3, 0.3, n)
     pts = np.c_[x, np.full(n, y_cut)]
     inside = Path(outline()).contains_points(pts) & ~Path(hole()).contains_points(pts)
-    depth = np.where(inside, np.maximum(arm.WEB_DEPTH, 0.0), 0.0)
+    depth = np.where(inside, arm.WEB_DEPTH, 0.0)
     # ribs: within the rib widths of the outline or the hole edge
     d_out = _distance_to_polyline(pts, outline())
     d_hole = _distance_to_polyline(pts, hole())

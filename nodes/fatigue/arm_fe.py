@@ -215,8 +215,8 @@ class SolidModel:
 
     def three_two_one(self, nodes: Sequence[int]) -> np.ndarray:
         """The dofs of a 3-2-1 support on three nodes A, B, C (not collinear): A all three
-        translations, B the two normal to AB... chosen as the two axes most normal to AB,
-        C the axis most normal to the plane ABC. Returns 6 global dof indices."""
+        translations, B the two axes least along AB, C the axis most normal to the plane
+        ABC. Returns 6 global dof indices."""
         a, b, c = (int(n) for n in nodes)
         pa, pb, pc = self.node_xyz[[a, b, c]]
         ab = (pb - pa) / np.linalg.norm(pb - pa)

@@ -102,7 +102,8 @@ def across_levels(width: np.ndarray, n_web: int) -> tuple[np.ndarray, np.ndarray
 
 def divisions(mesh_size: float) -> tuple[int, int, int]:
     """(n_around, n_web, n_thick) for a target element size [m]."""
-    perim = float(np.sum(np.hypot(*np.diff(np.vstack([outline(), outline()[:1]]), axis=0).T)))
+    edge = outline()
+    perim = float(np.sum(np.hypot(*np.diff(np.vstack([edge, edge[:1]]), axis=0).T)))
     n_around = max(24, int(np.ceil(perim / mesh_size / 4)) * 4)
     n_web = max(2, int(np.ceil(0.06 / mesh_size)))
     n_thick = max(2, int(np.ceil(arm.RIB_DEPTH / mesh_size / 2.0)))
