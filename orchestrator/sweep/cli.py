@@ -1,0 +1,96 @@
+"""The command line of ``suscosim sweep``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from cosim.errors import SuscosimError
+
+from .local import Runner
+from .results import result_rows, results_table, write_results, write_sweep_json
+from .serve import serve
+from .spec import MAX_ID, _params_text, load_sweep, validate_points
+from .state import point_state
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="suscosim sweep",
+                                 description="Run a grid of scenarios, several at once.")
+    ap.add_argument("sweep_file", metavar="SWEEP.toml")
+    ap.add_argument("--out", help="sweep folder (default sweeps/<name>)")
+    ap.add_argument("--jobs", type=int, help="runs at once (default: the file's, else "
+                    "cores // 2, at least 1; each run is 4 node processes)")
+    ap.add_argument("--connect", action="append", default=[],
+                    help="Zenoh router endpoint every run goes through (the same bus for all "
+                         "runs; needed for --external)")
+    ap.add_argument("--external", action="append", default=[], metavar="NODE",
+                    help="do not start NODE: it is started elsewhere (docs/sweeps.md)")
+    ap.add_argument("--serve", action="append", default=[], metavar="NODE",
+                    help="on another machine: start NODE for every point's run as it "
+                         "appears on the router given by --connect (docs/sweeps.md)")
+    ap.add_argument("--no-fatigue", action="store_true", help="skip the fatigue worker")
+    ap.add_argument("--list", action="store_true",
+                    help="validate and list the points (and whether they are done); run nothing")
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.jobs is not None and args.jobs < 1:
+        print("suscosim sweep: error: --jobs must be >= 1", file=sys.stderr)
+        return 2
+    if (args.external or args.serve) and not args.connect:
+        print("suscosim sweep: error: --external and --serve need --connect (a router "
+              "both machines reach)", file=sys.stderr)
+        return 2
+    try:
+        sweep = load_sweep(args.sweep_file, jobs=args.jobs,
+                           fatigue=False if args.no_fatigue else None)
+        out = Path(args.out) if args.out else Path("sweeps") / sweep.name
+        print(f"suscosim sweep {sweep.name}: {len(sweep.points)} points, validating ...",
+              flush=True)
+        validate_points(sweep, out)
+    except SuscosimError as exc:
+        print(f"suscosim sweep: error: {exc}", file=sys.stderr)
+        return exc.exit_code if exc.exit_code == 2 else 2
+    if args.serve:
+        from ..node_main import NODE_MODULES
+
+        bad = [n for n in args.serve if n not in NODE_MODULES]
+        if bad:
+            print(f"suscosim sweep: error: --serve {bad[0]}: expected one of "
+                  + ", ".join(sorted(NODE_MODULES)), file=sys.stderr)
+            return 2
+        return serve(sweep, args.serve, args.connect, out, sys.stdout)
+    out.mkdir(parents=True, exist_ok=True)
+    states = {p.id: point_state(p, out / "runs" / p.id, sweep.fatigue) for p in sweep.points}
+    if args.list:
+        for p in sweep.points:
+            print(f"  {p.id:<{MAX_ID}} {states[p.id]:<8} {p.n_steps:>8} steps  "
+                  f"{_params_text(p.params)}")
+        return 0
+    write_sweep_json(sweep, out)
+    todo = [(p, states[p.id]) for p in sweep.points if states[p.id] != "done"]
+    n_done = len(sweep.points) - len(todo)
+    print(f"  -> {out}: {len(todo)} to run ({n_done} already done), {sweep.jobs} at once"
+          + (", fatigue on" if sweep.fatigue else ""), flush=True)
+    runner = Runner(sweep, out, args.connect, args.external, sys.stderr)
+    t0 = time.monotonic()
+    completed = runner.execute(todo) if todo else True
+    rows = result_rows(sweep, out, runner.status)
+    write_results(out, rows)
+    print(results_table(sweep, rows))
+    n_failed = sum(r["status"] != "ok" for r in rows)
+    print(f"sweep {sweep.name}: {len(rows) - n_failed} ok, {n_failed} failed, "
+          f"{time.monotonic() - t0:.0f} s; results in {out / 'results.csv'}")
+    if not completed:
+        print("suscosim sweep: interrupted (rerun the same command to resume)", file=sys.stderr)
+        return 130
+    return 1 if n_failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,109 @@
+"""Results of a sweep: one row per point from the run folders, ``results.csv`` /
+``results.json``, the printed table, and ``sweep.json``."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+from typing import Any
+
+from .spec import Sweep
+from .state import _read_json, point_state
+
+
+def _fmt(v: Any) -> str:
+    if v is None or v == "":
+        return ""
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> list[dict]:
+    """One row per point, from the run folders (points of earlier sessions included)."""
+    rows = []
+    for p in sweep.points:
+        d = out / "runs" / p.id
+        summary = _read_json(d / "summary.json")
+        summary = summary if isinstance(summary, dict) else {}
+        fat = _read_json(d / "fatigue" / "summary.json") if sweep.fatigue else None
+        if p.id in status:
+            st, err = status[p.id]
+        else:
+            state = point_state(p, d, sweep.fatigue)
+            st = "ok" if state == "done" else "failed"
+            err = "" if st == "ok" else (summary.get("error") or "not run")
+        row: dict[str, Any] = {"point": p.id, **p.params, "status": st, "error": err,
+                               "wall_s": summary.get("wall_s"),
+                               "steps_per_s": summary.get("steps_per_s"),
+                               "n_steps": summary.get("n_steps", p.n_steps)}
+        chans = summary.get("channels", {}) if isinstance(summary.get("channels"), dict) else {}
+        for want in sweep.channels:
+            names = [c for c in chans if c == want or c.startswith(want + "[")] or [want]
+            for c in names:
+                stats = chans.get(c, {})
+                row[f"{c} peak"] = stats.get("peak")
+                row[f"{c} rms"] = stats.get("rms")
+        if sweep.fatigue:
+            fat = fat if isinstance(fat, dict) and st == "ok" else {}  # not of a partial run
+            row["life_repeats"] = fat.get("min_life_repeats")
+            row["life_km"] = fat.get("min_life_km")
+            row["max_damage"] = fat.get("max_damage_per_pass")
+            row["critical_node"] = fat.get("critical_node_id")
+        row["run_dir"] = f"runs/{p.id}"
+        rows.append(row)
+    return rows
+
+
+def write_results(out: Path, rows: list[dict]) -> None:
+    columns: list[str] = []
+    for r in rows:
+        columns += [c for c in r if c not in columns]
+    columns = [c for c in columns  # a channel no run has (e.g. arm loads of a lumped car)
+               if not c.endswith((" peak", " rms")) or any(r.get(c) is not None for r in rows)]
+    rows = [{c: r.get(c) for c in columns} for r in rows]
+    with open(out / "results.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=columns)
+        w.writeheader()
+        for r in rows:
+            w.writerow({c: "" if r.get(c) is None else r.get(c) for c in columns})
+    (out / "results.json").write_text(json.dumps(rows, indent=2, default=str))
+
+
+def results_table(sweep: Sweep, rows: list[dict]) -> str:
+    """The printed table: id, params, status, timing, the first channel's RMS, fatigue."""
+    cols = ["point", *(a.name for a in sweep.axes), "status", "wall_s", "steps_per_s"]
+    metrics = [c for c in (rows[0] if rows else {}) if c.endswith((" peak", " rms"))]
+    extra = [c for c in metrics if any(r.get(c) is not None for r in rows)][:3]
+    cols += extra
+    if sweep.fatigue:
+        cols += ["life_km", "life_repeats", "critical_node"]
+    head = [c.split("/")[-1] if "/" in c else c for c in cols]
+    body = [[_fmt(r.get(c)) for c in cols] for r in rows]
+    widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h)
+              for i, h in enumerate(head)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(head, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(v.ljust(w) for v, w in zip(b, widths, strict=True)) for b in body]
+    errs = [f"  {r['point']}: {r['error']}" for r in rows if r["status"] != "ok" and r["error"]]
+    if errs:
+        lines += ["failed:", *errs]
+    return "\n".join(lines)
+
+
+def write_sweep_json(sweep: Sweep, out: Path) -> None:
+    doc = {
+        "name": sweep.name,
+        "base": str(sweep.bases[0]) if len(sweep.bases) == 1 else [str(b) for b in sweep.bases],
+        "grid": {a.name: a.labels for a in sweep.axes},
+        "set": sweep.fixed,
+        "fatigue": sweep.fatigue,
+        "sweep_file": str(sweep.path.resolve()),
+        "variants": {k: v for k, v in sweep.raw_grid.items() if isinstance(v, dict)},
+        "points": [{"id": p.id, "params": p.params, "run_dir": f"runs/{p.id}",
+                    "base": str(p.base), "overrides": p.overrides, "n_steps": p.n_steps,
+                    "fingerprint": p.fingerprint} for p in sweep.points],
+    }
+    (out / "sweep.json").write_text(json.dumps(doc, indent=2, default=str))
+

@@ -1,0 +1,291 @@
+"""The sweep file: its keys, axes and points (``load_sweep``), point ids, TOML values for
+``--set``, and the preflight of every point's scenario (``validate_points``)."""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import itertools
+import json
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cosim import scenario as sc
+from cosim.errors import InputFileError, ScenarioError, SuscosimError
+from cosim.keys import check_name
+
+SWEEP_KEYS = ("name", "base", "jobs", "fatigue", "grid", "set", "channels", "description")
+DEFAULT_CHANNELS = ("plant/response/a_b", "plant/response/a_w", "tyre_road/force/F_t",
+                    "controller/force/F_d", "plant/arm/ball_joint_z")
+FATIGUE_COLUMNS = ("life_repeats", "life_km", "max_damage", "critical_node")
+MAX_ID = 64
+RESERVED = ("base", "point", "status", "error", "wall_s", "steps_per_s", "n_steps", "run_dir",
+            *FATIGUE_COLUMNS)
+"""Names a grid axis cannot have (result columns, the base axis)."""
+
+
+
+class SweepError(SuscosimError):
+    """A bad sweep file or point (exit code 2); the message names the key or the point."""
+
+    exit_code = 2
+
+
+
+# --------------------------------------------------------------------------- sweep file
+
+@dataclass
+class Axis:
+    """One grid axis: a parameter name and, per value, its label and overrides."""
+
+    name: str
+    labels: list[Any]
+    overrides: list[dict[str, Any]]
+    bases: list[Path] | None = None  # the ``base`` axis: one scenario file per label
+
+
+@dataclass
+class Point:
+    """One grid point: one run."""
+
+    index: int
+    id: str
+    params: dict[str, Any]
+    base: Path
+    overrides: dict[str, Any]
+    n_steps: int = 0
+    fingerprint: str = ""
+
+    @property
+    def set_args(self) -> list[str]:
+        """The ``--set`` assignments of this point (the run id last)."""
+        return [f"{k}={toml_value(v)}" for k, v in self.overrides.items()] + \
+            [f"run.id={toml_value(self.id)}"]
+
+
+@dataclass
+class Sweep:
+    """A parsed and checked sweep file (scenarios not yet validated)."""
+
+    path: Path
+    name: str
+    bases: list[Path]
+    axes: list[Axis]
+    fixed: dict[str, Any]
+    jobs: int
+    fatigue: bool
+    channels: list[str]
+    raw_grid: dict[str, Any]
+    points: list[Point] = field(default_factory=list)
+
+
+def toml_value(v: Any) -> str:
+    """A Python value (from TOML) as a TOML inline value, for ``--set``."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(str(k))} = {toml_value(x)}"
+                               for k, x in v.items()) + "}"
+    raise TypeError(f"cannot write {type(v).__name__} as a TOML value")
+
+
+def _slug(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | float):
+        return repr(v)
+    if isinstance(v, str):
+        s = re.sub(r"[^A-Za-z0-9_.]+", "_", v).strip("_.")
+        return s or "x"
+    return "h" + hashlib.sha1(json.dumps(v, sort_keys=True).encode()).hexdigest()[:8]
+
+
+def point_id(name: str, labels: list[Any]) -> str:
+    """``<name>-<value>-<value>...``: letters, digits, ``_ . -``, at most 64 characters
+    (longer ones are cut and end in a hash of the values)."""
+    pid = "-".join([name, *(_slug(v) for v in labels)])
+    if len(pid) > MAX_ID:
+        digest = hashlib.sha1(json.dumps([name, labels], sort_keys=True,
+                                         default=str).encode()).hexdigest()[:10]
+        pid = pid[:MAX_ID - 11].rstrip("-_.") + "-" + digest
+    return pid
+
+
+def _check_override_key(where: str, key: Any, value: Any) -> None:
+    if not isinstance(key, str) or not key:
+        raise SweepError(f"{where}: override keys must be dotted scenario keys")
+    parts = key.split(".")
+    if not all(parts) or (len(parts) < 2 and not isinstance(value, dict)):
+        raise ScenarioError(f"{where}.{key}", value,
+                            "a dotted scenario key such as \"run.h\" (quoted in TOML), or a "
+                            "section name with a table value")
+    if parts[0] not in sc.SECTIONS:
+        raise ScenarioError(f"{where}.{key}", value,
+                            "a key in one of the sections " + ", ".join(sc.SECTIONS))
+
+
+def _absolute_paths(overrides: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """Relative file paths among the overrides, made absolute against ``folder``."""
+    out = copy.deepcopy(overrides)
+    path_keys = {f"{s}.{k}" for s, k in sc.PATH_KEYS}
+    for key, value in out.items():
+        candidates: list[tuple[dict, str]] = []
+        if key in path_keys:
+            candidates.append((out, key))
+        elif isinstance(value, dict):
+            for s, k in sc.PATH_KEYS:
+                if key == s:
+                    candidates.append((value, k))
+        for holder, k in candidates:
+            v = holder.get(k)
+            if isinstance(v, str) and v and v != "builtin" and \
+                    not Path(v).expanduser().is_absolute():
+                holder[k] = str(folder / Path(v).expanduser())
+    return out
+
+
+def load_sweep(path: str | Path, jobs: int | None = None,
+               fatigue: bool | None = None) -> Sweep:
+    """Read and check a sweep file and enumerate its points (scenarios not yet validated)."""
+    import tomllib
+
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except OSError as exc:
+        raise InputFileError(str(path), f"cannot read sweep file ({exc.strerror})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputFileError(str(path), f"not valid TOML: {exc}") from None
+    sw = data.get("sweep")
+    if not isinstance(sw, dict):
+        raise ScenarioError("sweep", sw, "a [sweep] table (with base and grid)")
+    for k in sw:
+        if k not in SWEEP_KEYS:
+            raise ScenarioError(f"sweep.{k}", sw[k], "one of " + ", ".join(SWEEP_KEYS))
+    folder = path.resolve().parent
+    name = sw.get("name", path.stem)
+    check_name("sweep.name", name)
+    if len(name) > 40:
+        raise ScenarioError("sweep.name", name, "at most 40 characters")
+    raw_base = sw.get("base", None)
+    if raw_base is None:  # the sweep file is its own base scenario
+        if not any(k != "sweep" for k in data):
+            raise ScenarioError("sweep.base", None, "a base scenario file (or scenario "
+                                "sections in the sweep file itself)")
+        bases = [path.resolve()]
+    else:
+        items = raw_base if isinstance(raw_base, list) else [raw_base]
+        if not items or not all(isinstance(b, str) and b for b in items):
+            raise ScenarioError("sweep.base", raw_base, "a scenario file or a list of them")
+        bases = []
+        for b in items:
+            p = Path(b).expanduser()
+            p = p if p.is_absolute() else folder / p
+            if not p.is_file():
+                raise InputFileError(str(p), "base scenario not found (sweep.base is "
+                                     "relative to the sweep file)")
+            bases.append(p.resolve())
+    if jobs is None:
+        jobs = sw.get("jobs", max(1, (os.cpu_count() or 2) // 2))
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ScenarioError("sweep.jobs", jobs, "an integer >= 1")
+    if fatigue is None:
+        fatigue = sw.get("fatigue", False)
+    if not isinstance(fatigue, bool):
+        raise ScenarioError("sweep.fatigue", fatigue, "true or false")
+    channels = sw.get("channels", list(DEFAULT_CHANNELS))
+    if not isinstance(channels, list) or not all(isinstance(c, str) for c in channels):
+        raise ScenarioError("sweep.channels", channels, "a list of channel names")
+    fixed = sw.get("set", {})
+    if not isinstance(fixed, dict):
+        raise ScenarioError("sweep.set", fixed, "a table of dotted keys and values")
+    for k, v in fixed.items():
+        _check_override_key("sweep.set", k, v)
+    grid = sw.get("grid", {})
+    if not isinstance(grid, dict):
+        raise ScenarioError("sweep.grid", grid, "a table of axes")
+    axes: list[Axis] = []
+    if len(bases) > 1:
+        axes.append(Axis("base", [b.stem for b in bases], [{} for _ in bases], bases))
+    for key, spec in grid.items():
+        where = f"sweep.grid.{key}"
+        if key in RESERVED:
+            raise ScenarioError(where, spec, "an axis name other than " + ", ".join(RESERVED))
+        if isinstance(spec, list):
+            if not spec:
+                raise ScenarioError(where, spec, "a non-empty list of values")
+            _check_override_key("sweep.grid", key, spec[0])
+            axes.append(Axis(key, list(spec), [{key: v} for v in spec]))
+        elif isinstance(spec, dict):
+            if not spec:
+                raise ScenarioError(where, spec, "a non-empty table of named variants")
+            labels, overrides = [], []
+            for vname, ov in spec.items():
+                if not isinstance(ov, dict) or not ov:
+                    raise ScenarioError(f"{where}.{vname}", ov,
+                                        "a table of overrides, e.g. { \"run.h\" = 0.001 }")
+                for k, v in ov.items():
+                    _check_override_key(f"{where}.{vname}", k, v)
+                labels.append(vname)
+                overrides.append(ov)
+            axes.append(Axis(key, labels, overrides))
+        else:
+            raise ScenarioError(where, spec, "a list of values or a table of named variants")
+    sweep = Sweep(path=path, name=name, bases=bases, axes=axes, fixed=fixed, jobs=jobs,
+                  fatigue=fatigue, channels=channels, raw_grid=grid)
+    seen: dict[str, int] = {}
+    for index, combo in enumerate(itertools.product(*(range(len(a.labels)) for a in axes))):
+        params: dict[str, Any] = {}
+        overrides: dict[str, Any] = dict(fixed)
+        base = bases[0]
+        for axis, i in zip(axes, combo, strict=True):
+            params[axis.name] = axis.labels[i]
+            overrides.update(axis.overrides[i])
+            if axis.bases is not None:
+                base = axis.bases[i]
+        pid = point_id(name, [params[a.name] for a in axes])
+        if pid in seen:  # two values with the same slug (e.g. "a b" and "a_b")
+            pid = point_id(name, [*(params[a.name] for a in axes), index])
+        seen[pid] = index
+        sweep.points.append(Point(index, pid, params, base,
+                                  _absolute_paths(overrides, path.resolve().parent)))
+    return sweep
+
+
+def validate_points(sweep: Sweep, out: Path) -> None:
+    """Load and preflight every point's scenario (``cosim.scenario.load`` with the point's
+    overrides, then the runner's model checks); fills n_steps and the fingerprint. Raises
+    SweepError naming the point and the key; starts nothing."""
+    from ..runner import resolve
+
+    for p in sweep.points:
+        try:
+            scenario = sc.load(p.base, p.set_args)
+            p.fingerprint = hashlib.sha256(json.dumps(scenario, sort_keys=True, default=str)
+                                           .encode()).hexdigest()[:16]
+            resolved = resolve(copy.deepcopy(scenario), out / "runs" / p.id)
+            p.n_steps = int(resolved["run"]["n_steps"])
+        except SuscosimError as exc:
+            raise SweepError(f"sweep point '{p.id}' ({_params_text(p.params)}): {exc}") \
+                from None
+
+
+def _params_text(params: dict[str, Any]) -> str:
+    return ", ".join(f"{k}={v}" for k, v in params.items()) or "no parameters"
+
