@@ -1,0 +1,64 @@
+"""``suscosim report RUN_OR_SWEEP_DIR [--out FILE.html] [--open]``: the command."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .run_data import BadInput, is_run_dir, is_sweep_dir
+from .run_page import render_run
+from .sweep_page import render_sweep
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="suscosim report",
+                                 description="a self-contained HTML report of a run or sweep")
+    ap.add_argument("dir", metavar="RUN_OR_SWEEP_DIR", help="a run folder or a sweep folder")
+    ap.add_argument("--out", metavar="FILE.html", help="output file (default DIR/report.html)")
+    ap.add_argument("--open", action="store_true", help="open the page in a web browser")
+    return ap
+
+
+def _fail(message: str) -> int:
+    print(f"suscosim report: {message}", file=sys.stderr)
+    return 2
+
+
+def render(d: Path) -> tuple[str, str]:
+    """(kind, HTML) of a run or sweep folder; raises BadInput if it is neither."""
+    if not d.is_dir():
+        raise BadInput(f"{d}: no such folder")
+    if is_sweep_dir(d):
+        return "sweep", render_sweep(d)
+    if is_run_dir(d):
+        return "run", render_run(d)
+    raise BadInput(f"{d}: neither a run folder (scenario.json, summary.json, table.*, "
+                   "journal.msgpack) nor a sweep folder (sweep.json)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Write the report; 0 on success, 2 for bad input (one line on stderr)."""
+    try:
+        args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as exc:
+        return 0 if exc.code == 0 else 2
+    d = Path(args.dir)
+    try:
+        kind, text = render(d)
+    except BadInput as exc:
+        return _fail(str(exc))
+    out = Path(args.out) if args.out else d / "report.html"
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        return _fail(f"{out}: cannot write ({exc.strerror or exc})")
+    print(f"suscosim report: {kind} {d} -> {out} ({len(text) / 1e6:.2f} MB)")
+    if args.open:
+        import webbrowser
+
+        if not webbrowser.open(out.resolve().as_uri()):
+            print(f"suscosim report: no browser found; open {out.resolve().as_uri()}",
+                  file=sys.stderr)
+    return 0

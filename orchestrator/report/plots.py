@@ -1,0 +1,92 @@
+"""Matplotlib helpers of the report: an Agg figure without pyplot, figures and PNG files as
+``data:`` URIs, min/max decimation of long signals, stacked time-history panels."""
+
+from __future__ import annotations
+
+import base64
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .markup import esc
+from .signals import CORNERS
+
+MAX_PLOT_POINTS = 40000
+"""Longer signals are decimated (min/max per bucket) before plotting."""
+
+
+
+def new_figure(nrows: int, ncols: int = 1, width: float = 11.0, row_h: float = 2.6,
+            sharex: bool = False):
+    """A matplotlib Figure (no pyplot, Agg canvas) and its axes as a flat list."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, max(2.4, row_h * nrows)), layout="constrained")
+    axes = fig.subplots(nrows, ncols, sharex=sharex, squeeze=False)
+    return fig, [a for row in axes for a in row]
+
+
+def fig_uri(fig, dpi: int = 90) -> str:
+    """The figure as a ``data:image/png;base64,...`` URI."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def file_uri(path: Path) -> str | None:
+    """A PNG file as a data URI (None if it is not a PNG)."""
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    if not data.startswith(b"\x89PNG\r\n\x1a\n"):
+        return None
+    return "data:image/png;base64," + base64.b64encode(data).decode("ascii")
+
+
+def img(uri: str, alt: str) -> str:
+    return f'<img class="plot" src="{uri}" alt="{esc(alt)}">'
+
+
+def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """At most ~n_max points for a line plot, keeping each bucket's min and max (peaks stay)."""
+    n = x.size
+    if n <= n_max:
+        return t, x
+    b = int(math.ceil(n / (n_max // 2)))
+    m = (n // b) * b
+    xb, tb = x[:m].reshape(-1, b), t[:m].reshape(-1, b)
+    i_lo, i_hi = xb.argmin(axis=1), xb.argmax(axis=1)
+    first = np.minimum(i_lo, i_hi)
+    second = np.maximum(i_lo, i_hi)
+    rows = np.arange(xb.shape[0])
+    tt = np.column_stack([tb[rows, first], tb[rows, second]]).ravel()
+    xx = np.column_stack([xb[rows, first], xb[rows, second]]).ravel()
+    return tt, xx
+
+
+def plot_panels(t: np.ndarray, panels: list[tuple], width: float = 11.0) -> str:
+    fig, axes = new_figure(len(panels), width=width, sharex=True)
+    styles = ("-", "--", ":", "-.")
+    for ax, (title, unit, lines) in zip(axes, panels, strict=True):
+        quantities: list[str] = []
+        for i, (lab, y) in enumerate(lines):
+            head, _, last = lab.rpartition(" ")
+            if last in CORNERS and head:  # full vehicle: colour = corner, style = quantity
+                if head not in quantities:
+                    quantities.append(head)
+                style = dict(color=f"C{CORNERS.index(last)}",
+                             ls=styles[quantities.index(head) % len(styles)])
+            else:
+                style = dict(color=f"C{i % 10}")
+            ax.plot(*decimate(t, y), lw=0.9, label=lab, **style)
+        ax.set_title(title, fontsize=10, loc="left")
+        ax.set_ylabel(unit)
+        ax.grid(alpha=0.3)
+        if len(lines) > 1:
+            ax.legend(fontsize=7, loc="upper right", ncol=min(4, len(lines)))
+    axes[-1].set_xlabel("t [s]")
+    return fig_uri(fig)

@@ -1,0 +1,364 @@
+"""The sections of a run's page (scenario, time histories, PSDs, RMS/peak, ride metrics,
+loads, fatigue, logs) and the page itself."""
+
+from __future__ import annotations
+
+import datetime as _dt
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .markup import (
+    badge,
+    cmd,
+    esc,
+    flatten,
+    fmt,
+    is_num,
+    kv_table,
+    nav,
+    note,
+    page,
+    row,
+    section,
+    table_html,
+)
+from .plots import fig_uri, file_uri, img, new_figure, plot_panels
+from .run_data import RunData, load_run
+from .signals import (
+    BODY_ACC,
+    PSD_F_MAX_HZ,
+    TYRE_FORCE,
+    arm_groups,
+    corner_label,
+    first_present,
+    sample_rate,
+    time_history_panels,
+    unit_of,
+    welch_psd,
+)
+
+RUN_KEYS = ("name", "id", "mode", "exchange", "coupling", "h", "substeps", "t_end",
+            "t_end_source", "n_steps", "nodes")
+SUMMARY_KEYS = ("status", "wall_s", "run_wall_s", "step_wall_s", "steps_per_s", "n_steps", "rows",
+                "nodes")
+
+
+def run_header(r: RunData, title_prefix: str = "Run") -> str:
+    s = r.summary or {}
+    out = [f"<h1>{esc(title_prefix)} {esc(r.run_id)} {badge(r.status)}</h1>",
+           f'<p class="meta">folder {cmd(str(r.path.resolve()))} · report written '
+           f"{esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
+    if r.summary is None:
+        out.append(note("no summary.json: the run is still going, or its orchestrator was "
+                        "killed before it could write one. Shown: whatever the folder holds."))
+    if s.get("error"):
+        out.append(f'<div class="error">run failed: {esc(s["error"])}</div>')
+    for p in r.problems:
+        out.append(note(esc(p)))
+    glance = kv_table(at_a_glance(r), "At a glance", cls="kv glance")
+    status_tab = ""
+    if r.summary is not None:
+        pairs = [("status", r.status)]
+        if "wall_s" in s:
+            pairs.append(("wall time [s]", s.get("wall_s")))
+        if "step_wall_s" in s:
+            pairs.append(("stepping wall time [s]", s.get("step_wall_s")))
+        if "run_wall_s" in s:
+            pairs.append(("start to all nodes done [s]", s.get("run_wall_s")))
+        if "steps_per_s" in s:
+            pairs.append(("coupled steps per s", s.get("steps_per_s")))
+        for k in ("n_steps", "rows", "mode", "exchange", "coupling", "h", "substeps", "t_end"):
+            if k in s:
+                pairs.append((k, s[k]))
+        rej = {k: v for k, v in (s.get("rejected_messages") or {}).items() if v}
+        pairs.append(("rejected messages", rej or "none"))
+        status_tab = kv_table(pairs, "Run")
+    out.append(row(glance, status_tab))
+    return "\n".join(out)
+
+
+def _scn(r: RunData, sec: str, key: str) -> Any:
+    return ((r.scenario or {}).get(sec) or {}).get(key)
+
+
+def at_a_glance(r: RunData) -> list[tuple[str, Any]]:
+    """The few facts a reader wants first: what was simulated and what came out."""
+    pairs: list[tuple[str, Any]] = []
+    if r.scenario is not None:
+        pairs += [("vehicle", _scn(r, "vehicle", "model")),
+                  ("road", " ".join(str(x) for x in (
+                      _scn(r, "road", "type"), _scn(r, "road", "class") and
+                      f"class {_scn(r, 'road', 'class')}",
+                      _scn(r, "road", "speed_kmh") and f"{fmt(_scn(r, 'road', 'speed_kmh'))} km/h",
+                      _scn(r, "road", "length_m") and f"{fmt(_scn(r, 'road', 'length_m'))} m")
+                      if x)),
+                  ("tyre", _scn(r, "tyre", "model")),
+                  ("controller", _scn(r, "controller", "law"))]
+    s = r.summary or {}
+    pairs.append(("status", r.status))
+    if "t_end" in s or r.scenario:
+        pairs.append(("simulated [s]", s.get("t_end", _scn(r, "run", "t_end"))))
+    if "steps_per_s" in s:
+        pairs.append(("coupled steps per s", s.get("steps_per_s")))
+    chans = s.get("channels") or {}
+    for base, lab in (("plant/response/a_b", "body acceleration rms [m/s²]"),
+                      ("tyre_road/force/F_t", "tyre force peak [N]")):
+        st = chans.get(base) or chans.get(f"{base}[0]")
+        if st:
+            pairs.append((lab + ("" if base in chans else " (FL)"),
+                          st.get("rms" if "rms" in lab else "peak")))
+    if r.fatigue is not None:
+        pairs.append(("arm minimum life [km]", r.fatigue.get("min_life_km")))
+    return pairs
+
+
+def scenario_section(r: RunData) -> str:
+    if r.scenario is None:
+        return section("scenario", "Scenario", note("no scenario.json in the run folder."))
+    parts = []
+    order = ["run", "vehicle", "road", "tyre", "controller", "fatigue"]
+    keys = order + [k for k in r.scenario if k not in order]
+    for k in keys:
+        v = r.scenario.get(k)
+        if v is None:
+            continue
+        if k == "run":
+            pairs = [(x, v[x]) for x in RUN_KEYS if x in v] + \
+                    [(x, y) for x, y in flatten(v) if x not in RUN_KEYS and x != "dir"]
+        else:
+            pairs = flatten(v)
+        parts.append(kv_table(pairs, k))
+    return section("scenario", "Scenario", row(*parts))
+
+
+def time_section(r: RunData) -> str:
+    t = r.table["t"]
+    panels, missing = time_history_panels(r.table)
+    body = f'<p class="meta">from {esc(r.table_note)}: {t.size} samples, ' \
+           f"t = {fmt(float(t[0]))} … {fmt(float(t[-1]))} s</p>"
+    if panels:
+        body += img(plot_panels(t, panels), "time histories")
+    if missing:
+        body += note("not in this run's table: " + esc(", ".join(missing)))
+    return section("time", "Time histories", body)
+
+
+def psd_section(r: RunData) -> str:
+    t = r.table["t"]
+    fs = sample_rate(t)
+    if fs is None:
+        return section("psd", "Power spectral densities",
+                       note("the time column is not uniformly sampled (a run with missing "
+                            "steps?): no PSD."))
+    sigs = []
+    _b, acc = first_present(r.table, BODY_ACC)
+    if acc:
+        sigs.append(("Body acceleration", "(m/s²)²/Hz", acc))
+    _b, ft = first_present(r.table, TYRE_FORCE)
+    if ft:
+        sigs.append(("Tyre force", "N²/Hz", ft))
+    if not sigs:
+        return section("psd", "Power spectral densities",
+                       note("no body acceleration or tyre force in the table."))
+    fmax = min(fs / 2, PSD_F_MAX_HZ)
+    fig, axes = new_figure(1, len(sigs), row_h=3.4)
+    for ax, (title, unit, cols) in zip(axes, sigs, strict=True):
+        for c, x in cols:
+            f, p = welch_psd(x, fs)
+            keep = (f > 0) & (f <= fmax)
+            ax.semilogy(f[keep], np.maximum(p[keep], 1e-30), lw=1.0, label=c or None)
+        ax.set_title(title, fontsize=10, loc="left")
+        ax.set_xlabel("f [Hz]")
+        ax.set_ylabel(unit)
+        ax.grid(alpha=0.3, which="both")
+        if len(cols) > 1:
+            ax.legend(fontsize=7)
+    n = t.size
+    body = img(fig_uri(fig), "PSDs") + (
+        f'<p class="meta">Welch, Hann window, {min(n, max(256, n // 4))} samples per segment, '
+        f"50 % overlap, mean removed; fs = {fmt(fs)} Hz; shown to {fmt(fmax)} Hz.</p>")
+    return section("psd", "Power spectral densities", body)
+
+
+def stats_section(r: RunData) -> str:
+    chans = (r.summary or {}).get("channels") or {}
+    src = "summary.json"
+    if not chans and r.table is not None:
+        from nodes.recorder.table import channel_stats
+
+        chans = channel_stats({"t": r.table["t"], **{k: v for k, v in r.table.items()
+                                                      if k != "t"}})
+        src = r.table_note
+    if not chans:
+        return section("stats", "RMS and peak of every channel",
+                       note("no channel statistics: the run recorded no complete step."))
+    rows = [(name, unit_of(name), st.get("rms"), st.get("peak"), st.get("t_peak"),
+             st.get("mean"), st.get("std"), st.get("min"), st.get("max"))
+            for name, st in sorted(chans.items())]
+    body = f'<p class="meta">from {esc(src)}; peak = the value of largest magnitude ' \
+           f"(signed), at t_peak.</p>" + table_html(
+               ["channel", "unit", "rms", "peak", "t_peak [s]", "mean", "std", "min", "max"],
+               rows)
+    return section("stats", "RMS and peak of every channel", body)
+
+
+def ride_section(r: RunData) -> str:
+    from nodes.recorder.ride_metrics import run_metrics
+
+    try:
+        m = run_metrics(r.table)
+    except (ValueError, KeyError) as exc:
+        return section("ride", "Ride metrics", note(f"no ride metrics: {esc(exc)}"))
+    if not m:
+        return section("ride", "Ride metrics", note("no ride channels in the table."))
+    body = table_html(["metric", "value"], list(m.items()), cls="kv") + (
+        '<p class="meta">nodes.recorder.ride_metrics.run_metrics: band RMS as the thesis '
+        "computes it (resampled to 500 Hz, periodogram, Eq 4.8/4.9), full-band RMS at the "
+        "run's own rate, ISO 2631-1 Wk weighting, suspension "
+        "working space (SWS), dynamic tyre load (DTL).</p>")
+    return section("ride", "Ride metrics", body)
+
+
+def loads_section(r: RunData) -> str:
+    t = r.table["t"]
+    panels = []
+    _b, ft = first_present(r.table, TYRE_FORCE)
+    if ft:
+        panels.append(("Tyre force (vertical, compressive +)", "N",
+                       [(corner_label("F_t", c), x) for c, x in ft]))
+    groups = arm_groups(r.table)
+    for point, comps in groups.items():
+        unit = "N·m" if all(a.startswith("m") for a, _ in comps) else "N"
+        panels.append((f"Lower arm: {point.replace('_', ' ')} (arm frame)", unit, comps))
+    body = ""
+    if panels:
+        body += img(plot_panels(t, panels), "load histories")
+    if not groups:
+        model = ((r.scenario or {}).get("vehicle") or {}).get("model", "?")
+        body += note(f"no lower-arm load channels (<code>plant/arm/...</code>) in this run: the "
+                     f"vehicle model {cmd(model)} has no arm. The double-wishbone corner "
+                     f"({cmd('quarter_car_double_wishbone')}) reports them.")
+    else:
+        body += '<p class="meta">Forces on the lower arm at its joints, arm frame ' \
+                "(see cosim/channels.py); these drive the fatigue analysis.</p>"
+    return section("loads", "Tyre and lower-arm load histories", body)
+
+
+def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:
+    pairs: list[tuple[str, Any]] = [
+        ("minimum life [km]", fs.get("min_life_km")),
+        (f"minimum life [repeats of the {fmt(fs.get('track_length_m'))} m track]",
+         fs.get("min_life_repeats")),
+    ]
+    if fs.get("min_life_repeats_basis") is not None:
+        pairs.append((f"minimum life [repeats of {fmt(fs.get('repeats_basis_m'))} m]",
+                      fs.get("min_life_repeats_basis")))
+    xyz = fs.get("critical_node_xyz_m")
+    pairs += [
+        ("max damage per pass [-]", fs.get("max_damage_per_pass")),
+        ("critical node", fs.get("critical_node_id")),
+        ("critical node at [mm]",
+         [1e3 * v for v in xyz] if isinstance(xyz, list) and all(map(is_num, xyz)) else xyz),
+    ]
+    if is_num(fs.get("critical_eq_range_max_pa")):
+        pairs.append(("critical node: largest equivalent stress range [MPa]",
+                      fs["critical_eq_range_max_pa"] / 1e6))
+    if is_num(fs.get("eq_stress_max_pa")) and is_num(fs.get("eq_stress_min_pa")):
+        pairs.append(("equivalent stress, max / min over the arm [MPa]",
+                      [fs["eq_stress_max_pa"] / 1e6, fs["eq_stress_min_pa"] / 1e6]))
+    if fs.get("source"):
+        pairs.append(("computed", f"{fs['source']} (live: during the run; batch: "
+                                  "suscosim fatigue)"))
+    for k, lab in (("n_nodes", "nodes analysed"), ("n_samples", "samples"),
+                   ("duration_s", "duration [s]"), ("track_length_m", "track length [m]")):
+        if k in fs:
+            pairs.append((lab, fs[k]))
+    if fs.get("missing_channels"):
+        pairs.append(("load channels missing (taken as 0)", fs["missing_channels"]))
+    return pairs
+
+
+def fatigue_section(r: RunData) -> str:
+    d = cmd(f"suscosim fatigue {r.path}")
+    if r.fatigue is None:
+        if r.table is not None and not r.has_arm():
+            text = ("no fatigue results: this run has no lower-arm loads (the fatigue analysis "
+                    "needs the double-wishbone corner).")
+        else:
+            text = f"no fatigue results: run {d}"
+        return section("fatigue", "Fatigue of the lower arm", note(text))
+    fs = r.fatigue
+    blocks = [kv_table(fatigue_numbers(fs), "Results")]
+    top = fs.get("top_nodes") or []
+    if top:
+        blocks.append("<div><h3>Most damaged nodes</h3>" + table_html(
+            ["node", "damage per pass", "life [km]"],
+            [(n.get("node_id"), n.get("damage"), n.get("life_km")) for n in top]) + "</div>")
+    body = row(*blocks)
+    cfg = fs.get("config") or {}
+    inf = fs.get("influence") or {}
+    body += row(kv_table(flatten(cfg), "Settings") if cfg else "",
+                kv_table(flatten(inf), "Stress influence model") if inf else "")
+    body += '<h3 id="damage-map">Damage map</h3>'
+    uri = file_uri(r.damage_map) if r.damage_map else None
+    if uri:
+        body += img(uri, "damage map of the lower arm")
+    else:
+        body += note(f"no damage map (fatigue/damage_map.png): run {d}")
+    csv_path = r.path / "fatigue" / "damage_per_node.csv"
+    body += f'<p class="meta">Per-node results: {cmd(str(csv_path))}</p>'
+    return section("fatigue", "Fatigue of the lower arm", body)
+
+
+def logs_section(r: RunData) -> str:
+    """Tails of the node logs that say something (only for a run that did not end ok)."""
+    logs = sorted((r.path / "logs").glob("*.log")) if (r.path / "logs").is_dir() else []
+    parts = []
+    for p in logs:
+        try:
+            lines = p.read_text(errors="replace").splitlines()
+        except OSError:
+            continue
+        lines = [ln for ln in lines if ln.strip() and not ln.startswith("pybullet build time")]
+        if lines:
+            parts.append(f"<h3>{esc(p.name)}</h3><pre>{esc(chr(10).join(lines[-25:]))}</pre>")
+    if not parts:
+        return ""
+    return section("logs", "Node logs (last lines)", "".join(parts))
+
+
+def run_body(r: RunData) -> str:
+    """The sections of a run page (without the page frame)."""
+    parts = [scenario_section(r)]
+    if r.table is None:
+        j = r.path / "journal.msgpack"
+        if r.table_note:
+            hint = esc(r.table_note)
+        elif j.is_file():
+            hint = f"run {cmd(f'suscosim export {j}')}"
+        else:
+            hint = "the run recorded nothing (no journal.msgpack)"
+        parts.append(section("time", "Time histories",
+                             note(f"no table (table.parquet / table.csv): {hint}.")))
+        parts.append(stats_section(r))
+    else:
+        parts += [time_section(r), psd_section(r), stats_section(r), ride_section(r),
+                  loads_section(r)]
+    parts.append(fatigue_section(r))
+    if r.status != "ok":
+        parts.append(logs_section(r))
+    return "".join(parts)
+
+
+RUN_NAV = (("scenario", "Scenario"), ("time", "Time histories"), ("psd", "PSDs"),
+           ("stats", "RMS / peak"), ("ride", "Ride metrics"), ("loads", "Loads"),
+           ("fatigue", "Fatigue"), ("damage-map", "Damage map"))
+
+
+def render_run(d: Path) -> str:
+    """The HTML page of a run folder."""
+    r = load_run(d)
+    body = run_header(r) + nav(RUN_NAV) + run_body(r)
+    return page(f"suscosim run {r.run_id}", body)

@@ -1,0 +1,131 @@
+"""The sweep page: its header, results table, one section per point."""
+
+from __future__ import annotations
+
+import datetime as _dt
+from pathlib import Path
+from typing import Any
+
+from .markup import anchor_id, badge, cmd, esc, kv_table, nav, note, page, section, table_html
+from .run_page import fatigue_numbers
+from .signals import BODY_ACC, TYRE_FORCE
+from .sweep_charts import sweep_compare_section, sweep_maps_section, sweep_overlay_section
+from .sweep_data import Point, grid_keys, load_sweep, read_results, rms_of, vs_passive
+
+
+def sweep_results_section(spec: dict, points: list[Point], keys: list[str],
+                          d: Path) -> str:
+    life_change = vs_passive(points, keys, lambda p: p.life_km)
+    acc_change = vs_passive(points, keys, lambda p: rms_of(p, BODY_ACC))
+    header = ["point", *keys, "status", "wall [s]", "steps/s", "a_b rms [m/s²]",
+              "F_t rms [N]", "min life [km]"]
+    if life_change:
+        header.append("life change vs passive [%]")
+    if acc_change:
+        header.append("a_b rms vs passive [%]")
+    header.append("error")
+    rows = []
+    for p in points:
+        s = (p.run.summary or {}) if p.run else {}
+        row: list[Any] = [f'<a href="#{anchor_id(p.id)}">{esc(p.id)}</a>',
+                          *[p.params.get(k) for k in keys], badge(p.status),
+                          s.get("wall_s"), s.get("steps_per_s"), rms_of(p, BODY_ACC),
+                          rms_of(p, TYRE_FORCE), p.life_km]
+        if life_change:
+            row.append(life_change.get(p.id))
+        if acc_change:
+            row.append(acc_change.get(p.id))
+        err = s.get("error") or ("" if p.run else f"no run folder {p.run_dir}")
+        row.append(err[:160] + ("…" if len(err) > 160 else ""))
+        rows.append(row)
+    status_col = 1 + len(keys)
+    body = table_html(header, rows, raw_cols=(0, status_col))
+    results, src = read_results(d)
+    if results:
+        cols: list[str] = []
+        for row in results:
+            cols += [k for k in row if k not in cols]
+        body += (f"<details><summary>{esc(src)}: every column ({len(cols)})</summary>"
+                 + table_html(cols, [[_num_or_text(r.get(c)) for c in cols] for r in results])
+                 + "</details>")
+    elif src:
+        body += note(esc(src))
+    else:
+        body += note("no results.json / results.csv in the sweep folder (the sweep has not "
+                     "finished); the table above is read from the run folders.")
+    return section("results", "Results", body)
+
+
+def _num_or_text(v: Any) -> Any:
+    if isinstance(v, str):
+        try:
+            return float(v) if v.strip() else v
+        except ValueError:
+            return v
+    return v
+
+
+def point_section(p: Point, d: Path) -> str:
+    parts = [f'<section id="{anchor_id(p.id)}"><h3>Point {esc(p.id)} {badge(p.status)}</h3>']
+    parts.append(kv_table(list(p.params.items()) or [("params", "none")]))
+    try:
+        rel = p.run_dir.relative_to(d)
+    except ValueError:
+        rel = p.run_dir
+    parts.append(f'<p class="meta">run folder {cmd(str(rel))}')
+    if (p.run_dir / "report.html").is_file():
+        parts.append(f' · <a href="{esc((rel / "report.html").as_posix())}">its own report</a>')
+    else:
+        parts.append(f" · its own report: {cmd(f'suscosim report {p.run_dir}')}")
+    parts.append("</p>")
+    if p.run is None:
+        parts.append(note("not run yet (no run folder)."))
+    else:
+        s = p.run.summary or {}
+        if s.get("error"):
+            parts.append(f'<div class="error">{esc(s["error"])}</div>')
+        pairs = [(k, s.get(k)) for k in ("wall_s", "steps_per_s", "n_steps", "rows") if k in s]
+        pairs += [("a_b rms [m/s²]", rms_of(p, BODY_ACC)),
+                  ("F_t rms [N]", rms_of(p, TYRE_FORCE))]
+        if p.run.fatigue:
+            pairs += fatigue_numbers(p.run.fatigue)[:5]
+        else:
+            pairs.append(("fatigue", "no results"))
+        parts.append(kv_table(pairs))
+    parts.append('<p class="meta"><a href="#results">back to the results</a></p></section>')
+    return "".join(parts)
+
+
+def render_sweep(d: Path) -> str:
+    """The HTML page of a sweep folder."""
+    spec, points = load_sweep(d)
+    keys = grid_keys(spec, points)
+    name = str(spec.get("name") or d.name)
+    counts: dict[str, int] = {}
+    for p in points:
+        counts[p.status] = counts.get(p.status, 0) + 1
+    head = [f"<h1>Sweep {esc(name)}</h1>",
+            f'<p class="meta">folder {cmd(str(d.resolve()))} · report written '
+            f"{esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
+    pairs = [("base scenario", spec.get("base")), ("points", len(points)),
+             ("status", ", ".join(f"{v} {k}" for k, v in counts.items()) or "none")]
+    grid = spec.get("grid")
+    if isinstance(grid, dict):
+        pairs += [(f"grid: {k}", v) for k, v in grid.items()]
+    st = spec.get("set")
+    if isinstance(st, dict):
+        pairs += [(f"set: {k}", v) for k, v in st.items()]
+    elif st:
+        pairs.append(("set", st))
+    head.append(kv_table(pairs))
+    if not points:
+        head.append(note("sweep.json lists no points."))
+    navs = [("results", "Results"), ("compare", "Comparison"), ("overlay", "PSDs / histories"),
+            ("maps", "Damage maps"), ("points", "Points")]
+    body = "".join(head) + nav(navs)
+    body += sweep_results_section(spec, points, keys, d)
+    body += sweep_compare_section(points, keys)
+    body += sweep_overlay_section(points, keys)
+    body += sweep_maps_section(points)
+    body += section("points", "Points", "".join(point_section(p, d) for p in points))
+    return page(f"suscosim sweep {name}", body)
