@@ -35,6 +35,8 @@ from cosim import keys
 from cosim.errors import ScenarioError, WireError
 from cosim.wire import decode
 
+from .zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 LINGER_S = 0.5
 """Kept open this long after the last message, so Zenoh sends what it still holds."""
@@ -131,19 +133,15 @@ def build_parser() -> argparse.ArgumentParser:
     pace.add_argument("--speed", type=float, default=1.0, metavar="X",
                       help="pace factor against the recorded time (default 1 = real time)")
     pace.add_argument("--fast", action="store_true", help="as fast as possible")
-    ap.add_argument("--connect", action="append", metavar="EP",
-                    help="Zenoh endpoint to connect to (a run's, a router's, a tap's)")
-    ap.add_argument("--listen", action="append", metavar="EP",
-                    help=f"endpoint to listen on (default {DEFAULT_LISTEN} when no --connect)")
     ap.add_argument("--wait", type=float, default=5.0, metavar="S",
                     help="wait up to S s for a subscriber before publishing (default 5)")
-    ap.add_argument("--lowlatency", action="store_true",
-                    help="Zenoh low-latency transport (negotiated per link: peers without it "
-                         "still connect)")
-    ap.add_argument("--mode", choices=["auto", "peer", "client"], default="auto",
-                    help="Zenoh session mode; auto: peer when listening or every endpoint is "
-                         "on loopback, client otherwise (through a router, from elsewhere)")
-    ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    add_zenoh_arguments(
+        ap, connect_help="Zenoh endpoint to connect to (a run's, a router's, a tap's)",
+        listen_help=f"endpoint to listen on (default {DEFAULT_LISTEN} when no --connect)",
+        lowlatency_help="Zenoh low-latency transport (negotiated per link: peers without it "
+                        "still connect)",
+        mode_help="Zenoh session mode; auto: peer when listening or every endpoint is on "
+                  "loopback, client otherwise (through a router, from elsewhere)")
     return ap
 
 
@@ -180,25 +178,16 @@ def main(argv: list[str] | None = None) -> int:
               "before it", file=sys.stderr)
     if skipped:
         print(f"suscosim replay: note: skipped {skipped} undecodable record(s)", file=sys.stderr)
-    from cosim.bus import ZenohBus, zenoh_config
-
-    from .tap import apply_mode, session_mode
-
     connect = list(args.connect or [])
     listen = args.listen or (None if connect else [DEFAULT_LISTEN])
-    if args.zenoh_config and args.mode == "auto":
-        mode = "configured"  # the configuration file's mode
-    else:
-        mode = session_mode(args.mode, connect, args.listen or ([] if connect else listen))
+    mode = resolve_mode(args.mode, args.zenoh_config, connect,
+                        args.listen or ([] if connect else listen))
     try:
-        conf = zenoh_config(connect, listen if mode != "client" else None,
-                            lowlatency=args.lowlatency, config_file=args.zenoh_config)
-        bus = ZenohBus(apply_mode(conf, mode))
-    except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, unreachable router
-        reason = " ".join(str(exc).split(" at /")[0].split())
-        code = 1 if "Unable to connect" in reason else 2
+        bus = open_bus(connect, listen, mode, lowlatency=args.lowlatency,
+                       config_file=args.zenoh_config)
+    except SessionOpenError as exc:
         return _fail(f"cannot open a Zenoh {mode} session (listen {listen or 'loopback'}, "
-                     f"connect {connect}): {reason}", code)
+                     f"connect {connect}): {exc.reason}", exc.code)
     where = ", ".join(connect or listen or [])
     n_ch = len({(n, c) for n, c, _r, _t in records})
     pace = "as fast as possible" if args.fast else f"at {args.speed:g}x the recorded pace"

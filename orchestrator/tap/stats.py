@@ -1,0 +1,114 @@
+"""What the tap saw per key (counts, rates, last message) and its table and summary."""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import dataclass, field
+from typing import TextIO
+
+from cosim import keys
+from cosim.errors import WireError
+from cosim.wire import Message, decode
+
+from .csv_sink import CsvSink
+from .fmt import fmt_fields
+
+
+@dataclass
+class KeyStats:
+    """What the tap saw on one key."""
+
+    count: int = 0
+    undecodable: int = 0
+    first: float = 0.0
+    last: float = 0.0
+    window_count: int = 0
+    window_start: float = 0.0
+    rate: float = 0.0
+    msg: Message | None = None
+    problem: str = ""
+
+
+@dataclass
+class Tap:
+    """Counts, last messages and rates per key; the display; the CSV."""
+
+    keyexpr: str
+    csv_sink: CsvSink | None = None
+    raw: bool = False
+    out: TextIO = sys.stdout
+    stats: dict[str, KeyStats] = field(default_factory=dict)
+    data: int = 0
+    control: int = 0
+    undecodable: int = 0
+    last_problem: str = ""
+
+    def handle(self, key: str, raw: bytes, now: float) -> Message | None:
+        """Take one sample: decode, count, write to CSV. Never raises on bad bytes."""
+        st = self.stats.get(key)
+        if st is None:
+            st = self.stats[key] = KeyStats(first=now, window_start=now)
+        try:
+            msg = decode(raw)
+        except WireError as exc:
+            st.undecodable += 1
+            self.undecodable += 1
+            st.problem = self.last_problem = str(exc)
+            if self.raw:
+                print(f"{_short_key(key)} UNDECODABLE ({exc}) {raw[:24].hex()}", file=self.out)
+            return None
+        st.count += 1
+        st.window_count += 1
+        st.last, st.msg = now, msg
+        if msg.kind == "data":
+            self.data += 1
+            if self.csv_sink is not None:
+                self.csv_sink.write(key, msg)
+        else:
+            self.control += 1
+        if self.raw:
+            print(f"{_short_key(key)} {msg.kind} k={msg.k} t={msg.t:.6g} "
+                  f"{json.dumps(msg.d, separators=(',', ':'), default=str)}", file=self.out)
+        return msg
+
+    def update_rates(self, now: float) -> None:
+        for st in self.stats.values():
+            dt = now - st.window_start
+            if dt > 0:
+                st.rate = st.window_count / dt
+            st.window_count, st.window_start = 0, now
+
+    def table(self, width: int = 0, final: bool = False) -> str:
+        """The per-key display (``final``: average rates over the whole tap)."""
+        kw = max([len(_short_key(key)) for key in self.stats] + [24])
+        lines = [f"{'key':<{kw}} {'count':>7} {'msg/s':>8} {'k':>7} {'t [s]':>9}  last values"]
+        for key in sorted(self.stats):
+            st = self.stats[key]
+            if final:
+                rate = (st.count - 1) / (st.last - st.first) if st.count > 1 and \
+                    st.last > st.first else 0.0
+            else:
+                rate = st.rate
+            msg = st.msg
+            k = str(msg.k) if msg else "-"
+            t = f"{msg.t:.4f}" if msg else "-"
+            vals = fmt_fields(msg) if msg else ""
+            if st.undecodable:
+                vals = f"({st.undecodable} undecodable: {st.problem}) " + vals
+            line = f"{_short_key(key):<{kw}} {st.count:>7} {rate:>8.1f} {k:>7} {t:>9}  {vals}"
+            lines.append(line[:width or kw + 200])
+        return "\n".join(lines)
+
+    def summary(self) -> str:
+        text = (f"tap: {self.data + self.control} messages ({self.data} data, {self.control} "
+                f"control), {self.undecodable} undecodable on {len(self.stats)} key(s)")
+        if self.undecodable:
+            text += f"; last problem: {self.last_problem}"
+        if self.csv_sink is not None:
+            text += f"; {self.csv_sink.rows} rows -> {self.csv_sink.path}"
+        return text
+
+
+def _short_key(key: str) -> str:
+    return key[len(keys.PREFIX) + 1:] if key.startswith(keys.PREFIX + "/") else key

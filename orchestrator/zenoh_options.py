@@ -1,0 +1,103 @@
+"""The Zenoh session options of a command, and how its session is opened: in one place.
+
+In the style of the zenoh-python examples' ``common.py``: a command adds the options to its
+parser with :func:`add_zenoh_arguments` and opens its session with :func:`open_bus`.
+
+    --connect EP (repeatable)   endpoints to connect to (a run's, a router's)
+    --listen EP (repeatable)    endpoints to listen on
+    --lowlatency                Zenoh's low-latency transport (negotiated per link)
+    --mode auto|peer|client     auto: a peer when every endpoint is on loopback (or the
+                                session listens), a client otherwise
+    --zenoh-config FILE         a Zenoh JSON5 configuration file (TLS, access control)
+
+A *peer* joins the run's mesh on this machine and gets the data straight from the nodes; a
+*client* gets everything through the one router or peer it connects to: what works from
+another machine (a peer there is not relayed by a router, and the run's peers, listening on
+their loopback, cannot connect back to it).
+
+Used by ``suscosim tap``, ``replay`` and ``scope``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+MODES = ("auto", "peer", "client")
+CLIENT_CONNECT_TIMEOUT_MS = 10000
+"""How long a tap/replay/scope client keeps trying to reach its endpoint [ms]."""
+
+
+class SessionOpenError(Exception):
+    """The session could not be opened: ``reason`` (one line) and the exit ``code`` (1: the
+    endpoint cannot be reached, 2: bad input such as a bad endpoint or a port in use)."""
+
+    def __init__(self, reason: str, code: int, mode: str) -> None:
+        super().__init__(reason)
+        self.reason, self.code, self.mode = reason, code, mode
+
+
+def add_zenoh_arguments(ap: argparse.ArgumentParser, *, connect_help: str, listen_help: str,
+                        lowlatency_help: str, mode_help: str) -> None:
+    """Add ``--connect``, ``--listen``, ``--lowlatency``, ``--mode`` and ``--zenoh-config``
+    to ``ap`` (the help texts are the command's: their defaults differ)."""
+    ap.add_argument("--connect", action="append", metavar="EP", help=connect_help)
+    ap.add_argument("--listen", action="append", metavar="EP", help=listen_help)
+    ap.add_argument("--lowlatency", action="store_true", help=lowlatency_help)
+    ap.add_argument("--mode", choices=MODES, default="auto", help=mode_help)
+    ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+
+
+def is_loopback(ep: str) -> bool:
+    """Whether a Zenoh endpoint (``tcp/127.0.0.1:7447``) is on this machine's loopback."""
+    host = ep.split("/", 1)[-1].rsplit(":", 1)[0].strip("[]").split("#")[0]
+    return host in ("localhost", "::1") or host.startswith("127.")
+
+
+def session_mode(mode: str, connect: list[str], listen: list[str] | None) -> str:
+    """``auto``: a peer (joins the run's mesh directly) when every endpoint is on loopback
+    or the session listens; a client (everything through the one endpoint) otherwise: a peer
+    on another machine is not relayed by a router, and the run's peers, listening on their
+    loopback, cannot connect back to it."""
+    if mode != "auto":
+        return mode
+    return "peer" if listen or all(is_loopback(e) for e in connect) else "client"
+
+
+def resolve_mode(mode: str, config_file: str | None, connect: list[str],
+                 listen: list[str] | None) -> str:
+    """The session mode: ``configured`` (the configuration file's own) for ``auto`` with a
+    config file, else :func:`session_mode`."""
+    if config_file and mode == "auto":
+        return "configured"
+    return session_mode(mode, connect, listen)
+
+
+def apply_mode(conf: Any, mode: str, connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS
+               ) -> Any:
+    """Make a :func:`cosim.bus.zenoh_config` a client's (no listening; keep trying to reach
+    the endpoint for ``connect_timeout_ms``), or leave it a peer's."""
+    if mode == "client":
+        conf.insert_json5("mode", '"client"')
+        conf.insert_json5("listen/endpoints", "[]")
+        conf.insert_json5("connect/timeout_ms", str(int(connect_timeout_ms)))
+    return conf
+
+
+def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
+             lowlatency: bool = False, config_file: str | None = None) -> Any:
+    """A :class:`cosim.bus.ZenohBus` in ``mode`` (from :func:`resolve_mode`).
+
+    Raises :class:`SessionOpenError` with Zenoh's reason in one line (bad endpoint, port in
+    use, unreachable router) instead of its exception.
+    """
+    from cosim.bus import ZenohBus, zenoh_config
+
+    try:
+        conf = zenoh_config(connect, listen if mode != "client" else None,
+                            lowlatency=lowlatency, config_file=config_file)
+        return ZenohBus(apply_mode(conf, mode))
+    except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, unreachable router
+        reason = " ".join(str(exc).split(" at /")[0].split())
+        raise SessionOpenError(reason, 1 if "Unable to connect" in reason else 2,
+                               mode) from None
