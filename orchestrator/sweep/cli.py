@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         return serve(sweep, args.serve, args.connect, out, sys.stdout)
     out.mkdir(parents=True, exist_ok=True)
-    states = {p.id: point_state(p, out / "runs" / p.id, sweep.fatigue) for p in sweep.points}
+    states = {p.id: point_state(p, sweep.run_dir(out, p), sweep.fatigue) for p in sweep.points}
     if args.list:
         for p in sweep.points:
             print(f"  {p.id:<{MAX_ID}} {states[p.id]:<8} {p.n_steps:>8} steps  "

@@ -4,9 +4,11 @@ terminal, a line per event and a status line now and then on a pipe."""
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import TYPE_CHECKING, TextIO
 
-from .state import journal_step
+from .results import _fmt
+from .state import _read_json
 
 if TYPE_CHECKING:
     from .local import Job
@@ -61,7 +63,7 @@ class Display:
 
     @staticmethod
     def _k(j: Job) -> int | None:
-        return journal_step(j.run_dir / "journal.msgpack")
+        return j.step()
 
     def _frac(self, j: Job) -> str:
         if j.phase != "run":
@@ -85,3 +87,16 @@ class Display:
     def close(self) -> None:
         self._clear()
 
+
+
+def event_line(run_dir: Path, pid: str, status: str, err: str, i: int, n: int) -> str:
+    """The line printed when a point finishes: its status and timing (and minimum life)."""
+    head = f"[{i}/{n}] {status:<6} {pid}"
+    if status != "ok":
+        return f"{head}: {err}"
+    s = _read_json(run_dir / "summary.json") or {}
+    text = f"{head}  wall {s.get('wall_s', 0):.1f} s, {s.get('steps_per_s', 0):.0f} steps/s"
+    f = _read_json(run_dir / "fatigue" / "summary.json")
+    if isinstance(f, dict):
+        text += f", min life {_fmt(f.get('min_life_km'))} km"
+    return text

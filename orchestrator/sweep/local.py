@@ -3,21 +3,27 @@ this machine, ``jobs`` at a time, each followed by the fatigue worker when neede
 
 from __future__ import annotations
 
-import json
 import shutil
 import signal
 import subprocess
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
-from .display import Display
-from .procs import _exit_text, _kill_group, _last_error, _start
-from .results import _fmt
+from .display import Display, event_line
+from .phases import (
+    fatigue_command,
+    fatigue_outcome,
+    point_meta,
+    prepare_run_dir,
+    run_command,
+    run_outcome,
+    this_worker,
+)
+from .procs import _kill_group, _start
 from .spec import Point, Sweep
-from .state import _read_json
+from .state import journal_step
 
 
 @dataclass
@@ -32,6 +38,9 @@ class Job:
     log: Path
     fresh: bool = True  # its run was (re)done in this session (counts in the step progress)
 
+    def step(self) -> int | None:
+        """The step its run has reached (from the tail of its journal), or None."""
+        return journal_step(self.run_dir / "journal.msgpack")
 
 
 class Runner:
@@ -45,38 +54,22 @@ class Runner:
         self.status: dict[str, tuple[str, str]] = {}  # id -> (status, error) of this session
 
     def run_dir(self, p: Point) -> Path:
-        return self.out / "runs" / p.id
-
-    def _run_cmd(self, p: Point) -> list[str]:
-        cmd = [sys.executable, "-m", "orchestrator", "run", str(p.base),
-               "--out", str(self.run_dir(p)), "--quiet"]
-        if self.sweep.jobs > 1:  # runs side by side: pinning each to the same cores hurts
-            cmd += ["--pin", "off"]
-        for s in p.set_args:
-            cmd += ["--set", s]
-        for ep in self.connect:
-            cmd += ["--connect", ep]
-        for n in self.external:
-            cmd += ["--external", n]
-        return cmd
+        return self.sweep.run_dir(self.out, p)
 
     def _start_run(self, p: Point) -> Job:
         d = self.run_dir(p)
-        if d.exists():  # a failed or stale attempt: start clean
-            shutil.rmtree(d)
-        d.mkdir(parents=True)
-        (d / "point.json").write_text(json.dumps(
-            {"sweep": self.sweep.name, "id": p.id, "params": p.params, "base": str(p.base),
-             "overrides": p.overrides, "fingerprint": p.fingerprint}, indent=2, default=str))
+        prepare_run_dir(d, point_meta(self.sweep.name, p.id, p.params, str(p.base),
+                                      p.overrides, p.fingerprint), this_worker("local"))
         log = d / "sweep.log"
-        return Job(p, d, "run", _start(self._run_cmd(p), log), time.monotonic(), log)
+        cmd = run_command(str(p.base), d, p.set_args, self.sweep.jobs > 1, self.connect,
+                          self.external)
+        return Job(p, d, "run", _start(cmd, log), time.monotonic(), log)
 
     def _start_fatigue(self, p: Point) -> Job:
         d = self.run_dir(p)
         shutil.rmtree(d / "fatigue", ignore_errors=True)
         log = d / "fatigue.log"
-        cmd = [sys.executable, "-m", "orchestrator", "fatigue", str(d)]
-        return Job(p, d, "fatigue", _start(cmd, log), time.monotonic(), log)
+        return Job(p, d, "fatigue", _start(fatigue_command(d), log), time.monotonic(), log)
 
     def _finish(self, job: Job) -> Job | None:
         """A process ended: record the point's outcome, or return its next phase."""
@@ -85,24 +78,12 @@ class Runner:
             _kill_group(job.proc)  # nodes orphaned by a killed run
         p = job.point
         if job.phase == "run":
-            summary = _read_json(job.run_dir / "summary.json")
-            if code == 0 and isinstance(summary, dict) and summary.get("status") == "ok":
-                live = _read_json(job.run_dir / "fatigue" / "summary.json")
-                if self.sweep.fatigue and not isinstance(live, dict):  # no live fatigue node
-                    return self._start_fatigue(p)
-                self.status[p.id] = ("ok", "")
-                return None
-            err = summary.get("error", "") if isinstance(summary, dict) else ""
-            err = err or _last_error(job.log)
-            self.status[p.id] = ("failed", f"run {_exit_text(code)}" + (f": {err}" if err
-                                                                           else ""))
-            return None
-        if code == 0 and isinstance(_read_json(job.run_dir / "fatigue" / "summary.json"), dict):
-            self.status[p.id] = ("ok", "")
+            st, err = run_outcome(code, job.run_dir, job.log, self.sweep.fatigue)
+            if st == "fatigue":
+                return self._start_fatigue(p)
         else:
-            err = _last_error(job.log)
-            self.status[p.id] = ("failed", f"fatigue {_exit_text(code)}" + (f": {err}" if err
-                                                                               else ""))
+            st, err = fatigue_outcome(code, job.run_dir, job.log)
+        self.status[p.id] = (st, err)
         return None
 
     def execute(self, todo: list[tuple[Point, str]]) -> bool:
@@ -140,8 +121,8 @@ class Runner:
                     steps_done += job.point.n_steps if todo_state[job.point.id] == "todo" else 0
                     st, err = self.status[job.point.id]
                     failed += st != "ok"
-                    display.event(self._event_line(job.point, st, err, finished,
-                                                   len(todo)))
+                    display.event(event_line(self.run_dir(job.point), job.point.id, st, err,
+                                             finished, len(todo)))
                 jobs = still
                 display.update(jobs, finished, failed, len(queue), steps_done)
                 time.sleep(0.25)
@@ -162,16 +143,3 @@ class Runner:
             signal.signal(signal.SIGTERM, old)
             display.close()
         return not interrupted
-
-    def _event_line(self, p: Point, status: str, err: str, i: int, n: int) -> str:
-        d = self.run_dir(p)
-        head = f"[{i}/{n}] {status:<6} {p.id}"
-        if status != "ok":
-            return f"{head}: {err}"
-        s = _read_json(d / "summary.json") or {}
-        text = f"{head}  wall {s.get('wall_s', 0):.1f} s, {s.get('steps_per_s', 0):.0f} steps/s"
-        f = _read_json(d / "fatigue" / "summary.json")
-        if isinstance(f, dict):
-            text += f", min life {_fmt(f.get('min_life_km'))} km"
-        return text
-

@@ -24,7 +24,7 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
     """One row per point, from the run folders (points of earlier sessions included)."""
     rows = []
     for p in sweep.points:
-        d = out / "runs" / p.id
+        d = sweep.run_dir(out, p)
         summary = _read_json(d / "summary.json")
         summary = summary if isinstance(summary, dict) else {}
         fat = _read_json(d / "fatigue" / "summary.json") if sweep.fatigue else None
@@ -51,9 +51,42 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
             row["life_km"] = fat.get("min_life_km")
             row["max_damage"] = fat.get("max_damage_per_pass")
             row["critical_node"] = fat.get("critical_node_id")
-        row["run_dir"] = f"runs/{p.id}"
+        if sweep.design is not None:
+            row.update(ride_columns(d) if st == "ok" else {})
+        meta = _read_json(d / "point.json")
+        worker = meta.get("worker") if isinstance(meta, dict) else None
+        row["worker"] = _worker_text(worker) if isinstance(worker, dict) else None
+        row["run_dir"] = sweep.run_dir_text(p)
         rows.append(row)
     return rows
+
+
+RIDE_KEYS = ("a_b_rms", "a_b_wk_rms", "a_w_rms", "sws", "defl_rms", "dtl_rms", "f_d_rms")
+"""The ride metrics of :func:`nodes.recorder.ride_metrics.metric_values` a sampled design's
+results carry (as ``ride <key>``; per corner ``ride a_b[2]_rms`` for a full vehicle)."""
+
+
+def ride_columns(run_dir: Path) -> dict[str, float]:
+    """``{"ride <key>": value}`` of a finished run's table (empty if it has none)."""
+    table_path = run_dir / "table.parquet"
+    if not table_path.is_file():
+        return {}
+    from nodes.recorder.ride_metrics import metric_values
+    from nodes.recorder.table import read_table
+
+    try:
+        values = metric_values(read_table(table_path))
+    except (OSError, ValueError, KeyError):
+        return {}
+    return {f"ride {k}": float(v) for k, (v, _u, _l) in values.items()
+            if k.split("[")[0] + ("" if "[" not in k else k[k.index("]") + 1:]) in RIDE_KEYS}
+
+
+def _worker_text(w: dict[str, Any]) -> str:
+    """A worker as the results give it: a Dask worker's name (or address), else the host."""
+    if w.get("executor") == "dask":
+        return str(w.get("name") or w.get("address"))
+    return str(w.get("host", ""))
 
 
 def write_results(out: Path, rows: list[dict]) -> None:
@@ -101,9 +134,16 @@ def write_sweep_json(sweep: Sweep, out: Path) -> None:
         "fatigue": sweep.fatigue,
         "sweep_file": str(sweep.path.resolve()),
         "variants": {k: v for k, v in sweep.raw_grid.items() if isinstance(v, dict)},
-        "points": [{"id": p.id, "params": p.params, "run_dir": f"runs/{p.id}",
+        "points": [{"id": p.id, "params": p.params, "run_dir": sweep.run_dir_text(p),
                     "base": str(p.base), "overrides": p.overrides, "n_steps": p.n_steps,
                     "fingerprint": p.fingerprint} for p in sweep.points],
     }
+    if sweep.design is not None:
+        d = sweep.design
+        doc["design"] = {"method": d.method, "n": d.n, "seed": d.seed,
+                         "parameters": d.keys,
+                         "ranges": [{"key": r.key, "low": r.low, "high": r.high,
+                                     "scale": r.scale} for r in d.ranges],
+                         "sensitivity": "sensitivity.json"}
     (out / "sweep.json").write_text(json.dumps(doc, indent=2, default=str))
 

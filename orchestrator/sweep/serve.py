@@ -39,7 +39,7 @@ def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
     try:
         while True:
             for pid in ids:
-                if pid not in served_ok and point_state(ids[pid], out / "runs" / pid,
+                if pid not in served_ok and point_state(ids[pid], sweep.run_dir(out, ids[pid]),
                                                         sweep.fatigue) == "done":
                     served_ok.add(pid)  # done in a shared sweep folder
             if len(served_ok) == len(ids) and not running:

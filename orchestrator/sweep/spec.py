@@ -18,12 +18,16 @@ from cosim import scenario as sc
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
 
-SWEEP_KEYS = ("name", "base", "jobs", "fatigue", "grid", "set", "channels", "description")
+from .design import AXIS, Design, design_axis, parse_design
+
+SWEEP_KEYS = ("name", "base", "jobs", "fatigue", "grid", "set", "channels", "description",
+              "design", "runs_dir")
 DEFAULT_CHANNELS = ("plant/response/a_b", "plant/response/a_w", "tyre_road/force/F_t",
                     "controller/force/F_d", "plant/arm/ball_joint_z")
 FATIGUE_COLUMNS = ("life_repeats", "life_km", "max_damage", "critical_node")
 MAX_ID = 64
 RESERVED = ("base", "point", "status", "error", "wall_s", "steps_per_s", "n_steps", "run_dir",
+            "worker", "sample",
             *FATIGUE_COLUMNS)
 """Names a grid axis cannot have (result columns, the base axis)."""
 
@@ -46,6 +50,7 @@ class Axis:
     labels: list[Any]
     overrides: list[dict[str, Any]]
     bases: list[Path] | None = None  # the ``base`` axis: one scenario file per label
+    params: list[dict[str, Any]] | None = None  # the design axis: per label, its parameters
 
 
 @dataclass
@@ -81,6 +86,17 @@ class Sweep:
     channels: list[str]
     raw_grid: dict[str, Any]
     points: list[Point] = field(default_factory=list)
+    design: Design | None = None
+    runs_dir: Path | None = None  # a shared folder for the run folders (else <out>/runs)
+
+    def run_dir(self, out: Path, p: Point) -> Path:
+        """Where a point's run folder is: ``<runs_dir>/<id>`` or ``<out>/runs/<id>``."""
+        return (self.runs_dir if self.runs_dir is not None else out / "runs") / p.id
+
+    def run_dir_text(self, p: Point) -> str:
+        """The run folder as the results and sweep.json give it (relative to the sweep
+        folder unless the sweep file names a shared ``runs_dir``)."""
+        return str(self.runs_dir / p.id) if self.runs_dir is not None else f"runs/{p.id}"
 
 
 def toml_value(v: Any) -> str:
@@ -221,6 +237,19 @@ def load_sweep(path: str | Path, jobs: int | None = None,
     if not isinstance(grid, dict):
         raise ScenarioError("sweep.grid", grid, "a table of axes")
     axes: list[Axis] = []
+    design = None
+    if "design" in sw:
+        design = parse_design(sw["design"], _check_override_key)
+        for k in design.keys:
+            if k in RESERVED or k in grid:
+                raise ScenarioError(f"sweep.design.ranges.{k}", None, "a key that is neither "
+                                    "a grid axis nor one of " + ", ".join(RESERVED))
+    runs_dir = sw.get("runs_dir")
+    if runs_dir is not None:
+        if not isinstance(runs_dir, str) or not runs_dir:
+            raise ScenarioError("sweep.runs_dir", runs_dir, "a folder path")
+        runs_dir = Path(runs_dir).expanduser()
+        runs_dir = (runs_dir if runs_dir.is_absolute() else folder / runs_dir).resolve()
     if len(bases) > 1:
         axes.append(Axis("base", [b.stem for b in bases], [{} for _ in bases], bases))
     for key, spec in grid.items():
@@ -247,8 +276,12 @@ def load_sweep(path: str | Path, jobs: int | None = None,
             axes.append(Axis(key, labels, overrides))
         else:
             raise ScenarioError(where, spec, "a list of values or a table of named variants")
+    if design is not None:
+        labels, sampled = design_axis(design)
+        axes.append(Axis(AXIS, labels, sampled, params=sampled))
     sweep = Sweep(path=path, name=name, bases=bases, axes=axes, fixed=fixed, jobs=jobs,
-                  fatigue=fatigue, channels=channels, raw_grid=grid)
+                  fatigue=fatigue, channels=channels, raw_grid=grid, design=design,
+                  runs_dir=runs_dir)
     seen: dict[str, int] = {}
     for index, combo in enumerate(itertools.product(*(range(len(a.labels)) for a in axes))):
         params: dict[str, Any] = {}
@@ -256,6 +289,8 @@ def load_sweep(path: str | Path, jobs: int | None = None,
         base = bases[0]
         for axis, i in zip(axes, combo, strict=True):
             params[axis.name] = axis.labels[i]
+            if axis.params is not None:
+                params.update(axis.params[i])
             overrides.update(axis.overrides[i])
             if axis.bases is not None:
                 base = axis.bases[i]
