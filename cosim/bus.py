@@ -3,7 +3,8 @@
 Both offer the same verbs, so node code never knows which one it runs on:
 ``publisher(key)``, ``subscribe(keyexpr, callback)``, ``feed(key)`` (a subscriber read from
 its own FIFO), ``token(key)`` (liveliness), ``watch(keyexpr, callback)`` (liveliness changes),
-``serve(key, reply)`` / ``query(key)``.
+``serve(key, reply)`` / ``query(key)`` / ``query_all(key)``, ``alive(keyexpr)`` (the live
+tokens now).
 
 Callbacks receive ``(key: str, payload: bytes)`` and run on the bus's own thread: they must
 only hand the bytes over (to a queue), never block. A feed is for the lock-step inputs: the
@@ -175,6 +176,17 @@ class ZenohBus:
                 return r.ok.payload.to_bytes()
         return None
 
+    def query_all(self, key: str, timeout: float = 1.0) -> list[bytes]:
+        """Every reply to a query on ``key`` (a rogue queryable may answer too: the caller
+        picks the one it can verify)."""
+        return [r.ok.payload.to_bytes() for r in self.session.get(key, timeout=timeout)
+                if r.ok is not None]
+
+    def alive(self, keyexpr: str, timeout: float = 1.0) -> list[str]:
+        """The liveliness tokens matching ``keyexpr`` declared on the bus right now."""
+        return [str(r.ok.key_expr) for r in
+                self.session.liveliness().get(keyexpr, timeout=timeout) if r.ok is not None]
+
     def close(self) -> None:
         for obj in reversed(self._keep):
             try:
@@ -297,6 +309,14 @@ class MemoryBus:
         with self._lock:
             reply = self._served.get(key)
         return reply() if reply else None
+
+    def query_all(self, key: str, timeout: float = 1.0) -> list[bytes]:
+        raw = self.query(key, timeout)
+        return [] if raw is None else [raw]
+
+    def alive(self, keyexpr: str, timeout: float = 1.0) -> list[str]:
+        with self._lock:
+            return sorted(k for k in self._tokens if keyexpr_matches(keyexpr, k))
 
     def close(self) -> None:
         pass

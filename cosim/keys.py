@@ -10,11 +10,13 @@ recorder in batches (see cosim.wire).
 from __future__ import annotations
 
 import re
+import secrets
 
 from .errors import ScenarioError
 
 PREFIX = "suscosim"
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+NAME = _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+"""A valid run id, node or channel name."""
 
 
 def check_name(what: str, name: str) -> str:
@@ -22,6 +24,23 @@ def check_name(what: str, name: str) -> str:
     if not isinstance(name, str) or not _NAME.match(name):
         raise ScenarioError(what, name, "1-64 letters, digits, '_', '.', '-' (no '/', '*', '$')")
     return name
+
+
+MAX_NAME = 64
+
+
+def invocation_token() -> str:
+    """A random part for the run ids of one invocation (e.g. one ``suscosim sweep``): 6 hex
+    digits, so that two people running the same sweep through one router never share a run
+    id (issue #15 item 3)."""
+    return secrets.token_hex(3)
+
+
+def unique_run_id(base: str, token: str) -> str:
+    """``<base>-<token>``, cut to a valid run id of at most 64 characters (``base`` is
+    shortened, the token kept whole)."""
+    keep = MAX_NAME - len(token) - 1
+    return check_name("run id", f"{base[:keep].rstrip('-_.') or 'run'}-{token}")
 
 
 def key(run: str, node: str, channel: str) -> str:

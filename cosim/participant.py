@@ -25,7 +25,13 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
    does not come within the stall timeout, ends the node with :class:`RunError`.
 
 A message that does not decode or does not fit the schema (or lacks a field the node needs)
-is rejected: logged, counted, never a crash.
+is rejected: logged, counted, never a crash. With a run key (:class:`cosim.auth.RunKey`)
+every message the node publishes is signed and every message it takes must be signed with
+that key (else rejected and counted, before it is decoded). A ``start`` must be plausible
+(:func:`cosim.control.check_start`). Each input's mailbox is bounded: a stepped input holds
+only the steps from the one the node waits for up to :data:`MAILBOX_WINDOW` ahead (a lock-step
+producer is at most a step or two ahead), any other input at most :data:`MAILBOX_MAX`
+messages; what falls outside is rejected and counted.
 """
 
 from __future__ import annotations
@@ -39,6 +45,8 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from . import keys
+from .auth import RunKey
+from .control import check_clock, check_start
 from .errors import RunError, WireError
 from .wire import MAX_MESSAGE_BYTES, Message, decode, encode
 
@@ -60,14 +68,24 @@ WATCHDOG_PERIOD_S = 0.05
 """How often the watchdog looks at a node blocked on an input (bounds the abort latency)."""
 FEED_CAPACITY = 1024
 """Messages an input's FIFO holds; lock-step producers are at most a few steps ahead."""
+MAILBOX_WINDOW = 64
+"""Steps ahead of the one a node waits for that a stepped input's mailbox accepts."""
+MAILBOX_MAX = 256
+"""Messages an input that is not stepped (load blocks) may hold before they are taken."""
 
 
 class Participant:
     """One node's side of the lock-step protocol, on any bus."""
 
     def __init__(self, bus: Any, run: str, node: str, stall_timeout_s: float = 10.0,
-                 spin_s: float = 0.0) -> None:
+                 spin_s: float = 0.0, auth: RunKey | None = None) -> None:
         self.bus, self.run, self.node = bus, keys.check_name("run", run), node
+        self.auth = auth
+        """The run's key: sign what is published, verify what is taken (None: neither, for
+        tests of the protocol alone)."""
+        self.expect_start: dict[str, Any] = {}
+        """What a plausible ``start`` holds (``n_steps``, ``h``, ``nodes``: see
+        :func:`cosim.control.check_start`); set from the scenario by the node's shell."""
         self.stall_timeout_s = stall_timeout_s
         self.spin_s = spin_s
         """How long :meth:`wait` polls an input (yielding the core between polls) before it
@@ -78,13 +96,15 @@ class Participant:
         self.feeds: dict[Channel, Any] = {}
         self.mailbox: dict[Channel, dict[int, Message]] = {}
         self.required: dict[Channel, tuple[str, ...]] = {}
+        self._floor: dict[Channel, int] = {}  # the step a stepped input was last waited for
+        self._keyof: dict[Channel, str] = {_CLOCK_TAG: keys.key(run, *_CLOCK_TAG)}
         self.rejected = 0
         self._outputs: dict[str, Any] = {}
         self._records: list[tuple[str, bytes]] = []
         self._records_bytes = 0
         self._records_pub: Any = None
         self._records_k, self._records_t, self._records_since = -1, 0.0, time.monotonic()
-        self._ctl = bus.publisher(keys.key(run, node, keys.CTL))
+        self._ctl = self._publisher(keys.key(run, node, keys.CTL))
         self._last_progress = 0.0
         self._token = bus.token(keys.key(run, node, keys.ALIVE))
         self._listen(_CLOCK_TAG)
@@ -113,6 +133,19 @@ class Participant:
                            "(its liveliness token dropped)")
 
     # ---- wiring -------------------------------------------------------------------------
+    def _publisher(self, key: str) -> Any:
+        """A publisher on ``key`` that signs each message with the run's key."""
+        pub = self.bus.publisher(key)
+        if self.auth is None:
+            return pub
+        sign = self.auth.signer(key)
+        return lambda raw: pub(sign(raw))
+
+    def open(self, key: str, raw: bytes) -> Message:
+        """Verify (with the run's key) and decode a message received on ``key``; raises
+        :class:`WireError` (an :class:`cosim.auth.AuthError` for a bad signature)."""
+        return decode(self.auth.verify(key, raw) if self.auth is not None else raw)
+
     def _listen(self, tag: Channel) -> None:
         put = self.inbox.put
         self.bus.subscribe(keys.key(self.run, *tag), lambda _k, raw: put((tag, raw)))
@@ -127,6 +160,7 @@ class Participant:
         """
         tag = (node, channel)
         if tag not in self.mailbox:
+            self._keyof[tag] = keys.key(self.run, *tag)
             self.mailbox[tag] = {}
             self.required[tag] = tuple(required)
             if stepped:
@@ -137,18 +171,26 @@ class Participant:
 
     def output(self, channel: str) -> None:
         """Declare an output channel (a publisher on ``suscosim/<run>/<node>/<channel>``)."""
-        self._outputs[channel] = self.bus.publisher(keys.key(self.run, self.node, channel))
+        self._outputs[channel] = self._publisher(keys.key(self.run, self.node, channel))
         if self._records_pub is None:
-            self._records_pub = self.bus.publisher(keys.key(self.run, self.node, keys.RECORDS))
+            self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
 
     def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
-        """The resolved scenario, from the orchestrator's queryable (retried until it answers)."""
+        """The resolved scenario, from the orchestrator's queryable (retried until it answers).
+        Only a reply signed with the run's key counts: a rogue queryable on the run's key
+        (another process on the bus) is rejected and counted, never run."""
         deadline = time.monotonic() + timeout_s
         key = keys.key(self.run, keys.ORCHESTRATOR, keys.SCENARIO)
         while time.monotonic() < deadline:
-            raw = self.bus.query(key, timeout=1.0)
-            if raw is not None:
-                return decode(raw).d
+            for raw in self.bus.query_all(key, timeout=1.0):
+                try:
+                    msg = self.open(key, raw)
+                except WireError as exc:
+                    self._reject((keys.ORCHESTRATOR, keys.SCENARIO), str(exc))
+                    continue
+                if msg.kind == "start" and isinstance(msg.d.get("run"), dict):
+                    return msg.d
+                self._reject((keys.ORCHESTRATOR, keys.SCENARIO), "not a scenario")
             time.sleep(0.1)
         raise RunError(f"{self.node}: no orchestrator answered for run '{self.run}' "
                        f"within {timeout_s:.0f} s (is it running, and is --connect right?)")
@@ -263,7 +305,9 @@ class Participant:
         if tag != _CLOCK_TAG and tag not in self.mailbox:
             return None  # not an input of this node (e.g. the recorder's raw feed)
         try:
-            msg = decode(raw)
+            msg = self.open(self._keyof[tag], raw)
+            if tag == _CLOCK_TAG:
+                check_clock(msg.kind, msg.d)
         except WireError as exc:
             self._reject(tag, str(exc))
             return None
@@ -284,6 +328,15 @@ class Participant:
         box = self.mailbox[tag]
         if msg.k in box and msg.k >= 0:
             self._reject(tag, f"duplicate message for step {msg.k}")
+            return None
+        if tag in self.feeds:  # a stepped input: a window of steps from the one waited for
+            floor = self._floor.get(tag, 0)
+            if not floor <= msg.k <= floor + MAILBOX_WINDOW:
+                self._reject(tag, f"step {msg.k} outside the window {floor}..."
+                                  f"{floor + MAILBOX_WINDOW}")
+                return None
+        elif len(box) >= MAILBOX_MAX:
+            self._reject(tag, f"step {msg.k}: {MAILBOX_MAX} messages already wait")
             return None
         box[msg.k] = msg
         return None
@@ -320,8 +373,10 @@ class Participant:
         for tag, k in needs.items():
             box = self.mailbox[tag]
             out[tag] = box[k]
-            for old in [j for j in box if j < k]:
-                del box[old]
+            self._floor[tag] = k
+            if len(box) > 1:  # at most MAILBOX_WINDOW + 2 entries: bounded
+                for old in [j for j in box if j < k]:
+                    del box[old]
         return out
 
     def handshake(self, info: Mapping[str, Any] | None = None,
@@ -353,6 +408,11 @@ class Participant:
             except queue.Empty:
                 continue
             if msg is not None and msg.kind == "start":
+                try:
+                    check_start(msg.d, **self.expect_start)
+                except WireError as exc:  # a forged or foreign start: not acted on
+                    self._reject(_CLOCK_TAG, str(exc))
+                    continue
                 self.ctl("progress", -1, 0.0, rejected=self.rejected)
                 return msg.d
 

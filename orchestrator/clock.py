@@ -10,11 +10,18 @@ barrier is data-driven inside each node (see cosim.participant). The clock
 * ends the run when every node is done, or aborts it (publishing ``abort`` so the others stop)
   when a node reports an error, loses its liveliness token (killed, partitioned) or makes no
   progress for the stall timeout. The error names the node.
+
+With the run's key (:class:`cosim.auth.RunKey`) the clock signs what it publishes (start,
+abort, done, the scenario) and takes a node's control message only when it is signed with
+that key, well formed field by field (:func:`cosim.control.check_node_control`) and
+plausible (a step within the run; ``done`` only at the last step); anything else is rejected
+and counted (``rejected`` of the clock), never acted on.
 """
 
 from __future__ import annotations
 
 import queue
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -22,6 +29,8 @@ from typing import Any
 
 from cosim import channels as ch
 from cosim import keys
+from cosim.auth import RunKey
+from cosim.control import check_node_control
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.wire import decode, encode
 
@@ -60,6 +69,8 @@ class ClockResult:
     step_wall_s: float
     """From ``start`` until the last node of the coupling (plant, tyre/road, controller) has
     done its last step: what ``steps_per_s`` is measured on."""
+    rejected: int = 0
+    """Control messages the clock rejected (unsigned, badly signed, malformed, implausible)."""
 
 
 class Clock:
@@ -67,19 +78,26 @@ class Clock:
 
     def __init__(self, bus: Any, run: str, nodes: list[str], scenario: dict[str, Any],
                  on_progress: Callable[[int, int], None] | None = None,
-                 check_processes: Callable[[], str | None] | None = None) -> None:
-        self.bus, self.run_id, self.scenario = bus, run, scenario
+                 check_processes: Callable[[], str | None] | None = None,
+                 auth: RunKey | None = None) -> None:
+        self.bus, self.run_id, self.scenario, self.auth = bus, run, scenario, auth
         self.status = {n: NodeStatus() for n in nodes}
         self.n_steps = int(scenario["run"]["n_steps"])
         self.on_progress = on_progress or (lambda k, n: None)
         self.check_processes = check_processes or (lambda: None)
         self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
         self.rejected = 0
-        self._clock = bus.publisher(keys.key(run, keys.ORCHESTRATOR, keys.CLOCK))
+        clock_key = keys.key(run, keys.ORCHESTRATOR, keys.CLOCK)
+        pub = bus.publisher(clock_key)
+        sign = auth.signer(clock_key) if auth else (lambda raw: raw)
+        self._clock = lambda raw: pub(sign(raw))
+        blob = encode("start", -1, 0.0, scenario)  # raises on a number msgpack cannot hold
+        scenario_key = keys.key(run, keys.ORCHESTRATOR, keys.SCENARIO)
+        if auth:
+            blob = auth.sign(scenario_key, blob)
         # the nodes watch this token: a killed orchestrator ends its nodes too
         self._token = bus.token(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE))
-        blob = encode("start", -1, 0.0, scenario)
-        bus.serve(keys.key(run, keys.ORCHESTRATOR, keys.SCENARIO), lambda: blob)
+        bus.serve(scenario_key, lambda: blob)
         bus.subscribe(keys.key(run, "*", keys.CTL),
                       lambda k, raw: self.events.put(("ctl", k, raw)))
         bus.watch(keys.key(run, "*", keys.ALIVE),
@@ -112,14 +130,18 @@ class Clock:
                 st.gone_since = None if payload else (st.gone_since or now)
                 continue
             try:
-                msg = decode(payload)
+                msg = decode(self.auth.verify(key, payload) if self.auth else payload)
+                check_node_control(msg.kind, msg.d)
+                if msg.k > self.n_steps or (msg.kind == "done" and msg.k != self.n_steps):
+                    raise WireError(f"implausible {msg.kind} at step {msg.k} of {self.n_steps}")
             except WireError as exc:
                 self.rejected += 1
-                if self.rejected <= 10:
-                    print(f"suscosim: rejected control message from {node}: {exc}")
+                if self.rejected <= 10 or self.rejected % 1000 == 0:
+                    print(f"suscosim: rejected control message #{self.rejected} on {key}: "
+                          f"{exc}", file=sys.stderr)
                 continue
             st.last_seen = now
-            st.rejected = int(msg.d.get("rejected", st.rejected) or 0)
+            st.rejected = msg.d.get("rejected", st.rejected)
             if msg.kind == "ready":
                 st.ready, st.info, st.waiting_for = True, dict(msg.d.get("info", {})), []
             elif msg.kind == "waiting":
@@ -131,7 +153,7 @@ class Clock:
                 st.done, st.k, st.result = True, msg.k, dict(msg.d)
                 st.done_at = st.done_at or now
             elif msg.kind == "error":
-                code = int(msg.d.get("exit_code", 1))
+                code = msg.d.get("exit_code", 1)
                 err: RunError | ScenarioError = RunError(f"node '{node}': {msg.d.get('message')}")
                 if code == 2:
                     err.exit_code = 2
@@ -211,4 +233,5 @@ class Clock:
         coupled = [st.done_at for n, st in self.status.items()
                    if n in ch.COUPLED and st.done_at is not None]
         step_wall = max(coupled) - t_run if coupled else run_wall
-        return ClockResult(self.status, time.monotonic() - t0, run_wall, step_wall)
+        return ClockResult(self.status, time.monotonic() - t0, run_wall, step_wall,
+                           self.rejected)

@@ -2,7 +2,13 @@
 
 The node opens its own Zenoh session, fetches the resolved scenario from the orchestrator of
 that run, and runs. It can live on any machine that reaches the orchestrator (or a router).
-Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario or input.
+Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario or input (or no
+run key).
+
+The messages of a run are authenticated with the run's key (:mod:`cosim.auth`): the node
+takes it from ``SUSCOSIM_RUN_KEY`` (what the orchestrator gives the nodes it starts), else
+derives it from the secret of ``--key-file`` / ``SUSCOSIM_KEY_FILE`` (e.g. the run folder's
+``run.key``) or ``SUSCOSIM_KEY``.
 """
 
 from __future__ import annotations
@@ -11,10 +17,12 @@ import argparse
 import faulthandler
 import importlib
 import logging
+import os
 import signal
 import sys
 import traceback
 
+from cosim.auth import ENV_KEY_FILE, RunKey, run_key_from_env
 from cosim.bus import ZenohBus, zenoh_config
 from cosim.errors import RunError, SuscosimError
 from cosim.participant import Participant
@@ -29,14 +37,24 @@ NODE_MODULES = {
 
 
 def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
-             spin_s: float = 0.0) -> int:
-    """Run node ``name`` on ``bus``; report errors to the orchestrator; return an exit code."""
+             spin_s: float = 0.0, key: bytes | None = None) -> int:
+    """Run node ``name`` on ``bus``; report errors to the orchestrator; return an exit code.
+
+    ``key``: the run key (default: from the environment, see the module's docstring)."""
     log = logging.getLogger(f"suscosim.{name}")
-    part = Participant(bus, run_id, name, spin_s=spin_s)
+    try:
+        auth = RunKey(key if key is not None else run_key_from_env(run_id))
+    except SuscosimError as exc:  # no key: nothing it could say would be believed
+        log.error("%s", exc)
+        return exc.exit_code
+    part = Participant(bus, run_id, name, spin_s=spin_s, auth=auth)
     try:
         if scenario is None:
             scenario = part.fetch_scenario()
-        part.stall_timeout_s = float(scenario["run"]["stall_timeout_s"])
+        run = scenario["run"]
+        part.stall_timeout_s = float(run["stall_timeout_s"])
+        part.expect_start = {"n_steps": run.get("n_steps"), "h": run.get("h"),
+                             "nodes": list(run.get("nodes", []))}
         module = importlib.import_module(NODE_MODULES[name])
         module.run(part, scenario)
         return 0
@@ -69,6 +87,11 @@ def main(argv: list[str] | None = None) -> int:
                     help="Zenoh low-latency transport (negotiated per link: peers without it "
                          "still connect; the orchestrator sets it for its local nodes)")
     ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    ap.add_argument("--key-file",
+                    help="file holding the secret the run key is derived from (mode 0600; "
+                         "e.g. RUN_DIR/run.key written by the orchestrator; default "
+                         f"${ENV_KEY_FILE}); the nodes the orchestrator starts get the run "
+                         "key in their environment")
     ap.add_argument("--lease-ms", type=int, default=2000,
                     help="Zenoh link lease [ms]: how long peers keep this node's links when it "
                          "goes silent (default 2000; the orchestrator gives its local nodes "
@@ -84,6 +107,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.lease_ms <= 0:
         print(f"suscosim node: --lease-ms {args.lease_ms}: expected > 0", file=sys.stderr)
         return 2
+    if args.key_file:  # read where run_node looks (the environment), like the default
+        os.environ[ENV_KEY_FILE] = args.key_file
+        os.environ.pop("SUSCOSIM_RUN_KEY", None)
     logging.basicConfig(level=logging.INFO, format=f"%(asctime)s {args.name}: %(message)s",
                         stream=sys.stderr)
     # a node stopped with SIGTERM (the orchestrator ending a run it holds up) says where it

@@ -28,10 +28,13 @@ import time
 from pathlib import Path
 from typing import Any
 
+from cosim import auth as au
 from cosim import channels as ch
+from cosim import keys
 from cosim import scenario as sc
 from cosim.bus import MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
 from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
+from cosim.run_lock import RunIdInUseError, RunLock
 
 from .clock import Clock, ClockResult
 from .placement import core_layout, pin, should_pin, usable_cores
@@ -92,7 +95,8 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
         "step_wall_s": result.step_wall_s if result else wall_s,
         "steps_per_s": (n / result.step_wall_s) if result and result.step_wall_s > 0 else
         (n / wall_s if status == "ok" and wall_s > 0 else 0.0),
-        "rejected_messages": {k: v.rejected for k, v in result.nodes.items()} if result else {},
+        "rejected_messages": ({k: v.rejected for k, v in result.nodes.items()}
+                              | {"orchestrator": result.rejected}) if result else {},
         "rows": rec.get("rows", 0), "files": rec.get("files", {}),
         "channels": rec.get("stats", {}),
     }
@@ -166,11 +170,14 @@ class LocalNodes:
 
     def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
                  log_dir: Path, zenoh_config_file: str | None = None,
-                 cores: dict[str, int] | None = None, lease_ms: int = 2000) -> None:
+                 cores: dict[str, int] | None = None, lease_ms: int = 2000,
+                 run_key: bytes | None = None) -> None:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
         log_dir.mkdir(parents=True, exist_ok=True)
         env = dict(os.environ, PYTHONUNBUFFERED="1")
+        if run_key is not None:  # the run key, in the environment (readable by this user only)
+            env[au.ENV_RUN_KEY] = run_key.hex()
         for name in names:
             cmd = [sys.executable, "-m", "orchestrator", "node", name, "--run", run_id,
                    "--mode", "peer"]  # the local mesh; nodes elsewhere are clients
@@ -215,6 +222,41 @@ class LocalNodes:
                 p.wait()
 
 
+def _folder_error(exc: OSError, folder: Path) -> InputFileError:
+    full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
+    return InputFileError(str(exc.filename or folder),
+                          f"cannot write the run folder: {exc.strerror or exc}{full}")
+
+
+def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes:
+    """The run's key (:mod:`cosim.auth`): derived from the secret of ``SUSCOSIM_KEY_FILE`` /
+    ``SUSCOSIM_KEY`` when one is set (nodes started elsewhere derive the same), else from a
+    fresh random secret; with nodes started elsewhere that secret is written to
+    ``RUN_DIR/run.key`` (mode 0600) for their ``--key-file``."""
+    secret = au.secret_from_env()
+    if secret is None:
+        secret = au.new_secret()
+        if external:
+            path = au.write_secret_file(folder / au.KEY_FILE_NAME, secret)
+            print(f"suscosim: the run key of '{run['id']}' is in {path}: start the nodes "
+                  f"{', '.join(external)} with --key-file {path} (or set "
+                  f"{au.ENV_KEY_FILE} for the orchestrator and every node)", file=sys.stderr)
+    return au.derive_run_key(secret, run["id"])
+
+
+def check_run_id_free(bus: Any, run_id: str, external: list[str],
+                      timeout_s: float = 1.0) -> None:
+    """Refuse (exit 2) a run id that is live on the bus already: another run's orchestrator,
+    or a node of this run that this orchestrator is about to start itself (the nodes named
+    ``--external`` are expected to be there)."""
+    live = bus.alive(keys.key(run_id, "*", keys.ALIVE), timeout=timeout_s)
+    taken = sorted({keys.parse_key(k)[1] for k in live} - set(external))
+    if taken:
+        raise RunIdInUseError(f"run id '{run_id}' is already live on the bus ("
+                              f"{', '.join(taken)} of another run answer): choose another "
+                              "run.id, or wait for that run to end")
+
+
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                  external: list[str] | None = None, quiet: bool = False,
                  zenoh_config_file: str | None = None, listen: list[str] | None = None,
@@ -226,7 +268,29 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     off through a router or with a user's Zenoh config file) cuts ~15 % off a coupled step.
     ``pin_mode`` (``auto``, ``on``, ``off``) places the local node processes on cores (see
     :mod:`orchestrator.placement`).
+
+    The run folder is locked for the run (:class:`cosim.run_lock.RunLock`: a second run on
+    it is refused, exit 2); with ``connect``, a run id already live on the bus is refused too
+    (:func:`check_run_id_free`).
     """
+    folder = Path(scenario["run"]["dir"])
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        lock = RunLock(folder)
+    except OSError as exc:
+        raise _folder_error(exc, folder) from None
+    try:
+        return _run_locked(scenario, connect, external, quiet, zenoh_config_file, listen,
+                           lowlatency, pin_mode)
+    finally:
+        lock.release()
+
+
+def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
+                external: list[str] | None, quiet: bool, zenoh_config_file: str | None,
+                listen: list[str] | None, lowlatency: bool | None,
+                pin_mode: str) -> dict[str, Any]:
+    """:func:`run_scenario` once the run folder is locked."""
     if lowlatency is None:
         lowlatency = not connect and not zenoh_config_file
     run = scenario["run"]
@@ -243,11 +307,11 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
             (folder / "logs").mkdir(exist_ok=True)
         write_run_json(folder, run["id"], listen if bus_eps else [],
                        connect if bus_eps else [], lowlatency)
+        run_key = run_key_for(run, folder, [] if run["mode"] != "distributed"
+                              else [n for n in run["nodes"] if n in (external or [])])
     except OSError as exc:
-        full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
-        raise InputFileError(str(exc.filename or folder),
-                             f"cannot write the run folder: {exc.strerror or exc}{full}") \
-            from None
+        raise _folder_error(exc, folder) from None
+    auth = au.RunKey(run_key)
     t0 = time.monotonic()
     if run["mode"] == "reference":
         from .reference import run_reference
@@ -264,12 +328,19 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
         lease = local_lease_ms(float(run["stall_timeout_s"]))
         bus = ZenohBus(zenoh_config(connect or [], listen, lowlatency=lowlatency,
                                     lease_ms=lease, config_file=zenoh_config_file))
+        if connect:  # the embedded mesh is this run's own: only a shared one can collide
+            try:
+                check_run_id_free(bus, run["id"], list(external or []))
+            except BaseException:
+                _close(bus)
+                raise
         names = [n for n in run["nodes"] if n not in (external or [])]
         cores = usable_cores()
         layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
         try:
             local = LocalNodes(run["id"], names, list(connect or listen), lowlatency,
-                               folder / "logs", zenoh_config_file, layout, lease_ms=lease)
+                               folder / "logs", zenoh_config_file, layout, lease_ms=lease,
+                               run_key=run_key)
         except OSError as exc:  # a node log that cannot be opened: nothing has started yet
             _close(bus)
             raise InputFileError(str(exc.filename or folder / "logs"),
@@ -282,21 +353,22 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
         codes: dict[str, int] = {}
 
         def body(name: str) -> None:
-            codes[name] = run_node(bus, run["id"], name, scenario)
+            codes[name] = run_node(bus, run["id"], name, scenario, key=run_key)
 
         check = lambda: next((f"node '{n}' failed (exit code {c})"  # noqa: E731
                               for n, c in codes.items() if c), None)
-    clock = Clock(bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,
-                  check_processes=check)
-    if run["mode"] == "monolithic":
-        threads = [threading.Thread(target=body, args=(n,), daemon=True, name=n)
-                   for n in run["nodes"]]
-        for th in threads:
-            th.start()
-    try:
+    clock: Clock | None = None
+    try:  # from here on every error path stops the nodes and closes the bus
+        clock = Clock(bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,
+                      check_processes=check, auth=auth)
+        if run["mode"] == "monolithic":
+            threads = [threading.Thread(target=body, args=(n,), daemon=True, name=n)
+                       for n in run["nodes"]]
+            for th in threads:
+                th.start()
         result = clock.run()
     except BaseException as exc:
-        if isinstance(exc, KeyboardInterrupt):  # Ctrl-C or SIGTERM: stop the nodes cleanly
+        if isinstance(exc, KeyboardInterrupt) and clock is not None:  # Ctrl-C or SIGTERM
             try:
                 clock.announce_abort("the orchestrator was interrupted")
             except Exception:

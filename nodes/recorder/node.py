@@ -10,6 +10,11 @@ statistics to the orchestrator. On an abort it flushes, exports what is complete
 When the run has a live fatigue node, the recorder also streams the load channel
 (``plant/arm``) to it as blocks on ``recorder/loads`` (see cosim.channels): steps in order,
 no gaps, ``fatigue.block_samples`` steps per block, the last block at the end of the run.
+
+A batch must be signed with the run's key (:meth:`Participant.open`); each data message in
+it must decode and keep the shape of its channel (:class:`ChannelShapes`: a field is a number
+or a list of one length, as in the channel's first message). Anything else is rejected and
+counted, never journaled: one ragged batch cannot make a complete journal unexportable.
 """
 
 from __future__ import annotations
@@ -31,6 +36,30 @@ from .table import build_table, channel_stats, export
 
 FLUSH_PERIOD_S = 0.05
 _DATA = "~data"
+
+
+class ChannelShapes:
+    """The shape of each field of each channel (None: a number; n: a list of n numbers), as
+    its first data message gives it; a later message must match for the fields it shares."""
+
+    def __init__(self) -> None:
+        self.shapes: dict[str, dict[str, int | None]] = {}
+
+    def check(self, channel: str, d: dict[str, Any]) -> str | None:
+        """None if ``d`` fits the channel (the first message fixes it), else what is wrong."""
+        got = {f: (len(v) if type(v) is list else None) for f, v in d.items()}
+        known = self.shapes.get(channel)
+        if known is None:
+            self.shapes[channel] = got
+            return None
+        bad = [f for f, n in got.items() if f in known and known[f] != n]
+        if bad:
+            f = bad[0]
+            return (f"field '{f}' has shape {got[f]} where the channel's first message had "
+                    f"{known[f]} (None: a number)")
+        for f, n in got.items():
+            known.setdefault(f, n)
+        return None
 
 
 def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
@@ -138,6 +167,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         part.bus.subscribe(keys.key(part.run, node, keys.RECORDS),
                            lambda key, raw: put(((_DATA, key), raw)))
     heard: set[str] = set()
+    shapes = ChannelShapes()
     expected: set[str] = set()
     got: dict[str, set[int]] = {}
     n_steps = None
@@ -152,6 +182,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         if msg.kind != "data" or msg.k < 0:
             return
         name = f"{node}/{channel}"
+        if n_steps is not None and msg.k > n_steps:
+            part._reject((node, channel), f"step {msg.k} after the last step {n_steps}")
+            return
+        wrong = shapes.check(name, msg.d)
+        if wrong:
+            part._reject((node, channel), f"step {msg.k}: {wrong}")
+            return
         # Everything valid is journaled, duplicates included: the table keeps, per step,
         # the first message that has the channel's fields (see table.build_table).
         got.setdefault(name, set()).add(msg.k)
@@ -165,7 +202,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         """One ``records`` message; True if it held data."""
         _, node, _ = keys.parse_key(key)
         try:
-            batch = decode(raw)
+            batch = part.open(key, raw)  # signed with the run's key, else rejected
         except WireError as exc:
             part._reject((node, keys.RECORDS), str(exc))
             return False
@@ -173,6 +210,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         if batch.kind != "records":
             return False
         for channel, one in batch.d["records"]:
+            if not keys.NAME.match(channel):
+                part._reject((node, keys.RECORDS), f"bad channel name {channel!r:.40}")
+                continue
             record(node, channel, one)
         return True
 
