@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
+from nodes.controller.registry import Param, control_law
 
 
 def passive_linear(v_rel: np.ndarray | float, c: float) -> np.ndarray:
@@ -36,6 +37,12 @@ def passive_linear(v_rel: np.ndarray | float, c: float) -> np.ndarray:
         Force on the body, upward positive (N).
     """
     return c * np.asarray(v_rel, dtype=float)
+
+
+@control_law("passive")
+def passive(v_rel: np.ndarray, *, c: float = Param(1500.0, lo=0.0, unit="N·s/m")):
+    """Linear passive damper F_d = c v_rel (Table 4.3)."""
+    return passive_linear(v_rel, c), c
 
 
 def two_state_force(

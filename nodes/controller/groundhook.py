@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from nodes.controller.dampers import semi_active_force, two_state_force
+from nodes.controller.registry import HARD, SOFT, Param, control_law
 
 
 def groundhook_condition(v_w: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
@@ -44,3 +45,29 @@ def groundhook_continuous(
         (F_d in N, c in N·s/m).
     """
     return semi_active_force(c_gnd * np.asarray(v_w, dtype=float), v_rel, c_min, c_max)
+
+
+# ------------------------------------------------------------------ the laws, by name
+
+
+@control_law("groundhook_on_off")
+def groundhook_on_off_law(
+    v_w: np.ndarray, v_rel: np.ndarray, *, c_soft: float = SOFT, c_hard: float = HARD
+):
+    """Two-state groundhook: c_hard where v_w v_rel > 0, else c_soft (thesis Eq 2.4)."""
+    F, c, hard = groundhook_on_off(v_w, v_rel, c_soft, c_hard)
+    return F, c, {"state": hard.astype(float)}
+
+
+@control_law("groundhook")
+def groundhook_law(
+    v_w: np.ndarray,
+    v_rel: np.ndarray,
+    *,
+    c_gnd: float = Param(lo=0.0, unit="N·s/m"),
+    c_min: float = SOFT,
+    c_max: float = HARD,
+):
+    """Continuous groundhook c_gnd v_w clipped to c_min..c_max (thesis Eq 2.4)."""
+    F, c = groundhook_continuous(v_w, v_rel, c_gnd, c_min, c_max)
+    return F, c, {"c": c}

@@ -19,6 +19,7 @@ import numpy as np
 
 from nodes.controller.dampers import semi_active_force
 from nodes.controller.groundhook import groundhook_condition
+from nodes.controller.registry import HARD, SOFT, Param, control_law
 from nodes.controller.skyhook import skyhook_condition
 
 
@@ -44,3 +45,18 @@ def hybrid(
     """Hybrid law realised by a variable damper. Returns (F_d in N, c in N·s/m)."""
     v_rel = np.asarray(v_w, dtype=float) - np.asarray(v_b, dtype=float)
     return semi_active_force(hybrid_demand(v_b, v_w, alpha, G), v_rel, c_min, c_max)
+
+
+@control_law("hybrid")
+def hybrid_law(
+    v_b: np.ndarray,
+    v_w: np.ndarray,
+    *,
+    alpha: float = Param(lo=0.0, hi=1.0),
+    G: float = Param(lo=0.0, unit="N·s/m"),
+    c_min: float = SOFT,
+    c_max: float = HARD,
+):
+    """Hybrid skyhook-groundhook G [alpha sky + (1 - alpha) ground] (thesis Eq 2.5)."""
+    F, c = hybrid(v_b, v_w, alpha, G, c_min, c_max)
+    return F, c, {"c": c}

@@ -1,26 +1,14 @@
-"""Registry of control laws: ``build_controller(cfg, n_corners, h)`` from a scenario's
-``[controller]`` table.
+"""Build a scenario's controller: ``build_controller(cfg, n_corners, h)`` from its
+``[controller]`` table, and the laws that need a class.
 
-Laws (``law = "..."``) and their keys (defaults in brackets; "preset" defaults come from
-``preset = "lumped"`` [1500 / 2368 N·s/m, Table 5.2 lumped QVM and 7-DOF FVM] or
-``"realistic"`` [3800 / 6000 N·s/m, realistic QVM]):
-
-==================== ==========================================================================
-law                  keys
-==================== ==========================================================================
-passive              c [1500] N·s/m
-passive_curve        curve: CSV path (v_rel m/s, F_d N) — or points = [[v, F], ...]
-passive_mr           I [0.0] A; damper = {MR overrides}
-tss1 (skyhook_on_off) preset, c_soft, c_hard
-tss2                 preset, c_soft, c_hard, B [0.8], G [0.001] A/N; damper = {MR overrides}
-tss3                 I_soft [0.0] A, I_hard [0.6] A; damper = {MR overrides}
-skyhook              c_sky (required) N·s/m; preset, c_min [c_soft], c_max [c_hard]
-skyhook_no_jerk      G (required) N·s²/m²; preset, c_min, c_max
-groundhook           c_gnd (required) N·s/m; preset, c_min, c_max
-groundhook_on_off    preset, c_soft, c_hard
-hybrid               alpha (required, 0..1), G (required) N·s/m; preset, c_min, c_max
-pnr (tss1_pnr)       preset, c_soft, c_hard, angular_acc ["rates" | "corners"], wheelbase, track
-==================== ==========================================================================
+Every law is registered by name in :mod:`nodes.controller.registry`: most are one function
+each (``@control_law``, beside their numerics: ``passive`` in dampers.py, ``tss1`` /
+``skyhook_on_off``, ``skyhook``, ``skyhook_no_jerk`` in skyhook.py, ``groundhook``,
+``groundhook_on_off`` in groundhook.py, ``hybrid`` in hybrid.py); the laws below need state or
+substeps and register their builder (``@law_builder``): ``passive_curve``, ``passive_mr``,
+``tss2``, ``tss3``, ``pnr`` / ``tss1_pnr``; ``fmu`` (an FMI co-simulation FMU) is in fmu.py.
+``python3 -m nodes.controller.registry`` lists them all with their keys; docs/control.md
+has the table with defaults and thesis sources.
 
 Every law also accepts ``velocity`` ["relative" | "damper"]: "damper" makes the law use the
 plant's ``v_damper`` (damper compression velocity, m/s, published by the double-wishbone
@@ -32,7 +20,7 @@ see :class:`nodes.controller.mr_damper.MRParams`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -48,32 +36,11 @@ from nodes.controller.base import (
 )
 from nodes.controller.dampers import PassiveCurve
 from nodes.controller.full_vehicle import pnr_select
-from nodes.controller.groundhook import groundhook_continuous, groundhook_on_off
-from nodes.controller.hybrid import hybrid
 from nodes.controller.mr_damper import MRParams
 from nodes.controller.mr_laws import TSS2, TSS3, PassiveMR
-from nodes.controller.skyhook import skyhook_continuous, skyhook_no_jerk, skyhook_on_off
+from nodes.controller.registry import LAWS, PRESETS, discover, law_builder, lookup
 
-#: (c_soft, c_hard) in N·s/m of thesis Table 5.2.
-PRESETS: dict[str, tuple[float, float]] = {
-    "lumped": (1500.0, 2368.0),
-    "realistic": (3800.0, 6000.0),
-}
-
-
-class Passive(Controller):
-    """Linear passive damper ``F_d = c v_rel``; c in N·s/m."""
-
-    law = "passive"
-
-    def __init__(self, n_corners: int, h: float, c: float) -> None:
-        super().__init__(n_corners, h)
-        self.c = c
-
-    def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
-        _, _, v_rel = self.corners(state)
-        return ControlOutput(F_d=self.c * v_rel, c_eff=np.full(self.n, self.c))
-
+__all__ = ["LAWS", "PRESETS", "build_controller"]
 
 class PassiveCurveController(Controller):
     """Passive damper following a piecewise-linear force-velocity curve; ``c_eff`` is the
@@ -88,44 +55,6 @@ class PassiveCurveController(Controller):
     def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
         _, _, v_rel = self.corners(state)
         return ControlOutput(F_d=self.curve.force(v_rel), c_eff=self.curve.slope(v_rel))
-
-
-class OnOff(Controller):
-    """Two-state switching of the damping coefficient (TSS1 skyhook or groundhook)."""
-
-    def __init__(self, n_corners: int, h: float, law: str, c_soft: float, c_hard: float) -> None:
-        super().__init__(n_corners, h)
-        self.law, self.c_soft, self.c_hard = law, c_soft, c_hard
-
-    def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
-        v_b, v_w, v_rel = self.corners(state)
-        if self.law == "groundhook_on_off":
-            F, c, hard = groundhook_on_off(v_w, v_rel, self.c_soft, self.c_hard)
-        else:
-            F, c, hard = skyhook_on_off(v_b, v_rel, self.c_soft, self.c_hard)
-        return ControlOutput(F_d=F, c_eff=c, extra={"state": hard.astype(float)})
-
-
-class Clipped(Controller):
-    """A continuous law realised by a variable damper (c_min <= c <= c_max).
-
-    ``law_fn(v_b, v_w, v_rel) -> (F_d, c)``.
-    """
-
-    def __init__(
-        self,
-        n_corners: int,
-        h: float,
-        law: str,
-        law_fn: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
-    ) -> None:
-        super().__init__(n_corners, h)
-        self.law, self.law_fn = law, law_fn
-
-    def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
-        v_b, v_w, v_rel = self.corners(state)
-        F, c = self.law_fn(v_b, v_w, v_rel)
-        return ControlOutput(F_d=F, c_eff=c, extra={"c": c})
 
 
 class PitchRoll(Controller):
@@ -190,7 +119,8 @@ class PitchRoll(Controller):
 
 # --------------------------------------------------------------------------- builders
 
-Builder = Callable[[ConfigReader, int, float], Controller]
+_MR_KEYS = ("damper",)
+_SH = ("preset", "c_soft", "c_hard")
 
 
 def _soft_hard(r: ConfigReader, soft: str = "c_soft", hard: str = "c_hard") -> tuple[float, float]:
@@ -207,11 +137,9 @@ def _mr_params(r: ConfigReader) -> MRParams:
     return MRParams.from_config(r.table("damper"), r.key("damper"))
 
 
-def _passive(r: ConfigReader, n: int, h: float) -> Controller:
-    return Passive(n, h, r.number("c", 1500.0, lo=0.0, unit="N·s/m"))
-
-
+@law_builder("passive_curve", ("curve", "points"))
 def _passive_curve(r: ConfigReader, n: int, h: float) -> Controller:
+    """Passive damper on a force-velocity curve (CSV path or points)."""
     if r.has("curve") == r.has("points"):
         raise ScenarioError(
             r.key("curve"),
@@ -231,65 +159,34 @@ def _passive_curve(r: ConfigReader, n: int, h: float) -> Controller:
     return PassiveCurveController(n, h, PassiveCurve(arr[:, 0], arr[:, 1], source=r.key("points")))
 
 
+@law_builder("passive_mr", ("I", *_MR_KEYS))
 def _passive_mr(r: ConfigReader, n: int, h: float) -> Controller:
+    """MR damper at a constant current I (thesis "passive MR", Fig 5.7a)."""
     p = _mr_params(r)
     return PassiveMR(n, h, p, r.number("I", 0.0, lo=0.0, hi=p.I_max, unit="A"))
 
 
-def _tss1(r: ConfigReader, n: int, h: float) -> Controller:
-    return OnOff(n, h, "tss1", *_soft_hard(r))
-
-
-def _groundhook_on_off(r: ConfigReader, n: int, h: float) -> Controller:
-    return OnOff(n, h, "groundhook_on_off", *_soft_hard(r))
-
-
+@law_builder("tss2", (*_SH, "B", "G", *_MR_KEYS))
 def _tss2(r: ConfigReader, n: int, h: float) -> Controller:
+    """MR damper tracking the TSS1 force by current feedback (thesis Sec 5.3.2)."""
     c_soft, c_hard = _soft_hard(r)
     B = r.number("B", 0.8, lo=0.0, unit="(-)")
     G = r.number("G", 0.001, lo=0.0, lo_open=True, unit="A/N")
     return TSS2(n, h, _mr_params(r), c_soft, c_hard, B, G)
 
 
+@law_builder("tss3", ("I_soft", "I_hard", *_MR_KEYS))
 def _tss3(r: ConfigReader, n: int, h: float) -> Controller:
+    """Two-state skyhook switching the MR current (thesis Sec 5.3.3)."""
     p = _mr_params(r)
     I_soft = r.number("I_soft", 0.0, lo=0.0, hi=p.I_max, unit="A")
     I_hard = r.number("I_hard", p.I_max, lo=I_soft, hi=p.I_max, unit="A")
     return TSS3(n, h, p, I_soft, I_hard)
 
 
-def _skyhook(r: ConfigReader, n: int, h: float) -> Controller:
-    c_min, c_max = _soft_hard(r, "c_min", "c_max")
-    c_sky = r.number("c_sky", lo=0.0, unit="N·s/m")
-    return Clipped(
-        n, h, "skyhook", lambda vb, vw, vr: skyhook_continuous(vb, vr, c_sky, c_min, c_max)
-    )
-
-
-def _skyhook_no_jerk(r: ConfigReader, n: int, h: float) -> Controller:
-    c_min, c_max = _soft_hard(r, "c_min", "c_max")
-    G = r.number("G", lo=0.0, unit="N·s²/m²")
-    return Clipped(
-        n, h, "skyhook_no_jerk", lambda vb, vw, vr: skyhook_no_jerk(vb, vr, G, c_min, c_max)
-    )
-
-
-def _groundhook(r: ConfigReader, n: int, h: float) -> Controller:
-    c_min, c_max = _soft_hard(r, "c_min", "c_max")
-    c_gnd = r.number("c_gnd", lo=0.0, unit="N·s/m")
-    return Clipped(
-        n, h, "groundhook", lambda vb, vw, vr: groundhook_continuous(vw, vr, c_gnd, c_min, c_max)
-    )
-
-
-def _hybrid(r: ConfigReader, n: int, h: float) -> Controller:
-    c_min, c_max = _soft_hard(r, "c_min", "c_max")
-    alpha = r.number("alpha", lo=0.0, hi=1.0)
-    G = r.number("G", lo=0.0, unit="N·s/m")
-    return Clipped(n, h, "hybrid", lambda vb, vw, vr: hybrid(vb, vw, alpha, G, c_min, c_max))
-
-
+@law_builder("pnr", (*_SH, "angular_acc", "wheelbase", "track"), aliases=("tss1_pnr",))
 def _pnr(r: ConfigReader, n: int, h: float) -> Controller:
+    """Full-vehicle pitch-and-roll TSS1, minimum product of 16 combinations (Sec 5.4.4)."""
     if n != 4:
         raise ScenarioError(
             r.key("law"),
@@ -308,29 +205,6 @@ def _pnr(r: ConfigReader, n: int, h: float) -> Controller:
     return PitchRoll(n, h, c_soft, c_hard, source, wheelbase, track)
 
 
-_MR_KEYS = ("damper",)
-_SH = ("preset", "c_soft", "c_hard")
-_CLIP = ("preset", "c_min", "c_max")
-
-#: law name -> (builder, accepted keys besides "law")
-LAWS: dict[str, tuple[Builder, tuple[str, ...]]] = {
-    "passive": (_passive, ("c",)),
-    "passive_curve": (_passive_curve, ("curve", "points")),
-    "passive_mr": (_passive_mr, ("I", *_MR_KEYS)),
-    "tss1": (_tss1, _SH),
-    "skyhook_on_off": (_tss1, _SH),
-    "tss2": (_tss2, (*_SH, "B", "G", *_MR_KEYS)),
-    "tss3": (_tss3, ("I_soft", "I_hard", *_MR_KEYS)),
-    "skyhook": (_skyhook, (*_CLIP, "c_sky")),
-    "skyhook_no_jerk": (_skyhook_no_jerk, (*_CLIP, "G")),
-    "groundhook": (_groundhook, (*_CLIP, "c_gnd")),
-    "groundhook_on_off": (_groundhook_on_off, _SH),
-    "hybrid": (_hybrid, (*_CLIP, "alpha", "G")),
-    "pnr": (_pnr, (*_SH, "angular_acc", "wheelbase", "track")),
-    "tss1_pnr": (_pnr, (*_SH, "angular_acc", "wheelbase", "track")),
-}
-
-
 def build_controller(
     cfg: Mapping[str, Any], n_corners: int, h: float, key_prefix: str = "controller"
 ) -> Controller:
@@ -343,7 +217,8 @@ def build_controller(
         key_prefix: dotted path of the table, used in error messages.
 
     Raises:
-        ScenarioError: unknown law, unknown key, or a bad value (names the dotted key).
+        ScenarioError: unknown law, unknown key, or a bad value (names the dotted key);
+            ``law`` may be a registered name or ``"package.module:function"``.
         InputFileError: a malformed damper-curve CSV.
     """
     if n_corners < 1:
@@ -352,12 +227,12 @@ def build_controller(
         raise ValueError(f"communication step h must be > 0 s, got {h}")
     if not isinstance(cfg, Mapping):
         raise ScenarioError(key_prefix, cfg, "a table with a 'law' key")
-    law = cfg.get("law")
-    if law not in LAWS:
-        raise ScenarioError(f"{key_prefix}.law", law, f"one of {sorted(LAWS)}")
-    builder, keys = LAWS[law]
-    reader = ConfigReader(cfg, key_prefix, ("law", "velocity", *keys))
+    spec = lookup(cfg.get("law"), f"{key_prefix}.law")
+    reader = ConfigReader(cfg, key_prefix, ("law", "velocity", *spec.keys))
     velocity = reader.choice("velocity", VELOCITY_SOURCES, "relative")
-    controller = builder(reader, int(n_corners), float(h))
+    controller = spec.build(reader, int(n_corners), float(h))
     controller.velocity = velocity
     return controller
+
+
+discover()  # every law of the package registered once this module is imported

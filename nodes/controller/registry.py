@@ -1,0 +1,340 @@
+"""The law registry: a control law is one function.
+
+Write the law as a function of the corner signals, its settings as keyword-only arguments,
+and decorate it; name it in a scenario (``[controller] law = "my_law"``) and it runs::
+
+    import numpy as np
+    from nodes.controller.registry import HARD, SOFT, Param, control_law
+
+    @control_law("my_law")
+    def my_law(v_b, v_rel, *, gain: float = Param(lo=0.0, unit="N·s/m"), c_min=SOFT, c_max=HARD):
+        \"\"\"One line that ``python3 -m nodes.controller.registry`` lists.\"\"\"
+        c = np.clip(gain * np.abs(v_b), c_min, c_max)
+        return c * v_rel, c                       # F_d (N), c_eff (N·s/m) [, extras]
+
+**Inputs** are the parameters before the ``*``, filled by name at every step:
+
+* ``v_b``, ``v_w`` (m/s), ``v_rel`` (m/s; ``v_w - v_b``, or the plant's ``v_damper`` with
+  ``velocity = "damper"``), ``z_b``, ``z_w`` (m) and any other per-corner state key
+  (``v_damper``, ``a_b`` ...): float arrays of shape (n_corners,);
+* the full vehicle's body scalars ``v_heave``, ``w_pitch``, ``w_roll``, ``pitch``, ``roll``
+  (floats);
+* ``t`` (s, time of the state), ``h`` (s, communication step), ``n`` (number of corners);
+* ``memory``: a dict kept between the calls of one run, for a law with state (a filter, the
+  previous value of a signal).
+
+**Settings** are the keyword-only parameters after the ``*``: each is a key of the scenario's
+``[controller]`` table. A plain default (``gain: float = 2500.0``) makes it optional; a
+:class:`Param` gives its range and unit, or makes it required (no ``default``); :data:`SOFT`
+and :data:`HARD` are the damper's two coefficients with the thesis's presets (the law then also
+accepts ``preset = "lumped" | "realistic"``, and ``hard >= soft`` is checked). Bad or unknown
+keys are a ``ScenarioError`` naming the dotted key (exit 2), like every built-in law.
+
+**Outputs**: ``(F_d, c_eff)`` or ``(F_d, c_eff, extras)``: the damper force on the body,
+upward positive (N), its slope dF_d/dv_rel handed to the plant (N·s/m), and a dict of further
+channels to record; each is an array of n_corners values or a scalar (broadcast).
+
+**Where**: any module in ``nodes/controller/`` is found by :func:`discover`; a law kept
+elsewhere is named ``law = "package.module:function"`` (importable by the controller process).
+A law that needs a class (the MR damper's substeps, say) registers its builder with
+:func:`law_builder` instead.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import pkgutil
+import sys
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from cosim.errors import ScenarioError
+from nodes.controller.base import (
+    BODY_KEYS,
+    ConfigReader,
+    Controller,
+    ControlOutput,
+    body_scalar,
+    corner_array,
+)
+
+#: (c_soft, c_hard) in N·s/m of thesis Table 5.2 (``preset`` key).
+PRESETS: dict[str, tuple[float, float]] = {
+    "lumped": (1500.0, 2368.0),
+    "realistic": (3800.0, 6000.0),
+}
+#: Inputs that are not per-corner state arrays.
+SPECIAL_INPUTS = ("t", "h", "n", "memory")
+
+_REQUIRED = object()
+
+Builder = Callable[[ConfigReader, int, float], Controller]
+
+
+@dataclass(frozen=True)
+class Param:
+    """A law setting: its default (none: required), range, unit, choices, or preset role.
+
+    Args:
+        default: value when the key is absent; absent means the key is required.
+        lo, hi: accepted range of a number (``lo_open``: lo excluded).
+        unit: shown in error messages, e.g. ``"N·s/m"``.
+        choices: the accepted strings of a text setting.
+        preset: ``"soft"`` or ``"hard"``: default from :data:`PRESETS` through ``preset``.
+    """
+
+    default: Any = _REQUIRED
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    unit: str = ""
+    choices: tuple[str, ...] = ()
+    preset: str = ""
+
+    @property
+    def required(self) -> bool:
+        return self.default is _REQUIRED and not self.preset
+
+    def example(self) -> Any:
+        """A valid value (the default, else inside the range): for generic tests and listings."""
+        if self.preset:
+            return PRESETS["lumped"][0 if self.preset == "soft" else 1]
+        if not self.required:
+            return self.default
+        if self.choices:
+            return self.choices[0]
+        if self.lo is not None and self.hi is not None:
+            return 0.5 * (self.lo + self.hi)
+        return (self.lo or 0.0) + 1.0
+
+
+#: the damper's soft (minimum) coefficient, default from ``preset`` [lumped: 1500 N·s/m]
+SOFT = Param(preset="soft", lo=0.0, unit="N·s/m")
+#: the damper's hard (maximum) coefficient, default from ``preset`` [lumped: 2368 N·s/m]
+HARD = Param(preset="hard", lo=0.0, unit="N·s/m")
+
+
+@dataclass
+class LawSpec:
+    """One registered law: its name, how to build it, the keys it accepts, where it is."""
+
+    name: str
+    build: Builder
+    keys: tuple[str, ...]
+    doc: str
+    module: str
+    fn: Callable[..., Any] | None = None
+    params: dict[str, Param] = field(default_factory=dict)
+    inputs: tuple[str, ...] = ()
+
+
+#: law name (and alias) -> spec; filled by the decorators as the modules are imported.
+LAWS: dict[str, LawSpec] = {}
+_discovered = False
+
+
+def _register(spec: LawSpec, aliases: tuple[str, ...]) -> None:
+    for name in (spec.name, *aliases):
+        old = LAWS.get(name)
+        if old is not None and old.module != spec.module:
+            raise ValueError(f"control law '{name}' is defined twice: in {old.module} and "
+                             f"{spec.module}")
+        LAWS[name] = spec
+
+
+def _first_line(doc: str | None) -> str:
+    return (inspect.cleandoc(doc or "").splitlines() or [""])[0]
+
+
+def control_law(name: str, *, aliases: tuple[str, ...] = ()) -> Callable[[Callable], Callable]:
+    """Register ``fn`` as the law ``name`` (see the module docstring for the signature)."""
+
+    def register(fn: Callable[..., Any]) -> Callable[..., Any]:
+        inputs: list[str] = []
+        params: dict[str, Param] = {}
+        for p in inspect.signature(fn).parameters.values():
+            if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+                raise TypeError(f"control law '{name}': no *args/**kwargs ({p.name})")
+            if p.kind == p.KEYWORD_ONLY:
+                d = p.default
+                params[p.name] = d if isinstance(d, Param) else Param(
+                    default=_REQUIRED if d is p.empty else d)
+            else:
+                inputs.append(p.name)
+        if {"law", "velocity", "preset"} & set(params):
+            raise TypeError(f"control law '{name}': 'law', 'velocity' and 'preset' are "
+                            "reserved setting names")
+        keys = tuple(params) + (("preset",) if any(q.preset for q in params.values()) else ())
+        spec = LawSpec(name=name, build=lambda r, n, h: _build_function_law(spec, r, n, h),
+                       keys=keys, doc=_first_line(fn.__doc__), module=fn.__module__, fn=fn,
+                       params=params, inputs=tuple(inputs))
+        _register(spec, aliases)
+        fn.__suscosim_law__ = spec  # type: ignore[attr-defined]
+        return fn
+
+    return register
+
+
+def law_builder(
+    name: str, keys: tuple[str, ...], *, aliases: tuple[str, ...] = ()
+) -> Callable[[Builder], Builder]:
+    """Register ``builder(reader, n_corners, h) -> Controller`` as the law ``name`` that
+    accepts ``keys`` (besides ``law`` and ``velocity``): for laws that need a class."""
+
+    def register(builder: Builder) -> Builder:
+        _register(LawSpec(name=name, build=builder, keys=tuple(keys),
+                          doc=_first_line(builder.__doc__), module=builder.__module__), aliases)
+        return builder
+
+    return register
+
+
+def discover() -> None:
+    """Import every module of this package (except the node itself) so that their laws are
+    registered; once per process."""
+    global _discovered
+    if _discovered:
+        return
+    _discovered = True
+    package = sys.modules[__package__]
+    for info in pkgutil.iter_modules(package.__path__):
+        if info.name != "node" and not info.name.startswith("_"):
+            importlib.import_module(f"{__package__}.{info.name}")
+
+
+def lookup(name: Any, key: str = "controller.law") -> LawSpec:
+    """The spec of the law ``name`` (a registered name or ``"package.module:function"``).
+
+    Raises:
+        ScenarioError: unknown name, a module that does not import, or not a law.
+    """
+    discover()
+    if isinstance(name, str) and name in LAWS:
+        return LAWS[name]
+    if not (isinstance(name, str) and ":" in name):
+        raise ScenarioError(key, name, f"one of {sorted(LAWS)} or 'package.module:function'")
+    module_name, _, attr = name.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as exc:  # any failure to import a user's module is bad input
+        raise ScenarioError(key, name,
+                            f"an importable module ({type(exc).__name__}: {exc})") from None
+    spec = getattr(getattr(module, attr, None), "__suscosim_law__", None)
+    if spec is None:
+        raise ScenarioError(key, name, f"a function of {module_name} decorated with "
+                            "@control_law (nodes.controller.registry)")
+    return spec
+
+
+def read_settings(spec: LawSpec, r: ConfigReader) -> dict[str, Any]:
+    """The law's settings from the scenario table, validated, defaults filled in."""
+    soft_hard = PRESETS[r.choice("preset", sorted(PRESETS), "lumped")] if "preset" in spec.keys \
+        else (0.0, 0.0)
+    values: dict[str, Any] = {}
+    for name, p in spec.params.items():
+        if p.choices:
+            values[name] = r.choice(name, p.choices, *(() if p.required else (p.default,)))
+        elif isinstance(p.default, bool):
+            values[name] = r.boolean(name, p.default)
+        elif isinstance(p.default, str):
+            values[name] = r.string(name) if r.has(name) else p.default
+        else:
+            bounds = {"lo": p.lo, "hi": p.hi, "lo_open": p.lo_open, "unit": p.unit}
+            if p.required:
+                values[name] = r.number(name, **bounds)
+            else:
+                default = soft_hard[p.preset == "hard"] if p.preset else p.default
+                values[name] = r.number(name, default, **bounds)
+    soft = [n for n, p in spec.params.items() if p.preset == "soft"]
+    hard = [n for n, p in spec.params.items() if p.preset == "hard"]
+    if soft and hard and values[hard[0]] < values[soft[0]]:
+        raise ScenarioError(r.key(hard[0]), values[hard[0]],
+                            f"a number >= {soft[0]} ({values[soft[0]]:g}) N·s/m")
+    return values
+
+
+def _build_function_law(spec: LawSpec, r: ConfigReader, n: int, h: float) -> Controller:
+    return FunctionLaw(n, h, spec, read_settings(spec, r))
+
+
+class FunctionLaw(Controller):
+    """A :class:`Controller` that calls a registered law function every step."""
+
+    def __init__(self, n_corners: int, h: float, spec: LawSpec, settings: dict[str, Any]) -> None:
+        super().__init__(n_corners, h)
+        assert spec.fn is not None
+        self.law, self.spec, self.settings = spec.name, spec, settings
+        self.memory: dict[str, Any] = {}
+
+    def _input(self, name: str, t: float, state: Mapping[str, Any],
+               velocities: tuple[np.ndarray, np.ndarray, np.ndarray]) -> Any:
+        if name in ("v_b", "v_w", "v_rel"):
+            return velocities[("v_b", "v_w", "v_rel").index(name)]
+        if name == "t":
+            return float(t)
+        if name == "h":
+            return self.h
+        if name == "n":
+            return self.n
+        if name == "memory":
+            return self.memory
+        if name in BODY_KEYS:
+            return body_scalar(state, name)
+        return corner_array(state, name, self.n)
+
+    def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
+        velocities = self.corners(state)
+        args = [self._input(name, t, state, velocities) for name in self.spec.inputs]
+        out = self.spec.fn(*args, **self.settings)  # type: ignore[misc]
+        if not isinstance(out, tuple) or len(out) not in (2, 3):
+            raise TypeError(f"control law '{self.law}' must return (F_d, c_eff) or "
+                            f"(F_d, c_eff, extras), got {type(out).__name__}")
+        extras = out[2] if len(out) == 3 else {}
+        return ControlOutput(F_d=self._corners(out[0], "F_d"), c_eff=self._corners(out[1], "c_eff"),
+                             extra={k: self._corners(v, k) for k, v in extras.items()})
+
+    def _corners(self, value: Any, what: str) -> np.ndarray:
+        arr = np.asarray(value, dtype=float)
+        if arr.ndim == 0:
+            return np.full(self.n, float(arr))
+        if arr.shape != (self.n,):
+            raise ValueError(f"control law '{self.law}' returned {what} of shape {arr.shape}, "
+                             f"expected ({self.n},)")
+        return arr
+
+
+def example_config(name: str) -> dict[str, Any]:
+    """A valid ``[controller]`` table of a function law (required settings at example
+    values); a builder law gets ``{"law": name}`` only."""
+    spec = lookup(name)
+    return {"law": name, **{k: p.example() for k, p in spec.params.items() if p.required}}
+
+
+def describe() -> list[tuple[str, str, str, str]]:
+    """(name, keys, module, first docstring line) of every registered law, sorted."""
+    discover()
+    rows = []
+    for name, spec in sorted(LAWS.items()):
+        keys = ", ".join(
+            f"{k}{'' if not (p := spec.params.get(k)) or not p.required else ' (required)'}"
+            for k in spec.keys)
+        alias = "" if name == spec.name else f" (= {spec.name})"
+        rows.append((name + alias, keys, spec.module, spec.doc))
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python3 -m nodes.controller.registry``: list the registered laws."""
+    for name, keys, module, doc in describe():
+        print(f"{name:<22} {module:<34} {doc}\n{'':<22} keys: {keys or '-'}")
+    return 0
+
+
+if __name__ == "__main__":  # run as a script: list from the package's own module
+    from nodes.controller.registry import main as _main
+
+    raise SystemExit(_main())
