@@ -51,13 +51,16 @@ class Key:
     choices: tuple[Any, ...] | None = None
     positive: bool = False
     doc: str = ""
+    low: float | None = None
+    high: float | None = None
+    """Physical range (inclusive) of a number, with :attr:`positive` for a strict 0."""
 
 
 RUN_KEYS: dict[str, Key] = {
     "name": Key(str, "run", doc="run name; the run id is <name>-<timestamp> unless run.id"),
     "id": Key(str, "", doc="explicit run id (letters, digits, _ . -)"),
     "t_end": Key(float, 0.0, doc="simulated time [s]; 0 = from road length / speed"),
-    "h": Key(float, 0.001, positive=True, doc="communication step [s]"),
+    "h": Key(float, 0.001, positive=True, low=1e-6, high=0.1, doc="communication step [s]"),
     "exchange": Key(str, "sequential", ("sequential", "parallel"),
                     doc="sequential: thesis scheme (plant, then forces at the same t_k); "
                         "parallel: Jacobi, everybody on the previous step's inputs"),
@@ -66,15 +69,17 @@ RUN_KEYS: dict[str, Key] = {
                         "steps: hold (zero-order hold, the thesis), linear (extrapolate from "
                         "the last two steps), jacobian (linearise with dF/dz, dF/dv sent by "
                         "the force nodes)"),
-    "substeps": Key(int, 4, positive=True, doc="plant integration substeps per step"),
+    "substeps": Key(int, 4, positive=True, high=10000,
+                    doc="plant integration substeps per step"),
     "mode": Key(str, "distributed", ("distributed", "monolithic", "reference"),
                 doc="distributed: one process per node over Zenoh; monolithic: one process, "
                     "in-memory bus; reference: SciPy solve_ivp of the lumped model"),
-    "stall_timeout_s": Key(float, 5.0, positive=True,
+    "stall_timeout_s": Key(float, 5.0, positive=True, high=3600.0,
                            doc="a node that makes no progress this long ends the run [s]"),
-    "start_timeout_s": Key(float, 60.0, positive=True,
+    "start_timeout_s": Key(float, 60.0, positive=True, high=3600.0,
                            doc="how long to wait for every node to be ready [s]"),
-    "rtol": Key(float, 1e-10, positive=True, doc="reference mode: solve_ivp relative tolerance"),
+    "rtol": Key(float, 1e-10, positive=True, low=1e-14, high=1e-2,
+                doc="reference mode: solve_ivp relative tolerance"),
 }
 
 
@@ -93,7 +98,57 @@ def _typed(key: str, value: Any, spec: Key) -> Any:
         raise ScenarioError(key, value, "one of " + ", ".join(map(repr, spec.choices)))
     if spec.positive and value <= 0:
         raise ScenarioError(key, value, "a number > 0")
+    if (spec.low is not None and value < spec.low) or (spec.high is not None
+                                                       and value > spec.high):
+        lo = f"{spec.low:g} <= " if spec.low is not None else "0 < " if spec.positive else ""
+        hi = f" <= {spec.high:g}" if spec.high is not None else ""
+        raise ScenarioError(key, value, f"{lo}{key.rsplit('.', 1)[-1]}{hi}")
     return value
+
+
+PHYSICAL_RANGES: tuple[tuple[str, str, float, float, str], ...] = (
+    ("vehicle", "*mass*", 1e-3, 1e5, "kg"),
+    ("vehicle", "*inertia*", 1e-3, 1e6, "kg m^2"),
+    ("vehicle", "*stiffness*", 0.0, 1e9, "N/m (N m/deg for a torsion bar)"),
+    ("vehicle", "track", 0.1, 10.0, "m"),
+    ("vehicle", "wheelbase", 0.1, 20.0, "m"),
+    ("tyre", "stiffness", 1.0, 1e9, "N/m"),
+    ("tyre", "contact_length", 1e-4, 2.0, "m"),
+    ("controller", "c", 0.0, 1e7, "N s/m"),
+    ("controller", "c_*", 0.0, 1e7, "N s/m"),
+    ("controller", "I_*", 0.0, 100.0, "A"),
+    ("road", "height", -1.0, 1.0, "m"),
+    ("road", "depth", -1.0, 1.0, "m"),
+    ("road", "speed_kmh", 0.0, 500.0, "km/h"),
+    ("road", "length_m", 0.0, 1e7, "m"),
+)
+"""(section, key pattern, lowest, highest, unit): the physical range of the numbers of the
+model sections, wherever they sit in their section (``road.events[2].height`` too). A
+value outside is a ScenarioError naming the key. The models' own validators check more
+(e.g. a mass > 0); this table catches what no model would run sensibly (a 1e30 kg body,
+a 10 km step)."""
+
+
+def check_ranges(scenario: dict[str, Any]) -> None:
+    """Apply :data:`PHYSICAL_RANGES` to the model sections of ``scenario``."""
+    from fnmatch import fnmatchcase
+
+    def walk(section: str, value: Any, key: str) -> None:
+        if isinstance(value, dict):
+            for k, v in value.items():
+                walk(section, v, f"{key}.{k}")
+        elif isinstance(value, list):
+            for i, v in enumerate(value):
+                walk(section, v, f"{key}[{i}]")
+        elif type(value) in (int, float):
+            leaf = key.rsplit(".", 1)[-1].split("[", 1)[0]
+            for sec, pattern, lo, hi, unit in PHYSICAL_RANGES:
+                if sec == section and fnmatchcase(leaf, pattern) and not lo <= value <= hi:
+                    raise ScenarioError(key, value, f"a number in {lo:g}..{hi:g} {unit}")
+
+    for section in ("vehicle", "tyre", "road", "controller"):
+        if isinstance(scenario.get(section), dict):
+            walk(section, scenario[section], section)
 
 
 def check_finite(value: Any, key: str = "") -> None:
@@ -115,6 +170,7 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
     defaults. Returns a new dict."""
     out = copy.deepcopy(scenario)
     check_finite(out)
+    check_ranges(out)
     for name, value in out.items():
         if name not in SECTIONS:
             raise ScenarioError(name, "(section)", "one of the sections " + ", ".join(SECTIONS))
@@ -136,9 +192,17 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+MAX_STEPS = 100_000_000
+"""Most communication steps a run may have (14 h at 2000 steps/s; a journal of ~50 GB)."""
+
+
 def n_steps(t_end: float, h: float) -> int:
     """Number of communication steps N so that t_N = t_end (k = 0..N)."""
-    n = int(round(t_end / h))
+    ratio = t_end / h
+    if not math.isfinite(ratio) or ratio > MAX_STEPS:
+        raise ScenarioError("run.t_end", t_end, f"at most {MAX_STEPS} steps of h = {h} s "
+                            f"(got {ratio:.3g})")
+    n = int(round(ratio))
     if n < 1:
         raise ScenarioError("run.t_end", t_end, f"at least one step of h = {h} s")
     return n
@@ -174,9 +238,12 @@ def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[
     """Read a scenario TOML file, apply ``--set`` overrides, validate the common sections."""
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise InputFileError(str(path), f"cannot read scenario ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise InputFileError(str(path), f"not a text (UTF-8) scenario file: byte "
+                                        f"{exc.start} is 0x{exc.object[exc.start]:02x}") from None
     try:
         scenario = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -16,6 +16,8 @@ Every problem raises :class:`cosim.errors.InputFileError` naming the file and th
 from __future__ import annotations
 
 import math
+import os
+from array import array
 from pathlib import Path
 
 import numpy as np
@@ -33,55 +35,75 @@ def _number(text: str) -> float | None:
     return v
 
 
+MAX_PROFILE_BYTES = 256 * 1024 * 1024
+"""Largest profile file read [bytes] (~10 million samples: 1 cm steps over 100 km)."""
+
+
 def read_profile_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Read (x, z_left, z_right) [m] from ``path``; raise InputFileError when malformed."""
+    """Read (x, z_left, z_right) [m] from ``path``; raise InputFileError when malformed.
+
+    The file is read line by line into typed arrays (24 bytes a sample, not the ~200 of a
+    list of tuples of the lines), and refused above :data:`MAX_PROFILE_BYTES`."""
     path = str(path)
     try:
-        with open(path, encoding="utf-8") as f:
-            lines = f.read().splitlines()
+        size = os.stat(path).st_size
+        if size > MAX_PROFILE_BYTES:
+            raise InputFileError(path, f"profile file of {size / 2**20:.0f} MiB: at most "
+                                       f"{MAX_PROFILE_BYTES // 2**20} MiB (resample it coarser)")
+        f = open(path, encoding="utf-8")
     except FileNotFoundError:
         raise InputFileError(path, "file not found") from None
-    except UnicodeDecodeError:
-        raise InputFileError(path, "not a text (UTF-8) file") from None
     except OSError as e:
         raise InputFileError(path, f"cannot read: {e.strerror}") from None
 
-    rows: list[tuple[float, ...]] = []
+    cols: list[array] = []
     n_cols: int | None = None
+    last_x = -math.inf
     seen_data_or_header = False
-    for i, raw in enumerate(lines, start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        fields = [f.strip() for f in line.split(",")]
-        if not seen_data_or_header:
-            seen_data_or_header = True
-            if _number(fields[0]) is None:
-                continue  # header line
-        if len(fields) not in (2, 3):
-            raise InputFileError(
-                path, f"expected 2 or 3 comma-separated columns (distance, height[, right "
-                      f"height]), found {len(fields)}", i)
-        if n_cols is None:
-            n_cols = len(fields)
-        elif len(fields) != n_cols:
-            raise InputFileError(
-                path, f"row has {len(fields)} columns but earlier rows have {n_cols}", i)
-        values = []
-        for j, f in enumerate(fields):
-            v = _number(f)
-            if v is None or not math.isfinite(v):
-                raise InputFileError(path, f"column {j + 1} is not a finite number: {f!r}", i)
-            values.append(v)
-        if rows and values[0] <= rows[-1][0]:
-            raise InputFileError(
-                path, f"distance must increase strictly: {values[0]} after {rows[-1][0]}", i)
-        rows.append(tuple(values))
-    if len(rows) < 2:
-        raise InputFileError(path, f"need at least 2 data rows, found {len(rows)}")
-    a = np.array(rows, dtype=float)
-    z_r = a[:, 2] if a.shape[1] == 3 else a[:, 1]
-    return a[:, 0], a[:, 1], z_r.copy()
+    i = 0
+    with f:
+        try:
+            for i, raw in enumerate(f, start=1):
+                line = raw.strip()
+                if not line or line.startswith("#"):
+                    continue
+                fields = [x.strip() for x in line.split(",")]
+                if not seen_data_or_header:
+                    seen_data_or_header = True
+                    if _number(fields[0]) is None:
+                        continue  # header line
+                if len(fields) not in (2, 3):
+                    raise InputFileError(
+                        path, f"expected 2 or 3 comma-separated columns (distance, height[, "
+                              f"right height]), found {len(fields)}", i)
+                if n_cols is None:
+                    n_cols = len(fields)
+                    cols = [array("d") for _ in fields]
+                elif len(fields) != n_cols:
+                    raise InputFileError(
+                        path, f"row has {len(fields)} columns but earlier rows have {n_cols}",
+                        i)
+                values = []
+                for j, text in enumerate(fields):
+                    v = _number(text)
+                    if v is None or not math.isfinite(v):
+                        raise InputFileError(
+                            path, f"column {j + 1} is not a finite number: {text!r}", i)
+                    values.append(v)
+                if values[0] <= last_x:
+                    raise InputFileError(
+                        path, f"distance must increase strictly: {values[0]} after {last_x}", i)
+                last_x = values[0]
+                for col, v in zip(cols, values, strict=True):
+                    col.append(v)
+        except UnicodeDecodeError:
+            raise InputFileError(path, "not a text (UTF-8) file", i + 1) from None
+    rows = len(cols[0]) if cols else 0
+    if rows < 2:
+        raise InputFileError(path, f"need at least 2 data rows, found {rows}")
+    x, z_l = np.frombuffer(cols[0], dtype=float).copy(), np.frombuffer(cols[1], dtype=float)
+    z_r = np.frombuffer(cols[2], dtype=float) if n_cols == 3 else z_l
+    return x, z_l.copy(), z_r.copy()
 
 
 def csv_road(path: str | Path, speed: float, length: float | None = None,
