@@ -2,7 +2,7 @@
 
     suscosim run SCENARIO.toml [--out DIR] [--set KEY=VALUE ...] [--mode MODE]
     suscosim node NAME --run ID [--connect ENDPOINT]
-    suscosim export JOURNAL [--out DIR]
+    suscosim export RUN_DIR|JOURNAL [--format mdf4|rpc3|csv|parquet] [--out DIR]
     suscosim fatigue RUN_DIR [...]
     suscosim tap [RUN] [PATTERN] | replay JOURNAL | runs [DIR] | router
     suscosim sweep SWEEP.toml | report RUN_OR_SWEEP_DIR
@@ -74,30 +74,106 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _table_channels(table: dict, patterns: list[str] | None):
+    """A ChannelSet of a run's table (``k`` dropped, SI units from the channel schema), the
+    columns filtered by shell-style ``patterns`` (e.g. ``plant/arm/*``)."""
+    from fnmatch import fnmatchcase
+
+    from cosim.formats import ChannelSet, si_unit
+
+    names = [c for c in table if c not in ("k", "t")]
+    if patterns:
+        names = [c for c in names if any(fnmatchcase(c, p) for p in patterns)]
+    return ChannelSet(t=table["t"], channels={c: table[c] for c in names},
+                      units={c: si_unit(c) for c in names})
+
+
+def _write_format(table: dict, fmt: str, path: Path, args: argparse.Namespace) -> dict:
+    """Write a table in ``fmt`` to ``path``; what the format reports (RPC III resolution)."""
+    from cosim.formats import write_channels
+
+    cs = _table_channels(table, args.channels)
+    if not cs.channels:
+        raise ValueError(f"no column matches --channels {' '.join(args.channels)}")
+    opts = {"datatype": args.rpc3_type} if fmt == "rpc3" else \
+        {"units_in_header": True} if fmt == "csv" else {}
+    info = write_channels(cs, path, fmt, **opts)
+    return {"channels": len(cs.channels), **info}
+
+
+def _export_run_dir(run_dir: Path, args: argparse.Namespace) -> int:
+    """``export RUN_DIR --format F``: the run's table as ``<out>/table.<ext>`` (out default
+    ``RUN_DIR/export``)."""
+    from cosim.formats.channel_set import EXTENSION
+    from nodes.recorder.table import read_table
+
+    out = Path(args.out) if args.out else run_dir / "export"
+    src = next((run_dir / n for n in ("table.parquet", "table.csv")
+                if (run_dir / n).is_file()), None)
+    if src is None:
+        print(f"suscosim export: {run_dir}: no table.parquet or table.csv in the run folder "
+              "(give its journal.msgpack to rebuild one)", file=sys.stderr)
+        return 2
+    path = out / f"table{EXTENSION[args.format]}"
+    try:
+        table = read_table(src)
+        if "t" not in table or len(table["t"]) < 2:
+            raise ValueError(f"{src}: no time column 't' or fewer than 2 rows")
+        out.mkdir(parents=True, exist_ok=True)
+        info = _write_format(table, args.format, path, args)
+    except (OSError, ValueError) as exc:
+        print(f"suscosim export: {exc}", file=sys.stderr)
+        return 2
+    print(json.dumps({"rows": int(len(table["t"])), "source": str(src),
+                      "files": {args.format: str(path)}, **info}, indent=2))
+    return 0
+
+
 def cmd_export(args: argparse.Namespace) -> int:
-    """Table from a journal. Exit 0: every record intact (a torn last record, normal after a
-    crash, is only noted). Exit 2 with a message naming the journal: it is not one, it holds no
-    complete step, or records were lost in it (damaged records are skipped, the rest kept),
-    or the table already in the folder is larger; in the last two cases the table is written
-    alongside as ``table.recovered.csv/.parquet`` and ``table.*`` is left as it was."""
+    """Table from a journal, or a run's table in another format.
+
+    ``export JOURNAL`` (or ``export RUN_DIR`` without ``--format``: its journal). Exit 0:
+    every record intact (a torn last record, normal after a crash, is only noted). Exit 2 with
+    a message naming the journal: it is not one, it holds no complete step, or records were
+    lost in it (damaged records are skipped, the rest kept), or the table already in the
+    folder is larger; in the last two cases the table is written alongside as
+    ``table.recovered.csv/.parquet`` and ``table.*`` is left as it was. With ``--format
+    mdf4|rpc3`` the rebuilt table is also written as ``<stem>.mf4`` / ``<stem>.rsp``.
+
+    ``export RUN_DIR --format mdf4|rpc3|csv|parquet``: the run's table (names and SI units)
+    as ``RUN_DIR/export/table.<ext>`` (or ``--out``); see docs/data_formats.md.
+    """
     from nodes.recorder.journal import read_journal
     from nodes.recorder.table import build_table, export_safely
 
     journal = Path(args.journal)
+    if journal.is_dir():
+        if args.format:
+            return _export_run_dir(journal, args)
+        journal = journal / "journal.msgpack"
     out = Path(args.out) if args.out else journal.parent
+    extra_fmt = args.format if args.format in ("mdf4", "rpc3") else None
     try:
         out.mkdir(parents=True, exist_ok=True)
         contents = read_journal(journal)
         table, bad = build_table(contents.records)
         rows = int(len(table["t"]))
         files, why = export_safely(table, out, contents.damaged) if rows else ({}, "")
+        info: dict = {}
+        if extra_fmt and rows > 1:
+            from cosim.formats.channel_set import EXTENSION
+
+            stem = Path(files["csv"]).name[:-len(".csv")]
+            path = out / f"{stem}{EXTENSION[extra_fmt]}"
+            info = _write_format(table, extra_fmt, path, args)
+            files = {**files, extra_fmt: str(path)}
     except (OSError, ValueError) as exc:
         print(f"suscosim export: {exc}", file=sys.stderr)
         return 2
     print(json.dumps({"rows": rows, "files": files, "torn": contents.torn, "undecodable": bad,
                       "records": len(contents.records),
                       "skipped_records": contents.skipped_records,
-                      "skipped": [vars(s) for s in contents.skipped]}, indent=2))
+                      "skipped": [vars(s) for s in contents.skipped], **info}, indent=2))
     if contents.problem:
         print(f"suscosim export: {journal}: {contents.problem}", file=sys.stderr)
     if not rows:
@@ -145,9 +221,18 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
-    e = sub.add_parser("export", help="table.csv/.parquet from a journal (e.g. after a crash)")
-    e.add_argument("journal")
-    e.add_argument("--out")
+    e = sub.add_parser("export", help="table.csv/.parquet from a journal (e.g. after a crash), "
+                                      "or a run's table as MDF 4 / RPC III / CSV / Parquet")
+    e.add_argument("journal", metavar="RUN_DIR|JOURNAL")
+    e.add_argument("--out", help="output folder (default: the journal's folder; for RUN_DIR "
+                                 "--format: RUN_DIR/export)")
+    e.add_argument("--format", choices=("mdf4", "rpc3", "csv", "parquet"),
+                   help="write the run's table in this format (names and SI units)")
+    e.add_argument("--channels", nargs="+", metavar="PATTERN",
+                   help="only these columns (shell patterns, e.g. 'plant/arm/*')")
+    e.add_argument("--rpc3-type", choices=("int", "float"), default="int",
+                   help="RPC III data type: int = 16-bit SHORT_INTEGER (resolution max|x|/32752 "
+                        "per channel), float = 32-bit FLOATING_POINT")
     e.set_defaults(func=cmd_export)
     for name, module, text in (
         ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
@@ -161,6 +246,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("runs", "orchestrator.runs", "list runs and their state from the run folders"),
         ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
         ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
+        ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
         ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
     ):
         p = sub.add_parser(name, help=text, add_help=False)

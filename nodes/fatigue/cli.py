@@ -1,4 +1,11 @@
-"""``suscosim fatigue RUN_DIR``: fatigue life of the lower arm from a finished run."""
+"""``suscosim fatigue RUN_DIR | LOAD_FILE``: fatigue life of the lower arm.
+
+RUN_DIR: a finished run (its table and resolved scenario). LOAD_FILE: a measured or exported
+load history (RPC III ``.rsp/.tim/.rpc/.drv``, MDF 4 ``.mf4``, CSV, Parquet) mapped to the
+arm's load channels (by name, or ``--map SOURCE=TARGET[*SCALE]``), with the fatigue settings
+and road length of ``--scenario RUN_DIR|SCENARIO.toml`` (else the defaults and
+``--set track_length_m=...``); results in ``--out`` (default ``LOAD_FILE.fatigue/``).
+"""
 
 from __future__ import annotations
 
@@ -25,8 +32,18 @@ def _value(text: str):
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="suscosim fatigue",
-                                description="Fatigue life of the lower suspension arm of a run.")
-    p.add_argument("run_dir", metavar="RUN_DIR", type=Path)
+                                description="Fatigue life of the lower suspension arm of a run "
+                                            "or under a measured load file.")
+    p.add_argument("run_dir", metavar="RUN_DIR|LOAD_FILE", type=Path)
+    p.add_argument("--scenario", type=Path, metavar="RUN_DIR|SCENARIO",
+                   help="load file only: take the fatigue settings and road length from this "
+                        "run folder or scenario")
+    p.add_argument("--map", action="append", default=[], metavar="SOURCE=TARGET[*SCALE]",
+                   help="load file only: file channel SOURCE is the arm's load channel TARGET "
+                        "(e.g. LCA_Fz=ball_joint_z*-1); by default channels are matched by "
+                        "name (plant/arm/ball_joint_z or ball_joint_z)")
+    p.add_argument("--out", type=Path, help="load file only: results folder "
+                                            "(default LOAD_FILE.fatigue/)")
     p.add_argument("--equivalent", choices=EQUIVALENTS)
     p.add_argument("--method", choices=METHODS)
     p.add_argument("--mean-stress", choices=MEAN_STRESS_METHODS)
@@ -53,10 +70,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     for k in ("equivalent", "method", "mean_stress", "residue"):
         if getattr(args, k) is not None:
             overrides[k] = getattr(args, k)
-    from .run_dir import fatigue_run_dir
+    from .load_file import parse_map
+    from .run_dir import fatigue_load_file, fatigue_run_dir
 
+    is_file = args.run_dir.is_file()
+    if not is_file and (args.scenario or args.map or args.out):
+        print(f"error: {args.run_dir}: --scenario, --map and --out are for a load file",
+              file=sys.stderr)
+        return 2
     try:
-        r = fatigue_run_dir(args.run_dir, overrides)
+        if is_file:
+            out = args.out or args.run_dir.with_name(args.run_dir.name + ".fatigue")
+            r = fatigue_load_file(args.run_dir, overrides, args.scenario,
+                                  parse_map(args.map), out)
+        else:
+            out = Path(args.run_dir) / "fatigue"
+            r = fatigue_run_dir(args.run_dir, overrides)
     except SuscosimError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return exc.exit_code if exc.exit_code else 2
@@ -70,7 +99,9 @@ def main(argv: Sequence[str] | None = None) -> int:
           + ("" if r.life_repeats_basis is None
              else f" = {r.life_repeats_basis:.4g} repeats of {r.repeats_basis_m:g} m"))
     print(f"  critical node {r.critical_node_id}{where}, max damage/pass {r.max_damage:.3e}")
-    print(f"  results in {Path(args.run_dir) / 'fatigue'}")
+    if r.missing_channels:
+        print("  no load given for " + ", ".join(r.missing_channels) + " (zero)")
+    print(f"  results in {out}")
     return 0
 
 

@@ -1,4 +1,5 @@
-"""Fatigue of a finished run folder: table + resolved scenario in, CSV/JSON/PNG out."""
+"""Fatigue of a finished run folder (table + resolved scenario in, CSV/JSON/PNG out), or of a
+measured load file (RPC III, MDF 4, CSV, Parquet) mapped to the arm's load channels."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from cosim.errors import InputFileError, ScenarioError
 from .config import FatigueConfig
 from .damage_map import plot_damage_map
 from .influence import short_channel
-from .worker import FatigueResult, analyse
+from .worker import FatigueResult, analyse, load_influence
 
 
 def read_table(run_dir: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -116,6 +117,77 @@ def write_results(result: FatigueResult, out: Path) -> None:
                         f"{result.eq_min[i]:.6e}", f"{result.n_cycles[i]:g}"])
     (out / "summary.json").write_text(result.to_json())
     plot_damage_map(result, out / "damage_map.png")
+
+
+def _scenario_json(sc_path: Path) -> dict:
+    try:
+        scenario = json.loads(sc_path.read_text())
+    except json.JSONDecodeError as exc:
+        raise InputFileError(str(sc_path), f"invalid JSON ({exc.msg})", exc.lineno) from None
+    except OSError as exc:
+        raise InputFileError(str(sc_path), f"cannot read: {exc.strerror}") from None
+    if not isinstance(scenario, dict):
+        raise InputFileError(str(sc_path), "top level is not an object")
+    return scenario
+
+
+def settings_source(source: Path | None) -> tuple[dict, Path]:
+    """(scenario, base folder) that a load file's fatigue settings come from: a run folder
+    (its ``scenario.json``), a scenario TOML, or nothing (``{}``: the defaults)."""
+    if source is None:
+        return {}, Path.cwd()
+    source = Path(source)
+    if source.is_dir():
+        sc_path = source / "scenario.json"
+        if not sc_path.is_file():
+            raise InputFileError(str(sc_path), "resolved scenario not found")
+        return _scenario_json(sc_path), source
+    if not source.is_file():
+        raise InputFileError(str(source), "scenario or run folder not found")
+    if source.suffix.lower() == ".json":
+        return _scenario_json(source), source.parent
+    from cosim import scenario as sc
+
+    return sc.load(source), source.parent
+
+
+def fatigue_load_file(path: Path, overrides: dict | None = None,
+                      settings: Path | None = None, mapping: dict | None = None,
+                      out: Path | None = None) -> FatigueResult:
+    """Fatigue of the arm under a load file (RPC III / MDF 4 / CSV / Parquet).
+
+    The fatigue section (and the road's length, for life in km) come from ``settings`` (a run
+    folder or a scenario, see :func:`settings_source`) with ``overrides`` merged in; the track
+    length is ``track_length_m`` if given, else the scenario's road. The file's channels are
+    mapped to the arm's load channels by :func:`load_file.arm_loads` (``mapping`` from
+    :func:`load_file.parse_map`). Results go to ``out`` (default ``<file>.fatigue/`` beside
+    the file), written as for a run.
+    """
+    from cosim.formats import read_channels
+
+    from .load_file import arm_loads
+
+    path = Path(path)
+    scenario, base = settings_source(settings)
+    section = scenario.get("fatigue", {}) or {}
+    if not isinstance(section, dict):
+        raise ScenarioError("fatigue", section, "a table")
+    cfg = FatigueConfig.from_dict(_merge(section, overrides or {}), "fatigue", base_dir=base)
+    cs = read_channels(path)
+    loads = arm_loads(cs, str(path), load_influence(cfg).case_names, mapping)
+    if cfg.track_length_m is not None:
+        L = cfg.track_length_m
+    elif scenario.get("road"):
+        L = track_length(scenario, cs.t)
+    else:
+        raise ScenarioError("fatigue.track_length_m", None,
+                            f"the length of road {path.name} covers (m): --set "
+                            "track_length_m=... or --scenario RUN_DIR|SCENARIO.toml")
+    result = analyse(cs.t, loads, cfg, L)
+    result.source = f"file:{path.name}"
+    write_results(result, Path(out) if out is not None else
+                  path.with_name(path.name + ".fatigue"))
+    return result
 
 
 def fatigue_run_dir(run_dir: Path, overrides: dict | None = None) -> FatigueResult:

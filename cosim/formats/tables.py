@@ -1,0 +1,132 @@
+"""CSV and Parquet channel sets.
+
+CSV: a header row, then one row per sample, comma-separated numbers. The time column is
+``t`` (or ``time``); a header ``name [unit]`` gives the unit (``plant/arm/ball_joint_z [N]``);
+blank lines and lines starting with ``#`` are skipped. Parquet: one column per channel, the
+unit in the field metadata under ``unit``.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from cosim.errors import InputFileError
+
+from .channel_set import ChannelSet
+
+_TIME_NAMES = ("t", "time", "time_s", "Time")
+_WITH_UNIT = re.compile(r"^(.*\S)\s*\[([^\]]*)\]$")
+
+
+def _split(header: str) -> tuple[str, str]:
+    m = _WITH_UNIT.match(header.strip())
+    return (m.group(1), m.group(2).strip()) if m else (header.strip(), "")
+
+
+def _time_column(names: list[str], path: str) -> int:
+    for cand in _TIME_NAMES:
+        if cand in names:
+            return names.index(cand)
+    raise InputFileError(path, "no time column: the header needs a 't' (or 'time') column", 1)
+
+
+def read_csv(path: str | Path) -> ChannelSet:
+    """A CSV table (see the module docstring); ``k`` (a step index) is dropped."""
+    path = str(path)
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            lines = [(i, row) for i, row in enumerate(csv.reader(fh), start=1)
+                     if row and row[0].strip() and not row[0].lstrip().startswith("#")]
+    except UnicodeDecodeError:
+        raise InputFileError(path, "not a text (UTF-8) file") from None
+    except OSError as exc:
+        raise InputFileError(path, f"cannot read: {exc.strerror}") from None
+    except csv.Error as exc:
+        raise InputFileError(path, f"not a CSV file ({exc})") from None
+    if not lines:
+        raise InputFileError(path, "empty file")
+    hline, header = lines[0]
+    split = [_split(h) for h in header]
+    names = [n for n, _ in split]
+    if len(set(names)) != len(names):
+        raise InputFileError(path, "a column name appears twice in the header", hline)
+    it = _time_column(names, path)
+    rows = []
+    for lineno, row in lines[1:]:
+        if len(row) != len(header):
+            raise InputFileError(path, f"expected {len(header)} fields, got {len(row)}", lineno)
+        try:
+            vals = [float(v) for v in row]
+        except ValueError:
+            raise InputFileError(path, "non-numeric value", lineno) from None
+        if not all(math.isfinite(v) for v in vals):
+            raise InputFileError(path, "non-finite value", lineno)
+        rows.append(vals)
+    a = np.asarray(rows, dtype=float).reshape(-1, len(header))
+    chans = {n: a[:, j].copy() for j, n in enumerate(names) if j != it and n != "k"}
+    units = {n: u for n, u in split if n in chans}
+    return ChannelSet(t=a[:, it].copy(), channels=chans, units=units)
+
+
+def write_csv(cs: ChannelSet, path: str | Path, units_in_header: bool = False) -> dict:
+    """CSV with ``t`` first; numbers in full precision (repr). With ``units_in_header``
+    the header reads ``name [unit]``."""
+    def head(n: str) -> str:
+        u = cs.units.get(n, "")
+        return f"{n} [{u}]" if units_in_header and u else n
+
+    names = list(cs.channels)
+    cols = [np.asarray(cs.t, dtype=float).tolist()] + \
+        [np.asarray(cs.channels[n], dtype=float).tolist() for n in names]
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow([head("t") if units_in_header else "t"] + [head(n) for n in names])
+        for row in zip(*cols, strict=True):
+            w.writerow(row)
+    return {}
+
+
+def write_parquet(cs: ChannelSet, path: str | Path) -> dict:
+    """Parquet, ``t`` first, each field's unit in its metadata (``unit``)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    fields = [pa.field("t", pa.float64(), metadata={"unit": "s"})]
+    arrays = [pa.array(np.asarray(cs.t, dtype=float))]
+    for n, x in cs.channels.items():
+        fields.append(pa.field(n, pa.float64(), metadata={"unit": cs.units.get(n, "")}))
+        arrays.append(pa.array(np.asarray(x, dtype=float)))
+    pq.write_table(pa.Table.from_arrays(arrays, schema=pa.schema(fields)), path)
+    return {}
+
+
+def read_parquet(path: str | Path) -> ChannelSet:
+    """A Parquet table: its time column and every numeric column (``k`` dropped)."""
+    import pyarrow.parquet as pq
+
+    path = str(path)
+    try:
+        tab = pq.read_table(path)
+    except Exception as exc:  # pyarrow raises several types for a bad file
+        raise InputFileError(path, f"not a readable Parquet file ({exc})") from None
+    names = tab.column_names
+    it = _time_column(names, path)
+    chans: dict[str, np.ndarray] = {}
+    units: dict[str, str] = {}
+    for j, n in enumerate(names):
+        if j == it or n == "k":
+            continue
+        col = tab.column(n)
+        try:
+            chans[n] = col.to_numpy(zero_copy_only=False).astype(float)
+        except (TypeError, ValueError):
+            continue  # a text column: not a channel
+        md = tab.schema.field(n).metadata or {}
+        units[n] = md.get(b"unit", b"").decode()
+    t = tab.column(names[it]).to_numpy(zero_copy_only=False).astype(float)
+    return ChannelSet(t=t, channels=chans, units=units)

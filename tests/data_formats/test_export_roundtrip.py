@@ -1,0 +1,106 @@
+"""#20: a realistic run's arm channels exported to MDF 4 and RPC III, read back by asammdf and
+by rpc-reader (an RPC III reader independent of the rpc3-file writer), equal the table (MDF 4
+exactly, RPC III within half a count of its stated resolution), and fed to ``suscosim
+fatigue`` give the run's own life."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cosim.formats import si_unit
+from nodes.recorder.table import read_table
+
+from ..conftest import ROOT, suscosim
+
+pytestmark = pytest.mark.integration
+REALISTIC = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory) -> Path:
+    """0.6 s of the Chapter 6 realistic corner over the pave, monolithic (1201 rows)."""
+    out = tmp_path_factory.mktemp("fmt") / "run"
+    res = suscosim("run", str(REALISTIC), "--out", str(out), "--quiet", "--mode", "monolithic",
+                   "--set", "run.t_end=0.6", "--set", "fatigue.live=false", timeout=240)
+    assert res.returncode == 0, res.stdout + res.stderr
+    res = suscosim("fatigue", str(out))
+    assert res.returncode == 0, res.stdout + res.stderr
+    return out
+
+
+def _arm(table: dict) -> list[str]:
+    names = [c for c in table if c.startswith("plant/arm/")]
+    assert len(names) == 15  # 4 joints x 3 + torsion bar + bump stop y/z
+    return names
+
+
+def _export(run: Path, fmt: str) -> tuple[Path, dict]:
+    res = suscosim("export", str(run), "--format", fmt, "--channels", "plant/arm/*")
+    assert res.returncode == 0, res.stdout + res.stderr
+    info = json.loads(res.stdout)
+    return Path(info["files"][fmt]), info
+
+
+def test_mdf4_read_by_asammdf_equals_the_table_exactly(run: Path) -> None:
+    from asammdf import MDF
+
+    path, info = _export(run, "mdf4")
+    table = read_table(run / "table.parquet")
+    names = _arm(table)
+    assert info["channels"] == len(names) and info["rows"] == len(table["t"])
+    with MDF(str(path)) as mdf:
+        for name in names:
+            sig = mdf.get(name)
+            assert sig.unit == si_unit(name) and sig.unit in ("N", "N m")
+            np.testing.assert_array_equal(sig.timestamps, table["t"])
+            np.testing.assert_array_equal(sig.samples, table[name])
+
+
+def test_rpc3_read_by_rpc_reader_equals_the_table_within_its_resolution(run: Path) -> None:
+    from rpc_reader.rpc_reader import ReadRPC
+
+    path, info = _export(run, "rpc3")
+    table = read_table(run / "table.parquet")
+    names = _arm(table)
+    reader = ReadRPC(path)
+    with contextlib.redirect_stdout(io.StringIO()):  # it prints its progress
+        reader.import_rpc_data_from_file()
+    headers, channels, data = reader.get_headers(), reader.get_channels(), reader.get_data()
+    assert headers["DATA_TYPE"] == "SHORT_INTEGER"
+    assert headers["DELTA_T"] == pytest.approx(5e-4, rel=1e-12)  # the run's h
+    n = len(table["t"])
+    assert data.shape[0] >= n  # the last group is padded
+    for i, name in enumerate(names):
+        assert channels[i]["Description"] == name and channels[i]["Units"] == si_unit(name)
+        res = info["resolution"][name]
+        x = table[name]
+        # stated resolution: one 16-bit count, max|x| / 32752
+        assert res == pytest.approx(np.max(np.abs(x)) / 32752, rel=1e-12) or np.all(x == 0)
+        err = np.max(np.abs(data[:n, i] - x))
+        assert err <= 0.5 * res * (1 + 1e-9), (name, err, res)
+        if np.any(x):
+            assert err > 0  # really quantised: the test would see a wrong scale
+
+
+@pytest.mark.parametrize("fmt", ["mdf4", "rpc3", "csv", "parquet"])
+def test_exported_loads_give_the_runs_life(run: Path, fmt: str, tmp_path: Path) -> None:
+    path, _ = _export(run, fmt)
+    res = suscosim("fatigue", str(path), "--scenario", str(run), "--out", str(tmp_path))
+    assert res.returncode == 0, res.stdout + res.stderr
+    mine = json.loads((tmp_path / "summary.json").read_text())
+    base = json.loads((run / "fatigue" / "summary.json").read_text())
+    assert mine["missing_channels"] == [] and mine["n_samples"] == base["n_samples"]
+    assert mine["critical_node_id"] == base["critical_node_id"]
+    assert mine["track_length_m"] == base["track_length_m"] == 100.0
+    if fmt == "rpc3":  # loads within 3e-5 of their peaks: the life within 1e-3
+        assert mine["min_life_km"] == pytest.approx(base["min_life_km"], rel=1e-3)
+        assert mine["min_life_km"] != base["min_life_km"]
+    else:  # float64 all the way: the same numbers
+        assert mine["min_life_km"] == base["min_life_km"]
+        assert mine["max_damage_per_pass"] == base["max_damage_per_pass"]
