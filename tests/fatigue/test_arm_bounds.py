@@ -1,0 +1,61 @@
+"""The mode-stress closed form (nodes/fatigue/arm_bounds.py) against a real FE bar, and what it
+says about issue #12's bars."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from nodes.fatigue import arm_bounds as ab
+from nodes.fatigue.arm_fe import SolidModel, box_hex_mesh
+
+E, NU, RHO = 200e9, 0.3, 7800.0
+
+
+@pytest.fixture(scope="module")
+def bar():
+    """A slender steel bar (L/h = 20), free-free, 27-node bricks: its first flexible mode is
+    bending about the weak axis."""
+    L, b, h = 0.4, 0.04, 0.02
+    fe = SolidModel(box_hex_mesh(L, b, h, 16, 2, 2), E, NU, RHO)
+    return L, b, h, fe, float(fe.natural_frequencies(1)[0])
+
+
+def test_bending_frequency_matches_fe_bar(bar):
+    L, b, h, fe, f1 = bar
+    m = RHO * L * b * h
+    # Euler-Bernoulli; the solid's shear and rotary inertia lower it a little at L/h = 20
+    assert ab.bending_frequency(E * b * h**3 / 12, m, L) == pytest.approx(f1, rel=0.02)
+
+
+def test_stress_from_frequency_matches_beam_theory(bar):
+    """σ from (mass, length, FE frequency, κ) equals M c / I of the same bar."""
+    L, b, h, fe, f1 = bar
+    m = RHO * L * b * h
+    M = 1000.0
+    sigma_beam = M * (h / 2) / (b * h**3 / 12)
+    kappa = 1.0 / math.sqrt(3.0)  # solid rectangle: r = h / sqrt(12), c = h / 2
+    s = ab.nominal_bending_stress(M, m, L, f1, E, RHO, kappa=kappa)
+    assert s == pytest.approx(sigma_beam, rel=0.02)
+    # the floor (κ = 1, all material at the extreme fibres) is lower by exactly sqrt(3)
+    floor = ab.nominal_bending_stress(M, m, L, f1, E, RHO)
+    assert floor == pytest.approx(s / math.sqrt(3.0), rel=1e-12)
+    # and the inverse: the lowest frequency at which σ_beam can be kept
+    assert ab.lowest_bending_frequency(M, m, L, s, E, RHO, kappa) == pytest.approx(f1, rel=1e-12)
+
+
+def test_softer_arm_is_more_stressed():
+    """Issue #12's bars together: 5 kg ± 10 %, 0.3 m legs, the torsion spring's 1.58 kN m.
+    At Table 6.1's 362 Hz + 15 % (416 Hz), even the ideal section (κ = 1) at the heaviest
+    allowed mass is nominally above the 250 MPa hot-spot bar."""
+    s = ab.nominal_bending_stress(1583.0, 5.5, 0.32, 362.3 * 1.15, E, RHO)
+    assert s > 250e6
+    assert ab.lowest_bending_frequency(1583.0, 5.5, 0.32, 250e6, E, RHO) > 416.0
+
+
+def test_rejects_nonphysical_input():
+    with pytest.raises(ValueError):
+        ab.nominal_bending_stress(1.0, 5.0, 0.3, 300.0, E, RHO, kappa=1.5)
+    with pytest.raises(ValueError):
+        ab.nominal_bending_stress(1.0, 0.0, 0.3, 300.0, E, RHO)
