@@ -247,6 +247,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
         ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
         ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
+        ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
         ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
     ):
         p = sub.add_parser(name, help=text, add_help=False)

@@ -9,8 +9,10 @@ from pathlib import Path
 
 from cosim.errors import SuscosimError
 
+from .dask_exec import DaskRunner
 from .local import Runner
 from .results import result_rows, results_table, write_results, write_sweep_json
+from .sensitivity import sensitivity, sensitivity_table, write_sensitivity
 from .serve import serve
 from .spec import MAX_ID, _params_text, load_sweep, validate_points
 from .state import point_state
@@ -31,6 +33,11 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--serve", action="append", default=[], metavar="NODE",
                     help="on another machine: start NODE for every point's run as it "
                          "appears on the router given by --connect (docs/sweeps.md)")
+    ap.add_argument("--executor", choices=("local", "dask"), default="local",
+                    help="local: runs as subprocesses here, --jobs at once (default); dask: "
+                         "each point whole on a worker of the Dask cluster at --scheduler")
+    ap.add_argument("--scheduler", metavar="ADDRESS",
+                    help="the Dask scheduler, e.g. tcp://HOST:8786 (suscosim cluster)")
     ap.add_argument("--no-fatigue", action="store_true", help="skip the fatigue worker")
     ap.add_argument("--list", action="store_true",
                     help="validate and list the points (and whether they are done); run nothing")
@@ -45,6 +52,17 @@ def main(argv: list[str] | None = None) -> int:
     if (args.external or args.serve) and not args.connect:
         print("suscosim sweep: error: --external and --serve need --connect (a router "
               "both machines reach)", file=sys.stderr)
+        return 2
+    if args.executor == "dask" and not args.scheduler:
+        print("suscosim sweep: error: --executor dask needs --scheduler tcp://HOST:8786 "
+              "(start one with 'suscosim cluster')", file=sys.stderr)
+        return 2
+    if args.executor == "dask" and (args.external or args.serve or args.connect):
+        print("suscosim sweep: error: --executor dask runs every point whole on one worker; "
+              "--connect, --external and --serve are for the local executor", file=sys.stderr)
+        return 2
+    if args.scheduler and args.executor != "dask":
+        print("suscosim sweep: error: --scheduler needs --executor dask", file=sys.stderr)
         return 2
     try:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
@@ -75,14 +93,33 @@ def main(argv: list[str] | None = None) -> int:
     write_sweep_json(sweep, out)
     todo = [(p, states[p.id]) for p in sweep.points if states[p.id] != "done"]
     n_done = len(sweep.points) - len(todo)
-    print(f"  -> {out}: {len(todo)} to run ({n_done} already done), {sweep.jobs} at once"
+    runner: Runner | DaskRunner
+    if args.executor == "dask":
+        try:
+            runner = DaskRunner(sweep, out, args.scheduler, sys.stderr)
+        except SuscosimError as exc:
+            print(f"suscosim sweep: error: {exc}", file=sys.stderr)
+            return 2
+        where = runner.workers_text()
+    else:
+        runner = Runner(sweep, out, args.connect, args.external, sys.stderr)
+        where = f"{sweep.jobs} at once"
+    print(f"  -> {out}: {len(todo)} to run ({n_done} already done), {where}"
           + (", fatigue on" if sweep.fatigue else ""), flush=True)
-    runner = Runner(sweep, out, args.connect, args.external, sys.stderr)
     t0 = time.monotonic()
-    completed = runner.execute(todo) if todo else True
+    if todo:
+        completed = runner.execute(todo)
+    else:
+        completed = True
+        if isinstance(runner, DaskRunner):
+            runner.client.close()
     rows = result_rows(sweep, out, runner.status)
     write_results(out, rows)
     print(results_table(sweep, rows))
+    if sweep.design is not None:
+        sens = sensitivity(sweep, rows)
+        write_sensitivity(out, sens)
+        print(sensitivity_table(sens))
     n_failed = sum(r["status"] != "ok" for r in rows)
     print(f"sweep {sweep.name}: {len(rows) - n_failed} ok, {n_failed} failed, "
           f"{time.monotonic() - t0:.0f} s; results in {out / 'results.csv'}")

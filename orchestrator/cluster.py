@@ -1,0 +1,145 @@
+"""``suscosim cluster``: a local Dask cluster to try ``suscosim sweep --executor dask``.
+
+    suscosim cluster [--workers N] [--threads T] [--host HOST] [--port PORT] [--no-nanny]
+                     [--dashboard]
+
+Starts a Dask scheduler (``python -m distributed.cli.dask_scheduler``, the ``dask
+scheduler`` command) and N workers (``dask worker``), each with T threads = T sweep points
+at once (default 1: a point is already 4-5 node processes), prints the scheduler's address
+and waits; Ctrl-C or SIGTERM stops them all. Workers get this checkout on their
+``PYTHONPATH`` so they import ``orchestrator.sweep.task``.
+
+On several machines start the same two commands by hand (``dask scheduler`` on one,
+``dask worker tcp://HOST:8786 --nthreads 1`` on each of the others), or use dask-jobqueue
+(Slurm, PBS) or dask-kubernetes: docs/sweeps.md.
+
+Exit codes: 0 stopped by Ctrl-C/SIGTERM, 1 the scheduler died (or did not start), 2 bad
+arguments or ``distributed`` missing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="suscosim cluster",
+                                 description="a local Dask scheduler and workers for "
+                                             "'suscosim sweep --executor dask'")
+    ap.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="threads per worker = points it runs at once (default 1)")
+    ap.add_argument("--host", default="127.0.0.1",
+                    help="address the scheduler and workers listen on (default loopback; "
+                         "0.0.0.0 for workers on other machines)")
+    ap.add_argument("--port", type=int, default=8786, help="scheduler port (default 8786)")
+    ap.add_argument("--no-nanny", action="store_true",
+                    help="workers without a nanny (a killed worker is not restarted)")
+    ap.add_argument("--dashboard", action="store_true",
+                    help="the scheduler's web dashboard on port 8787")
+    ap.add_argument("--local-directory", help="workers' scratch folder (default: a "
+                    "temporary folder); a point's run folder is built there")
+    return ap
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), *filter(None, [env.get("PYTHONPATH")])])
+    return env
+
+
+def _wait_port(host: str, port: int, proc: subprocess.Popen, timeout_s: float) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and proc.poll() is None:
+        try:
+            with socket.create_connection((host, port), timeout=0.5):
+                return True
+        except OSError:
+            time.sleep(0.2)
+    return False
+
+
+def _stop(procs: list[subprocess.Popen]) -> None:
+    """SIGTERM the workers, then the scheduler (procs[0]); SIGKILL what is left after 10 s."""
+    for group in (procs[1:], procs[:1]):
+        for p in group:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        deadline = time.monotonic() + 10.0
+        for p in group:
+            try:
+                p.wait(timeout=max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    for name in ("workers", "threads"):
+        if getattr(args, name) < 1:
+            print(f"suscosim cluster: error: --{name} must be >= 1", file=sys.stderr)
+            return 2
+    if not 0 < args.port < 65536:
+        print("suscosim cluster: error: --port must be in 1-65535", file=sys.stderr)
+        return 2
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        print("suscosim cluster: error: needs the 'distributed' package (python3 -m pip "
+              "install 'dask[distributed]')", file=sys.stderr)
+        return 2
+    address = f"tcp://{args.host}:{args.port}"
+    py = sys.executable
+    sched_cmd = [py, "-m", "distributed.cli.dask_scheduler", "--host", args.host,
+                 "--port", str(args.port)]
+    sched_cmd += ["--dashboard-address", ":8787"] if args.dashboard else ["--no-dashboard"]
+    procs: list[subprocess.Popen] = []
+
+    def on_signal(signum, frame):  # noqa: ARG001
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGTERM, on_signal)
+    try:
+        sched = subprocess.Popen(sched_cmd, env=_env(), stdin=subprocess.DEVNULL)
+        procs.append(sched)
+        connect_host = "127.0.0.1" if args.host in ("0.0.0.0", "") else args.host
+        if not _wait_port(connect_host, args.port, sched, 30.0):
+            print(f"suscosim cluster: error: the scheduler did not start on {address} (port "
+                  "in use?)", file=sys.stderr)
+            return 1
+        for i in range(args.workers):
+            cmd = [py, "-m", "distributed.cli.dask_worker", f"tcp://{connect_host}:"
+                   f"{args.port}", "--nthreads", str(args.threads), "--name", f"w{i}",
+                   "--host", args.host if args.host not in ("0.0.0.0", "") else "127.0.0.1",
+                   "--no-dashboard", "--nanny" if not args.no_nanny else "--no-nanny"]
+            if args.local_directory:
+                cmd += ["--local-directory", args.local_directory]
+            procs.append(subprocess.Popen(cmd, env=_env(), stdin=subprocess.DEVNULL))
+        print(f"suscosim cluster: scheduler {address}, {args.workers} workers x "
+              f"{args.threads} threads (Ctrl-C stops them)\n"
+              f"  suscosim sweep SWEEP.toml --executor dask --scheduler {address}", flush=True)
+        while True:
+            if sched.poll() is not None:
+                print(f"suscosim cluster: the scheduler exited ({sched.returncode})",
+                      file=sys.stderr)
+                return 1
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        signal.signal(signal.SIGTERM, old)
+        _stop(procs)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,190 @@
+"""One sweep point run whole on a Dask worker (:func:`run_point`): its nodes are local
+processes on that worker (``suscosim run`` with the embedded Zenoh mesh on loopback and the
+point's own run id), then the fatigue worker if the sweep wants it; the run folder goes back
+to the client as a tar.gz (or is written in place under a shared ``runs_dir``).
+
+The task function is importable on the worker (``orchestrator.sweep.task.run_point``): the
+worker needs suscosim installed or this checkout on its ``PYTHONPATH``. Paths under the
+client's project folder are rewritten to the worker's, so a worker with the checkout at
+another path (a container image) runs the same base scenarios.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import io
+import shutil
+import signal
+import subprocess
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from .phases import (
+    fatigue_command,
+    fatigue_outcome,
+    prepare_run_dir,
+    run_command,
+    run_outcome,
+    this_worker,
+    write_point_json,
+)
+from .procs import ROOT, _child_env, _kill_group
+from .state import _read_json, journal_step
+
+POLL_S = 0.5
+PROGRESS_S = 1.0
+
+
+def pack(run_dir: Path) -> bytes:
+    """A run folder as tar.gz bytes (members relative to the folder)."""
+    buf = io.BytesIO()
+    with tarfile.open(fileobj=buf, mode="w:gz", compresslevel=1) as tar:
+        for f in sorted(run_dir.rglob("*")):
+            tar.add(f, arcname=str(f.relative_to(run_dir)), recursive=False)
+    return buf.getvalue()
+
+
+def unpack(data: bytes, run_dir: Path) -> None:
+    """Replace ``run_dir`` by the folder packed in ``data``."""
+    if run_dir.exists():
+        shutil.rmtree(run_dir)
+    run_dir.mkdir(parents=True)
+    with tarfile.open(fileobj=io.BytesIO(data), mode="r:gz") as tar:
+        tar.extractall(run_dir, filter="data")
+
+
+def _die_with_parent() -> None:  # runs in the child between fork and exec
+    try:  # Linux: SIGTERM when the worker thread that started us dies (a killed worker)
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def _start(cmd: list[str], log: Path) -> subprocess.Popen:
+    with open(log, "ab") as fh:
+        return subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT,
+                                stdin=subprocess.DEVNULL, env=_child_env(),
+                                start_new_session=True, preexec_fn=_die_with_parent)
+
+
+class _Cancelled(Exception):
+    pass
+
+
+class _Context:
+    """The worker, the task's key and the progress topic; cancellation and progress."""
+
+    def __init__(self, task: dict[str, Any]) -> None:
+        from distributed import get_worker
+
+        self.worker = get_worker()
+        self.key = self.worker.get_current_task()
+        self.topic, self.id = task["topic"], task["point"]["id"]
+        self.info = this_worker("dask", address=self.worker.address,
+                                name=str(self.worker.name))
+        self.last = 0.0
+
+    def cancelled(self) -> bool:
+        """The client cancelled the task (an interrupted sweep) or let it go."""
+        ts = self.worker.state.tasks.get(self.key)
+        return ts is None or ts.state in ("cancelled", "released", "forgotten")
+
+    def emit(self, phase: str, k: int | None = None, force: bool = False) -> None:
+        now = time.monotonic()
+        if force or now - self.last >= PROGRESS_S:
+            self.last = now
+            self.worker.log_event(self.topic, {"id": self.id, "phase": phase, "k": k,
+                                               "by": self.info})
+
+    def wait(self, proc: subprocess.Popen, phase: str, run_dir: Path) -> int:
+        """Wait for a phase's process, reporting the run's step; kill it if cancelled."""
+        while proc.poll() is None:
+            if self.cancelled():
+                _kill_group(proc)
+                try:
+                    proc.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    _kill_group(proc, signal.SIGKILL)
+                    proc.wait()
+                raise _Cancelled
+            if phase == "run":
+                self.emit(phase, journal_step(run_dir / "journal.msgpack"))
+            time.sleep(POLL_S)
+        if proc.returncode != 0:
+            _kill_group(proc)  # nodes orphaned by a killed run
+        return int(proc.returncode)
+
+
+def _remap(text: str, root: str) -> str:
+    """A path (or ``--set`` assignment) under the client's project folder, on this worker."""
+    return text.replace(root, str(ROOT)) if root and root != str(ROOT) else text
+
+
+def run_point(task: dict[str, Any]) -> dict[str, Any]:
+    """Run one sweep point on this Dask worker.
+
+    ``task``: ``{"point": point.json content, "base", "set_args", "phase": "todo"|"fatigue",
+    "fatigue": bool, "runs_dir": shared folder or None, "archive": the run folder (fatigue
+    phase without a shared folder), "root": the client's project folder, "topic"}``.
+
+    Returns ``{"id", "status": "ok"|"failed"|"cancelled", "error", "worker", "archive":
+    tar.gz bytes of the run folder, or None when it was written under the shared
+    runs_dir}``. A failed run is a result, not an exception: Dask retries only a point whose
+    worker was lost.
+    """
+    ctx = _Context(task)
+    pid, root = ctx.id, task["root"]
+    shared = task.get("runs_dir")
+    scratch = None
+    if shared:
+        run_dir = Path(_remap(shared, root)) / pid
+    else:
+        scratch = Path(tempfile.mkdtemp(prefix="suscosim-", dir=ctx.worker.local_directory))
+        run_dir = scratch / pid
+    result: dict[str, Any] = {"id": pid, "status": "failed", "error": "", "worker": ctx.info,
+                              "archive": None}
+    try:
+        phase = task["phase"]
+        if phase == "todo":
+            prepare_run_dir(run_dir, task["point"], ctx.info)
+            ctx.emit("run", force=True)
+            cmd = run_command(_remap(task["base"], root), run_dir,
+                              [_remap(s, root) for s in task["set_args"]], pin_off=True)
+            code = ctx.wait(_start(cmd, run_dir / "sweep.log"), "run", run_dir)
+            st, err = run_outcome(code, run_dir, run_dir / "sweep.log", task["fatigue"])
+            phase = "fatigue" if st == "fatigue" else "done"
+        else:
+            if task.get("archive"):
+                unpack(task["archive"], run_dir)
+            meta = _read_json(run_dir / "point.json") or dict(task["point"])
+            write_point_json(run_dir, {**meta, "fatigue_worker": ctx.info})
+            st, err = "failed", ""
+        if phase == "fatigue":
+            ctx.emit("fatigue", force=True)
+            shutil.rmtree(run_dir / "fatigue", ignore_errors=True)
+            log = run_dir / "fatigue.log"
+            code = ctx.wait(_start(fatigue_command(run_dir), log), "fatigue", run_dir)
+            st, err = fatigue_outcome(code, run_dir, log)
+        result.update(status=st, error=err)
+        if not shared:
+            result["archive"] = pack(run_dir)
+        return result
+    except _Cancelled:
+        return {**result, "status": "cancelled", "error": "cancelled"}
+    finally:
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+
+def task_doc(point_json: dict[str, Any], base: str, set_args: list[str], phase: str,
+             fatigue: bool, runs_dir: Path | None, run_dir: Path, topic: str) -> dict[str, Any]:
+    """The task of one point for :func:`run_point` (the client side)."""
+    archive = None
+    if phase == "fatigue" and runs_dir is None:
+        archive = pack(run_dir)
+    return {"point": point_json, "base": base, "set_args": set_args, "phase": phase,
+            "fatigue": fatigue, "runs_dir": str(runs_dir) if runs_dir else None,
+            "archive": archive, "root": str(ROOT), "topic": topic}
