@@ -1,0 +1,208 @@
+"""``suscosim scope``: the command (arguments, the run's source, the server's lifetime)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from cosim import keys
+from cosim.errors import ScenarioError
+from cosim.wire import decode
+
+from ..zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+from .selection import DEFAULT_CHANNELS, ScopeInputError, Selection
+from .state import ScopeState
+
+DEFAULT_PORT = 8470
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="suscosim scope",
+        description="watch a run live in the browser: time plots, progress, node states, "
+                    "the arm's damage map")
+    ap.add_argument("run", metavar="RUN_OR_RUN_DIR",
+                    help="a run folder (live while it runs, replayed from its journal once "
+                         "it has ended) or a run id (live, at --connect)")
+    ap.add_argument("--channels", nargs="+", action="extend", metavar="PATTERN",
+                    help="NODE/CHANNEL[/FIELD] with * wildcards (default: "
+                         f"{' '.join(DEFAULT_CHANNELS)})")
+    ap.add_argument("--port", type=int, default=DEFAULT_PORT,
+                    help=f"HTTP port (default {DEFAULT_PORT}; 0: a free one)")
+    ap.add_argument("--host", default="127.0.0.1",
+                    help="address to serve on (default loopback only)")
+    ap.add_argument("--open", action="store_true", help="open the page in a web browser")
+    pace = ap.add_mutually_exclusive_group()
+    pace.add_argument("--speed", type=float, default=1.0, metavar="X",
+                      help="replay pace against the recorded time (default 1 = real time)")
+    pace.add_argument("--fast", action="store_true", help="replay as fast as possible")
+    ap.add_argument("--replay", action="store_true",
+                    help="replay the run folder's journal even if the run is still going")
+    ap.add_argument("--duration", type=float, metavar="S",
+                    help="stop after S seconds (default: on Ctrl-C or SIGTERM)")
+    ap.add_argument("--buffer", type=int, default=20000, metavar="N",
+                    help="samples kept per line (default 20000)")
+    add_zenoh_arguments(
+        ap, connect_help="Zenoh endpoint of the run: a router's for a run on other machines "
+                         "(default: the run folder's run.json, else tcp/127.0.0.1:7447)",
+        listen_help="endpoint to listen on (default: a free loopback port)",
+        lowlatency_help="Zenoh low-latency transport (default: as run.json says)",
+        mode_help="Zenoh session mode; auto: peer when every endpoint is on loopback, client "
+                  "otherwise (through a router)")
+    return ap
+
+
+def _fail(message: str, code: int = 2) -> int:
+    print(f"suscosim scope: {message}", file=sys.stderr)
+    return code
+
+
+def _read_scenario(folder: Path) -> dict[str, Any] | None:
+    try:
+        sc = json.loads((folder / "scenario.json").read_text())
+    except (OSError, ValueError):
+        return None
+    return sc if isinstance(sc, dict) else None
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Serve the scope; 0 when stopped, 1 the run's endpoint cannot be reached, 2 bad input."""
+    try:
+        args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as exc:
+        return 0 if exc.code == 0 else 2
+    if not args.fast and not args.speed > 0:
+        return _fail(f"--speed {args.speed:g}: expected a factor > 0")
+    if not 0 <= args.port <= 65535:
+        return _fail(f"--port {args.port}: expected 0-65535")
+    if args.duration is not None and args.duration <= 0:
+        return _fail(f"--duration {args.duration:g}: expected a time > 0 s")
+    if args.buffer < 100:
+        return _fail(f"--buffer {args.buffer}: expected at least 100 samples")
+    try:
+        selection = Selection(args.channels)
+        return _scope(args, selection)
+    except ScopeInputError as exc:
+        return _fail(str(exc))
+
+
+def _scope(args: argparse.Namespace, selection: Selection) -> int:
+    from .damage import DamageMap, wants_map
+    from .server import ScopeServer
+
+    folder = Path(args.run) if Path(args.run).is_dir() else None
+    scenario = _read_scenario(folder) if folder else None
+    replay = folder is not None and (args.replay or (folder / "summary.json").exists())
+    bus = None
+    if replay:
+        from ..replay import ReplayInputError, load
+
+        try:
+            run_id, records, _skipped, problem = load(folder)
+        except ReplayInputError as exc:
+            raise ScopeInputError(f"{exc} (a finished run is replayed from its journal)") \
+                from None
+        if problem:
+            print(f"suscosim scope: note: {problem}", file=sys.stderr)
+        where = f"replay of {folder / 'journal.msgpack'} at " + \
+            ("full speed" if args.fast else f"{args.speed:g}x")
+    else:
+        from ..tap import TapInputError, resolve_target
+
+        if "/" in args.run or args.run in (".", ".."):
+            raise ScopeInputError(f"{args.run}: no such run folder")
+        try:
+            target = resolve_target(args.run, None, args.connect)
+        except TapInputError as exc:
+            raise ScopeInputError(str(exc)) from None
+        run_id = target.keyexpr.split("/")[1]
+        if run_id == "*":
+            raise ScopeInputError(f"{args.run!r}: give one run (a run id or a run folder)")
+        try:
+            keys.check_name("run", run_id)
+        except ScenarioError:
+            raise ScopeInputError(f"{args.run!r}: not a run id or a run folder") from None
+        mode = resolve_mode(args.mode, args.zenoh_config, target.endpoints, args.listen)
+        try:
+            bus = open_bus(target.endpoints, args.listen, mode,
+                           lowlatency=args.lowlatency or target.lowlatency,
+                           config_file=args.zenoh_config)
+        except SessionOpenError as exc:
+            return _fail(f"cannot open a Zenoh {mode} session "
+                         f"({', '.join(target.endpoints)}): {exc.reason}", exc.code)
+        if target.note:
+            print(f"suscosim scope: note: {target.note}", file=sys.stderr)
+        if scenario is None:  # a bare run id: ask the run's orchestrator (as its nodes do)
+            scenario = _query_scenario(bus, run_id)
+        where = f"live via {', '.join(target.endpoints)} ({mode} session)"
+    run_cfg = (scenario or {}).get("run") or {}
+    state = ScopeState(run_id, selection, source="replay" if replay else "live",
+                       n_steps=run_cfg.get("n_steps"), h=run_cfg.get("h"),
+                       nodes=list(run_cfg.get("nodes") or []), max_samples=args.buffer)
+    damage = DamageMap(scenario, state) if scenario and wants_map(scenario) else None
+    try:
+        server = ScopeServer(state, args.host, args.port)
+    except OSError as exc:
+        if bus is not None:
+            bus.close()
+        return _fail(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc} "
+                     "(another scope there? choose one with --port, 0 for a free port)")
+    if replay:
+        from .sources import JournalSource
+
+        source: Any = JournalSource(records, state, None if args.fast else args.speed, damage)
+    else:
+        from .sources import LiveSource
+
+        source = LiveSource(bus, state, damage)
+    return _serve(args, server, source, state, bus, where)
+
+
+def _query_scenario(bus: Any, run_id: str) -> dict[str, Any] | None:
+    try:
+        raw = bus.query(keys.key(run_id, keys.ORCHESTRATOR, keys.SCENARIO), timeout=2.0)
+        return decode(raw).d if raw is not None else None
+    except Exception:  # no orchestrator answering (yet): no map, n_steps from the clock
+        return None
+
+
+def _serve(args: argparse.Namespace, server: Any, source: Any, state: ScopeState, bus: Any,
+           where: str) -> int:
+    stop = threading.Event()
+
+    def on_term(_signum: int, _frame: Any) -> None:
+        stop.set()
+
+    old_term = signal.signal(signal.SIGTERM, on_term)
+    try:
+        server.start()
+        source.start()
+        print(f"suscosim scope: {server.url} - run {state.run_id}, {where}", flush=True)
+        if args.open:
+            import webbrowser
+
+            if not webbrowser.open(server.url):
+                print(f"suscosim scope: no browser found; open {server.url}", file=sys.stderr)
+        end = time.monotonic() + args.duration if args.duration else float("inf")
+        told = False
+        while not stop.wait(0.2) and time.monotonic() < end:
+            if not told and state.run_state in ("done", "failed"):
+                told = True
+                print(f"suscosim scope: run {state.run_id} {state.run_state} at step "
+                      f"{state.k} (still serving {server.url}; Ctrl-C to stop)",
+                      file=sys.stderr, flush=True)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, old_term)
+        source.close()
+        server.close()
+        if bus is not None:
+            bus.close()
+    return 0

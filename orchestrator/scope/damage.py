@@ -1,0 +1,129 @@
+"""The damage map on the scope's page, filled in block by block.
+
+The live fatigue node publishes the minimum life so far (``fatigue/damage``) but not the
+damage of every node. The map is computed here from the same loads (the ``plant/arm``
+messages, in step order) with the fatigue node's own engine
+(:class:`nodes.fatigue.worker.LiveFatigue`, the run's ``[fatigue]`` settings and its cached
+stress influence coefficients), so it equals the node's result on the same history: at the
+last step its largest damage is the run's ``fatigue/summary.json`` ``max_damage_per_pass``.
+Listening costs the run nothing: the messages are published anyway.
+
+Damage per node [-] (Miner, per pass of the history so far, residue closed as at the end of
+a run), sent as log10; node positions [mm] in the arm frame.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from cosim.wire import Message
+
+from .state import ScopeState
+
+UPDATE_PERIOD_S = 0.5
+"""At most this often (wall time) the map is recomputed (it closes every node's residue)."""
+
+
+def wants_map(scenario: dict[str, Any] | None) -> bool:
+    """Whether the run has the live fatigue node (then its arm loads make a map)."""
+    run = (scenario or {}).get("run") or {}
+    return "fatigue" in (run.get("nodes") or [])
+
+
+class DamageMap:
+    """Feed ``plant/arm`` messages in step order; the map lands in ``state``."""
+
+    def __init__(self, scenario: dict[str, Any], state: ScopeState,
+                 period_s: float = UPDATE_PERIOD_S) -> None:
+        from nodes.fatigue.config import FatigueConfig
+        from nodes.fatigue.run_dir import track_length
+
+        run = scenario["run"]
+        self.cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
+        self.n_steps = int(run.get("n_steps") or round(run["t_end"] / run["h"]))
+        self.track_m = self.cfg.track_length_m if self.cfg.track_length_m is not None else \
+            track_length(scenario, np.array([0.0, float(run["t_end"])]))
+        self.state, self.period_s = state, period_s
+        self._live: Any = None
+        self._fields: list[str] = []
+        self._t: list[float] = []
+        self._rows: list[list[float]] = []
+        self.k0: int | None = None
+        self.next_k = 0
+        self.gaps = 0
+        self._last = 0.0
+        self.problem = ""
+
+    def push(self, msg: Message, now: float | None = None) -> None:
+        """One ``plant/arm`` message (k >= 0); recomputes the map at most every period and
+        at the last step."""
+        if msg.k < 0 or self.problem:
+            return
+        if self.k0 is None:
+            self.k0 = self.next_k = msg.k
+            self._fields = [f for f, v in msg.d.items() if isinstance(v, int | float)]
+        if msg.k < self.next_k:
+            return  # a repeat
+        if msg.k > self.next_k:
+            self.gaps += msg.k - self.next_k
+        try:
+            self._rows.append([float(msg.d[f]) for f in self._fields])
+        except (KeyError, TypeError, ValueError):
+            return
+        self._t.append(msg.t)
+        self.next_k = msg.k + 1
+        now = time.monotonic() if now is None else now
+        if msg.k >= self.n_steps or now - self._last >= self.period_s:
+            self._last = now
+            self.flush()
+
+    def flush(self) -> None:
+        """Push the buffered samples to the engine and publish the map so far."""
+        if not self._rows:
+            return
+        geometry = None
+        try:
+            if self._live is None:
+                from nodes.fatigue.worker import LiveFatigue
+
+                self._live = LiveFatigue(self.cfg, [f"plant/arm/{f}" for f in self._fields],
+                                         self.track_m)
+                geometry = self._geometry()
+            self._live.update(np.asarray(self._t), np.asarray(self._rows))
+        except Exception as exc:  # a config the engine refuses: say so on the page
+            self.problem = f"{type(exc).__name__}: {exc}"
+            self.state.set_map(None, {"k": self.next_k - 1, "problem": self.problem})
+            return
+        self._t, self._rows = [], []
+        res = self._live.result()
+        D = np.asarray(res.damage, dtype=float)
+        k = self.next_k - 1
+        distance = self.track_m * (k + 1) / (self.n_steps + 1)
+        dmax = float(D.max()) if D.size else 0.0
+        with np.errstate(divide="ignore"):
+            logd = np.where(D > 0, np.round(np.log10(np.maximum(D, 1e-300)), 3), np.nan)
+        self.state.set_map(geometry, {
+            "k": k, "from_k": self.k0, "missing_steps": self.gaps, "final": k >= self.n_steps,
+            "max_damage": dmax, "critical_node_id": int(res.critical_node_id),
+            "distance_m": distance,
+            "life_km": distance / dmax / 1000.0 if dmax > 0 else "inf",
+            "log10_damage": [None if np.isnan(v) else float(v) for v in logd],
+        })
+
+    def _geometry(self) -> dict[str, Any]:
+        """Node positions [mm] in the arm frame (x forward, y outboard, z up) and the
+        hardpoints: the page draws a plan view (x-y) and a side view (x-z)."""
+        from cosim import lower_arm as geo
+
+        inf = self._live.inf
+        ids = [int(i) for i in inf.node_ids]
+        xyz = getattr(inf, "node_xyz", None)
+        if xyz is None:
+            return {"node_id": ids, "xyz_mm": None, "hardpoints": {}}
+        xyz = np.round(np.asarray(xyz, dtype=float) * 1e3, 2)
+        return {"node_id": ids, "xyz_mm": xyz.tolist(),
+                "hardpoints": {n: [round(float(v) * 1e3, 2) for v in p[:3]]
+                               for n, p in geo.HARDPOINTS.items()}}

@@ -1,0 +1,177 @@
+"""Where the scope's data come from: the bus of a live run, or the journal of a finished one.
+
+:class:`LiveSource` listens like ``suscosim tap``: plain Zenoh subscribers on the selected
+channels, the nodes' ``ctl`` messages, the orchestrator's clock, ``fatigue/damage`` and (for
+the damage map) ``plant/arm``, and a liveliness subscriber on the nodes' tokens. It declares
+no token, publishes nothing and answers no query, so the run neither waits for it nor sees it;
+its callbacks only queue the bytes (they never hold Zenoh's thread), decoding and filing
+happen on the source's own thread.
+
+:class:`JournalSource` replays a run's ``journal.msgpack`` into the same state at ``speed``
+times the recorded pace (message time against the wall clock), without any bus.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from typing import Any
+
+from cosim import channels as ch
+from cosim import keys
+from cosim.errors import WireError
+from cosim.wire import Message, decode
+
+from .damage import DamageMap
+from .state import ScopeState
+
+_CTL_STATES = {"ready": "ready", "waiting": "up", "progress": "stepping", "done": "done",
+               "error": "error"}
+
+
+class _Router:
+    """Files one decoded message of ``node/channel`` in the state (and the map)."""
+
+    def __init__(self, state: ScopeState, damage: DamageMap | None) -> None:
+        self.state, self.damage = state, damage
+
+    def file(self, node: str, channel: str, msg: Message, now: float) -> None:
+        st = self.state
+        if channel == keys.CTL:
+            state = _CTL_STATES.get(msg.kind)
+            if state:
+                info = str(msg.d.get("error") or msg.d.get("reason") or "") \
+                    if msg.kind == "error" else ""
+                st.node_event(node, state, msg.k if msg.k >= 0 else -1, msg.t, info, now)
+            return
+        if node == keys.ORCHESTRATOR and channel == keys.CLOCK:
+            if msg.kind == "start" and "n_steps" in msg.d:
+                st.run_event("stepping", n_steps=msg.d.get("n_steps"), h=msg.d.get("h"))
+            elif msg.kind == "done":
+                st.run_event("done")
+            elif msg.kind == "abort":
+                st.run_event("failed", reason=str(msg.d.get("reason", "aborted")))
+            return
+        if msg.kind != "data":
+            return
+        if (node, channel) == (ch.FATIGUE, ch.DAMAGE):
+            st.set_fatigue(msg.k, msg.t, msg.d)
+            return
+        if (node, channel) == ch.LOAD_CHANNEL and self.damage is not None:
+            self.damage.push(msg, now)
+        if st.selection.wants(node, channel):
+            st.add_data(node, channel, msg, now)
+        elif msg.k >= 0:
+            st.node_event(node, "stepping", msg.k, msg.t, now=now)
+
+
+class LiveSource:
+    """Subscribe to a live run on ``bus``; :meth:`close` undeclares nothing itself (the bus
+    owns the subscribers) but stops the filing thread."""
+
+    def __init__(self, bus: Any, state: ScopeState, damage: DamageMap | None = None) -> None:
+        self.bus, self.state = bus, state
+        self.router = _Router(state, damage)
+        self.inbox: queue.SimpleQueue[tuple[str, bytes, float] | None] = queue.SimpleQueue()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="scope-source", daemon=True)
+
+    def keyexprs(self) -> list[str]:
+        """Everything the scope subscribes to (no ``**``: the records batches stay away)."""
+        run = self.state.run_id
+        exprs = self.state.selection.keyexprs(run) + [
+            f"{keys.PREFIX}/{run}/*/{keys.CTL}", keys.key(run, keys.ORCHESTRATOR, keys.CLOCK),
+            keys.key(run, ch.FATIGUE, ch.DAMAGE)]
+        if self.router.damage is not None:
+            exprs.append(keys.key(run, *ch.LOAD_CHANNEL))
+        return list(dict.fromkeys(exprs))
+
+    def start(self) -> None:
+        put, clock = self.inbox.put, time.monotonic
+        self._thread.start()
+        for kx in self.keyexprs():
+            self.bus.subscribe(kx, lambda key, raw: put((key, raw, clock())))
+        self.bus.watch(f"{keys.PREFIX}/{self.state.run_id}/*/{keys.ALIVE}", self._on_alive)
+
+    def _on_alive(self, key: str, alive: bool) -> None:
+        try:
+            _run, node, _ch = keys.parse_key(key)
+        except ValueError:
+            return
+        if node != keys.ORCHESTRATOR:
+            self.state.node_event(node, "up" if alive else "gone")
+
+    def _loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                item = self.inbox.get(timeout=0.2)
+            except queue.Empty:
+                continue
+            if item is None:
+                break
+            key, raw, now = item
+            try:
+                _run, node, channel = keys.parse_key(key)
+                msg = decode(raw)
+            except (ValueError, WireError):
+                self.state.count_undecodable()
+                continue
+            try:
+                self.router.file(node, channel, msg, now)
+            except Exception:  # a malformed field must not stop the scope
+                self.state.count_undecodable()
+        if self.router.damage is not None:
+            self.router.damage.flush()
+
+    def close(self) -> None:
+        self._stop.set()
+        self.inbox.put(None)
+        self._thread.join(timeout=5)
+
+
+class JournalSource:
+    """Replay ``records`` ([(node, channel, raw, t)], as :func:`orchestrator.replay.load`
+    gives them) into the state at ``speed`` x the recorded pace (None: as fast as possible)."""
+
+    def __init__(self, records: list[tuple[str, str, bytes, float]], state: ScopeState,
+                 speed: float | None = 1.0, damage: DamageMap | None = None) -> None:
+        self.records, self.state, self.speed = records, state, speed
+        self.router = _Router(state, damage)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="scope-replay", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def _loop(self) -> None:
+        st = self.state
+        st.run_event("stepping")
+        if not self.records:
+            st.run_event("done")
+            return
+        t_first = self.records[0][3]
+        start = time.monotonic()
+        for node, channel, raw, t in self.records:
+            if self._stop.is_set():
+                return
+            if self.speed is not None:
+                ahead = start + (t - t_first) / self.speed - time.monotonic()
+                if ahead > 0.0005:
+                    if self._stop.wait(ahead):
+                        return
+            try:
+                msg = decode(raw)
+            except WireError:
+                st.count_undecodable()
+                continue
+            self.router.file(node, channel, msg, time.monotonic())
+        if self.router.damage is not None:
+            self.router.damage.flush()
+        for node in st.nodes_known():
+            st.node_event(node, "done", st.k, st.t)
+        st.run_event("done")
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)

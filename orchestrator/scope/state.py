@@ -1,0 +1,219 @@
+"""What the scope knows about a run: the plotted samples, the progress and steps/s, each
+node's state, the fatigue numbers and the damage map. Filled by a source (live bus or
+journal replay) on its thread, read by the web server's threads: every method holds one lock.
+
+:meth:`ScopeState.snapshot` is the ``/data?since=K`` answer: the samples of step ``k > K`` of
+every line, everything else whole. Samples: step ``k``, time ``t`` [s], value in the line's SI
+unit.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from bisect import bisect_right
+from collections import deque
+from typing import Any
+
+from cosim.wire import Message
+
+from .selection import Line, Selection
+
+NODE_STATES = ("waiting", "up", "ready", "stepping", "done", "error", "gone")
+"""A node's states: not seen yet; its liveliness token is there; it answered ready; it steps
+(data or progress seen); done; it reported an error; its token dropped before it was done."""
+RATE_WINDOW_S = 2.0
+"""Steps/s is measured over this much wall time."""
+
+
+class _Samples:
+    """One line's samples, the last ``max_samples`` kept."""
+
+    def __init__(self, line: Line, max_samples: int) -> None:
+        self.line, self.max = line, max_samples
+        self.k: list[int] = []
+        self.t: list[float] = []
+        self.y: list[float | None] = []
+
+    def add(self, k: int, t: float, y: float) -> None:
+        if self.k and k <= self.k[-1]:
+            return  # a repeat (a second subscription matching the same key)
+        self.k.append(k)
+        self.t.append(t)
+        self.y.append(y if math.isfinite(y) else None)  # JSON has no NaN
+        if len(self.k) > 2 * self.max:
+            del self.k[:-self.max], self.t[:-self.max], self.y[:-self.max]
+
+    def since(self, k: int) -> dict[str, list]:
+        i = max(bisect_right(self.k, k), len(self.k) - self.max)
+        return {"k": self.k[i:], "t": self.t[i:], "y": self.y[i:]}
+
+
+class ScopeState:
+    """The run as the scope sees it (thread-safe)."""
+
+    def __init__(self, run_id: str, selection: Selection, *, source: str = "live",
+                 n_steps: int | None = None, h: float | None = None,
+                 nodes: list[str] | None = None, max_samples: int = 20000) -> None:
+        self.run_id, self.selection, self.source = run_id, selection, source
+        self.n_steps, self.h = n_steps, h
+        self.max_samples = max_samples
+        self._lock = threading.Lock()
+        self._lines: dict[str, _Samples] = {}
+        self._nodes: dict[str, dict[str, Any]] = {
+            n: {"state": "waiting", "k": -1} for n in (nodes or [])}
+        self.k, self.t = -1, 0.0
+        self.run_state = "waiting"  # waiting | stepping | done | failed
+        self.reason = ""
+        self.messages = 0
+        self.undecodable = 0
+        self._rate: deque[tuple[float, int]] = deque()
+        self.steps_per_s = 0.0
+        self.fatigue: dict[str, Any] | None = None  # from the fatigue node's fatigue/damage
+        self.damage_map: dict[str, Any] | None = None  # per-node damage (orchestrator.scope.damage)
+        self.map_geometry: dict[str, Any] | None = None
+
+    # ---- filled by the source ---------------------------------------------------------
+    def add_data(self, node: str, channel: str, msg: Message, now: float | None = None) -> None:
+        """A data message: its selected fields become samples; the progress advances."""
+        if msg.k < 0:
+            return
+        with self._lock:
+            self.messages += 1
+            for fld, v in msg.d.items():
+                if isinstance(v, bool):
+                    continue
+                if isinstance(v, int | float):
+                    vals = [float(v)]
+                    lines = self.selection.lines(node, channel, fld, 0)
+                elif isinstance(v, list) and v and all(
+                        isinstance(x, int | float) and not isinstance(x, bool) for x in v):
+                    vals = [float(x) for x in v]
+                    lines = self.selection.lines(node, channel, fld, len(v))
+                else:
+                    continue
+                for line, y in zip(lines, vals, strict=False):
+                    s = self._lines.get(line.key)
+                    if s is None:
+                        s = self._lines[line.key] = _Samples(line, self.max_samples)
+                    s.add(msg.k, msg.t, y)
+            self._node(node, "stepping", msg.k)
+            self._advance(msg.k, msg.t, time.monotonic() if now is None else now)
+
+    def node_event(self, node: str, state: str, k: int = -1, t: float = 0.0,
+                   info: str = "", now: float | None = None) -> None:
+        """A node's control message (ready, progress, done, error) or liveliness change
+        (``up``, ``gone``: only if it was not done)."""
+        with self._lock:
+            self._node(node, state, k, info)
+            if state in ("stepping", "done") and k >= 0:
+                self._advance(k, t, time.monotonic() if now is None else now)
+
+    def run_event(self, state: str, n_steps: int | None = None, h: float | None = None,
+                  reason: str = "") -> None:
+        """The orchestrator's clock: ``stepping`` (start: n_steps, h), ``done``, ``failed``."""
+        with self._lock:
+            if n_steps is not None:
+                self.n_steps = int(n_steps)
+            if h is not None:
+                self.h = float(h)
+            if self.run_state not in ("done", "failed") or state == "failed":
+                self.run_state = state
+            self.reason = reason or self.reason
+
+    def count_undecodable(self) -> None:
+        with self._lock:
+            self.undecodable += 1
+
+    def set_fatigue(self, k: int, t: float, d: dict[str, Any]) -> None:
+        """The fatigue node's ``fatigue/damage`` message (minimum life so far)."""
+        with self._lock:
+            self.fatigue = {"k": k, "t": t, **{n: _finite(v) for n, v in d.items()}}
+
+    def set_map(self, geometry: dict[str, Any] | None, damage: dict[str, Any]) -> None:
+        """The damage map: node geometry (once) and the damage per node so far."""
+        with self._lock:
+            if geometry is not None:
+                self.map_geometry = geometry
+            self.damage_map = damage
+
+    def _node(self, node: str, state: str, k: int = -1, info: str = "") -> None:
+        n = self._nodes.setdefault(node, {"state": "waiting", "k": -1})
+        old = n["state"]
+        if state == "gone" and old == "done":
+            return
+        if state in ("up", "ready", "stepping") and old in ("done", "error", "gone") and \
+                not (state == "up" and old == "gone"):
+            return  # a late message of a node that has ended
+        if state == "up" and old not in ("waiting", "gone"):
+            return
+        n["state"] = state
+        if k > n["k"]:
+            n["k"] = k
+        if info:
+            n["info"] = info
+
+    def _advance(self, k: int, t: float, now: float) -> None:
+        if k > self.k:
+            self.k, self.t = k, t
+            self._rate.append((now, k))
+        if self.run_state == "waiting":
+            self.run_state = "stepping"
+        while len(self._rate) > 2 and now - self._rate[0][0] > RATE_WINDOW_S:
+            self._rate.popleft()
+
+    def _steps_per_s(self, now: float) -> float:
+        if len(self._rate) < 2:
+            return 0.0
+        (t0, k0), (t1, k1) = self._rate[0], self._rate[-1]
+        if self.run_state in ("stepping", "waiting") and now - t1 > RATE_WINDOW_S:
+            return 0.0  # nothing came for a while
+        return (k1 - k0) / (t1 - t0) if t1 > t0 else 0.0
+
+    def nodes_known(self) -> list[str]:
+        with self._lock:
+            return list(self._nodes)
+
+    # ---- read by the server -----------------------------------------------------------
+    def meta(self) -> dict[str, Any]:
+        """What does not change often: run, lines and their plots, the map's geometry."""
+        with self._lock:
+            return {"run": self.run_id, "source": self.source, "n_steps": self.n_steps,
+                    "h": self.h, "patterns": [p.text for p in self.selection.patterns],
+                    "lines": [vars(s.line) for s in self._lines.values()],
+                    "map_geometry": self.map_geometry}
+
+    def snapshot(self, since: int = -1) -> dict[str, Any]:
+        """The ``/data?since=K`` answer (JSON-ready)."""
+        now = time.monotonic()
+        with self._lock:
+            n = self.n_steps
+            out: dict[str, Any] = {
+                "run": self.run_id, "source": self.source, "since": since,
+                "k": self.k, "t": self.t, "n_steps": n, "h": self.h,
+                "progress": (max(0, self.k) / n if n else None),
+                "steps_per_s": self._steps_per_s(now), "run_state": self.run_state,
+                "reason": self.reason, "messages": self.messages,
+                "undecodable": self.undecodable,
+                "nodes": {name: dict(v) for name, v in sorted(self._nodes.items())},
+                "lines": {key: {**vars(s.line), **s.since(since)}
+                          for key, s in self._lines.items()},
+                "fatigue": dict(self.fatigue) if self.fatigue else None,
+            }
+            dm = self.damage_map
+            if dm is not None:
+                # the per-node damage only when it changed after step K (it is the big part)
+                out["damage_map"] = dm if dm["k"] > since else \
+                    {n: v for n, v in dm.items() if n != "log10_damage"}
+            else:
+                out["damage_map"] = None
+            out["map_geometry"] = self.map_geometry if since < 0 else None
+            return out
+
+
+def _finite(v: Any) -> Any:
+    """JSON-ready: a non-finite number as the text ``"inf"``/``"nan"``."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return "inf" if v > 0 else "nan"
+    return v
