@@ -129,9 +129,11 @@ def main() -> int:
           "| nominal at cut MPa | floor at vert. bending MPa | meets #12 |")
     print("|---|---|---|---|---|---|---|---|")
     for r in rows:
+        vb = "not in M1-M6" if np.isnan(r["f_vb"]) else f"{r['f_vb']:.0f}"
+        fl = "-" if np.isnan(r["floor"]) else f"{r['floor']:.0f}"
         print(f"| {r['variant']} | {r['mass']:.2f} | {r['m1'][0]:.0f} ({r['m1'][1]}) "
-              f"| {r['f_vb']:.0f} | {r['hot']:.0f} | {abs(r['nominal']):.0f} "
-              f"| {r['floor']:.0f} | {'yes' if r['meets'] else 'no'} |")
+              f"| {vb} | {r['hot']:.0f} | {abs(r['nominal']):.0f} "
+              f"| {fl} | {'yes' if r['meets'] else 'no'} |")
     return 0
 
 

@@ -22,6 +22,12 @@ import numpy as np
 from cosim import lower_arm as arm
 from cosim.errors import ScenarioError
 
+TABLE_6_1_M1_HZ = 362.3
+"""Table 6.1's first flexible mode of the thesis's arm (fundamental vertical bending) [Hz]."""
+LEG_LENGTH = 0.32
+"""Pivot to ball joint along the legs [m] (front 0.312, rear 0.332): the beam length of the
+mode-stress floor (nodes/fatigue/arm_bounds.py)."""
+
 NOMINAL_CUT_Y = 0.12
 """Distance from the pivot axis [m] of the cut across both legs for the hand calculation:
 mid-way between the eyes' joint zones and the damper seat, where beam theory holds."""
@@ -110,6 +116,17 @@ def fe_bending_stress(inf, loads: dict[str, float], y_cut: float = NOMINAL_CUT_Y
     return float(abs_max_principal(S[top]).mean())
 
 
+def stress_floor(moment: float, mass: float, mat) -> dict[str, float]:
+    """The least nominal bending stress [MPa] an arm of this mass can carry the torsion
+    spring's static moment at, if its first vertical bending mode is at Table 6.1's 362 Hz and
+    at its +15 % (nodes/fatigue/arm_bounds.py, ideal section κ = 1): why a 5 kg arm with the
+    thesis's M1 cannot also keep its static hot spot under 250 MPa."""
+    from nodes.fatigue.arm_bounds import nominal_bending_stress as sigma
+
+    return {f"at_{f:.0f}_hz": sigma(moment, mass, LEG_LENGTH, f, mat.E, mat.rho) / 1e6
+            for f in (TABLE_6_1_M1_HZ, 1.15 * TABLE_6_1_M1_HZ)}
+
+
 def card(mesh_size: float = 0.02, modes: bool = True) -> dict:
     """The model card as a dict (SI inside, MPa where the key says so)."""
     from nodes.fatigue.equivalent_stress import von_mises
@@ -128,11 +145,13 @@ def card(mesh_size: float = 0.02, modes: bool = True) -> dict:
     j = int(np.argmax(np.where(zone, vm, -1.0))) if zone.any() else i
     hand = nominal_bending_stress(loads)
     meta = inf.meta
+    floor = stress_floor(abs(loads.get("torsion_bar_mx", 0.0)), meta["mass_kg"], mat)
     return {
         "mass_kg": meta["mass_kg"],
         "mass_table_4_2_kg": arm.MASS_KG,
         "modes_hz": meta["natural_frequencies_hz"] if modes else None,
-        "mode_1_table_6_1_hz": 362.3,
+        "mode_1_table_6_1_hz": TABLE_6_1_M1_HZ,
+        "stress_floor_mpa": floor,
         "static_hotspot_stress_mpa": float(vm[i]) / 1e6,
         "static_hotspot_node": int(inf.node_ids[i]),
         "static_hotspot_xyz_m": [float(v) for v in inf.node_xyz[i]],
@@ -180,6 +199,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  static hot spot      {c['static_hotspot_stress_mpa']:.0f} MPa von Mises at node "
           f"{c['static_hotspot_node']} ({x * 1e3:.0f}, {y * 1e3:.0f}, {z * 1e3:.0f}) mm")
     print(f"  3 g vertical         {c['max_stress_3g_mpa']:.0f} MPa   (yield {c['yield_mpa']:.0f})")
+    fl = c["stress_floor_mpa"]
+    print("  stress floor if M1 were Table 6.1's vertical bending (362 / 416 Hz): "
+          + " / ".join(f"{v:.0f}" for v in fl.values()) + " MPa nominal (arm_bounds)")
     print(f"  joint zones (not assessed) peak {c['static_joint_zone_peak_mpa']:.0f} MPa")
     print(f"  nominal bending at y = {nb['y_cut_m'] * 1e3:.0f} mm: hand {nb['sigma_mpa']:.1f} MPa,"
           f" FE {nb['fe_sigma_mpa']:.1f} MPa")

@@ -176,6 +176,8 @@ def test_arm_card_json():
     assert len(c["modes_hz"]) == 6
     assert c["max_stress_3g_mpa"] == pytest.approx(3 * c["static_hotspot_stress_mpa"])
     assert c["max_stress_3g_mpa"] < c["yield_mpa"]
+    # the floor at the thesis's M1 is above the #12 hot-spot bar (why that bar is missed)
+    assert min(c["stress_floor_mpa"].values()) > 250.0
     bad = subprocess.run([sys.executable, "-m", "orchestrator.arm_card", "--mesh-size", "1"],
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and "--mesh-size" in bad.stderr
