@@ -49,10 +49,6 @@ def main(argv: list[str] | None = None) -> int:
     if args.jobs is not None and args.jobs < 1:
         print("suscosim sweep: error: --jobs must be >= 1", file=sys.stderr)
         return 2
-    if (args.external or args.serve) and not args.connect:
-        print("suscosim sweep: error: --external and --serve need --connect (a router "
-              "both machines reach)", file=sys.stderr)
-        return 2
     if args.executor == "dask" and not args.scheduler:
         print("suscosim sweep: error: --executor dask needs --scheduler tcp://HOST:8786 "
               "(start one with 'suscosim cluster')", file=sys.stderr)
@@ -63,6 +59,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.scheduler and args.executor != "dask":
         print("suscosim sweep: error: --scheduler needs --executor dask", file=sys.stderr)
+        return 2
+    if (args.external or args.serve) and not args.connect:
+        print("suscosim sweep: error: --external and --serve need --connect (a router "
+              "both machines reach)", file=sys.stderr)
         return 2
     try:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
