@@ -249,6 +249,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
         ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
         ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
+        ("export-fmu", "orchestrator.export_fmu", "the scenario's control law as an FMI FMU"),
         ("scope", "orchestrator.scope", "watch a run live in the browser (plots, damage map)"),
     ):
         p = sub.add_parser(name, help=text, add_help=False)

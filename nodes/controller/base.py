@@ -81,6 +81,10 @@ class Controller(ABC):
     def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
         """Return the damper forces at time ``t`` (s) for the plant state at ``t``."""
 
+    def close(self) -> None:
+        """Release what the law holds outside Python (an FMU's instances); a no-op here."""
+        return None
+
     def corners(self, state: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(v_b, v_w, v_rel) per corner in m/s, validated against ``n_corners``.
 

@@ -32,18 +32,21 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     n_corners = int(start["info"][ch.PLANT]["n_corners"])
     law = build_controller(scenario["controller"], n_corners, h)
     n = int(start["n_steps"])
-    for k in range(n + 1):
-        t = k * h
-        msg = part.wait({state: max(k - lag, 0)})[state]
-        values = {name: msg.array(name) for name in msg.d}
-        if law.velocity == "damper" and "v_damper" not in values:
-            model = start["info"][ch.PLANT].get("model", "?")
-            raise RunError(f"controller.velocity = 'damper' but the plant model '{model}' "
-                           "publishes no v_damper (only the double-wishbone corner does)")
-        out = law.step(t, values)
-        c_eff = law.plant_slope(out.c_eff, values)
-        part.publish(ch.FORCE, k, t, {"F_d": out.F_d, "c_eff": c_eff, **out.extra})
-        part.progress(k, t)
+    try:
+        for k in range(n + 1):
+            t = k * h
+            msg = part.wait({state: max(k - lag, 0)})[state]
+            values = {name: msg.array(name) for name in msg.d}
+            if law.velocity == "damper" and "v_damper" not in values:
+                model = start["info"][ch.PLANT].get("model", "?")
+                raise RunError(f"controller.velocity = 'damper' but the plant model '{model}' "
+                               "publishes no v_damper (only the double-wishbone corner does)")
+            out = law.step(t, values)
+            c_eff = law.plant_slope(out.c_eff, values)
+            part.publish(ch.FORCE, k, t, {"F_d": out.F_d, "c_eff": c_eff, **out.extra})
+            part.progress(k, t)
+    finally:
+        law.close()  # an FMU law terminates and frees its instances
     part.finish(n, n * h)
 
 

@@ -1,0 +1,341 @@
+"""The FMU law: an FMI 2.0 or 3.0 co-simulation FMU as the controller (run with FMPy).
+
+A controller built in Simulink, Modelica (OpenModelica, Dymola), or exported from suscosim
+itself (``suscosim export-fmu``) runs in the controller node's place::
+
+    [controller]
+    law = "fmu"
+    fmu = "/path/to/law.fmu"      # absolute, or relative to the controller's working directory
+    substeps = 1                  # doStep calls per communication step [1]
+    c_eff = 0.0                   # N·s/m handed to the plant when the FMU has no c_eff output [0]
+    [controller.inputs]           # FMU input <- our signal [FMU inputs named like a signal]
+    u_vbody = "v_b"
+    [controller.outputs]          # FMU output -> our channel [FMU outputs F_d, c_eff + extras]
+    y_force = "F_d"
+    [controller.fmu_parameters]   # FMU parameter = value, set before initialisation
+    c_hard = 2400.0
+
+Signals an input can take (per corner, SI): ``z_b``, ``v_b``, ``z_w``, ``v_w`` (m, m/s),
+``v_rel`` (m/s: ``v_w - v_b``, or ``v_damper`` with ``velocity = "damper"``), ``v_damper``, and
+on a full vehicle ``v_heave``, ``w_pitch``, ``w_roll``, ``pitch``, ``roll``. Outputs: ``F_d``
+(N, on the body, upward positive; required), ``c_eff`` (N·s/m) and any other name (recorded as
+an extra channel of ``controller/force``).
+
+One FMU instance per corner (a full vehicle runs four). At communication step k (time t_k)
+each instance gets the inputs of t_k, steps from t_k to t_k + h (``substeps`` equal doStep
+calls) and its outputs are the force of step k, which the plant holds over the step: for an
+algebraic law this is exactly f(u(t_k)), the native law's value. The inputs of t_0 are set
+before the FMU leaves initialisation.
+
+Preflight (:func:`check_fmu`, run by ``build_controller`` before anything starts) opens the
+FMU and reads its model description: a missing file, a file that is not an FMU (not a zip,
+no modelDescription.xml, bad XML), FMI 1.0, a model-exchange-only FMU, no binary for this
+platform, a mapped variable that the FMU does not have (or not as input / output /
+parameter) is an error naming the file or the key (exit 2). The FMU is instantiated only at
+the first step of the run.
+"""
+
+from __future__ import annotations
+
+import atexit
+import shutil
+import zipfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cosim.errors import InputFileError, ScenarioError
+from nodes.controller.base import BODY_KEYS, ConfigReader, Controller, ControlOutput, corner_array
+from nodes.controller.registry import law_builder
+
+#: Our signals an FMU input can be mapped to.
+INPUT_SIGNALS = ("z_b", "v_b", "z_w", "v_w", "v_rel", "v_damper", *BODY_KEYS)
+#: FMI types of a real number, by FMI version.
+REAL_TYPES = ("Real", "Float64", "Float32")
+KEYS = ("fmu", "substeps", "c_eff", "inputs", "outputs", "fmu_parameters")
+
+
+@dataclass
+class FmuPlan:
+    """What preflight found: the FMU's description and the resolved variable maps."""
+
+    path: Path
+    md: Any  # fmpy.model_description.ModelDescription
+    inputs: dict[str, str]  # FMU input name -> our signal
+    outputs: dict[str, str]  # FMU output name -> our channel
+    parameters: dict[str, Any]  # FMU parameter name -> value
+
+    @property
+    def version(self) -> str:
+        return str(self.md.fmiVersion)
+
+
+def _read_description(path: Path) -> Any:
+    """The model description of ``path``; every way it can fail is an InputFileError."""
+    from fmpy import read_model_description
+
+    if not path.is_file():
+        raise InputFileError(str(path), "no such FMU file" if not path.exists() else "not a file")
+    if not zipfile.is_zipfile(path):
+        raise InputFileError(str(path), "not an FMU: not a zip archive (corrupt or truncated?)")
+    try:
+        with zipfile.ZipFile(path) as zf:
+            if "modelDescription.xml" not in zf.namelist():
+                raise InputFileError(str(path), "not an FMU: no modelDescription.xml in the zip")
+            bad = zf.testzip()
+        if bad is not None:
+            raise InputFileError(str(path), f"corrupt FMU: member {bad} fails its CRC check")
+        return read_model_description(str(path), validate=True)
+    except InputFileError:
+        raise
+    except Exception as exc:  # zlib, lxml, fmpy validation: all mean a broken FMU
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputFileError(str(path), f"cannot read the FMU's model description: {msg}") from None
+
+
+def _variables(md: Any) -> dict[str, Any]:
+    return {v.name: v for v in md.modelVariables}
+
+
+def _names(variables: Mapping[str, Any], causality: str) -> list[str]:
+    return sorted(n for n, v in variables.items() if v.causality == causality)
+
+
+def check_fmu(r: ConfigReader, n_corners: int) -> FmuPlan:
+    """Preflight of ``law = "fmu"``: open the FMU, check it and the variable maps."""
+    from fmpy import platform, supported_platforms
+
+    raw = r.string("fmu")
+    path = Path(raw).expanduser()
+    md = _read_description(path)
+    if md.fmiVersion not in ("2.0",) and not str(md.fmiVersion).startswith("3."):
+        raise InputFileError(str(path), f"FMI {md.fmiVersion} FMU: suscosim runs FMI 2.0 and "
+                             "3.0 co-simulation FMUs")
+    if md.coSimulation is None:
+        kinds = [k for k in ("modelExchange", "scheduledExecution") if getattr(md, k, None)]
+        raise InputFileError(str(path), f"a {' / '.join(kinds) or 'non-co-simulation'}-only "
+                             "FMU: suscosim needs a co-simulation FMU (export it with "
+                             "'Co-Simulation' selected, e.g. FMI CS in Simulink or "
+                             "OpenModelica's --fmiType=cs)")
+    platforms = supported_platforms(str(path))
+    if platform not in platforms:
+        raise InputFileError(str(path), f"no binary for this platform ({platform}); the FMU "
+                             f"has: {', '.join(platforms) or 'none'}")
+    if n_corners > 1 and md.coSimulation.canBeInstantiatedOnlyOncePerProcess:
+        raise InputFileError(str(path), f"canBeInstantiatedOnlyOncePerProcess, but this vehicle "
+                             f"needs one instance per corner ({n_corners})")
+    variables = _variables(md)
+    inputs = _map_inputs(r, variables)
+    outputs = _map_outputs(r, variables)
+    parameters = _map_parameters(r, variables)
+    return FmuPlan(path=path, md=md, inputs=inputs, outputs=outputs, parameters=parameters)
+
+
+def _check_real(r: ConfigReader, key: str, var: Any) -> None:
+    if var.type not in REAL_TYPES:
+        raise ScenarioError(r.key(key), var.name, f"a real (Float64) variable; "
+                            f"'{var.name}' is {var.type}")
+
+
+def _map_inputs(r: ConfigReader, variables: Mapping[str, Any]) -> dict[str, str]:
+    fmu_inputs = _names(variables, "input")
+    table = r.table("inputs")
+    if not table:  # default: the FMU inputs named like one of our signals
+        return {n: n for n in fmu_inputs if n in INPUT_SIGNALS}
+    out = {}
+    for name, signal in table.items():
+        key = f"inputs.{name}"
+        if name not in variables or variables[name].causality != "input":
+            raise ScenarioError(r.key(key), signal, f"the name of an input of the FMU; '{name}' "
+                                f"is not one (its inputs: {fmu_inputs or 'none'})")
+        if signal not in INPUT_SIGNALS:
+            raise ScenarioError(r.key(key), signal, f"one of the signals {list(INPUT_SIGNALS)}")
+        _check_real(r, key, variables[name])
+        out[str(name)] = str(signal)
+    return out
+
+
+def _map_outputs(r: ConfigReader, variables: Mapping[str, Any]) -> dict[str, str]:
+    fmu_outputs = _names(variables, "output")
+    table = r.table("outputs")
+    if table:
+        out = {}
+        for name, channel in table.items():
+            key = f"outputs.{name}"
+            if name not in variables or variables[name].causality != "output":
+                raise ScenarioError(r.key(key), channel, f"the name of an output of the FMU; "
+                                    f"'{name}' is not one (its outputs: {fmu_outputs or 'none'})")
+            if not isinstance(channel, str) or not channel.isidentifier():
+                raise ScenarioError(r.key(key), channel, "a channel name (F_d, c_eff, or an "
+                                    "identifier for an extra channel)")
+            _check_real(r, key, variables[name])
+            out[str(name)] = channel
+    else:  # default: every real output under its own name
+        out = {n: n for n in fmu_outputs if variables[n].type in REAL_TYPES and n.isidentifier()}
+    if "F_d" not in out.values():
+        raise ScenarioError(r.key("outputs"), dict(table) or None,
+                            f"a map with one FMU output -> 'F_d' (the FMU has no output named "
+                            f"F_d; its outputs: {fmu_outputs or 'none'})")
+    return out
+
+
+def _map_parameters(r: ConfigReader, variables: Mapping[str, Any]) -> dict[str, Any]:
+    out = {}
+    settable = sorted(n for n, v in variables.items()
+                      if v.causality in ("parameter", "input") and v.variability != "constant")
+    for name, value in r.table("fmu_parameters").items():
+        key = r.key(f"fmu_parameters.{name}")
+        var = variables.get(name)
+        if var is None or name not in settable:
+            raise ScenarioError(key, value, f"the name of a parameter of the FMU; '{name}' is "
+                                f"not one (its parameters: {settable or 'none'})")
+        kind = var.type
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if kind == "Boolean":
+            ok = isinstance(value, bool)
+        elif kind == "String":
+            ok = isinstance(value, str)
+        elif kind.startswith(("Int", "UInt", "Integer", "Enumeration")):
+            ok = number and float(value) == int(value)
+        else:
+            ok = number and bool(np.isfinite(value))
+        if not ok:
+            raise ScenarioError(key, value, f"a value of the FMU variable's type ({kind})")
+        out[str(name)] = value
+    return out
+
+
+class FmuController(Controller):
+    """Runs one FMU instance per corner, one doStep (or ``substeps``) per communication step."""
+
+    law = "fmu"
+
+    def __init__(self, n_corners: int, h: float, plan: FmuPlan, substeps: int,
+                 c_eff: float) -> None:
+        super().__init__(n_corners, h)
+        self.plan, self.substeps, self.c_eff_default = plan, substeps, c_eff
+        self._instances: list[Any] = []
+        self._unzipdir: str | None = None
+        variables = _variables(plan.md)
+        self._in = [(variables[n].valueReference, s) for n, s in plan.inputs.items()]
+        self._out = [(variables[n].valueReference, c) for n, c in plan.outputs.items()]
+        self._params = [(variables[n], v) for n, v in plan.parameters.items()]
+        self._fmi3 = plan.version.startswith("3.")
+        self._t: float | None = None
+
+    # ------------------------------------------------------------------ FMI calls
+    def _set_real(self, fmu: Any, vrs: list[int], values: list[float]) -> None:
+        (fmu.setFloat64 if self._fmi3 else fmu.setReal)(vrs, values)
+
+    def _get_real(self, fmu: Any, vrs: list[int]) -> list[float]:
+        return (fmu.getFloat64 if self._fmi3 else fmu.getReal)(vrs)
+
+    def _set_param(self, fmu: Any, var: Any, value: Any) -> None:
+        vr = [var.valueReference]
+        if var.type in REAL_TYPES:
+            self._set_real(fmu, vr, [float(value)])
+        elif var.type == "Boolean":
+            fmu.setBoolean(vr, [bool(value)])
+        elif var.type == "String":
+            fmu.setString(vr, [str(value)])
+        elif self._fmi3:
+            getattr(fmu, f"set{var.type}")(vr, [int(value)])
+        else:
+            fmu.setInteger(vr, [int(value)])
+
+    def _start(self, t: float, inputs: list[list[float]]) -> None:
+        from fmpy import extract
+        from fmpy.fmi2 import FMU2Slave
+        from fmpy.fmi3 import FMU3Slave
+
+        md = self.plan.md
+        self._unzipdir = extract(str(self.plan.path))
+        atexit.register(self.close)
+        cls = FMU3Slave if self._fmi3 else FMU2Slave
+        for i in range(self.n):
+            fmu = cls(guid=md.guid, unzipDirectory=self._unzipdir,
+                      modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName=f"suscosim_controller_{i}")
+            fmu.instantiate()
+            self._instances.append(fmu)
+            if self._fmi3:
+                fmu.enterInitializationMode(startTime=t)
+            else:
+                fmu.setupExperiment(startTime=t)
+                fmu.enterInitializationMode()
+            for var, value in self._params:
+                self._set_param(fmu, var, value)
+            if self._in:
+                self._set_real(fmu, [vr for vr, _ in self._in], inputs[i])
+            fmu.exitInitializationMode()
+
+    def close(self) -> None:
+        """Terminate and free the FMU instances, remove the extracted FMU (idempotent)."""
+        instances, self._instances = self._instances, []
+        for fmu in instances:
+            try:
+                fmu.terminate()
+                fmu.freeInstance()
+            except Exception:  # noqa: S110 - best effort at shutdown
+                pass
+        if self._unzipdir:
+            shutil.rmtree(self._unzipdir, ignore_errors=True)
+            self._unzipdir = None
+
+    # ------------------------------------------------------------------ the law
+    def _signals(self, state: Mapping[str, Any]) -> list[list[float]]:
+        """Input values per corner, in the order of the input map."""
+        v_b, v_w, v_rel = self.corners(state)
+        cols = []
+        for _, signal in self._in:
+            if signal == "v_b":
+                col = v_b
+            elif signal == "v_w":
+                col = v_w
+            elif signal == "v_rel":
+                col = v_rel
+            elif signal in BODY_KEYS:
+                col = corner_array(state, signal, 1)[0] * np.ones(self.n)
+            else:
+                col = corner_array(state, signal, self.n)
+            cols.append(col)
+        return [[float(c[i]) for c in cols] for i in range(self.n)]
+
+    def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
+        inputs = self._signals(state)
+        if not self._instances:
+            self._start(float(t), inputs)
+        dt = self.h / self.substeps
+        vrs_in = [vr for vr, _ in self._in]
+        vrs_out = [vr for vr, _ in self._out]
+        values = np.empty((self.n, len(vrs_out)))
+        for i, fmu in enumerate(self._instances):
+            if vrs_in:
+                self._set_real(fmu, vrs_in, inputs[i])
+            for j in range(self.substeps):
+                result = fmu.doStep(currentCommunicationPoint=float(t) + j * dt,
+                                    communicationStepSize=dt)
+                if self._fmi3 and result[1]:  # terminateSimulation
+                    from cosim.errors import RunError
+
+                    raise RunError(f"the FMU {self.plan.path.name} asked to terminate at "
+                                   f"t = {t + (j + 1) * dt:g} s")
+            values[i] = self._get_real(fmu, vrs_out)
+        cols = {ch: values[:, k].copy() for k, (_, ch) in enumerate(self._out)}
+        F_d = cols.pop("F_d")
+        c_eff = cols.pop("c_eff", np.full(self.n, self.c_eff_default))
+        return ControlOutput(F_d=F_d, c_eff=c_eff, extra=cols)
+
+
+@law_builder("fmu", KEYS)
+def _fmu(r: ConfigReader, n: int, h: float) -> Controller:
+    """An FMI 2.0 / 3.0 co-simulation FMU (Simulink, Modelica, export-fmu) run with FMPy."""
+    plan = check_fmu(r, n)
+    substeps = r.number("substeps", 1, lo=1.0)
+    if substeps != int(substeps):
+        raise ScenarioError(r.key("substeps"), r.cfg["substeps"], "a whole number >= 1")
+    c_eff = r.number("c_eff", 0.0, lo=0.0, unit="N·s/m")
+    return FmuController(n, h, plan, int(substeps), c_eff)
