@@ -59,7 +59,9 @@ def connect(address: str, timeout_s: float = 20.0) -> Any:
         raise DaskError("--executor dask needs the 'distributed' package "
                         "(python3 -m pip install 'dask[distributed]')") from None
     try:
-        return Client(address, timeout=f"{timeout_s}s", set_as_default=False)
+        # results through the scheduler: workers may sit on networks the client cannot reach
+        return Client(address, timeout=f"{timeout_s}s", set_as_default=False,
+                      direct_to_workers=False)
     except (OSError, TimeoutError) as exc:
         raise DaskError(f"--scheduler {address}: cannot reach the Dask scheduler "
                         f"({type(exc).__name__}: {exc}); start one with 'suscosim cluster' "
