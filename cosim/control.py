@@ -14,7 +14,8 @@ ready      ``info``: map (``outputs``: list of str, the rest the node's facts)  
 waiting    ``missing``: list of str (inputs not heard yet)                         node
 progress   ``rejected``: int >= 0 (messages this node rejected so far)             node
 done       ``rejected``: int >= 0; recorder: ``rows`` int >= 0, ``files`` map      node
-           str -> str, ``stats`` map, ``torn`` bool, ``undecodable`` int >= 0
+           str -> str, ``stats`` map, ``torn`` bool, ``undecodable`` int >= 0;
+           fatigue: ``files`` str (its folder)
 error      ``message``: str; ``exit_code``: 1 or 2                                 node
 start      ``n_steps``: int >= 1, ``h``: number > 0 [s], ``info``: map node -> map  clock
 abort      ``reason``: str                                                         clock
@@ -72,10 +73,11 @@ def check_node_control(kind: str, d: Mapping[str, Any]) -> None:
         _int(d, "rows", kind)
         _int(d, "undecodable", kind)
         _map(d, "stats", kind)
-        _map(d, "files", kind)
         files = d.get("files", {})
-        if not all(type(k) is str and type(v) is str for k, v in files.items()):
-            raise WireError(f"{kind}: field 'files' is not a map of strings")
+        if type(files) is not str:  # the fatigue node names its folder
+            _map(d, "files", kind)
+            if not all(type(k) is str and type(v) is str for k, v in files.items()):
+                raise WireError(f"{kind}: field 'files' is not a map of strings")
         if "torn" in d and type(d["torn"]) is not bool:
             raise WireError(f"{kind}: field 'torn'={d['torn']!r:.40} is not a boolean")
     elif kind == "error":
