@@ -273,10 +273,31 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         finalize(journal_path, folder)
         raise
     journal.close()
-    result = finalize(journal_path, folder)
+    result = _with_heartbeat(part, n_steps, n_steps * run_cfg["h"],
+                             lambda: finalize(journal_path, folder),
+                             min(1.0, part.stall_timeout_s / 4))
     if sender is not None:
         sender.close()
     part.finish(n_steps, n_steps * run_cfg["h"], **result)
+
+
+def _with_heartbeat(part: Participant, k: int, t: float, work: Any,
+                    period_s: float = 1.0) -> Any:
+    """``work()`` while a thread says ``progress`` every ``period_s``: exporting the table
+    (pyarrow's first import alone takes seconds on a loaded machine) is not a stall."""
+    stop = threading.Event()
+
+    def beat() -> None:
+        while not stop.wait(period_s):
+            part.ctl("progress", k, t, rejected=part.rejected)
+
+    th = threading.Thread(target=beat, name="recorder-heartbeat", daemon=True)
+    th.start()
+    try:
+        return work()
+    finally:
+        stop.set()
+        th.join()
 
 
 def _drain(part: Participant, feed: Any, quiet_s: float = 0.3, limit_s: float = 1.5) -> None:
