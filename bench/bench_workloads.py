@@ -1,0 +1,153 @@
+"""The workloads side by side: coupled steps/s, CPU per step and peak RSS of every process, and
+the ratio to the bare Zenoh round-trip rate measured in the same bench run (issue #16).
+
+    python bench/bench_workloads.py [--repeats 2] [--t-end 4]
+
+Workloads: the lumped quarter car (Ch 3, h = 1 ms), the realistic double-wishbone corner
+(Ch 6 base scenario, h = 0.5 ms) with the live fatigue node on and off, and the 7-DOF full
+vehicle (Ch 4, h = 2 ms). The live fatigue node needs the lower arm's joint loads, which only
+the double-wishbone corner publishes, so it is "n/a" for the other two.
+
+Per process: CPU (user + system, from /proc/PID/stat, sampled every 50 ms until the process
+ends) per coupled step with the start-up removed (a run of a quarter of the length is
+subtracted: imports and the FE cache load cost 0.3-1 s of CPU), and peak RSS (VmHWM).
+"round trips/s" is 1 / the bare two-process Zenoh ping-pong round trip
+(callback subscriber, low-latency transport, express: the options of the embedded mesh), and
+"ratio" the coupled steps/s over it. Wall-clock numbers depend on what else the 2 cores do:
+run it on a quiet machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+WORKLOADS = [
+    ("lumped quarter car (ch3, h 1 ms)", "scenarios/ch3_step_quarter_car.toml", None),
+    ("realistic corner + live fatigue (ch6, h 0.5 ms)", "scenarios/thesis/ch6_realistic_qvm.toml",
+     True),
+    ("realistic corner, no fatigue (ch6, h 0.5 ms)", "scenarios/thesis/ch6_realistic_qvm.toml",
+     False),
+    ("7-DOF full vehicle (ch4, h 2 ms)", "scenarios/ch4_fvm_random.toml", None),
+]
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def _descendants(root: int) -> list[int]:
+    """PIDs of every process below ``root`` (by parent PID, from /proc)."""
+    parent: dict[int, int] = {}
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                parent[int(d.name)] = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                pass
+    out, todo = [], [root]
+    while todo:
+        p = todo.pop()
+        kids = [c for c, pp in parent.items() if pp == p]
+        out += kids
+        todo += kids
+    return out
+
+
+def _sample(pid: int) -> tuple[str, float, int] | None:
+    """(name, cpu seconds, peak RSS bytes) of a live process."""
+    try:
+        cmd = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        stat = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return None
+    args = [a.decode(errors="replace") for a in cmd if a]
+    if "node" in args:
+        name = args[args.index("node") + 1]
+    elif "run" in args:
+        name = "orchestrator"
+    else:
+        return None
+    cpu = (int(stat[11]) + int(stat[12])) / TICK
+    hwm = next((int(line.split()[1]) * 1024 for line in status.splitlines()
+                if line.startswith("VmHWM:")), 0)
+    return name, cpu, hwm
+
+
+def one_run(scenario: str, fatigue: bool | None, t_end: float) -> dict:
+    """Run once; steps/s from summary.json and per-process CPU / peak RSS."""
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out", tmp,
+               "--quiet", "--set", f"run.t_end={t_end}"]
+        if fatigue is not None:
+            cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
+        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+        last: dict[int, tuple[str, float, int]] = {}
+        while proc.poll() is None:
+            for pid in [proc.pid, *_descendants(proc.pid)]:
+                s = _sample(pid)
+                if s is not None:
+                    last[pid] = s
+            time.sleep(0.05)
+        err = proc.stderr.read().decode() if proc.stderr else ""
+        summary = json.loads((Path(tmp) / "summary.json").read_text())
+    if summary.get("status") != "ok":
+        raise RuntimeError(f"{scenario}: run {summary.get('status')}: {err[-400:]}")
+    per: dict[str, dict[str, float]] = {}
+    for name, cpu, hwm in last.values():
+        per[name] = {"cpu_s": cpu, "peak_rss_mb": hwm / 2**20}
+    return {"steps_per_s": float(summary["steps_per_s"]), "n_steps": int(summary["n_steps"]),
+            "per": per}
+
+
+def marginal_cpu_us(long: dict, short: dict) -> dict[str, float]:
+    """CPU per coupled step of each process [us], start-up removed: the difference between a
+    long and a short run over the difference of their steps."""
+    dn = long["n_steps"] - short["n_steps"]
+    return {n: (long["per"][n]["cpu_s"] - short["per"].get(n, {"cpu_s": 0.0})["cpu_s"]) / dn * 1e6
+            for n in long["per"]}
+
+
+def main() -> int:
+    from bench_zenoh_pingpong import one as pingpong
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--t-end", type=float, default=4.0, help="simulated seconds per run")
+    args = ap.parse_args()
+    rtts = [pingpong(2000, fifo=False, ll=True, express=True)["rtt_us"] for _ in range(2)]
+    rtt = statistics.median(rtts)
+    rate = 1e6 / rtt
+    print(f"bare Zenoh round trip: {rtt:.0f} us ({rate:.0f} round trips/s), "
+          f"median of {len(rtts)}\n")
+    print("| workload | coupled steps/s | ratio to round trips/s | CPU per step per process "
+          "(us) | peak RSS per process (MB) |")
+    print("|---|---|---|---|---|")
+    for label, scenario, fatigue in WORKLOADS:
+        runs = [one_run(scenario, fatigue, args.t_end) for _ in range(args.repeats)]
+        sps = statistics.median(r["steps_per_s"] for r in runs)
+        best = max(runs, key=lambda r: r["steps_per_s"])
+        short = one_run(scenario, fatigue, args.t_end / 4)
+        per_step = marginal_cpu_us(best, short)
+        names = sorted(best["per"])
+        cpu = ", ".join(f"{n} {per_step[n]:.0f}" for n in names)
+        rss = ", ".join(f"{n} {best['per'][n]['peak_rss_mb']:.0f}" for n in names)
+        each = ", ".join(f"{r['steps_per_s']:.0f}" for r in runs)
+        print(f"| {label} | {sps:.0f} ({each}) "
+              f"| {sps / rate:.2f} | {cpu} | {rss} |", flush=True)
+    print("\nlive fatigue: n/a for the lumped and 7-DOF models (no lower-arm joint loads)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
