@@ -246,7 +246,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("runs", "orchestrator.runs", "list runs and their state from the run folders"),
         ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
         ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
-        ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
+        ("duty", "orchestrator.duty", "damage and life over a proving-ground schedule of events"),
         ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
         ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
         ("export-fmu", "orchestrator.export_fmu", "the scenario's control law as an FMI FMU"),

@@ -16,22 +16,9 @@ import pytest
 from cosim.formats import si_unit
 from nodes.recorder.table import read_table
 
-from ..conftest import ROOT, suscosim
+from .conftest import cli
 
 pytestmark = pytest.mark.integration
-REALISTIC = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
-
-
-@pytest.fixture(scope="module")
-def run(tmp_path_factory) -> Path:
-    """0.6 s of the Chapter 6 realistic corner over the pave, monolithic (1201 rows)."""
-    out = tmp_path_factory.mktemp("fmt") / "run"
-    res = suscosim("run", str(REALISTIC), "--out", str(out), "--quiet", "--mode", "monolithic",
-                   "--set", "run.t_end=0.6", "--set", "fatigue.live=false", timeout=240)
-    assert res.returncode == 0, res.stdout + res.stderr
-    res = suscosim("fatigue", str(out))
-    assert res.returncode == 0, res.stdout + res.stderr
-    return out
 
 
 def _arm(table: dict) -> list[str]:
@@ -40,18 +27,18 @@ def _arm(table: dict) -> list[str]:
     return names
 
 
-def _export(run: Path, fmt: str) -> tuple[Path, dict]:
-    res = suscosim("export", str(run), "--format", fmt, "--channels", "plant/arm/*")
-    assert res.returncode == 0, res.stdout + res.stderr
-    info = json.loads(res.stdout)
+def _export(run: Path, fmt: str, capsys) -> tuple[Path, dict]:
+    rc, out, err = cli(capsys, "export", str(run), "--format", fmt, "--channels", "plant/arm/*")
+    assert rc == 0, out + err
+    info = json.loads(out)
     return Path(info["files"][fmt]), info
 
 
-def test_mdf4_read_by_asammdf_equals_the_table_exactly(run: Path) -> None:
+def test_mdf4_read_by_asammdf_equals_the_table_exactly(pave_run: Path, capsys) -> None:
     from asammdf import MDF
 
-    path, info = _export(run, "mdf4")
-    table = read_table(run / "table.parquet")
+    path, info = _export(pave_run, "mdf4", capsys)
+    table = read_table(pave_run / "table.parquet")
     names = _arm(table)
     assert info["channels"] == len(names) and info["rows"] == len(table["t"])
     with MDF(str(path)) as mdf:
@@ -62,11 +49,12 @@ def test_mdf4_read_by_asammdf_equals_the_table_exactly(run: Path) -> None:
             np.testing.assert_array_equal(sig.samples, table[name])
 
 
-def test_rpc3_read_by_rpc_reader_equals_the_table_within_its_resolution(run: Path) -> None:
+def test_rpc3_read_by_rpc_reader_equals_the_table_within_its_resolution(pave_run: Path,
+                                                                        capsys) -> None:
     from rpc_reader.rpc_reader import ReadRPC
 
-    path, info = _export(run, "rpc3")
-    table = read_table(run / "table.parquet")
+    path, info = _export(pave_run, "rpc3", capsys)
+    table = read_table(pave_run / "table.parquet")
     names = _arm(table)
     reader = ReadRPC(path)
     with contextlib.redirect_stdout(io.StringIO()):  # it prints its progress
@@ -89,12 +77,14 @@ def test_rpc3_read_by_rpc_reader_equals_the_table_within_its_resolution(run: Pat
 
 
 @pytest.mark.parametrize("fmt", ["mdf4", "rpc3", "csv", "parquet"])
-def test_exported_loads_give_the_runs_life(run: Path, fmt: str, tmp_path: Path) -> None:
-    path, _ = _export(run, fmt)
-    res = suscosim("fatigue", str(path), "--scenario", str(run), "--out", str(tmp_path))
-    assert res.returncode == 0, res.stdout + res.stderr
+def test_exported_loads_give_the_runs_life(pave_run: Path, fmt: str, tmp_path: Path,
+                                           capsys) -> None:
+    path, _ = _export(pave_run, fmt, capsys)
+    rc, out, err = cli(capsys, "fatigue", str(path), "--scenario", str(pave_run), "--out",
+                       str(tmp_path))
+    assert rc == 0, out + err
     mine = json.loads((tmp_path / "summary.json").read_text())
-    base = json.loads((run / "fatigue" / "summary.json").read_text())
+    base = json.loads((pave_run / "fatigue" / "summary.json").read_text())
     assert mine["missing_channels"] == [] and mine["n_samples"] == base["n_samples"]
     assert mine["critical_node_id"] == base["critical_node_id"]
     assert mine["track_length_m"] == base["track_length_m"] == 100.0

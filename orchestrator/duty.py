@@ -1,0 +1,356 @@
+"""``suscosim duty DUTY.toml``: damage and life of the lower arm over a proving-ground schedule.
+
+A duty file lists events, each a scenario (run here, once, into ``<out>/runs/<event>``; a
+finished run there is reused unless ``--rerun``) or a finished run folder, with how often the
+schedule drives it::
+
+    [duty]
+    name = "ch6_proving_ground"
+    survival_probability = 0.9   # life also at this certainty of survival ...
+    scatter_band = 3.0           # ... from T_N = N10/N90 of the S-N curve (or log10_std = s)
+
+    [[events]]
+    name = "pave"
+    scenario = "../thesis/ch6_realistic_qvm.toml"
+    set = ["road.seed=2"]        # --set overrides of that scenario
+    repeats = 200                # passes per schedule (or distance_km = 20: repeats = 20 km / L)
+
+    [[events]]
+    name = "pothole"
+    run = "../../runs/ch6-bump"  # a finished run folder (its fatigue/ results)
+    repeats = 50
+
+Every event's damage per node comes from its run's ``fatigue/`` (the live fatigue node's or
+``suscosim fatigue``'s; computed in batch when absent); all events must share the fatigue
+settings and node set. The sum (nodes/fatigue/duty_cycle.py) is written to ``<out>/`` (default
+``duty/<name>/`` beside the working directory): ``duty.json`` (events, totals, life in
+schedules and km, critical node, dominant event, life at the probability),
+``events.csv`` (one row per event) and ``damage_per_node.csv`` (each event's damage per
+schedule, the total and the life per node). Exit 2 for a bad duty file (key named), 1 if a
+run fails.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+import tomllib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from cosim.errors import InputFileError, ScenarioError, SuscosimError
+
+DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
+EVENT_KEYS = ("name", "scenario", "run", "set", "repeats", "distance_km")
+SAME_CONFIG_SKIP = ("track_length_m", "repeats_basis_m", "block_samples", "live")
+"""Fatigue keys that may differ between events (they do not change a pass's damage)."""
+
+
+def _number(v: Any, key: str, expected: str, lo: float = 0.0, lo_open: bool = False) -> float:
+    ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and \
+        (v > lo if lo_open else v >= lo)
+    if not ok:
+        raise ScenarioError(key, v, expected)
+    return float(v)
+
+
+def load_duty(path: str | Path) -> dict[str, Any]:
+    """Read and validate a duty file; paths made absolute (relative to its folder)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputFileError(str(path), f"cannot read duty file ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputFileError(str(path), "not a text (UTF-8) file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputFileError(str(path), f"not valid TOML: {exc}") from None
+    base = path.resolve().parent
+    for k in data:
+        if k not in ("duty", "events"):
+            raise ScenarioError(k, "(section)", "the sections [duty] and [[events]]")
+    duty = data.get("duty", {})
+    if not isinstance(duty, dict):
+        raise ScenarioError("duty", duty, "a table")
+    for k in duty:
+        if k not in DUTY_KEYS:
+            raise ScenarioError(f"duty.{k}", duty[k], "one of " + ", ".join(DUTY_KEYS))
+    name = duty.get("name", path.stem)
+    if not isinstance(name, str) or not name or "/" in name:
+        raise ScenarioError("duty.name", name, "a name without '/'")
+    out: dict[str, Any] = {"name": name, "file": str(path)}
+    if "out" in duty:
+        if not isinstance(duty["out"], str) or not duty["out"]:
+            raise ScenarioError("duty.out", duty["out"], "a folder path")
+        out["out"] = str(base / duty["out"])
+    if "log10_std" in duty and "scatter_band" in duty:
+        raise ScenarioError("duty.scatter_band", duty["scatter_band"],
+                            "either log10_std or scatter_band, not both")
+    from nodes.fatigue.duty_cycle import log10_std_from_scatter_band
+
+    if "log10_std" in duty:
+        out["log10_std"] = _number(duty["log10_std"], "duty.log10_std",
+                                   "a standard deviation of log10 N >= 0")
+    elif "scatter_band" in duty:
+        t_n = _number(duty["scatter_band"], "duty.scatter_band",
+                      "a scatter band T_N = N10/N90 >= 1", lo=1.0)
+        out["scatter_band"] = t_n
+        out["log10_std"] = log10_std_from_scatter_band(t_n)
+    if "survival_probability" in duty:
+        p = duty["survival_probability"]
+        _number(p, "duty.survival_probability", "a probability in (0, 1)", lo_open=True)
+        if not p < 1:
+            raise ScenarioError("duty.survival_probability", p, "a probability in (0, 1)")
+        if "log10_std" not in out:
+            raise ScenarioError("duty.log10_std", None, "the S-N scatter (log10_std or "
+                                "scatter_band) for a survival_probability")
+        out["survival_probability"] = float(p)
+    elif "log10_std" in out:
+        out["survival_probability"] = 0.9
+    events = data.get("events")
+    if not isinstance(events, list) or not events:
+        raise ScenarioError("events", events, "a non-empty list of [[events]] tables")
+    seen: set[str] = set()
+    out["events"] = []
+    for i, ev in enumerate(events):
+        q = f"events[{i}]"
+        if not isinstance(ev, dict):
+            raise ScenarioError(q, ev, "a table")
+        for k in ev:
+            if k not in EVENT_KEYS:
+                raise ScenarioError(f"{q}.{k}", ev[k], "one of " + ", ".join(EVENT_KEYS))
+        if ("scenario" in ev) == ("run" in ev):
+            raise ScenarioError(f"{q}.scenario", ev.get("scenario"),
+                                "either scenario (a TOML to run) or run (a run folder)")
+        src_key = "scenario" if "scenario" in ev else "run"
+        src = ev[src_key]
+        if not isinstance(src, str) or not src:
+            raise ScenarioError(f"{q}.{src_key}", src, "a path")
+        src_path = base / src
+        if src_key == "scenario" and not src_path.is_file():
+            raise InputFileError(str(src_path), f"{q}.scenario: scenario file not found")
+        if src_key == "run" and not src_path.is_dir():
+            raise InputFileError(str(src_path), f"{q}.run: run folder not found")
+        name_e = ev.get("name", src_path.resolve().stem or f"event{i}")
+        if not isinstance(name_e, str) or not name_e or "/" in name_e or name_e in seen:
+            raise ScenarioError(f"{q}.name", name_e, "a unique event name without '/'")
+        seen.add(name_e)
+        sets = ev.get("set", [])
+        if not isinstance(sets, list) or not all(isinstance(s, str) for s in sets):
+            raise ScenarioError(f"{q}.set", sets, "a list of 'KEY=VALUE' strings")
+        if sets and src_key == "run":
+            raise ScenarioError(f"{q}.set", sets, "no overrides for a finished run")
+        if ("repeats" in ev) == ("distance_km" in ev):
+            raise ScenarioError(f"{q}.repeats", ev.get("repeats"),
+                                "either repeats (passes per schedule) or distance_km")
+        e: dict[str, Any] = {"name": name_e, src_key: str(src_path), "set": sets}
+        if "repeats" in ev:
+            e["repeats"] = _number(ev["repeats"], f"{q}.repeats", "a number of passes >= 0")
+        else:
+            e["distance_km"] = _number(ev["distance_km"], f"{q}.distance_km",
+                                       "a distance > 0 (km)", lo_open=True)
+        out["events"].append(e)
+    return out
+
+
+def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool) -> Path:
+    """Run a scenario event into ``folder`` (reused when a finished run with fatigue is
+    there and ``rerun`` is false)."""
+    done = folder / "summary.json"
+    if not rerun and done.is_file() and (folder / "fatigue" / "damage_per_node.csv").is_file():
+        try:
+            if json.loads(done.read_text()).get("status") == "ok":
+                return folder
+        except (OSError, json.JSONDecodeError):
+            pass
+    from cosim import scenario as sc
+
+    from .runner import resolve, run_scenario
+
+    overrides = list(ev["set"]) + ([f'run.mode="{mode}"'] if mode else [])
+    scenario = resolve(sc.load(ev["scenario"], overrides), folder)
+    print(f"suscosim duty: event {ev['name']}: run {scenario['run']['id']} -> {folder}",
+          flush=True)
+    run_scenario(scenario, quiet=True)
+    return folder
+
+
+def _event_fatigue(run_dir: Path) -> dict[str, Any]:
+    """The fatigue result of a run folder: its ``fatigue/`` files (batch when absent)."""
+    fat = run_dir / "fatigue"
+    if not (fat / "damage_per_node.csv").is_file() or not (fat / "summary.json").is_file():
+        from nodes.fatigue.run_dir import fatigue_run_dir
+
+        fatigue_run_dir(run_dir)
+    try:
+        summary = json.loads((fat / "summary.json").read_text())
+        with open(fat / "damage_per_node.csv", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        ids = [int(r["node_id"]) for r in rows]
+        damage = [float(r["damage_per_pass"]) for r in rows]
+        xyz = [[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows]
+    except (OSError, json.JSONDecodeError, KeyError, ValueError) as exc:
+        raise InputFileError(str(fat), f"fatigue results not readable ({exc})") from None
+    return {"summary": summary, "ids": ids, "damage": damage, "xyz": xyz}
+
+
+def _same_config(a: dict, b: dict) -> bool:
+    strip = lambda c: {k: v for k, v in c.items() if k not in SAME_CONFIG_SKIP}  # noqa: E731
+    return strip(a) == strip(b)
+
+
+def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
+             rerun: bool = False) -> dict[str, Any]:
+    """Run/collect every event, sum the damage, write ``out/``; return duty.json's content."""
+    import numpy as np
+
+    from nodes.fatigue.duty_cycle import Event, life_factor, schedule_damage
+
+    out.mkdir(parents=True, exist_ok=True)
+    infos, events = [], []
+    for ev in duty["events"]:
+        run_dir = Path(ev["run"]) if "run" in ev else \
+            _run_event(ev, out / "runs" / ev["name"], mode, rerun)
+        fat = _event_fatigue(run_dir)
+        length = float(fat["summary"]["track_length_m"])
+        if not (length > 0 and math.isfinite(length)):
+            raise InputFileError(str(run_dir / "fatigue" / "summary.json"),
+                                 f"track_length_m {length!r}: a pass length > 0 is needed")
+        if infos:
+            first = infos[0]
+            if fat["ids"] != first["fat"]["ids"]:
+                raise InputFileError(str(run_dir / "fatigue"), f"event {ev['name']!r} has "
+                                     f"other nodes than {first['name']!r}")
+            if not _same_config(fat["summary"]["config"], first["fat"]["summary"]["config"]):
+                raise InputFileError(str(run_dir / "fatigue"), f"event {ev['name']!r} has other "
+                                     f"fatigue settings than {first['name']!r}")
+        repeats = ev["repeats"] if "repeats" in ev else ev["distance_km"] * 1000.0 / length
+        infos.append({"name": ev["name"], "run_dir": str(run_dir), "fat": fat})
+        events.append(Event(ev["name"], np.asarray(fat["damage"]), length, repeats))
+    try:
+        res = schedule_damage(events)
+    except ValueError as exc:
+        raise ScenarioError("events", duty["file"], str(exc)) from None
+    c = res.critical
+    shares = res.shares()
+    first = infos[0]["fat"]
+
+    def num(x: float) -> float | str:
+        return x if math.isfinite(x) else "inf"
+
+    result: dict[str, Any] = {
+        "name": duty["name"], "duty_file": duty["file"],
+        "events": [{
+            "name": e.name, "run_dir": info["run_dir"], "repeats": e.repeats,
+            "pass_length_m": e.length_m, "distance_km": e.repeats * e.length_m / 1000.0,
+            "max_damage_per_pass": float(e.damage.max()),
+            "own_critical_node_id": int(first["ids"][int(np.argmax(e.damage))]),
+            "damage_per_pass_at_critical": float(e.damage[c]),
+            "damage_per_schedule_at_critical": float(res.per_event[i, c]),
+            "share_at_critical": float(shares[i]),
+        } for i, (e, info) in enumerate(zip(events, infos, strict=True))],
+        "schedule_distance_km": res.distance_m / 1000.0,
+        "max_damage_per_schedule": res.max_damage,
+        "critical_node_id": int(first["ids"][c]),
+        "critical_node_xyz_m": first["xyz"][c],
+        "life_schedules": num(res.life_schedules),
+        "life_km": num(res.life_km),
+        "dominant_event": res.names[res.dominant],
+        "dominant_share": float(shares[res.dominant]),
+        "fatigue_config": first["summary"]["config"],
+    }
+    if "log10_std" in duty:
+        reliability = (first["summary"]["config"].get("component") or {}).get("reliability",
+                                                                              0.5)
+        if reliability != 0.5:
+            raise ScenarioError("duty.survival_probability", duty["survival_probability"],
+                                f"events on the median S-N curve (their fatigue.component."
+                                f"reliability is {reliability}, not 0.5)")
+        f = life_factor(duty["survival_probability"], duty["log10_std"])
+        result["certainty"] = {
+            "survival_probability": duty["survival_probability"],
+            "log10_std": duty["log10_std"], "scatter_band": duty.get("scatter_band"),
+            "life_factor": f, "life_schedules": num(res.life_schedules * f),
+            "life_km": num(res.life_km * f),
+        }
+    _write(out, result, res, first)
+    return result
+
+
+def _write(out: Path, result: dict, res, first: dict) -> None:
+    (out / "duty.json").write_text(json.dumps(result, indent=2) + "\n")
+    with open(out / "events.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        cols = ["name", "repeats", "pass_length_m", "distance_km", "max_damage_per_pass",
+                "own_critical_node_id", "damage_per_schedule_at_critical", "share_at_critical",
+                "run_dir"]
+        w.writerow(cols)
+        for e in result["events"]:
+            w.writerow([e[k] for k in cols])
+    with open(out / "damage_per_node.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["node_id", "x_m", "y_m", "z_m", *(f"damage_{n}" for n in res.names),
+                    "damage_per_schedule", "life_schedules", "life_km"])
+        for j, nid in enumerate(first["ids"]):
+            d = float(res.total[j])
+            life = 1.0 / d if d > 0 else math.inf
+            w.writerow([nid, *first["xyz"][j], *(f"{v:.6e}" for v in res.per_event[:, j]),
+                        f"{d:.6e}", f"{life:.6e}", f"{life * res.distance_m / 1000:.6e}"])
+
+
+def _print(result: dict) -> None:
+    print(f"duty {result['name']}: {len(result['events'])} events, "
+          f"{result['schedule_distance_km']:.4g} km per schedule")
+    print(f"  {'event':<16} {'repeats':>9} {'km':>9} {'D/pass max':>11} "
+          f"{'D/schedule @crit':>17} {'share':>7}")
+    for e in result["events"]:
+        print(f"  {e['name']:<16} {e['repeats']:>9.4g} {e['distance_km']:>9.4g} "
+              f"{e['max_damage_per_pass']:>11.3e} {e['damage_per_schedule_at_critical']:>17.3e} "
+              f"{100 * e['share_at_critical']:>6.1f}%")
+    life = result["life_schedules"]
+    fmt = (lambda x: x if isinstance(x, str) else f"{x:.4g}")  # noqa: E731
+    print(f"  critical node {result['critical_node_id']}: D = "
+          f"{result['max_damage_per_schedule']:.3e} per schedule, life {fmt(life)} schedules = "
+          f"{fmt(result['life_km'])} km; dominant event {result['dominant_event']} "
+          f"({100 * result['dominant_share']:.1f} %)")
+    cert = result.get("certainty")
+    if cert:
+        print(f"  at {100 * cert['survival_probability']:g} % survival (s = "
+              f"{cert['log10_std']:.3g} in log10 N): {fmt(cert['life_schedules'])} schedules = "
+              f"{fmt(cert['life_km'])} km (x {cert['life_factor']:.3g})")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="suscosim duty", description=__doc__.splitlines()[0])
+    p.add_argument("duty", metavar="DUTY.toml", type=Path)
+    p.add_argument("--out", type=Path, help="results folder (default duty/<name>)")
+    p.add_argument("--mode", choices=("distributed", "monolithic"),
+                   help="mode of the scenario events' runs (default: their scenario's)")
+    p.add_argument("--rerun", action="store_true",
+                   help="run the scenario events again even if finished runs are there")
+    p.add_argument("--json", action="store_true", help="print duty.json instead of a table")
+    args = p.parse_args(argv)
+    try:
+        duty = load_duty(args.duty)
+        out = args.out or Path(duty.get("out") or Path("duty") / duty["name"])
+        result = run_duty(duty, out, args.mode, args.rerun)
+    except SuscosimError as exc:
+        print(f"suscosim duty: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except OSError as exc:
+        print(f"suscosim duty: error: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        _print(result)
+        print(f"  results in {out}")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
