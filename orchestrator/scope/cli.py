@@ -115,7 +115,7 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
     else:
         from ..tap import TapInputError, resolve_target
 
-        if "/" in args.run or args.run in (".", ".."):
+        if folder is None and ("/" in args.run or args.run in (".", "..")):
             raise ScopeInputError(f"{args.run}: no such run folder")
         try:
             target = resolve_target(args.run, None, args.connect)
@@ -145,7 +145,9 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
     state = ScopeState(run_id, selection, source="replay" if replay else "live",
                        n_steps=run_cfg.get("n_steps"), h=run_cfg.get("h"),
                        nodes=list(run_cfg.get("nodes") or []), max_samples=args.buffer)
-    damage = DamageMap(scenario, state) if scenario and wants_map(scenario) else None
+    journal = folder / "journal.msgpack" if folder is not None and not replay else None
+    damage = DamageMap(scenario, state, journal=journal) \
+        if scenario and wants_map(scenario) else None
     try:
         server = ScopeServer(state, args.host, args.port)
     except OSError as exc:

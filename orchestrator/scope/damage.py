@@ -6,7 +6,8 @@ messages, in step order) with the fatigue node's own engine
 (:class:`nodes.fatigue.worker.LiveFatigue`, the run's ``[fatigue]`` settings and its cached
 stress influence coefficients), so it equals the node's result on the same history: at the
 last step its largest damage is the run's ``fatigue/summary.json`` ``max_damage_per_pass``.
-Listening costs the run nothing: the messages are published anyway.
+Listening costs the run nothing: the messages are published anyway. A scope that joins a
+live run late takes the steps it missed from the run folder's journal first.
 
 Damage per node [-] (Miner, per pass of the history so far, residue closed as at the end of
 a run), sent as log10; node positions [mm] in the arm frame.
@@ -15,16 +16,21 @@ a run), sent as log10; node positions [mm] in the arm frame.
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from cosim import channels as ch
 from cosim.wire import Message
 
 from .state import ScopeState
 
 UPDATE_PERIOD_S = 0.5
 """At most this often (wall time) the map is recomputed (it closes every node's residue)."""
+BACKFILL_TRIES = 20
+"""A scope that joined a live run late reads the steps it missed from the run's journal; it
+tries this many times (one per update period) before drawing the map from where it joined."""
 
 
 def wants_map(scenario: dict[str, Any] | None) -> bool:
@@ -37,7 +43,7 @@ class DamageMap:
     """Feed ``plant/arm`` messages in step order; the map lands in ``state``."""
 
     def __init__(self, scenario: dict[str, Any], state: ScopeState,
-                 period_s: float = UPDATE_PERIOD_S) -> None:
+                 period_s: float = UPDATE_PERIOD_S, journal: Path | None = None) -> None:
         from nodes.fatigue.config import FatigueConfig
         from nodes.fatigue.run_dir import track_length
 
@@ -56,6 +62,9 @@ class DamageMap:
         self.gaps = 0
         self._last = 0.0
         self.problem = ""
+        self.journal = journal
+        self._backfill_tries = 0 if journal is not None else BACKFILL_TRIES
+        self.backfilled = 0
 
     def push(self, msg: Message, now: float | None = None) -> None:
         """One ``plant/arm`` message (k >= 0); recomputes the map at most every period and
@@ -84,6 +93,8 @@ class DamageMap:
         """Push the buffered samples to the engine and publish the map so far."""
         if not self._rows:
             return
+        if self.k0 and self._backfill_tries < BACKFILL_TRIES and not self._backfill():
+            return  # the recorder has not written the first steps yet: next time
         geometry = None
         try:
             if self._live is None:
@@ -107,11 +118,40 @@ class DamageMap:
             logd = np.where(D > 0, np.round(np.log10(np.maximum(D, 1e-300)), 3), np.nan)
         self.state.set_map(geometry, {
             "k": k, "from_k": self.k0, "missing_steps": self.gaps, "final": k >= self.n_steps,
+            "from_journal": self.backfilled,
             "max_damage": dmax, "critical_node_id": int(res.critical_node_id),
             "distance_m": distance,
             "life_km": distance / dmax / 1000.0 if dmax > 0 else "inf",
             "log10_damage": [None if np.isnan(v) else float(v) for v in logd],
         })
+
+    def _backfill(self) -> bool:
+        """The steps before the scope joined, from the run's journal (the recorder writes it
+        as the run goes): True when they are in (or when giving up after a few tries)."""
+        from cosim.errors import WireError
+        from cosim.wire import decode
+        from nodes.recorder.journal import read_journal
+
+        self._backfill_tries += 1
+        want = "/".join(ch.LOAD_CHANNEL)
+        early: dict[int, tuple[float, list[float]]] = {}
+        try:
+            for channel, raw in read_journal(self.journal).records:
+                if channel != want:
+                    continue
+                msg = decode(raw)
+                if 0 <= msg.k < (self.k0 or 0):
+                    early[msg.k] = (msg.t, [float(msg.d[f]) for f in self._fields])
+        except (OSError, ValueError, KeyError, TypeError, WireError):
+            pass
+        if len(early) < (self.k0 or 0):
+            return self._backfill_tries >= BACKFILL_TRIES
+        self.backfilled = len(early)
+        self._t[:0] = [early[k][0] for k in range(self.backfilled)]
+        self._rows[:0] = [early[k][1] for k in range(self.backfilled)]
+        self.k0 = 0
+        self._backfill_tries = BACKFILL_TRIES
+        return True
 
     def _geometry(self) -> dict[str, Any]:
         """Node positions [mm] in the arm frame (x forward, y outboard, z up) and the

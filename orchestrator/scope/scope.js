@@ -29,7 +29,7 @@ function ingest(d) {
     let l = S.lines[key];
     if (!l) {
       l = S.lines[key] = {key, group: src.group, label: src.label, unit: src.unit,
-                          k: [], t: [], y: []};
+                          rank: src.rank, k: [], t: [], y: []};
       (S.groups[src.group] = S.groups[src.group] || []).push(key);
     }
     const last = l.k.length ? l.k[l.k.length - 1] : -1;
@@ -76,8 +76,11 @@ function plotFor(group) {
   const div = document.createElement("div");
   div.className = "card plot";
   div.dataset.group = group;
+  div.dataset.rank = first.rank;
   div.innerHTML = `<h2>${group} <span class="meta">[${first.unit || "-"}]</span></h2>`;
-  $("plots").appendChild(div);
+  // in the order of the --channels patterns (then of arrival)
+  const after = [...$("plots").children].find((c) => +c.dataset.rank > first.rank);
+  $("plots").insertBefore(div, after || null);
   const width = Math.max(320, div.clientWidth - 24);
   const opts = {
     width, height: 210, legend: {show: true},

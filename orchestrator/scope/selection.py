@@ -81,6 +81,7 @@ class Line:
     group: str
     label: str
     unit: str
+    rank: int = 0  # the index of the first pattern that takes it: the plots' order
 
 
 class Selection:
@@ -104,14 +105,16 @@ class Selection:
         memo = (node, channel, fld, n)
         if memo not in self._lines:
             out: list[Line] = []
-            if any(p.matches(node, channel) and p.takes(fld) for p in self.patterns):
+            ranks = [i for i, p in enumerate(self.patterns)
+                     if p.matches(node, channel) and p.takes(fld)]
+            if ranks:
                 group = f"{node}/{channel}/{fld}"
                 unit = unit_of(group)
                 if n == 0:
-                    out = [Line(group, group, fld, unit)]
+                    out = [Line(group, group, fld, unit, ranks[0])]
                 else:
                     names = CORNERS if n == 4 else tuple(str(i) for i in range(n))
-                    out = [Line(f"{group}[{i}]", group, f"{fld} {names[i]}", unit)
+                    out = [Line(f"{group}[{i}]", group, f"{fld} {names[i]}", unit, ranks[0])
                            for i in range(n)]
             self._lines[memo] = out
         return self._lines[memo]

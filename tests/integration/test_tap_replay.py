@@ -42,10 +42,18 @@ def _rows(path: Path) -> list[dict[str, str]]:
 
 
 def _wait_for(path: Path, proc, timeout: float = 60.0) -> None:
+    """Wait until ``path`` exists (a JSON file: until it parses; run.json is written in
+    place, so it may be seen empty for a moment)."""
     deadline = time.monotonic() + timeout
-    while not path.exists():
+    while True:
         assert proc.poll() is None, proc.communicate()
         assert time.monotonic() < deadline, f"{path} not written"
+        if path.exists():
+            try:
+                if path.suffix != ".json" or json.loads(path.read_text()) is not None:
+                    return
+            except ValueError:
+                pass
         time.sleep(0.05)
 
 

@@ -1,0 +1,320 @@
+"""``suscosim scope``: a real run over real Zenoh, the scope's web server, headless Chromium.
+
+* A Chapter 3 run watched live: two ``/data`` reads while it runs have increasing step
+  indices and the samples of the run's table; the page, loaded in headless Chromium while
+  the run goes, shows the data (the last step index and the plots' points in the DOM after
+  its script ran); the run's table is bit-identical to the same run without the scope.
+* The same run replayed from its journal: every step, in order, then every node done.
+* The realistic corner with the live fatigue node (``ch6_realistic_qvm.toml``, 0.6 s): the
+  page draws the damage map, and at the last step the scope's map has the run's own
+  ``fatigue/summary.json`` numbers.
+* Bad input: exit 2 with a message, no traceback.
+
+The browser parts skip with a reason when Chromium is not installed (the rest still runs).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import select
+import shutil
+import signal
+import subprocess
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cosim.bus import free_loopback_endpoint
+from nodes.recorder.table import read_table
+
+from ..conftest import CH3_STEP, ROOT, popen_suscosim, suscosim
+
+pytestmark = pytest.mark.integration
+
+T_END = "5.0"  # s: 5000 steps of the ch3 quarter car, a few seconds of wall time
+REALISTIC = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
+REALISTIC_SET = ("--set", "run.t_end=0.6", "--set", "fatigue.mesh_size_m=0.03", "--set",
+                 "run.stall_timeout_s=60")
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+NO_CHROMIUM = "headless Chromium not installed (Debian: apt-get install -y chromium): the " \
+              "page is not loaded in a browser"
+
+
+# ---- helpers ---------------------------------------------------------------------------
+def _wait_json(path: Path, proc: subprocess.Popen, timeout: float = 90.0) -> dict:
+    """The JSON file once it is written (it may be seen empty for a moment)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, f"{path} not written"
+        try:
+            return json.loads(path.read_text())
+        except (OSError, ValueError):
+            time.sleep(0.05)
+
+
+def _start_scope(*args: str) -> tuple[subprocess.Popen, str]:
+    """Start ``suscosim scope ARGS --port 0``; return it and the URL it printed."""
+    proc = popen_suscosim("scope", *args, "--port", "0")
+    deadline = time.monotonic() + 60
+    line = ""
+    while "http://" not in line:
+        assert time.monotonic() < deadline, "the scope printed no URL"
+        ready, _, _ = select.select([proc.stdout], [], [], 1.0)
+        if ready:
+            line = proc.stdout.readline()
+            assert line, f"the scope ended: {proc.communicate()}"
+    return proc, re.search(r"(http://\S+/)", line).group(1)
+
+
+def _stop(proc: subprocess.Popen) -> str:
+    """SIGTERM the scope; it ends with exit 0 and no traceback; returns its stderr."""
+    proc.send_signal(signal.SIGTERM)
+    _out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err, err
+    return err
+
+
+def _data(url: str, since: int = -1) -> dict:
+    with urllib.request.urlopen(f"{url}data?since={since}", timeout=10) as r:
+        assert r.headers["Content-Type"] == "application/json"
+        return json.loads(r.read())
+
+
+def _until(url: str, ok, timeout: float = 120.0, since: int = -1) -> dict:
+    deadline = time.monotonic() + timeout
+    while True:
+        d = _data(url, since)
+        if ok(d):
+            return d
+        assert time.monotonic() < deadline, {k: d[k] for k in ("k", "run_state", "nodes")}
+        time.sleep(0.1)
+
+
+def _chromium(url: str, tmp: Path, *, dom: bool = True, png: Path | None = None,
+              budget_ms: int = 4000) -> str:
+    """Load the page in headless Chromium, let its script run ``budget_ms`` of virtual
+    time; return the DOM (or write a screenshot)."""
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+           "--no-first-run", "--disable-background-networking", "--disable-component-update",
+           "--disable-sync", f"--user-data-dir={tmp / f'chromium-{time.monotonic_ns()}'}",
+           f"--virtual-time-budget={budget_ms}", "--window-size=1500,1150"]
+    cmd += ["--dump-dom"] if dom else [f"--screenshot={png}"]
+    res = subprocess.run([*cmd, url], capture_output=True, text=True, timeout=120,
+                         env=dict(os.environ, HOME=str(tmp)))
+    if png is not None:
+        assert png.is_file(), f"no screenshot (exit {res.returncode}): {res.stderr[-2000:]}"
+    return res.stdout
+
+
+def _dom_step(dom: str) -> int:
+    m = re.search(r'id="last-k" data-k="(-?\d+)"', dom)
+    assert m, dom[:3000]
+    return int(m.group(1))
+
+
+# ---- a live run, and the same run without the scope ---------------------------------------
+@pytest.fixture(scope="module")
+def unwatched(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("unwatched") / "run"
+    res = suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--set",
+                   f"run.t_end={T_END}", "--set", 'run.id="scopebase"', timeout=180)
+    assert res.returncode == 0, res.stdout + res.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def watched(tmp_path_factory) -> dict:
+    """The run with a scope on it: two /data reads and the page's DOM while it runs, the
+    last /data after it ended."""
+    tmp = tmp_path_factory.mktemp("watched")
+    out = tmp / "run"
+    run = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
+                         free_loopback_endpoint(), "--set", f"run.t_end={T_END}",
+                         "--set", 'run.id="scopetest"')
+    scope = None
+    seen: dict = {"out": out}
+    try:
+        _wait_json(out / "run.json", run)
+        scope, url = _start_scope(str(out), "--channels", "plant/state", "tyre_road/force/F_t")
+        first = _until(url, lambda d: d["k"] >= 0)
+        seen["first_running"] = run.poll() is None
+        if CHROMIUM:
+            seen["dom"] = _chromium(url, tmp)
+            seen["dom_running"] = run.poll() is None
+        second = _until(url, lambda d: d["k"] > first["k"] + 50, since=first["k"])
+        seen["second_running"] = run.poll() is None
+        seen["first"], seen["second"] = first, second
+        stdout, stderr = run.communicate(timeout=180)
+        assert run.returncode == 0, stdout + stderr
+        seen["last"] = _until(url, lambda d: d["run_state"] == "done" and all(
+            n["state"] == "done" for n in d["nodes"].values()), timeout=60)
+        seen["stderr"] = _stop(scope)
+    finally:
+        for p in (run, scope):
+            if p is not None and p.poll() is None:
+                p.kill()
+    return seen
+
+
+def test_scope_data_advance_while_the_run_goes(watched) -> None:
+    first, second, last = watched["first"], watched["second"], watched["last"]
+    assert watched["first_running"] and watched["second_running"]
+    assert first["run"] == "scopetest" and first["source"] == "live"
+    assert first["n_steps"] == 5000 and second["k"] > first["k"] >= 0
+    table = read_table(watched["out"] / "table.parquet")
+    # the second read holds only steps after the first read's, each the recorded value
+    z_b = second["lines"]["plant/state/z_b"]
+    assert z_b["k"] and z_b["k"][0] > first["k"] and z_b["unit"] == "m"
+    assert z_b["k"] == list(range(z_b["k"][0], z_b["k"][-1] + 1))
+    assert np.array_equal(z_b["y"], table["plant/state/z_b"][z_b["k"]])
+    assert np.allclose(z_b["t"], table["t"][z_b["k"]], rtol=0, atol=1e-12)
+    assert second["lines"]["tyre_road/force/F_t"]["unit"] == "N"
+    assert "controller/force/F_d" not in second["lines"]  # not chosen with --channels
+    assert set(second["lines"]) == {f"plant/state/{f}" for f in ("z_b", "v_b", "z_w", "v_w")} \
+        | {"tyre_road/force/F_t"}
+    assert second["steps_per_s"] > 0
+    # after the run: every step seen, every node done, the progress full
+    assert last["k"] == 5000 and last["progress"] == 1.0 and last["undecodable"] == 0
+    assert {n: v["state"] for n, v in last["nodes"].items()} == {
+        n: "done" for n in ("plant", "tyre_road", "controller", "recorder")}
+    assert "run scopetest done at step 5000" in watched["stderr"]
+
+
+def test_the_watched_run_is_the_unwatched_run(watched, unwatched) -> None:
+    summary = json.loads((watched["out"] / "summary.json").read_text())
+    assert summary["status"] == "ok" and not any(summary["rejected_messages"].values())
+    base, mine = read_table(unwatched / "table.csv"), read_table(watched["out"] / "table.csv")
+    assert set(base) == set(mine)
+    for col in base:
+        assert np.array_equal(base[col], mine[col]), col
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason=NO_CHROMIUM)
+def test_the_page_loads_the_data_in_chromium(watched) -> None:
+    dom = watched["dom"]
+    k = _dom_step(dom)
+    assert 0 <= k <= 5000, k
+    assert 'id="run-id" class="mono">scopetest<' in dom
+    plots = re.findall(r'class="card plot" data-group="([^"]+)" data-rank="\d+" '
+                       r'data-last-k="(\d+)" data-points="(\d+)"', dom)
+    assert {g for g, _k, _n in plots} == {"plant/state/z_b", "plant/state/v_b",
+                                          "plant/state/z_w", "plant/state/v_w",
+                                          "tyre_road/force/F_t"}, plots
+    assert plots[-1][0] == "tyre_road/force/F_t"  # in the order of --channels
+    assert all(int(n) > 10 and int(lk) <= k for _g, lk, n in plots), plots
+    assert dom.count("<canvas") >= len(plots)  # uPlot drew each plot on a canvas
+    assert 'data-node="plant"' in dom
+
+
+# ---- a finished run, replayed -------------------------------------------------------------
+def test_scope_replays_a_finished_run(unwatched) -> None:
+    scope, url = _start_scope(str(unwatched), "--speed", "2")
+    try:
+        first = _until(url, lambda d: d["k"] >= 0)
+        assert first["source"] == "replay" and first["run"] == "scopebase"
+        second = _until(url, lambda d: d["k"] > first["k"], since=first["k"])
+        assert second["run_state"] == "stepping" and second["k"] < 5000
+        last = _until(url, lambda d: d["run_state"] == "done")
+        every = _data(url)
+        _stop(scope)
+    finally:
+        if scope.poll() is None:
+            scope.kill()
+    assert last["k"] == 5000 and all(n["state"] == "done" for n in last["nodes"].values())
+    table = read_table(unwatched / "table.parquet")
+    for name in ("plant/state/z_b", "plant/response/a_b", "tyre_road/force/F_t",
+                 "controller/force/F_d"):
+        line = every["lines"][name]
+        assert line["k"] == list(range(5001)), name  # every step, in order
+        assert np.array_equal(line["y"], table[name]), name
+
+
+# ---- the damage map of a realistic run with live fatigue --------------------------------------
+def test_damage_map_of_a_realistic_run_with_live_fatigue(tmp_path) -> None:
+    out = tmp_path / "ch6"
+    run = popen_suscosim("run", str(REALISTIC), "--out", str(out), "--quiet", "--listen",
+                         free_loopback_endpoint(), *REALISTIC_SET)
+    scope = None
+    try:
+        _wait_json(out / "run.json", run)
+        scope, url = _start_scope(str(out), "--channels", "plant/arm/ball_joint_*")
+        stdout, stderr = run.communicate(timeout=300)
+        assert run.returncode == 0, stdout + stderr
+        last = _until(url, lambda d: (d["damage_map"] or {}).get("final")
+                      and (d["fatigue"] or {}).get("k") == d["n_steps"], timeout=60)
+        shot = None
+        if CHROMIUM:
+            shot = tmp_path / "scope.png"
+            dom = _chromium(url, tmp_path)
+            _chromium(url, tmp_path, dom=False, png=shot)
+        _stop(scope)
+    finally:
+        for p in (run, scope):
+            if p is not None and p.poll() is None:
+                p.kill()
+    fs = json.loads((out / "fatigue" / "summary.json").read_text())
+    assert fs["source"] == "live"
+    dm, fat = last["damage_map"], last["fatigue"]
+    n = int(round(0.6 / 0.0005))
+    assert last["n_steps"] == n and dm["k"] == n and dm["from_k"] == 0
+    assert dm["missing_steps"] == 0
+    # the scope's map (its own LiveFatigue on the plant/arm messages) is the node's result
+    assert dm["max_damage"] == pytest.approx(fs["max_damage_per_pass"], rel=1e-9)
+    assert dm["critical_node_id"] == fs["critical_node_id"]
+    assert dm["life_km"] == pytest.approx(fs["min_life_km"], rel=1e-9)
+    # and the fatigue node's own live message says the same minimum life
+    assert fat["life_km"] == pytest.approx(fs["min_life_km"], rel=1e-9)
+    logd = [v for v in dm["log10_damage"] if v is not None]
+    assert len(dm["log10_damage"]) == fs["n_nodes"] and logd
+    assert max(logd) == pytest.approx(np.log10(fs["max_damage_per_pass"]), abs=1e-3)
+    assert last["lines"]["plant/arm/ball_joint_z"]["unit"] == "N"
+    if not CHROMIUM:
+        pytest.skip(NO_CHROMIUM + " (the map's numbers were checked)")
+    m = re.search(r'id="damage-map"[^>]*data-drawn="(\d+)" data-k="(\d+)"', dom)
+    assert m and int(m.group(1)) == fs["n_nodes"] and int(m.group(2)) == n, dom[:3000]
+    life = re.search(r'id="min-life">([^<]+)<', dom).group(1)
+    assert float(life) == pytest.approx(fs["min_life_km"], rel=1e-3)
+    import matplotlib.image as mpimg
+
+    img = np.round(mpimg.imread(shot)[..., :3] * 255).astype(int)
+    # the map's dark purple (inferno's most damaged end: the colour bar and the worst nodes)
+    purple = [np.all(np.abs(img - c) <= 20, axis=-1).sum() for c in ((64, 10, 103),
+                                                                   (120, 28, 109))]
+    assert min(purple) > 20, f"no damage colours in the screenshot: {purple}"
+
+
+# ---- bad input -----------------------------------------------------------------------------
+@pytest.mark.parametrize(("args", "message"), [
+    (["nosuch/folder"], "no such run folder"),
+    (["r1", "--channels", "a/b/c/d"], "expected NODE/CHANNEL[/FIELD]"),
+    (["r1", "--channels", "plant/ctl"], "control channel"),
+    (["r1", "--speed", "0"], "--speed 0"),
+    (["r1", "--port", "70000"], "--port 70000"),
+])
+def test_bad_input_exits_2(args, message) -> None:
+    res = suscosim("scope", *args, timeout=60)
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert message in res.stderr and "Traceback" not in res.stderr
+
+
+def test_a_finished_run_without_journal_and_a_busy_port(tmp_path, unwatched) -> None:
+    (tmp_path / "summary.json").write_text("{}")
+    res = suscosim("scope", str(tmp_path), timeout=60)
+    assert res.returncode == 2 and "no such journal file" in res.stderr, res.stderr
+    scope, url = _start_scope(str(unwatched), "--fast")
+    try:
+        port = url.rsplit(":", 1)[1].strip("/")
+        res = suscosim("scope", str(unwatched), "--port", port, timeout=60)
+        assert res.returncode == 2 and f"cannot serve on 127.0.0.1:{port}" in res.stderr
+        with pytest.raises(urllib.error.HTTPError) as e:
+            urllib.request.urlopen(f"{url}data?since=x", timeout=10)
+        assert e.value.code == 400
+    finally:
+        _stop(scope)
