@@ -69,6 +69,7 @@ def _start_scope(*args: str) -> tuple[subprocess.Popen, str]:
         if ready:
             line = proc.stdout.readline()
             assert line, f"the scope ended: {proc.communicate()}"
+    proc.first_line = line
     return proc, re.search(r"(http://\S+/)", line).group(1)
 
 
@@ -234,6 +235,44 @@ def test_scope_replays_a_finished_run(unwatched) -> None:
         line = every["lines"][name]
         assert line["k"] == list(range(5001)), name  # every step, in order
         assert np.array_equal(line["y"], table[name]), name
+
+
+# ---- through a router, as from another machine -------------------------------------------
+def test_scope_through_a_router_by_run_id(tmp_path) -> None:
+    """A run whose nodes meet at a router; the scope knows only the run id and the router
+    (what a scope on another machine has) and is a client of the router."""
+    ep = free_loopback_endpoint()
+    router = popen_suscosim("router", "--listen", ep)
+    run = scope = None
+    try:
+        line = router.stdout.readline()
+        assert "listening on" in line, line + router.stderr.read()
+        out = tmp_path / "run"
+        run = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--connect",
+                             ep, "--set", "run.t_end=3.0", "--set", 'run.id="scoperouter"')
+        _wait_json(out / "run.json", run)
+        scope, url = _start_scope("scoperouter", "--connect", ep, "--mode", "client")
+        first = _until(url, lambda d: d["k"] >= 0)
+        second = _until(url, lambda d: d["k"] > first["k"], since=first["k"])
+        stdout, stderr = run.communicate(timeout=180)
+        assert run.returncode == 0, stdout + stderr
+        last = _until(url, lambda d: d["run_state"] == "done" and all(
+            n["state"] == "done" for n in d["nodes"].values()), timeout=60)
+        err = _stop(scope)
+    finally:
+        for p in (run, scope, router):
+            if p is not None and p.poll() is None:
+                p.terminate()
+                p.communicate(timeout=30)
+    assert f"run scoperouter, live via {ep} (client session)" in scope.first_line
+    assert second["k"] > first["k"] >= 0 and second["source"] == "live"
+    # n_steps and the node list came from the run's orchestrator (its scenario queryable)
+    assert last["n_steps"] == 3000 and last["k"] == 3000
+    assert set(last["nodes"]) == {"plant", "tyre_road", "controller", "recorder"}
+    table = read_table(out / "table.parquet")
+    z_b = last["lines"]["plant/state/z_b"]
+    assert np.array_equal(z_b["y"], table["plant/state/z_b"][z_b["k"]])
+    assert "run scoperouter done at step 3000" in err
 
 
 # ---- the damage map of a realistic run with live fatigue --------------------------------------
