@@ -220,9 +220,10 @@ class DoubleWishboneCorner(PlantModel):
                              physicsClientId=c)
         self._R_arm = _rot(arm[5])
         self._arm_state = arm
-        top = self._world(body, BODY, DAMPER_UPPER)
-        bot = self._world(arm, LOWER_ARM, DAMPER_LOWER)
-        self._pad = self._world(arm, LOWER_ARM, BUMP_STOP_PAD)
+        self._arm_frame = (np.array(arm[4]), self._R_arm)
+        top = self._world((np.array(body[4]), _rot(body[5])), BODY, DAMPER_UPPER)
+        bot = self._world(self._arm_frame, LOWER_ARM, DAMPER_LOWER)
+        self._pad = self._world(self._arm_frame, LOWER_ARM, BUMP_STOP_PAD)
         d = top - bot
         self._damper_len = float(np.linalg.norm(d))
         self._u = d / self._damper_len  # unit vector arm mount -> body mount
@@ -231,12 +232,22 @@ class DoubleWishboneCorner(PlantModel):
         self._v_damper = -float(self._u @ (v_top - v_bot))  # compression rate
         self._top, self._bot = top, bot
 
-    def _world(self, link_state, link: int, corner_point: np.ndarray) -> np.ndarray:
-        """World position of a hardpoint (given in the static corner frame) fixed to ``link``
-        (``link_state`` from getLinkState with forward kinematics)."""
-        pos, R = np.array(link_state[4]), _rot(link_state[5])
-        local = self._link_local[link] @ np.append(corner_point, 1.0)
-        return pos + R @ local
+    def _world(self, frame: tuple[np.ndarray, np.ndarray], link: int,
+               corner_point: np.ndarray) -> np.ndarray:
+        """World position of a hardpoint (given in the static corner frame) fixed to ``link``,
+        whose link frame is ``frame`` = (origin, rotation) (getLinkState's [4], [5] with
+        forward kinematics)."""
+        pos, R = frame
+        return pos + R @ self._local_point(link, corner_point)
+
+    def _local_point(self, link: int, corner_point: np.ndarray) -> np.ndarray:
+        """A hardpoint (static corner frame) in ``link``'s frame [m]: fixed, so computed once
+        per point (it was computed at every read, four times a substep)."""
+        cache = self.__dict__.setdefault("_local_cache", {})
+        key = (link, np.asarray(corner_point, dtype=float).tobytes())
+        if key not in cache:
+            cache[key] = self._link_local[link] @ np.append(corner_point, 1.0)
+        return cache[key]
 
     @property
     def _link_local(self) -> dict[int, np.ndarray]:
@@ -340,7 +351,7 @@ class DoubleWishboneCorner(PlantModel):
         arm = self._arm_state
         out: dict[str, np.ndarray] = {}
         for name, pt in ARM_ACCEL_POINTS.items():
-            v = _point_velocity(arm, self._world(arm, LOWER_ARM, la.to_corner(pt)))
+            v = _point_velocity(arm, self._world(self._arm_frame, LOWER_ARM, la.to_corner(pt)))
             for axis, val in zip("xyz", v, strict=True):
                 out[f"a_arm_{name}_{axis}"] = np.array([float(val)])
         return out
@@ -383,7 +394,15 @@ def _point_velocity(link_state, world_point: np.ndarray) -> np.ndarray:
     """World velocity of a point fixed to a link (``link_state`` with velocity and forward
     kinematics): v_com + omega x (r - r_com)."""
     v, w, com = np.array(link_state[6]), np.array(link_state[7]), np.array(link_state[0])
-    return v + np.cross(w, world_point - com)
+    return v + cross3(w, world_point - com)
+
+
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two 3-vectors: the same products and differences as ``np.cross`` (so the same
+    bits), without its axis handling, which cost ~20 us a call and 11 calls a step."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def _local(body: int, link: int, offset_from_link_origin: np.ndarray, client: int) -> list:
@@ -449,7 +468,7 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
 
     w_pivot = np.array(p.getJointState(b, LOWER_ARM, physicsClientId=c)[2])
     F_link = w_pivot[:3]
-    M_link = w_pivot[3:] + np.cross(r_com, F_link)  # about the link origin = O
+    M_link = w_pivot[3:] + cross3(r_com, F_link)  # about the link origin = O
     F = R_af.T @ F_link
     M = R_af.T @ M_link
     d = BUSH_SPACING
