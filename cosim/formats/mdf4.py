@@ -36,16 +36,34 @@ def write_mdf4(cs: ChannelSet, path: str | Path, comment: str = "suscosim load h
     return {}
 
 
+def _collect_half_built() -> None:
+    """asammdf leaves a half-built MDF object behind a file it refuses, whose ``__del__``
+    raises; collected later, inside unrelated code (even the compiler), that error can do
+    harm. Collect it now, with its ignored exception silenced."""
+    import gc
+    import sys
+
+    hook = sys.unraisablehook
+    sys.unraisablehook = lambda _unraisable: None
+    try:
+        gc.collect()
+    finally:
+        sys.unraisablehook = hook
+
+
 def read_mdf4(path: str | Path) -> ChannelSet:
     """Every channel of an MDF 3/4 file on its (common) time master."""
     from asammdf import MDF
 
     path = str(path)
+    failure = ""
     try:
         mdf = MDF(path)
     except Exception as exc:  # asammdf raises many types on a foreign or torn file
-        raise InputFileError(path, f"not a readable MDF file ({type(exc).__name__}: "
-                                   f"{exc})") from None
+        failure = f"{type(exc).__name__}: {exc}"
+    if failure:
+        _collect_half_built()
+        raise InputFileError(path, f"not a readable MDF file ({failure})")
     try:
         t: np.ndarray | None = None
         first = ""

@@ -2,7 +2,8 @@
 
 Road keys (``[road]``):
 
-* ``type``: step | ramp | bump | pothole | events | iso8608 | power_law | pave | csv
+* ``type``: step | ramp | bump | pothole | events | iso8608 | power_law | pave | csv | opencrg |
+  mdf4
 * ``speed_kmh`` (> 0) forward speed; ``length_m`` (> 0) run distance; duration = length / speed
 * ``corners`` (optional): list of corner names seeing the road, e.g. ["FR"] (Ch. 4 FVM test)
 * events (step, ramp, bump, pothole): ``height`` [m] (pothole: ``depth`` [m], > 0),
@@ -20,6 +21,12 @@ Road keys (``[road]``):
   ``joint_width``, ``joint_depth``, ``stone_height_std``, ``crown`` [m]; long waves ``G``,
   ``waviness``, ``band``, ``correlation`` (as power_law)
 * csv: ``path``, ``zero_start`` (bool, default true)
+* opencrg (measured surface, :mod:`nodes.tyre_road.opencrg`): ``path`` (.crg), ``track_width``
+  [m] (default the vehicle's 1.411), ``v_offset`` [m], ``u_start`` [m], ``reference`` ("grid" |
+  "full"), ``zero_start``
+* mdf4 (measured profile, :mod:`nodes.tyre_road.profile_mdf`): ``path`` (.mf4), ``left``
+  (channel), ``right`` (channel, default left), ``distance`` (channel [m]) or
+  ``recorded_speed_kmh``, ``zero_start``
 
 Tyre keys (``[tyre]``): ``model`` (point_contact | fixed_footprint), ``stiffness`` [N/m],
 fixed footprint: ``n`` (>= 1), ``contact_length`` [m].
@@ -36,13 +43,16 @@ from cosim.errors import ScenarioError
 from .cobblestone import DEFAULTS as PAVE_DEFAULTS
 from .cobblestone import PaveParameters, pave_road
 from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, GD_N0, iso8608_road
+from .opencrg import VEHICLE_TRACK_M, opencrg_road
 from .power_law import DEFAULT_WAVINESS, power_law_road
 from .profile_csv import csv_road
+from .profile_mdf import mdf_road
 from .roads import KMH, EventRoad, Road, RoadEvent
 from .tyres import FixedFootprint, PointContact, Tyre
 
 _EVENT_TYPES = ("step", "ramp", "bump", "pothole")
-_ROAD_TYPES = _EVENT_TYPES + ("events", "iso8608", "power_law", "pave", "csv")
+_ROAD_TYPES = _EVENT_TYPES + ("events", "iso8608", "power_law", "pave", "csv", "opencrg",
+                              "mdf4")
 PAVE_KEYS = ("stone_length", "stone_length_std", "joint_width", "joint_depth",
              "stone_height_std", "crown")
 """Stone keys of a pave road (besides the long-wave keys of power_law)."""
@@ -215,20 +225,59 @@ def build_road(cfg: Mapping, key_prefix: str = "road") -> Road:
             raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for pave)")
         road = pave_road(length, speed, seed,
                          PaveParameters(**vals, band=band, correlation=corr))
-    else:  # csv
-        _check_keys(cfg, _COMMON | {"path", "zero_start"}, p)
-        path = cfg.get("path")
-        if not isinstance(path, str) or not path:
-            raise ScenarioError(f"{p}.path", path, "a file path")
-        zero_start = cfg.get("zero_start", True)
-        if not isinstance(zero_start, bool):
-            raise ScenarioError(f"{p}.zero_start", zero_start, "true or false")
-        road = csv_road(path, speed, length, zero_start)
+    else:  # measured: csv, opencrg, mdf4
+        road = _measured_road(cfg, kind, speed, length, p)
 
     road.speed = speed
     road.length = length if length is not None else road.length
     road.corners = corners
     return road
+
+
+_MEASURED_KEYS = {"csv": {"path", "zero_start"},
+                  "opencrg": {"path", "zero_start", "track_width", "v_offset", "u_start",
+                              "reference"},
+                  "mdf4": {"path", "zero_start", "left", "right", "distance",
+                           "recorded_speed_kmh"}}
+
+
+def _text(cfg: Mapping, key: str, prefix: str, expected: str, required: bool = False):
+    v = cfg.get(key)
+    if v is None and not required:
+        return None
+    if not isinstance(v, str) or not v:
+        raise ScenarioError(f"{prefix}.{key}", v, expected)
+    return v
+
+
+def _measured_road(cfg: Mapping, kind: str, speed: float, length: float | None,
+                   p: str) -> Road:
+    """A measured road profile (csv, opencrg, mdf4) from its ``[road]`` keys."""
+    _check_keys(cfg, _COMMON | _MEASURED_KEYS[kind], p)
+    path = _text(cfg, "path", p, "a file path", required=True)
+    zero_start = cfg.get("zero_start", True)
+    if not isinstance(zero_start, bool):
+        raise ScenarioError(f"{p}.zero_start", zero_start, "true or false")
+    if kind == "csv":
+        return csv_road(path, speed, length, zero_start)
+    if kind == "opencrg":
+        reference = cfg.get("reference", "grid")
+        if reference not in ("grid", "full"):
+            raise ScenarioError(f"{p}.reference", reference, "'grid' or 'full'")
+        u_start = _number(cfg, "u_start", p) if "u_start" in cfg else None
+        return opencrg_road(path, speed, length,
+                            _number(cfg, "track_width", p, default=VEHICLE_TRACK_M,
+                                    positive=True),
+                            _number(cfg, "v_offset", p, default=0.0), u_start, reference,
+                            zero_start)
+    if ("distance" in cfg) == ("recorded_speed_kmh" in cfg):
+        raise ScenarioError(f"{p}.distance", cfg.get("distance"),
+                            "either distance (a channel in m) or recorded_speed_kmh")
+    rec = _number(cfg, "recorded_speed_kmh", p, positive=True) \
+        if "recorded_speed_kmh" in cfg else None
+    return mdf_road(path, speed, _text(cfg, "left", p, "a channel name", required=True),
+                    _text(cfg, "right", p, "a channel name"),
+                    _text(cfg, "distance", p, "a channel name"), rec, length, zero_start)
 
 
 def build_tyre(cfg: Mapping, key_prefix: str = "tyre") -> Tyre:
