@@ -157,7 +157,8 @@ def load_duty(path: str | Path) -> dict[str, Any]:
     return out
 
 
-def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool) -> Path:
+def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
+               sets: Sequence[str] = ()) -> Path:
     """Run a scenario event into ``folder`` (reused when a finished run with fatigue is
     there and ``rerun`` is false)."""
     done = folder / "summary.json"
@@ -171,7 +172,7 @@ def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool) 
 
     from .runner import resolve, run_scenario
 
-    overrides = list(ev["set"]) + ([f'run.mode="{mode}"'] if mode else [])
+    overrides = list(sets) + list(ev["set"]) + ([f'run.mode="{mode}"'] if mode else [])
     scenario = resolve(sc.load(ev["scenario"], overrides), folder)
     print(f"suscosim duty: event {ev['name']}: run {scenario['run']['id']} -> {folder}",
           flush=True)
@@ -204,8 +205,9 @@ def _same_config(a: dict, b: dict) -> bool:
 
 
 def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
-             rerun: bool = False) -> dict[str, Any]:
-    """Run/collect every event, sum the damage, write ``out/``; return duty.json's content."""
+             rerun: bool = False, sets: Sequence[str] = ()) -> dict[str, Any]:
+    """Run/collect every event, sum the damage, write ``out/``; return duty.json's content.
+    ``sets``: overrides for every scenario event (before the event's own ``set``)."""
     import numpy as np
 
     from nodes.fatigue.duty_cycle import Event, life_factor, schedule_damage
@@ -214,7 +216,7 @@ def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
     infos, events = [], []
     for ev in duty["events"]:
         run_dir = Path(ev["run"]) if "run" in ev else \
-            _run_event(ev, out / "runs" / ev["name"], mode, rerun)
+            _run_event(ev, out / "runs" / ev["name"], mode, rerun, sets)
         fat = _event_fatigue(run_dir)
         length = float(fat["summary"]["track_length_m"])
         if not (length > 0 and math.isfinite(length)):
@@ -332,12 +334,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="mode of the scenario events' runs (default: their scenario's)")
     p.add_argument("--rerun", action="store_true",
                    help="run the scenario events again even if finished runs are there")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key of every scenario event (before the event's own set)")
     p.add_argument("--json", action="store_true", help="print duty.json instead of a table")
     args = p.parse_args(argv)
     try:
         duty = load_duty(args.duty)
         out = args.out or Path(duty.get("out") or Path("duty") / duty["name"])
-        result = run_duty(duty, out, args.mode, args.rerun)
+        result = run_duty(duty, out, args.mode, args.rerun, args.set)
     except SuscosimError as exc:
         print(f"suscosim duty: error: {exc}", file=sys.stderr)
         return exc.exit_code
