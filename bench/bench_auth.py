@@ -107,7 +107,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--t-end", type=float, default=4.0, help="simulated time [s]")
     args = ap.parse_args(argv)
     us = per_message()
-    print(f"per message ({us['bytes']:.0f} B body + 18 B trailer): sign {us['sign']:.2f} us, "
+    print(f"per message ({us['bytes']:.0f} B + 20 B signature field): "
+          f"sign {us['sign']:.2f} us, "
           f"verify {us['verify']:.2f} us; encode {us['encode']:.2f} us, "
           f"decode {us['decode']:.2f} us")
     with tempfile.TemporaryDirectory() as tmp:

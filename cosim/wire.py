@@ -18,10 +18,11 @@ data messages of the last few steps, exactly as published, ``d = {"records": [[c
 raw message bytes], ...]}`` in publication order; ``k``/``t`` are those of the last one.
 The batch is signed; the messages in it are not (the batch's signature covers them).
 
-Every message a run publishes is signed with the run's key: the msgpack map is followed by an
-18-byte trailer (see :mod:`cosim.auth`). :func:`decode` steps over a trailer without
-checking it (for readers without the key: taps, replay); nodes and the orchestrator check it
-first with :meth:`cosim.auth.RunKey.verify`.
+Every message a run publishes is signed with the run's key: the map gets a sixth field, last,
+``"s"``: 16 bytes, the MAC of the five before it (see :mod:`cosim.auth`). A reader without
+the key (a tap, replay, a plain ``msgpack.unpackb``) reads the message as before and may
+ignore ``s``; nodes and the orchestrator check it first with
+:meth:`cosim.auth.RunKey.verify`.
 """
 
 from __future__ import annotations
@@ -81,7 +82,6 @@ def encode(kind: str, k: int, t: float, d: Mapping[str, Any] | None = None) -> b
     )
 
 
-_TRAILER, _TRAILER_BYTES = b"\xc4\x10", 18  # cosim.auth.TRAILER, TRAILER_BYTES
 _NUMBER_TYPES = (int, float)  # exact types (``type(x) in``): a bool is not a number here
 
 
@@ -89,10 +89,6 @@ def decode(raw: bytes) -> Message:
     """Decode and validate one message; raise :class:`WireError` saying what is wrong."""
     try:
         obj = msgpack.unpackb(raw, raw=False, strict_map_key=True)
-    except msgpack.ExtraData as exc:  # a signed message read without the key: its trailer
-        if len(exc.extra) != _TRAILER_BYTES or exc.extra[:2] != _TRAILER:
-            raise WireError(f"{len(exc.extra)} bytes after the message") from None
-        obj = exc.unpacked
     except Exception as exc:  # msgpack raises several unrelated types
         raise WireError(f"not msgpack ({type(exc).__name__}: {exc})") from None
     if not isinstance(obj, dict):
