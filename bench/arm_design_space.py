@@ -2,7 +2,8 @@
 
     python bench/arm_design_space.py            # about 3 min on 2 cores
 
-Runs the real FE (``orchestrator.arm_card.card`` and the free-free modes with their shapes) on
+Runs the real FE (``orchestrator.studies.arm_card.card`` and the free-free modes with their
+shapes) on
 variants of the forged arm of ``cosim/lower_arm.py``:
 
 * **depth family**: every rib and boss depth times s, the ribs' widths divided by s (the ribs'
@@ -101,7 +102,7 @@ def modes(hardware: dict[str, float], mesh_size: float = 0.02, n: int = 6):
 
 
 def evaluate(name: str, hardware: dict[str, float], **values: float) -> dict:
-    from orchestrator.arm_card import card
+    from orchestrator.studies.arm_card import card
 
     with variant(**values):
         c = card(0.02, modes=False)

@@ -237,10 +237,11 @@ def build_parser() -> argparse.ArgumentParser:
     for name, module, text in (
         ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
         ("fatigue", "nodes.fatigue.cli", "fatigue life of the lower arm from a finished run"),
-        ("equivalent-lumped", "nodes.plant.equivalent_lumped",
+        ("equivalent-lumped", "orchestrator.studies.equivalent_lumped",
          "equivalent lumped quarter car of the realistic corner (log decrement)"),
         ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
-        ("arm", "orchestrator.arm_card", "the lower arm's model card (mass, modes, stresses)"),
+        ("arm", "orchestrator.studies.arm_card",
+         "the lower arm's model card (mass, modes, stresses)"),
         ("tap", "orchestrator.tap", "print the messages of a running run, live"),
         ("replay", "orchestrator.replay", "republish a recorded journal on the bus"),
         ("runs", "orchestrator.runs", "list runs and their state from the run folders"),

@@ -7,12 +7,10 @@ t = 0.5 s, integrated by fixed-step RK4 (0.05 ms) with the PC or the FFP tyre of
 n = 4 springs over l_c = 0.20 m (a typical loaded passenger-car footprint) at 47 km/h (the
 speed of the thesis's tyre paper, App. I), i.e. 5.1 ms between springs.
 
-Run: ``python -m nodes.tyre_road.tyre_step_study [--speed-kmh 47] [--contact-length 0.2]``.
+Run: ``python -m orchestrator.studies.tyre_step [--speed-kmh 47] [--contact-length 0.2]``.
 """
 
 from __future__ import annotations
-
-import argparse
 
 import numpy as np
 
@@ -64,23 +62,3 @@ def compare(speed_kmh: float = 47.0, contact_length: float = 0.2, n: int = 4
         "z_b_diff_pct": 100 * float(pc["z_b"].max() / ffp["z_b"].max() - 1),
         "spring_delay_ms": 1e3 * contact_length / max(n - 1, 1) / v,
     }
-
-
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="tyre-step-study", description=__doc__.splitlines()[0])
-    ap.add_argument("--speed-kmh", type=float, default=47.0)
-    ap.add_argument("--contact-length", type=float, default=0.2)
-    ap.add_argument("-n", type=int, default=4)
-    a = ap.parse_args(argv)
-    r = compare(a.speed_kmh, a.contact_length, a.n)
-    print(f"20 mm step, Table 3.1 quarter car, FFP n={a.n}, l_c={a.contact_length} m, "
-          f"{a.speed_kmh} km/h ({r['spring_delay_ms']:.2f} ms between springs)")
-    print(f"peak tyre force: PC {r['F_pc']:.0f} N, FFP {r['F_ffp']:.0f} N -> PC higher by "
-          f"{r['F_diff_pct']:.1f} %; FFP peak lags by {r['lag_ms']:.1f} ms")
-    print(f"peak wheel displacement: PC higher by {r['z_w_diff_pct']:.2f} %; "
-          f"body: {r['z_b_diff_pct']:.2f} %")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -22,7 +22,11 @@ from nodes.fatigue.influence import (
     unit_cases,
 )
 from nodes.fatigue.material import steel_817M40
-from orchestrator.arm_card import fe_bending_stress, nominal_bending_stress, static_arm_loads
+from orchestrator.studies.arm_card import (
+    fe_bending_stress,
+    nominal_bending_stress,
+    static_arm_loads,
+)
 
 MAT = steel_817M40()
 MESH = 0.02  # the fatigue default
@@ -165,7 +169,7 @@ def test_mesh_convergence_at_the_hot_spot_and_the_legs(static_loads):
 
 
 def test_arm_card_json():
-    out = subprocess.run([sys.executable, "-m", "orchestrator.arm_card", "--json"],
+    out = subprocess.run([sys.executable, "-m", "orchestrator.studies.arm_card", "--json"],
                          capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr
     c = json.loads(out.stdout)
@@ -178,6 +182,7 @@ def test_arm_card_json():
     assert c["max_stress_3g_mpa"] < c["yield_mpa"]
     # the floor at the thesis's M1 is above the #12 hot-spot bar (why that bar is missed)
     assert min(c["stress_floor_mpa"].values()) > 250.0
-    bad = subprocess.run([sys.executable, "-m", "orchestrator.arm_card", "--mesh-size", "1"],
+    bad = subprocess.run([sys.executable, "-m", "orchestrator.studies.arm_card", "--mesh-size",
+                          "1"],
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and "--mesh-size" in bad.stderr

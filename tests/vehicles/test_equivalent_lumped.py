@@ -11,7 +11,6 @@ from nodes.plant.equivalent_lumped import (
     TABLE_4_3,
     identify,
     log_decrement,
-    main,
     simulate,
     two_dof_equivalent,
 )
@@ -94,6 +93,8 @@ def test_identify_on_the_realistic_corner_meets_table_4_3(corner_eq):
 
 
 def test_equivalent_lumped_json(capsys):
+    from orchestrator.studies.equivalent_lumped import main
+
     assert main(["--json", "--no-compare", "--dt", "0.002"]) == 0
     out = json.loads(capsys.readouterr().out)
     for key in ("k_s", "c_s", "m_s", "m_u", "k_t", "zeta", "f_n", "k_s_app2", "table_4_3"):
