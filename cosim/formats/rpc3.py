@@ -11,7 +11,7 @@ of the file), then demultiplexed data in groups of ``PTS_PER_GROUP`` points.
   (``resolution / 2``) of the one written. We write ``INT_FULL_SCALE = 32768``: readers
   either scale by ``SCALE.CHAN_n`` alone or by ``SCALE.CHAN_n x INT_FULL_SCALE / 32768``
   (``rpc-reader``); with 32768 both give the same numbers.
-* ``FLOATING_POINT``: 32-bit IEEE floats (relative resolution 6e-8).
+* ``FLOATING_POINT``: 32-bit IEEE floats (relative spacing 1.2e-7, rounding within 6e-8).
 
 A file has one uniform step: the table's ``t`` must be uniform (a run's is: t_k = k h); its
 first time is kept in the header as ``SUSCOSIM_T0_S`` (RPC III starts at 0).
@@ -77,7 +77,7 @@ def write_rpc3(cs: ChannelSet, path: str | Path, datatype: str = "int") -> dict:
     if datatype == "int":
         res = {n: resolution(x) for n, x in cs.channels.items()}
     else:
-        res = {n: float(np.finfo(np.float32).resolution) for n in cs.channels}
+        res = {n: float(np.finfo(np.float32).eps) for n in cs.channels}
     return {"resolution": res, "datatype": datatype, "delta_t": dt}
 
 
