@@ -40,6 +40,7 @@ from __future__ import annotations
 import atexit
 import shutil
 import zipfile
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -47,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from cosim.errors import InputFileError, ScenarioError
+from cosim.errors import InputFileError, RunError, ScenarioError
 from nodes.controller.base import BODY_KEYS, ConfigReader, Controller, ControlOutput, corner_array
 from nodes.controller.registry import law_builder
 
@@ -224,7 +225,8 @@ class FmuController(Controller):
         self._out = [(variables[n].valueReference, c) for n, c in plan.outputs.items()]
         self._params = [(variables[n], v) for n, v in plan.parameters.items()]
         self._fmi3 = plan.version.startswith("3.")
-        self._t: float | None = None
+        self._messages: deque[str] = deque(maxlen=5)
+        self._broken = self._fatal = False
 
     # ------------------------------------------------------------------ FMI calls
     def _set_real(self, fmu: Any, vrs: list[int], values: list[float]) -> None:
@@ -246,20 +248,31 @@ class FmuController(Controller):
         else:
             fmu.setInteger(vr, [int(value)])
 
-    def _start(self, t: float, inputs: list[list[float]]) -> None:
-        from fmpy import extract
-        from fmpy.fmi2 import FMU2Slave
-        from fmpy.fmi3 import FMU3Slave
+    def _log(self, *args: Any) -> None:
+        """FMI logger (FMI 2: env, instance, status, category, message; FMI 3: env, status,
+        category, message): keep the last messages of a warning or worse for the error."""
+        status, message = args[-3], args[-1]
+        if status >= 1:  # 1 warning, 2 discard, 3 error, 4 fatal
+            raw = message.decode("utf-8", "replace") if isinstance(message, bytes) else message
+            self._messages.append(str(raw).strip())
 
-        md = self.plan.md
+    def _failed(self, exc: Exception, what: str) -> RunError:
+        self._broken = True
+        self._fatal = getattr(exc, "status", None) == 4  # fmi2Fatal / fmi3Fatal
+        said = " | ".join(" ".join(m.split()) for m in self._messages if m)[-600:]
+        return RunError(f"the FMU {self.plan.path.name} failed {what}: {str(exc).rstrip('.')}"
+                        + (f"; it said: {said}" if said else ""))
+
+    def _start(self, t: float, inputs: list[list[float]]) -> None:
+        from fmpy import extract, instantiate_fmu
+
         self._unzipdir = extract(str(self.plan.path))
         atexit.register(self.close)
-        cls = FMU3Slave if self._fmi3 else FMU2Slave
         for i in range(self.n):
-            fmu = cls(guid=md.guid, unzipDirectory=self._unzipdir,
-                      modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName=f"suscosim_controller_{i}")
-            fmu.instantiate()
+            # logging on: what an FMU says when it fails goes into the error (costs no
+            # measurable time per step with a PythonFMU FMU, which says nothing otherwise)
+            fmu = instantiate_fmu(self._unzipdir, self.plan.md, fmi_type="CoSimulation",
+                                  logger=self._log, debug_logging=True)
             self._instances.append(fmu)
             if self._fmi3:
                 fmu.enterInitializationMode(startTime=t)
@@ -275,11 +288,18 @@ class FmuController(Controller):
     def close(self) -> None:
         """Terminate and free the FMU instances, remove the extracted FMU (idempotent)."""
         instances, self._instances = self._instances, []
+        if self._fatal:  # FMI: after a fatal status no call at all, not even freeInstance
+            instances = []
         for fmu in instances:
-            try:
-                fmu.terminate()
-                fmu.freeInstance()
-            except Exception:  # noqa: S110 - best effort at shutdown
+            if not self._broken:  # after an error FMI allows only freeing the instance
+                try:
+                    fmu.terminate()
+                except Exception:  # noqa: S110 - best effort at shutdown
+                    pass
+            try:  # free the instance but keep the library loaded: a PythonFMU binary leaves
+                # Python objects that point into it (unloading it made the GC crash later)
+                (fmu.fmi3FreeInstance if self._fmi3 else fmu.fmi2FreeInstance)(fmu.component)
+            except Exception:  # noqa: S110
                 pass
         if self._unzipdir:
             shutil.rmtree(self._unzipdir, ignore_errors=True)
@@ -307,7 +327,18 @@ class FmuController(Controller):
     def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
         inputs = self._signals(state)
         if not self._instances:
-            self._start(float(t), inputs)
+            try:
+                self._start(float(t), inputs)
+            except Exception as exc:  # FMICallException, a library that does not load
+                raise self._failed(exc, "to start") from None
+        try:
+            return self._step(float(t), inputs)
+        except RunError:
+            raise
+        except Exception as exc:
+            raise self._failed(exc, f"at t = {t:g} s") from None
+
+    def _step(self, t: float, inputs: list[list[float]]) -> ControlOutput:
         dt = self.h / self.substeps
         vrs_in = [vr for vr, _ in self._in]
         vrs_out = [vr for vr, _ in self._out]
@@ -319,8 +350,6 @@ class FmuController(Controller):
                 result = fmu.doStep(currentCommunicationPoint=float(t) + j * dt,
                                     communicationStepSize=dt)
                 if self._fmi3 and result[1]:  # terminateSimulation
-                    from cosim.errors import RunError
-
                     raise RunError(f"the FMU {self.plan.path.name} asked to terminate at "
                                    f"t = {t + (j + 1) * dt:g} s")
             values[i] = self._get_real(fmu, vrs_out)

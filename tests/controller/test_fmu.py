@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from cosim import scenario as sc
-from cosim.errors import InputFileError, ScenarioError
+from cosim.errors import InputFileError, RunError, ScenarioError
 from nodes.controller.laws import build_controller
 from orchestrator.export_fmu import export_fmu
 
@@ -228,3 +228,41 @@ def test_export_embeds_a_user_law_and_a_curve(tmp_path, monkeypatch):
         ctl.close()
         assert res.F_d[0] == pytest.approx(expected), (name, spec)
     sys.modules.pop("my_fmu_law", None)
+
+
+FAILING_LAW = '''
+from nodes.controller.registry import control_law
+
+
+@control_law("test_failing_fmu_law")
+def law(t, v_rel, *, c: float = 900.0):
+    """Fails after 10 ms."""
+    if t > 0.01:
+        raise ValueError("the law gave up at t > 10 ms")
+    return c * v_rel, c
+'''
+
+
+def test_an_fmu_that_fails_is_a_run_error_with_what_it_said(fmus, tmp_path, monkeypatch):
+    # a parameter the law refuses: the FMU fails to start, and says why
+    ctl = build_controller({"law": "fmu", "fmu": str(fmus["tss1"]),
+                            "fmu_parameters": {"c_hard": 100.0}}, 1, 0.002)
+    s = {"z_b": [0.0], "v_b": [0.0], "z_w": [0.0], "v_w": [0.1]}
+    with pytest.raises(RunError, match=r"tss1.fmu failed to start: fmi2ExitInitializationMode.*"
+                                       r"controller.c_hard.*100"):
+        ctl.step(0.0, s)
+    ctl.close()
+    # a law that raises while stepping
+    (tmp_path / "failing_fmu_law.py").write_text(FAILING_LAW)
+    with monkeypatch.context() as m:
+        m.syspath_prepend(str(tmp_path))
+        export_fmu(dict(sc.load(TSS1), controller={"law": "failing_fmu_law:law"}),
+                   tmp_path / "failing.fmu")
+    sys.modules.pop("failing_fmu_law", None)
+    ctl = build_controller({"law": "fmu", "fmu": str(tmp_path / "failing.fmu")}, 1, 0.002)
+    with pytest.raises(RunError, match=r"failing.fmu failed at t = 0.012 s: fmi2DoStep.*"
+                                       r"the law gave up"):
+        for k in range(10):
+            ctl.step(k * 0.002, s)
+    ctl.close()
+    sys.modules.pop("failing_fmu_law", None)
