@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
+from cosim import scenario as sc
 from cosim.errors import SuscosimError
 
 from .display import Display, event_line
@@ -89,8 +90,9 @@ class DaskRunner:
     def _task(self, p: Point, phase: str, topic: str) -> dict[str, Any]:
         meta = point_meta(self.sweep.name, p.id, p.params, str(p.base), p.overrides,
                           p.fingerprint)
-        return task_doc(meta, str(p.base), p.set_args, phase, self.sweep.fatigue,
-                        self.sweep.runs_dir, self.sweep.run_dir(self.out, p), topic)
+        scenario = sc.load(p.base, p.set_args)  # as validate_points loaded it
+        return task_doc(meta, scenario, phase, self.sweep.fatigue, self.sweep.runs_dir,
+                        self.sweep.run_dir(self.out, p), topic)
 
     def workers_text(self) -> str:
         info = self.client.scheduler_info()

@@ -5,8 +5,10 @@ to the client as a tar.gz (or is written in place under a shared ``runs_dir``).
 
 The task function is importable on the worker (``orchestrator.sweep.task.run_point``): the
 worker needs suscosim installed or this checkout on its ``PYTHONPATH``. Paths under the
-client's project folder are rewritten to the worker's, so a worker with the checkout at
-another path (a container image) runs the same base scenarios.
+client's project folder are rewritten to the worker's. The point's scenario travels whole
+(loaded and overridden on the client, file paths absolute), so a worker needs no scenario
+files, only the data files a scenario names (road profiles, influence tables), at the same
+path or under its own project folder.
 """
 
 from __future__ import annotations
@@ -126,7 +128,8 @@ def _remap(text: str, root: str) -> str:
 def run_point(task: dict[str, Any]) -> dict[str, Any]:
     """Run one sweep point on this Dask worker.
 
-    ``task``: ``{"point": point.json content, "base", "set_args", "phase": "todo"|"fatigue",
+    ``task``: ``{"point": point.json content, "scenario": the point's fully loaded scenario
+    as TOML text (its file paths absolute), "phase": "todo"|"fatigue",
     "fatigue": bool, "runs_dir": shared folder or None, "archive": the run folder (fatigue
     phase without a shared folder), "root": the client's project folder, "topic"}``.
 
@@ -138,12 +141,8 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
     ctx = _Context(task)
     pid, root = ctx.id, task["root"]
     shared = task.get("runs_dir")
-    scratch = None
-    if shared:
-        run_dir = Path(_remap(shared, root)) / pid
-    else:
-        scratch = Path(tempfile.mkdtemp(prefix="suscosim-", dir=ctx.worker.local_directory))
-        run_dir = scratch / pid
+    scratch = Path(tempfile.mkdtemp(prefix="suscosim-", dir=ctx.worker.local_directory))
+    run_dir = Path(_remap(shared, root)) / pid if shared else scratch / pid
     result: dict[str, Any] = {"id": pid, "status": "failed", "error": "", "worker": ctx.info,
                               "archive": None}
     try:
@@ -151,8 +150,9 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
         if phase == "todo":
             prepare_run_dir(run_dir, task["point"], ctx.info)
             ctx.emit("run", force=True)
-            cmd = run_command(_remap(task["base"], root), run_dir,
-                              [_remap(s, root) for s in task["set_args"]], pin_off=True)
+            scenario = scratch / f"{pid}.toml"  # the point's scenario, whole
+            scenario.write_text(_remap(task["scenario"], root))
+            cmd = run_command(str(scenario), run_dir, [], pin_off=True)
             code = ctx.wait(_start(cmd, run_dir / "sweep.log"), "run", run_dir)
             st, err = run_outcome(code, run_dir, run_dir / "sweep.log", task["fatigue"])
             phase = "fatigue" if st == "fatigue" else "done"
@@ -175,16 +175,22 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
     except _Cancelled:
         return {**result, "status": "cancelled", "error": "cancelled"}
     finally:
-        if scratch is not None:
-            shutil.rmtree(scratch, ignore_errors=True)
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
-def task_doc(point_json: dict[str, Any], base: str, set_args: list[str], phase: str,
-             fatigue: bool, runs_dir: Path | None, run_dir: Path, topic: str) -> dict[str, Any]:
+def scenario_toml(scenario: dict[str, Any]) -> str:
+    """A loaded scenario as a TOML file's text (one inline table per section)."""
+    from .spec import toml_value
+
+    return "".join(f"{name} = {toml_value(section)}\n" for name, section in scenario.items())
+
+
+def task_doc(point_json: dict[str, Any], scenario: dict[str, Any], phase: str, fatigue: bool,
+             runs_dir: Path | None, run_dir: Path, topic: str) -> dict[str, Any]:
     """The task of one point for :func:`run_point` (the client side)."""
     archive = None
     if phase == "fatigue" and runs_dir is None:
         archive = pack(run_dir)
-    return {"point": point_json, "base": base, "set_args": set_args, "phase": phase,
+    return {"point": point_json, "scenario": scenario_toml(scenario), "phase": phase,
             "fatigue": fatigue, "runs_dir": str(runs_dir) if runs_dir else None,
             "archive": archive, "root": str(ROOT), "topic": topic}

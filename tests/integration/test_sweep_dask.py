@@ -60,8 +60,7 @@ def _workers(address: str, n: int, timeout_s: float = 60.0) -> dict:
         return workers
 
 
-@pytest.fixture
-def cluster():
+def _cluster():
     """``suscosim cluster --workers 2 --no-nanny`` on a free loopback port."""
     port = _free_port()
     proc = popen_suscosim("cluster", "--workers", "2", "--no-nanny", "--port", str(port))
@@ -76,6 +75,18 @@ def cluster():
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.communicate()
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """One cluster for the tests that leave its workers alive."""
+    yield from _cluster()
+
+
+@pytest.fixture
+def own_cluster():
+    """A cluster of its own, for a test that kills a worker."""
+    yield from _cluster()
 
 
 def _rows(out: Path) -> dict[str, dict]:
@@ -127,7 +138,9 @@ def test_dask_sweep_uses_both_workers_and_equals_the_local_executor(tmp_path, cl
     assert workers == {"w0", "w1"}  # both workers ran points
 
 
-def test_interrupted_dask_sweep_resumes_and_a_killed_workers_point_reruns(tmp_path, cluster):
+def test_interrupted_dask_sweep_resumes_and_a_killed_workers_point_reruns(tmp_path,
+                                                                        own_cluster):
+    cluster = own_cluster
     f = _write(tmp_path, 1.0)
     out = tmp_path / "sw"
     args = ("sweep", str(f), "--out", str(out), "--executor", "dask", "--scheduler", cluster)
@@ -182,6 +195,47 @@ def test_interrupted_dask_sweep_resumes_and_a_killed_workers_point_reruns(tmp_pa
     while _cmdlines_with(victim["local_directory"]) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not _cmdlines_with(victim["local_directory"])
+
+
+FATIGUE = f"""
+[sweep]
+name = "tdfat"
+base = "{ROOT / 'scenarios' / 'ch4_qvm_realistic_bump_pothole.toml'}"
+fatigue = true
+runs_dir = "shared/runs"
+[sweep.grid]
+"road.speed_kmh" = [34.0]
+[sweep.set]
+"run.t_end" = 0.4
+"run.stall_timeout_s" = 30.0
+"""
+
+
+def test_dask_fatigue_in_a_shared_runs_dir_and_a_fatigue_only_rerun(tmp_path, cluster):
+    """The workers write the run folder in place under the sweep file's runs_dir (a shared
+    folder); a point whose fatigue results are missing gets only its fatigue, on a worker."""
+    f = tmp_path / "f.toml"
+    f.write_text(FATIGUE)
+    out = tmp_path / "sw"
+    args = ("sweep", str(f), "--out", str(out), "--executor", "dask", "--scheduler", cluster)
+    res = suscosim(*args, timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    (row,) = json.loads((out / "results.json").read_text())
+    run_dir = tmp_path / "shared" / "runs" / row["point"]
+    assert row["run_dir"] == str(run_dir) and not (out / "runs").exists()
+    fat = json.loads((run_dir / "fatigue" / "summary.json").read_text())
+    assert row["life_km"] == fat["min_life_km"] and row["max_damage"] > 0
+    summary = run_dir / "summary.json"
+    mtime = summary.stat().st_mtime_ns
+    (run_dir / "fatigue" / "summary.json").unlink()
+    res = suscosim(*args, timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert summary.stat().st_mtime_ns == mtime  # the run was not redone
+    again = json.loads((run_dir / "fatigue" / "summary.json").read_text())
+    assert again.pop("source") == "batch" and fat.pop("source") == "live"  # node, then worker
+    assert again == fat
+    meta = json.loads((run_dir / "point.json").read_text())
+    assert meta["fatigue_worker"]["executor"] == "dask"
 
 
 def test_dask_executor_bad_arguments_exit_2(tmp_path):
