@@ -3,6 +3,12 @@
     suscosim sweep SWEEP.toml [--out DIR] [--jobs N] [--connect EP] [--external NODE]
                               [--no-fatigue] [--list]
     suscosim sweep SWEEP.toml --serve NODE --connect EP     (on another machine)
+    suscosim sweep SWEEP.toml --executor dask --scheduler tcp://HOST:8786
+
+``--executor dask`` runs every point whole on a worker of a Dask cluster
+(:mod:`orchestrator.sweep.dask_exec`, :mod:`orchestrator.sweep.task`); ``[sweep.design]``
+samples parameter ranges (:mod:`orchestrator.sweep.design`) and adds a sensitivity table
+(:mod:`orchestrator.sweep.sensitivity`). docs/sweeps.md has all of it.
 
 A sweep file names a base scenario and a grid; every grid point is one run::
 
