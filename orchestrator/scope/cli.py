@@ -163,19 +163,34 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
         from .sources import LiveSource
 
         source = LiveSource(bus, state, damage)
-    return _serve(args, server, source, state, bus, where)
+    ask = None
+    if not replay and scenario is None:  # the run has not started yet: ask again later
+        def ask() -> bool:
+            sc = _query_scenario(bus, run_id, timeout_s=0.5)
+            if sc is None:
+                return False
+            run = sc.get("run") or {}
+            state.set_scenario(run.get("n_steps"), run.get("h"), list(run.get("nodes") or []))
+            if wants_map(sc):
+                try:
+                    source.attach(DamageMap(sc, state))
+                except Exception as exc:  # a [fatigue] the engine refuses: no map, say why
+                    print(f"suscosim scope: no damage map: {exc}", file=sys.stderr)
+            return True
+    return _serve(args, server, source, state, bus, where, ask)
 
 
-def _query_scenario(bus: Any, run_id: str) -> dict[str, Any] | None:
+def _query_scenario(bus: Any, run_id: str, timeout_s: float = 2.0) -> dict[str, Any] | None:
     try:
-        raw = bus.query(keys.key(run_id, keys.ORCHESTRATOR, keys.SCENARIO), timeout=2.0)
+        raw = bus.query(keys.key(run_id, keys.ORCHESTRATOR, keys.SCENARIO), timeout=timeout_s)
         return decode(raw).d if raw is not None else None
     except Exception:  # no orchestrator answering (yet): no map, n_steps from the clock
         return None
 
 
 def _serve(args: argparse.Namespace, server: Any, source: Any, state: ScopeState, bus: Any,
-           where: str) -> int:
+           where: str, ask: Any = None) -> int:
+    """Serve until stopped; ``ask()`` (if given) is retried every 2 s until it is True."""
     stop = threading.Event()
 
     def on_term(_signum: int, _frame: Any) -> None:
@@ -193,7 +208,11 @@ def _serve(args: argparse.Namespace, server: Any, source: Any, state: ScopeState
                 print(f"suscosim scope: no browser found; open {server.url}", file=sys.stderr)
         end = time.monotonic() + args.duration if args.duration else float("inf")
         told = False
+        next_ask = time.monotonic()
         while not stop.wait(0.2) and time.monotonic() < end:
+            if ask is not None and time.monotonic() >= next_ask:
+                ask = None if ask() else ask
+                next_ask = time.monotonic() + 2.0
             if not told and state.run_state in ("done", "failed"):
                 told = True
                 print(f"suscosim scope: run {state.run_id} {state.run_state} at step "

@@ -94,6 +94,14 @@ class LiveSource:
             self.bus.subscribe(kx, lambda key, raw: put((key, raw, clock())))
         self.bus.watch(f"{keys.PREFIX}/{self.state.run_id}/*/{keys.ALIVE}", self._on_alive)
 
+    def attach(self, damage: DamageMap) -> None:
+        """Start the damage map later (a scope started by run id before its run: the
+        scenario came once the run's orchestrator answered)."""
+        self.router.damage = damage
+        put, clock = self.inbox.put, time.monotonic
+        self.bus.subscribe(keys.key(self.state.run_id, *ch.LOAD_CHANNEL),
+                           lambda key, raw: put((key, raw, clock())))
+
     def _on_alive(self, key: str, alive: bool) -> None:
         try:
             _run, node, _ch = keys.parse_key(key)

@@ -122,6 +122,14 @@ class ScopeState:
                 self.run_state = state
             self.reason = reason or self.reason
 
+    def set_scenario(self, n_steps: int | None, h: float | None, nodes: list[str]) -> None:
+        """What the run's scenario says (when it came after the scope started)."""
+        with self._lock:
+            self.n_steps = self.n_steps if n_steps is None else int(n_steps)
+            self.h = self.h if h is None else float(h)
+            for n in nodes:
+                self._nodes.setdefault(n, {"state": "waiting", "k": -1})
+
     def count_undecodable(self) -> None:
         with self._lock:
             self.undecodable += 1
@@ -184,9 +192,10 @@ class ScopeState:
                     "lines": [vars(s.line) for s in self._lines.values()],
                     "map_geometry": self.map_geometry}
 
-    def snapshot(self, since: int = -1) -> dict[str, Any]:
-        """The ``/data?since=K`` answer (JSON-ready)."""
-        now = time.monotonic()
+    def snapshot(self, since: int = -1, now: float | None = None) -> dict[str, Any]:
+        """The ``/data?since=K`` answer (JSON-ready); ``now``: the clock of the steps/s
+        (default ``time.monotonic()``, as the sources use)."""
+        now = time.monotonic() if now is None else now
         with self._lock:
             n = self.n_steps
             out: dict[str, Any] = {

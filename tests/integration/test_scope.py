@@ -275,6 +275,31 @@ def test_scope_through_a_router_by_run_id(tmp_path) -> None:
     assert "run scoperouter done at step 3000" in err
 
 
+def test_scope_started_by_run_id_before_its_run(tmp_path) -> None:
+    """Started first (nothing listens at the endpoint yet), the scope finds the run when it
+    comes and learns its scenario from the run's orchestrator then."""
+    ep = free_loopback_endpoint()
+    scope, url = _start_scope("scopefirst", "--connect", ep)
+    run = None
+    try:
+        empty = _data(url)
+        assert empty["k"] == -1 and empty["n_steps"] is None and empty["nodes"] == {}
+        run = popen_suscosim("run", str(CH3_STEP), "--out", str(tmp_path / "run"), "--quiet",
+                             "--listen", ep, "--set", "run.t_end=3.0", "--set",
+                             'run.id="scopefirst"')
+        stdout, stderr = run.communicate(timeout=180)
+        assert run.returncode == 0, stdout + stderr
+        last = _until(url, lambda d: d["run_state"] == "done" and d["k"] == 3000, timeout=60)
+        _stop(scope)
+    finally:
+        for p in (run, scope):
+            if p is not None and p.poll() is None:
+                p.kill()
+    assert last["n_steps"] == 3000 and last["progress"] == 1.0
+    assert {n: v["state"] for n, v in last["nodes"].items()} == {
+        n: "done" for n in ("plant", "tyre_road", "controller", "recorder")}
+
+
 # ---- the damage map of a realistic run with live fatigue --------------------------------------
 def test_damage_map_of_a_realistic_run_with_live_fatigue(tmp_path) -> None:
     out = tmp_path / "ch6"
@@ -357,3 +382,56 @@ def test_a_finished_run_without_journal_and_a_busy_port(tmp_path, unwatched) -> 
         assert e.value.code == 400
     finally:
         _stop(scope)
+
+
+# ---- the state behind /data (no processes) -------------------------------------------------
+def test_state_gives_the_samples_after_since_and_the_node_states() -> None:
+    from cosim.wire import Message
+    from orchestrator.scope.selection import Selection
+    from orchestrator.scope.state import ScopeState
+
+    st = ScopeState("r1", Selection(["plant/state/z_*", "tyre_road/force"]), n_steps=9,
+                    nodes=["plant", "tyre_road"], max_samples=5)
+    st.node_event("plant", "up")
+    st.node_event("plant", "ready")
+    for k in range(10):
+        st.add_data("plant", "state", Message("data", k, k * 0.1, {
+            "z_b": [0.1 * k, 0.2, 0.3, float("nan")], "v_b": [1.0] * 4, "z_w": 2.0 * k}),
+            now=float(k))
+    d = st.snapshot(6, now=9.5)
+    assert d["k"] == 9 and d["progress"] == 1.0 and d["steps_per_s"] == pytest.approx(1.0)
+    assert set(d["lines"]) == {f"plant/state/z_b[{i}]" for i in range(4)} | {"plant/state/z_w"}
+    fl, rr = d["lines"]["plant/state/z_b[0]"], d["lines"]["plant/state/z_b[3]"]
+    assert (fl["label"], fl["unit"], fl["group"]) == ("z_b FL", "m", "plant/state/z_b")
+    assert fl["k"] == [7, 8, 9] and fl["y"] == pytest.approx([0.7, 0.8, 0.9])
+    assert rr["y"] == [None, None, None]  # NaN: JSON has none
+    assert st.snapshot(-1)["lines"]["plant/state/z_w"]["k"] == [5, 6, 7, 8, 9]  # the last 5
+    assert d["nodes"]["plant"]["state"] == "stepping" and d["nodes"]["tyre_road"]["state"] \
+        == "waiting"
+    st.node_event("plant", "done", 9, 0.9)
+    st.node_event("plant", "gone")  # its token drops after done: still done
+    st.node_event("tyre_road", "stepping", 3)
+    st.node_event("tyre_road", "gone")  # dropped while stepping
+    st.node_event("tyre_road", "ready")  # a late message does not bring it back
+    nodes = st.snapshot()["nodes"]
+    assert (nodes["plant"]["state"], nodes["tyre_road"]["state"]) == ("done", "gone")
+    st.set_map(None, {"k": 5, "log10_damage": [-3.0]})
+    assert st.snapshot(4)["damage_map"]["log10_damage"] == [-3.0]
+    assert "log10_damage" not in st.snapshot(5)["damage_map"]  # unchanged since step 5
+    assert json.dumps(st.snapshot(-1), allow_nan=False)
+
+
+def test_channel_patterns() -> None:
+    from orchestrator.scope.selection import ScopeInputError, Selection, parse_pattern
+
+    sel = Selection(["*/force/F_*", "plant/arm"])
+    assert sel.keyexprs("r1") == ["suscosim/r1/*/force", "suscosim/r1/plant/arm"]
+    assert sel.wants("controller", "force") and not sel.wants("controller", "ctl")
+    assert [ln.unit for ln in sel.lines("tyre_road", "force", "F_t", 0)] == ["N"]
+    assert sel.lines("tyre_road", "force", "k_t", 0) == []
+    arm = sel.lines("plant", "arm", "torsion_bar_mx", 0)
+    assert arm[0].unit == "N·m" and arm[0].rank == 1
+    assert parse_pattern("plant/state").field is None
+    for bad in ("plant", "a/b/c/d", "pl ant/state", "plant/records"):
+        with pytest.raises(ScopeInputError):
+            parse_pattern(bad)
