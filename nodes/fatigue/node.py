@@ -10,6 +10,8 @@ summary.json, damage map PNG) — the same files, and the same numbers, as the b
 
 from __future__ import annotations
 
+import contextlib
+import os
 import queue
 import time
 from pathlib import Path
@@ -27,12 +29,19 @@ from .worker import FatigueResult, LiveFatigue, load_influence
 
 REPORT_PERIOD_S = 0.5
 """At most this often (wall time) the damage so far is published on ``fatigue/damage``."""
+NICE = 10
+"""The node lowers its scheduling priority by this much (``os.nice``): it is off the coupled
+chain's critical path (it reads the recorder's load blocks, in arrears), so on a 2-core machine
+the plant, tyre/road and controller take the cores first and the fatigue node works in their
+idle time; its numbers do not depend on when it runs."""
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Consume load blocks until the last step, then write the run's fatigue results."""
     run_cfg = scenario["run"]
     cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
+    with contextlib.suppress(OSError):
+        os.nice(NICE)
     load_influence(cfg)  # FE solve or cache read: before ready, not inside the run
     tag = part.listen(ch.RECORDER, ch.LOADS, required=("k0", "t"), stepped=False)
     part.output(ch.DAMAGE)
