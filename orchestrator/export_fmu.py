@@ -130,7 +130,11 @@ def export_fmu(scenario: dict[str, Any], out: Path, fmi: int = 2, name: str | No
                            "body, upward +), c_eff (N s/m)")
     spec["fmi"] = fmi
     module = f"suscosim_law_fmi{fmi}"
-    out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.touch()
+    except OSError as exc:
+        raise InputFileError(str(out), f"cannot write the FMU ({exc.strerror or exc})") from None
     if fmi == 3:
         from pythonfmu3.builder import FmuBuilder
     else:
@@ -143,6 +147,9 @@ def export_fmu(scenario: dict[str, Any], out: Path, fmi: int = 2, name: str | No
             built = FmuBuilder.build_FMU(folder / f"{module}.py", dest=folder / "out",
                                          project_files=files)
             shutil.move(str(built), str(out))  # the builders differ in how they take a dest
+        except BaseException:
+            out.unlink(missing_ok=True)  # no half-written FMU left behind
+            raise
         finally:  # the builder imports the slave by name and extends sys.path: undo both
             sys.modules.pop(module, None)
             sys.path[:] = saved_path
