@@ -33,7 +33,7 @@ import pytest
 from cosim.bus import free_loopback_endpoint
 from nodes.recorder.table import read_table
 
-from ..conftest import CH3_STEP, ROOT, popen_suscosim, suscosim
+from ..conftest import CH3_STEP, ROOT, node_pids, popen_suscosim, suscosim
 
 pytestmark = pytest.mark.integration
 
@@ -235,6 +235,36 @@ def test_scope_replays_a_finished_run(unwatched) -> None:
         line = every["lines"][name]
         assert line["k"] == list(range(3001)), name  # every step, in order
         assert np.array_equal(line["y"], table[name]), name
+
+
+def test_a_killed_node_is_gone_on_the_page(tmp_path) -> None:
+    """SIGKILL the controller mid-run: its liveliness token drops, the scope shows it gone
+    and the run failed with the orchestrator's reason; the others are not 'done'."""
+    out = tmp_path / "run"
+    run = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
+                         free_loopback_endpoint(), "--set", "run.t_end=20.0", "--set",
+                         'run.id="scopekill"')
+    scope = None
+    try:
+        _wait_json(out / "run.json", run)
+        scope, url = _start_scope(str(out))
+        _until(url, lambda d: d["k"] > 300)
+        pids = node_pids("scopekill", "controller")
+        assert pids, "controller process not found"
+        for pid in pids:
+            os.kill(pid, signal.SIGKILL)
+        last = _until(url, lambda d: d["run_state"] == "failed"
+                      and d["nodes"]["controller"]["state"] == "gone", timeout=60)
+        run.communicate(timeout=120)
+        _stop(scope)
+    finally:
+        for p in (run, scope):
+            if p is not None and p.poll() is None:
+                p.kill()
+    assert run.returncode == 1
+    assert "controller" in last["reason"], last["reason"]
+    assert 300 < last["k"] < 20000
+    assert last["nodes"]["plant"]["state"] != "done"
 
 
 # ---- through a router, as from another machine -------------------------------------------
