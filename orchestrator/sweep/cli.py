@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -82,7 +83,19 @@ def main(argv: list[str] | None = None) -> int:
             print(f"suscosim sweep: error: --serve {bad[0]}: expected one of "
                   + ", ".join(sorted(NODE_MODULES)), file=sys.stderr)
             return 2
+        if not (os.environ.get("SUSCOSIM_KEY") or os.environ.get("SUSCOSIM_KEY_FILE")):
+            print("suscosim sweep: error: --serve needs the sweep's secret: set SUSCOSIM_KEY "
+                  "(or SUSCOSIM_KEY_FILE) to the same secret here and on the machine that runs "
+                  "the sweep (the messages of a run are signed; docs/reliability.md)",
+                  file=sys.stderr)
+            return 2
         return serve(sweep, args.serve, args.connect, out, sys.stdout)
+    if args.external and not (os.environ.get("SUSCOSIM_KEY")
+                              or os.environ.get("SUSCOSIM_KEY_FILE")):
+        print("suscosim sweep: warning: --external without SUSCOSIM_KEY / SUSCOSIM_KEY_FILE: "
+              "each run draws its own secret (RUN/run.key), which 'suscosim sweep --serve' on "
+              "another machine cannot know; set the same SUSCOSIM_KEY on both sides",
+              file=sys.stderr)
     out.mkdir(parents=True, exist_ok=True)
     states = {p.id: point_state(p, sweep.run_dir(out, p), sweep.fatigue) for p in sweep.points}
     if args.list:

@@ -258,12 +258,21 @@ jobs = 2
 
 
 @pytest.mark.integration
-def test_sweep_through_a_router_with_the_plant_served_elsewhere(tmp_path):
+def test_sweep_through_a_router_with_the_plant_served_elsewhere(tmp_path, monkeypatch):
     """The multi-machine recipe of docs/sweeps.md on loopback: a router, a 'remote' side that
-    serves the plant node for every point, and the sweep with --external plant."""
+    serves the plant node for every point, and the sweep with --external plant (both sides
+    given the same secret, SUSCOSIM_KEY, as the messages of a run are signed)."""
+    import secrets
+
     from cosim.bus import free_loopback_endpoint
 
+    monkeypatch.delenv("SUSCOSIM_KEY_FILE", raising=False)
+    monkeypatch.delenv("SUSCOSIM_KEY", raising=False)
     f = _write(tmp_path, "s.toml", SERVE_SWEEP)
+    res = suscosim("sweep", str(f), "--serve", "plant", "--connect", "tcp/127.0.0.1:9",
+                   "--out", str(tmp_path / "remote"))
+    assert res.returncode == 2 and "SUSCOSIM_KEY" in res.stderr, res.stdout + res.stderr
+    monkeypatch.setenv("SUSCOSIM_KEY", secrets.token_hex(16))  # inherited by both sides
     ep = free_loopback_endpoint()
     router = popen_suscosim("router", "--listen", ep)
     server = None
