@@ -97,7 +97,9 @@ def _point_worker(out: Path, pid: str) -> dict:
     return json.loads((out / "runs" / pid / "point.json").read_text())["worker"]
 
 
-def _cmdlines_with(needle: str) -> list[str]:
+def _cmdlines_with(needle: str, pid: bool = False) -> list[str]:
+    """Command lines of the processes whose command line holds ``needle`` (``pid``: each
+    prefixed by its process id)."""
     out = []
     for d in Path("/proc").iterdir():
         if d.name.isdigit():
@@ -106,7 +108,7 @@ def _cmdlines_with(needle: str) -> list[str]:
             except OSError:
                 continue
             if needle in cmd:
-                out.append(cmd)
+                out.append(f"{d.name} {cmd}" if pid else cmd)
     return out
 
 
@@ -195,6 +197,40 @@ def test_interrupted_dask_sweep_resumes_and_a_killed_workers_point_reruns(tmp_pa
     while _cmdlines_with(victim["local_directory"]) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not _cmdlines_with(victim["local_directory"])
+
+
+def test_a_failed_point_is_reported_and_the_others_go_on(tmp_path, cluster):
+    """The run of one point is SIGKILLed on its worker: that point is failed (a result, not a
+    Dask retry), the other finishes, exit 1; a rerun redoes only the failed one."""
+    f = tmp_path / "s.toml"
+    f.write_text(SWEEP.replace("T_END", "0.4").replace(
+        '"controller.c" = [1000.0, 1500.0, 2000.0, 2500.0]',
+        '"run.t_end" = [0.4, 4.0]').replace('"run.t_end" = 0.4\n', ""))
+    out = tmp_path / "sw"
+    victim = "tdask-4.0"
+    args = ("sweep", str(f), "--out", str(out), "--executor", "dask", "--scheduler", cluster)
+    proc = popen_suscosim(*args)
+    try:
+        deadline = time.monotonic() + 120
+        pids: list[int] = []
+        while time.monotonic() < deadline and not pids:
+            pids = [int(c.split()[0]) for c in _cmdlines_with(f"/{victim}.toml", pid=True)
+                    if " run " in c]
+            time.sleep(0.2)
+        assert pids, "the victim's run never started"
+        time.sleep(1.5)
+        os.kill(pids[0], signal.SIGKILL)
+        stdout, stderr = proc.communicate(timeout=180)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 1, stdout + stderr
+    rows = _rows(out)
+    assert rows["tdask-0.4"]["status"] == "ok"
+    assert rows[victim]["status"] == "failed" and "SIGKILL" in rows[victim]["error"]
+    res = suscosim(*args, timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "1 to run (1 already done)" in res.stdout
 
 
 FATIGUE = f"""
