@@ -12,6 +12,9 @@
 #                                     <name>: orchestrator plant tyre_road controller recorder
 #                                     fatigue (allowed to publish by router.json5) and observer
 #                                     (a tap: may subscribe, may not publish)
+#   suscosim.key                      the deployment's shared secret (hex, mode 600): every
+#                                     participant given SUSCOSIM_KEY_FILE=<it> derives each
+#                                     run's message-signing key from it (cosim/auth.py)
 # ROUTER_HOSTS="h1 h2" adds router names like the arguments (for docker compose). Set
 # CLIENTS="a b c" to choose other client names, DAYS to change the validity (default 365).
 # Existing files are kept: run it again with a new name to add one client.
@@ -72,6 +75,8 @@ for name in $CLIENTS; do
     sign "$name" "$COMMON
 extendedKeyUsage=clientAuth"
 done
+# The run-key secret (cosim/auth.py): copy it, like the CA, to every machine of a deployment.
+[ -f "$OUT/suscosim.key" ] || openssl rand -hex 32 > "$OUT/suscosim.key"
 chmod 644 "$OUT"/*.pem
-chmod 600 "$OUT"/*-key.pem
+chmod 600 "$OUT"/*-key.pem "$OUT/suscosim.key"
 echo "certificates in $OUT (router names: $SAN)"

@@ -8,7 +8,6 @@ official image with the shipped configuration mounted; paths agree across contai
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -148,27 +147,41 @@ def test_orchestrator_command_runs_the_default_scenario_with_every_node_external
     assert rec["/runs"] == orch["/runs"] == "runs" and "runs" in compose["volumes"]
 
 
-def test_dockerfile_installs_the_project_on_python_311_slim():
+def test_dockerfile_builds_offline_from_the_debootstrap_base():
+    """The image needs no registry: FROM the imported debootstrap base, pip --no-index."""
     text = (ROOT / "Dockerfile").read_text()
-    assert re.search(r"(?m)^FROM python:3\.11-slim\s*$", text)
-    assert re.search(r"(?m)^RUN pip install --no-cache-dir \.\s*$", text)
+    base = re.search(r"(?m)^ARG BASE=(\S+)\s*$", text)
+    assert base and base.group(1) == "suscosim-base:bookworm"
+    script = (ROOT / "deploy/docker/build_base.sh").read_text()
+    assert 'TAG="${SUSCOSIM_BASE:-suscosim-base:bookworm}"' in script  # what it tags
+    assert "--variant=minbase" in script and "docker import" in script
+    froms = re.findall(r"(?m)^FROM (\S+)", text)
+    assert froms and all(f in ("${BASE}", "deps") for f in froms)  # no registry image
+    installs = re.findall(r"bin/pip (?:install|wheel)[^\n]*", text)
+    assert len(installs) == 3 and all("--no-index" in i for i in installs)
+    assert re.search(r"(?m)^COPY build/wheelhouse /wheels\s*$", text)
     assert re.search(r"(?m)^WORKDIR /app\s*$", text)  # commands use repository-relative paths
     for path in ("cosim", "nodes", "orchestrator", "scenarios", "deploy", "pyproject.toml"):
         assert re.search(rf"(?m)^COPY .*\b{re.escape(path)}\b", text), path
     assert 'ENTRYPOINT ["suscosim"]' in text
+    # the build context keeps what the Dockerfile copies and leaves out the large folders
+    ignore = (ROOT / ".dockerignore").read_text().split()
+    assert ignore[ignore.index("*") + 1:].count("!build/wheelhouse") == 1
+    assert "!sweeps" not in ignore and "!runs" not in ignore
 
 
-def _compose_cli() -> str | None:
-    if shutil.which("docker") is None:
-        return "no docker client"
-    res = subprocess.run(["docker", "compose", "version"], capture_output=True, text=True)
-    return None if res.returncode == 0 else "the docker compose plugin is not installed"
+def test_every_service_runs_under_an_init(compose):
+    """Python as PID 1 ignores SIGTERM: without an init, 'down' waits for the kill."""
+    for name, svc in compose["services"].items():
+        assert svc.get("init") is True, name
 
 
 def test_docker_compose_config_accepts_the_file():
-    reason = _compose_cli()
-    if reason:
-        pytest.skip(f"'docker compose config' not available here: {reason}")
-    res = subprocess.run(["docker", "compose", "-f", str(COMPOSE), "config", "-q"],
+    from .docker_env import compose_command
+
+    cmd = compose_command()
+    if isinstance(cmd, str):
+        pytest.skip(f"'docker compose config' not available here: {cmd}")
+    res = subprocess.run([*cmd, "-f", str(COMPOSE), "config", "-q"],
                          capture_output=True, text=True, cwd=Path(COMPOSE).parent)
     assert res.returncode == 0, res.stderr
