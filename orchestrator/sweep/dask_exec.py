@@ -14,6 +14,7 @@ on another worker is announced.
 
 from __future__ import annotations
 
+import re
 import signal
 import threading
 import time
@@ -52,8 +53,15 @@ class RemoteJob:
         return self.k
 
 
+ADDRESS = re.compile(r"((tcp|tls|ws|wss|ucx)://)?(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.-]+)(:\d{1,5})?")
+"""A scheduler address as Dask takes it: ``tcp://HOST:PORT`` (scheme and port optional)."""
+
+
 def connect(address: str, timeout_s: float = 20.0) -> Any:
     """A ``distributed.Client`` of the scheduler at ``address``; DaskError if it fails."""
+    if not ADDRESS.fullmatch(address):
+        raise DaskError(f"--scheduler {address!r}: expected a Dask scheduler address such as "
+                        "tcp://HOST:8786")
     try:
         from distributed import Client
     except ImportError:
@@ -63,7 +71,7 @@ def connect(address: str, timeout_s: float = 20.0) -> Any:
         # results through the scheduler: workers may sit on networks the client cannot reach
         return Client(address, timeout=f"{timeout_s}s", set_as_default=False,
                       direct_to_workers=False)
-    except (OSError, TimeoutError) as exc:
+    except (OSError, TimeoutError, ValueError) as exc:
         raise DaskError(f"--scheduler {address}: cannot reach the Dask scheduler "
                         f"({type(exc).__name__}: {exc}); start one with 'suscosim cluster' "
                         "or 'dask scheduler'") from None

@@ -112,6 +112,8 @@ def results_table(sweep: Sweep, rows: list[dict]) -> str:
     cols += extra
     if sweep.fatigue:
         cols += ["life_km", "life_repeats", "critical_node"]
+    if len({r.get("worker") for r in rows} - {None}) > 1:  # points ran on several workers
+        cols.append("worker")
     head = [c.split("/")[-1] if "/" in c else c for c in cols]
     body = [[_fmt(r.get(c)) for c in cols] for r in rows]
     widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h)

@@ -282,6 +282,11 @@ def test_dask_executor_bad_arguments_exit_2(tmp_path):
                    "--external", "plant", "--out", str(tmp_path / "o"))
     assert res.returncode == 2 and "local executor" in res.stderr, res.stderr
     assert "Traceback" not in res.stderr
+    res = suscosim("sweep", str(f), "--executor", "dask", "--scheduler", "tcp:/x:y",
+                   "--out", str(tmp_path / "o"))
+    assert res.returncode == 2 and "'tcp:/x:y'" in res.stderr, res.stderr
+    res = suscosim("cluster", "--workers", "0")
+    assert res.returncode == 2 and "--workers" in res.stderr, res.stderr
 
 
 # ------------------------------------------------------------------ network namespaces
