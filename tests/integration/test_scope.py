@@ -23,6 +23,7 @@ import select
 import shutil
 import signal
 import subprocess
+import sys
 import time
 import urllib.request
 from pathlib import Path
@@ -59,9 +60,14 @@ def _wait_json(path: Path, proc: subprocess.Popen, timeout: float = 90.0) -> dic
             time.sleep(0.05)
 
 
-def _start_scope(*args: str) -> tuple[subprocess.Popen, str]:
+def _start_scope(*args: str, env: dict | None = None) -> tuple[subprocess.Popen, str]:
     """Start ``suscosim scope ARGS --port 0``; return it and the URL it printed."""
-    proc = popen_suscosim("scope", *args, "--port", "0")
+    if env is None:
+        proc = popen_suscosim("scope", *args, "--port", "0")
+    else:
+        proc = subprocess.Popen([sys.executable, "-m", "orchestrator", "scope", *args, "--port",
+                                 "0"], cwd=ROOT, env={**env, "PYTHONPATH": str(ROOT)},
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
     line = ""
     while "http://" not in line:
@@ -466,3 +472,19 @@ def test_channel_patterns() -> None:
     for bad in ("plant", "a/b/c/d", "pl ant/state", "plant/records"):
         with pytest.raises(ScopeInputError):
             parse_pattern(bad)
+
+
+def test_open_hands_the_url_to_the_browser(tmp_path, unwatched) -> None:
+    """--open gives the page's URL to the browser (``$BROWSER``, here a recorder)."""
+    seen = tmp_path / "opened.txt"
+    rec = f"{sys.executable} -c \"import sys; open('{seen}', 'w').write(sys.argv[1])\" %s"
+    scope, url = _start_scope(str(unwatched), "--fast", "--open",
+                              env=dict(os.environ, BROWSER=rec))
+    try:
+        deadline = time.monotonic() + 30
+        while not seen.exists() or not seen.read_text():
+            assert time.monotonic() < deadline, "the browser was not called"
+            time.sleep(0.1)
+        assert seen.read_text() == url
+    finally:
+        _stop(scope)
