@@ -4,6 +4,7 @@
 const COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
                  "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"];
 const POLL_MS = 250;
+const LAG_MAX = 5000;  // steps
 const MAX_POINTS = 200000;  // per line, in the page
 const S = {lines: {}, groups: {}, plots: {}, paused: false, windowS: 5, geometry: null,
            map: null, fatigue: null, last: null, fetchingMeta: false};
@@ -14,13 +15,18 @@ const fmt = (x, n = 4) => (x === null || x === undefined) ? "-" :
    x.toExponential(n - 1) : +x.toPrecision(n)).toString() : String(x));
 
 function since() {
-  // the smallest last step over the lines (a line may lag the others by a message)
-  let k = null;
+  // the smallest last step over the lines (a line may lag the others by a message), but
+  // not more than LAG_MAX steps behind the newest (a channel that stopped must not make
+  // every answer resend everything after it)
+  let lo = null, hi = null;
   for (const key in S.lines) {
     const l = S.lines[key];
-    if (l.k.length) k = (k === null) ? l.k[l.k.length - 1] : Math.min(k, l.k[l.k.length - 1]);
+    if (!l.k.length) continue;
+    const k = l.k[l.k.length - 1];
+    lo = (lo === null) ? k : Math.min(lo, k);
+    hi = (hi === null) ? k : Math.max(hi, k);
   }
-  return k === null ? -1 : k;
+  return lo === null ? -1 : Math.max(lo, hi - LAG_MAX);
 }
 
 function ingest(d) {
