@@ -166,7 +166,8 @@ def joint_zone_radius(name: str) -> float:
 
 def to_corner(point_arm: np.ndarray) -> np.ndarray:
     """An arm-frame point in the static corner frame [m] (the frames are parallel)."""
-    return ARM_ORIGIN + np.asarray(point_arm, dtype=float)
+    corner: np.ndarray = ARM_ORIGIN + np.asarray(point_arm, dtype=float)
+    return corner
 
 
 def lever_ball_joint() -> float:
@@ -199,7 +200,8 @@ def boss_depth(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def _smoothstep(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
     u = np.clip((v - lo) / (hi - lo), 0.0, 1.0)
-    return 0.5 * (1.0 - np.cos(math.pi * u))
+    step: np.ndarray = 0.5 * (1.0 - np.cos(math.pi * u))
+    return step
 
 
 def rib_depth(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -210,7 +212,8 @@ def rib_depth(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     w = np.maximum(_smoothstep(y, *BASE_BLEND_Y), _smoothstep(np.abs(x), *BASE_BLEND_X))
     v = np.clip((y - RIB_TAPER_Y[0]) / (RIB_TAPER_Y[1] - RIB_TAPER_Y[0]), 0.0, 1.0)
     leg = RIB_DEPTH + (RIB_DEPTH_TIP - RIB_DEPTH) * v
-    return BASE_RIB_DEPTH + (leg - BASE_RIB_DEPTH) * w
+    depth: np.ndarray = BASE_RIB_DEPTH + (leg - BASE_RIB_DEPTH) * w
+    return depth
 
 
 def geometry_key() -> dict[str, object]:

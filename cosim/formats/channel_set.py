@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -29,7 +31,7 @@ class ChannelSet:
     t: np.ndarray
     channels: dict[str, np.ndarray]
     units: dict[str, str] = field(default_factory=dict)
-    meta: dict = field(default_factory=dict)
+    meta: dict[str, Any] = field(default_factory=dict)
 
     def check(self, path: str) -> ChannelSet:
         """Raise InputFileError (naming ``path``) unless the set is usable as a history."""
@@ -74,9 +76,11 @@ def read_channels(path: str | Path) -> ChannelSet:
     return reader(path).check(str(path))
 
 
-def write_channels(cs: ChannelSet, path: str | Path, fmt: str, **options) -> dict:
+def write_channels(cs: ChannelSet, path: str | Path, fmt: str, **options: Any
+                   ) -> dict[str, Any]:
     """Write ``cs`` to ``path`` in ``fmt`` (one of :data:`FORMATS`); returns what the format
     reports (e.g. the RPC III resolution per channel)."""
+    writer: Callable[..., dict[str, Any]]
     if fmt == "mdf4":
         from .mdf4 import write_mdf4 as writer
     elif fmt == "rpc3":

@@ -9,7 +9,9 @@ differs). Values are float64 both ways, so a table round-trips exactly.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,9 +19,13 @@ from cosim.errors import InputFileError
 
 from .channel_set import ChannelSet
 
+if TYPE_CHECKING:
+    from asammdf.blocks import v2_v3_blocks, v4_blocks
+    from asammdf.blocks.mdf_common import GroupV3, GroupV4
+
 
 def write_mdf4(cs: ChannelSet, path: str | Path, comment: str = "suscosim load history"
-               ) -> dict:
+               ) -> dict[str, Any]:
     """Write ``cs`` as MDF 4.10 to ``path`` (overwritten)."""
     from asammdf import MDF, Signal
 
@@ -69,9 +75,12 @@ def read_mdf4(path: str | Path) -> ChannelSet:
         first = ""
         chans: dict[str, np.ndarray] = {}
         units: dict[str, str] = {}
-        for g, grp in enumerate(mdf.groups):
+        # asammdf types groups as list[GroupV3] | list[GroupV4]; either has .channels
+        groups: Sequence[GroupV3 | GroupV4] = mdf.groups
+        for g, grp in enumerate(groups):
             master = mdf.masters_db.get(g)
-            for i, ch in enumerate(grp.channels):
+            channels: Sequence[v2_v3_blocks.Channel | v4_blocks.Channel] = grp.channels
+            for i, ch in enumerate(channels):
                 if i == master or not ch.name:
                     continue
                 try:

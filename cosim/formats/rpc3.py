@@ -20,6 +20,7 @@ first time is kept in the header as ``SUSCOSIM_T0_S`` (RPC III starts at 0).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -49,7 +50,7 @@ def resolution(x: np.ndarray) -> float:
     return peak / COUNTS if peak > 0 else 1.0
 
 
-def write_rpc3(cs: ChannelSet, path: str | Path, datatype: str = "int") -> dict:
+def write_rpc3(cs: ChannelSet, path: str | Path, datatype: str = "int") -> dict[str, Any]:
     """Write ``cs`` as RPC III (``datatype`` "int": SHORT_INTEGER, "float": FLOATING_POINT).
 
     Returns ``{"resolution": {name: one count}}`` for "int" (absolute, in the channel's
@@ -69,7 +70,7 @@ def write_rpc3(cs: ChannelSet, path: str | Path, datatype: str = "int") -> dict:
     chans = [lib.Channel(name=name, unit=cs.units.get(name, ""), dt=dt,
                          data=np.asarray(x, dtype=np.float64))
              for name, x in cs.channels.items()]
-    extra = {T0_KEY: repr(float(cs.t[0]))}
+    extra: dict[str, str | int] = {T0_KEY: repr(float(cs.t[0]))}
     if datatype == "int":
         extra["INT_FULL_SCALE"] = 32768
     lib.write(str(path), chans, datatype=int if datatype == "int" else float, overwrite=True,

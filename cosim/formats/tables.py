@@ -12,6 +12,7 @@ import csv
 import math
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,8 @@ def read_csv(path: str | Path) -> ChannelSet:
     return ChannelSet(t=a[:, it].copy(), channels=chans, units=units)
 
 
-def write_csv(cs: ChannelSet, path: str | Path, units_in_header: bool = False) -> dict:
+def write_csv(cs: ChannelSet, path: str | Path, units_in_header: bool = False
+              ) -> dict[str, Any]:
     """CSV with ``t`` first; numbers in full precision (repr). With ``units_in_header``
     the header reads ``name [unit]``."""
     def head(n: str) -> str:
@@ -91,7 +93,7 @@ def write_csv(cs: ChannelSet, path: str | Path, units_in_header: bool = False) -
     return {}
 
 
-def write_parquet(cs: ChannelSet, path: str | Path) -> dict:
+def write_parquet(cs: ChannelSet, path: str | Path) -> dict[str, Any]:
     """Parquet, ``t`` first, each field's unit in its metadata (``unit``)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
