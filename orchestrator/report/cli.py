@@ -1,4 +1,4 @@
-"""``suscosim report RUN_OR_SWEEP_DIR [--out FILE.html] [--open]``: the command."""
+"""``suscosim report RUN_SWEEP_OR_DUTY_DIR [--out FILE.html] [--open]``: the command."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .duty_page import is_duty_dir, render_duty
 from .run_data import BadInput, is_run_dir, is_sweep_dir
 from .run_page import render_run
 from .sweep_page import render_sweep
@@ -13,8 +14,10 @@ from .sweep_page import render_sweep
 
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="suscosim report",
-                                 description="a self-contained HTML report of a run or sweep")
-    ap.add_argument("dir", metavar="RUN_OR_SWEEP_DIR", help="a run folder or a sweep folder")
+                                 description="a self-contained HTML report of a run, a sweep "
+                                             "or a duty cycle")
+    ap.add_argument("dir", metavar="RUN_SWEEP_OR_DUTY_DIR",
+                    help="a run folder, a sweep folder or a duty folder (suscosim duty)")
     ap.add_argument("--out", metavar="FILE.html", help="output file (default DIR/report.html)")
     ap.add_argument("--open", action="store_true", help="open the page in a web browser")
     return ap
@@ -26,15 +29,18 @@ def _fail(message: str) -> int:
 
 
 def render(d: Path) -> tuple[str, str]:
-    """(kind, HTML) of a run or sweep folder; raises BadInput if it is neither."""
+    """(kind, HTML) of a run, sweep or duty folder; raises BadInput if it is none."""
     if not d.is_dir():
         raise BadInput(f"{d}: no such folder")
     if is_sweep_dir(d):
         return "sweep", render_sweep(d)
+    if is_duty_dir(d):
+        return "duty", render_duty(d)
     if is_run_dir(d):
         return "run", render_run(d)
     raise BadInput(f"{d}: neither a run folder (scenario.json, summary.json, table.*, "
-                   "journal.msgpack) nor a sweep folder (sweep.json)")
+                   "journal.msgpack) nor a sweep folder (sweep.json) nor a duty folder "
+                   "(duty.json)")
 
 
 def main(argv: list[str] | None = None) -> int:

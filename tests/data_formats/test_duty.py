@@ -112,6 +112,26 @@ repeats = 7
     cert = got["certainty"]
     assert cert["life_km"] == pytest.approx(got["life_km"] / math.sqrt(3.0), rel=1e-12)
     assert "dominant event" in res.stdout and (out / "events.csv").is_file()
+    # the report's duty page: every event, the critical node, the certainty, a map
+    from orchestrator.report.cli import render
+    from orchestrator.report.markup import fmt
+
+    kind, html = render(out)
+    assert kind == "duty"
+    for e in got["events"]:
+        assert f"<td>{e['name']}</td>" in html
+    assert f"{crit} at (" in html and fmt(got["life_km"]) in html
+    assert "Certainty of survival" in html and fmt(cert["life_km"]) in html
+    assert html.count("data:image/png;base64,") == 2  # shares chart and damage map
+
+
+def test_report_of_a_damaged_duty_folder_is_exit_2(tmp_path: Path, capsys) -> None:
+    (tmp_path / "duty.json").write_text("{not json")
+    rc, _, err = cli(capsys, "report", str(tmp_path))
+    assert rc == 2 and "duty.json" in err
+    (tmp_path / "duty.json").write_text('{"name": "x"}')
+    rc, _, err = cli(capsys, "report", str(tmp_path))
+    assert rc == 2 and "no 'events' list" in err
 
 
 @pytest.mark.parametrize("body, key", [

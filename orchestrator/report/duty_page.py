@@ -1,0 +1,138 @@
+"""The duty-cycle page (``suscosim report duty/<name>``): the schedule's events, each one's
+share of the critical node's damage, totals, life at a survival probability and the damage
+map of one schedule, from the folder ``suscosim duty`` writes (duty.json, events.csv,
+damage_per_node.csv)."""
+
+from __future__ import annotations
+
+import csv
+import datetime as _dt
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .markup import cmd, esc, kv_table, nav, note, page, section, table_html
+from .plots import fig_uri, img, new_figure
+from .run_data import BadInput
+
+
+def is_duty_dir(d: Path) -> bool:
+    """A folder written by ``suscosim duty``."""
+    return (d / "duty.json").is_file()
+
+
+def _load(d: Path) -> tuple[dict[str, Any], dict[str, np.ndarray] | None, str]:
+    """(duty.json, columns of damage_per_node.csv or None, a problem with the CSV or "")."""
+    try:
+        duty = json.loads((d / "duty.json").read_text())
+    except (OSError, ValueError) as exc:
+        raise BadInput(f"{d / 'duty.json'}: not a duty result ({exc})") from None
+    if not isinstance(duty, dict) or not isinstance(duty.get("events"), list):
+        raise BadInput(f"{d / 'duty.json'}: not a duty result (no 'events' list)")
+    path = d / "damage_per_node.csv"
+    try:
+        with open(path, newline="") as fh:
+            rows = list(csv.reader(fh))
+        head, body = rows[0], rows[1:]
+        cols = {h: np.array([float(r[i]) for r in body]) for i, h in enumerate(head)}
+        for need in ("x_m", "y_m", "damage_per_schedule"):
+            if need not in cols:
+                return duty, None, f"{path}: no column {need!r}"
+    except (OSError, IndexError, ValueError) as exc:
+        return duty, None, f"{path}: unreadable ({exc})"
+    return duty, cols, ""
+
+
+def _life(v: Any) -> Any:
+    return "∞" if v == "inf" or (isinstance(v, float) and math.isinf(v)) else v
+
+
+def events_section(duty: dict[str, Any]) -> str:
+    header = ["event", "repeats", "pass [m]", "km per schedule", "max damage per pass",
+              "its own critical node", "damage per schedule at the critical node",
+              "share at the critical node [%]", "source run"]
+    rows = [[e.get("name"), e.get("repeats"), e.get("pass_length_m"), e.get("distance_km"),
+             e.get("max_damage_per_pass"), e.get("own_critical_node_id"),
+             e.get("damage_per_schedule_at_critical"),
+             100.0 * float(e.get("share_at_critical", float("nan"))), e.get("run_dir")]
+            for e in duty["events"]]
+    body = table_html(header, rows)
+    names = [str(e.get("name")) for e in duty["events"]]
+    shares = [100.0 * float(e.get("share_at_critical", 0.0)) for e in duty["events"]]
+    if names:
+        fig, (ax,) = new_figure(1, width=7.5, row_h=0.45 * len(names) + 1.4)
+        ax.barh(names[::-1], shares[::-1], color="#4472c4")
+        ax.set_xlabel(f"share of the damage at node {duty.get('critical_node_id')} [%]")
+        ax.set_xlim(0, 100)
+        for y, v in enumerate(shares[::-1]):
+            ax.text(min(v + 1.0, 88.0), y, f"{v:.1f} %", va="center", fontsize=8)
+        body += img(fig_uri(fig), "each event's share of the critical node's damage")
+    return section("events", "Events", body)
+
+
+def totals_section(duty: dict[str, Any]) -> str:
+    xyz = duty.get("critical_node_xyz_m") or []
+    pos = ", ".join(f"{1e3 * float(v):.0f}" for v in xyz) if xyz else "?"
+    pairs = [("km per schedule", duty.get("schedule_distance_km")),
+             ("critical node", f"{duty.get('critical_node_id')} at ({pos}) mm, arm frame"),
+             ("damage per schedule (max over nodes)", duty.get("max_damage_per_schedule")),
+             ("life [schedules] (median S-N curve)", _life(duty.get("life_schedules"))),
+             ("life [km]", _life(duty.get("life_km"))),
+             ("dominant event", f"{duty.get('dominant_event')} "
+                                f"({100.0 * float(duty.get('dominant_share', 0.0)):.1f} %)")]
+    cert = duty.get("certainty")
+    body = kv_table(pairs)
+    if isinstance(cert, dict):
+        p = 100.0 * float(cert.get("survival_probability", float("nan")))
+        band = cert.get("scatter_band")
+        spread = f"s = {cert.get('log10_std'):.4g} (std of log10 N)" + \
+            (f", scatter band T_N = {band}" if band else "")
+        body += kv_table([(f"life at {p:.4g} % survival [schedules]",
+                           _life(cert.get("life_schedules"))),
+                          (f"life at {p:.4g} % survival [km]", _life(cert.get("life_km"))),
+                          ("life factor (life_P / life_50)", cert.get("life_factor")),
+                          ("S-N scatter", spread)], title="Certainty of survival")
+    else:
+        body += note("no S-N scatter given in the duty file: the lives are median lives.")
+    return section("totals", "Totals", body)
+
+
+def map_section(duty: dict[str, Any], cols: dict[str, np.ndarray] | None, problem: str) -> str:
+    if cols is None:
+        return section("map", "Damage map", note(esc(problem or "no damage_per_node.csv")))
+    d = cols["damage_per_schedule"]
+    on = d > 0
+    fig, (ax,) = new_figure(1, width=7.5, row_h=6.0)
+    if on.any():
+        from matplotlib.colors import LogNorm
+
+        lo = max(float(d[on].min()), float(d[on].max()) * 1e-8)
+        sc = ax.scatter(cols["x_m"][on] * 1e3, cols["y_m"][on] * 1e3, c=np.maximum(d[on], lo),
+                        norm=LogNorm(lo, float(d[on].max())), s=12, cmap="inferno_r")
+        fig.colorbar(sc, ax=ax, label="damage per schedule")
+        c = int(np.argmax(d))
+        ax.plot(cols["x_m"][c] * 1e3, cols["y_m"][c] * 1e3, "c*", ms=14,
+                label=f"critical node {duty.get('critical_node_id')}")
+        ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel("x [mm] (forward, along the pivot axis)")
+    ax.set_ylabel("y [mm] (outward to the ball joint)")
+    ax.set_aspect("equal")
+    ax.set_title("lower arm, plan view: damage of one schedule (all events)")
+    return section("map", "Damage map", img(fig_uri(fig), "damage map of one schedule"))
+
+
+def render_duty(d: Path) -> str:
+    """The HTML page of a duty folder."""
+    duty, cols, problem = _load(d)
+    name = str(duty.get("name") or d.name)
+    head = [f"<h1>Duty cycle {esc(name)}</h1>",
+            f'<p class="meta">folder {cmd(str(d.resolve()))} · duty file '
+            f"{cmd(str(duty.get('duty_file')))} · report written "
+            f"{esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
+    navs = [("totals", "Totals"), ("events", "Events"), ("map", "Damage map")]
+    body = "".join(head) + nav(navs) + totals_section(duty) + events_section(duty)
+    body += map_section(duty, cols, problem)
+    return page(f"suscosim duty {name}", body)
