@@ -134,3 +134,47 @@ def test_a_run_id_live_on_the_bus_and_a_folder_in_use_are_refused(tmp_path) -> N
     assert summary["status"] == "ok" and summary["rows"] == 3001
     assert summary["channels"]["tyre_road/force/F_t"]["max"] == pytest.approx(
         (317.5 + 45.4) * 9.81 + 192000 * 0.02, rel=1e-9)
+
+
+def test_a_node_started_elsewhere_takes_the_key_file_the_orchestrator_wrote(tmp_path) -> None:
+    """#15 item 4: remote nodes get the run key by a key file (or the environment). With a
+    node started by hand and no secret given, the orchestrator writes RUN/run.key (0600);
+    the node started with --key-file takes part; without a key it exits 2 at once."""
+    env_clean = {k: v for k, v in os.environ.items() if not k.startswith("SUSCOSIM_")}
+    run_id = f"keyfile-{os.getpid()}"
+    endpoint = free_loopback_endpoint()
+    out = tmp_path / "run"
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    def cli(*args: str) -> subprocess.Popen:
+        return subprocess.Popen([sys.executable, "-m", "orchestrator", *args], cwd=ROOT,
+                                env=dict(env_clean, PYTHONPATH=str(ROOT)), text=True,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+    main = cli("run", str(CH3_STEP), "--quiet", "--out", str(out), "--listen", endpoint,
+               "--external", "plant", "--set", f'run.id="{run_id}"', *SHORT)
+    try:
+        key = out / "run.key"
+        deadline = time.monotonic() + 60
+        while not key.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert key.stat().st_mode & 0o777 == 0o600
+        keyless = cli("node", "plant", "--run", run_id, "--connect", endpoint)
+        _, err = keyless.communicate(timeout=60)
+        assert keyless.returncode == 2 and "--key-file" in err, err
+        plant = cli("node", "plant", "--run", run_id, "--connect", endpoint,
+                    "--key-file", str(key))
+        stdout, stderr = main.communicate(timeout=150)
+        p_out, p_err = plant.communicate(timeout=30)
+    finally:
+        for p in (main,):
+            if p.poll() is None:
+                p.kill()
+    assert main.returncode == 0, stdout + stderr
+    assert f"--key-file {key}" in stderr  # the orchestrator said where the key is
+    assert plant.returncode == 0, p_out + p_err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "ok" and summary["rows"] == N + 1
