@@ -53,6 +53,7 @@ docs/fatigue.md) (``suscosim arm``).
 from __future__ import annotations
 
 import math
+from typing import TypedDict
 
 import numpy as np
 
@@ -142,7 +143,15 @@ there the FE stress is that of an idealised load introduction (a spider on a sol
 the real splined eye, ball-joint housing or bolted seat, which are assessed with their own
 detailed models in practice (as the thesis's spider beams were not assessed)."""
 
-MASS_PROPERTIES = {
+class MassProperties(TypedDict):
+    """The arm's mass [kg], centre of mass (arm frame) [m] and inertia tensor [kg m^2]."""
+
+    mass_kg: float
+    centre_of_mass_m: tuple[float, float, float]
+    inertia_kg_m2: tuple[tuple[float, float, float], ...]
+
+
+MASS_PROPERTIES: MassProperties = {
     "mass_kg": 5.446,
     "centre_of_mass_m": (0.0068, 0.0850, 0.0),
     "inertia_kg_m2": ((0.0547, -0.0034, 0.0), (-0.0034, 0.0516, 0.0), (0.0, 0.0, 0.1050)),

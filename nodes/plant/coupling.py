@@ -56,7 +56,7 @@ def substep_forces(
     """
     if mode == "hold" or (mode == "linear" and before is None):
         return now.F_t, now.F_d
-    if mode == "linear":
+    if mode == "linear" and before is not None:
         r = s / h
         F_t = np.maximum(0.0, now.F_t + (now.F_t - before.F_t) * r)
         return F_t, now.F_d + (now.F_d - before.F_d) * r

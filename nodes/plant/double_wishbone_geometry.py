@@ -74,13 +74,19 @@ from cosim import lower_arm as la
 
 
 class CornerMasses(Protocol):
-    """The masses the URDF needs (:class:`.double_wishbone.DoubleWishboneParams`) [kg]."""
+    """The masses the URDF needs (:class:`.double_wishbone.DoubleWishboneParams`) [kg];
+    read-only, so that a frozen dataclass satisfies it."""
 
-    body_mass: float
-    hub_mass: float
-    lower_arm_mass: float
-    upper_arm_mass: float
-    tie_rod_mass: float
+    @property
+    def body_mass(self) -> float: ...
+    @property
+    def hub_mass(self) -> float: ...
+    @property
+    def lower_arm_mass(self) -> float: ...
+    @property
+    def upper_arm_mass(self) -> float: ...
+    @property
+    def tie_rod_mass(self) -> float: ...
 
 
 # ---- hardpoints in the corner frame [m] (see module docstring) ----

@@ -90,13 +90,13 @@ def log_decrement(t: np.ndarray, x: np.ndarray) -> dict[str, float]:
                  & (np.sign(x[1:-1]) != 0))[0] + 1
     i = i[np.abs(x[i]) > 1e-3 * np.abs(x[i]).max()]
     # keep one extremum per half cycle (alternating signs)
-    ext = [i[0]]
+    picked = [i[0]]
     for j in i[1:]:
-        if np.sign(x[j]) != np.sign(x[ext[-1]]):
-            ext.append(j)
-        elif abs(x[j]) > abs(x[ext[-1]]):
-            ext[-1] = j
-    ext = np.array(ext)
+        if np.sign(x[j]) != np.sign(x[picked[-1]]):
+            picked.append(j)
+        elif abs(x[j]) > abs(x[picked[-1]]):
+            picked[-1] = j
+    ext = np.array(picked)
     if len(ext) < 3:
         raise ValueError("need at least three extrema for the log decrement")
     amp, te = np.abs(x[ext]), t[ext]

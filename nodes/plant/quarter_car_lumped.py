@@ -92,7 +92,7 @@ class LumpedQuarterCar(PlantModel):
         )
         self._joints = [0, 1]
         free_joints(self.body, self._joints, self.client)
-        self._dt = None
+        self._dt: float | None = None
         self._z_b = self._z_w = self._v_b = self._v_w = 0.0  # [m], [m/s] (plain floats:
         # numpy's per-call cost dominates on two numbers, and this runs 4x per step)
 
