@@ -162,7 +162,8 @@ def stone_heights(x: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
 
 
 def pave_profile(length: float, seed: int, p: PaveParameters = DEFAULTS
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                            dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]]:
     """Heights (x, z_left, z_right) [m] of a pavé track ``length`` m long, every :data:`DX`.
 
     Also returns the stone layouts ({"left": (starts, lengths, heights), "right": ...}) for
