@@ -8,7 +8,7 @@ Two measurements:
    distributed, 4001 steps) run in turn with two copies of the committed tree (``git
    archive HEAD``): A as it is (every message signed and verified), B the same with
    :class:`cosim.auth.RunKey` replaced by one that neither signs nor verifies (the only
-   difference), A B A B ..., so that a drift of the machine's speed hits both alike. It
+   difference), A B B A A B ..., so that a drift of the machine's speed hits both alike. It
    prints each run's ``steps_per_s`` (summary.json: coupled steps per second of the step
    loop) and the median ratio of the pairs.
 
@@ -116,8 +116,12 @@ def main(argv: list[str] | None = None) -> int:
         without = tree(args.rev, Path(tmp) / "noauth", False)
         rows = []
         for i in range(args.pairs):
-            a = one_run(with_auth, Path(tmp) / f"a{i}", args.t_end)
-            b = one_run(without, Path(tmp) / f"b{i}", args.t_end)
+            if i % 2:  # alternate which goes first: a pair's first run must not bias it
+                b = one_run(without, Path(tmp) / f"b{i}", args.t_end)
+                a = one_run(with_auth, Path(tmp) / f"a{i}", args.t_end)
+            else:
+                a = one_run(with_auth, Path(tmp) / f"a{i}", args.t_end)
+                b = one_run(without, Path(tmp) / f"b{i}", args.t_end)
             print(f"pair {i + 1}: authenticated {a:7.0f} steps/s, without {b:7.0f} steps/s, "
                   f"ratio {a / b:.3f}", flush=True)
             if a == a and b == b:  # neither failed
