@@ -110,7 +110,10 @@ def main(argv: list[str] | None = None) -> int:
 
     old = signal.signal(signal.SIGTERM, on_signal)
     try:
-        sched = subprocess.Popen(sched_cmd, env=_env(), stdin=subprocess.DEVNULL)
+        # one point per worker thread at a time: with Dask's default saturation (1.1) a
+        # 1-thread worker is sent 2 points and runs them in turn while another worker idles
+        sched_env = dict(_env(), DASK_DISTRIBUTED__SCHEDULER__WORKER_SATURATION="1.0")
+        sched = subprocess.Popen(sched_cmd, env=sched_env, stdin=subprocess.DEVNULL)
         procs.append(sched)
         connect_host = "127.0.0.1" if args.host in ("0.0.0.0", "") else args.host
         if not _wait_port(connect_host, args.port, sched, 30.0):
