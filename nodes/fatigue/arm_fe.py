@@ -276,7 +276,7 @@ class SolidModel:
         N = np.stack([self.sbasis.basis[a][0].value for a in range(nloc)])  # (27, e, q)
         Me = self.rho * np.einsum("aeq,beq,eq->eab", N, N, self.sbasis.dx, optimize=True)
         Me = Me[:, :, None, :, None] * np.eye(3)[None, None, :, None, :]
-        self._M = self._scatter(Me.reshape(Me.shape[0], 3 * nloc, 3 * nloc))
+        self._M: sp.csr_matrix = self._scatter(Me.reshape(Me.shape[0], 3 * nloc, 3 * nloc))
         return self._M
 
     def volume(self) -> float:

@@ -24,6 +24,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -179,6 +180,7 @@ def builtin_influence(mesh_size: float, mat: Material, use_cache: bool = True) -
         raise ScenarioError("fatigue.mesh_size_m", mesh_size,
                             f"a finer mesh for the built-in arm ({exc})") from None
     if use_cache:
+        assert inf.node_xyz is not None  # the built-in FE always has its node coordinates
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".tmp.npz")
         np.savez(tmp, case_names=json.dumps(inf.case_names), coefficients=inf.coefficients,
@@ -242,7 +244,7 @@ def read_case_csv(path: Path) -> tuple[np.ndarray, np.ndarray | None, np.ndarray
     return a[:, 0].astype(np.int64), a[:, 1:4], a[:, 4:]
 
 
-def import_influence(base: Path, mapping: Mapping[str, object],
+def import_influence(base: Path, mapping: Mapping[str, str | Mapping[str, Any]],
                      stress_scale: float = 1.0) -> InfluenceSet:
     """Influence coefficients from per-case CSV files.
 
@@ -262,7 +264,7 @@ def import_influence(base: Path, mapping: Mapping[str, object],
         if isinstance(spec, str):
             fname, scale = spec, 1.0
         else:
-            fname, scale = spec["file"], float(spec.get("scale", 1.0))  # type: ignore[index]
+            fname, scale = spec["file"], float(spec.get("scale", 1.0))
         path = folder / fname
         ids, xyz, s = read_case_csv(path)
         if ids_ref is None:

@@ -55,6 +55,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from statistics import NormalDist
+from typing import Any
 
 from .life_models import ENDURANCE_MODES, SNCurve
 
@@ -169,7 +170,7 @@ def with_overrides(mat: Material, overrides: Mapping[str, float]) -> Material:
     Raises KeyError for an unknown name and ValueError for a non-finite value; the config
     layer turns both into a ScenarioError naming the key.
     """
-    changes: dict[str, float] = {}
+    changes: dict[str, Any] = {}  # field name -> new value (each a float field)
     src = dict(mat.source)
     for key, value in overrides.items():
         if key not in ALIASES:

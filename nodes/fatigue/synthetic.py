@@ -9,6 +9,8 @@ arm's static balance (`balance_at_pivot`). Newtons, arm frame (see `cosim.lower_
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
@@ -48,8 +50,9 @@ def balance_at_pivot(loads: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     the given loads (channels ``plant/arm/<point>_<axis>``): the bushes (on the pivot axis x at
     x_f, x_r) take the force and the moments about y and z, sharing the axial force equally;
     the torsion spring takes the moment about x."""
-    F = [0.0, 0.0, 0.0]
-    M = [0.0, 0.0, 0.0]
+    # sums of force [N] and moment [N m] components: 0.0, then arrays once a load is added
+    F: list[Any] = [0.0, 0.0, 0.0]
+    M: list[Any] = [0.0, 0.0, 0.0]
     for name, p in geo.HARDPOINTS.items():
         f = [np.asarray(loads.get(f"plant/arm/{name}_{a}", 0.0)) for a in "xyz"]
         F = [F[k] + f[k] for k in range(3)]

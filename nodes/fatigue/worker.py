@@ -196,10 +196,12 @@ class _Engine:
         )
 
 
-def _case_columns(case_names: Sequence[str], channels: Sequence[str]) -> tuple[list, list]:
+def _case_columns(case_names: Sequence[str], channels: Sequence[str]
+                  ) -> tuple[list[int | None], list[str]]:
     """For each case, the index of its channel among ``channels`` (or None if absent)."""
     short = [short_channel(c) for c in channels]
-    cols, missing = [], []
+    cols: list[int | None] = []
+    missing: list[str] = []
     for name in case_names:
         if name in short:
             cols.append(short.index(name))
@@ -297,6 +299,8 @@ class LiveFatigue:
 
     def result(self, track_length_m: float | None = None) -> FatigueResult:
         L = track_length_m if track_length_m is not None else self.track_length_m
-        duration = 0.0 if self._t0 is None else self._t_last - self._t0 + self._dt
+        # _t0 and _t_last are set together, by the first block
+        duration = 0.0 if self._t0 is None or self._t_last is None \
+            else self._t_last - self._t0 + self._dt
         return self._eng.result(float("nan") if L is None else L, duration,
                                 list(self._missing))
