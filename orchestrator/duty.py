@@ -213,7 +213,8 @@ def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
     from nodes.fatigue.duty_cycle import Event, life_factor, schedule_damage
 
     out.mkdir(parents=True, exist_ok=True)
-    infos, events = [], []
+    infos: list[dict[str, Any]] = []  # name, run_dir, fat (_event_fatigue) per event
+    events: list[Event] = []
     for ev in duty["events"]:
         run_dir = Path(ev["run"]) if "run" in ev else \
             _run_event(ev, out / "runs" / ev["name"], mode, rerun, sets)

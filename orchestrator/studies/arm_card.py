@@ -141,7 +141,9 @@ def card(mesh_size: float = 0.02, modes: bool = True) -> dict:
     vm = von_mises(S)
     assessed = inf.surface
     i = int(np.argmax(np.where(assessed, vm, -1.0)))
-    zone = joint_zone_nodes(inf.node_xyz) & ~assessed
+    xyz = inf.node_xyz
+    assert xyz is not None  # the built-in FE always has its node coordinates
+    zone = joint_zone_nodes(xyz) & ~assessed
     j = int(np.argmax(np.where(zone, vm, -1.0))) if zone.any() else i
     hand = nominal_bending_stress(loads)
     meta = inf.meta
@@ -154,7 +156,7 @@ def card(mesh_size: float = 0.02, modes: bool = True) -> dict:
         "stress_floor_mpa": floor,
         "static_hotspot_stress_mpa": float(vm[i]) / 1e6,
         "static_hotspot_node": int(inf.node_ids[i]),
-        "static_hotspot_xyz_m": [float(v) for v in inf.node_xyz[i]],
+        "static_hotspot_xyz_m": [float(v) for v in xyz[i]],
         "static_joint_zone_peak_mpa": float(vm[j]) / 1e6,
         "max_stress_3g_mpa": 3.0 * float(vm[i]) / 1e6,
         "yield_mpa": mat.Sy / 1e6,
