@@ -212,9 +212,9 @@ def test_a_failed_point_is_reported_and_the_others_go_on(tmp_path, cluster):
     f = tmp_path / "s.toml"
     f.write_text(SWEEP.replace("T_END", "0.4").replace(
         '"controller.c" = [1000.0, 1500.0, 2000.0, 2500.0]',
-        '"run.t_end" = [0.4, 4.0]').replace('"run.t_end" = 0.4\n', ""))
+        '"run.t_end" = [0.4, 2.5]').replace('"run.t_end" = 0.4\n', ""))
     out = tmp_path / "sw"
-    victim = "tdask-4.0"
+    victim = "tdask-2.5"
     args = ("sweep", str(f), "--out", str(out), "--executor", "dask", "--scheduler", cluster)
     proc = popen_suscosim(*args)
     try:
