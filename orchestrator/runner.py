@@ -252,9 +252,9 @@ def check_run_id_free(bus: Any, run_id: str, external: list[str],
     live = bus.alive(keys.key(run_id, "*", keys.ALIVE), timeout=timeout_s)
     taken = sorted({keys.parse_key(k)[1] for k in live} - set(external))
     if taken:
-        raise RunIdInUseError(f"run id '{run_id}' is already live on the bus ("
-                              f"{', '.join(taken)} of another run answer): choose another "
-                              "run.id, or wait for that run to end")
+        raise RunIdInUseError(f"run id '{run_id}' is already live on the bus (live there "
+                              f"now: {', '.join(taken)}): choose another run.id, or wait "
+                              "for that run to end")
 
 
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
