@@ -4,14 +4,27 @@ terminal, a line per event and a status line now and then on a pipe."""
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING, Protocol, TextIO
 
 from .results import _fmt
 from .state import _read_json
 
 if TYPE_CHECKING:
-    from .local import Job
+    from .spec import Point
+
+
+class Job(Protocol):
+    """What the display needs of a point being worked on (a local process or a Dask task)."""
+
+    point: Point
+    phase: str
+    t0: float
+    fresh: bool
+
+    def step(self) -> int | None:
+        """The step its run has reached, or None."""
 
 
 class Display:
@@ -36,7 +49,7 @@ class Display:
         self.stream.write(text + "\n")
         self.stream.flush()
 
-    def update(self, jobs: list[Job], done: int, failed: int, pending: int,
+    def update(self, jobs: Sequence[Job], done: int, failed: int, pending: int,
                steps_done: int) -> None:
         elapsed = time.monotonic() - self.t0
         if not self.tty and time.monotonic() - self.last_status < 30.0:

@@ -264,21 +264,22 @@ def load_sweep(path: str | Path, jobs: int | None = None,
         elif isinstance(spec, dict):
             if not spec:
                 raise ScenarioError(where, spec, "a non-empty table of named variants")
-            labels, overrides = [], []
+            names: list[Any] = []
+            variants: list[dict[str, Any]] = []
             for vname, ov in spec.items():
                 if not isinstance(ov, dict) or not ov:
                     raise ScenarioError(f"{where}.{vname}", ov,
                                         "a table of overrides, e.g. { \"run.h\" = 0.001 }")
                 for k, v in ov.items():
                     _check_override_key(f"{where}.{vname}", k, v)
-                labels.append(vname)
-                overrides.append(ov)
-            axes.append(Axis(key, labels, overrides))
+                names.append(vname)
+                variants.append(ov)
+            axes.append(Axis(key, names, variants))
         else:
             raise ScenarioError(where, spec, "a list of values or a table of named variants")
     if design is not None:
-        labels, sampled = design_axis(design)
-        axes.append(Axis(AXIS, labels, sampled, params=sampled))
+        samples, sampled = design_axis(design)
+        axes.append(Axis(AXIS, list(samples), sampled, params=sampled))
     sweep = Sweep(path=path, name=name, bases=bases, axes=axes, fixed=fixed, jobs=jobs,
                   fatigue=fatigue, channels=channels, raw_grid=grid, design=design,
                   runs_dir=runs_dir)
