@@ -96,7 +96,8 @@ class PassiveCurve:
         source: where the points came from, for error messages.
     """
 
-    def __init__(self, v: Sequence[float], F: Sequence[float], source: str = "<points>") -> None:
+    def __init__(self, v: Sequence[float] | np.ndarray, F: Sequence[float] | np.ndarray,
+                 source: str = "<points>") -> None:
         v_arr = np.asarray(v, dtype=float)
         F_arr = np.asarray(F, dtype=float)
         problem = _curve_problem(v_arr, F_arr)

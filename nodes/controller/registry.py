@@ -25,7 +25,7 @@ and decorate it; name it in a scenario (``[controller] law = "my_law"``) and it 
 
 **Settings** are the keyword-only parameters after the ``*``: each is a key of the scenario's
 ``[controller]`` table. A plain default (``gain: float = 2500.0``) makes it optional; a
-:class:`Param` gives its range and unit, or makes it required (no ``default``); :data:`SOFT`
+:func:`Param` gives its range and unit, or makes it required (no ``default``); :data:`SOFT`
 and :data:`HARD` are the damper's two coefficients with the thesis's presets (the law then also
 accepts ``preset = "lumped" | "realistic"``, and ``hard >= soft`` is checked). Bad or unknown
 keys are a ``ScenarioError`` naming the dotted key (exit 2), like every built-in law.
@@ -76,8 +76,10 @@ Builder = Callable[[ConfigReader, int, float], Controller]
 
 
 @dataclass(frozen=True)
-class Param:
+class ParamInfo:
     """A law setting: its default (none: required), range, unit, choices, or preset role.
+
+    Made by :func:`Param`; the registry reads it from the law's signature.
 
     Args:
         default: value when the key is absent; absent means the key is required.
@@ -112,6 +114,24 @@ class Param:
         return (self.lo or 0.0) + 1.0
 
 
+def Param(
+    default: Any = _REQUIRED,
+    lo: float | None = None,
+    hi: float | None = None,
+    lo_open: bool = False,
+    unit: str = "",
+    choices: tuple[str, ...] = (),
+    preset: str = "",
+) -> Any:
+    """A law setting's :class:`ParamInfo` (arguments as its fields), as the default of the
+    setting: ``gain: float = Param(lo=0.0, unit="N·s/m")``.
+
+    Typed ``Any`` (like :func:`dataclasses.field`) so that the setting keeps its own type
+    (``float``) for a type checker; the registry takes the :class:`ParamInfo` off the signature.
+    """
+    return ParamInfo(default, lo, hi, lo_open, unit, choices, preset)
+
+
 #: the damper's soft (minimum) coefficient, default from ``preset`` [lumped: 1500 N·s/m]
 SOFT = Param(preset="soft", lo=0.0, unit="N·s/m")
 #: the damper's hard (maximum) coefficient, default from ``preset`` [lumped: 2368 N·s/m]
@@ -128,7 +148,7 @@ class LawSpec:
     doc: str
     module: str
     fn: Callable[..., Any] | None = None
-    params: dict[str, Param] = field(default_factory=dict)
+    params: dict[str, ParamInfo] = field(default_factory=dict)
     inputs: tuple[str, ...] = ()
 
 
@@ -155,13 +175,13 @@ def control_law(name: str, *, aliases: tuple[str, ...] = ()) -> Callable[[Callab
 
     def register(fn: Callable[..., Any]) -> Callable[..., Any]:
         inputs: list[str] = []
-        params: dict[str, Param] = {}
+        params: dict[str, ParamInfo] = {}
         for p in inspect.signature(fn).parameters.values():
             if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
                 raise TypeError(f"control law '{name}': no *args/**kwargs ({p.name})")
             if p.kind == p.KEYWORD_ONLY:
                 d = p.default
-                params[p.name] = d if isinstance(d, Param) else Param(
+                params[p.name] = d if isinstance(d, ParamInfo) else ParamInfo(
                     default=_REQUIRED if d is p.empty else d)
             else:
                 inputs.append(p.name)
@@ -243,12 +263,12 @@ def read_settings(spec: LawSpec, r: ConfigReader) -> dict[str, Any]:
         elif isinstance(p.default, str):
             values[name] = r.string(name) if r.has(name) else p.default
         else:
-            bounds = {"lo": p.lo, "hi": p.hi, "lo_open": p.lo_open, "unit": p.unit}
             if p.required:
-                values[name] = r.number(name, **bounds)
+                values[name] = r.number(name, lo=p.lo, hi=p.hi, lo_open=p.lo_open, unit=p.unit)
             else:
                 default = soft_hard[p.preset == "hard"] if p.preset else p.default
-                values[name] = r.number(name, default, **bounds)
+                values[name] = r.number(name, default, lo=p.lo, hi=p.hi, lo_open=p.lo_open,
+                                        unit=p.unit)
     soft = [n for n, p in spec.params.items() if p.preset == "soft"]
     hard = [n for n, p in spec.params.items() if p.preset == "hard"]
     if soft and hard and values[hard[0]] < values[soft[0]]:
