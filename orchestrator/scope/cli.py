@@ -103,6 +103,7 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
     if replay:
         from ..replay import ReplayInputError, load
 
+        assert folder is not None  # replay is only ever set for a run folder
         try:
             run_id, records, _skipped, problem = load(folder)
         except ReplayInputError as exc:

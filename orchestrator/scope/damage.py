@@ -132,6 +132,7 @@ class DamageMap:
         from cosim.wire import decode
         from nodes.recorder.journal import read_journal
 
+        assert self.journal is not None, "backfill without a journal (its tries start used up)"
         self._backfill_tries += 1
         want = "/".join(ch.LOAD_CHANNEL)
         early: dict[int, tuple[float, list[float]]] = {}

@@ -86,8 +86,10 @@ class ScopeServer:
     @property
     def url(self) -> str:
         host, port = self.httpd.server_address[:2]
-        host = f"[{host}]" if ":" in str(host) else host
-        return f"http://{host}:{port}/"
+        # an IP socket's host is a str (typeshed also allows the bytes of a Unix socket)
+        name = host.decode() if isinstance(host, bytes) else str(host)
+        name = f"[{name}]" if ":" in name else name
+        return f"http://{name}:{port}/"
 
     def start(self) -> None:
         self._thread.start()
