@@ -128,7 +128,8 @@ def _sign(base: Any, body: bytes) -> bytes:
     fields = memoryview(body)[1:]
     h = base.copy()
     h.update(fields)
-    return b"\x86" + fields + SIG_FIELD + h.digest()
+    tag: bytes = h.digest()
+    return b"\x86" + fields + SIG_FIELD + tag
 
 
 def read_secret_file(path: str | Path) -> bytes:

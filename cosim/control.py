@@ -94,7 +94,8 @@ def check_clock(kind: str, d: Mapping[str, Any]) -> None:
     if kind == "start":
         _int(d, "n_steps", kind, required=True, low=1)
         h = d.get("h")
-        if type(h) not in (int, float) or not math.isfinite(h) or h <= 0:
+        if not isinstance(h, int | float) or isinstance(h, bool) or not math.isfinite(h) \
+                or h <= 0:
             raise WireError(f"start: field 'h'={h!r:.40} is not a number > 0")
         _map(d, "info", kind, required=True)
         bad = [n for n, v in d["info"].items() if type(v) is not dict]

@@ -98,8 +98,9 @@ def _typed(key: str, value: Any, spec: Key) -> Any:
         raise ScenarioError(key, value, "one of " + ", ".join(map(repr, spec.choices)))
     if spec.positive and value <= 0:
         raise ScenarioError(key, value, "a number > 0")
-    if (spec.low is not None and value < spec.low) or (spec.high is not None
-                                                       and value > spec.high):
+    number = float(value) if isinstance(value, int | float) else None
+    if number is not None and ((spec.low is not None and number < spec.low)
+                               or (spec.high is not None and number > spec.high)):
         lo = f"{spec.low:g} <= " if spec.low is not None else "0 < " if spec.positive else ""
         hi = f" <= {spec.high:g}" if spec.high is not None else ""
         raise ScenarioError(key, value, f"{lo}{key.rsplit('.', 1)[-1]}{hi}")
