@@ -11,6 +11,7 @@ from .run_page import fatigue_numbers
 from .signals import BODY_ACC, TYRE_FORCE
 from .sweep_charts import sweep_compare_section, sweep_maps_section, sweep_overlay_section
 from .sweep_data import Point, grid_keys, load_sweep, read_results, rms_of, vs_passive
+from .sweep_sensitivity import sensitivity_section
 
 
 def sweep_results_section(spec: dict, points: list[Point], keys: list[str],
@@ -43,8 +44,8 @@ def sweep_results_section(spec: dict, points: list[Point], keys: list[str],
     results, src = read_results(d)
     if results:
         cols: list[str] = []
-        for row in results:
-            cols += [k for k in row if k not in cols]
+        for res in results:
+            cols += [k for k in res if k not in cols]
         body += (f"<details><summary>{esc(src)}: every column ({len(cols)})</summary>"
                  + table_html(cols, [[_num_or_text(r.get(c)) for c in cols] for r in results])
                  + "</details>")
@@ -120,10 +121,12 @@ def render_sweep(d: Path) -> str:
     head.append(kv_table(pairs))
     if not points:
         head.append(note("sweep.json lists no points."))
-    navs = [("results", "Results"), ("compare", "Comparison"), ("overlay", "PSDs / histories"),
+    sens = sensitivity_section(d, read_results(d)[0])
+    navs = [("results", "Results"), *([("sensitivity", "Sensitivity")] if sens else []),
+            ("compare", "Comparison"), ("overlay", "PSDs / histories"),
             ("maps", "Damage maps"), ("points", "Points")]
     body = "".join(head) + nav(navs)
-    body += sweep_results_section(spec, points, keys, d)
+    body += sweep_results_section(spec, points, keys, d) + sens
     body += sweep_compare_section(points, keys)
     body += sweep_overlay_section(points, keys)
     body += sweep_maps_section(points)

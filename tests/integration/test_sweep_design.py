@@ -150,3 +150,12 @@ def test_16_point_latin_hypercube_of_real_runs_with_its_sensitivity_table(tmp_pa
     doc = json.loads((out / "sweep.json").read_text())
     assert doc["design"]["method"] == "lhs" and doc["design"]["sensitivity"] == \
         "sensitivity.json"
+    # the sweep report shows the table (every output x parameter) and the scatter plots
+    from orchestrator.report.cli import render
+    from orchestrator.report.markup import fmt
+
+    kind, html = render(out)
+    assert kind == "sweep" and 'id="sensitivity"' in html and "Latin hypercube" in html
+    for r in sens["rows"]:
+        assert fmt(r["spearman"]) in html
+    assert html.count("<td>controller.c_hard</td>") >= len(sens["outputs"])
