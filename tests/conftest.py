@@ -13,6 +13,24 @@ ROOT = Path(__file__).resolve().parents[1]
 CH3_STEP = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
 
 
+SHARED_SECRET = "suscosim-tests-shared-secret"
+"""The secret every process of a multi-machine test shares (``SUSCOSIM_KEY``): the run key of
+a run is derived from it and the run id, so nodes started by hand sign and verify like the
+orchestrator's (#15: without it, a node started elsewhere exits 2)."""
+
+
+@pytest.fixture(scope="module")
+def shared_run_secret():
+    """``SUSCOSIM_KEY`` set for a module's tests (and the processes they start)."""
+    old = os.environ.get("SUSCOSIM_KEY")
+    os.environ["SUSCOSIM_KEY"] = SHARED_SECRET
+    yield SHARED_SECRET
+    if old is None:
+        os.environ.pop("SUSCOSIM_KEY", None)
+    else:
+        os.environ["SUSCOSIM_KEY"] = old
+
+
 def suscosim(*args: str, timeout: float = 120.0, **kw) -> subprocess.CompletedProcess:
     """Run ``python -m orchestrator ARGS`` (the ``suscosim`` command) and capture its output."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))

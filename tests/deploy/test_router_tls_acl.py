@@ -24,6 +24,7 @@ from orchestrator.router import DEFAULT_LISTEN, router_config
 from ..conftest import CH3_STEP, ROOT, popen_suscosim, suscosim
 
 DEPLOY = ROOT / "deploy" / "zenoh"
+pytestmark = pytest.mark.usefixtures("shared_run_secret")
 CERTS = "/etc/suscosim/certs"
 KEY = "suscosim/acltest/plant/state"
 

@@ -24,7 +24,8 @@ from nodes.recorder.table import build_table, read_table
 from ..conftest import CH3_STEP, ROOT, suscosim
 from .netns import ADDR, MAIN, PLANT, ROUTER, ROUTER_ADDR, Topology, unavailable
 
-pytestmark = [pytest.mark.netns, pytest.mark.integration]
+pytestmark = [pytest.mark.netns, pytest.mark.integration,
+              pytest.mark.usefixtures("shared_run_secret")]
 
 PORT = 7447
 SHORT = ["--set", "run.t_end=0.5", "--set", "road.t_start=0.1"]  # the step inside the run
