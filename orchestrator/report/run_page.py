@@ -60,7 +60,7 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
     glance = kv_table(at_a_glance(r), "At a glance", cls="kv glance")
     status_tab = ""
     if r.summary is not None:
-        pairs = [("status", r.status)]
+        pairs: list[tuple[str, Any]] = [("status", r.status)]
         if "wall_s" in s:
             pairs.append(("wall time [s]", s.get("wall_s")))
         if "step_wall_s" in s:
@@ -133,9 +133,16 @@ def scenario_section(r: RunData) -> str:
     return section("scenario", "Scenario", row(*parts))
 
 
+def _table(r: RunData) -> dict[str, np.ndarray]:
+    """The run's table, for the sections that :func:`run_body` shows only when there is one."""
+    assert r.table is not None, "a table section of a run without a table"
+    return r.table
+
+
 def time_section(r: RunData) -> str:
-    t = r.table["t"]
-    panels, missing = time_history_panels(r.table)
+    table = _table(r)
+    t = table["t"]
+    panels, missing = time_history_panels(table)
     body = f'<p class="meta">from {esc(r.table_note)}: {t.size} samples, ' \
            f"t = {fmt(float(t[0]))} … {fmt(float(t[-1]))} s</p>"
     if panels:
@@ -146,17 +153,18 @@ def time_section(r: RunData) -> str:
 
 
 def psd_section(r: RunData) -> str:
-    t = r.table["t"]
+    table = _table(r)
+    t = table["t"]
     fs = sample_rate(t)
     if fs is None:
         return section("psd", "Power spectral densities",
                        note("the time column is not uniformly sampled (a run with missing "
                             "steps?): no PSD."))
     sigs = []
-    _b, acc = first_present(r.table, BODY_ACC)
+    _b, acc = first_present(table, BODY_ACC)
     if acc:
         sigs.append(("Body acceleration", "(m/s²)²/Hz", acc))
-    _b, ft = first_present(r.table, TYRE_FORCE)
+    _b, ft = first_present(table, TYRE_FORCE)
     if ft:
         sigs.append(("Tyre force", "N²/Hz", ft))
     if not sigs:
@@ -208,7 +216,7 @@ def ride_section(r: RunData) -> str:
     from nodes.recorder.ride_metrics import run_metrics
 
     try:
-        m = run_metrics(r.table)
+        m = run_metrics(_table(r))
     except (ValueError, KeyError) as exc:
         return section("ride", "Ride metrics", note(f"no ride metrics: {esc(exc)}"))
     if not m:
@@ -222,13 +230,14 @@ def ride_section(r: RunData) -> str:
 
 
 def loads_section(r: RunData) -> str:
-    t = r.table["t"]
+    table = _table(r)
+    t = table["t"]
     panels = []
-    _b, ft = first_present(r.table, TYRE_FORCE)
+    _b, ft = first_present(table, TYRE_FORCE)
     if ft:
         panels.append(("Tyre force (vertical, compressive +)", "N",
                        [(corner_label("F_t", c), x) for c, x in ft]))
-    groups = arm_groups(r.table)
+    groups = arm_groups(table)
     for point, comps in groups.items():
         unit = "N·m" if all(a.startswith("m") for a, _ in comps) else "N"
         panels.append((f"Lower arm: {point.replace('_', ' ')} (arm frame)", unit, comps))

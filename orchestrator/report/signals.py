@@ -65,7 +65,10 @@ def time_history_panels(table: dict[str, np.ndarray]) -> tuple[list[tuple], list
     missing: list[str] = []
 
     def add(title: str, unit: str, lines: list[tuple[str, np.ndarray]]) -> None:
-        (panels if lines else missing).append((title, unit, lines) if lines else title)
+        if lines:
+            panels.append((title, unit, lines))
+        else:
+            missing.append(title)
 
     disp = []
     for base, name in (("plant/state/z_b", "body z_b"), ("plant/state/z_w", "wheel z_w"),

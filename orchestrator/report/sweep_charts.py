@@ -85,9 +85,9 @@ def _grouped_change(ax, points: list[Point], keys: list[str], change: dict[str, 
         ax.set_xlim(-0.7, len(cells) - 0.3)
         ax.legend(fontsize=8)
     else:
-        xs = [(j - (nl - 1) / 2) * 0.5 for j in range(nl)]
-        ax.set_xticks(xs, [str(x) for x in laws], fontsize=8)
-        ax.set_xlim(min(xs, default=0) - 0.5, max(xs, default=0) + 0.5)
+        ticks = [(j - (nl - 1) / 2) * 0.5 for j in range(nl)]
+        ax.set_xticks(ticks, [str(x) for x in laws], fontsize=8)
+        ax.set_xlim(min(ticks, default=0) - 0.5, max(ticks, default=0) + 0.5)
     ax.axhline(0, color="k", lw=0.8)
     ax.margins(y=0.15)
     ax.set_title(title, fontsize=10, loc="left")
@@ -151,6 +151,12 @@ def overlay_groups(points: list[Point], keys: list[str]
     return list(groups.items())
 
 
+def _table_of(p: Point) -> dict[str, np.ndarray]:
+    """The table of a point that has one (the overlay keeps only those)."""
+    assert p.run is not None and p.run.table is not None, f"point {p.id} has no table"
+    return p.run.table
+
+
 def _overlay_figures(members: list[tuple[Point, str, str]], ci: int) -> str:
     """PSD and time-history overlays of one group of points (corner index ``ci``)."""
     out = ""
@@ -158,7 +164,7 @@ def _overlay_figures(members: list[tuple[Point, str, str]], ci: int) -> str:
     ax = axes[0]
     corner, n_psd = "", 0
     for p, lab, colour in members:
-        tab = p.run.table
+        tab = _table_of(p)
         fs = sample_rate(tab["t"])
         _b, cols = first_present(tab, BODY_ACC)
         if fs is None or len(cols) <= ci:
@@ -177,12 +183,12 @@ def _overlay_figures(members: list[tuple[Point, str, str]], ci: int) -> str:
         ax.legend(fontsize=8)
         out += img(fig_uri(fig), "overlaid body acceleration PSDs")
     rows = [("Body acceleration", "m/s²", BODY_ACC), ("Tyre force", "N", TYRE_FORCE)]
-    if any(p.run.has_arm() for p, _l, _c in members):
+    if any(p.run is not None and p.run.has_arm() for p, _l, _c in members):
         rows.append(("Lower arm: ball joint z", "N", ("plant/arm/ball_joint_z",)))
     fig, axes = new_figure(len(rows), row_h=2.4, sharex=True)
     for ax, (title, unit, bases) in zip(axes, rows, strict=True):
         for p, lab, colour in members:
-            tab = p.run.table
+            tab = _table_of(p)
             _b, cols = first_present(tab, bases)
             if len(cols) > ci:
                 ax.plot(*decimate(tab["t"], cols[ci][1]), lw=0.8, color=colour, label=lab,
@@ -202,7 +208,7 @@ def sweep_overlay_section(points: list[Point], keys: list[str]) -> str:
                        note("no point has a table yet."))
     # the corner with the largest body-acceleration RMS in the first point (full vehicle)
     ci = 0
-    _b, cols = first_present(have[0].run.table, BODY_ACC)
+    _b, cols = first_present(_table_of(have[0]), BODY_ACC)
     if len(cols) > 1:
         ci = int(np.argmax([np.sqrt(np.mean(x * x)) for _c, x in cols]))
     body = ""
