@@ -6,12 +6,30 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TextIO
 
 from .procs import _kill_group, _start
 from .spec import Sweep
 from .state import point_state
+
+
+def point_of_run(run_id: str, point_ids: Iterable[str]) -> str | None:
+    """The point whose run this is: a sweep's run ids are ``<point id>-<invocation token>``
+    (:attr:`.spec.Point.run_id`); a bare point id (a sweep of an older version) is taken too."""
+    from cosim import keys
+
+    ids = set(point_ids)
+    if run_id in ids:
+        return run_id
+    base, _, token = run_id.rpartition("-")
+    if len(token) != 6 or any(c not in "0123456789abcdef" for c in token):
+        return None  # not an invocation token (keys.invocation_token: 6 hex digits)
+    for pid in ids:
+        if base and run_id == keys.unique_run_id(pid, token):
+            return pid
+    return None
 
 
 def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
@@ -44,17 +62,20 @@ def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
                     served_ok.add(pid)  # done in a shared sweep folder
             if len(served_ok) == len(ids) and not running:
                 return 0
-            live: set[str] = set()
+            live: dict[str, str] = {}  # point id -> the live run id of that point
             for reply in bus.session.get(pattern, timeout=min(0.5, poll_s)):
                 if reply.ok is not None:
-                    live.add(keys.parse_key(str(reply.ok.key_expr))[0])
+                    run_id = keys.parse_key(str(reply.ok.key_expr))[0]
+                    pid = point_of_run(run_id, ids)
+                    if pid is not None:
+                        live[pid] = run_id
             now = time.monotonic()
-            for pid in sorted(live & ids.keys()):
+            for pid in sorted(live):
                 if pid in served_ok or pid in running or cooldown.get(pid, 0.0) > now:
                     continue
                 procs = []
                 for n in nodes:
-                    cmd = [sys.executable, "-m", "orchestrator", "node", n, "--run", pid]
+                    cmd = [sys.executable, "-m", "orchestrator", "node", n, "--run", live[pid]]
                     for ep in connect:
                         cmd += ["--connect", ep]
                     procs.append(_start(cmd, logs / f"{pid}.{n}.log"))

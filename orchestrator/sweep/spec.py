@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from cosim import keys
 from cosim import scenario as sc
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
@@ -26,6 +27,8 @@ DEFAULT_CHANNELS = ("plant/response/a_b", "plant/response/a_w", "tyre_road/force
                     "controller/force/F_d", "plant/arm/ball_joint_z")
 FATIGUE_COLUMNS = ("life_repeats", "life_km", "max_damage", "critical_node")
 MAX_ID = 64
+INVOCATION = keys.invocation_token()
+"""The random part of this invocation's run ids (one per ``suscosim sweep`` process)."""
 RESERVED = ("base", "point", "status", "error", "wall_s", "steps_per_s", "n_steps", "run_dir",
             "worker", "sample",
             *FATIGUE_COLUMNS)
@@ -66,8 +69,22 @@ class Point:
     fingerprint: str = ""
 
     @property
+    def run_id(self) -> str:
+        """The run id of this point in this invocation: the point id and a random part
+        (:data:`INVOCATION`), so that two people running the same sweep through one router
+        never share a run id (#15 item 3); the run folder stays ``runs/<point id>``."""
+        return keys.unique_run_id(self.id, INVOCATION)
+
+    @property
     def set_args(self) -> list[str]:
         """The ``--set`` assignments of this point (the run id last)."""
+        return [f"{k}={toml_value(v)}" for k, v in self.overrides.items()] + \
+            [f"run.id={toml_value(self.run_id)}"]
+
+    @property
+    def fingerprint_args(self) -> list[str]:
+        """:attr:`set_args` with the point id as the run id: what the fingerprint (resume)
+        is computed from, the same in every invocation."""
         return [f"{k}={toml_value(v)}" for k, v in self.overrides.items()] + \
             [f"run.id={toml_value(self.id)}"]
 
@@ -312,7 +329,7 @@ def validate_points(sweep: Sweep, out: Path) -> None:
 
     for p in sweep.points:
         try:
-            scenario = sc.load(p.base, p.set_args)
+            scenario = sc.load(p.base, p.fingerprint_args)
             p.fingerprint = hashlib.sha256(json.dumps(scenario, sort_keys=True, default=str)
                                            .encode()).hexdigest()[:16]
             resolved = resolve(copy.deepcopy(scenario), out / "runs" / p.id)

@@ -80,7 +80,19 @@ def test_grid_product_variants_and_overrides(tmp_path):
     p = sweep.points[1]
     assert p.params == {"run.h": 0.001, "tyre": "ffp"}
     assert p.overrides["run.t_end"] == 0.6 and p.overrides["tyre"]["model"] == "fixed_footprint"
-    assert p.set_args[-1] == 'run.id="t2x2-0.001-ffp"'
+    # the run id: the point id and this invocation's random part (#15 item 3); the
+    # fingerprint (resume) is computed with the point id alone, the same in every invocation
+    from orchestrator.sweep.serve import point_of_run
+    from orchestrator.sweep.spec import INVOCATION
+
+    assert p.run_id == f"t2x2-0.001-ffp-{INVOCATION}" and len(INVOCATION) == 6
+    assert p.set_args[-1] == f'run.id="{p.run_id}"'
+    assert p.fingerprint_args[-1] == 'run.id="t2x2-0.001-ffp"'
+    ids = [q.id for q in sweep.points]
+    assert point_of_run(p.run_id, ids) == p.id and point_of_run(p.id, ids) == p.id
+    assert point_of_run("t2x2-0.001-ffp-zz", ids) is None  # not a token
+    assert point_of_run("t2x2-0.001-ffp-abc123", ids) == p.id  # another invocation's run
+    assert point_of_run("someone-else", ids) is None
 
 
 def test_journal_step_reads_the_last_record(tmp_path):
@@ -144,7 +156,7 @@ def test_sweep_2x2_results_then_resume_redoes_nothing(tmp_path):
     assert doc["set"] == {"run.t_end": 0.6, "run.stall_timeout_s": 30.0}
     for p in doc["points"]:
         summary = json.loads((out / p["run_dir"] / "summary.json").read_text())
-        assert summary["status"] == "ok" and summary["run_id"] == p["id"]
+        assert summary["status"] == "ok" and summary["run_id"].startswith(p["id"] + "-")
         assert summary["h"] == p["params"]["run.h"] and summary["n_steps"] == round(
             0.6 / p["params"]["run.h"])
     assert len(json.loads((out / "results.json").read_text())) == 4
@@ -154,6 +166,9 @@ def test_sweep_2x2_results_then_resume_redoes_nothing(tmp_path):
     assert "0 to run (4 already done)" in res.stdout
     assert {p: p.stat().st_mtime_ns for p in out.glob("runs/*/summary.json")} == mtimes
     assert "t2x2-0.002-ffp" in res.stdout  # the table lists every point again
+    # two invocations of one sweep: different run ids (never the same id on one router)
+    ids = {json.loads(q.read_text())["run_id"] for q in out.glob("runs/*/summary.json")}
+    assert len(ids) == 4
 
 
 KILL_SWEEP = f"""
