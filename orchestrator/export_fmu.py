@@ -57,6 +57,8 @@ def _law_module_file(law: str) -> Path | None:
 def law_interface(scenario: dict[str, Any]) -> dict[str, Any]:
     """The FMU's interface for the scenario's law: controller table, h, inputs, outputs and
     parameters (raises ScenarioError when the law cannot be exported)."""
+    import numpy as np
+
     from nodes.controller.laws import PassiveCurveController, build_controller
     from nodes.controller.registry import FunctionLaw
 
@@ -77,7 +79,7 @@ def law_interface(scenario: dict[str, Any]) -> dict[str, Any]:
         cfg["points"] = [[float(v), float(f)] for v, f in zip(ctl.curve.v, ctl.curve.F,
                                                                 strict=True)]
     inputs = list(ch.STATE_FIELDS) + (["v_damper"] if ctl.velocity == "damper" else [])
-    probe = ctl.step(0.0, {name: [0.0] for name in inputs})  # which extras the law records
+    probe = ctl.step(0.0, {name: np.zeros(1) for name in inputs})  # which extras the law records
     outputs = ["F_d", "c_eff", *probe.extra]
     settings = ctl.settings if isinstance(ctl, FunctionLaw) else cfg
     taken = set(inputs) | set(outputs) | {"time"}

@@ -52,7 +52,7 @@ def load(path: str | Path) -> tuple[str, list[tuple[str, str, bytes, float]], in
     ``skipped`` counts records that do not decode or whose channel is not ``node/channel``
     (none in a journal the recorder wrote); ``problem`` says whether the tail was torn.
     """
-    from nodes.recorder.journal import read_journal
+    from cosim.journal import read_journal
 
     p = Path(path)
     if p.is_dir():
@@ -82,8 +82,8 @@ def load(path: str | Path) -> tuple[str, list[tuple[str, str, bytes, float]], in
 
 def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
     """Wait until one of the publishers has a matching subscriber (or ``wait_s`` passes)."""
-    objs = [getattr(put, "__self__", None) for put in pubs]
-    objs = [o for o in objs if o is not None and hasattr(o, "matching_status")]
+    owners = [getattr(put, "__self__", None) for put in pubs]
+    objs = [o for o in owners if o is not None and hasattr(o, "matching_status")]
     deadline = time.monotonic() + wait_s
     while time.monotonic() < deadline:
         if not objs:  # no matching API: give discovery a moment
