@@ -12,7 +12,7 @@ import os
 import shutil
 import socket
 import subprocess
-from datetime import datetime
+from datetime import UTC, datetime
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -90,6 +90,22 @@ def finished_at(container: str) -> datetime:
     return datetime.fromisoformat(f"{head}.{(frac + '000000')[:6]}")
 
 
+def sigterm_times(since: float, until: float) -> dict[str, datetime]:
+    """Container id -> when the engine sent it SIGTERM (its 'kill' events, signal 15),
+    between two Unix times."""
+    res = _run(["docker", "events", "--since", f"{since:.3f}", "--until", f"{until:.3f}",
+                "--filter", "type=container", "--filter", "event=kill",
+                "--format", "{{json .}}"], timeout=30)
+    assert res.returncode == 0, res.stderr
+    out = {}
+    for line in res.stdout.splitlines():
+        ev = json.loads(line)
+        if ev.get("Actor", {}).get("Attributes", {}).get("signal") == "15":
+            when = datetime.fromtimestamp(ev["timeNano"] / 1e9, UTC).replace(tzinfo=None)
+            out.setdefault(ev["Actor"]["ID"], when)
+    return out
+
+
 class Project:
     """One compose project: ``docker compose -p NAME -f FILE ...`` with its environment."""
 
@@ -114,6 +130,14 @@ class Project:
         out = self.compose("ps", "-a", "-q", service).stdout.split()
         assert len(out) == 1, f"{service}: containers {out}"
         return out[0]
+
+    def volume_dir(self, volume: str) -> Path | None:
+        """The host folder of one of the project's named volumes, if this process can read
+        it (root, local driver); else None (go through a container)."""
+        res = _run(["docker", "volume", "inspect", "-f", "{{.Mountpoint}}",
+                    f"{self.name}_{volume}"])
+        path = Path(res.stdout.strip()) if res.returncode == 0 else None
+        return path if path and os.access(path, os.R_OK | os.X_OK) else None
 
     def logs(self) -> str:
         return self.compose("logs", "--no-color", check=False).stdout

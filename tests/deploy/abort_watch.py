@@ -1,0 +1,40 @@
+"""Run inside a container of a compose network: print when run RUN's clock says abort.
+
+    python3 abort_watch.py RUN ENDPOINT CLIENT_CONFIG
+
+Prints ``ready`` once subscribed, then ``abort <unix time> <reason>`` for the first abort
+the orchestrator publishes on ``suscosim/RUN/orchestrator/clock``, and exits. A tap: it needs
+no run key (signed messages decode without it) and only a certificate that may subscribe.
+"""
+
+import os
+import sys
+import threading
+import time
+
+import zenoh
+
+from cosim import keys
+from cosim.wire import decode
+
+run, endpoint, config = sys.argv[1:4]
+conf = zenoh.Config.from_file(config)
+conf.insert_json5("connect/endpoints", f'["{endpoint}"]')
+done = threading.Event()
+
+
+def on_sample(sample) -> None:
+    try:
+        msg = decode(sample.payload.to_bytes())
+    except Exception:
+        return
+    if msg.kind == "abort" and not done.is_set():
+        done.set()
+        print(f"abort {time.time():.6f} {msg.d.get('reason', '')}", flush=True)
+
+
+session = zenoh.open(conf)
+session.declare_subscriber(keys.key(run, keys.ORCHESTRATOR, keys.CLOCK), on_sample)
+print("ready", flush=True)
+done.wait(600)
+os._exit(0)  # a Zenoh session open at exit can hang interpreter shutdown
