@@ -8,6 +8,7 @@ official image with the shipped configuration mounted; paths agree across contai
 from __future__ import annotations
 
 import re
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -104,6 +105,23 @@ def test_certs_service_runs_the_shipped_script(compose):
     for name in ("router", "orchestrator", *ch.NODES):
         assert compose["services"][name]["depends_on"]["certs"]["condition"] == \
             "service_completed_successfully"
+
+
+def test_every_participant_gets_the_deployment_secret_made_by_certs(compose, tmp_path):
+    """Run messages are signed (cosim/auth.py): every participant derives the run key from
+    the same secret, which the certs service writes (mode 600) into the certs volume."""
+    for name in ("orchestrator", *ch.NODES):
+        svc = compose["services"][name]
+        key_file = svc["environment"]["SUSCOSIM_KEY_FILE"]
+        assert key_file == f"{CERTS}/suscosim.key" and _mounts(svc)[CERTS] == "certs"
+    script = ROOT / "deploy/zenoh/make_certs.sh"
+    if shutil.which("openssl") is None:
+        pytest.skip("openssl not installed: make_certs.sh not run")
+    res = subprocess.run(["sh", str(script), str(tmp_path / "c")], capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    key = tmp_path / "c" / "suscosim.key"
+    assert key.stat().st_mode & 0o777 == 0o600 and len(bytes.fromhex(key.read_text())) == 32
 
 
 def test_node_commands_parse_and_name_their_node(compose, monkeypatch):
