@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim import scenario as sc
-from nodes.recorder.table import read_table
+from cosim.table import read_table
 from orchestrator.accuracy import peak_errors, worst
 from orchestrator.reference import reference_solution
 from orchestrator.runner import resolve, run_scenario

@@ -282,3 +282,27 @@ def read_journal(path: str | Path, tail_bytes: int | None = None) -> JournalCont
                 f"{len(records)} intact records kept")
         problem = text + (f"; {problem}" if problem else "")
     return JournalContents(run_id, records, torn, problem, skipped)
+
+
+TAIL_BYTES = 64 * 1024
+"""How much of a journal's end :func:`last_step` reads."""
+
+
+def last_step(path: str | Path, tail_bytes: int = TAIL_BYTES) -> int | None:
+    """The last step ``k`` every channel in the journal's tail has reached, or None (no
+    journal, no data record in the tail). Only the header and the last ``tail_bytes`` are
+    read, so it is cheap on a journal of any size (``runs``, a sweep's progress display)."""
+    try:
+        contents = read_journal(path, tail_bytes=tail_bytes)
+    except (OSError, ValueError):
+        return None
+    last: dict[str, int] = {}
+    for channel, raw in contents.records:
+        try:
+            obj = msgpack.unpackb(raw, raw=False)
+        except Exception:  # a payload the bus would have rejected: not a step
+            continue
+        k = obj.get("k") if isinstance(obj, dict) and obj.get("kind") == "data" else None
+        if isinstance(k, int):
+            last[channel] = max(last.get(channel, -1), k)
+    return min(last.values()) if last else None

@@ -8,7 +8,6 @@ that ended early) is left out of the table, so every row is complete.
 from __future__ import annotations
 
 import csv
-import json
 import math
 from collections import Counter
 from collections.abc import Iterable
@@ -172,7 +171,3 @@ def export_safely(table: Table, folder: str | Path, damaged: bool) -> tuple[dict
     """:func:`export` to :func:`export_target`'s place: (paths written, why alongside)."""
     stem, why = export_target(folder, len(table["t"]), damaged)
     return export(table, folder, stem), why
-
-
-def dump_json(obj: object, path: str | Path) -> None:
-    Path(path).write_text(json.dumps(obj, indent=2, sort_keys=True) + "\n")

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from nodes.recorder.table import Table
+from cosim.table import Table
 
 TABLE_3_3_SIGNALS = {
     "body displacement": "plant/state/z_b",

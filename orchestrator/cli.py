@@ -105,7 +105,7 @@ def _export_run_dir(run_dir: Path, args: argparse.Namespace) -> int:
     """``export RUN_DIR --format F``: the run's table as ``<out>/table.<ext>`` (out default
     ``RUN_DIR/export``)."""
     from cosim.formats.channel_set import EXTENSION
-    from nodes.recorder.table import read_table
+    from cosim.table import read_table
 
     out = Path(args.out) if args.out else run_dir / "export"
     src = next((run_dir / n for n in ("table.parquet", "table.csv")
@@ -143,8 +143,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     ``export RUN_DIR --format mdf4|rpc3|csv|parquet``: the run's table (names and SI units)
     as ``RUN_DIR/export/table.<ext>`` (or ``--out``); see docs/data_formats.md.
     """
-    from nodes.recorder.journal import read_journal
-    from nodes.recorder.table import build_table, export_safely
+    from cosim.journal import read_journal
+    from cosim.table import build_table, export_safely
 
     journal = Path(args.journal)
     if journal.is_dir():

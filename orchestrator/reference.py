@@ -16,9 +16,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from cosim.errors import ScenarioError
+from cosim.table import Table, channel_stats, export
 from nodes.plant.model import GRAVITY
 from nodes.plant.quarter_car_lumped import LumpedQuarterCarParams
-from nodes.recorder.table import Table, channel_stats, export
 from nodes.tyre_road.config import build_road, build_tyre
 
 

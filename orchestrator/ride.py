@@ -90,8 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         if not (d / TABLE).is_file():
             return _fail(f"{d}: no {TABLE} (unfinished run? try 'suscosim export "
                          f"{d / 'journal.msgpack'}')")
+    from cosim.table import read_table
     from nodes.recorder.ride_metrics import ride_summary, ride_table
-    from nodes.recorder.table import read_table
 
     names = run_names(dirs)
     runs = {}

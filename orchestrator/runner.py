@@ -297,7 +297,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     folder = Path(run["dir"])
     if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go
         listen = list(listen or [free_loopback_endpoint()])
-    from .runs import write_run_json
+    from cosim.run_folder import write_run_json
 
     bus_eps = run["mode"] == "distributed"  # the other modes open no Zenoh session
     try:  # before any node or bus: an unwritable folder or a full disk ends it here
@@ -433,13 +433,13 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
 
 def _recover(folder: Path) -> dict[str, Any]:
     """After a failed run: whatever the journal holds, as a table, never put in place of a
-    larger one (see :func:`nodes.recorder.table.export_target`); a table that cannot be
+    larger one (see :func:`cosim.table.export_target`); a table that cannot be
     written (a full disk) is removed rather than left truncated."""
     journal = folder / "journal.msgpack"
     if not journal.exists():
         return {}
-    from nodes.recorder.journal import read_journal
-    from nodes.recorder.table import build_table, channel_stats, export, export_target
+    from cosim.journal import read_journal
+    from cosim.table import build_table, channel_stats, export, export_target
 
     try:
         contents = read_journal(journal)

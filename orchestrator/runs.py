@@ -32,184 +32,20 @@ Exit codes: 0 listed (also when there is no run), 2 ``DIR`` is not a folder.
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
 import json
-import os
 import socket
 import sys
 from pathlib import Path
 from typing import Any
 
-import msgpack
+from cosim.run_folder import SCENARIO_JSON, run_info
 
-RUN_JSON = "run.json"
-TAIL_BYTES = 64 * 1024
 MAX_DEPTH = 3
-STATUSES = ("ok", "failed", "running", "interrupted", "unknown")
-
-
-# ---- run.json (written by the runner) ------------------------------------------------------
-def _proc_start(pid: int) -> int | None:
-    """Start time of process ``pid`` in clock ticks since boot (Linux ``/proc``), or None."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return None
-    # Field 2 (comm) may hold spaces and parentheses: split after its closing one.
-    fields = stat[stat.rfind(")") + 2:].split()
-    try:
-        return int(fields[19])  # field 22 of the whole line
-    except (IndexError, ValueError):
-        return None
-
-
-def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
-                   connect: list[str] | None, lowlatency: bool = False) -> dict[str, Any]:
-    """Record who runs ``folder`` and where its bus is (for ``suscosim runs`` and ``tap``)."""
-    scenario_mode = ""
-    try:
-        scenario_mode = json.loads((folder / "scenario.json").read_text())["run"]["mode"]
-    except (OSError, ValueError, KeyError, TypeError):
-        pass
-    info = {
-        "run_id": run_id, "pid": os.getpid(), "pid_start": _proc_start(os.getpid()),
-        "host": socket.gethostname(),
-        "started": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
-        "mode": scenario_mode,
-        "endpoints": {"listen": list(listen or []), "connect": list(connect or [])},
-        "lowlatency": bool(lowlatency), "state": "started",
-    }
-    (Path(folder) / RUN_JSON).write_text(json.dumps(info, indent=2))
-    return info
-
-
-# ---- reading a run folder -----------------------------------------------------------------
-def _read_json(path: Path) -> dict[str, Any] | None:
-    try:
-        obj = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    return obj if isinstance(obj, dict) else None
-
-
-def pid_alive(pid: int, pid_start: int | None = None) -> bool:
-    """Whether process ``pid`` exists (and is not a zombie), and is the one that started at
-    ``pid_start`` (clock ticks since boot) when that is given and ``/proc`` can tell."""
-    if not isinstance(pid, int) or pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # someone else's process: it exists
-        pass
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-        if stat[stat.rfind(")") + 2:].split()[0] == "Z":
-            return False
-    except (OSError, IndexError):
-        pass
-    if pid_start is not None:
-        now = _proc_start(pid)
-        if now is not None and now != pid_start:
-            return False
-    return True
-
-
-def journal_tail_steps(path: Path, tail_bytes: int = TAIL_BYTES) -> int | None:
-    """The last step ``k`` every channel in the journal's tail has reached, or None.
-
-    Only the header and the last ``tail_bytes`` are read, by the journal reader every other
-    command uses (:func:`nodes.recorder.journal.read_journal`; it finds the first intact record
-    of the tail by its CRC)."""
-    from nodes.recorder.journal import read_journal
-
-    try:
-        contents = read_journal(path, tail_bytes=tail_bytes)
-    except (OSError, ValueError):
-        return None
-    return _min_last_k(contents.records)
-
-
-def journal_integrity(path: Path) -> dict[str, Any]:
-    """What ``suscosim export`` would find in the journal: intact ``records``,
-    ``skipped_records`` (damaged, stepped over), ``torn`` and ``problem`` (one line)."""
-    from nodes.recorder.journal import read_journal
-
-    try:
-        c = read_journal(path)
-    except (OSError, ValueError) as exc:
-        return {"records": None, "skipped_records": None, "torn": False, "problem": str(exc)}
-    return {"records": len(c.records), "skipped_records": c.skipped_records, "torn": c.torn,
-            "problem": c.problem}
-
-
-def _min_last_k(records: list[tuple[str, bytes]]) -> int | None:
-    last: dict[str, int] = {}
-    for channel, raw in records:
-        try:
-            obj = msgpack.unpackb(raw, raw=False)
-            k = obj["k"] if isinstance(obj, dict) and obj.get("kind") == "data" else None
-        except Exception:
-            continue
-        if isinstance(k, int):
-            last[channel] = max(last.get(channel, -1), k)
-    return min(last.values()) if last else None
-
-
-def run_info(folder: Path, host: str | None = None) -> dict[str, Any]:
-    """What the files of one run folder say about it (see the module docstring)."""
-    host = host or socket.gethostname()
-    scenario = _read_json(folder / "scenario.json") or {}
-    run = scenario.get("run") if isinstance(scenario.get("run"), dict) else {}
-    meta = _read_json(folder / RUN_JSON)
-    summary = _read_json(folder / "summary.json")
-    info: dict[str, Any] = {
-        "dir": str(folder), "id": (meta or {}).get("run_id") or run.get("id") or folder.name,
-        "name": run.get("name", ""), "mode": run.get("mode") or (meta or {}).get("mode", ""),
-        "n_steps": run.get("n_steps"), "steps": None, "status": "unknown", "error": "",
-        "started": (meta or {}).get("started") or _mtime(folder / "scenario.json"),
-        "pid": (meta or {}).get("pid"), "endpoints": (meta or {}).get("endpoints", {}),
-        "lowlatency": bool((meta or {}).get("lowlatency", False)),
-    }
-    if summary is not None:
-        info["status"] = summary.get("status") if summary.get("status") in STATUSES else "unknown"
-        info["error"] = str(summary.get("error") or "")
-    elif meta is None:
-        info["error"] = "no run.json and no summary.json: cannot tell"
-    elif meta.get("host") not in (None, host):
-        info["error"] = f"orchestrator on host {meta.get('host')}: cannot check its process"
-    else:
-        alive = pid_alive(meta.get("pid"), meta.get("pid_start"))
-        info["status"] = "running" if alive else "interrupted"
-        if not alive:
-            info["error"] = f"orchestrator (pid {meta.get('pid')}) is gone, no summary.json"
-    journal = folder / "journal.msgpack"
-    info["records"] = info["skipped_records"] = None
-    if journal.exists():
-        info["steps"] = journal_tail_steps(journal)
-        integrity = journal_integrity(journal)
-        info["records"] = integrity["records"]
-        info["skipped_records"] = integrity["skipped_records"]
-        if integrity["skipped_records"] or integrity["records"] is None:
-            note = f"journal: {integrity['problem']}"
-            info["error"] = f"{info['error']}; {note}" if info["error"] else note
-    elif summary is not None and summary.get("rows"):
-        info["steps"] = int(summary["rows"]) - 1
-    return info
-
-
-def _mtime(path: Path) -> str:
-    try:
-        ts = path.stat().st_mtime
-    except OSError:
-        return ""
-    return _dt.datetime.fromtimestamp(ts).astimezone().isoformat(timespec="seconds")
 
 
 def find_runs(root: Path, depth: int = MAX_DEPTH) -> list[Path]:
     """Run folders (holding ``scenario.json``) in ``root``, up to ``depth`` levels down."""
-    if (root / "scenario.json").is_file():
+    if (root / SCENARIO_JSON).is_file():
         return [root]
     if depth <= 0:
         return []

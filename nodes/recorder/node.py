@@ -28,11 +28,10 @@ from typing import Any
 from cosim import channels as ch
 from cosim import keys
 from cosim.errors import RunError, WireError
+from cosim.journal import JournalWriter, read_journal
 from cosim.participant import HELLO_PERIOD_S, WAITING_PERIOD_S, Participant
+from cosim.table import build_table, channel_stats, export
 from cosim.wire import MAX_MESSAGE_BYTES, decode
-
-from .journal import JournalWriter, read_journal
-from .table import build_table, channel_stats, export
 
 FLUSH_PERIOD_S = 0.05
 _DATA = "~data"

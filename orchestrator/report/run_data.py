@@ -69,7 +69,7 @@ def is_sweep_dir(d: Path) -> bool:
 
 def load_run(d: Path) -> RunData:
     """Read every piece of a run folder that exists; never raises for a bad piece."""
-    from nodes.recorder.table import read_table
+    from cosim.table import read_table
 
     r = RunData(path=d)
     sc = _read_json(d / "scenario.json", r.problems)
@@ -87,8 +87,8 @@ def load_run(d: Path) -> RunData:
             r.table, r.table_note = tab, name
     if r.table is None and (d / "journal.msgpack").is_file():
         try:
-            from nodes.recorder.journal import read_journal
-            from nodes.recorder.table import build_table
+            from cosim.journal import read_journal
+            from cosim.table import build_table
 
             contents = read_journal(d / "journal.msgpack")
             tab, _bad = build_table(contents.records)

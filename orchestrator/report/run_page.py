@@ -194,7 +194,7 @@ def stats_section(r: RunData) -> str:
     chans = (r.summary or {}).get("channels") or {}
     src = "summary.json"
     if not chans and r.table is not None:
-        from nodes.recorder.table import channel_stats
+        from cosim.table import channel_stats
 
         chans = channel_stats({"t": r.table["t"], **{k: v for k, v in r.table.items()
                                                       if k != "t"}})

@@ -129,8 +129,8 @@ class DamageMap:
         """The steps before the scope joined, from the run's journal (the recorder writes it
         as the run goes): True when they are in (or when giving up after a few tries)."""
         from cosim.errors import WireError
+        from cosim.journal import read_journal
         from cosim.wire import decode
-        from nodes.recorder.journal import read_journal
 
         assert self.journal is not None, "backfill without a journal (its tries start used up)"
         self._backfill_tries += 1

@@ -76,11 +76,11 @@ from .spec import (
     toml_value,
     validate_points,
 )
-from .state import journal_step, point_state
+from .state import point_state
 
 __all__ = ["DEFAULT_CHANNELS", "FATIGUE_COLUMNS", "MAX_ID", "RESERVED", "ROOT", "SWEEP_KEYS",
            "Axis", "Display", "Job", "Point", "Runner", "Sweep", "SweepError", "build_parser",
-           "journal_step", "load_sweep", "main", "point_id", "point_state", "result_rows",
+           "load_sweep", "main", "point_id", "point_state", "result_rows",
            "results_table", "serve", "toml_value", "validate_points", "write_results",
            "write_sweep_json"]
 

@@ -8,8 +8,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol, TextIO
 
+from cosim.run_folder import read_json
+
 from .results import _fmt
-from .state import _read_json
 
 if TYPE_CHECKING:
     from .spec import Point
@@ -107,9 +108,9 @@ def event_line(run_dir: Path, pid: str, status: str, err: str, i: int, n: int) -
     head = f"[{i}/{n}] {status:<6} {pid}"
     if status != "ok":
         return f"{head}: {err}"
-    s = _read_json(run_dir / "summary.json") or {}
+    s = read_json(run_dir / "summary.json") or {}
     text = f"{head}  wall {s.get('wall_s', 0):.1f} s, {s.get('steps_per_s', 0):.0f} steps/s"
-    f = _read_json(run_dir / "fatigue" / "summary.json")
+    f = read_json(run_dir / "fatigue" / "summary.json")
     if isinstance(f, dict):
         text += f", min life {_fmt(f.get('min_life_km'))} km"
     return text

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
+from cosim.journal import last_step
+
 from .display import Display, event_line
 from .phases import (
     fatigue_command,
@@ -23,7 +25,6 @@ from .phases import (
 )
 from .procs import _kill_group, _start
 from .spec import Point, Sweep
-from .state import journal_step
 
 
 @dataclass
@@ -40,7 +41,7 @@ class Job:
 
     def step(self) -> int | None:
         """The step its run has reached (from the tail of its journal), or None."""
-        return journal_step(self.run_dir / "journal.msgpack")
+        return last_step(self.run_dir / "journal.msgpack")
 
 
 class Runner:

@@ -12,8 +12,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from cosim.run_folder import read_json
+
 from .procs import _exit_text, _last_error
-from .state import _read_json
 
 
 def point_meta(sweep_name: str, pid: str, params: dict[str, Any], base: str,
@@ -64,9 +65,9 @@ def fatigue_command(run_dir: Path) -> list[str]:
 def run_outcome(code: int, run_dir: Path, log: Path, fatigue: bool) -> tuple[str, str]:
     """The run phase ended with exit ``code``: ``("ok", "")``, ``("fatigue", "")`` (ok, but
     the fatigue phase is still to do: no live fatigue node wrote it) or ``("failed", why)``."""
-    summary = _read_json(run_dir / "summary.json")
+    summary = read_json(run_dir / "summary.json")
     if code == 0 and isinstance(summary, dict) and summary.get("status") == "ok":
-        if fatigue and not isinstance(_read_json(run_dir / "fatigue" / "summary.json"), dict):
+        if fatigue and not isinstance(read_json(run_dir / "fatigue" / "summary.json"), dict):
             return "fatigue", ""
         return "ok", ""
     err = summary.get("error", "") if isinstance(summary, dict) else ""
@@ -76,7 +77,7 @@ def run_outcome(code: int, run_dir: Path, log: Path, fatigue: bool) -> tuple[str
 
 def fatigue_outcome(code: int, run_dir: Path, log: Path) -> tuple[str, str]:
     """The fatigue phase ended with exit ``code``: ``("ok", "")`` or ``("failed", why)``."""
-    if code == 0 and isinstance(_read_json(run_dir / "fatigue" / "summary.json"), dict):
+    if code == 0 and isinstance(read_json(run_dir / "fatigue" / "summary.json"), dict):
         return "ok", ""
     err = _last_error(log)
     return "failed", f"fatigue {_exit_text(code)}" + (f": {err}" if err else "")

@@ -8,8 +8,10 @@ import json
 from pathlib import Path
 from typing import Any
 
+from cosim.run_folder import read_json
+
 from .spec import Sweep
-from .state import _read_json, point_state
+from .state import point_state
 
 
 def _fmt(v: Any) -> str:
@@ -25,9 +27,9 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
     rows = []
     for p in sweep.points:
         d = sweep.run_dir(out, p)
-        summary = _read_json(d / "summary.json")
+        summary = read_json(d / "summary.json")
         summary = summary if isinstance(summary, dict) else {}
-        fat = _read_json(d / "fatigue" / "summary.json") if sweep.fatigue else None
+        fat = read_json(d / "fatigue" / "summary.json") if sweep.fatigue else None
         if p.id in status:
             st, err = status[p.id]
         else:
@@ -53,7 +55,7 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
             row["critical_node"] = fat.get("critical_node_id")
         if sweep.design is not None:
             row.update(ride_columns(d) if st == "ok" else {})
-        meta = _read_json(d / "point.json")
+        meta = read_json(d / "point.json")
         worker = meta.get("worker") if isinstance(meta, dict) else None
         row["worker"] = _worker_text(worker) if isinstance(worker, dict) else None
         row["run_dir"] = sweep.run_dir_text(p)
@@ -71,8 +73,8 @@ def ride_columns(run_dir: Path) -> dict[str, float]:
     table_path = run_dir / "table.parquet"
     if not table_path.is_file():
         return {}
+    from cosim.table import read_table
     from nodes.recorder.ride_metrics import metric_values
-    from nodes.recorder.table import read_table
 
     try:
         values = metric_values(read_table(table_path))

@@ -24,6 +24,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from cosim.journal import last_step
+from cosim.run_folder import read_json
+
 from .phases import (
     fatigue_command,
     fatigue_outcome,
@@ -34,7 +37,6 @@ from .phases import (
     write_point_json,
 )
 from .procs import ROOT, _child_env, _kill_group
-from .state import _read_json, journal_step
 
 POLL_S = 0.5
 PROGRESS_S = 1.0
@@ -113,7 +115,7 @@ class _Context:
                     proc.wait()
                 raise _Cancelled
             if phase == "run":
-                self.emit(phase, journal_step(run_dir / "journal.msgpack"))
+                self.emit(phase, last_step(run_dir / "journal.msgpack"))
             time.sleep(POLL_S)
         if proc.returncode != 0:
             _kill_group(proc)  # nodes orphaned by a killed run
@@ -159,7 +161,7 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
         else:
             if task.get("archive"):
                 unpack(task["archive"], run_dir)
-            meta = _read_json(run_dir / "point.json") or dict(task["point"])
+            meta = read_json(run_dir / "point.json") or dict(task["point"])
             write_point_json(run_dir, {**meta, "fatigue_worker": ctx.info})
             st, err = "failed", ""
         if phase == "fatigue":

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from cosim.formats import si_unit
-from nodes.recorder.table import read_table
+from cosim.table import read_table
 
 from .conftest import cli
 

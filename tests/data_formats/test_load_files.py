@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.recorder.table import read_table
+from cosim.table import read_table
 
 from ..conftest import suscosim
 from .conftest import cli

@@ -12,7 +12,7 @@ import pytest
 
 from cosim import scenario as sc
 from cosim.errors import ScenarioError
-from nodes.recorder.table import read_table
+from cosim.table import read_table
 from orchestrator.runner import resolve
 
 from ..conftest import ROOT, suscosim

@@ -14,9 +14,9 @@ import pytest
 
 from cosim import channels as ch
 from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.journal import read_journal
+from cosim.table import build_table, read_table
 from cosim.wire import encode
-from nodes.recorder.journal import read_journal
-from nodes.recorder.table import build_table, read_table
 from orchestrator.accuracy import peak_errors, worst
 from orchestrator.placement import core_layout, usable_cores
 from orchestrator.reference import reference_solution

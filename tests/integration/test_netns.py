@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.recorder.journal import read_journal
-from nodes.recorder.table import build_table, read_table
+from cosim.journal import read_journal
+from cosim.table import build_table, read_table
 
 from ..conftest import CH3_STEP, ROOT, suscosim
 from .netns import ADDR, MAIN, PLANT, ROUTER, ROUTER_ADDR, Topology, unavailable

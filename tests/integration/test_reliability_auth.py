@@ -14,9 +14,9 @@ import pytest
 
 from cosim import keys
 from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.journal import read_journal
+from cosim.table import build_table
 from cosim.wire import decode, encode
-from nodes.recorder.journal import read_journal
-from nodes.recorder.table import build_table
 from tests.conftest import CH3_STEP, popen_suscosim, suscosim
 
 pytestmark = pytest.mark.integration

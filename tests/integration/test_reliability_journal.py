@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from nodes.recorder.journal import read_journal
-from nodes.recorder.table import read_table
+from cosim.journal import read_journal
+from cosim.table import read_table
 
 from ..conftest import CH3_STEP, suscosim
 

@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from nodes.recorder.table import read_table
+from cosim.table import read_table
 from orchestrator.runner import local_lease_ms
 
 from ..conftest import node_pids, popen_suscosim

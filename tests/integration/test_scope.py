@@ -32,7 +32,7 @@ import numpy as np
 import pytest
 
 from cosim.bus import free_loopback_endpoint
-from nodes.recorder.table import read_table
+from cosim.table import read_table
 
 from ..conftest import CH3_STEP, ROOT, node_pids, popen_suscosim, suscosim
 

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.sweep import journal_step, load_sweep, point_id, toml_value
+from cosim.journal import last_step
+from orchestrator.sweep import load_sweep, point_id, toml_value
 
 from ..conftest import CH3_STEP, ROOT, popen_suscosim, suscosim
 
@@ -95,19 +96,19 @@ def test_grid_product_variants_and_overrides(tmp_path):
     assert point_of_run("someone-else", ids) is None
 
 
-def test_journal_step_reads_the_last_record(tmp_path):
+def test_last_step_reads_the_journal_tail(tmp_path):
+    from cosim.journal import JournalWriter
     from cosim.wire import encode
-    from nodes.recorder.journal import JournalWriter
 
-    assert journal_step(tmp_path / "missing.msgpack") is None
+    assert last_step(tmp_path / "missing.msgpack") is None
     w = JournalWriter(tmp_path / "j.msgpack", "r")
     for k in range(3000):
-        w.append("plant/state", encode("state", k, k * 1e-3, {"z_b": 0.1 * k, "blob": b"\x93" * 7}))
+        w.append("plant/state", encode("data", k, k * 1e-3, {"z_b": 0.1 * k, "blob": b"\x93" * 7}))
     w.close()
-    assert journal_step(tmp_path / "j.msgpack") == 2999
+    assert last_step(tmp_path / "j.msgpack") == 2999
     with open(tmp_path / "j.msgpack", "ab") as fh:  # a torn last record
         fh.write(b"\x93\xabplant/state\xc4\x40partial")
-    assert journal_step(tmp_path / "j.msgpack") == 2999
+    assert last_step(tmp_path / "j.msgpack") == 2999
 
 
 # ------------------------------------------------------------------ bad sweep files
@@ -194,7 +195,7 @@ def test_killed_run_fails_alone_and_resume_redoes_only_it(tmp_path):
         pids: list[int] = []
         while time.monotonic() < deadline:  # the victim's run is stepping: kill it
             pids = _procs_with("orchestrator", " run ", f"runs/{victim} ")
-            k = journal_step(out / "runs" / victim / "journal.msgpack")
+            k = last_step(out / "runs" / victim / "journal.msgpack")
             if pids and k is not None and k > 100:
                 break
             time.sleep(0.1)

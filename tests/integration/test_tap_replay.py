@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
-from nodes.recorder.journal import read_journal
-from nodes.recorder.table import read_table
+from cosim.journal import read_journal
+from cosim.table import read_table
 from orchestrator import runs
 
 from ..conftest import CH3_STEP, popen_suscosim, suscosim

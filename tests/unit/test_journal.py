@@ -1,8 +1,8 @@
 import os
 
+from cosim.journal import JournalWriter, read_journal
+from cosim.table import build_table, channel_stats
 from cosim.wire import encode
-from nodes.recorder.journal import JournalWriter, read_journal
-from nodes.recorder.table import build_table, channel_stats
 
 
 def _write(path, n):

@@ -13,10 +13,10 @@ import pytest
 from cosim import auth as au
 from cosim import keys
 from cosim.bus import MemoryBus
+from cosim.journal import read_journal
 from cosim.participant import MAILBOX_MAX, MAILBOX_WINDOW, Participant
+from cosim.table import build_table
 from cosim.wire import encode
-from nodes.recorder.journal import read_journal
-from nodes.recorder.table import build_table
 from orchestrator.clock import Clock
 
 KEY = au.derive_run_key(b"k" * 32, "r")

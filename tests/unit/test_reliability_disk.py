@@ -65,7 +65,7 @@ def test_full_disk_during_a_run_ends_it_with_both_errors_and_the_bus_closed(
             raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(runner, "MemoryBus", Bus)
-    monkeypatch.setattr("nodes.recorder.journal.JournalWriter.flush", flush)
+    monkeypatch.setattr("cosim.journal.JournalWriter.flush", flush)
     monkeypatch.setattr(Path, "write_text", _full_for("summary.json", ".summary.json.tmp"))
     out = tmp_path / "run"
     code, err = cli("run", str(CH3), "--set", "run.t_end=0.05", "--out", str(out),
@@ -88,8 +88,8 @@ def test_unwritable_run_folder_is_refused_before_anything_starts(tmp_path, cli):
 
 
 def test_salvaged_table_is_removed_rather_than_left_truncated(tmp_path, monkeypatch):
+    from cosim.journal import JournalWriter
     from cosim.wire import encode
-    from nodes.recorder.journal import JournalWriter
 
     w = JournalWriter(tmp_path / "journal.msgpack", "r")
     for k in range(5):
@@ -100,7 +100,7 @@ def test_salvaged_table_is_removed_rather_than_left_truncated(tmp_path, monkeypa
         Path(path).write_bytes(b"PAR1")  # half a file, then the disk is full
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr("nodes.recorder.table.write_parquet", write_parquet)
+    monkeypatch.setattr("cosim.table.write_parquet", write_parquet)
     rec = runner._recover(tmp_path)
     assert rec["rows"] == 5 and "No space left on device" in rec["error"]
     assert not (tmp_path / "table.csv").exists() and not (tmp_path / "table.parquet").exists()

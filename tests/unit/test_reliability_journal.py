@@ -8,11 +8,10 @@ from pathlib import Path
 
 import msgpack
 
+from cosim import run_folder
+from cosim.journal import JournalWriter, last_step, read_journal
 from cosim.wire import encode
-from nodes.recorder.journal import JournalWriter, read_journal
-from orchestrator import runs
 from orchestrator.cli import main as cli_main
-from orchestrator.sweep import journal_step
 
 CHANNELS = ("plant/state", "tyre_road/force")
 
@@ -113,7 +112,7 @@ def test_export_of_a_damaged_journal_writes_alongside_and_exits_2(tmp_path: Path
     assert res["records"] == len(original) - 1 and res["skipped_records"] == 1
     # `suscosim runs` reads it with the same reader: the same counts, and a note.
     (tmp_path / "scenario.json").write_text(json.dumps({"run": {"id": "rel", "n_steps": 99}}))
-    info = runs.run_info(tmp_path)
+    info = run_folder.run_info(tmp_path)
     assert info["records"] == res["records"] and info["skipped_records"] == 1
     assert "damaged" in info["error"]
 
@@ -136,6 +135,5 @@ def test_tail_readers_skip_damage_too(tmp_path: Path) -> None:
     data = bytearray(p.read_bytes())
     data[-300] ^= 0xFF  # inside one of the last records
     p.write_bytes(bytes(data))
-    assert journal_step(p) == 2999
-    assert runs.journal_tail_steps(p) == 2999
+    assert last_step(p) == 2999
     assert read_journal(p, tail_bytes=4096).skipped_records == 1

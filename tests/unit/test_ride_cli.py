@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.recorder.table import export
+from cosim.table import export
 from orchestrator import ride
 from orchestrator.cli import main as cli_main
 

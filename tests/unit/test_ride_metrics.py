@@ -250,7 +250,7 @@ def test_the_same_run_at_2_ms_and_at_half_a_ms_gives_the_same_headline(tmp_path,
     coupling, so the physics has converged at both steps (with the thesis's zero-order hold
     the 2 ms run itself is 3.4 % high against the SciPy reference, a coupling error and not a
     metric one; REPRODUCTION.md Ch. 5)."""
-    from nodes.recorder.table import read_table
+    from cosim.table import read_table
     from orchestrator import ride
 
     from ..conftest import ROOT, suscosim
@@ -295,7 +295,7 @@ def test_the_headline_of_a_tss3_run_at_half_a_ms_is_the_thesis_metric_of_that_ru
     sqrt(trapz) over 0-20 Hz selected by frequency."""
     from scipy.signal import periodogram, resample_poly
 
-    from nodes.recorder.table import read_table
+    from cosim.table import read_table
     from orchestrator import ride
 
     from ..conftest import ROOT, suscosim

@@ -10,8 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from cosim import run_folder
+from cosim.journal import TAIL_BYTES, JournalWriter, last_step
 from cosim.wire import encode
-from nodes.recorder.journal import JournalWriter
 from orchestrator import runs
 
 CHANNELS = ("plant/state", "tyre_road/force", "controller/force", "plant/response")
@@ -55,8 +56,8 @@ def _run(root: Path, name: str, *, n_steps: int = 200, summary: dict | None = No
 @pytest.fixture
 def fabricated(tmp_path: Path) -> Path:
     dead = _dead_pid()
-    me, me_start = os.getpid(), runs._proc_start(os.getpid())
-    host = runs.socket.gethostname()
+    me, me_start = os.getpid(), run_folder._proc_start(os.getpid())
+    host = run_folder.socket.gethostname()
     _run(tmp_path, "a_ok", meta={"pid": dead, "host": host, "started": "2025-01-01T10:00:00"},
          summary={"status": "ok", "error": "", "rows": 201}, last_k=200)
     _run(tmp_path, "b_failed", meta={"pid": dead, "host": host, "started": "2025-01-01T10:01:00"},
@@ -106,12 +107,12 @@ def test_status_of_each_fabricated_run(fabricated: Path) -> None:
 
 def test_steps_read_from_the_tail_of_a_big_journal(tmp_path: Path) -> None:
     folder = _run(tmp_path, "big", n_steps=5000, last_k=4321, lagging=1)
-    assert (folder / "journal.msgpack").stat().st_size > 4 * runs.TAIL_BYTES
-    assert runs.journal_tail_steps(folder / "journal.msgpack") == 4320
+    assert (folder / "journal.msgpack").stat().st_size > 4 * TAIL_BYTES
+    assert last_step(folder / "journal.msgpack") == 4320
     # A torn last record (the recorder was killed mid-write) is tolerated.
     with open(folder / "journal.msgpack", "ab") as f:
         f.write(b"\x93\xabplant/state\xc4\x40")
-    assert runs.journal_tail_steps(folder / "journal.msgpack") == 4320
+    assert last_step(folder / "journal.msgpack") == 4320
 
 
 def test_sweep_folders_one_level_deeper(tmp_path: Path) -> None:
@@ -125,12 +126,12 @@ def test_sweep_folders_one_level_deeper(tmp_path: Path) -> None:
 
 def test_write_run_json_marks_this_process_running(tmp_path: Path) -> None:
     folder = _run(tmp_path, "live", mode="distributed")
-    info = runs.write_run_json(folder, "live-id", ["tcp/127.0.0.1:7447"], [], lowlatency=True)
+    info = run_folder.write_run_json(folder, "live-id", ["tcp/127.0.0.1:7447"], [], lowlatency=True)
     assert info["pid"] == os.getpid()
     on_disk = json.loads((folder / "run.json").read_text())
     assert on_disk["endpoints"] == {"listen": ["tcp/127.0.0.1:7447"], "connect": []}
     assert on_disk["mode"] == "distributed" and on_disk["lowlatency"] is True
-    r = runs.run_info(folder)
+    r = run_folder.run_info(folder)
     assert r["status"] == "running" and r["lowlatency"] is True
 
 

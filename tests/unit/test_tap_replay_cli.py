@@ -10,8 +10,8 @@ import msgpack
 import pytest
 
 from cosim.bus import keyexpr_matches
+from cosim.journal import JournalWriter
 from cosim.wire import decode, encode
-from nodes.recorder.journal import JournalWriter
 from orchestrator import replay, tap
 
 

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
+from cosim.table import read_table
 from nodes.plant import double_wishbone as dw
-from nodes.recorder.table import read_table
 
 from ..conftest import ROOT, suscosim
 

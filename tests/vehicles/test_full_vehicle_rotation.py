@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from cosim.table import read_table
 from nodes.plant.full_vehicle_7dof import FullVehicle7DOF
-from nodes.recorder.table import read_table
 
 from ..conftest import ROOT, suscosim
 

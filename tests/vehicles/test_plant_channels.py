@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nodes.recorder.table import read_table
+from cosim.table import read_table
 
 from ..conftest import ROOT, suscosim
 

@@ -1,0 +1,199 @@
+"""The run folder: what a run writes where, and reading it back. Every command that reads or
+writes a run folder (the runner, the recorder, ``runs``, ``sweep``, ``report``, ``tap``,
+``fatigue``) goes through this module, :mod:`cosim.journal` (``journal.msgpack``) and
+:mod:`cosim.table` (``table.csv`` / ``table.parquet``).
+
+A run folder holds, in the order they are written:
+
+==================  ==========================================================================
+``scenario.json``   the scenario as resolved (written before anything starts)
+``run.json``        who runs it and where its bus is: ``{"run_id", "pid", "pid_start", "host",
+                    "started", "mode", "endpoints": {"listen", "connect"}, "lowlatency",
+                    "state"}`` (:func:`write_run_json`)
+``journal.msgpack`` every data message as received (:mod:`cosim.journal`)
+``table.*``         every channel against time (:mod:`cosim.table`)
+``summary.json``    how the run ended: the authority on ``ok`` / ``failed``
+``fatigue/``        the lower arm's damage (``summary.json``, ``damage_per_node.csv``, map)
+==================  ==========================================================================
+
+The state of a run (:func:`run_info`) is read from the files alone:
+
+* ``ok`` / ``failed``: ``summary.json`` says so (written at the end of every run, also a
+  failed one; its ``error`` is shown);
+* ``running``: no ``summary.json`` yet, and the orchestrator process recorded in ``run.json``
+  is alive (same host, same pid, same process start time: a reused pid is not taken for it);
+* ``interrupted``: no ``summary.json`` and that process is gone (killed, machine rebooted);
+* ``unknown``: no ``summary.json`` and no way to tell (no ``run.json``: a run from before it
+  existed; or the orchestrator ran on another host).
+
+Steps are the last step ``k`` every channel of the journal has reached, read from the
+journal's last 64 KiB only (:func:`cosim.journal.last_step`), against ``run.n_steps``. The
+whole journal is also walked (frames and CRCs only) by the reader ``suscosim export`` uses, so
+both give the same ``records`` and ``skipped_records``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import socket
+from pathlib import Path
+from typing import Any
+
+from .journal import last_step, read_journal
+
+SCENARIO_JSON = "scenario.json"
+RUN_JSON = "run.json"
+SUMMARY_JSON = "summary.json"
+JOURNAL = "journal.msgpack"
+TABLE_STEM = "table"
+FATIGUE_DIR = "fatigue"
+STATUSES = ("ok", "failed", "running", "interrupted", "unknown")
+
+
+def read_json(path: Path) -> Any:
+    """The JSON document in ``path``, or None when it is missing, unreadable or not JSON."""
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+
+
+def _dict(obj: Any) -> dict[str, Any] | None:
+    return obj if isinstance(obj, dict) else None
+
+
+def write_json(obj: object, path: str | Path) -> None:
+    """Write ``obj`` as strict JSON (no NaN or Infinity: a ValueError names the problem),
+    atomically: to a temporary file beside ``path``, then renamed over it, so that a reader
+    sees the old file or the new one, never half of one."""
+    path = Path(path)
+    text = json.dumps(obj, indent=2, sort_keys=True, allow_nan=False) + "\n"
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+# ---- run.json (written by the runner) ------------------------------------------------------
+def _proc_start(pid: int) -> int | None:
+    """Start time of process ``pid`` in clock ticks since boot (Linux ``/proc``), or None."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    # Field 2 (comm) may hold spaces and parentheses: split after its closing one.
+    fields = stat[stat.rfind(")") + 2:].split()
+    try:
+        return int(fields[19])  # field 22 of the whole line
+    except (IndexError, ValueError):
+        return None
+
+
+def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
+                   connect: list[str] | None, lowlatency: bool = False) -> dict[str, Any]:
+    """Record who runs ``folder`` and where its bus is (for ``suscosim runs`` and ``tap``)."""
+    scenario = read_json(Path(folder) / SCENARIO_JSON)
+    run = scenario.get("run") if isinstance(scenario, dict) else None
+    scenario_mode = str(run.get("mode", "")) if isinstance(run, dict) else ""
+    info = {
+        "run_id": run_id, "pid": os.getpid(), "pid_start": _proc_start(os.getpid()),
+        "host": socket.gethostname(),
+        "started": _dt.datetime.now().astimezone().isoformat(timespec="seconds"),
+        "mode": scenario_mode,
+        "endpoints": {"listen": list(listen or []), "connect": list(connect or [])},
+        "lowlatency": bool(lowlatency), "state": "started",
+    }
+    write_json(info, Path(folder) / RUN_JSON)  # atomic: a reader never sees it half-written
+    return info
+
+
+
+# ---- reading a run folder ----------------------------------------------------------------
+def pid_alive(pid: int, pid_start: int | None = None) -> bool:
+    """Whether process ``pid`` exists (and is not a zombie), and is the one that started at
+    ``pid_start`` (clock ticks since boot) when that is given and ``/proc`` can tell."""
+    if not isinstance(pid, int) or pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process: it exists
+        pass
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+        if stat[stat.rfind(")") + 2:].split()[0] == "Z":
+            return False
+    except (OSError, IndexError):
+        pass
+    if pid_start is not None:
+        now = _proc_start(pid)
+        if now is not None and now != pid_start:
+            return False
+    return True
+
+
+def journal_integrity(path: Path) -> dict[str, Any]:
+    """What ``suscosim export`` would find in the journal: intact ``records``,
+    ``skipped_records`` (damaged, stepped over), ``torn`` and ``problem`` (one line)."""
+    try:
+        c = read_journal(path)
+    except (OSError, ValueError) as exc:
+        return {"records": None, "skipped_records": None, "torn": False, "problem": str(exc)}
+    return {"records": len(c.records), "skipped_records": c.skipped_records, "torn": c.torn,
+            "problem": c.problem}
+
+
+def run_info(folder: Path, host: str | None = None) -> dict[str, Any]:
+    """What the files of one run folder say about it (see the module docstring)."""
+    host = host or socket.gethostname()
+    scenario = _dict(read_json(folder / SCENARIO_JSON)) or {}
+    run = scenario.get("run") if isinstance(scenario.get("run"), dict) else {}
+    meta = _dict(read_json(folder / RUN_JSON))
+    summary = _dict(read_json(folder / SUMMARY_JSON))
+    info: dict[str, Any] = {
+        "dir": str(folder), "id": (meta or {}).get("run_id") or run.get("id") or folder.name,
+        "name": run.get("name", ""), "mode": run.get("mode") or (meta or {}).get("mode", ""),
+        "n_steps": run.get("n_steps"), "steps": None, "status": "unknown", "error": "",
+        "started": (meta or {}).get("started") or _mtime(folder / SCENARIO_JSON),
+        "pid": (meta or {}).get("pid"), "endpoints": (meta or {}).get("endpoints", {}),
+        "lowlatency": bool((meta or {}).get("lowlatency", False)),
+    }
+    if summary is not None:
+        info["status"] = summary.get("status") if summary.get("status") in STATUSES else "unknown"
+        info["error"] = str(summary.get("error") or "")
+    elif meta is None:
+        info["error"] = "no run.json and no summary.json: cannot tell"
+    elif meta.get("host") not in (None, host):
+        info["error"] = f"orchestrator on host {meta.get('host')}: cannot check its process"
+    else:
+        alive = pid_alive(meta.get("pid"), meta.get("pid_start"))
+        info["status"] = "running" if alive else "interrupted"
+        if not alive:
+            info["error"] = f"orchestrator (pid {meta.get('pid')}) is gone, no summary.json"
+    journal = folder / JOURNAL
+    info["records"] = info["skipped_records"] = None
+    if journal.exists():
+        info["steps"] = last_step(journal)
+        integrity = journal_integrity(journal)
+        info["records"] = integrity["records"]
+        info["skipped_records"] = integrity["skipped_records"]
+        if integrity["skipped_records"] or integrity["records"] is None:
+            note = f"journal: {integrity['problem']}"
+            info["error"] = f"{info['error']}; {note}" if info["error"] else note
+    elif summary is not None and summary.get("rows"):
+        info["steps"] = int(summary["rows"]) - 1
+    return info
+
+
+def _mtime(path: Path) -> str:
+    try:
+        ts = path.stat().st_mtime
+    except OSError:
+        return ""
+    return _dt.datetime.fromtimestamp(ts).astimezone().isoformat(timespec="seconds")
