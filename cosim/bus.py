@@ -23,12 +23,43 @@ import logging
 import queue
 import threading
 from collections.abc import Callable, Iterable
-from typing import Any
+from typing import Any, Protocol
 
 log = logging.getLogger("suscosim.bus")
 
 Callback = Callable[[str, bytes], None]
 LiveCallback = Callable[[str, bool], None]
+
+
+class Feed(Protocol):
+    """A lock-step input read by the node's own thread (:meth:`Bus.feed`)."""
+
+    def recv(self) -> bytes:
+        """The next message; blocks (``b""`` after :meth:`wake`)."""
+
+    def try_recv(self) -> bytes | None:
+        """The next message, or None if none is waiting."""
+
+    def wake(self) -> None:
+        """Make a blocked :meth:`recv` return ``b""``."""
+
+
+class Bus(Protocol):
+    """What node code, the clock and the runner use of a bus: :class:`ZenohBus` and
+    :class:`MemoryBus` both implement it (the verbs of the module docstring)."""
+
+    def publisher(self, key: str) -> Callable[[bytes], None]: ...
+    def put(self, key: str, payload: bytes) -> None: ...
+    def subscribe(self, keyexpr: str, callback: Callback) -> Any: ...
+    def feed(self, key: str, capacity: int = 1024) -> Feed: ...
+    def token(self, key: str) -> Any: ...
+    def watch(self, keyexpr: str, callback: LiveCallback) -> Any: ...
+    def serve(self, key: str, reply: Callable[[], bytes]) -> Any: ...
+    def query(self, key: str, timeout: float = 1.0) -> bytes | None: ...
+    def query_all(self, key: str, timeout: float = 1.0) -> list[bytes]: ...
+    def alive(self, keyexpr: str, timeout: float = 1.0) -> list[str]: ...
+    def close(self) -> None: ...
+
 
 LOOPBACK_LISTEN = "tcp/127.0.0.1:0"
 
@@ -194,7 +225,7 @@ class ZenohBus:
             except Exception:  # already gone with a closing session
                 pass
         self._keep.clear()
-        self.session.close()
+        self.session.close()  # type: ignore[no-untyped-call]  # zenoh's stub lacks a return type
 
 
 class _ZenohFeed:
@@ -221,7 +252,7 @@ class _ZenohFeed:
         self._session.put(self._key, b"", allowed_destination=self._local)
 
     def undeclare(self) -> None:
-        self._sub.undeclare()
+        self._sub.undeclare()  # type: ignore[no-untyped-call]  # zenoh's stub: no return type
 
 
 def _chunks_match(pattern: list[str], key: list[str]) -> bool:

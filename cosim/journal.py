@@ -239,13 +239,13 @@ def read_journal(path: str | Path, tail_bytes: int | None = None) -> JournalCont
         data = path.read_bytes()
         run_id, version, pos = _header(data, path)
     else:
-        with open(path, "rb") as f:
-            head = f.read(HEADER_MAX)
+        with open(path, "rb") as fh:
+            head = fh.read(HEADER_MAX)
             run_id, version, pos = _header(head, path)
-            size = f.seek(0, os.SEEK_END)
+            size = fh.seek(0, os.SEEK_END)
             start = base = max(pos, size - tail_bytes)
-            f.seek(start)
-            data = f.read()
+            fh.seek(start)
+            data = fh.read()
         found = _resync(data, 0, version) if start > pos else 0
         pos = len(data) if found is None else found
     records: list[tuple[str, bytes]] = []

@@ -46,6 +46,7 @@ from typing import Any
 
 from . import keys
 from .auth import RunKey
+from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import RunError, WireError
 from .wire import MAX_MESSAGE_BYTES, Message, decode, encode
@@ -77,7 +78,7 @@ MAILBOX_MAX = 256
 class Participant:
     """One node's side of the lock-step protocol, on any bus."""
 
-    def __init__(self, bus: Any, run: str, node: str, stall_timeout_s: float = 10.0,
+    def __init__(self, bus: Bus, run: str, node: str, stall_timeout_s: float = 10.0,
                  spin_s: float = 0.0, auth: RunKey | None = None) -> None:
         self.bus, self.run, self.node = bus, keys.check_name("run", run), node
         self.auth = auth
@@ -252,7 +253,7 @@ class Participant:
         """Move one inbox item into the mailbox; return it if it is a clock message."""
         return self.handle(*self.inbox.get(timeout=timeout))
 
-    def _poll(self, feed: Any) -> bytes | None:
+    def _poll(self, feed: Feed) -> bytes | None:
         """The next message of ``feed`` if it comes within :attr:`spin_s`, else None."""
         end = time.perf_counter() + self.spin_s
         while (raw := feed.try_recv()) is None and time.perf_counter() < end:

@@ -153,7 +153,7 @@ def run_info(folder: Path, host: str | None = None) -> dict[str, Any]:
     """What the files of one run folder say about it (see the module docstring)."""
     host = host or socket.gethostname()
     scenario = _dict(read_json(folder / SCENARIO_JSON)) or {}
-    run = scenario.get("run") if isinstance(scenario.get("run"), dict) else {}
+    run: dict[str, Any] = _dict(scenario.get("run")) or {}
     meta = _dict(read_json(folder / RUN_JSON))
     summary = _dict(read_json(folder / SUMMARY_JSON))
     info: dict[str, Any] = {
@@ -172,7 +172,9 @@ def run_info(folder: Path, host: str | None = None) -> dict[str, Any]:
     elif meta.get("host") not in (None, host):
         info["error"] = f"orchestrator on host {meta.get('host')}: cannot check its process"
     else:
-        alive = pid_alive(meta.get("pid"), meta.get("pid_start"))
+        pid, pid_start = meta.get("pid"), meta.get("pid_start")
+        alive = isinstance(pid, int) and pid_alive(pid, pid_start if isinstance(pid_start, int)
+                                                   else None)
         info["status"] = "running" if alive else "interrupted"
         if not alive:
             info["error"] = f"orchestrator (pid {meta.get('pid')}) is gone, no summary.json"

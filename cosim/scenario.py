@@ -92,11 +92,11 @@ def _typed(key: str, value: Any, spec: Key) -> Any:
         value = float(value)
     if not isinstance(value, spec.kind) or isinstance(value, bool) and spec.kind is not bool:
         raise ScenarioError(key, value, f"a {spec.kind.__name__}")
-    if spec.kind is float and not math.isfinite(value):
+    if isinstance(value, float) and not math.isfinite(value):
         raise ScenarioError(key, value, "a finite number")
     if spec.choices is not None and value not in spec.choices:
         raise ScenarioError(key, value, "one of " + ", ".join(map(repr, spec.choices)))
-    if spec.positive and value <= 0:
+    if spec.positive and isinstance(value, int | float) and value <= 0:
         raise ScenarioError(key, value, "a number > 0")
     number = float(value) if isinstance(value, int | float) else None
     if number is not None and ((spec.low is not None and number < spec.low)

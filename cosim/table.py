@@ -12,11 +12,12 @@ import math
 from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from cosim.errors import WireError
-from cosim.wire import decode
+from cosim.wire import Message, decode
 
 Table = dict[str, np.ndarray]
 
@@ -28,7 +29,7 @@ def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
     that carries them all is used, so a stray or forged message (wrong fields) on a channel
     cannot displace the real one. Returns (table, number of records left out as bad).
     """
-    per_channel: dict[str, list] = {}
+    per_channel: dict[str, list[Message]] = {}
     bad = 0
     for channel, payload in records:
         try:
@@ -38,7 +39,7 @@ def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
             continue
         if msg.kind == "data" and msg.k >= 0:
             per_channel.setdefault(channel, []).append(msg)
-    rows: dict[str, dict[int, dict]] = {}
+    rows: dict[str, dict[int, dict[str, Any]]] = {}
     fields_of: dict[str, tuple[str, ...]] = {}
     times: dict[int, float] = {}
     for channel, msgs in per_channel.items():

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import msgpack
 import numpy as np
@@ -76,10 +76,11 @@ def _plain(value: Any) -> Any:
 def encode(kind: str, k: int, t: float, d: Mapping[str, Any] | None = None) -> bytes:
     """Encode one message. ``d`` values may be numpy arrays."""
     payload = {name: _plain(v) for name, v in (d or {}).items()}
-    return msgpack.packb(
+    raw: bytes = msgpack.packb(
         {"v": SCHEMA_VERSION, "kind": kind, "k": int(k), "t": float(t), "d": payload},
         use_bin_type=True,
     )
+    return raw
 
 
 _NUMBER_TYPES = (int, float)  # exact types (``type(x) in``): a bool is not a number here
@@ -101,7 +102,7 @@ def decode(raw: bytes) -> Message:
         raise WireError(f"unknown kind {kind!r}")
     if not isinstance(k, int) or isinstance(k, bool) or k < -1:
         raise WireError(f"bad step index k={k!r} (expected int >= -1)")
-    if type(t) not in _NUMBER_TYPES or not math.isfinite(t):
+    if type(t) not in _NUMBER_TYPES or not math.isfinite(cast(float, t)):
         raise WireError(f"bad time t={t!r} (expected a finite number, s)")
     if not isinstance(d, dict):
         raise WireError(f"bad payload d of type {type(d).__name__} (expected a map)")
@@ -118,5 +119,5 @@ def decode(raw: bytes) -> Message:
                 isinstance(r, list) and len(r) == 2 and isinstance(r[0], str)
                 and isinstance(r[1], bytes) for r in recs):
             raise WireError("records payload is not a list of [channel, bytes] pairs")
-    return Message(kind, k, float(t), d)
+    return Message(kind, k, float(cast(float, t)), d)
 

@@ -30,6 +30,7 @@ from typing import Any
 from cosim import channels as ch
 from cosim import keys
 from cosim.auth import RunKey
+from cosim.bus import Bus
 from cosim.control import check_node_control
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.wire import decode, encode
@@ -76,7 +77,7 @@ class ClockResult:
 class Clock:
     """Supervise one run on a bus (Zenoh or in-memory)."""
 
-    def __init__(self, bus: Any, run: str, nodes: list[str], scenario: dict[str, Any],
+    def __init__(self, bus: Bus, run: str, nodes: list[str], scenario: dict[str, Any],
                  on_progress: Callable[[int, int], None] | None = None,
                  check_processes: Callable[[], str | None] | None = None,
                  auth: RunKey | None = None) -> None:

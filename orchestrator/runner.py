@@ -26,13 +26,13 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from cosim import auth as au
 from cosim import channels as ch
 from cosim import keys
 from cosim import scenario as sc
-from cosim.bus import MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.bus import Bus, MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
 from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 from cosim.run_lock import RunIdInUseError, RunLock
 
@@ -67,7 +67,7 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
         raise ScenarioError("fatigue.live", True, "false or \"auto\": this vehicle model "
                             "reports no lower-arm loads (use the realistic corner)")
     duration = tyre_node.static_check(scenario)
-    controller_node.static_check(scenario, int(info["n_corners"]))
+    controller_node.static_check(scenario, int(cast(int, info["n_corners"])))
     if run["t_end"] == 0:
         if duration is None:
             raise ScenarioError("run.t_end", 0, "a duration > 0 s (or a road with length_m "
@@ -244,7 +244,7 @@ def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes
     return au.derive_run_key(secret, run["id"])
 
 
-def check_run_id_free(bus: Any, run_id: str, external: list[str],
+def check_run_id_free(bus: Bus, run_id: str, external: list[str],
                       timeout_s: float = 1.0) -> None:
     """Refuse (exit 2) a run id that is live on the bus already: another run's orchestrator,
     or a node of this run that this orchestrator is about to start itself (the nodes named
@@ -324,6 +324,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     result: ClockResult | None = None
     local: LocalNodes | None = None
     threads: list[threading.Thread] = []
+    bus: Bus
     if run["mode"] == "distributed":  # listen: chosen above, before run.json
         lease = local_lease_ms(float(run["stall_timeout_s"]))
         bus = ZenohBus(zenoh_config(connect or [], listen, lowlatency=lowlatency,
@@ -338,7 +339,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         cores = usable_cores()
         layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
         try:
-            local = LocalNodes(run["id"], names, list(connect or listen), lowlatency,
+            local = LocalNodes(run["id"], names, list(connect or listen or []), lowlatency,
                                folder / "logs", zenoh_config_file, layout, lease_ms=lease,
                                run_key=run_key)
         except OSError as exc:  # a node log that cannot be opened: nothing has started yet
@@ -417,7 +418,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     return summary
 
 
-def _close(bus: Any) -> None:
+def _close(bus: Bus) -> None:
     try:
         bus.close()
     except Exception:  # closing on an error path: the first error is the one to report

@@ -86,7 +86,7 @@ class LoadStreamer:
     def blocks(self, last_k: int | None) -> list[dict[str, Any]]:
         """Full blocks available now; with ``last_k`` (the run's last step) also the final
         partial block once every step up to it is there."""
-        out = []
+        out: list[dict[str, Any]] = []
         while True:
             n = 0
             while self.next_k + n in self.pending and n < self.block_steps:
@@ -192,7 +192,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         # the first message that has the channel's fields (see table.build_table).
         got.setdefault(name, set()).add(msg.k)
         journal.append(name, raw)
-        if streamer is not None and name == load_name:
+        if streamer is not None and sender is not None and name == load_name:
             streamer.add(msg.k, msg.t, msg.d)
             for blk in streamer.blocks(n_steps):
                 sender.send(blk)

@@ -66,9 +66,9 @@ def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
             for reply in bus.session.get(pattern, timeout=min(0.5, poll_s)):
                 if reply.ok is not None:
                     run_id = keys.parse_key(str(reply.ok.key_expr))[0]
-                    pid = point_of_run(run_id, ids)
-                    if pid is not None:
-                        live[pid] = run_id
+                    point = point_of_run(run_id, ids)
+                    if point is not None:
+                        live[point] = run_id
             now = time.monotonic()
             for pid in sorted(live):
                 if pid in served_ok or pid in running or cooldown.get(pid, 0.0) > now:
