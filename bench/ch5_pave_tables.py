@@ -20,7 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-CORNERS = ("FL", "FR", "RL", "RR")
+from cosim.channels import CORNERS
+
 LAWS = ("passive", "tss1", "pnr")
 
 

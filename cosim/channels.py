@@ -34,8 +34,8 @@ plant/arm             <pt>_<ax>    load ON the lower arm at point pt (ball_joint
                       bump_stop_y, the bumper's force on the arm at its pad, arm-frame y/z
                       bump_stop_z  [N]: -F_bs sin(theta), -F_bs cos(theta) (z <= 0; no x)
                       torsion_bar_ the torsion-bar moment on the arm about its x axis, static
-                      mx           preload included [N m]; it enters at the front bush eye
-                                   (the torsion-bar socket)
+                      mx           preload included [N m]; it enters the arm through its
+                                   pivot, half at each bush eye (cosim/lower_arm.py)
 tyre_road/force       F_t          tyre force, compressive-positive, >= 0, absolute [N]
                       k_t          dF_t/d(z_g - z_w), 0 when lifted off [N/m] (for coupling)
                       z_g          road height under the wheel [m]
@@ -74,6 +74,9 @@ OPTIONAL_NODES = (FATIGUE,)
 LOAD_CHANNEL = (PLANT, ARM)
 """The channel the recorder streams to the fatigue node in blocks."""
 
+CORNERS = ("FL", "FR", "RL", "RR")
+"""The corners of a full vehicle, in the order of every per-corner list field (front left,
+front right, rear left, rear right); a quarter car is the front-left corner."""
 STATE_FIELDS = ("z_b", "v_b", "z_w", "v_w")
 TYRE_FIELDS = ("F_t", "k_t", "z_g")
 DAMPER_FIELDS = ("F_d", "c_eff")

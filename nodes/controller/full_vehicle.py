@@ -29,9 +29,6 @@ import numpy as np
 #: (16, 4) bool: row n-1 is MPn, True = hard, columns FL, FR, RL, RR (binary n-1, FL = MSB).
 COMBINATIONS = np.array([[(n >> (3 - i)) & 1 for i in range(4)] for n in range(16)], dtype=bool)
 
-#: corner order of a full vehicle
-CORNERS = ("FL", "FR", "RL", "RR")
-
 
 def combination_label(index: int) -> str:
     """Table 5.2 name of combination ``index`` (0-based), e.g. 8 -> ``"MP9 HSSS"``."""

@@ -38,10 +38,10 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet as p
 
+from cosim.channels import CORNERS
+
 from .model import GRAVITY, PlantModel
 from .quarter_car_lumped import free_joints, load_urdf_text, new_direct_client
-
-CORNERS = ("FL", "FR", "RL", "RR")
 
 _EPS_MASS = 1e-3
 _LINK = """ <link name="{name}"><inertial><origin xyz="0 0 0"/><mass value="{m}"/>

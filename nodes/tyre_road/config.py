@@ -38,6 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from cosim.channels import CORNERS as _CORNERS
 from cosim.errors import ScenarioError
 
 from .cobblestone import DEFAULTS as PAVE_DEFAULTS
@@ -63,7 +64,6 @@ _EVENT_KEYS = {
     "bump": {"height", "x_start", "t_start", "length", "tracks"},
     "pothole": {"depth", "x_start", "t_start", "length", "shape", "tracks"},
 }
-_CORNERS = ("FL", "FR", "RL", "RR")
 _TRACKS = {"both": (0, 1), "left": (0,), "right": (1,)}
 
 

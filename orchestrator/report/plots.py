@@ -10,8 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
+from cosim.channels import CORNERS
+
 from .markup import esc
-from .signals import CORNERS
 
 MAX_PLOT_POINTS = 40000
 """Longer signals are decimated (min/max per bucket) before plotting."""

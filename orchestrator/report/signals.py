@@ -8,11 +8,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from cosim.channels import CORNERS
+
 PSD_F_MAX_HZ = 50.0
 """Upper end of the PSD plots [Hz] (or Nyquist, if lower)."""
-
-
-CORNERS = ("FL", "FR", "RL", "RR")
 
 
 UNITS = {"z": "m", "v": "m/s", "a": "m/s²", "F": "N", "k_t": "N/m", "c_eff": "N·s/m",

@@ -15,6 +15,7 @@ import re
 from dataclasses import dataclass
 
 from cosim import keys
+from cosim.channels import CORNERS
 from cosim.errors import SuscosimError
 
 from ..report.signals import unit_of
@@ -22,7 +23,6 @@ from ..report.signals import unit_of
 DEFAULT_CHANNELS = ("plant/state/z_b", "plant/state/z_w", "plant/response/a_b",
                     "tyre_road/force/F_t", "controller/force/F_d")
 """Plotted when ``--channels`` is not given: body and wheel, body acceleration, the forces."""
-CORNERS = ("FL", "FR", "RL", "RR")
 CONTROL_CHANNELS = frozenset({keys.CTL, keys.RECORDS, keys.ALIVE, keys.CLOCK, keys.SCENARIO})
 _PART = re.compile(r"^[A-Za-z0-9_.*?\[\]-]{1,64}$")
 
