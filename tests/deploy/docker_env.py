@@ -63,11 +63,18 @@ def unavailable() -> str | None:
     return None
 
 
+_built: list[bool] = []
+
+
 def build_image() -> None:
-    """Build (or find current) the base image, the wheelhouse and the project image."""
+    """Build (or find current) the base image, the wheelhouse and the project image; once
+    per test session (a current image still costs ~15 s of build-context uploads)."""
+    if _built:
+        return
     res = _run(["bash", str(ROOT / "deploy/docker/build_image.sh"), IMAGE], timeout=1500,
                cwd=ROOT)
     assert res.returncode == 0, f"image build failed:\n{res.stdout}\n{res.stderr}"
+    _built.append(True)
 
 
 def free_port() -> int:
