@@ -34,8 +34,7 @@ from typing import Any
 from cosim import keys
 from cosim.errors import ScenarioError, WireError
 from cosim.wire import decode
-
-from .zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 LINGER_S = 0.5

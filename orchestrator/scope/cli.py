@@ -14,8 +14,8 @@ from typing import Any
 from cosim import keys
 from cosim.errors import ScenarioError
 from cosim.wire import decode
+from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
 
-from ..zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
 from .selection import DEFAULT_CHANNELS, ScopeInputError, Selection
 from .state import ScopeState
 

@@ -37,12 +37,13 @@ Exit codes: 0 done, 1 the endpoint cannot be reached (client mode, after 10 s), 
 
 The package: :mod:`.target` (key expressions, the run folder's endpoints), :mod:`.fmt` (values
 as text and columns), :mod:`.csv_sink` (``--csv``), :mod:`.stats` (per-key counts, rates and
-the table), :mod:`.cli` (the command). Session options: :mod:`orchestrator.zenoh_options`.
+the table), :mod:`.cli` (the command). Session options: :mod:`cosim.zenoh_options`.
 """
 
 from __future__ import annotations
 
-from ..zenoh_options import apply_mode, is_loopback, session_mode
+from cosim.zenoh_options import apply_mode, is_loopback, session_mode
+
 from .cli import build_parser, main
 from .csv_sink import CsvSink
 from .fmt import flatten, fmt_fields, fmt_value

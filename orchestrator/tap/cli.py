@@ -10,7 +10,8 @@ import sys
 import time
 from typing import Any
 
-from ..zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+
 from .csv_sink import CsvSink
 from .stats import Tap
 from .target import DEFAULT_ENDPOINT, TapInputError, Target, resolve_target

@@ -12,8 +12,7 @@ from typing import Any
 
 from cosim import keys
 from cosim.errors import ScenarioError
-
-from ..zenoh_options import is_loopback
+from cosim.zenoh_options import is_loopback
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 _CHUNK = re.compile(r"^(\*\*?|[A-Za-z0-9][A-Za-z0-9_.-]{0,63})$")

@@ -15,7 +15,9 @@ A *peer* joins the run's mesh on this machine and gets the data straight from th
 another machine (a peer there is not relayed by a router, and the run's peers, listening on
 their loopback, cannot connect back to it).
 
-Used by ``suscosim tap``, ``replay`` and ``scope``.
+Used by ``suscosim tap``, ``replay`` and ``scope`` (the commands that join a run from outside;
+the nodes and the router have session defaults of their own: ``orchestrator/node_main.py``,
+``orchestrator/router.py``).
 """
 
 from __future__ import annotations
