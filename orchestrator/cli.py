@@ -236,7 +236,8 @@ def build_parser() -> argparse.ArgumentParser:
     e.set_defaults(func=cmd_export)
     for name, module, text in (
         ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
-        ("fatigue", "nodes.fatigue.cli", "fatigue life of the lower arm from a finished run"),
+        ("fatigue", "orchestrator.fatigue_cli",
+         "fatigue life of the lower arm from a finished run or a load file"),
         ("equivalent-lumped", "orchestrator.studies.equivalent_lumped",
          "equivalent lumped quarter car of the realistic corner (log decrement)"),
         ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),

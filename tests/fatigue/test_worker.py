@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from cosim.errors import InputFileError, ScenarioError
-from nodes.fatigue.cli import main
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import LiveFatigue, analyse
+from orchestrator.fatigue_cli import main
 
 COARSE = {"mesh_size_m": 0.03}
 

@@ -16,11 +16,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from cosim.errors import SuscosimError
-
-from .config import RESIDUES
-from .damage import METHODS
-from .equivalent_stress import EQUIVALENTS
-from .mean_stress import MEAN_STRESS_METHODS
+from nodes.fatigue.config import RESIDUES
+from nodes.fatigue.damage import METHODS
+from nodes.fatigue.equivalent_stress import EQUIVALENTS
+from nodes.fatigue.mean_stress import MEAN_STRESS_METHODS
 
 
 def _value(text: str):
@@ -70,8 +69,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     for k in ("equivalent", "method", "mean_stress", "residue"):
         if getattr(args, k) is not None:
             overrides[k] = getattr(args, k)
-    from .load_file import parse_map
-    from .run_dir import fatigue_load_file, fatigue_run_dir
+    from nodes.fatigue.load_file import parse_map
+    from nodes.fatigue.run_dir import fatigue_load_file, fatigue_run_dir
 
     is_file = args.run_dir.is_file()
     if not is_file and (args.scenario or args.map or args.out):
