@@ -2,8 +2,11 @@
 
     python3 abort_watch.py RUN ENDPOINT CLIENT_CONFIG
 
-Prints ``ready`` once subscribed, then ``abort <unix time> <reason>`` for the first abort
-the orchestrator publishes on ``suscosim/RUN/orchestrator/clock``, and exits. A tap: it needs
+Prints ``ready`` once subscribed, ``hearing`` at the first ``plant/state`` message of the run
+that reaches it (the route from the run to this session is up: a subscription only printed
+as declared may not have reached the router and the publishers yet), then ``abort <unix
+time> <reason>`` for the first abort the orchestrator publishes on
+``suscosim/RUN/orchestrator/clock``, and exits. A tap: it needs
 no run key (signed messages decode without it) and only a certificate that may subscribe.
 """
 
@@ -33,8 +36,18 @@ def on_sample(sample) -> None:
         print(f"abort {time.time():.6f} {msg.d.get('reason', '')}", flush=True)
 
 
+heard = threading.Event()
+
+
+def on_state(_sample) -> None:
+    if not heard.is_set():
+        heard.set()
+        print("hearing", flush=True)
+
+
 session = zenoh.open(conf)
 session.declare_subscriber(keys.key(run, keys.ORCHESTRATOR, keys.CLOCK), on_sample)
+session.declare_subscriber(keys.key(run, "plant", "state"), on_state)
 print("ready", flush=True)
 done.wait(600)
 os._exit(0)  # a Zenoh session open at exit can hang interpreter shutdown

@@ -156,7 +156,9 @@ def test_compose_run_on_the_volume_equals_a_local_run(image, tmp_path):
 
 def _start_abort_watch(project: de.Project, run_id: str) -> str:
     """A tap container on the project's network (``abort_watch.py``, observer certificate):
-    it prints the wall time of the first abort of the run. Returns its id once subscribed."""
+    it prints the wall time of the first abort of the run. Returns its id once it hears the
+    run's messages (so the route to it is up before the plant is killed: a watcher only
+    subscribed missed the abort once in a full suite)."""
     orch = de.inspect(project.container("orchestrator"))
     network = next(iter(orch["NetworkSettings"]["Networks"]))
     certs = next(m["Name"] for m in orch["Mounts"] if m["Destination"] == "/etc/suscosim/certs")
@@ -170,10 +172,11 @@ def _start_abort_watch(project: de.Project, run_id: str) -> str:
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         out = de._run(["docker", "logs", cid]).stdout
-        if "ready" in out:
+        if "hearing" in out:
             return cid
         time.sleep(0.2)
-    pytest.fail("the abort watcher did not subscribe: " + de._run(["docker", "logs", cid]).stderr)
+    pytest.fail("the abort watcher did not hear the run: "
+                + de._run(["docker", "logs", cid]).stderr)
 
 
 def test_killed_plant_container_ends_the_run_naming_it_and_the_journal_is_readable(
