@@ -75,18 +75,21 @@ class Point:
         never share a run id (#15 item 3); the run folder stays ``runs/<point id>``."""
         return keys.unique_run_id(self.id, INVOCATION)
 
+    def _assignments(self, run_id: str) -> list[str]:
+        """The ``--set`` assignments of this point's overrides, then ``run.id``."""
+        return [f"{k}={toml_value(v)}" for k, v in self.overrides.items()] + \
+            [f"run.id={toml_value(run_id)}"]
+
     @property
     def set_args(self) -> list[str]:
         """The ``--set`` assignments of this point (the run id last)."""
-        return [f"{k}={toml_value(v)}" for k, v in self.overrides.items()] + \
-            [f"run.id={toml_value(self.run_id)}"]
+        return self._assignments(self.run_id)
 
     @property
     def fingerprint_args(self) -> list[str]:
         """:attr:`set_args` with the point id as the run id: what the fingerprint (resume)
         is computed from, the same in every invocation."""
-        return [f"{k}={toml_value(v)}" for k, v in self.overrides.items()] + \
-            [f"run.id={toml_value(self.id)}"]
+        return self._assignments(self.id)
 
 
 @dataclass
