@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .config import ConfigReader
 from .errors import InputFileError, ScenarioError
 from .keys import check_name
 
@@ -87,24 +88,21 @@ RESOLVED_RUN_KEYS = ("dir", "n_steps", "nodes", "t_end_source")
 """Keys the orchestrator adds when it resolves a scenario (not for users to set)."""
 
 
-def _typed(key: str, value: Any, spec: Key) -> Any:
-    if spec.kind is float and isinstance(value, int) and not isinstance(value, bool):
-        value = float(value)
-    if not isinstance(value, spec.kind) or isinstance(value, bool) and spec.kind is not bool:
-        raise ScenarioError(key, value, f"a {spec.kind.__name__}")
-    if isinstance(value, float) and not math.isfinite(value):
-        raise ScenarioError(key, value, "a finite number")
-    if spec.choices is not None and value not in spec.choices:
-        raise ScenarioError(key, value, "one of " + ", ".join(map(repr, spec.choices)))
-    if spec.positive and isinstance(value, int | float) and value <= 0:
-        raise ScenarioError(key, value, "a number > 0")
-    number = float(value) if isinstance(value, int | float) else None
-    if number is not None and ((spec.low is not None and number < spec.low)
-                               or (spec.high is not None and number > spec.high)):
-        lo = f"{spec.low:g} <= " if spec.low is not None else "0 < " if spec.positive else ""
-        hi = f" <= {spec.high:g}" if spec.high is not None else ""
-        raise ScenarioError(key, value, f"{lo}{key.rsplit('.', 1)[-1]}{hi}")
-    return value
+def _read_key(r: ConfigReader, name: str, spec: Key) -> Any:
+    """The value of the common key ``name`` by its :class:`Key` spec (defaults filled)."""
+    if spec.choices is not None:
+        return r.choice(name, spec.choices, spec.default)
+    if spec.kind is float:
+        lo = spec.low if spec.low is not None else 0.0 if spec.positive else None
+        return r.number(name, spec.default, lo=lo, hi=spec.high,
+                        lo_open=spec.positive and spec.low is None)
+    if spec.kind is int:
+        ilo = int(spec.low) if spec.low is not None else 1 if spec.positive else None
+        return r.integer(name, spec.default, lo=ilo,
+                         hi=int(spec.high) if spec.high is not None else None)
+    if spec.kind is bool:
+        return r.boolean(name, spec.default)
+    return r.string(name, spec.default, empty=True)
 
 
 PHYSICAL_RANGES: tuple[tuple[str, str, float, float, str], ...] = (
@@ -178,11 +176,10 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
         if not isinstance(value, dict):
             raise ScenarioError(name, value, "a table")
     run = out.setdefault("run", {})
-    for key in run:
-        if key not in RUN_KEYS and key not in RESOLVED_RUN_KEYS:
-            raise ScenarioError(f"run.{key}", run[key], "one of " + ", ".join(RUN_KEYS))
+    r = ConfigReader(run, "run")
+    r.only(RUN_KEYS, unlisted=RESOLVED_RUN_KEYS)
     for key, spec in RUN_KEYS.items():
-        run[key] = _typed(f"run.{key}", run.get(key, spec.default), spec)
+        run[key] = _read_key(r, key, spec)
     if run["id"]:
         check_name("run.id", run["id"])
     check_name("run.name", run["name"])

@@ -1,4 +1,7 @@
-"""What every controller shares: the output record, the base class and the config reader.
+"""What every controller shares: the output record and the base class.
+
+The ``[controller]`` table is read with :class:`cosim.config.ConfigReader` (re-exported here
+for the law modules that import it from this module).
 
 Sign convention (whole package), per corner:
 
@@ -21,15 +24,14 @@ docstring gives the thesis form and its translation into the convention above.
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from cosim.errors import ScenarioError
+from cosim.config import ConfigReader as ConfigReader  # re-exported (fmu.py imports it here)
 
 #: Keys every ``state`` mapping passed to :meth:`Controller.step` carries (per corner).
 CORNER_KEYS = ("z_b", "v_b", "z_w", "v_w")
@@ -140,105 +142,3 @@ def body_scalar(state: Mapping[str, Any], key: str) -> float:
     if arr.size != 1:
         raise ValueError(f"controller state '{key}' has {arr.size} values, expected 1")
     return float(arr[0])
-
-
-_REQUIRED = object()
-
-
-class ConfigReader:
-    """Reads one scenario table, naming the dotted key in every error.
-
-    Unknown keys are an error (they are almost always typos).
-
-    Args:
-        cfg: the table (mapping).
-        prefix: dotted path of the table, e.g. ``"controller"``.
-        allowed: accepted key names.
-    """
-
-    def __init__(self, cfg: Mapping[str, Any], prefix: str, allowed: Iterable[str]) -> None:
-        if not isinstance(cfg, Mapping):
-            raise ScenarioError(prefix, cfg, "a table")
-        self.cfg = cfg
-        self.prefix = prefix
-        self.allowed = set(allowed)
-        for key in cfg:
-            if key not in self.allowed:
-                raise ScenarioError(
-                    self.key(str(key)), cfg[key], f"one of the keys {sorted(self.allowed)}"
-                )
-
-    def key(self, name: str) -> str:
-        return f"{self.prefix}.{name}" if self.prefix else name
-
-    def has(self, name: str) -> bool:
-        return name in self.cfg
-
-    def number(
-        self,
-        name: str,
-        default: Any = _REQUIRED,
-        *,
-        lo: float | None = None,
-        hi: float | None = None,
-        lo_open: bool = False,
-        unit: str = "",
-    ) -> float:
-        """A finite real number in [lo, hi] (or (lo, hi] when ``lo_open``)."""
-        if name not in self.cfg:
-            if default is _REQUIRED:
-                expected = f"a number{_range(lo, hi, lo_open, unit)}"
-                raise ScenarioError(self.key(name), None, expected)
-            return float(default)
-        value = self.cfg[name]
-        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if ok:
-            x = float(value)
-            ok = math.isfinite(x)
-            if ok and lo is not None:
-                ok = x > lo if lo_open else x >= lo
-            if ok and hi is not None:
-                ok = x <= hi
-        if not ok:
-            raise ScenarioError(self.key(name), value, f"a number{_range(lo, hi, lo_open, unit)}")
-        return float(value)
-
-    def choice(self, name: str, options: Iterable[str], default: Any = _REQUIRED) -> str:
-        opts = list(options)
-        if name not in self.cfg:
-            if default is _REQUIRED:
-                raise ScenarioError(self.key(name), None, f"one of {opts}")
-            return str(default)
-        value = self.cfg[name]
-        if value not in opts:
-            raise ScenarioError(self.key(name), value, f"one of {opts}")
-        return str(value)
-
-    def boolean(self, name: str, default: bool) -> bool:
-        value = self.cfg.get(name, default)
-        if not isinstance(value, bool):
-            raise ScenarioError(self.key(name), value, "true or false")
-        return value
-
-    def string(self, name: str) -> str:
-        value = self.cfg.get(name)
-        if not isinstance(value, str) or not value:
-            raise ScenarioError(self.key(name), value, "a non-empty string")
-        return value
-
-    def table(self, name: str) -> Mapping[str, Any]:
-        value = self.cfg.get(name, {})
-        if not isinstance(value, Mapping):
-            raise ScenarioError(self.key(name), value, "a table")
-        return value
-
-
-def _range(lo: float | None, hi: float | None, lo_open: bool, unit: str) -> str:
-    u = f" {unit}" if unit else ""
-    if lo is not None and hi is not None:
-        return f" in {'(' if lo_open else '['}{lo:g}, {hi:g}]{u}"
-    if lo is not None:
-        return f" {'>' if lo_open else '>='} {lo:g}{u}"
-    if hi is not None:
-        return f" <= {hi:g}{u}"
-    return u and f" ({u.strip()})"

@@ -26,10 +26,10 @@ from typing import Any
 
 import numpy as np
 
+from cosim.config import ConfigReader
 from cosim.errors import ScenarioError
 from nodes.controller.base import (
     VELOCITY_SOURCES,
-    ConfigReader,
     Controller,
     ControlOutput,
     body_scalar,

@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from nodes.controller.base import ConfigReader
+from cosim.config import ConfigReader
 
 #: Table 5.1 polynomial coefficients, highest power first (numpy.polyval order).
 C_POST_POLY = (-5257.3, 7671.5, 3203.3)

@@ -52,10 +52,10 @@ from typing import Any
 
 import numpy as np
 
+from cosim.config import ConfigReader
 from cosim.errors import ScenarioError
 from nodes.controller.base import (
     BODY_KEYS,
-    ConfigReader,
     Controller,
     ControlOutput,
     body_scalar,
@@ -261,7 +261,7 @@ def read_settings(spec: LawSpec, r: ConfigReader) -> dict[str, Any]:
         elif isinstance(p.default, bool):
             values[name] = r.boolean(name, p.default)
         elif isinstance(p.default, str):
-            values[name] = r.string(name) if r.has(name) else p.default
+            values[name] = r.string(name, p.default)
         else:
             if p.required:
                 values[name] = r.number(name, lo=p.lo, hi=p.hi, lo_open=p.lo_open, unit=p.unit)

@@ -21,52 +21,42 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from typing import Any
 
-from cosim.errors import ScenarioError
+from cosim.config import ConfigReader
 
 from .model import PlantModel
 
 MODELS = ("quarter_car_lumped", "quarter_car_double_wishbone", "full_vehicle_7dof")
 
 
-def _params(cls, cfg: Mapping, prefix: str, choices: dict[str, tuple[str, ...]] | None = None):
+def _params(cls, r: ConfigReader, choices: dict[str, tuple[str, ...]] | None = None):
+    """``cls(**kwargs)`` from the keys the table gives (the dataclass fills the others)."""
     fields = {f.name: f for f in dataclasses.fields(cls)}
-    kwargs = {}
-    for key, value in cfg.items():
+    r.only(["model", *fields])
+    kwargs: dict[str, Any] = {}
+    for key in r.names():
         if key == "model":
             continue
-        if key not in fields:
-            raise ScenarioError(f"{prefix}.{key}", value,
-                                f"one of the keys {sorted(['model', *fields])}")
         if choices and key in choices:
-            if value not in choices[key]:
-                raise ScenarioError(f"{prefix}.{key}", value, "one of " + ", ".join(
-                    repr(c) for c in choices[key]))
+            kwargs[key] = r.choice(key, choices[key])
         elif isinstance(fields[key].default, bool):
-            if not isinstance(value, bool):
-                raise ScenarioError(f"{prefix}.{key}", value, "true or false")
-        elif isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-            raise ScenarioError(f"{prefix}.{key}", value, "a number > 0")
+            kwargs[key] = r.boolean(key)
         else:
-            value = float(value)
-        kwargs[key] = value
+            kwargs[key] = r.number(key, positive=True)
     return cls(**kwargs)
 
 
-def build_plant_model(cfg: Mapping, key_prefix: str = "vehicle") -> PlantModel:
+def build_plant_model(cfg: Mapping[str, Any], key_prefix: str = "vehicle") -> PlantModel:
     """Build the plant model named by ``cfg["model"]`` with the parameters in ``cfg``."""
-    p = key_prefix
-    if not isinstance(cfg, Mapping):
-        raise ScenarioError(p, cfg, "a table")
-    model = cfg.get("model")
+    r = ConfigReader(cfg, key_prefix)
+    model = r.choice("model", MODELS)
     if model == "quarter_car_lumped":
         from .quarter_car_lumped import LumpedQuarterCar, LumpedQuarterCarParams
-        return LumpedQuarterCar(_params(LumpedQuarterCarParams, cfg, p))
+        return LumpedQuarterCar(_params(LumpedQuarterCarParams, r))
     if model == "full_vehicle_7dof":
         from .full_vehicle_7dof import FullVehicle7DOF, FullVehicleParams
-        return FullVehicle7DOF(_params(FullVehicleParams, cfg, p,
+        return FullVehicle7DOF(_params(FullVehicleParams, r,
                                        {"mass_basis": ("corner", "axle")}))
-    if model == "quarter_car_double_wishbone":
-        from .double_wishbone import DoubleWishboneCorner, DoubleWishboneParams
-        return DoubleWishboneCorner(_params(DoubleWishboneParams, cfg, p))
-    raise ScenarioError(f"{p}.model", model, "one of " + ", ".join(MODELS))
+    from .double_wishbone import DoubleWishboneCorner, DoubleWishboneParams  # the third model
+    return DoubleWishboneCorner(_params(DoubleWishboneParams, r))

@@ -37,9 +37,10 @@ Bad keys or values raise :class:`cosim.errors.ScenarioError` naming the dotted k
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 from cosim.channels import CORNERS as _CORNERS
-from cosim.errors import ScenarioError
+from cosim.config import ConfigReader
 
 from .cobblestone import DEFAULTS as PAVE_DEFAULTS
 from .cobblestone import PaveParameters, pave_road
@@ -67,166 +68,117 @@ _EVENT_KEYS = {
 _TRACKS = {"both": (0, 1), "left": (0,), "right": (1,)}
 
 
-def _number(cfg: Mapping, key: str, prefix: str, *, default=None, positive=False,
-            nonneg=False) -> float:
-    v = cfg.get(key, default)
-    if v is None:
-        raise ScenarioError(f"{prefix}.{key}", None, "a number (missing)")
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ScenarioError(f"{prefix}.{key}", v, "a number")
-    if positive and not v > 0:
-        raise ScenarioError(f"{prefix}.{key}", v, "a number > 0")
-    if nonneg and not v >= 0:
-        raise ScenarioError(f"{prefix}.{key}", v, "a number >= 0")
-    return float(v)
+def _seed(r: ConfigReader, key: str = "seed") -> int:
+    return r.integer(key, 0, lo=0)
 
 
-def _check_keys(cfg: Mapping, allowed: set[str], prefix: str) -> None:
-    for k in cfg:
-        if k not in allowed:
-            raise ScenarioError(f"{prefix}.{k}", cfg[k],
-                                f"one of the keys {sorted(allowed)}")
-
-
-def _seed(cfg: Mapping, prefix: str, key: str = "seed") -> int:
-    seed = cfg.get(key, 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ScenarioError(f"{prefix}.{key}", seed, "an integer >= 0")
-    return seed
-
-
-def _correlation(cfg: Mapping, prefix: str) -> str | float:
-    corr = cfg.get("correlation", "independent")
+def _correlation(r: ConfigReader) -> str | float:
+    corr = r.value("correlation", "independent")
     if isinstance(corr, bool) or not (
             corr in ("identical", "independent")
             or (isinstance(corr, (int, float)) and 0.0 <= corr <= 1.0)):
-        raise ScenarioError(f"{prefix}.correlation", corr,
-                            "'identical', 'independent' or a number in [0, 1]")
+        raise r.error("correlation", corr, "'identical', 'independent' or a number in [0, 1]")
     return corr
 
 
-def _band(cfg: Mapping, prefix: str, key: str = "band") -> tuple[float, float]:
-    band = cfg.get(key, [DEFAULT_N_MIN, DEFAULT_N_MAX])
-    if (not isinstance(band, (list, tuple)) or len(band) != 2
-            or any(isinstance(b, bool) or not isinstance(b, (int, float)) for b in band)
-            or not 0 < band[0] < band[1]):
-        raise ScenarioError(f"{prefix}.{key}", band,
-                            "[n_min, n_max] in cycles/m with 0 < n_min < n_max")
-    return float(band[0]), float(band[1])
+def _band(r: ConfigReader, key: str = "band") -> tuple[float, float]:
+    expected = "[n_min, n_max] in cycles/m with 0 < n_min < n_max"
+    band = r.number_list(key, [DEFAULT_N_MIN, DEFAULT_N_MAX], length=2, expected=expected)
+    if not 0 < band[0] < band[1]:
+        raise r.error(key, r.value(key), expected)
+    return band[0], band[1]
 
 
 _POWER_LAW_KEYS = {"G", "waviness", "seed", "correlation", "band"}
 
 
-def _power_law_keys(cfg: Mapping, prefix: str
+def _power_law_keys(r: ConfigReader
                     ) -> tuple[float, float, int, str | float, tuple[float, float]]:
     """(G, waviness, seed, correlation, (n_min, n_max)) of an Eq. 4.10 road section."""
-    G = _number(cfg, "G", prefix, positive=True)
-    waviness = _number(cfg, "waviness", prefix, default=DEFAULT_WAVINESS, positive=True)
-    return G, waviness, _seed(cfg, prefix), _correlation(cfg, prefix), _band(cfg, prefix)
+    G = r.number("G", positive=True)
+    waviness = r.number("waviness", DEFAULT_WAVINESS, positive=True)
+    return G, waviness, _seed(r), _correlation(r), _band(r)
 
 
-def _event(cfg: Mapping, kind: str, speed: float, prefix: str) -> RoadEvent:
-    if "x_start" in cfg and "t_start" in cfg:
-        raise ScenarioError(f"{prefix}.t_start", cfg["t_start"],
-                            "either x_start or t_start, not both")
-    if "t_start" in cfg:
-        x0 = _number(cfg, "t_start", prefix, nonneg=True) * speed
+def _event(r: ConfigReader, kind: str, speed: float) -> RoadEvent:
+    if r.has("x_start") and r.has("t_start"):
+        raise r.error("t_start", r.value("t_start"), "either x_start or t_start, not both")
+    if r.has("t_start"):
+        x0 = r.number("t_start", lo=0.0) * speed
     else:
-        x0 = _number(cfg, "x_start", prefix, default=0.0)
+        x0 = r.number("x_start", 0.0)
     if kind == "pothole":
-        h = _number(cfg, "depth", prefix, positive=True)
+        h = r.number("depth", positive=True)
     else:
-        h = _number(cfg, "height", prefix)
+        h = r.number("height")
     length = 0.0
     if kind != "step":
-        length = _number(cfg, "length", prefix, positive=True)
-    shape = cfg.get("shape", "cosine")
-    if shape not in ("cosine", "rect"):
-        raise ScenarioError(f"{prefix}.shape", shape, "'cosine' or 'rect'")
-    tracks = cfg.get("tracks", "both")
-    if tracks not in _TRACKS:
-        raise ScenarioError(f"{prefix}.tracks", tracks, "'both', 'left' or 'right'")
+        length = r.number("length", positive=True)
+    shape = r.choice("shape", ("cosine", "rect"), "cosine")
+    tracks = r.choice("tracks", tuple(_TRACKS), "both")
     return RoadEvent(kind=kind, x_start=x0, height=h, length=length, shape=shape,
                      tracks=_TRACKS[tracks])
 
 
-def build_road(cfg: Mapping, key_prefix: str = "road") -> Road:
+def build_road(cfg: Mapping[str, Any], key_prefix: str = "road") -> Road:
     """A :class:`Road` from the ``[road]`` section (see the module docstring for the keys)."""
-    p = key_prefix
-    if not isinstance(cfg, Mapping):
-        raise ScenarioError(p, cfg, "a table")
-    kind = cfg.get("type")
-    if kind not in _ROAD_TYPES:
-        raise ScenarioError(f"{p}.type", kind, "one of " + ", ".join(_ROAD_TYPES))
-    speed = _number(cfg, "speed_kmh", p, positive=True) * KMH
-    length = cfg.get("length_m")
-    if length is not None:
-        length = _number(cfg, "length_m", p, positive=True)
-    corners = cfg.get("corners")
+    r = ConfigReader(cfg, key_prefix)
+    kind = r.choice("type", _ROAD_TYPES)
+    speed = r.number("speed_kmh", positive=True) * KMH
+    length = r.optional_number("length_m", positive=True)
+    corners = r.value("corners")
     if corners is not None:
         if not isinstance(corners, (list, tuple)) or not corners or \
                 any(c not in _CORNERS for c in corners):
-            raise ScenarioError(f"{p}.corners", corners,
-                                "a non-empty list of corner names from FL, FR, RL, RR")
+            raise r.error("corners", corners,
+                          "a non-empty list of corner names from FL, FR, RL, RR")
         corners = tuple(corners)
 
     if kind in _EVENT_TYPES:
-        _check_keys(cfg, _COMMON | _EVENT_KEYS[kind], p)
-        road: Road = EventRoad(events=[_event(cfg, kind, speed, p)], name=kind)
+        r.only(_COMMON | _EVENT_KEYS[kind])
+        road: Road = EventRoad(events=[_event(r, kind, speed)], name=kind)
     elif kind == "events":
-        _check_keys(cfg, _COMMON | {"events"}, p)
-        evs = cfg.get("events")
-        if not isinstance(evs, (list, tuple)) or not evs:
-            raise ScenarioError(f"{p}.events", evs, "a non-empty list of event tables")
+        r.only(_COMMON | {"events"})
         events = []
-        for i, ev in enumerate(evs):
-            q = f"{p}.events[{i}]"
-            if not isinstance(ev, Mapping):
-                raise ScenarioError(q, ev, "a table")
-            ek = ev.get("type")
-            if ek not in _EVENT_TYPES:
-                raise ScenarioError(f"{q}.type", ek, "one of " + ", ".join(_EVENT_TYPES))
-            _check_keys(ev, {"type"} | _EVENT_KEYS[ek], q)
-            events.append(_event(ev, ek, speed, q))
+        for ev in r.sections("events", expected="a non-empty list of event tables"):
+            ek = ev.choice("type", _EVENT_TYPES)
+            ev.only({"type"} | _EVENT_KEYS[ek])
+            events.append(_event(ev, ek, speed))
         road = EventRoad(events=events, name="events")
     elif kind == "iso8608":
-        _check_keys(cfg, _COMMON | {"class", "seed", "correlation", "n_min", "n_max"}, p)
-        cls = cfg.get("class")
-        if cls not in GD_N0:
-            raise ScenarioError(f"{p}.class", cls, "an ISO 8608 class letter A-H")
-        seed = _seed(cfg, p)
-        corr = _correlation(cfg, p)
-        n_min = _number(cfg, "n_min", p, default=DEFAULT_N_MIN, positive=True)
-        n_max = _number(cfg, "n_max", p, default=DEFAULT_N_MAX, positive=True)
+        r.only(_COMMON | {"class", "seed", "correlation", "n_min", "n_max"})
+        cls = r.choice("class", GD_N0, expected="an ISO 8608 class letter A-H")
+        seed = _seed(r)
+        corr = _correlation(r)
+        n_min = r.number("n_min", DEFAULT_N_MIN, positive=True)
+        n_max = r.number("n_max", DEFAULT_N_MAX, positive=True)
         if n_max <= n_min:
-            raise ScenarioError(f"{p}.n_max", n_max, f"a number > n_min ({n_min})")
+            raise r.error("n_max", n_max, f"a number > n_min ({n_min})")
         if length is None:
-            raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for iso8608)")
+            raise r.error("length_m", None, "a number > 0 (needed for iso8608)")
         road = iso8608_road(cls, length, speed, seed, corr, n_min, n_max)
     elif kind == "power_law":
-        _check_keys(cfg, _COMMON | _POWER_LAW_KEYS, p)
-        G, waviness, seed, corr, (n_min, n_max) = _power_law_keys(cfg, p)
+        r.only(_COMMON | _POWER_LAW_KEYS)
+        G, waviness, seed, corr, (n_min, n_max) = _power_law_keys(r)
         if length is None:
-            raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for power_law)")
+            raise r.error("length_m", None, "a number > 0 (needed for power_law)")
         road = power_law_road(G, length, speed, seed, waviness, corr, n_min, n_max)
     elif kind == "pave":
-        _check_keys(cfg, _COMMON | _POWER_LAW_KEYS | set(PAVE_KEYS), p)
-        seed, corr = _seed(cfg, p), _correlation(cfg, p)
-        band = _band(cfg, p) if "band" in cfg else PAVE_DEFAULTS.band
-        vals = {k: _number(cfg, k, p, default=getattr(PAVE_DEFAULTS, k),
-                           positive=k in ("stone_length", "joint_width", "G", "waviness"),
-                           nonneg=True)
+        r.only(_COMMON | _POWER_LAW_KEYS | set(PAVE_KEYS))
+        seed, corr = _seed(r), _correlation(r)
+        band = _band(r) if r.has("band") else PAVE_DEFAULTS.band
+        vals = {k: r.number(k, getattr(PAVE_DEFAULTS, k), lo=0.0,
+                            lo_open=k in ("stone_length", "joint_width", "G", "waviness"))
                 for k in PAVE_KEYS + ("G", "waviness")}
         if vals["stone_length_std"] >= vals["stone_length"]:
-            raise ScenarioError(f"{p}.stone_length_std", vals["stone_length_std"],
-                                f"a number < stone_length ({vals['stone_length']})")
+            raise r.error("stone_length_std", vals["stone_length_std"],
+                          f"a number < stone_length ({vals['stone_length']})")
         if length is None:
-            raise ScenarioError(f"{p}.length_m", None, "a number > 0 (needed for pave)")
+            raise r.error("length_m", None, "a number > 0 (needed for pave)")
         road = pave_road(length, speed, seed,
                          PaveParameters(**vals, band=band, correlation=corr))
     else:  # measured: csv, opencrg, mdf4
-        road = _measured_road(cfg, kind, speed, length, p)
+        road = _measured_road(r, kind, speed, length)
 
     road.speed = speed
     road.length = length if length is not None else road.length
@@ -241,60 +193,38 @@ _MEASURED_KEYS = {"csv": {"path", "zero_start"},
                            "recorded_speed_kmh"}}
 
 
-def _text(cfg: Mapping, key: str, prefix: str, expected: str, required: bool = False):
-    v = cfg.get(key)
-    if v is None and not required:
-        return None
-    if not isinstance(v, str) or not v:
-        raise ScenarioError(f"{prefix}.{key}", v, expected)
-    return v
-
-
-def _measured_road(cfg: Mapping, kind: str, speed: float, length: float | None,
-                   p: str) -> Road:
+def _measured_road(r: ConfigReader, kind: str, speed: float, length: float | None) -> Road:
     """A measured road profile (csv, opencrg, mdf4) from its ``[road]`` keys."""
-    _check_keys(cfg, _COMMON | _MEASURED_KEYS[kind], p)
-    path = _text(cfg, "path", p, "a file path", required=True)
-    zero_start = cfg.get("zero_start", True)
-    if not isinstance(zero_start, bool):
-        raise ScenarioError(f"{p}.zero_start", zero_start, "true or false")
+    r.only(_COMMON | _MEASURED_KEYS[kind])
+    path = r.string("path", expected="a file path")
+    zero_start = r.boolean("zero_start", True)
     if kind == "csv":
         return csv_road(path, speed, length, zero_start)
     if kind == "opencrg":
-        reference = cfg.get("reference", "grid")
-        if reference not in ("grid", "full"):
-            raise ScenarioError(f"{p}.reference", reference, "'grid' or 'full'")
-        u_start = _number(cfg, "u_start", p) if "u_start" in cfg else None
+        reference = r.choice("reference", ("grid", "full"), "grid")
+        u_start = r.optional_number("u_start")
         return opencrg_road(path, speed, length,
-                            _number(cfg, "track_width", p, default=VEHICLE_TRACK_M,
-                                    positive=True),
-                            _number(cfg, "v_offset", p, default=0.0), u_start, reference,
-                            zero_start)
-    if ("distance" in cfg) == ("recorded_speed_kmh" in cfg):
-        raise ScenarioError(f"{p}.distance", cfg.get("distance"),
-                            "either distance (a channel in m) or recorded_speed_kmh")
-    rec = _number(cfg, "recorded_speed_kmh", p, positive=True) \
-        if "recorded_speed_kmh" in cfg else None
-    return mdf_road(path, speed, _text(cfg, "left", p, "a channel name", required=True),
-                    _text(cfg, "right", p, "a channel name"),
-                    _text(cfg, "distance", p, "a channel name"), rec, length, zero_start)
+                            r.number("track_width", VEHICLE_TRACK_M, positive=True),
+                            r.number("v_offset", 0.0), u_start, reference, zero_start)
+    if r.has("distance") == r.has("recorded_speed_kmh"):
+        raise r.error("distance", r.value("distance"),
+                      "either distance (a channel in m) or recorded_speed_kmh")
+    channel = "a channel name"
+    rec = r.optional_number("recorded_speed_kmh", positive=True)
+    return mdf_road(path, speed, r.string("left", expected=channel),
+                    r.optional_string("right", expected=channel),
+                    r.optional_string("distance", expected=channel),
+                    rec, length, zero_start)
 
 
-def build_tyre(cfg: Mapping, key_prefix: str = "tyre") -> Tyre:
+def build_tyre(cfg: Mapping[str, Any], key_prefix: str = "tyre") -> Tyre:
     """A :class:`Tyre` from the ``[tyre]`` section."""
-    p = key_prefix
-    if not isinstance(cfg, Mapping):
-        raise ScenarioError(p, cfg, "a table")
-    model = cfg.get("model", "point_contact")
+    r = ConfigReader(cfg, key_prefix)
+    model = r.choice("model", ("point_contact", "fixed_footprint"), "point_contact")
     if model == "point_contact":
-        _check_keys(cfg, {"model", "stiffness"}, p)
-        return PointContact(k_t=_number(cfg, "stiffness", p, positive=True))
-    if model == "fixed_footprint":
-        _check_keys(cfg, {"model", "stiffness", "n", "contact_length"}, p)
-        n = cfg.get("n", 4)
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ScenarioError(f"{p}.n", n, "an integer >= 1")
-        return FixedFootprint(n=n, contact_length=_number(cfg, "contact_length", p,
-                                                          positive=True),
-                              k_t=_number(cfg, "stiffness", p, positive=True))
-    raise ScenarioError(f"{p}.model", model, "'point_contact' or 'fixed_footprint'")
+        r.only({"model", "stiffness"})
+        return PointContact(k_t=r.number("stiffness", positive=True))
+    r.only({"model", "stiffness", "n", "contact_length"})
+    n = r.integer("n", 4, lo=1)
+    return FixedFootprint(n=n, contact_length=r.number("contact_length", positive=True),
+                          k_t=r.number("stiffness", positive=True))
