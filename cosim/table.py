@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import threading
 from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
@@ -45,12 +47,13 @@ def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
     for channel, msgs in per_channel.items():
         fields = Counter(tuple(sorted(m.d)) for m in msgs).most_common(1)[0][0]
         fields_of[channel] = fields
+        # A message's shape: its field names and value types, in its own order. A producer
+        # sends one shape, so a channel has a handful: each is judged once, not each message.
+        shapes = [(tuple(m.d), tuple(map(type, m.d.values()))) for m in msgs]
+        verdict = _shape_verdicts(Counter(shapes), fields)
         box = rows.setdefault(channel, {})
-        for m in msgs:
-            if m.k in box or not all(f in m.d for f in fields):
-                bad += 1
-                continue
-            if any(isinstance(m.d[f], list) != isinstance(msgs[0].d[f], list) for f in fields):
+        for m, shape in zip(msgs, shapes, strict=True):
+            if m.k in box or not verdict[shape]:
                 bad += 1
                 continue
             box[m.k] = m.d
@@ -72,16 +75,32 @@ def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
     return table, bad
 
 
+_Shape = tuple[tuple[str, ...], tuple[type, ...]]
+
+
+def _shape_verdicts(counts: Counter[_Shape], fields: tuple[str, ...]) -> dict[_Shape, bool]:
+    """Whether a message of each shape goes in the table: it carries every one of the
+    channel's ``fields``, each a list or not as in the channel's most common such shape."""
+    def listness(shape: _Shape) -> dict[str, bool] | None:
+        kinds = dict(zip(*shape, strict=True))
+        if not all(f in kinds for f in fields):
+            return None
+        return {f: kinds[f] is list for f in fields}
+
+    complete = [(n, shape) for shape, n in counts.items() if listness(shape) is not None]
+    ref = listness(max(complete, key=lambda c: c[0])[1]) if complete else None
+    return {shape: ref is not None and listness(shape) == ref for shape in counts}
+
+
 def write_csv(table: Table, path: str | Path) -> None:
-    """CSV with a header row; numbers in full precision (repr)."""
+    """CSV with a header row; numbers in full precision (repr), rows ended by CRLF (what
+    ``csv.writer`` writes; the body is joined directly: a number never needs quoting)."""
     cols = list(table)
     with open(path, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(cols)
-        n = len(table["t"])
-        data = [table[c].tolist() for c in cols]
-        for i in range(n):
-            w.writerow([col[i] for col in data])
+        csv.writer(f).writerow(cols)
+        for start in range(0, len(table["t"]), 4096):  # bounded memory for long runs
+            chunk = [map(str, table[c][start:start + 4096].tolist()) for c in cols]
+            f.writelines(",".join(row) + "\r\n" for row in zip(*chunk, strict=True))
 
 
 def write_parquet(table: Table, path: str | Path) -> None:
@@ -122,11 +141,21 @@ def channel_stats(table: Table) -> dict[str, dict[str, float]]:
 
 
 def export(table: Table, folder: str | Path, stem: str = "table") -> dict[str, str]:
-    """Write ``<stem>.csv`` and ``<stem>.parquet`` in ``folder``; return their paths."""
+    """Write ``<stem>.csv`` and ``<stem>.parquet`` in ``folder``; return their paths.
+
+    Each file is written beside its place and renamed over it: a reader (or a second writer:
+    the recorder and the orchestrator both export on an error path, a killed exporter) never
+    leaves or sees half a table."""
     folder = Path(folder)
     paths = {"csv": str(folder / f"{stem}.csv"), "parquet": str(folder / f"{stem}.parquet")}
-    write_csv(table, paths["csv"])
-    write_parquet(table, paths["parquet"])
+    for kind, write in (("csv", write_csv), ("parquet", write_parquet)):
+        path = Path(paths[kind])
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+        try:
+            write(table, tmp)
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
     return paths
 
 

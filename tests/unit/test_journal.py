@@ -48,3 +48,54 @@ def test_corrupted_last_record_is_skipped_and_reported(tmp_path):
     p.write_bytes(bytes(data))
     c = read_journal(p)
     assert len(c.records) == 9 and c.skipped_records == 1 and "1 damaged record" in c.problem
+
+
+def test_a_stray_first_message_neither_crashes_nor_displaces_the_channel():
+    """The first message of a channel lacks a field and has a list where the others have a
+    scalar: it is left out (counted bad), the real messages make the table."""
+    records = [("plant/state", encode("data", 0, 0.0, {"z_b": [9.0, 9.0]}))]
+    records += [("plant/state", encode("data", k, k * 0.001, {"z_b": 0.1 * k, "v_b": -1.0 * k}))
+                for k in range(5)]
+    records += [("plant/state", encode("data", 5, 0.005, {"z_b": [1.0], "v_b": 0.0}))]
+    table, bad = build_table(records)
+    assert bad == 2
+    assert table["k"].tolist() == [0, 1, 2, 3, 4]
+    assert table["plant/state/z_b"].tolist() == [0.1 * k for k in range(5)]
+    assert table["plant/state/v_b"].tolist() == [-1.0 * k for k in range(5)]
+
+
+def test_csv_is_what_the_csv_module_writes_and_reads_back_exactly(tmp_path):
+    """Every float (subnormal, signed zero, inf, nan, 2**60) as ``csv.writer`` writes it,
+    and read back to the same bits; a column name with a comma is quoted."""
+    import csv
+    import math
+
+    import numpy as np
+
+    from cosim.table import read_table, write_csv
+
+    x = np.array([0.0, -0.0, 5e-324, 1 / 3, -np.inf, np.inf, np.nan, 2.0 ** 60, -1e300] * 1000)
+    table = {"k": np.arange(x.size), "t": np.arange(x.size) * 1e-3, "a,b": x}
+    write_csv(table, tmp_path / "fast.csv")
+    with open(tmp_path / "ref.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(list(table))
+        for row in zip(*(table[c].tolist() for c in table), strict=True):
+            w.writerow(row)
+    assert (tmp_path / "fast.csv").read_bytes() == (tmp_path / "ref.csv").read_bytes()
+    back = read_table(tmp_path / "fast.csv")
+    assert [math.copysign(1, v) for v in back["a,b"][:2]] == [1, -1]
+    np.testing.assert_array_equal(back["a,b"], x)
+
+
+def test_export_leaves_no_temporary_file_and_replaces_whole(tmp_path):
+    import numpy as np
+
+    from cosim.table import export, read_table
+
+    (tmp_path / "table.csv").write_text("half a tab")  # e.g. left by a killed exporter
+    table = {"k": np.arange(3), "t": np.arange(3) * 0.5, "x": np.ones(3)}
+    paths = export(table, tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["table.csv", "table.parquet"]
+    for path in paths.values():
+        np.testing.assert_array_equal(read_table(path)["x"], np.ones(3))
