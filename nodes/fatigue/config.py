@@ -59,7 +59,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
-from cosim.errors import ScenarioError
+from cosim.config import ConfigReader
 
 from .damage import METHODS
 from .equivalent_stress import EQUIVALENTS
@@ -153,193 +153,151 @@ class FatigueConfig:
     def from_dict(cls, d: Mapping | None, key_prefix: str = "fatigue",
                   base_dir: str | Path = ".") -> FatigueConfig:
         """Validate a scenario section; a bad key or value raises ScenarioError(dotted key)."""
-        d = dict(d or {})
-
-        def key(k: str) -> str:
-            return f"{key_prefix}.{k}" if key_prefix else k
-
-        def choice(k: str, options: tuple[str, ...], default: str) -> str:
-            v = d.pop(k, default)
-            if v not in options:
-                raise ScenarioError(key(k), v, "one of " + ", ".join(repr(o) for o in options))
-            return v
-
-        def number(k: str, default, *, positive: bool = True, optional: bool = False):
-            v = d.pop(k, default)
-            if v is None and optional:
-                return None
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise ScenarioError(key(k), v, "a finite number" + (" > 0" if positive else ""))
-            if positive and v <= 0:
-                raise ScenarioError(key(k), v, "a number > 0")
-            return float(v)
-
-        influence = d.pop("influence", "builtin")
-        if not isinstance(influence, str) or not influence:
-            raise ScenarioError(key("influence"), influence, '"builtin" or a path to CSV files')
-        raw_map = d.pop("mapping", {})
-        if not isinstance(raw_map, Mapping):
-            raise ScenarioError(key("mapping"), raw_map, "a table channel -> case file")
-        mapping: list[tuple[str, str, float]] = []
-        for ch, spec in raw_map.items():
-            k = key(f"mapping.{ch}")
-            if isinstance(spec, str):
-                mapping.append((str(ch), spec, 1.0))
-            elif isinstance(spec, Mapping) and isinstance(spec.get("file"), str):
-                extra = set(spec) - {"file", "scale"}
-                sc = spec.get("scale", 1.0)
-                if extra or isinstance(sc, bool) or not isinstance(sc, (int, float)):
-                    raise ScenarioError(k, dict(spec), '{file = "<csv>", scale = <number>}')
-                mapping.append((str(ch), spec["file"], float(sc)))
-            else:
-                raise ScenarioError(k, spec, 'a file name or {file = "<csv>", scale = <number>}')
+        r = ConfigReader(d or {}, key_prefix, FATIGUE_KEYS)
+        influence = r.string("influence", "builtin", expected='"builtin" or a path to CSV files')
+        mapping = _mapping(r.section("mapping", expected="a table channel -> case file"))
         if influence != "builtin" and not mapping:
-            raise ScenarioError(key("mapping"), raw_map,
-                                "a mapping of load channels to case files for imported tables")
-        raw_mat = d.pop("material", {})
-        if not isinstance(raw_mat, Mapping):
-            raise ScenarioError(key("material"), raw_mat, "a table of material overrides")
-        mat: list[tuple[str, float]] = []
-        raw_mat = dict(raw_mat)
-        cyclic = raw_mat.pop("cyclic", "uml")
-        if cyclic not in CYCLIC_CURVES:
-            raise ScenarioError(key("material.cyclic"), cyclic,
-                                "one of " + ", ".join(repr(o) for o in CYCLIC_CURVES))
-        for mk, mv in raw_mat.items():
-            if mk not in ALIASES:
-                raise ScenarioError(key(f"material.{mk}"), mv,
-                                    "a key among " + ", ".join(sorted(ALIASES)) + ", cyclic")
-            if isinstance(mv, bool) or not isinstance(mv, (int, float)) or not math.isfinite(mv):
-                raise ScenarioError(key(f"material.{mk}"), mv, "a finite number (SI units)")
-            name = ALIASES[mk]
-            if name in ("b", "c") and mv >= 0:
-                raise ScenarioError(key(f"material.{mk}"), mv, "a negative exponent")
-            if name not in ("b", "c") and mv <= 0:
-                raise ScenarioError(key(f"material.{mk}"), mv, "a number > 0")
-            if name == "nu" and not mv < 0.5:
-                raise ScenarioError(key(f"material.{mk}"), mv, "a Poisson's ratio < 0.5")
-            mat.append((name, float(mv)))
-        endurance = d.pop("endurance", None)
-        if endurance is not None and endurance not in ENDURANCE_MODES:
-            raise ScenarioError(key("endurance"), endurance,
-                                "one of " + ", ".join(repr(o) for o in ENDURANCE_MODES))
-        if "endurance_limit" in d:  # the old boolean key
-            old = d.pop("endurance_limit")
-            if not isinstance(old, bool):
-                raise ScenarioError(key("endurance_limit"), old,
-                                    'true or false (or use endurance = "haibach" | '
-                                    '"elementary" | "none")')
-            implied = "elementary" if old else "none"
-            if endurance is not None and endurance != implied:
-                raise ScenarioError(key("endurance_limit"), old,
-                                    f"not both: endurance = {endurance!r} contradicts it "
-                                    f"(endurance_limit = {str(old).lower()} means "
-                                    f"endurance = {implied!r}); drop endurance_limit")
-            endurance = implied
-        endurance = endurance or "haibach"
-        d_comp = d.pop("component", {})
-        component = _component(d_comp, key("component"))
-        live = d.pop("live", "auto")
-        if live not in (True, False, "auto"):
-            raise ScenarioError(key("live"), live, 'true, false or "auto"')
-        block = d.pop("block_samples", 500)
-        if isinstance(block, bool) or not isinstance(block, int) or block < 1:
-            raise ScenarioError(key("block_samples"), block, "an integer >= 1")
+            raise r.error("mapping", r.table("mapping"),
+                          "a mapping of load channels to case files for imported tables")
+        raw_mat = r.section("material", expected="a table of material overrides")
+        cyclic = raw_mat.choice("cyclic", CYCLIC_CURVES, "uml")
+        material_overrides = _material_overrides(raw_mat)
         cfg = cls(
             influence=influence,
-            mapping=tuple(mapping),
-            stress_scale=number("stress_scale", 1.0),
-            equivalent=choice("equivalent", EQUIVALENTS, "abs_max_principal"),
-            method=choice("method", METHODS, "stress_life"),
-            mean_stress=choice("mean_stress", MEAN_STRESS_METHODS, "goodman"),
-            residue=choice("residue", RESIDUES, "repeated"),
-            endurance=endurance,
-            material_overrides=tuple(mat),
+            mapping=mapping,
+            stress_scale=r.number("stress_scale", 1.0, positive=True),
+            equivalent=r.choice("equivalent", EQUIVALENTS, "abs_max_principal"),
+            method=r.choice("method", METHODS, "stress_life"),
+            mean_stress=r.choice("mean_stress", MEAN_STRESS_METHODS, "goodman"),
+            residue=r.choice("residue", RESIDUES, "repeated"),
+            endurance=_endurance(r),
+            material_overrides=material_overrides,
             cyclic=cyclic,
-            component=component,
-            mesh_size_m=number("mesh_size_m", 0.02),
-            nodes=choice("nodes", NODE_SETS, "surface"),
-            track_length_m=number("track_length_m", None, optional=True),
-            repeats_basis_m=number("repeats_basis_m", None, optional=True),
-            block_samples=block,
-            live=live,
+            component=_component(r.section(
+                "component", expected="a table of component (Marin factor) settings")),
+            mesh_size_m=r.number("mesh_size_m", 0.02, lo=0.002, hi=0.1, unit="m"),
+            nodes=r.choice("nodes", NODE_SETS, "surface"),
+            track_length_m=r.optional_number("track_length_m", positive=True),
+            repeats_basis_m=r.optional_number("repeats_basis_m", positive=True),
+            block_samples=r.integer("block_samples", 500, lo=1),
+            live=_live(r),
             base_dir=str(base_dir),
         )
-        if not 0.002 <= cfg.mesh_size_m <= 0.1:
-            raise ScenarioError(key("mesh_size_m"), cfg.mesh_size_m, "between 0.002 and 0.1 m")
         try:
             mat0 = with_overrides(steel_817M40(cfg.cyclic), dict(cfg.material_overrides))
         except ValueError as e:
-            raise ScenarioError(key("material"), dict(raw_mat),
-                                f"a consistent material ({e})") from None
+            raise r.error("material", dict(raw_mat.cfg),
+                          f"a consistent material ({e})") from None
         try:
             cfg.material  # noqa: B018 -- builds the S-N curve: a factor set that breaks it
         except ValueError as e:
-            raise ScenarioError(key("component"), dict(d_comp),
-                                f"factors giving a valid S-N curve for Su = {mat0.Su:.4g} Pa "
-                                f"({e})") from None
-        if d:
-            k = sorted(d)[0]
-            raise ScenarioError(key(k), d[k], "no such key (known: influence, mapping, "
-                                "stress_scale, equivalent, method, mean_stress, residue, "
-                                "endurance, endurance_limit, material, component, "
-                                "mesh_size_m, nodes, track_length_m, repeats_basis_m, "
-                                "block_samples, live)")
+            raise r.error("component", dict(r.table("component")),
+                          f"factors giving a valid S-N curve for Su = {mat0.Su:.4g} Pa "
+                          f"({e})") from None
         return cfg
+
+
+FATIGUE_KEYS = ("influence", "mapping", "stress_scale", "equivalent", "method", "mean_stress",
+                "residue", "endurance", "endurance_limit", "material", "component",
+                "mesh_size_m", "nodes", "track_length_m", "repeats_basis_m", "block_samples",
+                "live")
+"""The keys of ``[fatigue]`` (module docstring)."""
+
+
+def _mapping(r: ConfigReader) -> tuple[tuple[str, str, float], ...]:
+    """``[fatigue.mapping]``: channel -> (channel, case file, scale)."""
+    mapping: list[tuple[str, str, float]] = []
+    for ch in r.names():
+        spec = r.value(ch)
+        if isinstance(spec, str):
+            mapping.append((ch, spec, 1.0))
+        elif isinstance(spec, Mapping) and isinstance(spec.get("file"), str):
+            extra = set(spec) - {"file", "scale"}
+            sc = spec.get("scale", 1.0)
+            if extra or isinstance(sc, bool) or not isinstance(sc, (int, float)):
+                raise r.error(ch, dict(spec), '{file = "<csv>", scale = <number>}')
+            mapping.append((ch, spec["file"], float(sc)))
+        else:
+            raise r.error(ch, spec, 'a file name or {file = "<csv>", scale = <number>}')
+    return tuple(mapping)
+
+
+def _material_overrides(r: ConfigReader) -> tuple[tuple[str, float], ...]:
+    """``[fatigue.material]`` besides ``cyclic``: (property name, value in SI units)."""
+    r.only([*ALIASES, "cyclic"])
+    mat: list[tuple[str, float]] = []
+    for mk in r.names():
+        if mk == "cyclic":
+            continue
+        mv = r.number(mk, expected="a finite number (SI units)")
+        name = ALIASES[mk]
+        if name in ("b", "c") and mv >= 0:
+            raise r.error(mk, mv, "a negative exponent")
+        if name not in ("b", "c") and mv <= 0:
+            raise r.error(mk, mv, "a number > 0")
+        if name == "nu" and not mv < 0.5:
+            raise r.error(mk, mv, "a Poisson's ratio < 0.5")
+        mat.append((name, mv))
+    return tuple(mat)
+
+
+def _endurance(r: ConfigReader) -> str:
+    """``endurance``, or what the old boolean ``endurance_limit`` means (not both)."""
+    endurance = r.choice("endurance", ENDURANCE_MODES) if r.has("endurance") else None
+    if r.has("endurance_limit"):
+        old = r.value("endurance_limit")
+        if not isinstance(old, bool):
+            raise r.error("endurance_limit", old, 'true or false (or use endurance = '
+                          '"haibach" | "elementary" | "none")')
+        implied = "elementary" if old else "none"
+        if endurance is not None and endurance != implied:
+            raise r.error("endurance_limit", old,
+                          f"not both: endurance = {endurance!r} contradicts it "
+                          f"(endurance_limit = {str(old).lower()} means "
+                          f"endurance = {implied!r}); drop endurance_limit")
+        endurance = implied
+    return endurance or "haibach"
+
+
+def _live(r: ConfigReader) -> bool | str:
+    live = r.value("live", "auto")
+    if not (isinstance(live, bool) or live == "auto"):
+        raise r.error("live", live, 'true, false or "auto"')
+    return live
 
 
 COMPONENT_KEYS = ("enabled", "surface", "section_h_m", "section_b_m", "equivalent_diameter_m",
                   "loading", "reliability", "temperature_c", "kf", "knee_cycles")
 
 
-def _component(raw, prefix: str) -> ComponentSpec | None:
+def _component(r: ConfigReader) -> ComponentSpec | None:
     """Validate ``[fatigue.component]``; ScenarioError names the key (``prefix.<key>``)."""
-    if not isinstance(raw, Mapping):
-        raise ScenarioError(prefix, raw, "a table of component (Marin factor) settings")
-    d = dict(raw)
-    for k in d:
-        if k not in COMPONENT_KEYS:
-            raise ScenarioError(f"{prefix}.{k}", d[k], "a key among " + ", ".join(COMPONENT_KEYS))
-    enabled = d.pop("enabled", True)
-    if not isinstance(enabled, bool):
-        raise ScenarioError(f"{prefix}.enabled", enabled, "true or false")
+    r.only(COMPONENT_KEYS)
+    enabled = r.boolean("enabled", True)
     defaults = ComponentSpec()
-
-    def num(k: str, default, lo: float, hi: float, what: str):
-        v = d.pop(k, default)
-        if v is None and default is None:
-            return None
-        if (isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)
-                or not lo <= v <= hi):
-            raise ScenarioError(f"{prefix}.{k}", v, what)
-        return float(v)
-
-    surface = d.pop("surface", defaults.surface)
-    if surface not in SURFACE_FACTORS:
-        raise ScenarioError(f"{prefix}.surface", surface,
-                            "one of " + ", ".join(repr(o) for o in SURFACE_FACTORS))
-    loading = d.pop("loading", defaults.loading)
-    if loading not in LOADINGS:
-        raise ScenarioError(f"{prefix}.loading", loading,
-                            "one of " + ", ".join(repr(o) for o in LOADINGS))
-    h = num("section_h_m", defaults.section_h_m, 1e-3, 0.3, "a section depth in m (0.001-0.3)")
-    b = num("section_b_m", defaults.section_b_m, 1e-3, 0.3, "a section width in m (0.001-0.3)")
-    d_e = num("equivalent_diameter_m", None, 2.79e-3, 0.254,
-              "an equivalent diameter in m (0.00279-0.254, Shigley Eq 6-20)")
+    surface = r.choice("surface", SURFACE_FACTORS, defaults.surface)
+    loading = r.choice("loading", LOADINGS, defaults.loading)
+    h = r.number("section_h_m", defaults.section_h_m, lo=1e-3, hi=0.3,
+                 expected="a section depth in m (0.001-0.3)")
+    b = r.number("section_b_m", defaults.section_b_m, lo=1e-3, hi=0.3,
+                 expected="a section width in m (0.001-0.3)")
+    d_e = r.optional_number("equivalent_diameter_m", lo=2.79e-3, hi=0.254,
+                            expected="an equivalent diameter in m (0.00279-0.254, "
+                                     "Shigley Eq 6-20)")
     if d_e is None and loading == "bending":
         de_rect = 0.808 * math.sqrt(h * b)
         if not 2.79e-3 <= de_rect <= 0.254:
-            raise ScenarioError(f"{prefix}.section_h_m", h,
-                                f"a section whose d_e = 0.808 sqrt(h b) = {de_rect:.4g} m lies "
-                                "in 0.00279-0.254 m (Shigley Eq 6-20)")
+            raise r.error("section_h_m", h,
+                          f"a section whose d_e = 0.808 sqrt(h b) = {de_rect:.4g} m lies "
+                          "in 0.00279-0.254 m (Shigley Eq 6-20)")
     spec = ComponentSpec(
         surface=surface, section_h_m=h, section_b_m=b, d_e_m=d_e, loading=loading,
-        reliability=num("reliability", defaults.reliability, 0.5, 0.999999,
-                        "a reliability between 0.5 and 0.999999"),
-        temperature_c=num("temperature_c", defaults.temperature_c, -60.0, 537.8,
-                          "a temperature in °C (-60 to 537.8)"),
-        kf=num("kf", defaults.kf, 1e-3, 2.0, "a factor in (0, 2]"),
-        knee_cycles=num("knee_cycles", defaults.knee_cycles, 1e5, 1e8,
-                        "a number of cycles between 1e5 and 1e8"),
+        reliability=r.number("reliability", defaults.reliability, lo=0.5, hi=0.999999,
+                             expected="a reliability between 0.5 and 0.999999"),
+        temperature_c=r.number("temperature_c", defaults.temperature_c, lo=-60.0, hi=537.8,
+                               expected="a temperature in °C (-60 to 537.8)"),
+        kf=r.number("kf", defaults.kf, lo=1e-3, hi=2.0, expected="a factor in (0, 2]"),
+        knee_cycles=r.number("knee_cycles", defaults.knee_cycles, lo=1e5, hi=1e8,
+                             expected="a number of cycles between 1e5 and 1e8"),
     )
     return spec if enabled else None
