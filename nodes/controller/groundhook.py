@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from nodes.controller.dampers import semi_active_force, two_state_force
+from nodes.controller.law_output import LawOutput, recording_c, recording_state
 from nodes.controller.registry import HARD, SOFT, Param, control_law
 
 
@@ -51,23 +52,15 @@ def groundhook_continuous(
 
 
 @control_law("groundhook_on_off")
-def groundhook_on_off_law(
-    v_w: np.ndarray, v_rel: np.ndarray, *, c_soft: float = SOFT, c_hard: float = HARD
-):
+def groundhook_on_off_law(v_w: np.ndarray, v_rel: np.ndarray, *, c_soft: float = SOFT,
+                          c_hard: float = HARD) -> LawOutput:
     """Two-state groundhook: c_hard where v_w v_rel > 0, else c_soft (thesis Eq 2.4)."""
-    F, c, hard = groundhook_on_off(v_w, v_rel, c_soft, c_hard)
-    return F, c, {"state": hard.astype(float)}
+    return recording_state(*groundhook_on_off(v_w, v_rel, c_soft, c_hard))
 
 
 @control_law("groundhook")
-def groundhook_law(
-    v_w: np.ndarray,
-    v_rel: np.ndarray,
-    *,
-    c_gnd: float = Param(lo=0.0, unit="N·s/m"),
-    c_min: float = SOFT,
-    c_max: float = HARD,
-):
+def groundhook_law(v_w: np.ndarray, v_rel: np.ndarray, *,
+                   c_gnd: float = Param(lo=0.0, unit="N·s/m"), c_min: float = SOFT,
+                   c_max: float = HARD) -> LawOutput:
     """Continuous groundhook c_gnd v_w clipped to c_min..c_max (thesis Eq 2.4)."""
-    F, c = groundhook_continuous(v_w, v_rel, c_gnd, c_min, c_max)
-    return F, c, {"c": c}
+    return recording_c(*groundhook_continuous(v_w, v_rel, c_gnd, c_min, c_max))

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from nodes.controller.dampers import semi_active_force, two_state_force
+from nodes.controller.law_output import LawOutput, recording_c, recording_state
 from nodes.controller.registry import HARD, SOFT, Param, control_law
 
 
@@ -91,35 +92,22 @@ def skyhook_no_jerk(
 
 
 @control_law("tss1", aliases=("skyhook_on_off",))
-def tss1_law(v_b: np.ndarray, v_rel: np.ndarray, *, c_soft: float = SOFT, c_hard: float = HARD):
+def tss1_law(v_b: np.ndarray, v_rel: np.ndarray, *, c_soft: float = SOFT,
+             c_hard: float = HARD) -> LawOutput:
     """Two-state skyhook TSS1 (thesis Eq 5.3): c_hard where v_b v_rel < 0, else c_soft."""
-    F, c, hard = skyhook_on_off(v_b, v_rel, c_soft, c_hard)
-    return F, c, {"state": hard.astype(float)}
+    return recording_state(*skyhook_on_off(v_b, v_rel, c_soft, c_hard))
 
 
 @control_law("skyhook")
-def skyhook_law(
-    v_b: np.ndarray,
-    v_rel: np.ndarray,
-    *,
-    c_sky: float = Param(lo=0.0, unit="N·s/m"),
-    c_min: float = SOFT,
-    c_max: float = HARD,
-):
+def skyhook_law(v_b: np.ndarray, v_rel: np.ndarray, *, c_sky: float = Param(lo=0.0, unit="N·s/m"),
+                c_min: float = SOFT, c_max: float = HARD) -> LawOutput:
     """Continuous skyhook -c_sky v_b clipped to c_min..c_max (thesis Eq 2.2)."""
-    F, c = skyhook_continuous(v_b, v_rel, c_sky, c_min, c_max)
-    return F, c, {"c": c}
+    return recording_c(*skyhook_continuous(v_b, v_rel, c_sky, c_min, c_max))
 
 
 @control_law("skyhook_no_jerk")
-def skyhook_no_jerk_law(
-    v_b: np.ndarray,
-    v_rel: np.ndarray,
-    *,
-    G: float = Param(lo=0.0, unit="N·s²/m²"),
-    c_min: float = SOFT,
-    c_max: float = HARD,
-):
+def skyhook_no_jerk_law(v_b: np.ndarray, v_rel: np.ndarray, *,
+                        G: float = Param(lo=0.0, unit="N·s²/m²"), c_min: float = SOFT,
+                        c_max: float = HARD) -> LawOutput:
     """No-jerk skyhook c = clip(G |v_b|) in the skyhook region (Ahmadian [49,50])."""
-    F, c = skyhook_no_jerk(v_b, v_rel, G, c_min, c_max)
-    return F, c, {"c": c}
+    return recording_c(*skyhook_no_jerk(v_b, v_rel, G, c_min, c_max))
