@@ -65,12 +65,23 @@ PLANT, TYRE_ROAD, CONTROLLER, RECORDER = "plant", "tyre_road", "controller", "re
 STATE, RESPONSE, ARM, FORCE = "state", "response", "arm", "force"
 FATIGUE, LOADS, DAMAGE = "fatigue", "loads", "damage"
 
-NODES = (PLANT, TYRE_ROAD, CONTROLLER, RECORDER)
-"""The nodes of every run, in start order."""
-COUPLED = (PLANT, TYRE_ROAD, CONTROLLER)
-"""The nodes of the lock-step exchange (the recorder and the fatigue worker only listen)."""
-OPTIONAL_NODES = (FATIGUE,)
-"""Nodes a run may add: the live fatigue worker (fed by the recorder's load blocks)."""
+
+def __getattr__(name: str) -> tuple[str, ...]:
+    """``NODES`` (the nodes of every run, in start order), ``COUPLED`` (the nodes of the
+    lock-step exchange; the recorder and the fatigue worker only listen) and
+    ``OPTIONAL_NODES`` (nodes a run may add: the live fatigue worker), from the node
+    registry (:mod:`cosim.node_kinds`, imported here when first asked: it imports this
+    module)."""
+    from . import node_kinds as nk
+
+    derived = {"NODES": nk.always, "COUPLED": lambda: nk.names(nk.COUPLED),
+               "OPTIONAL_NODES": lambda: nk.names(nk.OPTIONAL)}
+    if name not in derived:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = derived[name]()
+    globals()[name] = value
+    return value
+
 LOAD_CHANNEL = (PLANT, ARM)
 """The channel the recorder streams to the fatigue node in blocks."""
 

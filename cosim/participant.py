@@ -170,6 +170,11 @@ class Participant:
                 self._listen(tag)
         return tag
 
+    @property
+    def outputs(self) -> list[str]:
+        """The output channels declared so far (:meth:`output`)."""
+        return list(self._outputs)
+
     def output(self, channel: str) -> None:
         """Declare an output channel (a publisher on ``suscosim/<run>/<node>/<channel>``)."""
         self._outputs[channel] = self._publisher(keys.key(self.run, self.node, channel))
@@ -187,11 +192,11 @@ class Participant:
                 try:
                     msg = self.open(key, raw)
                 except WireError as exc:
-                    self._reject((keys.ORCHESTRATOR, keys.SCENARIO), str(exc))
+                    self.reject((keys.ORCHESTRATOR, keys.SCENARIO), str(exc))
                     continue
                 if msg.kind == "start" and isinstance(msg.d.get("run"), dict):
                     return msg.d
-                self._reject((keys.ORCHESTRATOR, keys.SCENARIO), "not a scenario")
+                self.reject((keys.ORCHESTRATOR, keys.SCENARIO), "not a scenario")
             time.sleep(0.1)
         raise RunError(f"{self.node}: no orchestrator answered for run '{self.run}' "
                        f"within {timeout_s:.0f} s (is it running, and is --connect right?)")
@@ -243,7 +248,9 @@ class Participant:
             self.check_orchestrator()
             self.ctl("progress", k, t, rejected=self.rejected)
 
-    def _reject(self, tag: Channel, why: str) -> None:
+    def reject(self, tag: Channel, why: str) -> None:
+        """Count and log (the first ten, then every thousandth) a message taken on ``tag``
+        that is not acted on: it does not verify, decode or fit what the node expects."""
         self.rejected += 1
         if self.rejected <= 10 or self.rejected % 1000 == 0:
             log.warning("%s: rejected message #%d on %s/%s: %s",
@@ -282,7 +289,7 @@ class Participant:
         with self._wake_lock:
             woken, self._wakes = self._wakes > 0, max(0, self._wakes - 1)
         if not woken:
-            self._reject(tag, "empty message")
+            self.reject(tag, "empty message")
 
     def _watch(self) -> None:
         """Wake the node's thread when it waits on an input and must look elsewhere: a control
@@ -310,7 +317,7 @@ class Participant:
             if tag == _CLOCK_TAG:
                 check_clock(msg.kind, msg.d)
         except WireError as exc:
-            self._reject(tag, str(exc))
+            self.reject(tag, str(exc))
             return None
         if tag == _CLOCK_TAG:
             if msg.kind == "abort":
@@ -320,24 +327,24 @@ class Participant:
             self.mailbox[tag].setdefault(-1, msg)
             return None
         if msg.kind != "data":
-            self._reject(tag, f"unexpected kind '{msg.kind}' on a data channel")
+            self.reject(tag, f"unexpected kind '{msg.kind}' on a data channel")
             return None
         missing = [f for f in self.required[tag] if f not in msg.d]
         if missing:
-            self._reject(tag, f"step {msg.k}: missing field(s) {', '.join(missing)}")
+            self.reject(tag, f"step {msg.k}: missing field(s) {', '.join(missing)}")
             return None
         box = self.mailbox[tag]
         if msg.k in box and msg.k >= 0:
-            self._reject(tag, f"duplicate message for step {msg.k}")
+            self.reject(tag, f"duplicate message for step {msg.k}")
             return None
         if tag in self.feeds:  # a stepped input: a window of steps from the one waited for
             floor = self._floor.get(tag, 0)
             if not floor <= msg.k <= floor + MAILBOX_WINDOW:
-                self._reject(tag, f"step {msg.k} outside the window {floor}..."
+                self.reject(tag, f"step {msg.k} outside the window {floor}..."
                                   f"{floor + MAILBOX_WINDOW}")
                 return None
         elif len(box) >= MAILBOX_MAX:
-            self._reject(tag, f"step {msg.k}: {MAILBOX_MAX} messages already wait")
+            self.reject(tag, f"step {msg.k}: {MAILBOX_MAX} messages already wait")
             return None
         box[msg.k] = msg
         return None
@@ -412,7 +419,7 @@ class Participant:
                 try:
                     check_start(msg.d, **self.expect_start)
                 except WireError as exc:  # a forged or foreign start: not acted on
-                    self._reject(_CLOCK_TAG, str(exc))
+                    self.reject(_CLOCK_TAG, str(exc))
                     continue
                 self.ctl("progress", -1, 0.0, rejected=self.rejected)
                 return msg.d

@@ -15,25 +15,37 @@ from __future__ import annotations
 
 import argparse
 import faulthandler
-import importlib
+import inspect
 import logging
 import os
 import signal
 import sys
 import traceback
+from collections.abc import Callable
+from typing import Any
 
+from cosim import node_kinds as nk
 from cosim.auth import ENV_KEY_FILE, RunKey, run_key_from_env
 from cosim.bus import ZenohBus, zenoh_config
 from cosim.errors import RunError, SuscosimError
 from cosim.participant import Participant
+from cosim.stepped import run_stepped
 
-NODE_MODULES = {
-    "plant": "nodes.plant.node",
-    "tyre_road": "nodes.tyre_road.node",
-    "controller": "nodes.controller.node",
-    "recorder": "nodes.recorder.node",
-    "fatigue": "nodes.fatigue.node",
-}
+NODE_MODULES: dict[str, str] = nk.entries()
+"""Node kind -> the module of its own implementation (from the registry,
+:mod:`cosim.node_kinds`); the kinds are the names ``suscosim node`` takes."""
+
+
+def node_callable(name: str, scenario: dict[str, Any]) -> Callable[[Participant], None]:
+    """What runs node ``name`` on a participant: the implementation the scenario's
+    ``[nodes]`` picks (the kind's own without one; :func:`cosim.node_kinds.implementation`).
+    A function entry is called as ``function(part, scenario)``; a class entry runs as a
+    stepped node (:func:`cosim.stepped.run_stepped`)."""
+    impl = nk.implementation(name, scenario)
+    obj = nk.load(impl.entry, f"{nk.SECTION}.{name}")
+    if inspect.isclass(obj):
+        return lambda part: run_stepped(obj, part, scenario, name)
+    return lambda part: obj(part, scenario)
 
 
 def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
@@ -55,8 +67,7 @@ def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
         part.stall_timeout_s = float(run["stall_timeout_s"])
         part.expect_start = {"n_steps": run.get("n_steps"), "h": run.get("h"),
                              "nodes": list(run.get("nodes", []))}
-        module = importlib.import_module(NODE_MODULES[name])
-        module.run(part, scenario)
+        node_callable(name, scenario)(part)
         return 0
     except SuscosimError as exc:
         if not (isinstance(exc, RunError) and "aborted by the orchestrator" in str(exc)):

@@ -10,6 +10,8 @@ the sequential exchange on the 2-core machine of docs/cosim.md (``bench/bench_th
 
 Layout by the number of usable cores n (``os.sched_getaffinity``), c0 < c1 < ... :
 
+The layout is each kind's ``cores`` in the node registry (:mod:`cosim.node_kinds`):
+
 ==========  =====  =========  ==========  =========================================
 n           plant  tyre_road  controller  recorder, fatigue (and any other node)
 ==========  =====  =========  ==========  =========================================
@@ -33,6 +35,8 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 
+from cosim import node_kinds as nk
+
 PIN_MODES = ("auto", "on", "off")
 AUTO_MAX_CORES = 4
 
@@ -46,14 +50,13 @@ def usable_cores() -> list[int]:
 
 
 def core_layout(nodes: Iterable[str], cores: list[int]) -> dict[str, int]:
-    """The core of each node (see the table above); empty with fewer than 2 cores."""
+    """The core of each node (see the table above: each kind's ``cores`` in the registry,
+    :mod:`cosim.node_kinds`; a name that is no kind is placed as the listeners are); empty
+    with fewer than 2 cores."""
     n = len(cores)
     if n < 2:
         return {}
-    role = {"plant": cores[0], "tyre_road": cores[1],
-            "controller": cores[2] if n >= 3 else cores[0]}
-    other = cores[3] if n >= 4 else (cores[0] if n == 3 else cores[1])
-    return {node: role.get(node, other) for node in nodes}
+    return {node: cores[nk.core_index(node, n)] for node in nodes}
 
 
 def should_pin(mode: str, cores: list[int]) -> bool:

@@ -26,11 +26,12 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from cosim import auth as au
 from cosim import channels as ch
 from cosim import keys
+from cosim import node_kinds as nk
 from cosim import scenario as sc
 from cosim.bus import Bus, MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
 from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
@@ -47,27 +48,12 @@ def new_run_id(name: str) -> str:
 
 
 def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str, Any]:
-    """Preflight every model section and fill the derived run keys (id, dir, t_end, N)."""
-    from nodes.controller import node as controller_node
-    from nodes.fatigue.config import FatigueConfig
-    from nodes.plant.models import build_plant_model
-    from nodes.tyre_road import node as tyre_node
-
+    """Preflight every node kind's check (the registry, :mod:`cosim.node_kinds`: the model
+    sections, the implementations ``[nodes]`` picks) and fill the derived run keys (id, dir,
+    t_end, N, the run's nodes)."""
     run = scenario["run"]
-    model = build_plant_model(scenario["vehicle"])
-    try:
-        info = model.info()
-        load_channels = set(model.loads())
-    finally:
-        model.close()
-    fatigue = FatigueConfig.from_dict(scenario.get("fatigue"))  # validated before anything
-    live_fatigue = run["mode"] != "reference" and (
-        fatigue.live is True or (fatigue.live == "auto" and ch.LOAD_CHANNEL[1] in load_channels))
-    if fatigue.live is True and ch.LOAD_CHANNEL[1] not in load_channels:
-        raise ScenarioError("fatigue.live", True, "false or \"auto\": this vehicle model "
-                            "reports no lower-arm loads (use the realistic corner)")
-    duration = tyre_node.static_check(scenario)
-    controller_node.static_check(scenario, int(cast(int, info["n_corners"])))
+    nodes, facts = nk.run_preflight(scenario)
+    duration = facts.get("duration_s")
     if run["t_end"] == 0:
         if duration is None:
             raise ScenarioError("run.t_end", 0, "a duration > 0 s (or a road with length_m "
@@ -77,7 +63,7 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
     run["t_end"] = run["n_steps"] * run["h"]  # what is simulated: a whole number of steps
     run["id"] = run["id"] or new_run_id(run["name"])
     run["dir"] = str(Path(out) if out else Path("runs") / run["id"])
-    run["nodes"] = list(ch.NODES) + ([ch.FATIGUE] if live_fatigue else [])
+    run["nodes"] = nodes
     return scenario
 
 

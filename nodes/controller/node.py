@@ -63,3 +63,16 @@ def static_check(scenario: dict[str, Any], n_corners: int) -> None:
         raise ScenarioError("controller.velocity", "damper",
                             f"'relative' for vehicle.model = {model!r} (only "
                             f"{', '.join(DAMPER_VELOCITY_MODELS)} publishes v_damper)")
+
+
+def fmu_check(scenario: dict[str, Any], n_corners: int) -> None:
+    """Preflight of ``[nodes] controller = "fmu"`` (the registry's FMU alternative of the
+    controller): the law is the FMU (``controller.law = "fmu"``, filled in when absent; any
+    other law is a ScenarioError), then :func:`static_check` opens the FMU and checks its
+    model description."""
+    section = scenario.setdefault("controller", {})
+    law = section.setdefault("law", "fmu")
+    if law != "fmu":
+        raise ScenarioError("controller.law", law, "\"fmu\" (or no law) with [nodes] "
+                            "controller = \"fmu\"")
+    static_check(scenario, n_corners)

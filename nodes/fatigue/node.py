@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import queue
 import time
 from pathlib import Path
 from typing import Any
@@ -20,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from cosim import channels as ch
-from cosim.errors import RunError
+from cosim.errors import RunError, ScenarioError
+from cosim.listener import Listener, Received
 from cosim.participant import Participant
 
 from .config import FatigueConfig
@@ -43,10 +43,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     with contextlib.suppress(OSError):
         os.nice(NICE)
     load_influence(cfg)  # FE solve or cache read: before ready, not inside the run
-    tag = part.listen(ch.RECORDER, ch.LOADS, required=("k0", "t"), stepped=False)
+    listener = Listener(part, run_cfg["start_timeout_s"])
+    tag = listener.feed(ch.RECORDER, ch.LOADS, required=("k0", "t"))
     part.output(ch.DAMAGE)
-    start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
-    n_steps = int(start["n_steps"])
+    early: list[Received] = []  # a block that overtook the start (another sender)
+    while listener.start is None:  # the handshake
+        if (got := listener.poll(timeout=0.05)) is not None:
+            early.append(got)
+    n_steps = int(listener.start["n_steps"])
     h = float(run_cfg["h"])
     L = cfg.track_length_m if cfg.track_length_m is not None else \
         track_length(scenario, np.array([0.0, run_cfg["t_end"]]))
@@ -54,21 +58,16 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     fields: list[str] = []  # the load fields of the blocks, in the order LiveFatigue takes
     next_k = 0
     t_last = 0.0
-    box = part.mailbox[tag]
     last_input = time.monotonic()
     last_report = 0.0
     while next_k <= n_steps:
-        try:
-            part.handle(*part.inbox.get(timeout=0.05))  # files the block; raises on abort
-        except queue.Empty:
-            pass
+        got = early.pop(0) if early else listener.poll(timeout=0.05)  # raises on abort
         now = time.monotonic()
-        while box:
-            k = min(box)
-            msg = box.pop(k)
-            if k < 0:
-                continue  # hello
-            d = msg.d
+        if got is not None:
+            k, d = got.msg.k, got.msg.d
+            if k < next_k:  # a block of steps already taken (a duplicate)
+                part.reject(tag, f"load block of steps {d['k0']}..{k} again")
+                continue
             if int(d["k0"]) != next_k:
                 raise RunError(f"fatigue: load block starts at step {d['k0']}, expected "
                                f"{next_k} (a block was lost)")
@@ -120,3 +119,17 @@ def _report(part: Participant, res: FatigueResult, k: int, t: float, distance_m:
 
 def _finite(x: float) -> float | str:
     return x if np.isfinite(x) else "inf"
+
+
+def preflight(scenario: dict[str, Any], load_channels: list[str] | None) -> bool:
+    """Preflight (:mod:`cosim.node_kinds`): validate ``[fatigue]``; whether the live fatigue
+    node joins the run: ``fatigue.live = true``, or ``"auto"`` with a plant that publishes
+    the lower-arm loads (``load_channels`` from the plant's check); never in reference
+    mode. ``live = true`` without those loads is a ScenarioError."""
+    cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
+    has_loads = ch.LOAD_CHANNEL[1] in (load_channels or ())
+    if cfg.live is True and not has_loads:
+        raise ScenarioError("fatigue.live", True, "false or \"auto\": this vehicle model "
+                            "reports no lower-arm loads (use the realistic corner)")
+    return scenario["run"]["mode"] != "reference" and (
+        cfg.live is True or (cfg.live == "auto" and has_loads))

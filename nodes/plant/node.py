@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import Any
 
 from cosim import channels as ch
+from cosim import node_kinds as nk
 from cosim.participant import Participant
 
 from .coupling import StepInputs, substep_forces
@@ -35,8 +36,10 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         outputs = [ch.STATE, ch.RESPONSE, *model.loads().keys()]
         for name in outputs:
             part.output(name)
-        tyre = part.listen(ch.TYRE_ROAD, ch.FORCE, required=("F_t", "k_t"))
-        damper = part.listen(ch.CONTROLLER, ch.FORCE, required=("F_d", "c_eff"))
+        # the force nodes of the registry, each with the coupling fields it provides
+        sources = [part.listen(node, ch.FORCE, required=fields)
+                   for node, fields in nk.force_sources()]
+        provides = dict(nk.force_sources())
         info = dict(model.info(), outputs=outputs)
         start = part.handshake(info=info, timeout_s=run_cfg["start_timeout_s"])
         n = int(start["n_steps"])
@@ -53,11 +56,11 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             for name, kk, tt, values in later:
                 part.publish(name, kk, tt, values)
             later.clear()
-            msgs = part.wait({tyre: k, damper: k})
+            msgs = part.wait({tag: k for tag in sources})
+            forces = {f: msg.array(f) for tag, msg in msgs.items() for f in provides[tag[0]]}
             now = StepInputs(
-                F_t=msgs[tyre].array("F_t"), k_t=msgs[tyre].array("k_t"),
-                F_d=msgs[damper].array("F_d"), c_eff=msgs[damper].array("c_eff"),
-                z_w=seen["z_w"], v_rel=seen["v_w"] - seen["v_b"],
+                F_t=forces["F_t"], k_t=forces["k_t"], F_d=forces["F_d"],
+                c_eff=forces["c_eff"], z_w=seen["z_w"], v_rel=seen["v_w"] - seen["v_b"],
             )
             F_t, F_d = substep_forces(mode, now, before, 0.0, h,
                                       st["z_w"], st["v_w"] - st["v_b"])
@@ -90,3 +93,15 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     finally:
         model.close()
 
+
+
+def preflight(scenario: dict[str, Any]) -> dict[str, Any]:
+    """Preflight (:mod:`cosim.node_kinds`): build the vehicle model once (raises
+    ScenarioError on a bad ``vehicle`` section); the facts the other checks take:
+    ``n_corners`` and ``load_channels`` (the component-load channels it publishes)."""
+    model = build_plant_model(scenario["vehicle"])
+    try:
+        info = model.info()
+        return {"n_corners": int(info["n_corners"]), "load_channels": sorted(model.loads())}
+    finally:
+        model.close()

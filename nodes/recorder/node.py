@@ -27,14 +27,15 @@ from typing import Any
 
 from cosim import channels as ch
 from cosim import keys
+from cosim import node_kinds as nk
 from cosim.errors import RunError, WireError
 from cosim.journal import JournalWriter, read_journal
-from cosim.participant import HELLO_PERIOD_S, WAITING_PERIOD_S, Participant
+from cosim.listener import Listener, Received
+from cosim.participant import Participant
 from cosim.table import build_table, channel_stats, export
 from cosim.wire import MAX_MESSAGE_BYTES, decode
 
 FLUSH_PERIOD_S = 0.05
-_DATA = "~data"
 
 
 class ChannelShapes:
@@ -145,14 +146,15 @@ class BlockSender:
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Record the run until every channel is complete (or the run is aborted).
 
-    Producers send their data messages, exactly as they published them, in batches on
-    ``<node>/records`` (see cosim.participant); each one is validated and journaled.
+    Producers (the coupled kinds of the registry, :func:`cosim.node_kinds.producers`) send
+    their data messages, exactly as they published them, in batches on ``<node>/records``
+    (see cosim.participant); each one is validated and journaled.
     """
     run_cfg = scenario["run"]
     folder = Path(run_cfg["dir"])
     journal_path = folder / "journal.msgpack"
     journal = JournalWriter(journal_path, part.run)
-    producers = [n for n in run_cfg["nodes"] if n in ch.NODES and n != part.node]
+    producers = [n for n in run_cfg["nodes"] if n in nk.producers() and n != part.node]
     streamer: LoadStreamer | None = None
     sender: BlockSender | None = None
     if ch.FATIGUE in run_cfg["nodes"]:
@@ -161,11 +163,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         streamer = LoadStreamer(block)
         sender = BlockSender(part)
     load_name = "/".join(ch.LOAD_CHANNEL)
-    put = part.inbox.put
+    listener = Listener(part, run_cfg["start_timeout_s"])
     for node in producers:
-        part.bus.subscribe(keys.key(part.run, node, keys.RECORDS),
-                           lambda key, raw: put(((_DATA, key), raw)))
-    heard: set[str] = set()
+        listener.feed(node, keys.RECORDS, kinds=("records",))
     shapes = ChannelShapes()
     expected: set[str] = set()
     got: dict[str, set[int]] = {}
@@ -176,17 +176,17 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         try:
             msg = decode(raw)
         except WireError as exc:
-            part._reject((node, channel), str(exc))
+            part.reject((node, channel), str(exc))
             return
         if msg.kind != "data" or msg.k < 0:
             return
         name = f"{node}/{channel}"
         if n_steps is not None and msg.k > n_steps:
-            part._reject((node, channel), f"step {msg.k} after the last step {n_steps}")
+            part.reject((node, channel), f"step {msg.k} after the last step {n_steps}")
             return
         wrong = shapes.check(name, msg.d)
         if wrong:
-            part._reject((node, channel), f"step {msg.k}: {wrong}")
+            part.reject((node, channel), f"step {msg.k}: {wrong}")
             return
         # Everything valid is journaled, duplicates included: the table keeps, per step,
         # the first message that has the channel's fields (see table.build_table).
@@ -197,69 +197,36 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             for blk in streamer.blocks(n_steps):
                 sender.send(blk)
 
-    def feed(key: str, raw: bytes) -> bool:
-        """One ``records`` message; True if it held data."""
-        _, node, _ = keys.parse_key(key)
-        try:
-            batch = part.open(key, raw)  # signed with the run's key, else rejected
-        except WireError as exc:
-            part._reject((node, keys.RECORDS), str(exc))
-            return False
-        heard.add(node)
-        if batch.kind != "records":
-            return False
-        for channel, one in batch.d["records"]:
+    def feed(batch: Received) -> None:
+        """One ``records`` batch (verified by the listener): its data messages."""
+        for channel, one in batch.msg.d["records"]:
             if not keys.NAME.match(channel):
-                part._reject((node, keys.RECORDS), f"bad channel name {channel!r:.40}")
+                part.reject((batch.node, keys.RECORDS), f"bad channel name {channel!r:.40}")
                 continue
-            record(node, channel, one)
-        return True
+            record(batch.node, channel, one)
 
     last_flush = last_data = time.monotonic()
-    next_ready = 0.0
-    next_waiting = time.monotonic() + WAITING_PERIOD_S
-    deadline = time.monotonic() + run_cfg["start_timeout_s"]
     try:
         while True:
             now = time.monotonic()
-            part.check_orchestrator()
-            if n_steps is None:
-                if now >= deadline:
-                    raise RunError(f"recorder: not started; heard {sorted(heard)} of {producers}")
-                if now >= next_ready:
-                    next_ready = now + HELLO_PERIOD_S
-                    if streamer is not None:
-                        part.publish_hello()
-                    if heard.issuperset(producers):
-                        part.ctl("ready", info={"outputs": []})
-                    elif now >= next_waiting:
-                        next_waiting = now + WAITING_PERIOD_S
-                        part.ctl("waiting", missing=[f"{n}/{keys.RECORDS}" for n in producers
-                                                     if n not in heard])
-            elif now - last_data > part.stall_timeout_s:
+            if n_steps is not None and now - last_data > part.stall_timeout_s:
                 missing = sorted(c for c in expected if len(got.get(c, ())) <= n_steps)
                 raise RunError(f"recorder: no data for {part.stall_timeout_s:.1f} s; "
                                f"incomplete: {', '.join(missing)}")
             if now - last_flush >= FLUSH_PERIOD_S:
                 journal.flush()
                 last_flush = now
-            try:
-                tag, raw = part.inbox.get(timeout=0.05)
-            except queue.Empty:
+            batch = listener.poll(timeout=0.05)  # the clock: raises RunError on abort
+            if n_steps is None and listener.start is not None:
+                n_steps = int(listener.start["n_steps"])
+                for node, info in listener.start["info"].items():
+                    if node not in producers:
+                        continue  # e.g. the fatigue node: not a per-step channel
+                    expected.update(f"{node}/{c}" for c in info.get("outputs", []))
+                last_data = time.monotonic()
+            if batch is None:
                 continue
-            if tag[0] != _DATA:
-                msg = part.handle(tag, raw)  # the clock: raises RunError on abort
-                if msg is not None and msg.kind == "start":
-                    n_steps = int(msg.d["n_steps"])
-                    for node, info in msg.d["info"].items():
-                        if node not in producers:
-                            continue  # e.g. the fatigue node: not a per-step channel
-                        expected.update(f"{node}/{c}" for c in info.get("outputs", []))
-                    part.ctl("progress", -1, 0.0, rejected=part.rejected)
-                    last_data = time.monotonic()
-                continue
-            if not feed(tag[1], raw):
-                continue
+            feed(batch)
             last_data = time.monotonic()
             if n_steps is not None:
                 done_k = min(len(got.get(c, ())) for c in expected) - 1
@@ -267,7 +234,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 if done_k >= n_steps:
                     break
     except RunError:
-        _drain(part, feed)  # the other nodes' last batches, sent as they stop
+        for batch in listener.drain():  # the other nodes' last batches, sent as they stop
+            feed(batch)
         journal.close()
         finalize(journal_path, folder)
         raise
@@ -297,15 +265,3 @@ def _with_heartbeat(part: Participant, k: int, t: float, work: Any,
     finally:
         stop.set()
         th.join()
-
-
-def _drain(part: Participant, feed: Any, quiet_s: float = 0.3, limit_s: float = 1.5) -> None:
-    """After an abort: keep journaling the records that still arrive, until the bus is quiet."""
-    end = time.monotonic() + limit_s
-    while time.monotonic() < end:
-        try:
-            tag, raw = part.inbox.get(timeout=quiet_s)
-        except queue.Empty:
-            return
-        if tag[0] == _DATA:
-            feed(tag[1], raw)

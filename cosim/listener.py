@@ -1,0 +1,166 @@
+"""The shell of a node that only listens: takes its inputs as they come, not step by step.
+
+The recorder (every producer's ``records`` feed) and the live fatigue node (the recorder's
+load blocks) are not in the lock-step exchange: they take each message when it arrives,
+before the run's ``start`` as after it. A :class:`Listener` does for them what
+:meth:`Participant.handshake` and :meth:`Participant.wait` do for a coupled node, through
+the participant's public API only:
+
+* :meth:`Listener.feed` subscribes to an input (``node/channel``);
+* :meth:`Listener.poll` takes one message (or None after ``timeout``): a feed's message is
+  verified with the run's key and decoded (:meth:`Participant.open`), of a kind the feed
+  takes and with the fields it requires, else rejected and counted
+  (:meth:`Participant.reject`); ``hello`` proves the feed live and is not returned. A clock
+  message is handled (an abort raises :class:`RunError`); a ``start`` must be plausible
+  (:func:`cosim.control.check_start`) and sets :attr:`Listener.start`.
+* until the start, every poll keeps the handshake going: ``hello`` on the node's outputs,
+  ``ready`` once every feed has been heard (else ``waiting``, naming the silent ones, every
+  second), a :class:`RunError` after the start timeout naming them.
+"""
+
+from __future__ import annotations
+
+import queue
+import time
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from . import keys
+from .control import check_start
+from .errors import RunError, WireError
+from .participant import HELLO_PERIOD_S, WAITING_PERIOD_S, Channel, Participant
+from .wire import Message
+
+
+@dataclass(frozen=True)
+class Received:
+    """One message of a feed: from ``node``, on ``channel`` (key ``key``), verified and
+    decoded."""
+
+    node: str
+    channel: str
+    key: str
+    msg: Message
+
+
+@dataclass(frozen=True)
+class _Feed:
+    key: str
+    kinds: tuple[str, ...]
+    required: tuple[str, ...]
+
+
+class Listener:
+    """The handshake and the input side of a listening node (see the module's docstring)."""
+
+    def __init__(self, part: Participant, start_timeout_s: float,
+                 info: Mapping[str, Any] | None = None) -> None:
+        self.part = part
+        self.info = dict(info or {})
+        """Facts sent with ``ready`` (besides the node's outputs)."""
+        self.start: dict[str, Any] | None = None
+        """The ``start`` payload (``n_steps``, ``h``, ``info``), once it came."""
+        self.heard: set[Channel] = set()
+        """The feeds a valid message (``hello`` or data) came on."""
+        self.feeds: dict[Channel, _Feed] = {}
+        self.start_timeout_s = start_timeout_s
+        self._deadline = time.monotonic() + start_timeout_s
+        self._next_ready = 0.0
+        self._next_waiting = time.monotonic() + WAITING_PERIOD_S
+
+    def feed(self, node: str, channel: str, kinds: Iterable[str] = ("data",),
+             required: Iterable[str] = ()) -> Channel:
+        """Subscribe to ``node/channel``: messages of ``kinds`` with the ``required`` fields
+        come out of :meth:`poll`; anything else (but ``hello``) is rejected."""
+        tag = (node, channel)
+        if tag in self.feeds:
+            return tag
+        key = keys.key(self.part.run, node, channel)
+        self.feeds[tag] = _Feed(key, tuple(kinds), tuple(required))
+        put = self.part.inbox.put
+        self.part.bus.subscribe(key, lambda _k, raw: put((tag, raw)))
+        return tag
+
+    def missing(self) -> list[str]:
+        """The feeds not heard yet, as ``node/channel``."""
+        return [f"{n}/{c}" for (n, c) in self.feeds if (n, c) not in self.heard]
+
+    def poll(self, timeout: float = 0.05) -> Received | None:
+        """One message of a feed, or None (nothing within ``timeout`` [s], a control message,
+        a message rejected). Raises RunError on an abort, when the orchestrator is gone, or
+        when the start does not come within the start timeout."""
+        part = self.part
+        part.check_orchestrator()
+        if self.start is None:
+            self._handshake()
+        try:
+            tag, raw = part.inbox.get(timeout=timeout)
+        except queue.Empty:
+            return None
+        feed = self.feeds.get(tag)
+        if feed is not None:
+            return self._open(tag, feed, raw)
+        msg = part.handle(tag, raw)  # the clock: raises RunError on an abort
+        if msg is not None and msg.kind == "start" and self.start is None:
+            try:
+                check_start(msg.d, **part.expect_start)
+            except WireError as exc:  # a forged or foreign start: not acted on
+                part.reject(tag, str(exc))
+                return None
+            self.start = dict(msg.d)
+            part.ctl("progress", -1, 0.0, rejected=part.rejected)
+        return None
+
+    def _open(self, tag: Channel, feed: _Feed, raw: bytes) -> Received | None:
+        try:
+            msg = self.part.open(feed.key, raw)  # signed with the run's key, else rejected
+        except WireError as exc:
+            self.part.reject(tag, str(exc))
+            return None
+        if msg.kind == "hello":
+            self.heard.add(tag)
+            return None
+        if msg.kind not in feed.kinds:
+            self.part.reject(tag, f"unexpected kind '{msg.kind}' on {tag[0]}/{tag[1]}")
+            return None
+        missing = [f for f in feed.required if f not in msg.d]
+        if missing:
+            self.part.reject(tag, f"step {msg.k}: missing field(s) {', '.join(missing)}")
+            return None
+        self.heard.add(tag)
+        return Received(tag[0], tag[1], feed.key, msg)
+
+    def _handshake(self) -> None:
+        """Before the start: hello, ready / waiting as they are due; the start timeout."""
+        part = self.part
+        now = time.monotonic()
+        if now >= self._deadline:
+            silent = self.missing()
+            raise RunError(f"{part.node}: not started within {self.start_timeout_s:.0f} s"
+                           + (f"; never heard {', '.join(silent)}" if silent else ""))
+        if now < self._next_ready:
+            return
+        self._next_ready = now + HELLO_PERIOD_S
+        part.publish_hello()
+        silent = self.missing()
+        if not silent:
+            part.ctl("ready", info={"outputs": part.outputs, **self.info})
+        elif now >= self._next_waiting:  # tell the orchestrator what holds this node up
+            self._next_waiting = now + WAITING_PERIOD_S
+            part.ctl("waiting", missing=silent)
+
+    def drain(self, quiet_s: float = 0.3, limit_s: float = 1.5) -> list[Received]:
+        """After an abort: the feeds' messages that still arrive, until the bus is quiet
+        (at most ``limit_s``); control messages are dropped."""
+        out: list[Received] = []
+        end = time.monotonic() + limit_s
+        while time.monotonic() < end:
+            try:
+                tag, raw = self.part.inbox.get(timeout=quiet_s)
+            except queue.Empty:
+                break
+            feed = self.feeds.get(tag)
+            if feed is not None and (got := self._open(tag, feed, raw)) is not None:
+                out.append(got)
+        return out

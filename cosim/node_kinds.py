@@ -1,0 +1,308 @@
+"""The node registry: every kind of node a run can have, declared once.
+
+Each :class:`NodeKind` says what a node is: its name (also its key segment, its log file,
+its certificate's common name), the entry of its implementation, its role, the channels it
+reads and writes, its preflight check, the scenario keys of its that are file paths, and
+the core it is pinned to. What used to be spread over ten files is derived from here:
+
+* ``suscosim node NAME`` (``orchestrator.node_main``: which kinds exist, what to run),
+* the run's node list and preflight (``orchestrator.runner.resolve``),
+* CPU placement (``orchestrator.placement``),
+* whom the recorder records (:func:`producers`), whom the plant takes forces from
+  (:func:`force_sources`),
+* the per-node services of ``docker-compose.yml`` / ``deploy/compose/*.yml``, the router's
+  access control (``deploy/zenoh/*.json5``), the client configurations and the certificate
+  names (``python -m orchestrator.compose_gen``; a test fails when they are stale).
+
+Adding a kind: one :class:`NodeKind` in :data:`KINDS`, its node module, then ``python -m
+orchestrator.compose_gen`` (docs/nodes.md). This module imports nothing outside ``cosim``:
+entries are ``package.module:attribute`` strings, imported when used (:func:`load`).
+
+A scenario picks an implementation per kind in ``[nodes]`` (:func:`implementation`):
+``controller = "fmu"`` (a named alternative of the kind) or ``controller =
+"package.module:Class"`` / ``"package.module:function"`` (a user's own node, as mosaik
+names its simulators). A bad value is a :class:`ScenarioError` naming ``nodes.<kind>``,
+found at preflight (:func:`check_nodes_section`), before any process starts.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from .errors import ScenarioError
+
+COUPLED, LISTENER, OPTIONAL = "coupled", "listener", "optional"
+"""Roles. *coupled*: in the lock-step exchange, one message per step on each output,
+recorded; *listener*: in every run, takes inputs as they come (the recorder); *optional*: a
+listener that joins a run when its check says so (the live fatigue node)."""
+ROLES = (COUPLED, LISTENER, OPTIONAL)
+NATIVE = "native"
+"""The name of a kind's own implementation (``[nodes] controller = "native"``)."""
+SECTION = "nodes"
+"""The scenario section that picks implementations."""
+
+
+@dataclass(frozen=True)
+class Check:
+    """A preflight check: ``entry(scenario, *facts[takes])``, run by the orchestrator before
+    any node starts; it raises :class:`ScenarioError` / :class:`InputFileError` on bad input.
+
+    ``gives``: the name of the fact its result is (e.g. ``duration_s``); None: the result is a
+    mapping of facts (or None), merged into the facts the later checks take. The check of an
+    *optional* kind returns whether the kind joins the run."""
+
+    entry: str
+    takes: tuple[str, ...] = ()
+    gives: str | None = None
+
+
+@dataclass(frozen=True)
+class Impl:
+    """One implementation of a kind: ``entry`` is ``package.module:function`` (called as
+    ``function(part, scenario)``, see :mod:`orchestrator.node_main`) or
+    ``package.module:Class`` (a stepped node, see :mod:`cosim.stepped`); ``check`` its
+    preflight."""
+
+    entry: str
+    check: Check | None = None
+
+
+@dataclass(frozen=True)
+class NodeKind:
+    """One kind of node (see the module's docstring)."""
+
+    name: str
+    role: str
+    impl: Impl
+    reads: tuple[tuple[str, str], ...] = ()
+    """(node, channel) inputs; node ``*``: every coupled kind that writes that channel."""
+    writes: tuple[str, ...] = ()
+    """Output channels (under ``suscosim/<run>/<name>/``)."""
+    provides: tuple[str, ...] = ()
+    """The coupling fields of its ``force`` output the plant applies (F_t, k_t / F_d, c_eff)."""
+    path_keys: tuple[str, ...] = ()
+    """Dotted scenario keys of its that hold file paths (relative: to the scenario file)."""
+    cores: tuple[int, int, int] = (1, 0, 3)
+    """Its core with 2, 3 and >= 4 usable cores (index into the usable cores; see
+    :mod:`orchestrator.placement`)."""
+    run_folder: bool = False
+    """Writes into the run folder (its container mounts the runs volume)."""
+    alternatives: Mapping[str, Impl] = field(default_factory=dict)
+    """Named alternative implementations (``[nodes] <name> = "<alternative>"``)."""
+
+
+_CONTROLLER_CHECK = Check("nodes.controller.node:static_check", takes=("n_corners",))
+
+KINDS: tuple[NodeKind, ...] = (
+    NodeKind("plant", COUPLED, Impl("nodes.plant.node:run", Check("nodes.plant.node:preflight")),
+             reads=(("*", "force"),), writes=("state", "response", "arm", "records"),
+             cores=(0, 0, 0)),
+    NodeKind("tyre_road", COUPLED,
+             Impl("nodes.tyre_road.node:run",
+                  Check("nodes.tyre_road.node:static_check", gives="duration_s")),
+             reads=(("plant", "state"),), writes=("force", "records"),
+             provides=("F_t", "k_t"), path_keys=("road.path",), cores=(1, 1, 1)),
+    NodeKind("controller", COUPLED, Impl("nodes.controller.node:run", _CONTROLLER_CHECK),
+             reads=(("plant", "state"),), writes=("force", "records"),
+             provides=("F_d", "c_eff"), path_keys=("controller.curve",), cores=(0, 2, 2),
+             alternatives={"fmu": Impl("nodes.controller.node:run",
+                                       Check("nodes.controller.node:fmu_check",
+                                             takes=("n_corners",)))}),
+    NodeKind("recorder", LISTENER, Impl("nodes.recorder.node:run"),
+             reads=(("*", "records"),), writes=("loads",), run_folder=True),
+    NodeKind("fatigue", OPTIONAL,
+             Impl("nodes.fatigue.node:run",
+                  Check("nodes.fatigue.node:preflight", takes=("load_channels",))),
+             reads=(("recorder", "loads"),), writes=("damage",),
+             path_keys=("fatigue.influence",)),
+)
+"""Every node kind, in start order."""
+
+BY_NAME: dict[str, NodeKind] = {k.name: k for k in KINDS}
+
+
+def kind(name: str) -> NodeKind:
+    """The kind called ``name`` (KeyError if none)."""
+    return BY_NAME[name]
+
+
+def names(*roles: str) -> tuple[str, ...]:
+    """The kinds of the given roles (all, without), in start order."""
+    return tuple(k.name for k in KINDS if not roles or k.role in roles)
+
+
+def always() -> tuple[str, ...]:
+    """The nodes of every run (coupled and listeners), in start order."""
+    return names(COUPLED, LISTENER)
+
+
+def producers() -> tuple[str, ...]:
+    """The kinds whose data the recorder journals (their ``records`` feeds)."""
+    return reads_from("recorder", "records")
+
+
+def reads_from(name: str, channel: str) -> tuple[str, ...]:
+    """The nodes that ``name`` reads ``channel`` from (``*`` expanded)."""
+    out: list[str] = []
+    for node, ch in kind(name).reads:
+        if ch != channel:
+            continue
+        if node == "*":
+            out += [k.name for k in KINDS if k.role == COUPLED and channel in k.writes
+                    and k.name != name]
+        else:
+            out.append(node)
+    return tuple(out)
+
+
+def inputs(name: str) -> tuple[tuple[str, str], ...]:
+    """Every (node, channel) that ``name`` reads, ``*`` expanded."""
+    return tuple((node, ch) for _, ch in dict.fromkeys(kind(name).reads)
+                 for node in reads_from(name, ch))
+
+
+def force_sources() -> tuple[tuple[str, tuple[str, ...]], ...]:
+    """(node, coupling fields) of every kind the plant takes ``force`` from."""
+    return tuple((n, kind(n).provides) for n in reads_from("plant", "force"))
+
+
+def path_keys() -> tuple[tuple[str, str], ...]:
+    """(section, key) of every scenario key of every kind that holds a file path."""
+    return tuple(tuple(p.split(".", 1)) for k in KINDS for p in k.path_keys)  # type: ignore
+
+
+def core_index(name: str, n_cores: int) -> int:
+    """The index (into the usable cores) of the core of node ``name`` with ``n_cores`` >= 2
+    usable cores; a name that is no kind is placed as a listener."""
+    cores = BY_NAME[name].cores if name in BY_NAME else NodeKind.cores
+    return cores[min(n_cores, 4) - 2]
+
+
+# ---- implementations ----------------------------------------------------------------------
+def _importable_here() -> None:
+    """A user's module is found as by ``python -m``: the working directory is on the path."""
+    cwd = os.getcwd()
+    if cwd not in sys.path and "" not in sys.path:
+        sys.path.append(cwd)
+
+
+def load(entry: str, key: str = "") -> Any:
+    """The object named by ``package.module:attribute``; a ScenarioError naming ``key`` (the
+    scenario key it came from) when the module cannot be imported or lacks the attribute."""
+    what = key or "node entry"
+    module, sep, attr = entry.partition(":")
+    if not sep or not module or not attr:
+        raise ScenarioError(what, entry, "'package.module:Class' or 'package.module:function'")
+    _importable_here()
+    try:
+        mod = importlib.import_module(module)
+    except ImportError as exc:
+        raise ScenarioError(what, entry, f"an importable module: cannot import '{module}' "
+                            f"({type(exc).__name__}: {exc})") from None
+    except Exception as exc:  # the user's module raised while being imported
+        raise ScenarioError(what, entry, f"a module that imports: '{module}' raised "
+                            f"{type(exc).__name__}: {exc}") from None
+    obj: Any = mod
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            raise ScenarioError(what, entry, f"an attribute of module '{module}': it has no "
+                                f"'{attr}'")
+        obj = getattr(obj, part)
+    if not callable(obj):
+        raise ScenarioError(what, entry, f"a class or function: '{attr}' is a "
+                            f"{type(obj).__name__}")
+    return obj
+
+
+def implementation(name: str, scenario: Mapping[str, Any]) -> Impl:
+    """The implementation of kind ``name`` that ``scenario``'s ``[nodes]`` picks (the kind's
+    own without one); a ScenarioError naming ``nodes.<name>`` for a bad value."""
+    k = kind(name)
+    value = (scenario.get(SECTION) or {}).get(name, NATIVE)
+    key = f"{SECTION}.{name}"
+    if not isinstance(value, str):
+        raise ScenarioError(key, value, _choices(k))
+    if value == NATIVE:
+        return k.impl
+    if value in k.alternatives:
+        return k.alternatives[value]
+    if ":" not in value:
+        raise ScenarioError(key, value, _choices(k))
+    return Impl(value, None)
+
+
+def _choices(k: NodeKind) -> str:
+    named = ", ".join(repr(n) for n in (NATIVE, *k.alternatives))
+    return f"one of {named} or 'package.module:Class' / 'package.module:function'"
+
+
+def check_nodes_section(scenario: Mapping[str, Any]) -> dict[str, Impl]:
+    """Validate ``[nodes]``: every key a kind, every value one of its implementations,
+    importable (user entries are imported here). Returns kind -> implementation for every
+    kind."""
+    section = scenario.get(SECTION)
+    if section is None:
+        section = {}
+    if not isinstance(section, Mapping):
+        raise ScenarioError(SECTION, section, "a table of node kind = implementation")
+    for name in section:
+        if name not in BY_NAME:
+            raise ScenarioError(f"{SECTION}.{name}", section[name],
+                                "a node kind: one of " + ", ".join(BY_NAME) + " (unknown kind "
+                                f"'{name}')")
+    out = {name: implementation(name, scenario) for name in BY_NAME}
+    for name, impl in out.items():
+        if impl is not kind(name).impl and impl not in kind(name).alternatives.values():
+            load(impl.entry, f"{SECTION}.{name}")  # importable, the attribute exists
+    return out
+
+
+def user_check(impl: Impl, key: str) -> Any:
+    """The preflight of a user's implementation: its ``preflight(scenario, facts)`` attribute
+    if it has one (else None)."""
+    if impl.check is not None:
+        return None
+    obj = load(impl.entry, key)
+    check = getattr(obj, "preflight", None)
+    return check if callable(check) else None
+
+
+def run_preflight(scenario: dict[str, Any]) -> tuple[list[str], dict[str, Any]]:
+    """Every kind's check, in registry order, on ``scenario`` (changed in place where a check
+    fills a key). Returns the nodes of the run (in start order) and the facts gathered
+    (``n_corners``, ``load_channels``, ``duration_s``, ...)."""
+    impls = check_nodes_section(scenario)
+    facts: dict[str, Any] = {}
+    nodes: list[str] = []
+    for k in KINDS:
+        impl = impls[k.name]
+        result: Any = None
+        if impl.check is not None:
+            fn = load(impl.check.entry, f"{SECTION}.{k.name} (its check)")
+            result = fn(scenario, *(facts.get(t) for t in impl.check.takes))
+            if impl.check.gives is not None:
+                facts[impl.check.gives] = result
+                result = None
+        else:
+            fn = user_check(impl, f"{SECTION}.{k.name}")
+            if fn is not None:
+                result = fn(scenario, facts)
+        if k.role == OPTIONAL:
+            if result:
+                nodes.append(k.name)
+            continue
+        if isinstance(result, Mapping):
+            facts.update(result)
+        nodes.append(k.name)
+    return nodes, facts
+
+
+def entries(names_: Iterable[str] | None = None) -> dict[str, str]:
+    """Kind -> the module of its own implementation (``package.module``)."""
+    return {k.name: k.impl.entry.partition(":")[0] for k in KINDS
+            if names_ is None or k.name in names_}
