@@ -363,6 +363,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         error = ("interrupted (Ctrl-C or SIGTERM)" if isinstance(exc, KeyboardInterrupt)
                  else str(exc) or type(exc).__name__)
         unwritten: SummaryWriteError | None = None
+        bus_open = True
         try:
             if hasattr(bar, "close"):
                 bar.close()
@@ -376,6 +377,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
                 except Exception:
                     pass
             _close(bus)  # before the table: what follows is the run folder's, not the bus's
+            bus_open = False
             rec = _recover(folder, interrupted=isinstance(exc, KeyboardInterrupt),
                            since=started)
             summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", error)
@@ -384,7 +386,8 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         except SummaryWriteError as werr:  # a full disk: say both, still end promptly
             unwritten = werr
         finally:
-            _close(bus)  # else the session's threads keep the orchestrator alive
+            if bus_open:
+                _close(bus)  # else the session's threads keep the orchestrator alive
         if unwritten is not None:
             if isinstance(exc, KeyboardInterrupt):
                 print(f"suscosim: {unwritten}", file=sys.stderr)
