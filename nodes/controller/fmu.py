@@ -41,7 +41,7 @@ import atexit
 import shutil
 import zipfile
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -141,43 +141,41 @@ def _check_real(r: ConfigReader, key: str, var: Any) -> None:
                             f"'{var.name}' is {var.type}")
 
 
-def _map_inputs(r: ConfigReader, variables: Mapping[str, Any]) -> dict[str, str]:
-    fmu_inputs = _names(variables, "input")
-    table = r.table("inputs")
-    if not table:  # default: the FMU inputs named like one of our signals
-        return {n: n for n in fmu_inputs if n in INPUT_SIGNALS}
+def _map_table(r: ConfigReader, variables: Mapping[str, Any], causality: str,
+               value_ok: Callable[[Any], bool], expected: str) -> dict[str, str]:
+    """The ``[controller.<causality>s]`` table (FMU variable -> our signal or channel), each
+    entry checked: an FMU variable of that causality, a value ``value_ok`` accepts (else the
+    error says ``expected``), a real variable. Empty when the table is absent or empty."""
+    names = _names(variables, causality)
     out = {}
-    for name, signal in table.items():
-        key = f"inputs.{name}"
-        if name not in variables or variables[name].causality != "input":
-            raise ScenarioError(r.key(key), signal, f"the name of an input of the FMU; '{name}' "
-                                f"is not one (its inputs: {fmu_inputs or 'none'})")
-        if signal not in INPUT_SIGNALS:
-            raise ScenarioError(r.key(key), signal, f"one of the signals {list(INPUT_SIGNALS)}")
+    for name, value in r.table(f"{causality}s").items():
+        key = f"{causality}s.{name}"
+        if name not in variables or variables[name].causality != causality:
+            raise ScenarioError(r.key(key), value, f"the name of an {causality} of the FMU; "
+                                f"'{name}' is not one (its {causality}s: {names or 'none'})")
+        if not value_ok(value):
+            raise ScenarioError(r.key(key), value, expected)
         _check_real(r, key, variables[name])
-        out[str(name)] = str(signal)
+        out[str(name)] = str(value)
     return out
 
 
+def _map_inputs(r: ConfigReader, variables: Mapping[str, Any]) -> dict[str, str]:
+    out = _map_table(r, variables, "input", lambda signal: signal in INPUT_SIGNALS,
+                     f"one of the signals {list(INPUT_SIGNALS)}")
+    # default: the FMU inputs named like one of our signals
+    return out or {n: n for n in _names(variables, "input") if n in INPUT_SIGNALS}
+
+
 def _map_outputs(r: ConfigReader, variables: Mapping[str, Any]) -> dict[str, str]:
+    out = _map_table(r, variables, "output",
+                     lambda channel: isinstance(channel, str) and channel.isidentifier(),
+                     "a channel name (F_d, c_eff, or an identifier for an extra channel)")
     fmu_outputs = _names(variables, "output")
-    table = r.table("outputs")
-    if table:
-        out = {}
-        for name, channel in table.items():
-            key = f"outputs.{name}"
-            if name not in variables or variables[name].causality != "output":
-                raise ScenarioError(r.key(key), channel, f"the name of an output of the FMU; "
-                                    f"'{name}' is not one (its outputs: {fmu_outputs or 'none'})")
-            if not isinstance(channel, str) or not channel.isidentifier():
-                raise ScenarioError(r.key(key), channel, "a channel name (F_d, c_eff, or an "
-                                    "identifier for an extra channel)")
-            _check_real(r, key, variables[name])
-            out[str(name)] = channel
-    else:  # default: every real output under its own name
+    if not out:  # default: every real output under its own name
         out = {n: n for n in fmu_outputs if variables[n].type in REAL_TYPES and n.isidentifier()}
     if "F_d" not in out.values():
-        raise ScenarioError(r.key("outputs"), dict(table) or None,
+        raise ScenarioError(r.key("outputs"), dict(r.table("outputs")) or None,
                             f"a map with one FMU output -> 'F_d' (the FMU has no output named "
                             f"F_d; its outputs: {fmu_outputs or 'none'})")
     return out
