@@ -15,9 +15,12 @@ A *peer* joins the run's mesh on this machine and gets the data straight from th
 another machine (a peer there is not relayed by a router, and the run's peers, listening on
 their loopback, cannot connect back to it).
 
-Used by ``suscosim tap``, ``replay`` and ``scope`` (the commands that join a run from outside;
-the nodes and the router have session defaults of their own: ``orchestrator/node_main.py``,
-``orchestrator/router.py``).
+:func:`add_zenoh_arguments` (all five, with the session policy above) is used by ``suscosim
+tap``, ``replay`` and ``scope``, the commands that join a run from outside. A command with
+session defaults of its own (``run``, ``sweep``, ``router``, ``node``) adds the options it has
+one at a time, with its own help text, metavar and default: :func:`add_connect_argument`,
+:func:`add_listen_argument`, :func:`add_lowlatency_argument`, :func:`add_mode_argument`,
+:func:`add_config_argument`.
 """
 
 from __future__ import annotations
@@ -38,16 +41,67 @@ class SessionOpenError(Exception):
         super().__init__(reason)
         self.reason, self.code, self.mode = reason, code, mode
 
+    def message(self, where: str) -> str:
+        """The command's error line: ``cannot open a Zenoh MODE session (WHERE): REASON``."""
+        return f"cannot open a Zenoh {self.mode} session ({where}): {self.reason}"
 
-def add_zenoh_arguments(ap: argparse.ArgumentParser, *, connect_help: str, listen_help: str,
-                        lowlatency_help: str, mode_help: str) -> None:
+
+MODE_HELP = ("Zenoh session mode; auto: peer when listening or every endpoint is on loopback, "
+             "client otherwise (through a router, from another machine)")
+"""The help of ``--mode`` for the commands that follow :func:`session_mode`."""
+LISTEN_HELP = "endpoint to listen on (default: a free loopback port)"
+CONFIG_HELP = "Zenoh JSON5 config file (TLS, access control)"
+
+
+def add_connect_argument(ap: argparse.ArgumentParser, help: str, *, metavar: str | None = "EP",
+                         default: list[str] | None = None) -> None:
+    """``--connect EP`` (repeatable): the endpoints the session connects to (a run's, a
+    router's). ``default`` None: absent gives None; ``[]``: absent gives an empty list.
+    ``metavar`` None: argparse's own (``CONNECT``)."""
+    ap.add_argument("--connect", action="append", metavar=metavar, default=default, help=help)
+
+
+def add_listen_argument(ap: argparse.ArgumentParser, help: str = LISTEN_HELP, *,
+                        metavar: str | None = "EP") -> None:
+    """``--listen EP`` (repeatable): the endpoints the session listens on (absent: None)."""
+    ap.add_argument("--listen", action="append", metavar=metavar, help=help)
+
+
+def add_lowlatency_argument(ap: argparse.ArgumentParser, help: str, *,
+                            negatable: bool = False) -> None:
+    """``--lowlatency``: Zenoh's low-latency transport (negotiated per link). A flag (absent:
+    False), or with ``negatable`` ``--lowlatency/--no-lowlatency`` (absent: None, the command
+    decides)."""
+    if negatable:
+        ap.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
+                        help=help)
+    else:
+        ap.add_argument("--lowlatency", action="store_true", help=help)
+
+
+def add_mode_argument(ap: argparse.ArgumentParser, help: str = MODE_HELP, *,
+                      choices: tuple[str, ...] = MODES, default: str | None = "auto") -> None:
+    """``--mode``: the session mode, one of ``choices`` (see :func:`resolve_mode`)."""
+    ap.add_argument("--mode", choices=list(choices), default=default, help=help)
+
+
+def add_config_argument(ap: argparse.ArgumentParser) -> None:
+    """``--zenoh-config FILE``: a Zenoh JSON5 configuration file (TLS, access control)."""
+    ap.add_argument("--zenoh-config", help=CONFIG_HELP)
+
+
+def add_zenoh_arguments(ap: argparse.ArgumentParser, *, connect_help: str,
+                        lowlatency_help: str, listen_help: str = LISTEN_HELP,
+                        mode_help: str = MODE_HELP) -> None:
     """Add ``--connect``, ``--listen``, ``--lowlatency``, ``--mode`` and ``--zenoh-config``
-    to ``ap`` (the help texts are the command's: their defaults differ)."""
-    ap.add_argument("--connect", action="append", metavar="EP", help=connect_help)
-    ap.add_argument("--listen", action="append", metavar="EP", help=listen_help)
-    ap.add_argument("--lowlatency", action="store_true", help=lowlatency_help)
-    ap.add_argument("--mode", choices=MODES, default="auto", help=mode_help)
-    ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    to ``ap``, for a command that opens its session with :func:`resolve_mode` and
+    :func:`open_bus` (the connect and low-latency help texts are the command's: their
+    defaults differ)."""
+    add_connect_argument(ap, connect_help)
+    add_listen_argument(ap, listen_help)
+    add_lowlatency_argument(ap, lowlatency_help)
+    add_mode_argument(ap, mode_help)
+    add_config_argument(ap)
 
 
 def is_loopback(ep: str) -> bool:
@@ -103,3 +157,17 @@ def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
         reason = " ".join(str(exc).split(" at /")[0].split())
         raise SessionOpenError(reason, 1 if "Unable to connect" in reason else 2,
                                mode) from None
+
+
+def open_session(args: argparse.Namespace, connect: list[str], listen: list[str] | None, *,
+                 lowlatency: bool = False) -> tuple[Any, str]:
+    """The bus the options of :func:`add_zenoh_arguments` (``args``) ask for, and its mode:
+    :func:`resolve_mode` of ``args.mode``, then :func:`open_bus` on ``connect`` and ``listen``
+    (the command's endpoints: its options with its own defaults), low-latency when
+    ``args.lowlatency`` or ``lowlatency`` (e.g. the run uses it).
+
+    Raises :class:`SessionOpenError` (its :meth:`~SessionOpenError.message` is the error line).
+    """
+    mode = resolve_mode(args.mode, args.zenoh_config, connect, listen)
+    return open_bus(connect, listen, mode, lowlatency=args.lowlatency or lowlatency,
+                    config_file=args.zenoh_config), mode

@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from cosim import scenario as sc
+from cosim import zenoh_options as zo
 from cosim.errors import SuscosimError
 
 from .placement import PIN_MODES
@@ -205,20 +206,20 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a scenario value, e.g. --set run.h=0.002")
     r.add_argument("--mode", choices=["distributed", "monolithic", "reference"])
-    r.add_argument("--connect", action="append",
-                   help="Zenoh router endpoint (default: embedded peer mode on loopback)")
-    r.add_argument("--listen", action="append",
-                   help="endpoint the orchestrator listens on (default: a free loopback port)")
-    r.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
-                   help="Zenoh's low-latency transport for the run's sessions (default: on "
-                        "for the embedded loopback mesh, off with --connect or "
-                        "--zenoh-config; peers without it still connect)")
+    zo.add_connect_argument(r, "Zenoh router endpoint (default: embedded peer mode on loopback)",
+                            metavar=None)
+    zo.add_listen_argument(r, "endpoint the orchestrator listens on (default: a free loopback "
+                              "port)", metavar=None)
+    zo.add_lowlatency_argument(r, "Zenoh's low-latency transport for the run's sessions "
+                                  "(default: on for the embedded loopback mesh, off with "
+                                  "--connect or --zenoh-config; peers without it still "
+                                  "connect)", negatable=True)
     r.add_argument("--pin", choices=PIN_MODES, default="auto",
                    help="pin the local node processes to cores (auto: on machines of 2-4 "
                         "cores; see orchestrator/placement.py)")
     r.add_argument("--external", action="append", metavar="NODE",
                    help="do not start NODE here: it is started elsewhere with 'suscosim node'")
-    r.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    zo.add_config_argument(r)
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
     e = sub.add_parser("export", help="table.csv/.parquet from a journal (e.g. after a crash), "

@@ -34,7 +34,9 @@ from typing import Any
 from cosim import keys
 from cosim.errors import ScenarioError, WireError
 from cosim.wire import decode
-from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
+
+from .cli_util import add_pace_arguments, fail, pace_factor, parse_args
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 LINGER_S = 0.5
@@ -128,36 +130,27 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("journal", help="journal.msgpack, or a run folder holding one")
     ap.add_argument("--run", metavar="ID", help="run id to publish under "
                     "(default: <original>-replay)")
-    pace = ap.add_mutually_exclusive_group()
-    pace.add_argument("--speed", type=float, default=1.0, metavar="X",
-                      help="pace factor against the recorded time (default 1 = real time)")
-    pace.add_argument("--fast", action="store_true", help="as fast as possible")
+    add_pace_arguments(ap, speed_help="pace factor against the recorded time (default 1 = real "
+                                      "time)", fast_help="as fast as possible")
     ap.add_argument("--wait", type=float, default=5.0, metavar="S",
                     help="wait up to S s for a subscriber before publishing (default 5)")
     add_zenoh_arguments(
         ap, connect_help="Zenoh endpoint to connect to (a run's, a router's, a tap's)",
         listen_help=f"endpoint to listen on (default {DEFAULT_LISTEN} when no --connect)",
         lowlatency_help="Zenoh low-latency transport (negotiated per link: peers without it "
-                        "still connect)",
-        mode_help="Zenoh session mode; auto: peer when listening or every endpoint is on "
-                  "loopback, client otherwise (through a router, from elsewhere)")
+                        "still connect)")
     return ap
 
 
 def _fail(message: str, code: int = 2) -> int:
-    print(f"suscosim replay: {message}", file=sys.stderr)
-    return code
+    return fail("suscosim replay", message, code)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Replay a journal; return the exit code (0 done, 2 bad input, 130 interrupted)."""
-    ap = build_parser()
-    try:
-        args = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
-    except SystemExit as exc:
-        return 0 if exc.code == 0 else 2
-    if not args.fast and not args.speed > 0:
-        return _fail(f"--speed {args.speed:g}: expected a factor > 0")
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     if args.wait < 0:
         return _fail(f"--wait {args.wait:g}: expected a time >= 0 s")
     try:
@@ -179,23 +172,19 @@ def main(argv: list[str] | None = None) -> int:
         print(f"suscosim replay: note: skipped {skipped} undecodable record(s)", file=sys.stderr)
     connect = list(args.connect or [])
     listen = args.listen or (None if connect else [DEFAULT_LISTEN])
-    mode = resolve_mode(args.mode, args.zenoh_config, connect,
-                        args.listen or ([] if connect else listen))
     try:
-        bus = open_bus(connect, listen, mode, lowlatency=args.lowlatency,
-                       config_file=args.zenoh_config)
+        bus, mode = open_session(args, connect, listen)
     except SessionOpenError as exc:
-        return _fail(f"cannot open a Zenoh {mode} session (listen {listen or 'loopback'}, "
-                     f"connect {connect}): {exc.reason}", exc.code)
+        return _fail(exc.message(f"listen {listen or 'loopback'}, connect {connect}"), exc.code)
     where = ", ".join(connect or listen or [])
     n_ch = len({(n, c) for n, c, _r, _t in records})
-    pace = "as fast as possible" if args.fast else f"at {args.speed:g}x the recorded pace"
+    pace_text = "as fast as possible" if args.fast else f"at {args.speed:g}x the recorded pace"
     print(f"suscosim replay: {len(records)} messages on {n_ch} channels of run {original} as "
-          f"suscosim/{run_id}/** via {where} ({mode} session), {pace}", file=sys.stderr,
+          f"suscosim/{run_id}/** via {where} ({mode} session), {pace_text}", file=sys.stderr,
           flush=True)
     sent, wall = 0, 0.0
     try:
-        sent, wall = replay(bus, run_id, records, None if args.fast else args.speed,
+        sent, wall = replay(bus, run_id, records, pace_factor(args),
                             args.wait, log=lambda text: print(f"suscosim replay: {text}",
                                                               file=sys.stderr, flush=True))
         time.sleep(LINGER_S)

@@ -28,6 +28,8 @@ import threading
 from pathlib import Path
 from typing import Any
 
+from cosim.zenoh_options import add_listen_argument
+
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 DEFAULT_LEASE_MS = 2000
 
@@ -85,9 +87,9 @@ def router_config(listen: list[str] | None = None, config_file: str | None = Non
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="suscosim router", description=__doc__.splitlines()[0])
-    ap.add_argument("--listen", action="append", metavar="ENDPOINT",
-                    help=f"endpoint to listen on (repeatable; default {DEFAULT_LISTEN}, "
-                         "loopback only), e.g. tcp/0.0.0.0:7447 or tls/0.0.0.0:7447")
+    add_listen_argument(ap, f"endpoint to listen on (repeatable; default {DEFAULT_LISTEN}, "
+                            "loopback only), e.g. tcp/0.0.0.0:7447 or tls/0.0.0.0:7447",
+                        metavar="ENDPOINT")
     ap.add_argument("--config", metavar="FILE.json5",
                     help="Zenoh configuration (e.g. deploy/zenoh/router.json5: TLS, "
                          "access control)")

@@ -40,6 +40,8 @@ from typing import Any
 
 from cosim.run_folder import SCENARIO_JSON, run_info
 
+from .cli_util import fail, parse_args
+
 MAX_DEPTH = 3
 
 
@@ -94,14 +96,12 @@ def main(argv: list[str] | None = None) -> int:
                     help="folder of run folders, a sweep folder, or one run folder "
                          "(default: runs)")
     ap.add_argument("--json", action="store_true", help="print JSON (a list of runs)")
-    try:
-        args = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
-    except SystemExit as exc:
-        return 0 if exc.code == 0 else 2
+    args = parse_args(ap, argv)
+    if isinstance(args, int):
+        return args
     root = Path(args.dir)
     if not root.is_dir():
-        print(f"suscosim runs: {root}: not a folder", file=sys.stderr)
-        return 2
+        return fail("suscosim runs", f"{root}: not a folder")
     runs = list_runs(root)
     if args.json:
         print(json.dumps(runs, indent=2))

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..cli_util import fail, parse_args
 from .duty_page import is_duty_dir, render_duty
 from .run_data import BadInput, is_run_dir, is_sweep_dir
 from .run_page import render_run
@@ -24,8 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _fail(message: str) -> int:
-    print(f"suscosim report: {message}", file=sys.stderr)
-    return 2
+    return fail("suscosim report", message)
 
 
 def render(d: Path) -> tuple[str, str]:
@@ -45,10 +45,9 @@ def render(d: Path) -> tuple[str, str]:
 
 def main(argv: list[str] | None = None) -> int:
     """Write the report; 0 on success, 2 for bad input (one line on stderr)."""
-    try:
-        args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
-    except SystemExit as exc:
-        return 0 if exc.code == 0 else 2
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     d = Path(args.dir)
     try:
         kind, text = render(d)

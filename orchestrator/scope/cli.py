@@ -14,8 +14,9 @@ from typing import Any
 from cosim import keys
 from cosim.errors import ScenarioError
 from cosim.wire import decode
-from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
 
+from ..cli_util import add_pace_arguments, fail, pace_factor, parse_args
 from .selection import DEFAULT_CHANNELS, ScopeInputError, Selection
 from .state import ScopeState
 
@@ -38,10 +39,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--host", default="127.0.0.1",
                     help="address to serve on (default loopback only)")
     ap.add_argument("--open", action="store_true", help="open the page in a web browser")
-    pace = ap.add_mutually_exclusive_group()
-    pace.add_argument("--speed", type=float, default=1.0, metavar="X",
-                      help="replay pace against the recorded time (default 1 = real time)")
-    pace.add_argument("--fast", action="store_true", help="replay as fast as possible")
+    add_pace_arguments(ap, speed_help="replay pace against the recorded time (default 1 = real "
+                                      "time)", fast_help="replay as fast as possible")
     ap.add_argument("--replay", action="store_true",
                     help="replay the run folder's journal even if the run is still going")
     ap.add_argument("--duration", type=float, metavar="S",
@@ -51,16 +50,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_zenoh_arguments(
         ap, connect_help="Zenoh endpoint of the run: a router's for a run on other machines "
                          "(default: the run folder's run.json, else tcp/127.0.0.1:7447)",
-        listen_help="endpoint to listen on (default: a free loopback port)",
-        lowlatency_help="Zenoh low-latency transport (default: as run.json says)",
-        mode_help="Zenoh session mode; auto: peer when every endpoint is on loopback, client "
-                  "otherwise (through a router)")
+        lowlatency_help="Zenoh low-latency transport (default: as run.json says)")
     return ap
 
 
 def _fail(message: str, code: int = 2) -> int:
-    print(f"suscosim scope: {message}", file=sys.stderr)
-    return code
+    return fail("suscosim scope", message, code)
 
 
 def _read_scenario(folder: Path) -> dict[str, Any] | None:
@@ -73,12 +68,9 @@ def _read_scenario(folder: Path) -> dict[str, Any] | None:
 
 def main(argv: list[str] | None = None) -> int:
     """Serve the scope; 0 when stopped, 1 the run's endpoint cannot be reached, 2 bad input."""
-    try:
-        args = build_parser().parse_args(list(sys.argv[1:] if argv is None else argv))
-    except SystemExit as exc:
-        return 0 if exc.code == 0 else 2
-    if not args.fast and not args.speed > 0:
-        return _fail(f"--speed {args.speed:g}: expected a factor > 0")
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     if not 0 <= args.port <= 65535:
         return _fail(f"--port {args.port}: expected 0-65535")
     if args.duration is not None and args.duration <= 0:
@@ -129,14 +121,11 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
             keys.check_name("run", run_id)
         except ScenarioError:
             raise ScopeInputError(f"{args.run!r}: not a run id or a run folder") from None
-        mode = resolve_mode(args.mode, args.zenoh_config, target.endpoints, args.listen)
         try:
-            bus = open_bus(target.endpoints, args.listen, mode,
-                           lowlatency=args.lowlatency or target.lowlatency,
-                           config_file=args.zenoh_config)
+            bus, mode = open_session(args, target.endpoints, args.listen,
+                                     lowlatency=target.lowlatency)
         except SessionOpenError as exc:
-            return _fail(f"cannot open a Zenoh {mode} session "
-                         f"({', '.join(target.endpoints)}): {exc.reason}", exc.code)
+            return _fail(exc.message(", ".join(target.endpoints)), exc.code)
         if target.note:
             print(f"suscosim scope: note: {target.note}", file=sys.stderr)
         if scenario is None:  # a bare run id: ask the run's orchestrator (as its nodes do)
@@ -159,7 +148,7 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
     if replay:
         from .sources import JournalSource
 
-        source: Any = JournalSource(records, state, None if args.fast else args.speed, damage)
+        source: Any = JournalSource(records, state, pace_factor(args), damage)
     else:
         from .sources import LiveSource
 

@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from cosim.errors import SuscosimError
+from cosim.zenoh_options import add_connect_argument
 
 from .dask_exec import DaskRunner
 from .local import Runner
@@ -26,9 +27,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--out", help="sweep folder (default sweeps/<name>)")
     ap.add_argument("--jobs", type=int, help="runs at once (default: the file's, else "
                     "cores // 2, at least 1; each run is 4 node processes)")
-    ap.add_argument("--connect", action="append", default=[],
-                    help="Zenoh router endpoint every run goes through (the same bus for all "
-                         "runs; needed for --external)")
+    add_connect_argument(ap, "Zenoh router endpoint every run goes through (the same bus for "
+                             "all runs; needed for --external)", metavar=None, default=[])
     ap.add_argument("--external", action="append", default=[], metavar="NODE",
                     help="do not start NODE: it is started elsewhere (docs/sweeps.md)")
     ap.add_argument("--serve", action="append", default=[], metavar="NODE",

@@ -10,8 +10,9 @@ import sys
 import time
 from typing import Any
 
-from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_bus, resolve_mode
+from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
 
+from ..cli_util import fail, parse_args
 from .csv_sink import CsvSink
 from .stats import Tap
 from .target import DEFAULT_ENDPOINT, TapInputError, Target, resolve_target
@@ -33,27 +34,21 @@ def build_parser() -> argparse.ArgumentParser:
     add_zenoh_arguments(
         ap, connect_help=f"Zenoh endpoint of the run (default: the run folder's, else "
                          f"{DEFAULT_ENDPOINT})",
-        listen_help="endpoint to listen on (default: a free loopback port)",
         lowlatency_help="Zenoh low-latency transport (as the run uses it, read from run.json "
                         "when RUN is a run folder; negotiated per link, so a tap without it "
-                        "still connects)",
-        mode_help="Zenoh session mode; auto: peer when every endpoint is on loopback, client "
-                  "otherwise (through a router, from another machine)")
+                        "still connects)")
     return ap
 
 
 def _fail(message: str, code: int = 2) -> int:
-    print(f"suscosim tap: {message}", file=sys.stderr)
-    return code
+    return fail("suscosim tap", message, code)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Tap a run; return the exit code (0 done, 2 bad input)."""
-    ap = build_parser()
-    try:
-        args = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
-    except SystemExit as exc:
-        return 0 if exc.code == 0 else 2
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     if args.duration is not None and args.duration <= 0:
         return _fail(f"--duration {args.duration:g}: expected a time > 0 s")
     if args.count is not None and args.count <= 0:
@@ -73,14 +68,11 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
-    mode = resolve_mode(args.mode, args.zenoh_config, target.endpoints, args.listen)
     try:
-        bus = open_bus(target.endpoints, args.listen, mode,
-                       lowlatency=args.lowlatency or target.lowlatency,
-                       config_file=args.zenoh_config)
+        bus, mode = open_session(args, target.endpoints, args.listen,
+                                 lowlatency=target.lowlatency)
     except SessionOpenError as exc:
-        return _fail(f"cannot open a Zenoh {mode} session ({', '.join(target.endpoints)}): "
-                     f"{exc.reason}", exc.code)
+        return _fail(exc.message(", ".join(target.endpoints)), exc.code)
     inbox: queue.SimpleQueue[tuple[str, bytes, float]] = queue.SimpleQueue()
     clock = time.monotonic
     stop: list[str] = []

@@ -1,0 +1,60 @@
+"""What the commands' ``main`` functions share: arguments parsed into an exit code instead of
+``SystemExit``, an error line that names the command, and the pace options of the commands that
+replay a journal (``replay``, ``scope``).
+
+A command returns its exit code (0 done, 2 bad input, ...) rather than exiting, so that it can
+be called from a test or from ``suscosim`` itself::
+
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args                       # --help (0) or a usage error argparse printed (2)
+    if args.wait < 0:
+        return fail("suscosim replay", f"--wait {args.wait:g}: expected a time >= 0 s")
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+
+def parse_args(ap: argparse.ArgumentParser,
+               argv: Sequence[str] | None) -> argparse.Namespace | int:
+    """``ap``'s arguments from ``argv`` (None: ``sys.argv[1:]``), or the exit code where argparse
+    would exit: 0 after ``--help``, 2 after a usage error (which argparse has printed)."""
+    try:
+        return ap.parse_args(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as exc:
+        return 0 if exc.code == 0 else 2
+
+
+def fail(prog: str, message: str, code: int = 2) -> int:
+    """Print ``prog: message`` on stderr; return ``code`` (default 2, bad input)."""
+    print(f"{prog}: {message}", file=sys.stderr)
+    return code
+
+
+class _Factor(argparse.Action):
+    """Store a float option that must be > 0; else a usage error naming it (exit 2)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        if not values > 0:
+            parser.error(f"{option_string} {values:g}: expected a factor > 0")
+        setattr(namespace, self.dest, values)
+
+
+def add_pace_arguments(ap: argparse.ArgumentParser, *, speed_help: str, fast_help: str) -> None:
+    """``--speed X`` (a factor > 0 against the recorded time, default 1) or ``--fast``."""
+    pace = ap.add_mutually_exclusive_group()
+    pace.add_argument("--speed", type=float, default=1.0, metavar="X", action=_Factor,
+                      help=speed_help)
+    pace.add_argument("--fast", action="store_true", help=fast_help)
+
+
+def pace_factor(args: argparse.Namespace) -> float | None:
+    """The pace factor of :func:`add_pace_arguments`' options: None (as fast as possible) with
+    ``--fast``, else ``--speed``."""
+    return None if args.fast else float(args.speed)
