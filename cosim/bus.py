@@ -309,19 +309,23 @@ class MemoryBus:
         return feed
 
     def token(self, key: str) -> Any:
-        with self._lock:
-            self._tokens.add(key)
-            targets = [cb for kx, cb in self._watchers if keyexpr_matches(kx, key)]
-        for cb in targets:
-            cb(key, True)
+        self._set_token(key, True)
         return _MemoryToken(self, key)
 
     def _drop_token(self, key: str) -> None:
+        self._set_token(key, False)
+
+    def _set_token(self, key: str, alive: bool) -> None:
+        """Declare (``alive``) or drop the token ``key``; tell the watchers that match it (the
+        ones watching at the change: their list is taken under the same lock)."""
         with self._lock:
-            self._tokens.discard(key)
+            if alive:
+                self._tokens.add(key)
+            else:
+                self._tokens.discard(key)
             targets = [cb for kx, cb in self._watchers if keyexpr_matches(kx, key)]
         for cb in targets:
-            cb(key, False)
+            cb(key, alive)
 
     def watch(self, keyexpr: str, callback: LiveCallback) -> Any:
         with self._lock:
