@@ -30,19 +30,22 @@ KMH = 1.0 / 3.6
 """1 km/h in m/s."""
 
 
+@dataclass(kw_only=True)
 class Road:
     """A road surface under two wheel tracks (0 left, 1 right), driven at constant speed.
 
-    Attributes:
+    Attributes (keyword-only, after a subclass's own fields):
         speed: forward speed v [m/s].
         length: road length L [m] (the run's distance), or None when unbounded.
         corners: if not None, the corner names ("FL", "FR", "RL", "RR") that see this road;
             the others run on a flat road (thesis Ch. 4: only the front-right wheel is excited).
+        name: what the road is ("events", "sampled", "pave", "csv:FILE" ...).
     """
 
     speed: float = 0.0
     length: float | None = None
     corners: tuple[str, ...] | None = None
+    name: str = "road"
 
     def height(self, s: np.ndarray, track: int) -> np.ndarray:
         """Road height z_g [m] at distances ``s`` [m] on ``track`` (0 left, 1 right)."""
@@ -128,10 +131,7 @@ class EventRoad(Road):
     """A flat road carrying discrete events, superposed (heights add)."""
 
     events: Sequence[RoadEvent]
-    speed: float = 0.0
-    length: float | None = None
-    corners: tuple[str, ...] | None = None
-    name: str = field(default="events")
+    name: str = field(default="events", kw_only=True)
 
     def height(self, s: np.ndarray, track: int) -> np.ndarray:
         _check_track(track)
@@ -152,10 +152,7 @@ class SampledRoad(Road):
     x: np.ndarray
     z_left: np.ndarray
     z_right: np.ndarray
-    speed: float = 0.0
-    length: float | None = None
-    corners: tuple[str, ...] | None = None
-    name: str = field(default="sampled")
+    name: str = field(default="sampled", kw_only=True)
 
     def height(self, s: np.ndarray, track: int) -> np.ndarray:
         _check_track(track)
