@@ -16,18 +16,48 @@ from .fmt import fmt_fields
 
 
 @dataclass
-class KeyStats:
-    """What the tap saw on one key."""
+class RateWindow:
+    """Messages counted since ``start`` [s]; ``rate``: that of the last closed window [msg/s]."""
 
+    start: float
+    count: int = 0
+    rate: float = 0.0
+
+    def close(self, now: float) -> None:
+        """End the window at ``now`` [s] (its rate, when it has a length) and open the next."""
+        if now > self.start:
+            self.rate = self.count / (now - self.start)
+        self.count, self.start = 0, now
+
+
+@dataclass
+class KeyStats:
+    """What the tap saw on one key, first heard at ``first`` [s]."""
+
+    first: float
+    window: RateWindow
     count: int = 0
     undecodable: int = 0
-    first: float = 0.0
     last: float = 0.0
-    window_count: int = 0
-    window_start: float = 0.0
-    rate: float = 0.0
     msg: Message | None = None
     problem: str = ""
+
+    @classmethod
+    def starting(cls, now: float) -> KeyStats:
+        """The stats of a key first heard at ``now`` [s]."""
+        return cls(first=now, window=RateWindow(start=now))
+
+    def seen(self, now: float, msg: Message) -> None:
+        """One decoded message at ``now`` [s]."""
+        self.count += 1
+        self.window.count += 1
+        self.last, self.msg = now, msg
+
+    def mean_rate(self) -> float:
+        """Rate over the whole tap, first to last message [msg/s] (0 before two)."""
+        if self.count > 1 and self.last > self.first:
+            return (self.count - 1) / (self.last - self.first)
+        return 0.0
 
 
 @dataclass
@@ -48,7 +78,7 @@ class Tap:
         """Take one sample: decode, count, write to CSV. Never raises on bad bytes."""
         st = self.stats.get(key)
         if st is None:
-            st = self.stats[key] = KeyStats(first=now, window_start=now)
+            st = self.stats[key] = KeyStats.starting(now)
         try:
             msg = decode(raw)
         except WireError as exc:
@@ -58,9 +88,7 @@ class Tap:
             if self.raw:
                 print(f"{_short_key(key)} UNDECODABLE ({exc}) {raw[:24].hex()}", file=self.out)
             return None
-        st.count += 1
-        st.window_count += 1
-        st.last, st.msg = now, msg
+        st.seen(now, msg)
         if msg.kind == "data":
             self.data += 1
             if self.csv_sink is not None:
@@ -74,10 +102,7 @@ class Tap:
 
     def update_rates(self, now: float) -> None:
         for st in self.stats.values():
-            dt = now - st.window_start
-            if dt > 0:
-                st.rate = st.window_count / dt
-            st.window_count, st.window_start = 0, now
+            st.window.close(now)
 
     def table(self, width: int = 0, final: bool = False) -> str:
         """The per-key display (``final``: average rates over the whole tap)."""
@@ -85,11 +110,7 @@ class Tap:
         lines = [f"{'key':<{kw}} {'count':>7} {'msg/s':>8} {'k':>7} {'t [s]':>9}  last values"]
         for key in sorted(self.stats):
             st = self.stats[key]
-            if final:
-                rate = (st.count - 1) / (st.last - st.first) if st.count > 1 and \
-                    st.last > st.first else 0.0
-            else:
-                rate = st.rate
+            rate = st.mean_rate() if final else st.window.rate
             msg = st.msg
             k = str(msg.k) if msg else "-"
             t = f"{msg.t:.4f}" if msg else "-"
