@@ -28,6 +28,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -66,16 +67,18 @@ def _router(ep: str, prefix: list[str] | None = None) -> subprocess.Popen:
     return r
 
 
-def _stop(*procs: subprocess.Popen) -> None:
+def _stop(*procs: subprocess.Popen, grace_s: float = 15.0) -> None:
+    """SIGTERM every process (an ended one ignores it), then SIGKILL those still running
+    ``grace_s`` seconds later: one grace period for them all, not one each."""
+    for p in procs:
+        p.terminate()
+    deadline = time.monotonic() + grace_s
+    while any(p.poll() is None for p in procs) and time.monotonic() < deadline:
+        time.sleep(0.05)
     for p in procs:
         if p.poll() is None:
-            p.terminate()
-    for p in procs:
-        try:
-            p.wait(timeout=15)
-        except subprocess.TimeoutExpired:
             p.kill()
-            p.wait()
+        p.wait()
 
 
 def loopback_peers(out: Path, run_id: str, base: list[str]) -> float:
