@@ -31,7 +31,9 @@ shift
 # shellcheck disable=SC2086  # ROUTER_HOSTS is a space-separated list
 set -- "$@" ${ROUTER_HOSTS:-}
 DAYS=${DAYS:-365}
+# >>> generated names by python -m orchestrator.compose_gen from cosim/node_kinds.py: do not edit
 CLIENTS=${CLIENTS:-"orchestrator plant tyre_road controller recorder fatigue observer"}
+# <<< generated names
 mkdir -p "$OUT"
 chmod 700 "$OUT"
 umask 077
