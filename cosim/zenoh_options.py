@@ -1,7 +1,8 @@
 """The Zenoh session options of a command, and how its session is opened: in one place.
 
 In the style of the zenoh-python examples' ``common.py``: a command adds the options to its
-parser with :func:`add_zenoh_arguments` and opens its session with :func:`open_bus`.
+parser with :func:`add_zenoh_arguments` and opens its session with :func:`open_session`
+(:func:`resolve_mode`, then :func:`open_bus`).
 
     --connect EP (repeatable)   endpoints to connect to (a run's, a router's)
     --listen EP (repeatable)    endpoints to listen on
@@ -17,9 +18,10 @@ their loopback, cannot connect back to it).
 
 :func:`add_zenoh_arguments` (all five, with the session policy above) is used by ``suscosim
 tap``, ``replay`` and ``scope``, the commands that join a run from outside. A command with
-session defaults of its own (``run``, ``sweep``, ``router``, ``node``) adds the options it has
-one at a time, with its own help text, metavar and default: :func:`add_connect_argument`,
-:func:`add_listen_argument`, :func:`add_lowlatency_argument`, :func:`add_mode_argument`,
+session defaults of its own (``run``, ``sweep``, ``router``; ``node`` can too) adds the options
+it has one at a time, with its own help text, metavar and default: :func:`add_connect_argument`,
+:func:`add_listen_argument`, :func:`add_lowlatency_argument` (``negatable``: ``run``'s
+``--lowlatency/--no-lowlatency``), :func:`add_mode_argument` (``choices``, ``default``),
 :func:`add_config_argument`.
 """
 
