@@ -74,11 +74,11 @@ def __getattr__(name: str) -> tuple[str, ...]:
     module)."""
     from . import node_kinds as nk
 
-    derived = {"NODES": nk.always, "COUPLED": lambda: nk.names(nk.COUPLED),
-               "OPTIONAL_NODES": lambda: nk.names(nk.OPTIONAL)}
-    if name not in derived:
+    roles = {"NODES": (nk.COUPLED, nk.LISTENER), "COUPLED": (nk.COUPLED,),
+             "OPTIONAL_NODES": (nk.OPTIONAL,)}
+    if name not in roles:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = derived[name]()
+    value = nk.names(*roles[name])
     globals()[name] = value
     return value
 

@@ -190,7 +190,8 @@ def fill(text: str, regs: dict[str, str], path: str) -> str:
             raise SystemExit(f"{path}: expected one region '{region}' between "
                              f"'{BEGIN} {region}' and '{END} {region}' lines, found "
                              f"{len(found)}")
-        text = pat.sub(lambda m, body=body: m.group(1) + body + m.group(3), text)
+        head, old, tail = found[0]
+        text = text.replace(head + old + tail, head + body + tail, 1)
     return text
 
 

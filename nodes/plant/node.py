@@ -16,7 +16,7 @@ first-order error (all of it, for a linear tyre and damper).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 from cosim import channels as ch
 from cosim import node_kinds as nk
@@ -102,6 +102,7 @@ def preflight(scenario: dict[str, Any]) -> dict[str, Any]:
     model = build_plant_model(scenario["vehicle"])
     try:
         info = model.info()
-        return {"n_corners": int(info["n_corners"]), "load_channels": sorted(model.loads())}
+        return {"n_corners": int(cast(int, info["n_corners"])),
+                "load_channels": sorted(model.loads())}
     finally:
         model.close()
