@@ -85,7 +85,7 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
                               | {"orchestrator": result.rejected}) if result else {},
         "rows": rec.get("rows", 0), "files": rec.get("files", {}),
         "channels": rec.get("stats", {}),
-    }
+    } | ({"table_note": rec["note"]} if rec.get("note") else {})
 
 
 def strict_json(obj: Any, key: str = "", nulled: list[str] | None = None) -> Any:
@@ -383,6 +383,8 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
             summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", error)
             summary.update(_transport(local, lowlatency))
             write_summary(folder, summary)
+            if rec.get("note") and (not rec.get("files") or "table.recovered" in rec["note"]):
+                print(f"suscosim: {rec['note']}", file=sys.stderr)
         except SummaryWriteError as werr:  # a full disk: say both, still end promptly
             unwritten = werr
         finally:

@@ -74,3 +74,14 @@ def test_an_interrupted_short_run_still_gets_its_table(tmp_path):
     _journal(tmp_path, 30)
     rec = runner._recover(tmp_path, interrupted=True, since=time.time() - 60)
     assert rec["rows"] == 30 and len(read_table(tmp_path / "table.csv")["t"]) == 30
+
+
+def test_the_summary_says_what_became_of_the_table():
+    scenario = {"run": {"n_steps": 10, "id": "r", "mode": "distributed", "exchange": "x",
+                        "coupling": "y", "h": 1e-3, "substeps": 1, "t_end": 0.01,
+                        "nodes": ["plant"]}}
+    note = "interrupted: the table was not rebuilt ...; run `suscosim export J`"
+    summary = runner._summary(scenario, None, 1.0, {"rows": 7, "files": {}, "note": note},
+                              "failed", "interrupted")
+    assert summary["table_note"] == note and summary["rows"] == 7
+    assert "table_note" not in runner._summary(scenario, None, 1.0, {"rows": 7}, "failed")
