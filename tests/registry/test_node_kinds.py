@@ -175,3 +175,20 @@ def test_the_fmu_alternative_takes_the_fmu_law_only() -> None:
     with pytest.raises(Exception, match="no such FMU file"):
         resolve(scenario)
     assert scenario["controller"]["law"] == "fmu"
+
+
+def test_suscosim_run_refuses_a_bad_node_choice_before_any_process(tmp_path: Path) -> None:
+    """Through the real CLI: a scenario file's [nodes] with a module that is not there is
+    exit 2 naming nodes.controller, and no node was started (no logs)."""
+    if nk.SECTION not in sc.SECTIONS:
+        pytest.skip("cosim/scenario.py does not accept the [nodes] section yet (SECTIONS "
+                    "lacks 'nodes': the lead's one-line change)")
+    from ..conftest import suscosim
+
+    path = tmp_path / "mine.toml"
+    path.write_text(CH3_STEP.read_text() + '\n[nodes]\ncontroller = "no_such_lab.dampers:Mine"\n')
+    res = suscosim("run", str(path), "--out", str(tmp_path / "run"), "--quiet", timeout=120)
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert "nodes.controller" in res.stderr and "cannot import 'no_such_lab.dampers'" in res.stderr
+    assert "Traceback" not in res.stderr
+    assert not (tmp_path / "run" / "logs").exists()
