@@ -25,6 +25,7 @@ from collections.abc import Callable
 from typing import Any
 
 from cosim import node_kinds as nk
+from cosim import zenoh_options as zo
 from cosim.auth import ENV_KEY_FILE, RunKey, run_key_from_env
 from cosim.bus import ZenohBus, zenoh_config
 from cosim.errors import RunError, SuscosimError
@@ -90,14 +91,13 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="suscosim node", description=__doc__.splitlines()[0])
     ap.add_argument("name", choices=sorted(NODE_MODULES))
     ap.add_argument("--run", required=True, help="run id (printed by 'suscosim run')")
-    ap.add_argument("--connect", action="append", default=[],
-                    help="Zenoh endpoint of the orchestrator or a router, e.g. tcp/10.0.0.1:7447")
-    ap.add_argument("--listen", action="append", default=None,
-                    help="endpoint to listen on (default: loopback only)")
-    ap.add_argument("--lowlatency", action="store_true",
-                    help="Zenoh low-latency transport (negotiated per link: peers without it "
-                         "still connect; the orchestrator sets it for its local nodes)")
-    ap.add_argument("--zenoh-config", help="Zenoh JSON5 config file (TLS, access control)")
+    zo.add_connect_argument(ap, "Zenoh endpoint of the orchestrator or a router, e.g. "
+                                "tcp/10.0.0.1:7447", metavar=None, default=[])
+    zo.add_listen_argument(ap, "endpoint to listen on (default: loopback only)", metavar=None)
+    zo.add_lowlatency_argument(ap, "Zenoh low-latency transport (negotiated per link: peers "
+                                   "without it still connect; the orchestrator sets it for "
+                                   "its local nodes)")
+    zo.add_config_argument(ap)
     ap.add_argument("--key-file",
                     help="file holding the secret the run key is derived from (mode 0600; "
                          "e.g. RUN_DIR/run.key written by the orchestrator; default "
@@ -110,10 +110,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--spin-us", type=float, default=0.0,
                     help="poll an input this long before blocking on it [us] (the "
                          "orchestrator sets it for nodes it pins to a core)")
-    ap.add_argument("--mode", choices=["client", "peer"],
-                    help="Zenoh mode (default: the config file's, else client: everything "
-                         "through the router or orchestrator given by --connect; the "
-                         "orchestrator starts its local nodes as peers)")
+    zo.add_mode_argument(ap, "Zenoh mode (default: the config file's, else client: "
+                             "everything through the router or orchestrator given by "
+                             "--connect; the orchestrator starts its local nodes as peers)",
+                         choices=("client", "peer"), default=None)
     args = ap.parse_args(argv)
     if args.lease_ms <= 0:
         print(f"suscosim node: --lease-ms {args.lease_ms}: expected > 0", file=sys.stderr)
