@@ -284,7 +284,12 @@ def run_preflight(scenario: dict[str, Any]) -> tuple[list[str], dict[str, Any]]:
         result: Any = None
         if impl.check is not None:
             fn = load(impl.check.entry, f"{SECTION}.{k.name} (its check)")
-            result = fn(scenario, *(facts.get(t) for t in impl.check.takes))
+            lacking = [t for t in impl.check.takes if t not in facts]
+            if lacking:  # e.g. a user's plant without a preflight giving n_corners
+                raise ScenarioError(SECTION, dict(scenario.get(SECTION) or {}),
+                                    f"implementations whose preflight gives "
+                                    f"{', '.join(lacking)} (the check of {k.name} takes it)")
+            result = fn(scenario, *(facts[t] for t in impl.check.takes))
             if impl.check.gives is not None:
                 facts[impl.check.gives] = result
                 result = None

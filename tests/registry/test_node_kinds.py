@@ -192,3 +192,10 @@ def test_suscosim_run_refuses_a_bad_node_choice_before_any_process(tmp_path: Pat
     assert "nodes.controller" in res.stderr and "cannot import 'no_such_lab.dampers'" in res.stderr
     assert "Traceback" not in res.stderr
     assert not (tmp_path / "run" / "logs").exists()
+
+
+def test_a_fact_a_later_check_needs_but_no_implementation_gave_is_named() -> None:
+    """A user's plant (a class without a preflight) gives no n_corners: the controller's
+    check, which takes it, cannot run; that is said, not a TypeError."""
+    with pytest.raises(ScenarioError, match="gives n_corners \\(the check of controller"):
+        resolve(_ch3(plant="argparse:ArgumentParser"))
