@@ -25,6 +25,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -193,13 +194,25 @@ class LocalNodes:
                 return f"node '{name}' exited with code {code} (see logs/{name}.log)"
         return None
 
-    def stop(self, grace_s: float = 5.0) -> None:
+    def stop(self, grace_s: float = 5.0, tick: Callable[[], None] | None = None,
+             tick_period_s: float = 0.25) -> None:
+        """Wait up to ``grace_s`` for the nodes to end on their own, calling ``tick`` every
+        ``tick_period_s`` meanwhile (the abort, said again for a node that subscribed after
+        it was first said: one killed at start-up leaves the others in their handshake),
+        then SIGTERM what is left, and SIGKILL what is left 2 s later."""
         deadline = time.monotonic() + grace_s
         for p in self.procs.values():
-            try:
-                p.wait(timeout=max(0.05, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                p.terminate()
+            while True:
+                left = deadline - time.monotonic()
+                try:
+                    p.wait(timeout=max(0.05, min(left, tick_period_s if tick else left)))
+                    break
+                except subprocess.TimeoutExpired:
+                    if time.monotonic() >= deadline:
+                        p.terminate()
+                        break
+                    if tick is not None:
+                        tick()
         for p in self.procs.values():
             try:
                 p.wait(timeout=2)
@@ -367,15 +380,18 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         try:
             if hasattr(bar, "close"):
                 bar.close()
+            def say_abort() -> None:  # to a node that joined after it was first said
+                if clock is not None:
+                    try:
+                        clock.announce_abort(error)
+                    except Exception:
+                        pass
+
             if local:
-                local.stop(grace_s=3.0)
+                local.stop(grace_s=3.0, tick=say_abort)
             for th in threads:
                 th.join(timeout=3.0)
-            if clock is not None:  # once more, the nodes stopped: then the bus is closed
-                try:
-                    clock.announce_abort(error)
-                except Exception:
-                    pass
+            say_abort()  # once more, the nodes stopped: then the bus is closed
             _close(bus)  # before the table: what follows is the run folder's, not the bus's
             bus_open = False
             rec = _recover(folder, interrupted=isinstance(exc, KeyboardInterrupt),
