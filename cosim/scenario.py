@@ -36,11 +36,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from . import node_kinds
 from .config import ConfigReader
 from .errors import InputFileError, ScenarioError
 from .keys import check_name
 
-SECTIONS = ("run", "vehicle", "tyre", "road", "controller", "fatigue", "sweep", "report")
+SECTIONS = ("run", "vehicle", "tyre", "road", "controller", "fatigue", "sweep", "report",
+            "nodes")
 
 
 @dataclass(frozen=True)
@@ -253,8 +255,9 @@ def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[
     return validate_common(scenario)
 
 
-PATH_KEYS = (("road", "path"), ("controller", "curve"), ("fatigue", "influence"))
-"""Keys holding file paths: relative ones are relative to the scenario file's folder."""
+PATH_KEYS = node_kinds.path_keys()
+"""Keys holding file paths, as the node kinds declare them (:mod:`cosim.node_kinds`):
+relative ones are relative to the scenario file's folder."""
 
 
 def absolute_paths(scenario: dict[str, Any], folder: Path) -> None:

@@ -180,9 +180,7 @@ def test_the_fmu_alternative_takes_the_fmu_law_only() -> None:
 def test_suscosim_run_refuses_a_bad_node_choice_before_any_process(tmp_path: Path) -> None:
     """Through the real CLI: a scenario file's [nodes] with a module that is not there is
     exit 2 naming nodes.controller, and no node was started (no logs)."""
-    if nk.SECTION not in sc.SECTIONS:
-        pytest.skip("cosim/scenario.py does not accept the [nodes] section yet (SECTIONS "
-                    "lacks 'nodes': the lead's one-line change)")
+    assert nk.SECTION in sc.SECTIONS
     from ..conftest import suscosim
 
     path = tmp_path / "mine.toml"
@@ -199,3 +197,16 @@ def test_a_fact_a_later_check_needs_but_no_implementation_gave_is_named() -> Non
     check, which takes it, cannot run; that is said, not a TypeError."""
     with pytest.raises(ScenarioError, match="gives n_corners \\(the check of controller"):
         resolve(_ch3(plant="argparse:ArgumentParser"))
+
+
+def test_a_relative_fmu_path_is_relative_to_the_scenario_file(tmp_path: Path) -> None:
+    """``controller.fmu`` is a path key of the controller kind: relative to the scenario's
+    folder, like the road file, not to where suscosim was started."""
+    folder = tmp_path / "study"
+    folder.mkdir()
+    path = folder / "s.toml"
+    text = CH3_STEP.read_text().replace("[controller]", '[controller]\nfmu = "laws/t.fmu"', 1)
+    path.write_text(text)
+    scenario = sc.load(path)
+    assert scenario["controller"]["fmu"] == str(folder / "laws" / "t.fmu")
+    assert ("controller", "fmu") in sc.PATH_KEYS
