@@ -4,6 +4,10 @@ the table records."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -93,7 +97,18 @@ def _assert_user_forces(table: dict) -> None:
 
 
 def test_a_user_controller_class_runs_distributed(tmp_path: Path, user_module: str) -> None:
-    _assert_user_forces(_run(tmp_path, f"{user_module}:LinearDamper", "distributed"))
+    """Through the CLI, as a user does: ``[nodes]`` in the scenario file, ``suscosim run``."""
+    path = tmp_path / "mine.toml"
+    path.write_text(CH3_STEP.read_text()
+                    + f'\n[nodes]\ncontroller = "{user_module}:LinearDamper"\n')
+    res = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(path), "--out",
+                          str(tmp_path / "run"), "--quiet", "--set", "run.t_end=0.6"],
+                         cwd=tmp_path, env=dict(os.environ), capture_output=True, text=True,
+                         timeout=180)
+    assert res.returncode == 0, res.stdout + res.stderr
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["mode"] == "distributed" and summary["nodes"] == list(nk.always())
+    _assert_user_forces(read_table(tmp_path / "run" / "table.parquet"))
 
 
 def test_a_user_controller_function_runs_monolithic(tmp_path: Path, user_module: str) -> None:
