@@ -21,11 +21,9 @@ import json
 import math
 import os
 import secrets
-import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -39,8 +37,10 @@ from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 from cosim.run_lock import RunIdInUseError, RunLock
 
 from .clock import Clock, ClockResult
-from .placement import core_layout, pin, should_pin, usable_cores
+from .local_nodes import LocalNodes, local_lease_ms
+from .placement import core_layout, should_pin, usable_cores
 from .progress import ProgressBar
+from .run_recovery import recover_table
 
 
 def new_run_id(name: str) -> str:
@@ -133,92 +133,6 @@ class SummaryWriteError(RunError):
         self.path, self.os_error = path, exc
         super().__init__(f"cannot write {path}: {exc.strerror or exc}"
                          + (" (the disk is full)" if exc.errno == errno.ENOSPC else ""))
-
-
-PINNED_SPIN_US = 200
-"""How long a pinned node polls its input before blocking [us] (Participant.spin_s): +15 %
-coupled steps/s on the 2-core VM (docs/cosim.md); unpinned runs side by side got nothing."""
-
-
-def local_lease_ms(stall_timeout_s: float) -> int:
-    """Zenoh link lease [ms] of the orchestrator and the nodes it starts: the run's stall
-    timeout, between 2 and 30 s (issue #15 item 8). A process starved of CPU for longer than
-    its lease loses its links: its liveliness token drops (the run was ended as "gone" after
-    a 3-4 s pause even with a 30 s stall timeout) and the messages sent to it meanwhile are
-    lost (the recorder then stalls). With the lease at the stall timeout a pause is judged by
-    one rule. A local node that dies is still seen at once (its exit code; its sockets close,
-    which ends its links whatever the lease); nodes started elsewhere keep their own lease
-    (``suscosim node --lease-ms``, default 2 s), so a partitioned machine is seen in ~2 s."""
-    return int(1000.0 * min(max(stall_timeout_s, 2.0), 30.0))
-
-
-class LocalNodes:
-    """Node processes started on this machine, their logs, and their fate."""
-
-    def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
-                 log_dir: Path, zenoh_config_file: str | None = None,
-                 cores: dict[str, int] | None = None, lease_ms: int = 2000,
-                 run_key: bytes | None = None) -> None:
-        self.procs: dict[str, subprocess.Popen] = {}
-        self.cores: dict[str, int] = {}  # the core each node was pinned to
-        log_dir.mkdir(parents=True, exist_ok=True)
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
-        if run_key is not None:  # the run key, in the environment (readable by this user only)
-            env[au.ENV_RUN_KEY] = run_key.hex()
-        for name in names:
-            cmd = [sys.executable, "-m", "orchestrator", "node", name, "--run", run_id,
-                   "--mode", "peer"]  # the local mesh; nodes elsewhere are clients
-            for ep in connect:
-                cmd += ["--connect", ep]
-            if lowlatency:
-                cmd.append("--lowlatency")
-            if zenoh_config_file:
-                cmd += ["--zenoh-config", zenoh_config_file]
-            cmd += ["--lease-ms", str(int(lease_ms))]
-            core = (cores or {}).get(name)
-            if core is not None:
-                cmd += ["--spin-us", str(PINNED_SPIN_US)]
-            log = open(log_dir / f"{name}.log", "wb")
-            self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
-                                                stdin=subprocess.DEVNULL, env=env)
-            log.close()
-            # before its interpreter has started any thread: they all inherit the core
-            if core is not None and pin(self.procs[name].pid, core):
-                self.cores[name] = core
-
-    def dead(self) -> str | None:
-        """A message naming a node process that exited with an error, if any."""
-        for name, p in self.procs.items():
-            code = p.poll()
-            if code not in (None, 0):
-                return f"node '{name}' exited with code {code} (see logs/{name}.log)"
-        return None
-
-    def stop(self, grace_s: float = 5.0, tick: Callable[[], None] | None = None,
-             tick_period_s: float = 0.25) -> None:
-        """Wait up to ``grace_s`` for the nodes to end on their own, calling ``tick`` every
-        ``tick_period_s`` meanwhile (the abort, said again for a node that subscribed after
-        it was first said: one killed at start-up leaves the others in their handshake),
-        then SIGTERM what is left, and SIGKILL what is left 2 s later."""
-        deadline = time.monotonic() + grace_s
-        for p in self.procs.values():
-            while True:
-                left = deadline - time.monotonic()
-                try:
-                    p.wait(timeout=max(0.05, min(left, tick_period_s if tick else left)))
-                    break
-                except subprocess.TimeoutExpired:
-                    if time.monotonic() >= deadline:
-                        p.terminate()
-                        break
-                    if tick is not None:
-                        tick()
-        for p in self.procs.values():
-            try:
-                p.wait(timeout=2)
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
 
 
 def _folder_error(exc: OSError, folder: Path) -> InputFileError:
@@ -394,7 +308,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
             say_abort()  # once more, the nodes stopped: then the bus is closed
             _close(bus)  # before the table: what follows is the run folder's, not the bus's
             bus_open = False
-            rec = _recover(folder, interrupted=isinstance(exc, KeyboardInterrupt),
+            rec = recover_table(folder, interrupted=isinstance(exc, KeyboardInterrupt),
                            since=started)
             summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", error)
             summary.update(_transport(local, lowlatency))
@@ -444,91 +358,6 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
     if local is None:
         return {}
     return {"lowlatency": bool(lowlatency), "cores": dict(local.cores)}
-
-
-INTERRUPT_REBUILD_BYTES = 4 << 20
-"""On an interrupt (Ctrl-C, SIGTERM: ``docker compose down``) the orchestrator rebuilds the
-table from a journal of up to this size [bytes] (~0.7 s on this 2-core machine: the journal
-of a Chapter 6 run rebuilds at ~5.5 MB/s, read, decode, CSV and Parquet); a larger journal
-is left for ``suscosim export``, so that a stopped run ends within seconds whatever its
-length (issue #18: under 3 s a container)."""
-
-
-def _recover(folder: Path, interrupted: bool = False, since: float | None = None
-             ) -> dict[str, Any]:
-    """After a failed run: whatever the journal holds, as a table, never put in place of a
-    larger one (see :func:`cosim.table.export_target`); a table that cannot be
-    written (a full disk) is removed rather than left truncated.
-
-    The recorder exports what it has when it hears the abort: a table of its, written
-    ``since`` the run began [s, Unix time], that already holds every step the journal reached
-    is taken as it is (its statistics read back, not rebuilt). On an ``interrupted`` run a
-    journal larger than :data:`INTERRUPT_REBUILD_BYTES` is not rebuilt: the summary says so
-    and how."""
-    journal = folder / "journal.msgpack"
-    if not journal.exists():
-        return {}
-    from cosim.journal import last_step, read_journal
-    from cosim.table import (
-        build_table,
-        channel_stats,
-        export,
-        export_target,
-        read_table,
-        table_rows,
-    )
-
-    reached = last_step(journal)
-    have = table_rows(folder)
-    fresh = since is None or _mtime(folder / "table.parquet") >= since
-    if reached is not None and have is not None and have >= reached + 1 and fresh:
-        try:
-            table = read_table(folder / "table.parquet")
-            return {"stats": channel_stats(table), "rows": int(len(table["t"])),
-                    "files": {"csv": str(folder / "table.csv"),
-                              "parquet": str(folder / "table.parquet")},
-                    "note": "the table the recorder exported"}
-        except Exception:  # not readable after all: rebuilt below
-            pass
-    size = journal.stat().st_size
-    if interrupted and size > INTERRUPT_REBUILD_BYTES:
-        return {"rows": 0 if reached is None else reached + 1, "files": {},
-                "note": f"interrupted: the table was not rebuilt from the journal "
-                        f"({size / 2**20:.0f} MB); run `suscosim export {journal}`"}
-    try:
-        contents = read_journal(journal)
-        table, bad = build_table(contents.records)
-    except Exception as exc:  # the run already failed: report, do not mask that error
-        return {"error": f"journal unreadable: {type(exc).__name__}: {exc}"}
-    rows = int(len(table["t"]))
-    rec: dict[str, Any] = {"stats": channel_stats(table), "files": {}, "rows": rows,
-                           "torn": contents.torn, "undecodable": bad,
-                           "skipped_records": contents.skipped_records}
-    if contents.problem:
-        rec["journal"] = contents.problem
-    if not rows:
-        return rec
-    stem = "table"
-    try:
-        stem, why = export_target(folder, rows, contents.damaged)
-        rec["files"] = export(table, folder, stem)
-        if why:
-            rec["note"] = f"table written as {stem}.*: {why}"
-    except OSError as exc:
-        for suffix in (".csv", ".parquet"):
-            try:
-                (folder / f"{stem}{suffix}").unlink(missing_ok=True)
-            except OSError:
-                pass
-        rec["error"] = f"table not written: {exc.strerror or exc}"
-    return rec
-
-
-def _mtime(path: Path) -> float:
-    try:
-        return path.stat().st_mtime
-    except OSError:
-        return -math.inf
 
 
 __all__ = ["resolve", "run_scenario", "RunError"]

@@ -91,7 +91,7 @@ def _wait_under_way(project: de.Project, run_id: str, min_bytes: int = 20_000) -
     read on the host where the volume's folder is readable (root), else in the container.
 
     Early in the run on purpose: when a run fails or is interrupted the orchestrator rebuilds
-    the tables from the whole journal before it exits (``runner._recover``), which takes
+    the tables from the whole journal before it exits (``run_recovery.recover_table``), which takes
     about 0.7 s per 1000 recorded steps on this loaded machine (py-spy: 7 s at step 9850)."""
     recorder = project.container("recorder")
     orch = project.container("orchestrator")
@@ -261,7 +261,7 @@ def _killed_plant_case(tmp_path: Path, tag: str) -> bool:
 def test_compose_stop_mid_run_ends_every_container_on_sigterm(image, tmp_path):
     """``docker compose stop`` (what ``down`` does first) mid-run: the router and the node
     containers end on SIGTERM within 3 s, the orchestrator too (it records the
-    interruption and the table in the run folder first: ``runner._recover`` leaves a long
+    interruption and the table in the run folder first: ``run_recovery.recover_table`` leaves a long
     journal's table to ``suscosim export`` on an interrupt); no container is killed."""
     project, run_id = _project(tmp_path, "stop", ["--set", "run.t_end=120.0"])
     try:

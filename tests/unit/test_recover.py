@@ -1,4 +1,4 @@
-"""The orchestrator's table after a failed or interrupted run (``runner._recover``): one
+"""The orchestrator's table after a failed or interrupted run (``run_recovery.recover_table``): one
 writer per table, and a stopped run that ends within seconds whatever its length."""
 
 import time
@@ -8,7 +8,7 @@ import numpy as np
 from cosim.journal import JournalWriter, read_journal
 from cosim.table import build_table, export, read_table
 from cosim.wire import encode
-from orchestrator import runner
+from orchestrator import run_recovery, runner
 
 
 def _journal(folder, n: int, pad: int = 0) -> None:
@@ -22,7 +22,7 @@ def _journal(folder, n: int, pad: int = 0) -> None:
 
 def test_a_failed_run_rebuilds_its_table_from_the_journal(tmp_path):
     _journal(tmp_path, 50)
-    rec = runner._recover(tmp_path, since=time.time() - 60)
+    rec = run_recovery.recover_table(tmp_path, since=time.time() - 60)
     assert rec["rows"] == 50 and rec["files"]["csv"].endswith("table.csv")
     assert read_table(tmp_path / "table.csv")["tyre_road/force/F"][49] == -98.0
     assert rec["stats"]["plant/state/z"]["max"] == 49.0
@@ -36,7 +36,7 @@ def test_the_recorders_fresh_table_is_taken_as_it_is(tmp_path):
     table, _ = build_table(read_journal(tmp_path / "journal.msgpack").records)
     table["plant/state/z"] = table["plant/state/z"] + 1000.0  # the recorder's (marked)
     export(table, tmp_path)
-    rec = runner._recover(tmp_path, since=t0)
+    rec = run_recovery.recover_table(tmp_path, since=t0)
     assert rec["note"] == "the table the recorder exported" and rec["rows"] == 20
     assert rec["stats"]["plant/state/z"]["min"] == 1000.0
     assert read_table(tmp_path / "table.csv")["plant/state/z"][0] == 1000.0
@@ -47,32 +47,32 @@ def test_a_table_older_than_the_run_or_short_of_the_journal_is_rebuilt(tmp_path)
     table, _ = build_table(read_journal(tmp_path / "journal.msgpack").records)
     stale = dict(table, **{"plant/state/z": table["plant/state/z"] + 1000.0})
     export(stale, tmp_path)
-    rec = runner._recover(tmp_path, since=time.time() + 5.0)  # written before the run began
+    rec = run_recovery.recover_table(tmp_path, since=time.time() + 5.0)  # before the run
     assert "note" not in rec and rec["stats"]["plant/state/z"]["min"] == 0.0
     short = {c: v[:10] for c, v in stale.items()}  # fresher, but 10 of the 20 steps
     export(short, tmp_path)
-    rec = runner._recover(tmp_path, since=time.time() - 60)
+    rec = run_recovery.recover_table(tmp_path, since=time.time() - 60)
     assert rec["rows"] == 20 and rec["stats"]["plant/state/z"]["min"] == 0.0
     np.testing.assert_array_equal(read_table(tmp_path / "table.parquet")["plant/state/z"],
                                   np.arange(20.0))
 
 
 def test_an_interrupted_long_run_leaves_its_table_to_suscosim_export(tmp_path, monkeypatch):
-    monkeypatch.setattr(runner, "INTERRUPT_REBUILD_BYTES", 20_000)
+    monkeypatch.setattr(run_recovery, "INTERRUPT_REBUILD_BYTES", 20_000)
     _journal(tmp_path, 200, pad=20)
     assert (tmp_path / "journal.msgpack").stat().st_size > 20_000
-    rec = runner._recover(tmp_path, interrupted=True, since=time.time() - 60)
+    rec = run_recovery.recover_table(tmp_path, interrupted=True, since=time.time() - 60)
     assert rec["rows"] == 200 and rec["files"] == {}
     assert "suscosim export" in rec["note"] and str(tmp_path / "journal.msgpack") in rec["note"]
     assert not (tmp_path / "table.csv").exists()
     # the same journal, not interrupted (a node died): rebuilt whatever its size
-    rec = runner._recover(tmp_path, interrupted=False, since=time.time() - 60)
+    rec = run_recovery.recover_table(tmp_path, interrupted=False, since=time.time() - 60)
     assert rec["rows"] == 200 and (tmp_path / "table.csv").exists()
 
 
 def test_an_interrupted_short_run_still_gets_its_table(tmp_path):
     _journal(tmp_path, 30)
-    rec = runner._recover(tmp_path, interrupted=True, since=time.time() - 60)
+    rec = run_recovery.recover_table(tmp_path, interrupted=True, since=time.time() - 60)
     assert rec["rows"] == 30 and len(read_table(tmp_path / "table.csv")["t"]) == 30
 
 

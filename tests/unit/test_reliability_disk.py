@@ -101,6 +101,8 @@ def test_salvaged_table_is_removed_rather_than_left_truncated(tmp_path, monkeypa
         raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr("cosim.table.write_parquet", write_parquet)
-    rec = runner._recover(tmp_path)
+    from orchestrator.run_recovery import recover_table
+
+    rec = recover_table(tmp_path)
     assert rec["rows"] == 5 and "No space left on device" in rec["error"]
     assert not (tmp_path / "table.csv").exists() and not (tmp_path / "table.parquet").exists()

@@ -1,0 +1,100 @@
+"""The node processes a run starts on this machine: their command lines, logs, cores and
+fate, and the Zenoh link lease they share with the orchestrator."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from cosim import auth as au
+
+from .placement import pin
+
+PINNED_SPIN_US = 200
+"""How long a pinned node polls its input before blocking [us] (Participant.spin_s): +15 %
+coupled steps/s on the 2-core VM (docs/cosim.md); unpinned runs side by side got nothing."""
+
+
+def local_lease_ms(stall_timeout_s: float) -> int:
+    """Zenoh link lease [ms] of the orchestrator and the nodes it starts: the run's stall
+    timeout, between 2 and 30 s (issue #15 item 8). A process starved of CPU for longer than
+    its lease loses its links: its liveliness token drops (the run was ended as "gone" after
+    a 3-4 s pause even with a 30 s stall timeout) and the messages sent to it meanwhile are
+    lost (the recorder then stalls). With the lease at the stall timeout a pause is judged by
+    one rule. A local node that dies is still seen at once (its exit code; its sockets close,
+    which ends its links whatever the lease); nodes started elsewhere keep their own lease
+    (``suscosim node --lease-ms``, default 2 s), so a partitioned machine is seen in ~2 s."""
+    return int(1000.0 * min(max(stall_timeout_s, 2.0), 30.0))
+
+
+class LocalNodes:
+    """Node processes started on this machine, their logs, and their fate."""
+
+    def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
+                 log_dir: Path, zenoh_config_file: str | None = None,
+                 cores: dict[str, int] | None = None, lease_ms: int = 2000,
+                 run_key: bytes | None = None) -> None:
+        self.procs: dict[str, subprocess.Popen] = {}
+        self.cores: dict[str, int] = {}  # the core each node was pinned to
+        log_dir.mkdir(parents=True, exist_ok=True)
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        if run_key is not None:  # the run key, in the environment (readable by this user only)
+            env[au.ENV_RUN_KEY] = run_key.hex()
+        for name in names:
+            cmd = [sys.executable, "-m", "orchestrator", "node", name, "--run", run_id,
+                   "--mode", "peer"]  # the local mesh; nodes elsewhere are clients
+            for ep in connect:
+                cmd += ["--connect", ep]
+            if lowlatency:
+                cmd.append("--lowlatency")
+            if zenoh_config_file:
+                cmd += ["--zenoh-config", zenoh_config_file]
+            cmd += ["--lease-ms", str(int(lease_ms))]
+            core = (cores or {}).get(name)
+            if core is not None:
+                cmd += ["--spin-us", str(PINNED_SPIN_US)]
+            log = open(log_dir / f"{name}.log", "wb")
+            self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
+                                                stdin=subprocess.DEVNULL, env=env)
+            log.close()
+            # before its interpreter has started any thread: they all inherit the core
+            if core is not None and pin(self.procs[name].pid, core):
+                self.cores[name] = core
+
+    def dead(self) -> str | None:
+        """A message naming a node process that exited with an error, if any."""
+        for name, p in self.procs.items():
+            code = p.poll()
+            if code not in (None, 0):
+                return f"node '{name}' exited with code {code} (see logs/{name}.log)"
+        return None
+
+    def stop(self, grace_s: float = 5.0, tick: Callable[[], None] | None = None,
+             tick_period_s: float = 0.25) -> None:
+        """Wait up to ``grace_s`` for the nodes to end on their own, calling ``tick`` every
+        ``tick_period_s`` meanwhile (the abort, said again for a node that subscribed after
+        it was first said: one killed at start-up leaves the others in their handshake),
+        then SIGTERM what is left, and SIGKILL what is left 2 s later."""
+        deadline = time.monotonic() + grace_s
+        for p in self.procs.values():
+            while True:
+                left = deadline - time.monotonic()
+                try:
+                    p.wait(timeout=max(0.05, min(left, tick_period_s if tick else left)))
+                    break
+                except subprocess.TimeoutExpired:
+                    if time.monotonic() >= deadline:
+                        p.terminate()
+                        break
+                    if tick is not None:
+                        tick()
+        for p in self.procs.values():
+            try:
+                p.wait(timeout=2)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
