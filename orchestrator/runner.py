@@ -37,7 +37,7 @@ from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 from cosim.run_lock import RunIdInUseError, RunLock
 
 from .clock import Clock, ClockResult
-from .local_nodes import LocalNodes, local_lease_ms
+from .local_nodes import PINNED_SPIN_US, LocalNodes, local_lease_ms  # noqa: F401 (re-exported)
 from .placement import core_layout, should_pin, usable_cores
 from .progress import ProgressBar
 from .run_recovery import recover_table
