@@ -21,6 +21,7 @@ import numpy as np
 from cosim import channels as ch
 from cosim.errors import RunError, ScenarioError
 from cosim.listener import Listener, Received
+from cosim.load_blocks import block_loads, load_fields
 from cosim.participant import Participant
 
 from .config import FatigueConfig
@@ -71,18 +72,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             if int(d["k0"]) != next_k:
                 raise RunError(f"fatigue: load block starts at step {d['k0']}, expected "
                                f"{next_k} (a block was lost)")
-            t = np.asarray(d["t"], dtype=float)
             if live is None:
-                fields = [f for f in d if f not in ("k0", "t")]
+                fields = load_fields(d)
                 live = LiveFatigue(cfg, [f"{ch.PLANT}/{ch.ARM}/{f}" for f in fields], L)
             try:
-                loads = np.column_stack([np.asarray(d[f], dtype=float) for f in fields])
-            except (KeyError, ValueError) as exc:
+                t, loads = block_loads(d, fields)
+            except ValueError as exc:
                 raise RunError(f"fatigue: malformed load block at step {d['k0']}: "
-                               f"{type(exc).__name__}: {exc}") from None
-            if loads.shape[0] != t.size:
-                raise RunError(f"fatigue: load block at step {d['k0']} has "
-                               f"{loads.shape[0]} rows for {t.size} times")
+                               f"{exc}") from None
             live.update(t, loads)
             next_k, t_last = k + 1, float(t[-1])
             last_input = now

@@ -31,9 +31,10 @@ from cosim import node_kinds as nk
 from cosim.errors import RunError, WireError
 from cosim.journal import JournalWriter, read_journal
 from cosim.listener import Listener, Received
+from cosim.load_blocks import LoadStreamer, wire_pieces
 from cosim.participant import Participant
 from cosim.table import build_table, channel_stats, export
-from cosim.wire import MAX_MESSAGE_BYTES, decode
+from cosim.wire import decode
 
 FLUSH_PERIOD_S = 0.05
 
@@ -69,53 +70,6 @@ def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
     files = export(table, folder) if len(table["t"]) else {}
     return {"stats": channel_stats(table), "files": files, "rows": int(len(table["t"])),
             "torn": contents.torn, "undecodable": bad}
-
-
-class LoadStreamer:
-    """Cuts the load channel into consecutive blocks as its steps arrive (in any order)."""
-
-    def __init__(self, block_steps: int) -> None:
-        self.block_steps = max(1, int(block_steps))
-        self.pending: dict[int, tuple[float, dict[str, Any]]] = {}
-        self.next_k = 0
-
-    def add(self, k: int, t: float, fields: dict[str, Any]) -> None:
-        """Keep the first message of each step (as the table does), from next_k on."""
-        if k >= self.next_k and k not in self.pending:
-            self.pending[k] = (t, fields)
-
-    def blocks(self, last_k: int | None) -> list[dict[str, Any]]:
-        """Full blocks available now; with ``last_k`` (the run's last step) also the final
-        partial block once every step up to it is there."""
-        out: list[dict[str, Any]] = []
-        while True:
-            n = 0
-            while self.next_k + n in self.pending and n < self.block_steps:
-                n += 1
-            final = last_k is not None and n > 0 and self.next_k + n - 1 == last_k
-            if n < self.block_steps and not final:
-                return out
-            ks = range(self.next_k, self.next_k + n)
-            rows = [self.pending.pop(k) for k in ks]
-            names = [f for f in rows[0][1] if f not in ("k0", "t")]
-            block: dict[str, Any] = {"k0": self.next_k, "t": [r[0] for r in rows]}
-            for f in names:
-                block[f] = [float(r[1].get(f, float("nan"))) for r in rows]
-            out.append(block)
-            self.next_k += n
-
-
-def wire_pieces(blk: dict[str, Any], max_bytes: int = MAX_MESSAGE_BYTES - 2048
-                ) -> list[dict[str, Any]]:
-    """A load block cut into consecutive pieces that each fit one bus message (a msgpack
-    float is 9 bytes); the fatigue worker takes blocks of any length."""
-    n = len(blk["t"])
-    fields = [f for f in blk if f != "k0"]
-    per = max(1, max_bytes // (9 * len(fields) + 16))
-    if n <= per:
-        return [blk]
-    return [{"k0": blk["k0"] + i, **{f: blk[f][i:i + per] for f in fields}}
-            for i in range(0, n, per)]
 
 
 class BlockSender:

@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cosim.load_blocks import LoadStreamer
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.run_dir import read_table, track_length
 from nodes.fatigue.worker import analyse
-from nodes.recorder.node import LoadStreamer
 from tests.conftest import ROOT, suscosim
 
 REALISTIC = ROOT / "scenarios" / "ch4_qvm_realistic_bump_pothole.toml"
@@ -85,3 +85,24 @@ def test_live_fatigue_off_and_refused_on_a_plant_without_arm_loads(tmp_path: Pat
                    "--out", str(tmp_path / "bad"), "--set", "fatigue.live=true")
     assert bad.returncode == 2
     assert "fatigue.live" in bad.stderr and "arm loads" in bad.stderr
+
+
+def test_a_block_is_read_back_as_written_and_a_bad_one_is_named():
+    import pytest
+
+    from cosim.load_blocks import block_loads, load_fields
+
+    s = LoadStreamer(block_steps=2)
+    for k in range(3):
+        s.add(k, 0.1 * k, {"ball_joint_z": 10.0 * k, "spring_m": -1.0 * k})
+    blocks = s.blocks(last_k=2)
+    assert [b["k0"] for b in blocks] == [0, 2]
+    fields = load_fields(blocks[0])
+    assert fields == ["ball_joint_z", "spring_m"]
+    t, loads = block_loads(blocks[0], fields)
+    assert t.tolist() == [0.0, 0.1] and loads.tolist() == [[0.0, -0.0], [10.0, -1.0]]
+    with pytest.raises(ValueError, match="no field 'spring_m'"):
+        block_loads({"k0": 0, "t": [0.0], "ball_joint_z": [1.0]}, fields)
+    with pytest.raises(ValueError, match="2 rows for 1 times"):
+        block_loads({"k0": 0, "t": [0.0], "ball_joint_z": [1.0, 2.0], "spring_m": [0, 0]},
+                    fields)

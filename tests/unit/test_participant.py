@@ -11,9 +11,9 @@ import pytest
 from cosim import keys
 from cosim.bus import MemoryBus
 from cosim.errors import RunError
+from cosim.load_blocks import wire_pieces
 from cosim.participant import Participant
 from cosim.wire import MAX_MESSAGE_BYTES, decode, encode
-from nodes.recorder.node import wire_pieces
 
 
 def _pair(stall_s: float = 10.0) -> tuple[MemoryBus, Participant]:
