@@ -12,13 +12,13 @@ import math
 import os
 import threading
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cosim.errors import WireError
+from cosim.errors import InputFileError, WireError
 from cosim.wire import Message, decode
 
 Table = dict[str, np.ndarray]
@@ -110,19 +110,50 @@ def write_parquet(table: Table, path: str | Path) -> None:
     pq.write_table(pa.table({c: pa.array(v) for c, v in table.items()}), path)
 
 
-def read_table(path: str | Path) -> Table:
-    """Read a table written by :func:`write_parquet` or :func:`write_csv`."""
+def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> Table:
+    """Read a table written by :func:`write_parquet` or :func:`write_csv` (by its suffix),
+    only the columns whose name ``keep`` accepts when it is given (``k`` and ``t`` always).
+
+    A file that is not such a table is an :class:`~cosim.errors.InputFileError` naming it
+    (and the CSV line): not Parquet, no header, a row of another length, a value that is not
+    a number."""
     path = Path(path)
+
+    def wanted(name: str) -> bool:
+        return keep is None or name in ("k", "t") or keep(name)
+
     if path.suffix == ".parquet":
         import pyarrow.parquet as pq
 
-        t = pq.read_table(path)
-        return {c: t.column(c).to_numpy() for c in t.column_names}
+        try:
+            names = [n for n in pq.ParquetFile(path).schema_arrow.names if wanted(n)]
+            t = pq.read_table(path, columns=names)
+            return {c: t.column(c).to_numpy() for c in t.column_names}
+        except OSError as exc:
+            if not path.is_file():
+                raise
+            raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
+        except Exception as exc:  # pyarrow raises several types for a bad file
+            raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
+    if not rows or not rows[0]:
+        raise InputFileError(str(path), "no header row", 1)
     cols = rows[0]
-    arr = np.asarray(rows[1:], dtype=float).reshape(len(rows) - 1, len(cols))
-    return {c: arr[:, i] for i, c in enumerate(cols)}
+    cut = [i for i, c in enumerate(cols) if wanted(c)]
+    try:
+        arr = np.asarray(rows[1:], dtype=float).reshape(len(rows) - 1, len(cols))
+    except ValueError:  # say where
+        for lineno, row in enumerate(rows[1:], start=2):
+            if len(row) != len(cols):
+                raise InputFileError(str(path), f"expected {len(cols)} fields, got "
+                                                f"{len(row)}", lineno) from None
+            try:
+                [float(x) for x in row]
+            except ValueError:
+                raise InputFileError(str(path), "non-numeric value", lineno) from None
+        raise
+    return {cols[i]: arr[:, i] for i in cut}
 
 
 def channel_stats(table: Table) -> dict[str, dict[str, float]]:

@@ -19,44 +19,18 @@ from .worker import FatigueResult, analyse, load_influence
 
 def read_table(run_dir: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """(t, {column: values}) from ``table.parquet`` or else ``table.csv`` (only load columns
-    ``plant/arm/...`` are kept)."""
-    pq, cs = run_dir / "table.parquet", run_dir / "table.csv"
-    cols: dict[str, np.ndarray] = {}
-    if pq.is_file():
-        import pyarrow.parquet as papq
+    ``plant/arm/...`` are kept; :func:`cosim.table.read_table` reads them)."""
+    from cosim.table import read_table as read_run_table
 
-        try:
-            tab = papq.read_table(pq)
-        except Exception as exc:  # pyarrow raises several types for a bad file
-            raise InputFileError(str(pq), f"not a readable Parquet file ({exc})") from None
-        names = tab.column_names
-        if "t" not in names:
-            raise InputFileError(str(pq), "no column 't'")
-        for n in names:
-            if n == "t" or n.startswith("plant/arm/"):
-                cols[n] = tab.column(n).to_numpy(zero_copy_only=False).astype(float)
-        src = pq
-    elif cs.is_file():
-        with open(cs, newline="") as fh:
-            reader = csv.reader(fh)
-            header = next(reader, None)
-            if not header or "t" not in header:
-                raise InputFileError(str(cs), "header with a 't' column expected", 1)
-            keep = [i for i, n in enumerate(header) if n == "t" or n.startswith("plant/arm/")]
-            rows = []
-            for lineno, row in enumerate(reader, start=2):
-                if len(row) != len(header):
-                    raise InputFileError(str(cs), f"expected {len(header)} fields, got "
-                                                  f"{len(row)}", lineno)
-                try:
-                    rows.append([float(row[i]) for i in keep])
-                except ValueError:
-                    raise InputFileError(str(cs), "non-numeric value", lineno) from None
-        a = np.asarray(rows, dtype=float).reshape(-1, len(keep))
-        cols = {header[i]: a[:, j] for j, i in enumerate(keep)}
-        src = cs
-    else:
+    src = next((p for p in (run_dir / "table.parquet", run_dir / "table.csv") if p.is_file()),
+               None)
+    if src is None:
         raise InputFileError(str(run_dir), "no table.parquet or table.csv in the run folder")
+    cols = {n: np.asarray(v, dtype=float)
+            for n, v in read_run_table(src, keep=lambda n: n.startswith("plant/arm/")).items()}
+    cols.pop("k", None)
+    if "t" not in cols:
+        raise InputFileError(str(src), "no column 't'", 1 if src.suffix == ".csv" else None)
     t = cols.pop("t")
     if t.size < 2:
         raise InputFileError(str(src), "fewer than 2 samples")

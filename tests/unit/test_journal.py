@@ -99,3 +99,33 @@ def test_export_leaves_no_temporary_file_and_replaces_whole(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["table.csv", "table.parquet"]
     for path in paths.values():
         np.testing.assert_array_equal(read_table(path)["x"], np.ones(3))
+
+
+def test_read_table_keeps_the_columns_asked_for_and_names_a_bad_file(tmp_path):
+    import numpy as np
+    import pytest
+
+    from cosim.errors import InputFileError
+    from cosim.table import export, read_table
+
+    table = {"k": np.arange(3), "t": np.arange(3) * 0.5, "plant/arm/ball_joint_z": np.ones(3),
+             "plant/state/z_b": np.zeros(3)}
+    paths = export(table, tmp_path)
+    for path in paths.values():
+        got = read_table(path, keep=lambda n: n.startswith("plant/arm/"))
+        assert sorted(got) == ["k", "plant/arm/ball_joint_z", "t"]
+        np.testing.assert_array_equal(got["plant/arm/ball_joint_z"], np.ones(3))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("k,t,x\r\n0,0.0,1\r\n1,0.5\r\n")
+    with pytest.raises(InputFileError, match=r"bad.csv:3: expected 3 fields, got 2"):
+        read_table(bad)
+    bad.write_text("k,t,x\r\n0,0.0,one\r\n")
+    with pytest.raises(InputFileError, match=r"bad.csv:2: non-numeric value"):
+        read_table(bad)
+    bad.write_text("")
+    with pytest.raises(InputFileError, match=r"bad.csv:1: no header row"):
+        read_table(bad)
+    torn = tmp_path / "torn.parquet"
+    torn.write_bytes((tmp_path / "table.parquet").read_bytes()[:100])
+    with pytest.raises(InputFileError, match=r"torn.parquet: not a readable Parquet file"):
+        read_table(torn)
