@@ -48,6 +48,8 @@ joint in the arm plane, z = x cross y; the frame turns with the arm), in N; see
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -190,6 +192,14 @@ class DoubleWishboneCorner(PlantModel):
             _local(b, HUB, TIE_ROD_OUTER - LOWER_BALL_JOINT, c), physicsClientId=c)
         for cid in (self._c_upper, self._c_tie):
             p.changeConstraint(cid, maxForce=1e9, physicsClientId=c)
+        # hardpoints in their links' frames (fixed): the damper mounts, the bumper pad, the
+        # points whose accelerations plant/response carries
+        self._loc_top = self._local_point(BODY, DAMPER_UPPER)
+        self._loc_bot = self._local_point(LOWER_ARM, DAMPER_LOWER)
+        self._loc_pad = self._local_point(LOWER_ARM, BUMP_STOP_PAD)
+        self._loc_accel = [(name, self._local_point(LOWER_ARM, la.to_corner(pt)),
+                            tuple(f"a_arm_{name}_{axis}" for axis in "xyz"))
+                           for name, pt in ARM_ACCEL_POINTS.items()]
         self._dt: float | None = None
         self._F_t = 0.0
         self._F_d = 0.0
@@ -201,10 +211,15 @@ class DoubleWishboneCorner(PlantModel):
         self._pad_z0 = float(self._pad[2])
         self.tau0 = self._static_torque(static_dt)
         self._read()
-        self._applied_pose = (self._R_arm, self._R_hub, self._u)
+        self._applied_pose = (self._R_arm, self._hub_quat, self._u)
 
     # --- helpers ---
     def _read(self) -> None:
+        """Read the links' states after a substep. Plain floats where the arithmetic is
+        elementwise (differences, cross products, scaling: the same IEEE operations numpy
+        does, so the same bits); the rotations and the dot product stay numpy calls (BLAS, in
+        the order and with the fused multiply-adds it uses here), so every number is what it
+        was with small arrays throughout."""
         c, b = self.client, self.body
         js = p.getJointStates(b, [BODY, LOWER_ARM], physicsClientId=c)
         self._zb_abs, self._vb = js[0][0], js[0][1]
@@ -212,42 +227,31 @@ class DoubleWishboneCorner(PlantModel):
         hub = p.getLinkState(b, HUB, computeLinkVelocity=1, computeForwardKinematics=1,
                              physicsClientId=c)
         self._zw_abs, self._vw = hub[0][2], hub[6][2]
-        self._hub_pos = np.array(hub[0])
-        self._R_hub = _rot(hub[5])
+        self._hub_pos = list(hub[0])
+        self._hub_quat = hub[5]  # its rotation only when the arm loads need it
         body = p.getLinkState(b, BODY, computeLinkVelocity=1, computeForwardKinematics=1,
                               physicsClientId=c)
         arm = p.getLinkState(b, LOWER_ARM, computeLinkVelocity=1, computeForwardKinematics=1,
                              physicsClientId=c)
-        self._R_arm = _rot(arm[5])
+        self._R_arm = R_arm = _rot(arm[5])
         self._arm_state = arm
-        self._arm_frame = (np.array(arm[4]), self._R_arm)
-        top = self._world((np.array(body[4]), _rot(body[5])), BODY, DAMPER_UPPER)
-        bot = self._world(self._arm_frame, LOWER_ARM, DAMPER_LOWER)
-        self._pad = self._world(self._arm_frame, LOWER_ARM, BUMP_STOP_PAD)
-        d = top - bot
-        self._damper_len = float(np.linalg.norm(d))
-        self._u = d / self._damper_len  # unit vector arm mount -> body mount
+        top = _world(body[4], _rot(body[5]), self._loc_top)
+        bot = _world(arm[4], R_arm, self._loc_bot)
+        self._pad = _world(arm[4], R_arm, self._loc_pad)
+        d = [top[0] - bot[0], top[1] - bot[1], top[2] - bot[2]]
+        dd = np.array(d)
+        self._damper_len = L = math.sqrt(dd.dot(dd))  # np.linalg.norm(d), the same bits
+        self._u = [d[0] / L, d[1] / L, d[2] / L]  # unit vector arm mount -> body mount
         v_top = _point_velocity(body, top)
         v_bot = _point_velocity(arm, bot)
-        self._v_damper = -float(self._u @ (v_top - v_bot))  # compression rate
+        dv = np.array([v_top[0] - v_bot[0], v_top[1] - v_bot[1], v_top[2] - v_bot[2]])
+        self._v_damper = -float(np.array(self._u) @ dv)  # compression rate
         self._top, self._bot = top, bot
-
-    def _world(self, frame: tuple[np.ndarray, np.ndarray], link: int,
-               corner_point: np.ndarray) -> np.ndarray:
-        """World position of a hardpoint (given in the static corner frame) fixed to ``link``,
-        whose link frame is ``frame`` = (origin, rotation) (getLinkState's [4], [5] with
-        forward kinematics)."""
-        pos, R = frame
-        return pos + R @ self._local_point(link, corner_point)
 
     def _local_point(self, link: int, corner_point: np.ndarray) -> np.ndarray:
         """A hardpoint (static corner frame) in ``link``'s frame [m]: fixed, so computed once
-        per point (it was computed at every read, four times a substep)."""
-        cache = self.__dict__.setdefault("_local_cache", {})
-        key = (link, np.asarray(corner_point, dtype=float).tobytes())
-        if key not in cache:
-            cache[key] = self._link_local[link] @ np.append(corner_point, 1.0)
-        return cache[key]
+        per point (:meth:`__init__`)."""
+        return self._link_local[link] @ np.append(corner_point, 1.0)
 
     @property
     def _link_local(self) -> dict[int, np.ndarray]:
@@ -278,15 +282,15 @@ class DoubleWishboneCorner(PlantModel):
         c, b = self.client, self.body
         p.setJointMotorControl2(b, LOWER_ARM, p.TORQUE_CONTROL, force=self._tau,
                                 physicsClientId=c)
-        p.applyExternalForce(b, HUB, [0, 0, self._F_t], self._hub_pos.tolist(), p.WORLD_FRAME,
+        p.applyExternalForce(b, HUB, [0, 0, self._F_t], self._hub_pos, p.WORLD_FRAME,
                              physicsClientId=c)
-        f = self._F_d * self._u
-        p.applyExternalForce(b, BODY, f.tolist(), self._top.tolist(), p.WORLD_FRAME,
-                             physicsClientId=c)
-        p.applyExternalForce(b, LOWER_ARM, (-f).tolist(), self._bot.tolist(), p.WORLD_FRAME,
+        F_d, u = self._F_d, self._u
+        f = [F_d * u[0], F_d * u[1], F_d * u[2]]
+        p.applyExternalForce(b, BODY, f, self._top, p.WORLD_FRAME, physicsClientId=c)
+        p.applyExternalForce(b, LOWER_ARM, [-f[0], -f[1], -f[2]], self._bot, p.WORLD_FRAME,
                              physicsClientId=c)
         if self._F_bs > 0.0:  # bumper: up on the body, down on the arm's pad, at the pad
-            pad = self._pad.tolist()
+            pad = self._pad
             p.applyExternalForce(b, BODY, [0.0, 0.0, self._F_bs], pad, p.WORLD_FRAME,
                                  physicsClientId=c)
             p.applyExternalForce(b, LOWER_ARM, [0.0, 0.0, -self._F_bs], pad, p.WORLD_FRAME,
@@ -348,12 +352,13 @@ class DoubleWishboneCorner(PlantModel):
         velocity is that of the material point at its current position, v_com + omega x
         (r - r_com), from the arm's link state that :meth:`_read` already fetched (no
         PyBullet call: the dynamics are untouched)."""
-        arm = self._arm_state
+        arm, R_arm = self._arm_state, self._R_arm
         out: dict[str, np.ndarray] = {}
-        for name, pt in ARM_ACCEL_POINTS.items():
-            v = _point_velocity(arm, self._world(self._arm_frame, LOWER_ARM, la.to_corner(pt)))
-            for axis, val in zip("xyz", v, strict=True):
-                out[f"a_arm_{name}_{axis}"] = np.array([float(val)])
+        for _name, loc, names in self._loc_accel:
+            v = _point_velocity(arm, _world(arm[4], R_arm, loc))
+            out[names[0]] = np.array([v[0]])
+            out[names[1]] = np.array([v[1]])
+            out[names[2]] = np.array([v[2]])
         return out
 
     def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
@@ -364,7 +369,7 @@ class DoubleWishboneCorner(PlantModel):
         self._tau = self.tau0 - self.params.k_theta * (self._theta - self._theta0)
         self._F_bs = self.bump_stop_force()
         # the pose the forces of this substep are applied (and the joint sensors evaluated) in
-        self._applied_pose = (self._R_arm, self._R_hub, self._u)
+        self._applied_pose = (self._R_arm, self._hub_quat, self._u)
         self._apply()
         p.stepSimulation(physicsClientId=self.client)
         self._read()
@@ -390,19 +395,28 @@ class DoubleWishboneCorner(PlantModel):
             p.disconnect(self.client)
 
 
-def _point_velocity(link_state, world_point: np.ndarray) -> np.ndarray:
+def _world(pos: Sequence[float], R: np.ndarray, local: np.ndarray) -> list[float]:
+    """World position of a point fixed to a link whose frame is at ``pos`` with rotation
+    ``R`` (getLinkState's [4], and [5] as a matrix), at ``local`` in that frame [m]:
+    pos + R @ local (the rotation a numpy product, the sum in floats)."""
+    w = (R @ local).tolist()
+    return [pos[0] + w[0], pos[1] + w[1], pos[2] + w[2]]
+
+
+def _point_velocity(link_state, world_point: Sequence[float]) -> list[float]:
     """World velocity of a point fixed to a link (``link_state`` with velocity and forward
-    kinematics): v_com + omega x (r - r_com)."""
-    v, w, com = np.array(link_state[6]), np.array(link_state[7]), np.array(link_state[0])
-    return v + cross3(w, world_point - com)
+    kinematics): v_com + omega x (r - r_com) [m/s], in floats."""
+    v, w, com = link_state[6], link_state[7], link_state[0]
+    c = cross3(w, (world_point[0] - com[0], world_point[1] - com[1], world_point[2] - com[2]))
+    return [v[0] + c[0], v[1] + c[1], v[2] + c[2]]
 
 
-def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b of two 3-vectors: the same products and differences as ``np.cross`` (so the same
-    bits), without its axis handling, which cost ~20 us a call and 11 calls a step."""
+def cross3(a: Sequence[float], b: Sequence[float]) -> list[float]:
+    """a x b of two 3-vectors, in floats: the same products and differences as ``np.cross``
+    (so the same bits), without its array handling (~20 us a call, 11 calls a step)."""
     a0, a1, a2 = a
     b0, b1, b2 = b
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    return [a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0]
 
 
 def _local(body: int, link: int, offset_from_link_origin: np.ndarray, client: int) -> list:
@@ -462,30 +476,33 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     """
     c, b = model.client, model.body
     R_af = ARM_ROTATION
-    R_arm, R_hub, u = model._applied_pose  # the pose at the start of the substep
+    R_arm, hub_quat, u = model._applied_pose  # the pose at the start of the substep
     to_arm = R_af.T @ R_arm.T  # world -> arm frame
     r_com = model._arm_r_com  # the arm's centre of mass in its link frame
 
-    w_pivot = np.array(p.getJointState(b, LOWER_ARM, physicsClientId=c)[2])
-    F_link = w_pivot[:3]
-    M_link = w_pivot[3:] + cross3(r_com, F_link)  # about the link origin = O
-    F = R_af.T @ F_link
-    M = R_af.T @ M_link
+    w = p.getJointState(b, LOWER_ARM, physicsClientId=c)[2]
+    rxF = cross3(r_com, w[:3])
+    M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
+    F0, F1, F2 = (R_af.T @ np.array(w[:3])).tolist()
+    M0, M1, M2 = (R_af.T @ np.array(M_link)).tolist()
     d = BUSH_SPACING
-    front = np.array([F[0] / 2, F[1] / 2 + M[2] / d, F[2] / 2 - M[1] / d])
-    rear = np.array([F[0] / 2, F[1] / 2 - M[2] / d, F[2] / 2 + M[1] / d])
+    front = (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d)
+    rear = (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d)
 
-    w_bj = np.array(p.getJointStateMultiDof(b, HUB, physicsClientId=c)[2])
-    ball = to_arm @ (-(R_hub @ w_bj[:3]))
-    damper = to_arm @ (-model._F_d * u)
-    bump = to_arm @ np.array([0.0, 0.0, -model._F_bs])
+    w_bj = np.array(p.getJointStateMultiDof(b, HUB, physicsClientId=c)[2][:3])
+    ball = (to_arm @ (-(_rot(hub_quat) @ w_bj))).tolist()
+    F_d = -model._F_d
+    damper = (to_arm @ np.array([F_d * u[0], F_d * u[1], F_d * u[2]])).tolist()
+    bump = (to_arm @ np.array([0.0, 0.0, -model._F_bs])).tolist()
 
     out: dict[str, float] = {}
-    for name, f in (("ball_joint", ball), ("damper_mount", damper), ("bush_front", front),
-                    ("bush_rear", rear)):
-        for axis, v in zip("xyz", f, strict=True):
-            out[f"{name}_{axis}"] = float(v)
-    out["bump_stop_y"] = float(bump[1])
-    out["bump_stop_z"] = float(bump[2])
-    out["torsion_bar_mx"] = float(M[0])
+    for names, f in ((_BALL, ball), (_DAMPER, damper), (_FRONT, front), (_REAR, rear)):
+        out[names[0]], out[names[1]], out[names[2]] = f
+    out["bump_stop_y"] = bump[1]
+    out["bump_stop_z"] = bump[2]
+    out["torsion_bar_mx"] = M0
     return out
+
+
+_BALL, _DAMPER, _FRONT, _REAR = (tuple(f"{name}_{axis}" for axis in "xyz") for name in
+                                 ("ball_joint", "damper_mount", "bush_front", "bush_rear"))
