@@ -1,0 +1,126 @@
+"""The double-wishbone corner's float helpers give the same bits as the numpy expressions they
+replaced (issue #16: the speed work must not move the simulated numbers)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nodes.plant import double_wishbone as dw
+
+
+def _vectors(n: int, seed: int) -> np.ndarray:
+    """Random 3-vectors over many magnitudes, with zeros, signed zeros and tiny values."""
+    rng = np.random.default_rng(seed)
+    v = rng.standard_normal((n, 3)) * 10.0 ** rng.integers(-8, 6, size=(n, 1))
+    v[::7, 1] = 0.0
+    v[::11, 2] = -0.0
+    v[::13, 0] = 1e-300
+    return v
+
+
+def _bits(x) -> bytes:
+    return np.asarray(x, dtype=float).tobytes()
+
+
+def test_cross3_is_np_cross_bit_for_bit():
+    a, b = _vectors(2000, 1), _vectors(2000, 2)
+    for x, y in zip(a, b, strict=True):
+        assert _bits(dw.cross3(x.tolist(), y.tolist())) == _bits(np.cross(x, y))
+        assert _bits(dw.cross3(x, y)) == _bits(np.cross(x, y))  # arrays in: the same
+
+
+def test_point_velocity_is_the_numpy_expression_bit_for_bit():
+    v, w, com, r = (_vectors(1000, s) for s in (3, 4, 5, 6))
+    for i in range(len(v)):
+        state = (tuple(com[i]), None, None, None, None, None, tuple(v[i]), tuple(w[i]))
+        want = v[i] + np.cross(w[i], r[i] - com[i])
+        assert _bits(dw._point_velocity(state, r[i].tolist())) == _bits(want)
+
+
+def test_world_point_is_the_numpy_expression_bit_for_bit():
+    rng = np.random.default_rng(7)
+    pos, local = _vectors(500, 8), _vectors(500, 9)
+    for i in range(len(pos)):
+        q = rng.standard_normal(4)
+        R = np.array(dw.p.getMatrixFromQuaternion((q / np.linalg.norm(q)).tolist())).reshape(3, 3)
+        want = pos[i] + R @ local[i]
+        assert _bits(dw._world(tuple(pos[i]), R, local[i])) == _bits(want)
+
+
+def _arm_loads_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
+    """arm_loads as it was written with small arrays (before issue #16's floats)."""
+    c, b = model.client, model.body
+    R_af = dw.ARM_ROTATION
+    R_arm, hub_quat, u = model._applied_pose
+    R_hub = np.array(dw.p.getMatrixFromQuaternion(hub_quat)).reshape(3, 3)
+    u = np.array(u)
+    to_arm = R_af.T @ R_arm.T
+    w_pivot = np.array(dw.p.getJointState(b, dw.LOWER_ARM, physicsClientId=c)[2])
+    F_link = w_pivot[:3]
+    M_link = w_pivot[3:] + np.cross(model._arm_r_com, F_link)
+    F, M = R_af.T @ F_link, R_af.T @ M_link
+    d = dw.BUSH_SPACING
+    front = np.array([F[0] / 2, F[1] / 2 + M[2] / d, F[2] / 2 - M[1] / d])
+    rear = np.array([F[0] / 2, F[1] / 2 - M[2] / d, F[2] / 2 + M[1] / d])
+    w_bj = np.array(dw.p.getJointStateMultiDof(b, dw.HUB, physicsClientId=c)[2])
+    ball = to_arm @ (-(R_hub @ w_bj[:3]))
+    damper = to_arm @ (-model._F_d * u)
+    bump = to_arm @ np.array([0.0, 0.0, -model._F_bs])
+    out = {}
+    for name, f in (("ball_joint", ball), ("damper_mount", damper), ("bush_front", front),
+                    ("bush_rear", rear)):
+        for axis, v in zip("xyz", f, strict=True):
+            out[f"{name}_{axis}"] = float(v)
+    out["bump_stop_y"], out["bump_stop_z"] = float(bump[1]), float(bump[2])
+    out["torsion_bar_mx"] = float(M[0])
+    return out
+
+
+def _rates_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
+    """response_velocities as it was written with small arrays."""
+    arm = model._arm_state
+    pos, R = np.array(arm[4]), model._R_arm
+    out = {}
+    for name, pt in dw.ARM_ACCEL_POINTS.items():
+        r = pos + R @ model._local_point(dw.LOWER_ARM, dw.la.to_corner(pt))
+        v = np.array(arm[6]) + np.cross(np.array(arm[7]), r - np.array(arm[0]))
+        for axis, val in zip("xyz", v, strict=True):
+            out[f"a_arm_{name}_{axis}"] = float(val)
+    return out
+
+
+def test_arm_loads_and_rates_are_the_array_versions_bit_for_bit():
+    """Through a stroke into the bumper and back (F_bs > 0 on the way): every arm load and
+    arm-point velocity the floats give is the array code's, bit for bit."""
+    m = dw.DoubleWishboneCorner()
+    try:
+        W = m.static_tyre_load()
+        bumped = 0
+        for i in range(600):
+            F_t = W * (1.0 + 2.5 * np.sin(np.pi * i / 300.0) ** 2)
+            m.substep(2.5e-4, F_t, np.array([800.0 * np.cos(i / 40.0)]))
+            bumped += m._F_bs > 0.0
+            got, want = dw.arm_loads(m), _arm_loads_numpy(m)
+            assert got.keys() == want.keys()
+            assert _bits(list(got.values())) == _bits(list(want.values())), i
+            rates = {k: float(v[0]) for k, v in m.response_velocities().items()}
+            assert _bits(list(rates.values())) == _bits(list(_rates_numpy(m).values())), i
+        assert bumped > 10  # the bumper path was taken
+    finally:
+        m.close()
+
+
+def test_floats_keep_the_arm_loads_and_response_types():
+    """What the node takes from the model keeps its types: arrays for the response rates,
+    floats for the arm loads (the wire encodes either the same)."""
+    m = dw.DoubleWishboneCorner()
+    try:
+        m.substep(2.5e-4, m.static_tyre_load() * 1.5, np.array([300.0]))
+        loads = dw.arm_loads(m)
+        assert all(type(v) is float for v in loads.values())
+        assert len(loads) == 15
+        rates = m.response_velocities()
+        assert len(rates) == 9
+        assert all(isinstance(v, np.ndarray) and v.shape == (1,) for v in rates.values())
+    finally:
+        m.close()
