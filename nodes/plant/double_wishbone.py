@@ -102,6 +102,8 @@ __all__ = [
 ]
 
 _BS = BumpStopParams()
+_READ_LINKS = [HUB, BODY, LOWER_ARM]
+"""The links whose states each substep reads (:meth:`DoubleWishboneCorner._read`)."""
 
 
 @dataclass(frozen=True)
@@ -224,15 +226,13 @@ class DoubleWishboneCorner(PlantModel):
         js = p.getJointStates(b, [BODY, LOWER_ARM], physicsClientId=c)
         self._zb_abs, self._vb = js[0][0], js[0][1]
         self._theta, self._omega = js[1][0], js[1][1]
-        hub = p.getLinkState(b, HUB, computeLinkVelocity=1, computeForwardKinematics=1,
-                             physicsClientId=c)
+        # one call for the three links: the forward kinematics computed once, not thrice
+        # (the same states, ~8 us less a substep)
+        hub, body, arm = p.getLinkStates(b, _READ_LINKS, computeLinkVelocity=1,
+                                         computeForwardKinematics=1, physicsClientId=c)
         self._zw_abs, self._vw = hub[0][2], hub[6][2]
         self._hub_pos = list(hub[0])
         self._hub_quat = hub[5]  # its rotation only when the arm loads need it
-        body = p.getLinkState(b, BODY, computeLinkVelocity=1, computeForwardKinematics=1,
-                              physicsClientId=c)
-        arm = p.getLinkState(b, LOWER_ARM, computeLinkVelocity=1, computeForwardKinematics=1,
-                             physicsClientId=c)
         self._R_arm = R_arm = _rot(arm[5])
         self._arm_state = arm
         top = _world(body[4], _rot(body[5]), self._loc_top)
