@@ -2,7 +2,7 @@
 
     python bench/bench_corner_cpu.py [--steps 1000] [--repeats 5] [--substeps 2]
 
-Each coupled step makes the calls the plant node makes (nodes/plant/node.py): ``state``,
+Each coupled step makes the calls the plant node makes (nodes/plant/node.py):
 ``spring_force``, ``extra_response``, ``response_velocities`` before and after the first
 substep, ``loads``, and ``state`` after every substep, with constant forces (the static tyre
 load, no damper force). Prints the best of ``--repeats`` runs of ``--steps`` steps in
@@ -24,7 +24,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 def one_step(model, dt: float, n_sub: int, F_t: np.ndarray, F_d: np.ndarray) -> None:
     """One coupled step of the plant node's calls on ``model``."""
-    model.state()
     model.spring_force()
     model.extra_response()
     model.response_velocities()

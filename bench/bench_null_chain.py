@@ -26,6 +26,7 @@ Two ways of sending, both with no model work at all:
 * ``protocol``: the run's code: :class:`cosim.participant.Participant` (publish: encode, sign;
   wait: verify, decode, mailbox; records batches), :class:`cosim.listener.Listener` for the
   recorder and the fatigue node (each message verified and decoded), constant payloads;
+* ``unsigned`` (``--wires``): the protocol without the run key (nothing signed or verified);
 * ``raw``: bytes of the same sizes put and taken directly on the same Zenoh sessions (keys
   ``<channel>.raw``; a step number in the first bytes, nothing encoded or checked): what
   Zenoh and the processes alone cost. The start barrier and the end are the participant's
@@ -62,6 +63,8 @@ from cosim import keys  # noqa: E402
 
 ROLES = ("plant", "tyre_road", "controller", "recorder", "fatigue")
 FORCE_NODES = ("tyre_road", "controller")
+WIRES = ("raw", "protocol", "unsigned")
+EXCHANGES = ("sequential", "parallel")
 H = 0.0005
 """The Chapter 6 step [s] (only the start's plausibility check and t = k h use it)."""
 STALL_S = 30.0
@@ -344,8 +347,9 @@ def node_main(name: str, connect: str, spin_us: float) -> int:
         cmd = json.loads(line)
         if cmd.get("quit"):
             break
+        auth = None if cmd["wire"] == "unsigned" else RunKey(bytes.fromhex(cmd["key"]))
         part = Participant(bus, cmd["run"], name, stall_timeout_s=STALL_S,
-                           spin_s=spin_us * 1e-6, auth=RunKey(bytes.fromhex(cmd["key"])))
+                           spin_s=spin_us * 1e-6, auth=auth)
         part.expect_start = {"n_steps": cmd["n"], "h": H, "nodes": cmd["nodes"]}
         try:
             role(part, cmd)
@@ -412,7 +416,8 @@ class Chain:
                "nodes": self.names, "sizes": _sizes(key)}
         scenario = {"run": {"n_steps": n, "h": H, "start_timeout_s": STALL_S,
                             "stall_timeout_s": STALL_S}}
-        clock = Clock(self.bus, run, self.names, scenario, auth=RunKey(key),
+        clock = Clock(self.bus, run, self.names, scenario,
+                      auth=None if wire == "unsigned" else RunKey(key),
                       check_processes=self._dead)
         for p in self.procs.values():
             _send(p, cmd)
@@ -462,7 +467,8 @@ def main() -> int:
     ap.add_argument("--steps", type=int, default=2000, help="coupled steps per run")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--counts", default="2,3,4,5", help="process counts, of 2..5")
-    ap.add_argument("--wires", default="raw,protocol")
+    ap.add_argument("--wires", default="raw,protocol",
+                    help="of raw, protocol, unsigned (the protocol without the run key)")
     ap.add_argument("--exchanges", default="sequential,parallel")
     ap.add_argument("--pin", choices=("auto", "off"), default="auto",
                     help="auto: pinned as the orchestrator pins (2-4 cores), off: not pinned")
@@ -484,6 +490,11 @@ def main() -> int:
         print(f"--counts {args.counts}: each must be 2..{len(ROLES)}", file=sys.stderr)
         return 2
     wires, exchanges = args.wires.split(","), args.exchanges.split(",")
+    bad = [w for w in wires if w not in WIRES] + [e for e in exchanges if e not in EXCHANGES]
+    if bad:
+        print(f"unknown wire or exchange: {', '.join(bad)} (wires: {', '.join(WIRES)}; "
+              f"exchanges: {', '.join(EXCHANGES)})", file=sys.stderr)
+        return 2
     pin = should_pin(args.pin, usable_cores())
     t0 = time.monotonic()
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} CPUs, "
