@@ -157,6 +157,15 @@ class RawOut:
             self.batch = []
 
 
+def busy(us: float) -> None:
+    """Spend ``us`` of this thread's CPU [us] (a stand-in for model work: CPU time, so a
+    preempted node still does all of it)."""
+    if us > 0.0:
+        end = time.thread_time() + us * 1e-6
+        while time.thread_time() < end:
+            pass
+
+
 def raw_wait(feed: Any, have: list[int], need: int, spin_s: float) -> None:
     """Until a raw message of step >= ``need`` has come on ``feed`` (``have[0]``: the latest
     step seen), polling ``spin_s`` before blocking as :meth:`Participant.wait` does."""
@@ -187,6 +196,7 @@ def plant(part: Any, cmd: dict) -> None:
         out = RawOut(part.bus, part.run, part.node,
                      {c: cmd["sizes"][c] for c in ("state", "response", "arm")})
     n = int(part.handshake(info={}, timeout_s=STALL_S)["n_steps"])
+    work = float(cmd["work"].get(part.node, 0.0))
     CPU[:] = [time.process_time()]
     later: list[tuple[str, int, float, Any]] = []
     for k in range(n + 1):
@@ -197,11 +207,13 @@ def plant(part: Any, cmd: dict) -> None:
                 out.put(c, kk)
             for feed, have in feeds:
                 raw_wait(feed, have, k, part.spin_s)
+            busy(work)
         else:
             part.publish("state", k, t, STATE)
             for c, kk, tt, d in later:
                 part.publish(c, kk, tt, d)
             part.wait({tag: k for tag in tags})
+            busy(work)  # the model's substeps, before the next state
         later = [("response", k, t, RESPONSE), ("arm", k, t, ARM)]
         part.progress(k, t)
     for c, kk, tt, d in later:
@@ -225,14 +237,17 @@ def force_node(part: Any, cmd: dict) -> None:
     part.output("force")
     state = part.listen("plant", "state", required=("z_w",))
     n = int(part.handshake(timeout_s=STALL_S)["n_steps"])
+    work = float(cmd["work"].get(name, 0.0))
     CPU[:] = [time.process_time()]
     for k in range(n + 1):
         t = k * H
         if raw:
             raw_wait(feed, have, max(k - lag, 0), part.spin_s)
+            busy(work)
             out.put("force", k)
         else:
             part.wait({state: max(k - lag, 0)})
+            busy(work)  # the law, the road and the tyre
             part.publish("force", k, t, FORCE[name])
         part.progress(k, t)
     if raw:
@@ -270,6 +285,8 @@ def recorder(part: Any, cmd: dict) -> None:
         listener.feed(node, "records", kinds=("records",))
     ended: set[str] = set()
     CPU[:] = []
+    work = float(cmd["work"].get(part.node, 0.0))
+    per_step = 3 + len(producers) - 1  # messages a step: the plant's 3, one per force node
     sent = 0  # steps of arm sent to the fatigue node
     while len(ended) < len(producers):
         if listener.start is not None and not CPU:
@@ -280,11 +297,12 @@ def recorder(part: Any, cmd: dict) -> None:
                 continue
             for _channel, one in rec.msg.d["records"]:
                 decode(one)
-            node, k, final = rec.node, rec.msg.k, False
+            node, k, final, count = rec.node, rec.msg.k, False, len(rec.msg.d["records"])
         else:
             got = inbox.get(timeout=STALL_S)
-            k, _count, final, who = _BATCH.unpack_from(got, len(MAGIC))
+            k, count, final, who = _BATCH.unpack_from(got, len(MAGIC))
             node = ROLES[who]
+        busy(work * count / per_step)  # journal, checks, load streaming
         n = int(cmd["n"])  # the start's (it may come after a first batch)
         if final or k >= n:
             ended.add(node)
@@ -314,7 +332,9 @@ def fatigue(part: Any, cmd: dict) -> None:
     listener.feed("recorder", "loads", required=("k0", "t"))
     k = -1
     CPU[:] = []
+    work = float(cmd["work"].get(part.node, 0.0))
     while listener.start is None or k < int(listener.start["n_steps"]):
+        k_before = k
         if listener.start is not None and not CPU:
             CPU.append(time.process_time())
         if listener.start is None or not raw:
@@ -323,6 +343,7 @@ def fatigue(part: Any, cmd: dict) -> None:
                 k = rec.msg.k
         else:
             k = _K.unpack_from(inbox.get(timeout=STALL_S), len(MAGIC))[0]
+        busy(work * max(0, k - k_before))  # stresses, counting, damage of the block
     n = int(listener.start["n_steps"])
     CPU.append(time.process_time())
     part.finish(n, n * H)
@@ -405,7 +426,8 @@ class Chain:
                 raise RuntimeError(f"null node {name} did not start ({line!r})")
         self.bus = bus
 
-    def trial(self, i: int, n: int, exchange: str, wire: str) -> dict[str, Any]:
+    def trial(self, i: int, n: int, exchange: str, wire: str,
+              work: dict[str, float] | None = None) -> dict[str, Any]:
         """One run of ``n`` steps: steps/s (``n / step_wall_s``) and each node's CPU per step."""
         from cosim.auth import RunKey
         from orchestrator.clock import Clock
@@ -413,7 +435,7 @@ class Chain:
         run = f"null{len(self.names)}-{wire}-{exchange[:3]}-{i}-{os.getpid()}"
         key = os.urandom(32)
         cmd = {"run": run, "key": key.hex(), "n": n, "exchange": exchange, "wire": wire,
-               "nodes": self.names, "sizes": _sizes(key)}
+               "nodes": self.names, "sizes": _sizes(key), "work": work or {}}
         scenario = {"run": {"n_steps": n, "h": H, "start_timeout_s": STALL_S,
                             "stall_timeout_s": STALL_S}}
         clock = Clock(self.bus, run, self.names, scenario,
@@ -473,6 +495,11 @@ def main() -> int:
     ap.add_argument("--pin", choices=("auto", "off"), default="auto",
                     help="auto: pinned as the orchestrator pins (2-4 cores), off: not pinned")
     ap.add_argument("--pingpong-n", type=int, default=2000)
+    ap.add_argument("--work", default="",
+                    help="CPU of model work per coupled step [us] by node, e.g. plant=145,"
+                         "tyre_road=35 (default none: the null chain); spent after a node's "
+                         "inputs came (plant, force nodes), per records batch (recorder) or "
+                         "per load block (fatigue), in proportion to the steps covered")
     ap.add_argument("--node", help=argparse.SUPPRESS)
     ap.add_argument("--connect", help=argparse.SUPPRESS)
     ap.add_argument("--spin-us", type=float, default=0.0, help=argparse.SUPPRESS)
@@ -490,6 +517,14 @@ def main() -> int:
         print(f"--counts {args.counts}: each must be 2..{len(ROLES)}", file=sys.stderr)
         return 2
     wires, exchanges = args.wires.split(","), args.exchanges.split(",")
+    try:
+        work = {k: float(v) for k, v in (kv.split("=") for kv in args.work.split(",") if kv)}
+    except ValueError:
+        print(f"--work {args.work}: expected node=us,node=us", file=sys.stderr)
+        return 2
+    if not set(work) <= set(ROLES):
+        print(f"--work: nodes are {', '.join(ROLES)}", file=sys.stderr)
+        return 2
     bad = [w for w in wires if w not in WIRES] + [e for e in exchanges if e not in EXCHANGES]
     if bad:
         print(f"unknown wire or exchange: {', '.join(bad)} (wires: {', '.join(WIRES)}; "
@@ -498,7 +533,8 @@ def main() -> int:
     pin = should_pin(args.pin, usable_cores())
     t0 = time.monotonic()
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} CPUs, "
-          f"load {_load()}, {args.steps} steps a run, pinned: {pin}", flush=True)
+          f"load {_load()}, {args.steps} steps a run, pinned: {pin}, model work per step: "
+          f"{args.work or 'none'}", flush=True)
     pp0 = pingpongs(max(1, args.repeats // 2 + 1), args.pingpong_n)
     endpoint = free_loopback_endpoint()
     bus = ZenohBus(zenoh_config(listen=[endpoint], lowlatency=True,
@@ -515,7 +551,7 @@ def main() -> int:
                     for wire in wires:
                         for exchange in exchanges:
                             got.setdefault((wire, exchange), []).append(
-                                chain.trial(i, args.steps, exchange, wire))
+                                chain.trial(i, args.steps, exchange, wire, work))
                     loads.append(_load())
             finally:
                 chain.close()
