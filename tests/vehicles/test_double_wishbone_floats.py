@@ -51,9 +51,9 @@ def _arm_loads_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     """arm_loads as it was written with small arrays (before issue #16's floats)."""
     c, b = model.client, model.body
     R_af = dw.ARM_ROTATION
-    R_arm, hub_quat, u = model._applied_pose
+    R_arm, hub_quat, u_list = model._applied_pose
     R_hub = np.array(dw.p.getMatrixFromQuaternion(hub_quat)).reshape(3, 3)
-    u = np.array(u)
+    u = np.array(u_list)
     to_arm = R_af.T @ R_arm.T
     w_pivot = np.array(dw.p.getJointState(b, dw.LOWER_ARM, physicsClientId=c)[2])
     F_link = w_pivot[:3]
