@@ -48,8 +48,9 @@ class _Router:
         if node == keys.ORCHESTRATOR and channel == keys.CLOCK:
             if msg.kind == "start" and "n_steps" in msg.d:
                 st.run_event("stepping", n_steps=msg.d.get("n_steps"), h=msg.d.get("h"))
-            elif msg.kind == "done":
-                st.run_event("done")
+            elif msg.kind == "done":  # k = n_steps: for a scope that joined after the
+                # start (a short run can end between two of its scenario queries)
+                st.run_event("done", n_steps=msg.k if msg.k > 0 else None)
             elif msg.kind == "abort":
                 st.run_event("failed", reason=str(msg.d.get("reason", "aborted")))
             return
