@@ -569,18 +569,25 @@ def main() -> int:
           f"issue #16's configuration (callback, low-latency, express, not pinned) "
           f"{_median_range(pp['callback'])}; the nodes' configuration (FIFO, pinned, polling) "
           f"{_median_range(pp['nodes'])}\n")
-    print("| processes | wire | exchange | null-chain steps/s, median (range) | ratio to round "
-          "trips/s | CPU per step per process (us, median) | load |")
-    print("|---|---|---|---|---|---|---|")
+    print("\n".join(_table(rows, rate)))
+    print(f"\nratio: to issue #16's round-trip rate ({rate:.0f}/s, the median above); "
+          f"bench wall {time.monotonic() - t0:.0f} s")
+    return 0
+
+
+def _table(rows: list[tuple[int, str, str, list[dict[str, Any]], str]], rate: float
+           ) -> list[str]:
+    """The markdown table of the null-chain runs (``rows``), ratios to ``rate`` [1/s]."""
+    out = ["| processes | wire | exchange | null-chain steps/s, median (range) | ratio to "
+           "round trips/s | CPU per step per process (us, median) | load |",
+           "|---|---|---|---|---|---|---|"]
     for count, wire, exchange, runs, load in rows:
         sps = [r["steps_per_s"] for r in runs]
         cpu = ", ".join(f"{n} {statistics.median(r['cpu_us'][n] for r in runs):.0f}"
                         for n in ROLES[:count])
-        print(f"| {count} | {wire} | {exchange} | {_median_range(sps)} | "
-              f"{statistics.median(sps) / rate:.2f} | {cpu} | {load} |")
-    print(f"\nratio: to issue #16's round-trip rate ({rate:.0f}/s, the median above); "
-          f"bench wall {time.monotonic() - t0:.0f} s")
-    return 0
+        out.append(f"| {count} | {wire} | {exchange} | {_median_range(sps)} | "
+                   f"{statistics.median(sps) / rate:.2f} | {cpu} | {load} |")
+    return out
 
 
 if __name__ == "__main__":
