@@ -4,6 +4,7 @@ run that ends within seconds whatever its length (issues #15, #18)."""
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from typing import Any
 
@@ -15,47 +16,46 @@ is left for ``suscosim export``, so that a stopped run ends within seconds whate
 length (issue #18: under 3 s a container)."""
 
 
-def recover_table(folder: Path, interrupted: bool = False, since: float | None = None
-             ) -> dict[str, Any]:
+RECORDER_WAIT_S = 1.5
+"""How long the orchestrator waits for the table of a recorder running elsewhere [s]."""
+
+
+def recover_table(folder: Path, interrupted: bool = False, since: float | None = None,
+                  recorder_elsewhere: bool = False, wait_s: float = RECORDER_WAIT_S
+                  ) -> dict[str, Any]:
     """After a failed run: whatever the journal holds, as a table, never put in place of a
     larger one (see :func:`cosim.table.export_target`); a table that cannot be
     written (a full disk) is removed rather than left truncated.
 
     The recorder exports what it has when it hears the abort: a table of its, written
     ``since`` the run began [s, Unix time], that already holds every step the journal reached
-    is taken as it is (its statistics read back, not rebuilt). On an ``interrupted`` run a
-    journal larger than :data:`INTERRUPT_REBUILD_BYTES` is not rebuilt: the summary says so
-    and how."""
+    is taken as it is (its statistics read back, not rebuilt); for a recorder running
+    elsewhere and alive at the abort (``recorder_elsewhere``) it is waited for up to
+    ``wait_s``. On an ``interrupted`` run, or one whose recorder runs elsewhere, a journal
+    larger than :data:`INTERRUPT_REBUILD_BYTES` is not rebuilt here (the recorder's own
+    table, or ``suscosim export``): the summary says so and how."""
     journal = folder / "journal.msgpack"
     if not journal.exists():
         return {}
-    from cosim.journal import last_step, read_journal
-    from cosim.table import (
-        build_table,
-        channel_stats,
-        export,
-        export_target,
-        read_table,
-        table_rows,
-    )
+    from cosim.journal import read_journal
+    from cosim.table import build_table, channel_stats, export, export_target
 
-    reached = last_step(journal)
-    have = table_rows(folder)
-    fresh = since is None or _mtime(folder / "table.parquet") >= since
-    if reached is not None and have is not None and have >= reached + 1 and fresh:
-        try:
-            table = read_table(folder / "table.parquet")
-            return {"stats": channel_stats(table), "rows": int(len(table["t"])),
-                    "files": {"csv": str(folder / "table.csv"),
-                              "parquet": str(folder / "table.parquet")},
-                    "note": "the table the recorder exported"}
-        except Exception:  # not readable after all: rebuilt below
-            pass
+    deadline = time.monotonic() + (wait_s if recorder_elsewhere else 0.0)
+    while (taken := _recorders_table(folder, journal, since)) is None \
+            and time.monotonic() < deadline:
+        time.sleep(0.1)
+    if taken is not None:
+        return taken
     size = journal.stat().st_size
-    if interrupted and size > INTERRUPT_REBUILD_BYTES:
+    if (interrupted or recorder_elsewhere) and size > INTERRUPT_REBUILD_BYTES:
+        from cosim.journal import last_step
+
+        reached = last_step(journal)
+        why = ("interrupted" if interrupted else
+               "the recorder, running elsewhere, exports the table when it has the abort")
         return {"rows": 0 if reached is None else reached + 1, "files": {},
-                "note": f"interrupted: the table was not rebuilt from the journal "
-                        f"({size / 2**20:.0f} MB); run `suscosim export {journal}`"}
+                "note": f"{why}: the table was not rebuilt here from the journal "
+                        f"({size / 2**20:.0f} MB); `suscosim export {journal}` does it"}
     try:
         contents = read_journal(journal)
         table, bad = build_table(contents.records)
@@ -83,6 +83,27 @@ def recover_table(folder: Path, interrupted: bool = False, since: float | None =
                 pass
         rec["error"] = f"table not written: {exc.strerror or exc}"
     return rec
+
+
+def _recorders_table(folder: Path, journal: Path, since: float | None
+                     ) -> dict[str, Any] | None:
+    """The recorder's table in ``folder``, when it was written ``since`` the run began and
+    holds every step the journal reached: its statistics, rows and files."""
+    from cosim.journal import last_step
+    from cosim.table import channel_stats, read_table, table_rows
+
+    reached, have = last_step(journal), table_rows(folder)
+    fresh = since is None or _mtime(folder / "table.parquet") >= since
+    if reached is None or have is None or have < reached + 1 or not fresh:
+        return None
+    try:
+        table = read_table(folder / "table.parquet")
+    except Exception:  # not readable after all (being replaced): not taken
+        return None
+    return {"stats": channel_stats(table), "rows": int(len(table["t"])),
+            "files": {"csv": str(folder / "table.csv"),
+                      "parquet": str(folder / "table.parquet")},
+            "note": "the table the recorder exported"}
 
 
 def _mtime(path: Path) -> float:

@@ -308,8 +308,10 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
             say_abort()  # once more, the nodes stopped: then the bus is closed
             _close(bus)  # before the table: what follows is the run folder's, not the bus's
             bus_open = False
+            elsewhere = (ch.RECORDER in (external or []) and clock is not None
+                         and ch.RECORDER in clock.status and clock.status[ch.RECORDER].alive)
             rec = recover_table(folder, interrupted=isinstance(exc, KeyboardInterrupt),
-                           since=started)
+                                since=started, recorder_elsewhere=elsewhere)
             summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", error)
             summary.update(_transport(local, lowlatency))
             write_summary(folder, summary)

@@ -232,6 +232,9 @@ def _killed_plant_case(tmp_path: Path, tag: str) -> bool:
         assert "'plant'" in reason and "gone" in reason, reason
         assert 0 <= ended < 5.0, f"the run ended {ended:.2f} s after the plant was killed"
 
+        # the recorder (its own container) finalises the table on the volume after the abort;
+        # the orchestrator may exit first (it waits for that table only a moment)
+        _wait_exit(project.container("recorder"), 90)
         run_dir = _copy_out(orch, f"/runs/{run_id}", tmp_path / "killed")
         summary = json.loads((run_dir / "summary.json").read_text())
         assert summary["status"] == "failed" and "plant" in summary["error"], summary

@@ -85,3 +85,25 @@ def test_the_summary_says_what_became_of_the_table():
                               "failed", "interrupted")
     assert summary["table_note"] == note and summary["rows"] == 7
     assert "table_note" not in runner._summary(scenario, None, 1.0, {"rows": 7}, "failed")
+
+
+def test_a_recorder_elsewhere_is_waited_for_then_left_its_long_table(tmp_path, monkeypatch):
+    """A recorder running elsewhere (compose, another machine), alive at the abort: its
+    table is waited for; a long journal's is not rebuilt here when it does not come."""
+    import threading
+
+    monkeypatch.setattr(run_recovery, "INTERRUPT_REBUILD_BYTES", 20_000)
+    _journal(tmp_path, 200, pad=20)
+    rec = run_recovery.recover_table(tmp_path, since=time.time() - 60,
+                                     recorder_elsewhere=True, wait_s=0.3)
+    assert rec["files"] == {} and rec["rows"] == 200
+    assert "running elsewhere" in rec["note"] and "suscosim export" in rec["note"]
+    assert not (tmp_path / "table.csv").exists()
+    # the recorder's table arrives while the orchestrator waits: taken as it is
+    table, _ = build_table(read_journal(tmp_path / "journal.msgpack").records)
+    later = threading.Timer(0.3, export, (table, tmp_path))
+    later.start()
+    rec = run_recovery.recover_table(tmp_path, since=time.time() - 60,
+                                     recorder_elsewhere=True, wait_s=5.0)
+    later.join()
+    assert rec["note"] == "the table the recorder exported" and rec["rows"] == 200
