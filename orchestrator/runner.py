@@ -209,7 +209,13 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     run = scenario["run"]
     folder = Path(run["dir"])
     if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go
-        listen = list(listen or [free_loopback_endpoint()])
+        # Every node elsewhere, behind the router it connects to (compose, one machine per
+        # node): the orchestrator is a client of that router, as the nodes and taps are,
+        # not a peer (no mixed peer/client routing through one router: a tap of the router
+        # once heard the nodes but not the orchestrator's abort, docs/deployment.md).
+        as_client = bool(connect) and not listen and all(n in (external or [])
+                                                         for n in run["nodes"])
+        listen = [] if as_client else list(listen or [free_loopback_endpoint()])
     from cosim.run_folder import write_run_json
 
     bus_eps = run["mode"] == "distributed"  # the other modes open no Zenoh session
@@ -240,8 +246,9 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     bus: Bus
     if run["mode"] == "distributed":  # listen: chosen above, before run.json
         lease = local_lease_ms(float(run["stall_timeout_s"]))
-        bus = ZenohBus(zenoh_config(connect or [], listen, lowlatency=lowlatency,
-                                    lease_ms=lease, config_file=zenoh_config_file))
+        bus = ZenohBus(zenoh_config(connect or [], listen or None, lowlatency=lowlatency,
+                                    lease_ms=lease, config_file=zenoh_config_file,
+                                    default_mode="client" if as_client else "peer"))
         if connect:  # the embedded mesh is this run's own: only a shared one can collide
             try:
                 check_run_id_free(bus, run["id"], list(external or []))

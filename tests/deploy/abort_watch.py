@@ -29,20 +29,33 @@ done = threading.Event()
 def on_sample(sample) -> None:
     try:
         msg = decode(sample.payload.to_bytes())
-    except Exception:
+    except Exception as exc:  # said, so that a missed abort can be told from a bad one
+        print(f"undecodable {type(exc).__name__}: {exc}", flush=True)
         return
+    if msg.kind != "abort":
+        print(f"clock {msg.kind}", flush=True)
     if msg.kind == "abort" and not done.is_set():
         done.set()
         print(f"abort {time.time():.6f} {msg.d.get('reason', '')}", flush=True)
 
 
 heard = threading.Event()
+states = [0]
 
 
 def on_state(_sample) -> None:
+    states[0] += 1
     if not heard.is_set():
         heard.set()
         print("hearing", flush=True)
+
+
+def count() -> None:  # how many plant/state it has heard, each second (for a missed abort)
+    while not done.wait(1.0):
+        print(f"states {states[0]} {time.time():.3f}", flush=True)
+
+
+threading.Thread(target=count, daemon=True).start()
 
 
 session = zenoh.open(conf)

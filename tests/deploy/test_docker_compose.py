@@ -224,7 +224,10 @@ def _killed_plant_case(tmp_path: Path, tag: str) -> bool:
         heard = de._run(["docker", "logs", watch]).stdout.split("\n")
         line = next((x for x in heard if x.startswith("abort ")), None)
         if not line:
-            print(f"{tag}: no abort heard on the bus: {heard}; orchestrator: {orch_logs[-2000:]}")
+            time.sleep(3.0)  # late, or never? (said, for whoever looks into it)
+            later = de._run(["docker", "logs", watch]).stdout.split("\n")
+            print(f"{tag}: no abort heard on the bus (plant killed at {killed:.3f}); the tap "
+                  f"3 s later: {later[-12:]}; orchestrator: {orch_logs[-2000:]}")
             return False
         _, t_abort, reason = line.split(" ", 2)
         ended = float(t_abort) - killed
