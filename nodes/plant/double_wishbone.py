@@ -49,7 +49,6 @@ joint in the arm plane, z = x cross y; the frame turns with the arm), in N; see
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,6 +88,7 @@ from .double_wishbone_geometry import (  # the corner's geometry, re-exported
     to_arm_frame,
 )
 from .model import GRAVITY, PlantModel
+from .point_kinematics import cross3, point_velocity, world_point
 from .quarter_car_lumped import load_urdf_text, new_direct_client
 
 __all__ = [
@@ -235,15 +235,15 @@ class DoubleWishboneCorner(PlantModel):
         self._hub_quat = hub[5]  # its rotation only when the arm loads need it
         self._R_arm = R_arm = _rot(arm[5])
         self._arm_state = arm
-        top = _world(body[4], _rot(body[5]), self._loc_top)
-        bot = _world(arm[4], R_arm, self._loc_bot)
-        self._pad = _world(arm[4], R_arm, self._loc_pad)
+        top = world_point(body[4], _rot(body[5]), self._loc_top)
+        bot = world_point(arm[4], R_arm, self._loc_bot)
+        self._pad = world_point(arm[4], R_arm, self._loc_pad)
         d = [top[0] - bot[0], top[1] - bot[1], top[2] - bot[2]]
         dd = np.array(d)
         self._damper_len = L = math.sqrt(dd.dot(dd))  # np.linalg.norm(d), the same bits
         self._u = [d[0] / L, d[1] / L, d[2] / L]  # unit vector arm mount -> body mount
-        v_top = _point_velocity(body, top)
-        v_bot = _point_velocity(arm, bot)
+        v_top = point_velocity(body, top)
+        v_bot = point_velocity(arm, bot)
         dv = np.array([v_top[0] - v_bot[0], v_top[1] - v_bot[1], v_top[2] - v_bot[2]])
         self._v_damper = -float(np.array(self._u) @ dv)  # compression rate
         self._top, self._bot = top, bot
@@ -355,7 +355,7 @@ class DoubleWishboneCorner(PlantModel):
         arm, R_arm = self._arm_state, self._R_arm
         out: dict[str, np.ndarray] = {}
         for _name, loc, names in self._loc_accel:
-            v = _point_velocity(arm, _world(arm[4], R_arm, loc))
+            v = point_velocity(arm, world_point(arm[4], R_arm, loc))
             out[names[0]] = np.array([v[0]])
             out[names[1]] = np.array([v[1]])
             out[names[2]] = np.array([v[2]])
@@ -393,30 +393,6 @@ class DoubleWishboneCorner(PlantModel):
     def close(self) -> None:
         if p.isConnected(self.client):
             p.disconnect(self.client)
-
-
-def _world(pos: Sequence[float], R: np.ndarray, local: np.ndarray) -> list[float]:
-    """World position of a point fixed to a link whose frame is at ``pos`` with rotation
-    ``R`` (getLinkState's [4], and [5] as a matrix), at ``local`` in that frame [m]:
-    pos + R @ local (the rotation a numpy product, the sum in floats)."""
-    w = (R @ local).tolist()
-    return [pos[0] + w[0], pos[1] + w[1], pos[2] + w[2]]
-
-
-def _point_velocity(link_state, world_point: Sequence[float]) -> list[float]:
-    """World velocity of a point fixed to a link (``link_state`` with velocity and forward
-    kinematics): v_com + omega x (r - r_com) [m/s], in floats."""
-    v, w, com = link_state[6], link_state[7], link_state[0]
-    c = cross3(w, (world_point[0] - com[0], world_point[1] - com[1], world_point[2] - com[2]))
-    return [v[0] + c[0], v[1] + c[1], v[2] + c[2]]
-
-
-def cross3(a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray) -> list[float]:
-    """a x b of two 3-vectors, in floats: the same products and differences as ``np.cross``
-    (so the same bits), without its array handling (~20 us a call, 11 calls a step)."""
-    a0, a1, a2 = a
-    b0, b1, b2 = b
-    return [a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0]
 
 
 def _local(body: int, link: int, offset_from_link_origin: np.ndarray, client: int) -> list:
