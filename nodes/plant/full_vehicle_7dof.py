@@ -25,10 +25,25 @@ Table 4.4: effective sprung mass front 535 kg, rear 400 kg, unsprung 47.8 kg, k_
 c_s 1500 N s/m (controller node), k_t 239 000 N/m (tyre node), pitch inertia 1761.3 kg m^2,
 roll inertia 465.3 kg m^2. The thesis gives no wheelbase or track; the defaults
 L = 2.774 m, t = 1.411 m are those for which the tabulated inertias follow from the masses
-(see shared/reference/thesis-ch4.md Sec. 4). ``mass_basis`` reads the sprung masses as per
-**corner** (default: body mass 2*535 + 2*400 = 1870 kg, each corner carries the quarter car's
-535 kg, so a front corner matches the QVM) or per **axle** (935 kg). The CG sits where the
-static corner loads balance: a = L * m_rear / (m_front + m_rear) behind the front axle.
+read per axle (see shared/reference/thesis-ch4.md Sec. 4).
+
+**One mass basis (issue #27).** Sec. 4.4 says the sprung mass "is represented as lumped
+masses at each corner" (after Hudson [103]). So the body here is point masses m_i at the
+corners (x_i, y_i) and everything follows from them: M = sum m_i, the CG where the static
+corner loads balance (a = L m_rear / (m_front + m_rear) behind the front axle), and, unless a
+scenario gives them, I_pitch = sum m_i x_i^2 and I_roll = sum m_i y_i^2 [kg m^2]; the
+dynamic index k_pitch^2 / (a b) is then exactly 1 (Gillespie's "near unity" of passenger
+cars). ``mass_basis`` reads the sprung masses as per **corner** (default: 2*535 + 2*400 =
+1870 kg, each corner the quarter car's 535 / 400 kg, so a front corner is Table 4.3's QVM and
+Appendix III's 1.14 Hz) or per **axle** (935 kg). With the axle reading the point-mass
+inertias are Table 4.4's printed 1761.3 / 465.3 kg m^2 to 0.1 %; with the corner reading
+they double (3522.5 / 930.8 kg m^2). The old default mixed the two (an 1870 kg body with the
+935 kg body's inertias: dynamic index 0.5, pitch and roll at 1.72 / 1.77 Hz against heave
+1.2 Hz). 935 kg is also too light for an unladen MPV (the thesis's earlier 7-DOF MPV,
+App. I: 1600 kg); 1870 kg sprung + 191 kg unsprung is a mid-size MPV's kerb mass. The radii
+of gyration are k_pitch = 1.372 m (0.49 L) and k_roll = t/2 = 0.706 m; App. I's MPV
+(1600 kg, I = 1580 / 628 kg m^2) has 0.99 / 0.63 m, so ours are upper bounds of a real body
+(mass inboard of the wheels), by 38 % / 13 % in radius; see docs/vehicles_roads.md.
 """
 
 from __future__ import annotations
@@ -61,11 +76,37 @@ class FullVehicleParams:
     sprung_mass_rear: float = 400.0
     unsprung_mass: float = 47.8
     spring_stiffness: float = 31000.0
-    pitch_inertia: float = 1761.3
-    roll_inertia: float = 465.3
+    pitch_inertia: float | None = None  # kg m^2; None: sum m_i x_i^2 of the corner masses
+    roll_inertia: float | None = None   # kg m^2; None: sum m_i y_i^2 of the corner masses
     wheelbase: float = 2.774
     track: float = 1.411
     mass_basis: str = "corner"
+
+    def __post_init__(self) -> None:
+        """Fill the inertias from the lumped corner masses where the scenario gives none."""
+        if self.mass_basis not in ("corner", "axle"):
+            raise ValueError(f"mass_basis must be 'corner' or 'axle', got {self.mass_basis!r}")
+        m, xy = self.corner_sprung_mass, self.corner_xy
+        if self.pitch_inertia is None:
+            object.__setattr__(self, "pitch_inertia", float(m @ xy[:, 0] ** 2))
+        if self.roll_inertia is None:
+            object.__setattr__(self, "roll_inertia", float(m @ xy[:, 1] ** 2))
+
+    @property
+    def I_pitch(self) -> float:
+        """Body pitch inertia about the CG's y axis [kg m^2]."""
+        return float(self.pitch_inertia)  # type: ignore[arg-type]  # set in __post_init__
+
+    @property
+    def I_roll(self) -> float:
+        """Body roll inertia about the CG's x axis [kg m^2]."""
+        return float(self.roll_inertia)  # type: ignore[arg-type]  # set in __post_init__
+
+    @property
+    def dynamic_index(self) -> float:
+        """Pitch dynamic index DI = k_pitch^2 / (a b), k_pitch^2 = I_pitch / M [-]."""
+        a = self.a
+        return self.I_pitch / self.body_mass / (a * (self.wheelbase - a))
 
     @property
     def corner_sprung_mass(self) -> np.ndarray:
@@ -97,8 +138,8 @@ def _urdf(pr: FullVehicleParams) -> str:
     links = _LINK.format(name="ground", m=0, ixx=0, iyy=0, izz=0)
     links += _LINK.format(name="heave", m=e, ixx=e, iyy=e, izz=e)
     links += _LINK.format(name="pitch", m=e, ixx=e, iyy=e, izz=e)
-    links += _LINK.format(name="body", m=pr.body_mass, ixx=pr.roll_inertia,
-                          iyy=pr.pitch_inertia, izz=pr.pitch_inertia + pr.roll_inertia)
+    links += _LINK.format(name="body", m=pr.body_mass, ixx=pr.I_roll,
+                          iyy=pr.I_pitch, izz=pr.I_pitch + pr.I_roll)
     joints = _JOINT.format(name="heave", kind="prismatic", parent="ground", child="heave",
                            x=0, y=0, z=0, axis="0 0 1")
     joints += _JOINT.format(name="pitch", kind="revolute", parent="heave", child="pitch",
@@ -201,6 +242,9 @@ class FullVehicle7DOF(PlantModel):
             "track": pr.track,
             "cg_to_front_axle": pr.a,
             "body_mass": pr.body_mass,
+            "pitch_inertia": pr.I_pitch,
+            "roll_inertia": pr.I_roll,
+            "dynamic_index": pr.dynamic_index,
             "unsprung_mass": [pr.unsprung_mass] * 4,
             "spring_stiffness": [pr.spring_stiffness] * 4,
         })
