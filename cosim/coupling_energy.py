@@ -1,0 +1,168 @@
+"""The coupling's energy residual: how wrong a run is because of its communication step.
+
+After the energy-conservation idea of ECCO (Sadjina et al., "Energy conservation and power
+bonds in co-simulations", arXiv 1602.06434; worked on a quarter car in arXiv 2406.17353): a
+force exchanged between two nodes and the velocity it acts through form a *power bond*. The
+force node computes F from the plant's state; between two exchanges the plant applies its own
+version of that force (held, extrapolated or linearised: ``run.coupling``). If the coupling were
+exact, the force the plant applies at the end of a step would be the force the force node
+computes from the state the plant reaches there. Their difference, times the bond's velocity,
+is power that one side of the bond sends and the other does not receive:
+
+    dE_k = h/2 [ (F_app(t_k+) - F(x_k)) v_k + (F_app(t_k+1-) - F(x_k+1)) v_k+1 ]     [J]
+
+(the trapezoidal rule over step k; in the sequential exchange the first term is zero, since
+the plant starts each step from the force computed from its own state). Everything in it is
+in the run's table: the force nodes' outputs ``F`` and their derivatives (``k_t``, ``c_eff``),
+and the plant's states. So the residual needs neither a reference solution nor a model of
+the vehicle: it works on the realistic corner, the full vehicle, an FMU or a user's node.
+
+Two bonds, per corner, summed over corners:
+
+* ``damper``: the damper force F_d [N] (``controller/force``) through the strut velocity
+  v_rel = v_w - v_b [m/s] (the velocity the plant's coupling linearises about);
+* ``tyre``: the vertical tyre force F_t [N] (``tyre_road/force``) through the wheel's
+  vertical velocity v_w [m/s].
+
+The relative residual of a bond is sum_k |dE_k| over the energy the bond carried,
+sum_k h |F(x_k) v_k|. The per-step series is what a live view shows; the totals go into
+``summary.json`` as ``coupling_energy_residual``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+BONDS = ("damper", "tyre")
+
+
+@dataclass(frozen=True)
+class BondResidual:
+    """One power bond's residual over a run.
+
+    Attributes:
+        dE: residual per step [J], summed over corners (steps k = lag .. n - 2 - lag: those
+            whose end state and the force computed from it are in the table).
+        abs_residual: sum |dE| [J].
+        carried: energy the bond carried, sum h |F v| [J].
+    """
+
+    dE: np.ndarray
+    abs_residual: float
+    carried: float
+
+    @property
+    def relative(self) -> float:
+        """abs_residual / carried (0 for a bond that carried nothing)."""
+        return self.abs_residual / self.carried if self.carried > 0 else 0.0
+
+
+def _columns(table: Mapping[str, np.ndarray], name: str) -> np.ndarray:
+    """The column ``name`` as (n_steps, n_corners): ``name`` itself or ``name[0]``, ``name[1]``…"""
+    if name in table:
+        return np.asarray(table[name], dtype=float)[:, None]
+    cols = []
+    while f"{name}[{len(cols)}]" in table:
+        cols.append(np.asarray(table[f"{name}[{len(cols)}]"], dtype=float))
+    if not cols:
+        raise KeyError(name)
+    return np.stack(cols, axis=1)
+
+
+def applied_force(coupling: str, F: np.ndarray, dFdx: np.ndarray, x_seen: np.ndarray,
+                  x_now: np.ndarray, F_before: np.ndarray, r: float, clip: bool,
+                  sign: float) -> np.ndarray:
+    """The force the plant applies within a step (as ``nodes/plant/coupling.py`` does).
+
+    Args:
+        coupling: ``hold``, ``linear`` or ``jacobian``.
+        F: the step's force [N]; ``dFdx``: its derivative the force node sent (k_t [N/m] or
+            c_eff [N s/m]); ``x_seen``: the plant variable the force was computed from
+            (z_w [m] or v_rel [m/s]); ``x_now``: that variable at the moment of interest.
+        F_before: the previous step's force [N] (for ``linear``); ``r``: time into the step
+            over h (0 at its start, 1 at its end).
+        clip: the tyre's no-tension clip (F >= 0); ``sign``: +1 if F grows with x (damper),
+            -1 if it falls (tyre: F_t = F_t,k - k_t (z_w - z_w,k)).
+    """
+    if coupling == "hold":
+        out = F
+    elif coupling == "linear":
+        out = F + (F - F_before) * r
+    elif coupling == "jacobian":
+        out = F + sign * dFdx * (x_now - x_seen)
+    else:
+        raise ValueError(f"unknown coupling {coupling!r}")
+    return np.maximum(0.0, out) if clip else out
+
+
+def bond_residual(F: np.ndarray, dFdx: np.ndarray, x: np.ndarray, v: np.ndarray, h: float,
+                  coupling: str, lag: int, clip: bool, sign: float) -> BondResidual:
+    """Residual of one bond from its columns (rows = steps k = 0..n; columns = corners).
+
+    ``F[k]``, ``dFdx[k]``: the force node's output of step k, computed from the plant's state
+    of step k - lag (lag 0: sequential exchange, 1: parallel). ``x``: the plant variable the
+    coupling linearises about (z_w or v_rel), ``v``: the bond's velocity [m/s], both per step.
+    """
+    n = F.shape[0]
+    # steps k = lag .. n-2-lag: the force computed from the state at t_k is F[k + lag], and
+    # the one from the state at t_k+1, F[k + 1 + lag], must be in the table
+    m = n - 1 - 2 * lag
+    if m <= 0:
+        return BondResidual(np.zeros(0), 0.0, 0.0)
+    k = np.arange(lag, lag + m)
+    F_k, J_k = F[k], dFdx[k]
+    F_prev = F[np.maximum(k - 1, 0)]
+    seen = x[k - lag]
+    true_start, true_end = F[k + lag], F[k + 1 + lag]
+    app_start = applied_force(coupling, F_k, J_k, seen, x[k], F_prev, 0.0, clip, sign)
+    app_end = applied_force(coupling, F_k, J_k, seen, x[k + 1], F_prev, 1.0, clip, sign)
+    dE = 0.5 * h * ((app_start - true_start) * v[k] + (app_end - true_end) * v[k + 1])
+    dE_step = dE.sum(axis=1)
+    carried = float(h * np.abs(F[lag:n] * v[: n - lag]).sum())
+    return BondResidual(dE_step, float(np.abs(dE).sum()), carried)
+
+
+def coupling_residual(table: Mapping[str, np.ndarray], h: float, coupling: str,
+                      exchange: str) -> dict[str, BondResidual]:
+    """Both bonds' residuals from a run's table (columns as :mod:`cosim.table` names them).
+
+    A bond whose columns the table lacks (no controller, a plant without a wheel) is left
+    out. ``h`` [s] is the communication step.
+    """
+    lag = 0 if exchange == "sequential" else 1
+    out: dict[str, BondResidual] = {}
+    try:
+        v_w = _columns(table, "plant/state/v_w")
+        v_b = _columns(table, "plant/state/v_b")
+    except KeyError:
+        return out
+    v_rel = v_w - v_b
+    try:
+        F_d = _columns(table, "controller/force/F_d")
+        c_eff = _columns(table, "controller/force/c_eff")
+        out["damper"] = bond_residual(F_d, c_eff, v_rel, v_rel, h, coupling, lag,
+                                      clip=False, sign=1.0)
+    except KeyError:
+        pass
+    try:
+        F_t = _columns(table, "tyre_road/force/F_t")
+        k_t = _columns(table, "tyre_road/force/k_t")
+        z_w = _columns(table, "plant/state/z_w")
+        out["tyre"] = bond_residual(F_t, k_t, z_w, v_w, h, coupling, lag, clip=True,
+                                    sign=-1.0)
+    except KeyError:
+        pass
+    return out
+
+
+def summary(residuals: Mapping[str, BondResidual]) -> dict[str, float]:
+    """``summary.json``'s ``coupling_energy_residual``: each bond's relative residual and the
+    total (all bonds' |dE| over all bonds' carried energy)."""
+    out = {name: r.relative for name, r in residuals.items()}
+    carried = sum(r.carried for r in residuals.values())
+    out["total"] = (sum(r.abs_residual for r in residuals.values()) / carried
+                    if carried > 0 else 0.0)
+    return out
