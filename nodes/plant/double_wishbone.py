@@ -52,7 +52,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
 from cosim import lower_arm as la
 
@@ -90,6 +89,7 @@ from .double_wishbone_geometry import (  # the corner's geometry, re-exported
 from .model import GRAVITY, PlantModel
 from .point_kinematics import cross3, point_velocity, world_point
 from .quarter_car_lumped import load_urdf_text, new_direct_client
+from .quiet_pybullet import p
 
 __all__ = [
     "ARM_ACCEL_POINTS", "ARM_ORIGIN", "ARM_POINTS", "ARM_ROTATION", "BODY", "BUMP_STOP_PAD",

@@ -24,6 +24,8 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from . import quiet_pybullet  # noqa: F401 - pybullet imported without its banner, first
+
 GRAVITY = 9.81
 """g [m/s^2], the value the thesis uses."""
 

@@ -16,9 +16,9 @@ import tempfile
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
 
 from .model import GRAVITY, PlantModel
+from .quiet_pybullet import p
 
 _URDF = """<?xml version="1.0"?>
 <robot name="quarter_car_lumped">
