@@ -63,10 +63,10 @@ class BondResidual:
 def _columns(table: Mapping[str, np.ndarray], name: str) -> np.ndarray:
     """The column ``name`` as (n_steps, n_corners): ``name`` itself or ``name[0]``, ``name[1]``…"""
     if name in table:
-        return np.asarray(table[name], dtype=float)[:, None]
-    cols = []
+        return np.asarray(table[name], dtype=np.float64)[:, None]
+    cols: list[np.ndarray] = []
     while f"{name}[{len(cols)}]" in table:
-        cols.append(np.asarray(table[f"{name}[{len(cols)}]"], dtype=float))
+        cols.append(np.asarray(table[f"{name}[{len(cols)}]"], dtype=np.float64))
     if not cols:
         raise KeyError(name)
     return np.stack(cols, axis=1)
