@@ -5,6 +5,7 @@ recorded."""
 from __future__ import annotations
 
 import json
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +43,13 @@ def test_ch5_scenarios_share_the_road_and_use_the_thesis_steps() -> None:
     loaded = {name: sc.load(p) for name, p in CH5.items()}
     roads = [s["road"] for s in loaded.values()]
     assert all(r == roads[0] for r in roads), "the four laws must drive the same seeded road"
-    assert roads[0]["type"] == "iso8608" and roads[0]["speed_kmh"] == 34.0
+    # issue #27: the calibrated MIRA substitute of scenarios/thesis/ch5_mira_*.toml, not an
+    # uncalibrated ISO road under a thesis name
+    assert roads[0]["type"] == "power_law" and roads[0]["speed_kmh"] == 34.0
+    assert roads[0]["G"] == 1.77e-6 and roads[0]["waviness"] == 2.5
+    mira = tomllib.loads((ROOT / "scenarios" / "thesis" / "ch5_mira_lumped.toml").read_text())
+    assert {k: roads[0][k] for k in ("G", "waviness", "speed_kmh")} == {
+        k: mira["sweep"]["set"]["road"][k] for k in ("G", "waviness", "speed_kmh")}
     steps = {name.split("_")[2]: s["run"]["h"] for name, s in loaded.items()}
     assert steps == {"passive": 0.002, "tss1": 0.002, "tss2": 0.0005, "tss3": 0.0005}
     for law in ("tss2", "tss3"):
@@ -59,6 +66,19 @@ def test_damper_velocity_on_a_lumped_plant_is_refused_in_preflight(tmp_path: Pat
     scenario = sc.load(CH5["ch5_qvm_passive_random.toml"], ['controller.velocity="damper"'])
     with pytest.raises(ScenarioError, match="controller.velocity"):
         resolve(scenario, tmp_path / "run")
+
+
+def test_ch5_passive_scenario_gives_the_thesis_body_rms(tmp_path: Path) -> None:
+    """Issue #27 item 6: the shipped passive Ch. 5 scenario, run as shipped (monolithic),
+    gives Table 5.3's lumped passive body RMS 0.898 m/s2 (0-20 Hz) within 10 %."""
+    out = tmp_path / "passive"
+    res = suscosim("run", str(CH5["ch5_qvm_passive_random.toml"]), "--out", str(out),
+                   "--mode", "monolithic", "--quiet", timeout=300.0)
+    assert res.returncode == 0, res.stderr + res.stdout
+    res = suscosim("ride", str(out), "--json")
+    assert res.returncode == 0, res.stderr
+    a_b = json.loads(res.stdout)["runs"][0]["metrics"]["a_b_rms"]
+    assert a_b == pytest.approx(0.898, rel=0.10)
 
 
 def test_short_ch5_tss1_run_records_the_switching_state(tmp_path: Path) -> None:
