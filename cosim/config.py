@@ -31,7 +31,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from .errors import ScenarioError
+from .errors import ScenarioError, UnknownKeyError
 
 __all__ = ["REQUIRED", "ConfigReader", "describe_range"]
 
@@ -145,7 +145,7 @@ class ConfigReader:
     def _unknown(self, name: str, known: list[str]) -> ScenarioError:
         close = difflib.get_close_matches(name, known, n=1)
         hint = f" (did you mean '{close[0]}'?)" if close else ""
-        return self.error(name, self.cfg[name], f"one of the keys {known}{hint}")
+        return UnknownKeyError(self.key(name), self.cfg[name], known, hint)
 
     # ------------------------------------------------------------------ values
 

@@ -29,6 +29,23 @@ class ScenarioError(SuscosimError, ValueError):
         self.key, self.value, self.expected = key, value, expected
         super().__init__(f"scenario key '{key}': got {value!r}, expected {expected}")
 
+    def with_hint(self, hint: str) -> ScenarioError:
+        """The same error with ``hint`` appended to its message (a new error of the same
+        class; the key, value and expected text kept)."""
+        new = type(self).__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new.args = (f"{self.args[0]}; {hint}",)
+        return new
+
+
+class UnknownKeyError(ScenarioError):
+    """A key a table does not take (almost always a typo, or a key left over from another
+    model when ``--set`` changed one key of a table). ``accepted``: the keys it takes."""
+
+    def __init__(self, key: str, value: object, accepted: list[str], hint: str = "") -> None:
+        self.accepted = list(accepted)
+        super().__init__(key, value, f"one of the keys {self.accepted}{hint}")
+
 
 class InputFileError(SuscosimError, ValueError):
     """A user-supplied file (CSV profile, damper curve, FE table...) is malformed.

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import copy
 import math
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,7 +39,7 @@ from typing import Any
 
 from . import node_kinds
 from .config import ConfigReader
-from .errors import InputFileError, ScenarioError
+from .errors import InputFileError, ScenarioError, UnknownKeyError
 from .keys import check_name
 
 SECTIONS = ("run", "vehicle", "tyre", "road", "controller", "fatigue", "sweep", "report",
@@ -232,6 +233,78 @@ def apply_override(scenario: dict[str, Any], assignment: str) -> None:
         if not isinstance(node, dict):
             raise ScenarioError(dotted, text, f"'{part}' to be a table")
     node[parts[-1]] = value  # a table replaces the whole table at that key
+
+
+def _override_key(assignment: str) -> str:
+    return assignment.split("=", 1)[0].strip()
+
+
+def override_hint(exc: ScenarioError, overrides: list[str] | tuple[str, ...]) -> ScenarioError:
+    """``exc`` with a hint when ``--set`` changed single keys of the table that now has a key
+    it does not take, left over from the scenario file (``--set 'controller.law="skyhook"'``
+    on a passive scenario keeps its ``controller.c``): how to replace the whole table
+    instead. Any other error is returned as it is.
+
+    ``--set`` never drops a key by itself (a typo in a key must still be an error): a table
+    given whole (``--set 'controller={law="skyhook", c_sky=2500.0}'``) replaces the file's.
+    """
+    if not isinstance(exc, UnknownKeyError):
+        return exc
+    table, _, leaf = exc.key.rpartition(".")
+    if not table:
+        return exc
+    set_keys = [_override_key(a) for a in overrides]
+    if exc.key in set_keys:
+        return exc  # the user typed that key: a typo, the message already says so
+    mine = [a for a in overrides if _override_key(a).rpartition(".")[0] == table]
+    if not mine:
+        return exc
+    whole = ", ".join(f"{_override_key(a).rpartition('.')[2]}={a.split('=', 1)[1].strip()}"
+                      for a in mine)
+    return exc.with_hint(
+        f"'{leaf}' comes from the scenario file: --set {_override_key(mine[0])}=... changes "
+        f"one key of [{table}] and keeps the others; to replace the whole table, give it "
+        f"whole: --set '{table}={{{whole}, ...}}' with the keys it takes")
+
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def _toml_key(key: str) -> str:
+    import json
+
+    return key if _BARE_KEY.fullmatch(key) else json.dumps(key)
+
+
+def _toml_value(value: Any) -> str:
+    """One TOML value: strings as basic strings, floats with their exact ``repr``, tables
+    inline."""
+    import json
+
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int | float | str):
+        return json.dumps(value) if isinstance(value, str) else repr(value)
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_toml_key(str(k))} = {_toml_value(v)}"
+                               for k, v in value.items()) + "}"
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"no TOML form for {type(value).__name__}")
+
+
+def to_toml(scenario: dict[str, Any]) -> str:
+    """A scenario as TOML text that :func:`tomllib.loads` reads back equal (``check`` prints
+    a resolved scenario with it): one ``[section]`` per table, its sub-tables inline."""
+    lines: list[str] = []
+    for name, section in scenario.items():
+        if not isinstance(section, dict):
+            lines.append(f"{_toml_key(name)} = {_toml_value(section)}")
+            continue
+        lines.append(f"[{_toml_key(name)}]")
+        lines += [f"{_toml_key(str(k))} = {_toml_value(v)}" for k, v in section.items()]
+        lines.append("")
+    return "\n".join(lines)
 
 
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[str, Any]:

@@ -1,6 +1,7 @@
 """``suscosim``: the command line.
 
     suscosim run SCENARIO.toml [--out DIR] [--set KEY=VALUE ...] [--mode MODE]
+    suscosim check SCENARIO.toml [--set KEY=VALUE ...] [--mode MODE] [--json]
     suscosim node NAME --run ID [--connect ENDPOINT]
     suscosim export RUN_DIR|JOURNAL [--format mdf4|rpc3|csv|parquet] [--out DIR]
     suscosim fatigue RUN_DIR [...]
@@ -8,7 +9,7 @@
     suscosim sweep SWEEP.toml | report RUN_OR_SWEEP_DIR
 
 Exit codes: 0 success, 1 the run failed (dead node, stall, abort), 2 bad input (scenario,
-file, arguments).
+file, arguments). Every error line starts ``suscosim: error: ``.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from cosim import scenario as sc
 from cosim import zenoh_options as zo
 from cosim.errors import SuscosimError
 
+from .cli_util import ArgumentParser, error_line
 from .placement import PIN_MODES
 
 
@@ -35,9 +37,12 @@ def _print_summary(summary: dict) -> None:
         print("  cores: " + ", ".join(f"{n} {c}" for n, c in summary["cores"].items()))
     chans = summary.get("channels", {})
     if chans:
-        print(f"  {'channel':<34} {'peak':>12} {'rms':>12}")
+        from cosim.formats import si_unit  # the units of the channel schema
+
+        print(f"  {'channel':<34} {'peak':>12} {'rms':>12}  unit")
         for name, st in chans.items():
-            print(f"  {name:<34} {st['peak']:>12.5g} {st['rms']:>12.5g}")
+            print(f"  {name:<34} {st['peak']:>12.5g} {st['rms']:>12.5g}  "
+                  f"{si_unit(name) or '-'}")
     fat = summary.get("fatigue")
     if fat:
         print(f"  fatigue (live): lower-arm min life {_num(fat['min_life_km'])} km = "
@@ -56,22 +61,53 @@ def _sigterm_as_interrupt(_signum: int, _frame: object) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     import signal
 
-    from .runner import resolve, run_scenario
+    from .runner import run_scenario
 
     # SIGTERM (docker compose down, a sweep stopping a run, kill) ends the run like Ctrl-C:
     # the nodes are told to abort and summary.json says "failed: interrupted"
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
 
-    overrides = list(args.set or [])
-    if args.mode:
-        overrides.append(f'run.mode="{args.mode}"')
-    scenario = resolve(sc.load(args.scenario, overrides), args.out)
+    scenario = _resolved(args)
     print(f"suscosim: run {scenario['run']['id']} -> {scenario['run']['dir']}", flush=True)
     summary = run_scenario(scenario, connect=args.connect, external=args.external,
                            quiet=args.quiet, zenoh_config_file=args.zenoh_config,
                            listen=args.listen, lowlatency=args.lowlatency, pin_mode=args.pin)
     _print_summary(summary)
     print(f"  summary: {Path(scenario['run']['dir']) / 'summary.json'}")
+    return 0
+
+
+def _resolved(args: argparse.Namespace) -> dict:
+    """The scenario of ``run`` / ``check``: read, ``--set`` applied, every node kind's
+    preflight run and the run keys filled (:func:`orchestrator.runner.resolve`); a
+    ScenarioError says how to replace a whole table when ``--set`` left a key behind."""
+    from cosim.errors import ScenarioError
+
+    from .runner import resolve
+
+    overrides = list(args.set or [])
+    if args.mode:
+        overrides.append(f'run.mode="{args.mode}"')
+    try:
+        return resolve(sc.load(args.scenario, overrides), getattr(args, "out", None))
+    except ScenarioError as exc:
+        raise sc.override_hint(exc, overrides) from None
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    """Validate and resolve a scenario without running it: the same reading, ``--set`` and
+    preflight as ``run`` (every model section, the implementations ``[nodes]`` picks, files
+    named), no node started and nothing written. Prints the resolved scenario (as TOML, a
+    scenario file itself; ``--json``: as the run's scenario.json) and exits 0; a bad key is
+    exit 2 naming it."""
+    scenario = _resolved(args)
+    run = scenario["run"]
+    if args.json:
+        print(json.dumps(scenario, indent=2, sort_keys=True))
+        return 0
+    print(f"# {args.scenario}: ok: {run['n_steps']} steps of h = {run['h']:g} s "
+          f"(t_end = {run['t_end']:g} s), nodes {', '.join(run['nodes'])}")
+    print(sc.to_toml(scenario))
     return 0
 
 
@@ -197,15 +233,93 @@ def _delegate(module: str, argv: list[str]) -> int:
     return int(importlib.import_module(module).main(argv) or 0)
 
 
+DELEGATED: tuple[tuple[str, str, str], ...] = (
+    ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
+    ("fatigue", "orchestrator.fatigue_cli",
+     "fatigue life of the lower arm from a finished run or a load file"),
+    ("equivalent-lumped", "orchestrator.studies.equivalent_lumped",
+     "equivalent lumped quarter car of the realistic corner (log decrement)"),
+    ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
+    ("arm", "orchestrator.studies.arm_card",
+     "the lower arm's model card (mass, modes, stresses)"),
+    ("part", "orchestrator.studies.part_check",
+     "a part file's model card: mass, modes, stresses, hot spots, mesh convergence"),
+    ("corner", "orchestrator.studies.corner_check",
+     "a corner file's kinematic and compliance curves and equivalent quarter car"),
+    ("tap", "orchestrator.tap", "print the messages of a running run, live"),
+    ("replay", "orchestrator.replay", "republish a recorded journal on the bus"),
+    ("runs", "orchestrator.runs", "list runs and their state from the run folders"),
+    ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
+    ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
+    ("duty", "orchestrator.duty", "damage and life over a proving-ground schedule of events"),
+    ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
+    ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
+    ("export-fmu", "orchestrator.export_fmu", "the scenario's control law as an FMI FMU"),
+    ("scope", "orchestrator.scope", "watch a run live in the browser (plots, damage map)"),
+)
+"""The subcommands whose module parses its own arguments: (name, module, one-line help)."""
+
+COMMAND_GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("everyday commands", ("run", "check", "sweep", "report", "fatigue", "duty", "scope",
+                           "part", "corner")),
+    ("results and model cards", ("runs", "ride", "export", "arm", "equivalent-lumped")),
+    ("plumbing (several machines, the bus, other tools)",
+     ("node", "router", "cluster", "tap", "replay", "export-fmu")),
+)
+"""How ``suscosim --help`` lists the subcommands: every one of them in one group."""
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("suscosim")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "unknown (not installed)"
+
+
+def _grouped_help(helps: dict[str, str]) -> str:
+    """The ``--help`` epilog: the subcommands by :data:`COMMAND_GROUPS`."""
+    listed = [n for _, names in COMMAND_GROUPS for n in names]
+    missing = sorted(set(helps) - set(listed))
+    if missing:  # a new subcommand must be put in a group
+        raise AssertionError(f"subcommands in no group of COMMAND_GROUPS: {missing}")
+    width = max(len(n) for n in helps) + 2
+    out = []
+    for title, names in COMMAND_GROUPS:
+        out.append(f"{title}:")
+        out += [f"  {n:<{width}}{helps[n]}" for n in names]
+        out.append("")
+    out.append("'suscosim COMMAND --help' for a command's options. Exit codes: 0 done, 1 the "
+               "run failed, 2 bad input.")
+    return "\n".join(out)
+
+
+def _add_scenario_arguments(p: argparse.ArgumentParser) -> None:
+    """``run``'s and ``check``'s: the scenario, ``--set`` and ``--mode``."""
+    p.add_argument("scenario", help="scenario TOML file")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a scenario value (TOML), e.g. --set run.h=0.002; a whole "
+                        "table: --set 'controller={law=\"skyhook\", c_sky=2500.0}'")
+    p.add_argument("--mode", choices=["distributed", "monolithic", "reference"])
+
+
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="suscosim", description=__doc__.splitlines()[0])
-    sub = ap.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("run", help="run a scenario")
-    r.add_argument("scenario", help="scenario TOML file")
+    ap = ArgumentParser(prog="suscosim", description="suscosim: a distributed co-simulation "
+                        "of semi-active suspensions and the fatigue of their parts",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--version", action="version", version=f"suscosim {_version()}")
+    sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                            help="one of the commands below")
+    helps: dict[str, str] = {}
+
+    def add(name: str, text: str, **kw: object) -> argparse.ArgumentParser:
+        helps[name] = text
+        return sub.add_parser(name, description=text, **kw)  # type: ignore[arg-type]
+
+    r = add("run", "run a scenario")
+    _add_scenario_arguments(r)
     r.add_argument("--out", help="run folder (default runs/<run id>)")
-    r.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override a scenario value, e.g. --set run.h=0.002")
-    r.add_argument("--mode", choices=["distributed", "monolithic", "reference"])
     zo.add_connect_argument(r, "Zenoh router endpoint (default: embedded peer mode on loopback)",
                             metavar=None)
     zo.add_listen_argument(r, "endpoint the orchestrator listens on (default: a free loopback "
@@ -222,8 +336,12 @@ def build_parser() -> argparse.ArgumentParser:
     zo.add_config_argument(r)
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
-    e = sub.add_parser("export", help="table.csv/.parquet from a journal (e.g. after a crash), "
-                                      "or a run's table as MDF 4 / RPC III / CSV / Parquet")
+    c = add("check", "validate a scenario as run does, without running it; print it resolved")
+    _add_scenario_arguments(c)
+    c.add_argument("--json", action="store_true",
+                   help="print the resolved scenario as JSON (as a run's scenario.json)")
+    c.set_defaults(func=cmd_check)
+    e = add("export", "a run's table from its journal, or as MDF 4 / RPC III / CSV / Parquet")
     e.add_argument("journal", metavar="RUN_DIR|JOURNAL")
     e.add_argument("--out", help="output folder (default: the journal's folder; for RUN_DIR "
                                  "--format: RUN_DIR/export)")
@@ -235,33 +353,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="RPC III data type: int = 16-bit SHORT_INTEGER (resolution max|x|/32752 "
                         "per channel), float = 32-bit FLOATING_POINT")
     e.set_defaults(func=cmd_export)
-    for name, module, text in (
-        ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
-        ("fatigue", "orchestrator.fatigue_cli",
-         "fatigue life of the lower arm from a finished run or a load file"),
-        ("equivalent-lumped", "orchestrator.studies.equivalent_lumped",
-         "equivalent lumped quarter car of the realistic corner (log decrement)"),
-        ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
-        ("arm", "orchestrator.studies.arm_card",
-         "the lower arm's model card (mass, modes, stresses)"),
-        ("part", "orchestrator.studies.part_check",
-         "a part file's model card: mass, modes, stresses, hot spots, mesh convergence"),
-        ("corner", "orchestrator.studies.corner_check",
-         "a corner file's kinematic and compliance curves and equivalent quarter car"),
-        ("tap", "orchestrator.tap", "print the messages of a running run, live"),
-        ("replay", "orchestrator.replay", "republish a recorded journal on the bus"),
-        ("runs", "orchestrator.runs", "list runs and their state from the run folders"),
-        ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
-        ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
-        ("duty", "orchestrator.duty", "damage and life over a proving-ground schedule of events"),
-        ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
-        ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
-        ("export-fmu", "orchestrator.export_fmu", "the scenario's control law as an FMI FMU"),
-        ("scope", "orchestrator.scope", "watch a run live in the browser (plots, damage map)"),
-    ):
-        p = sub.add_parser(name, help=text, add_help=False)
+    for name, module, text in DELEGATED:
+        p = add(name, text, add_help=False)
         p.add_argument("rest", nargs=argparse.REMAINDER)
         p.set_defaults(func=None, module=module)
+    ap.epilog = _grouped_help(helps)
     return ap
 
 
@@ -278,10 +374,10 @@ def main(argv: list[str] | None = None) -> int:
             return _delegate(args.module, unknown + args.rest)
         return args.func(args)
     except SuscosimError as exc:
-        print(f"suscosim: error: {exc}", file=sys.stderr)
+        print(error_line("suscosim", str(exc)), file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
-        print("suscosim: interrupted", file=sys.stderr)
+        print(error_line("suscosim", "interrupted"), file=sys.stderr)
         return 130
     except BrokenPipeError:  # output piped into e.g. `head`: not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
@@ -289,7 +385,8 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # a bug: one line for the user, the details for a report
         import traceback
 
-        print(f"suscosim: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(error_line("suscosim", f"internal error: {type(exc).__name__}: {exc}"),
+              file=sys.stderr)
         if os.environ.get("SUSCOSIM_DEBUG"):
             traceback.print_exc()
         return 1

@@ -2,6 +2,9 @@
 ``SystemExit``, an error line that names the command, and the pace options of the commands that
 replay a journal (``replay``, ``scope``).
 
+Every error line starts ``suscosim: error: `` (:func:`error_line`, :func:`fail`, and argparse's
+usage errors through :func:`parse_args` / :class:`ArgumentParser`).
+
 A command returns its exit code (0 done, 2 bad input, ...) rather than exiting, so that it can
 be called from a test or from ``suscosim`` itself::
 
@@ -17,13 +20,51 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NoReturn
+
+ERROR_PREFIX = "suscosim: error: "
+"""How every command's error line starts (a usage error of argparse too)."""
+
+
+def _command(prog: str) -> str:
+    """``"replay"`` of ``"suscosim replay"``; ``""`` of ``"suscosim"``."""
+    return prog.removeprefix("suscosim").strip()
+
+
+def error_line(prog: str, message: str) -> str:
+    """``suscosim: error: <command>: message`` (the command left out for ``suscosim``)."""
+    cmd = _command(prog)
+    return f"{ERROR_PREFIX}{cmd + ': ' if cmd else ''}{message}"
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """An ``argparse.ArgumentParser`` whose usage errors start with :data:`ERROR_PREFIX`
+    (argparse's own: ``suscosim run: error: ...``), then exit 2 as argparse does."""
+
+    def error(self, message: str) -> NoReturn:
+        self.print_usage(sys.stderr)
+        self.exit(2, error_line(self.prog, message) + "\n")
+
+
+def unify_errors(ap: argparse.ArgumentParser) -> None:
+    """Make ``ap`` (and its subcommands' parsers) print usage errors as
+    :class:`ArgumentParser` does, for a parser built as a plain ``argparse.ArgumentParser``."""
+    parsers = [ap]
+    while parsers:
+        p = parsers.pop()
+        if type(p) is argparse.ArgumentParser:  # a subclass of its own is left as it is
+            p.__class__ = ArgumentParser
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                parsers.extend(action.choices.values())
 
 
 def parse_args(ap: argparse.ArgumentParser,
                argv: Sequence[str] | None) -> argparse.Namespace | int:
     """``ap``'s arguments from ``argv`` (None: ``sys.argv[1:]``), or the exit code where argparse
-    would exit: 0 after ``--help``, 2 after a usage error (which argparse has printed)."""
+    would exit: 0 after ``--help``, 2 after a usage error (which argparse has printed, as
+    ``suscosim: error: <command>: ...``)."""
+    unify_errors(ap)
     try:
         return ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     except SystemExit as exc:
@@ -31,8 +72,9 @@ def parse_args(ap: argparse.ArgumentParser,
 
 
 def fail(prog: str, message: str, code: int = 2) -> int:
-    """Print ``prog: message`` on stderr; return ``code`` (default 2, bad input)."""
-    print(f"{prog}: {message}", file=sys.stderr)
+    """Print ``suscosim: error: <command>: message`` on stderr (``prog``: ``"suscosim
+    replay"``); return ``code`` (default 2, bad input)."""
+    print(error_line(prog, message), file=sys.stderr)
     return code
 
 

@@ -1,32 +1,117 @@
-"""A one-line progress bar on stderr (only when stderr is a terminal)."""
+"""A one-line progress bar on stderr (only when stderr is a terminal).
+
+A run shows its start-up phases first, then the steps with their rate and an ETA::
+
+    ch3-step-... starting nodes ...
+    ch3-step-... handshake: 3/4 nodes ready ...
+    ch3-step-... [###########...................]  37.2% step 1488/4000    2012 steps/s ETA 0:01
+
+The bar is made as the nodes are started: it shows ``starting nodes`` at once; the clock calls
+it with ``(k, n)``, k = -1 while its start barrier waits (shown as ``handshake``), then the
+steps. :meth:`ProgressBar.phase` shows any other phase, or a detail of one (``"handshake",
+"3/4 nodes ready"``). The rate and the ETA count from the first
+step shown, not from the start-up: the ETA is (n - k) / rate, rate = steps done since the
+first step shown / the wall time since then.
+"""
 
 from __future__ import annotations
 
 import sys
 import time
+from typing import TextIO
+
+
+def format_eta(seconds: float) -> str:
+    """``h:mm:ss`` (``m:ss`` under an hour) of a remaining time; ``--:--`` when unknown."""
+    if not seconds >= 0 or seconds > 99 * 3600:
+        return "--:--"
+    s = int(round(seconds))
+    h, rem = divmod(s, 3600)
+    m, s = divmod(rem, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
 class ProgressBar:
-    def __init__(self, label: str, stream=None, width: int = 30) -> None:
+    """The bar of one run, labelled ``label`` (the run id), on ``stream`` (stderr)."""
+
+    def __init__(self, label: str, stream: TextIO | None = None, width: int = 30,
+                 min_interval_s: float = 0.1, start_phase: str = "starting nodes") -> None:
         self.label, self.width = label, width
         self.stream = stream or sys.stderr
         self.enabled = self.stream.isatty()
+        self.min_interval_s = min_interval_s
         self.t0 = time.monotonic()
         self._last = 0.0
+        self._first: tuple[float, int] | None = None  # (wall time, k) of the first step shown
+        self._width_written = 0
+        self.phases: list[tuple[str, float]] = []
+        """The start-up phases shown, with their start (s after the bar was made)."""
+        if start_phase:
+            self.phase(start_phase)
 
-    def __call__(self, k: int, n: int) -> None:
-        now = time.monotonic()
-        if not self.enabled or now - self._last < 0.1:
-            return
-        self._last = now
+    def _write(self, text: str) -> None:
+        pad = max(0, self._width_written - len(text))  # clear what a longer line left
+        self.stream.write("\r" + text + " " * pad)
+        self.stream.flush()
+        self._width_written = len(text)
+
+    def phase(self, name: str, detail: str = "") -> None:
+        """Show a start-up phase (``"starting nodes"``, ``"handshake"``), with ``detail``
+        (e.g. ``"3/4 nodes ready"``); a new name is recorded in :attr:`phases`."""
+        if not self.phases or self.phases[-1][0] != name:
+            self.phases.append((name, time.monotonic() - self.t0))
+        if self.enabled:
+            elapsed = time.monotonic() - self.t0
+            self._write(f"{self.label} {name}{': ' + detail if detail else ''} ... "
+                        f"{elapsed:.1f} s")
+
+    def line(self, k: int, n: int, now: float) -> str:
+        """The bar's text at step ``k`` of ``n`` (wall time ``now``, monotonic)."""
+        k = max(k, 0)
+        if self._first is None:
+            self._first = (now, k)
+        t_first, k_first = self._first
         frac = max(0.0, min(1.0, (k + 1) / (n + 1)))
         fill = int(frac * self.width)
-        rate = max(k, 0) / max(now - self.t0, 1e-9)
-        self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (self.width - fill)}] "
-                          f"{100 * frac:5.1f}% step {max(k, 0)}/{n} {rate:7.0f} steps/s")
-        self.stream.flush()
+        dt = now - t_first
+        rate = (k - k_first) / dt if dt > 0 else 0.0
+        eta = format_eta((n - k) / rate) if rate > 0 else "--:--"
+        return (f"{self.label} [{'#' * fill}{'.' * (self.width - fill)}] "
+                f"{100 * frac:5.1f}% step {k}/{n} {rate:7.0f} steps/s ETA {eta}")
+
+    def __call__(self, k: int, n: int) -> None:
+        """Show step ``k`` of ``n``; ``k < 0``: the start barrier (``handshake``)."""
+        if k < 0 and self._first is None:
+            if not self.phases or self.phases[-1][0] != "handshake":
+                self.phase("handshake")
+            elif self.enabled and time.monotonic() - self._last >= self.min_interval_s:
+                self._last = time.monotonic()
+                self.phase("handshake")  # the seconds go on
+            return
+        now = time.monotonic()
+        if self._first is None:
+            self.line(k, n, now)  # the ETA's origin, even when not shown
+        if not self.enabled or now - self._last < self.min_interval_s:
+            return
+        self._last = now
+        self._write(self.line(k, n, now))
 
     def close(self) -> None:
         if self.enabled:
             self.stream.write("\n")
             self.stream.flush()
+
+
+class NullProgress:
+    """The bar of a ``--quiet`` run: the same calls, nothing shown."""
+
+    phases: list[tuple[str, float]] = []
+
+    def phase(self, name: str, detail: str = "") -> None:
+        """Nothing (see :meth:`ProgressBar.phase`)."""
+
+    def __call__(self, k: int, n: int) -> None:
+        """Nothing."""
+
+    def close(self) -> None:
+        """Nothing."""
