@@ -8,6 +8,11 @@ plane, z = x × y (up). At static ride height the arm frame is parallel to the c
 (vehicle axes, origin at the static wheel centre of the front-left corner), offset by
 :data:`ARM_ORIGIN`.
 
+**The hardpoints are data**: the built-in corner file ``cosim/corners/mpv_front.toml``
+(:mod:`cosim.corner`, docs/corners.md) gives them in the corner frame; this module puts them
+in the arm frame (:func:`hardpoints_of`, :func:`arm_frame_of`: the same for a user's corner
+file). The shape below (eyes, ribs, hole) is the part's, drawn round the built-in points.
+
 **Where the numbers come from** (the thesis gives no drawing of its arm: Ch 6.2 approximated
 it from a half-scale physical model; Table 4.2 gives its MBS mass, 5 kg, and the suspension's
 torsional stiffness K_θ = 46.74 N m/deg):
@@ -57,12 +62,51 @@ from typing import TypedDict
 
 import numpy as np
 
+from . import corner as corner_file
+from .corner import Corner
+
 # ------------------------------------------------------------------ hardpoints, arm frame [m]
-BUSH_FRONT = np.array([0.130, 0.0, 0.0])
-BUSH_REAR = np.array([-0.130, 0.0, 0.0])
-BALL_JOINT = np.array([0.025, 0.294, 0.0])
-DAMPER_MOUNT = np.array([0.064, 0.185, 0.0])
-BUMP_STOP_PAD = np.array([-0.017, 0.215, 0.0])
+# The points are the built-in corner file's (cosim/corners/mpv_front.toml, corner frame), put
+# in the arm frame here: one definition of each hardpoint, read by the plant and by the FE.
+
+
+def arm_frame_of(c: Corner) -> tuple[np.ndarray, np.ndarray]:
+    """(origin, R) of a corner's lower-arm frame in its corner frame at static ride height:
+    origin the bush midpoint, columns of R the arm's x (rear bush -> front bush), y (toward the
+    ball joint, normal to x) and z = x cross y; p_arm = R.T @ (p_corner - origin) [m]."""
+    f, r, bj = c.points["lower_bush_front"], c.points["lower_bush_rear"], \
+        c.points["lower_ball_joint"]
+    o = 0.5 * (f + r)
+    ex = f - r
+    ex /= np.linalg.norm(ex)
+    d = bj - o
+    ey = d - ex * (d @ ex)
+    ey /= np.linalg.norm(ey)
+    return o, np.column_stack([ex, ey, np.cross(ex, ey)])
+
+
+def hardpoints_of(c: Corner) -> dict[str, np.ndarray]:
+    """A corner's lower-arm load points in its arm frame [m] (:data:`HARDPOINTS`' names; the
+    bump-stop pad only if the corner has one)."""
+    o, R = arm_frame_of(c)
+    names = {"bush_front": "lower_bush_front", "bush_rear": "lower_bush_rear",
+             "ball_joint": "lower_ball_joint", "damper_mount": "damper_lower",
+             "bump_stop": "bump_stop_pad"}
+    out: dict[str, np.ndarray] = {}
+    for name, key in names.items():
+        if key in c.points:
+            out[name] = R.T @ (c.points[key] - o)
+    return out
+
+
+_CORNER = corner_file.builtin()
+_O, _R = arm_frame_of(_CORNER)
+_HP = hardpoints_of(_CORNER)
+BUSH_FRONT = _HP["bush_front"]
+BUSH_REAR = _HP["bush_rear"]
+BALL_JOINT = _HP["ball_joint"]
+DAMPER_MOUNT = _HP["damper_mount"]
+BUMP_STOP_PAD = _HP["bump_stop"]
 TORSION_SPRING_POINTS = (BUSH_FRONT, BUSH_REAR)
 """Where the torsion spring's moment M_x enters the arm: half at each bush eye [m]."""
 
@@ -73,11 +117,14 @@ HARDPOINTS: dict[str, np.ndarray] = {
     "damper_mount": DAMPER_MOUNT,
     "bump_stop": BUMP_STOP_PAD,
 }
-"""Load points of the arm (arm frame, m)."""
+"""Load points of the arm (arm frame, m): the built-in corner's."""
 
-ARM_ORIGIN = np.array([0.0, -0.06 - 0.294, -0.13])
+ARM_ORIGIN = _O
 """Arm-frame origin (bush midpoint) in the corner frame [m]: the ball joint sits 60 mm inboard
 of and 130 mm below the wheel centre (inside the wheel rim)."""
+ARM_ROTATION = _R
+"""The arm frame's axes in the corner frame at static ride height (columns x, y, z); the
+identity for the built-in corner (arm frame parallel to the corner frame)."""
 
 MASS_KG = 5.0
 """Table 4.2's lower-arm mass [kg] (the plant's lower-arm mass; the FE arm's is within 10 %,
@@ -174,8 +221,9 @@ def joint_zone_radius(name: str) -> float:
 
 
 def to_corner(point_arm: np.ndarray) -> np.ndarray:
-    """An arm-frame point in the static corner frame [m] (the frames are parallel)."""
-    corner: np.ndarray = ARM_ORIGIN + np.asarray(point_arm, dtype=float)
+    """An arm-frame point in the static corner frame [m]: origin + R @ p (for the built-in
+    corner R is the identity, whose product gives p's own bits)."""
+    corner: np.ndarray = ARM_ORIGIN + ARM_ROTATION @ np.asarray(point_arm, dtype=float)
     return corner
 
 

@@ -53,7 +53,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cosim import corner as corner_file
 from cosim import lower_arm as la
+from cosim.corner import Corner
 
 from .bump_stop import BumpStopParams, bump_stop_force, compression
 from .double_wishbone_geometry import (  # the corner's geometry, re-exported
@@ -81,6 +83,7 @@ from .double_wishbone_geometry import (  # the corner's geometry, re-exported
     UPPER_BUSH_FRONT,
     UPPER_BUSH_REAR,
     WHEEL_CENTRE,
+    CornerGeometry,
     arm_frame,
     corner_urdf,
     lower_arm_inertia,
@@ -130,6 +133,23 @@ class DoubleWishboneParams:
     """k_0, bumper rate at first contact [N/m]."""
     bump_stop_stroke: float = _BS.stroke
     """s_b, bumper block compression [m]."""
+    bump_stop_transition: float = _BS.transition
+    """r, fraction of s_b beyond which the law goes on along its tangent [-] (0 < r < 1)."""
+
+    @classmethod
+    def from_corner(cls, c: Corner) -> DoubleWishboneParams:
+        """The parameters a corner file gives (masses, torsion bar, bumper)."""
+        m, bs = c.masses, c.bump_stop
+        kw: dict[str, float | bool] = {
+            "body_mass": m["body"], "hub_mass": m["hub"], "lower_arm_mass": m["lower_arm"],
+            "upper_arm_mass": m["upper_arm"], "tie_rod_mass": m["tie_rod"],
+            "torsion_stiffness_nm_per_deg": c.torsion_bar_nm_per_deg,
+            "bump_stop": bs is not None}
+        if bs is not None:
+            kw.update(bump_stop_clearance=bs["clearance"],
+                      bump_stop_initial_rate=bs["initial_rate"], bump_stop_stroke=bs["stroke"],
+                      bump_stop_transition=bs["transition"])
+        return cls(**kw)  # type: ignore[arg-type]
 
     @property
     def k_theta(self) -> float:
@@ -148,7 +168,8 @@ class DoubleWishboneParams:
             return None
         return BumpStopParams(clearance=self.bump_stop_clearance,
                               initial_rate=self.bump_stop_initial_rate,
-                              stroke=self.bump_stop_stroke)
+                              stroke=self.bump_stop_stroke,
+                              transition=self.bump_stop_transition)
 
 
 def _rot(quat) -> np.ndarray:
@@ -162,13 +183,23 @@ class DoubleWishboneCorner(PlantModel):
     name = "quarter_car_double_wishbone"
 
     def __init__(self, params: DoubleWishboneParams | None = None,
-                 static_dt: float = 1e-3) -> None:
-        self.params = pr = params or DoubleWishboneParams()
+                 static_dt: float = 1e-3, corner: Corner | None = None) -> None:
+        """``corner``: the corner file (:mod:`cosim.corner`; default the built-in MPV corner)
+        whose hardpoints make the model; ``params``: its masses, torsion bar and bumper
+        (default: the corner file's, :meth:`DoubleWishboneParams.from_corner`)."""
+        self.corner = cf = corner or corner_file.builtin()
+        if cf.coil_n_per_m > 0.0:
+            raise ValueError(f"{cf.source}: the PyBullet corner has no coil spring yet "
+                             "(spring.coil_n_per_m): use a torsion bar")
+        self.geom = g = CornerGeometry(cf)
+        self.params = pr = params or DoubleWishboneParams.from_corner(cf)
+        if pr.bump_stop and g.bump_stop_pad is None:
+            raise ValueError(f"{cf.source}: a bump stop needs hardpoints.bump_stop_pad")
         self.bump_stop = pr.bump_stop_params
         self.client = c = new_direct_client()
         p.setPhysicsEngineParameter(numSolverIterations=200, erp=0.2,
                                     solverResidualThreshold=1e-12, physicsClientId=c)
-        self.body = b = load_urdf_text(corner_urdf(pr), c, useFixedBase=True,
+        self.body = b = load_urdf_text(g.urdf(pr), c, useFixedBase=True,
                                        flags=p.URDF_USE_INERTIA_FROM_FILE)
         for j in range(p.getNumJoints(b, physicsClientId=c)):
             info = p.getJointInfo(b, j, physicsClientId=c)
@@ -183,25 +214,27 @@ class DoubleWishboneCorner(PlantModel):
                              physicsClientId=c)
             p.enableJointForceTorqueSensor(b, j, True, physicsClientId=c)
         self._arm_r_com = np.array(p.getLinkState(b, LOWER_ARM, physicsClientId=c)[2])
-        ua_o = 0.5 * (UPPER_BUSH_FRONT + UPPER_BUSH_REAR)
+        ua_o = 0.5 * (g.upper_bush_front + g.upper_bush_rear)
         self._c_upper = p.createConstraint(
             b, UPPER_ARM, b, HUB, p.JOINT_POINT2POINT, [0, 0, 0],
-            _local(b, UPPER_ARM, UPPER_BALL_JOINT - ua_o, c),
-            _local(b, HUB, UPPER_BALL_JOINT - LOWER_BALL_JOINT, c), physicsClientId=c)
+            _local(b, UPPER_ARM, g.upper_ball_joint - ua_o, c),
+            _local(b, HUB, g.upper_ball_joint - g.lower_ball_joint, c), physicsClientId=c)
         self._c_tie = p.createConstraint(
             b, TIE_ROD, b, HUB, p.JOINT_POINT2POINT, [0, 0, 0],
-            _local(b, TIE_ROD, TIE_ROD_OUTER - TIE_ROD_INNER, c),
-            _local(b, HUB, TIE_ROD_OUTER - LOWER_BALL_JOINT, c), physicsClientId=c)
+            _local(b, TIE_ROD, g.tie_rod_outer - g.tie_rod_inner, c),
+            _local(b, HUB, g.tie_rod_outer - g.lower_ball_joint, c), physicsClientId=c)
         for cid in (self._c_upper, self._c_tie):
             p.changeConstraint(cid, maxForce=1e9, physicsClientId=c)
         # hardpoints in their links' frames (fixed): the damper mounts, the bumper pad, the
         # points whose accelerations plant/response carries
-        self._loc_top = self._local_point(BODY, DAMPER_UPPER)
-        self._loc_bot = self._local_point(LOWER_ARM, DAMPER_LOWER)
-        self._loc_pad = self._local_point(LOWER_ARM, BUMP_STOP_PAD)
-        self._loc_accel = [(name, self._local_point(LOWER_ARM, la.to_corner(pt)),
+        self._loc_top = self._local_point(BODY, g.damper_upper)
+        self._loc_bot = self._local_point(LOWER_ARM, g.damper_lower)
+        # no pad (a corner without a bumper): the pad's place is the ball joint's (unused)
+        self._loc_pad = self._local_point(LOWER_ARM, g.lower_ball_joint
+                                          if g.bump_stop_pad is None else g.bump_stop_pad)
+        self._loc_accel = [(name, self._local_point(LOWER_ARM, g.to_corner(pt)),
                             tuple(f"a_arm_{name}_{axis}" for axis in "xyz"))
-                           for name, pt in ARM_ACCEL_POINTS.items()]
+                           for name, pt in g.arm_accel_points.items()]
         self._dt: float | None = None
         self._F_t = 0.0
         self._F_d = 0.0
@@ -257,10 +290,12 @@ class DoubleWishboneCorner(PlantModel):
     def _link_local(self) -> dict[int, np.ndarray]:
         # link frame origins in the static corner frame (all link frames axis-aligned at t=0)
         if not hasattr(self, "_ll"):
-            origins = {BODY: np.zeros(3), LOWER_ARM: 0.5 * (LOWER_BUSH_FRONT + LOWER_BUSH_REAR),
-                       HUB: LOWER_BALL_JOINT, UPPER_ARM: 0.5 * (UPPER_BUSH_FRONT
-                                                                + UPPER_BUSH_REAR),
-                       TIE_ROD: TIE_ROD_INNER}
+            g = self.geom
+            origins = {BODY: np.zeros(3),
+                       LOWER_ARM: 0.5 * (g.lower_bush_front + g.lower_bush_rear),
+                       HUB: g.lower_ball_joint,
+                       UPPER_ARM: 0.5 * (g.upper_bush_front + g.upper_bush_rear),
+                       TIE_ROD: g.tie_rod_inner}
             self._ll = {k: np.hstack([np.eye(3), -o[:, None]]) for k, o in origins.items()}
         return self._ll
 
@@ -335,10 +370,11 @@ class DoubleWishboneCorner(PlantModel):
 
     def spring_force(self) -> np.ndarray:
         """Dynamic torsion-bar torque expressed as a vertical force at the ball joint,
-        K_theta (theta - theta_0) / L with L = :func:`cosim.lower_arm.lever_ball_joint`
-        (0.294 m), upward on the body [N]."""
+        K_theta (theta - theta_0) / L with L the corner's ball-joint lever
+        (:func:`cosim.lower_arm.lever_ball_joint`, 0.294 m, for the built-in corner), upward
+        on the body [N]."""
         return np.array([self.params.k_theta * (self._theta - self._theta0)
-                         / la.lever_ball_joint()])
+                         / self.geom.lever_ball_joint])
 
     def extra_response(self) -> dict[str, np.ndarray]:
         """``F_bs``: the jounce-bumper force [N] (>= 0) the next substep applies."""
@@ -383,8 +419,9 @@ class DoubleWishboneCorner(PlantModel):
         d.update({"model": self.name, "corner_names": ["FL"], "wheel_x": [0.0],
                   "wheel_track": [0], "unsprung_mass": [self.params.unsprung_mass],
                   "torsion_preload_nm": self.tau0,
-                  "arm_points": {k: [float(x) for x in to_arm_frame(v)]
-                                 for k, v in ARM_POINTS.items()},
+                  "corner": self.corner.name,
+                  "arm_points": {k: [float(x) for x in self.geom.to_arm_frame(v)]
+                                 for k, v in self.geom.arm_points.items()},
                   "bump_stop": None if bs is None else {
                       "clearance_m": bs.clearance, "initial_rate_n_per_m": bs.initial_rate,
                       "stroke_m": bs.stroke}})
@@ -451,7 +488,7 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     applies on its child body B, world axes; it is not needed here.)
     """
     c, b = model.client, model.body
-    R_af = ARM_ROTATION
+    R_af = model.geom.arm_rotation
     R_arm, hub_quat, u = model._applied_pose  # the pose at the start of the substep
     to_arm = R_af.T @ R_arm.T  # world -> arm frame
     r_com = model._arm_r_com  # the arm's centre of mass in its link frame
@@ -461,7 +498,7 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
     F0, F1, F2 = (R_af.T @ np.array(w[:3])).tolist()
     M0, M1, M2 = (R_af.T @ np.array(M_link)).tolist()
-    d = BUSH_SPACING
+    d = model.geom.bush_spacing
     front = (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d)
     rear = (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d)
 

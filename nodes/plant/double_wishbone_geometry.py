@@ -2,8 +2,11 @@
 named points, and its URDF (links with masses and inertias, joints). Pure numbers and text, no
 PyBullet; :mod:`.double_wishbone` builds the multi-body model from them.
 
-**Hardpoints** (the thesis gives none: "the actual dimensions of the arms are not available";
-plausible values for a small MPV, our reasoning). Corner frame = vehicle axes (x forward,
+**Hardpoints** are data: a corner file (:mod:`cosim.corner`, docs/corners.md) read into a
+:class:`CornerGeometry`; the module's constants (``LOWER_BALL_JOINT``, ``ARM_ROTATION``, ...)
+are the built-in corner's, ``cosim/corners/mpv_front.toml``. Its numbers (the thesis gives
+none: "the actual dimensions of the arms are not available"; plausible values for a small MPV,
+our reasoning): Corner frame = vehicle axes (x forward,
 y left, z up) with origin at the static wheel centre of this **front-left** corner (outboard
 = +y, so the arm frame has z up). Metres.
 
@@ -56,12 +59,14 @@ y left, z up) with origin at the static wheel centre of this **front-left** corn
 * *half track* 0.7055 m (t = 1.411 m, Ch. 4 extraction); the body's centre of mass is put on
   the vehicle centreline (it only moves vertically, so its position has no effect).
 
-*Mass properties*: the lower arm's centre of mass is the centroid of its three joints; its
-inertia is that of half its mass spread as a uniform triangle and half lumped in the three
-bosses, over a 40 mm section depth (:func:`lower_arm_inertia`: I_xx 0.061, I_yy 0.048,
-I_zz 0.107 kg m^2 about the centre of mass; the product I_xy = -0.005 kg m^2 is neglected).
-The hub's inertia is a wheel's (spin axis y), the tie rod is a slender rod, the upper arm a
-small triangle.
+*Mass properties*: the built-in lower arm's centre of mass and inertia are the FE arm's
+(:data:`cosim.lower_arm.MASS_PROPERTIES`, scaled to the corner's arm mass; its product of
+inertia is dropped). Another corner's lower arm (other hardpoints: not the FE part's shape)
+takes its mass as a triangle of three equal point masses at its bushes and ball joint
+(centre of mass at their centroid, the inertia of the three points about it, plus 10 % of
+the polar value on each axis for the arm's depth; a model choice, ours: a forged A-arm's mass
+sits mostly in its eyes and bosses). The hub's inertia is a wheel's (spin axis y), the tie
+rod is a slender rod, the upper arm a small triangle (the same for every corner).
 """
 
 from __future__ import annotations
@@ -70,7 +75,9 @@ from typing import Protocol
 
 import numpy as np
 
+from cosim import corner as corner_file
 from cosim import lower_arm as la
+from cosim.corner import Corner
 
 
 class CornerMasses(Protocol):
@@ -89,59 +96,169 @@ class CornerMasses(Protocol):
     def tie_rod_mass(self) -> float: ...
 
 
+# link indices (joint index = child link index)
+BODY, LOWER_ARM, HUB, UPPER_ARM, TIE_ROD = 0, 1, 2, 3, 4
+
+
+class CornerGeometry:
+    """A corner file's points as the PyBullet corner uses them (corner frame [m]), its lower
+    arm's frame and named points, and its URDF. Every number in the same arithmetic as
+    before the corner was a file, so the built-in corner gives the same bits."""
+
+    def __init__(self, corner: Corner) -> None:
+        self.corner = c = corner
+        P = c.points
+        self.wheel_centre = np.array([0.0, 0.0, 0.0])
+        self.lower_bush_front = P["lower_bush_front"]
+        self.lower_bush_rear = P["lower_bush_rear"]
+        self.lower_ball_joint = P["lower_ball_joint"]
+        self.damper_lower = P["damper_lower"]
+        self.damper_upper = P["damper_upper"]
+        self.bump_stop_pad = P.get("bump_stop_pad")
+        self.spring_lower = P.get("spring_lower")
+        self.spring_upper = P.get("spring_upper")
+        self.upper_bush_front = P["upper_bush_front"]
+        self.upper_bush_rear = P["upper_bush_rear"]
+        self.upper_ball_joint = P["upper_ball_joint"]
+        self.tie_rod_inner = P["tie_rod_inner"]
+        self.tie_rod_outer = P["tie_rod_outer"]
+        self.half_track = c.half_track
+        self.builtin = c.source == str(corner_file.BUILTIN)
+        o, R = la.arm_frame_of(c)
+        self.arm_origin, self.arm_rotation = o, R
+        hp = la.hardpoints_of(c)
+        self.arm_hardpoints = hp
+        """The lower arm's load points in its arm frame [m]."""
+        self.arm_points = {"bush_front": self.lower_bush_front,
+                           "bush_rear": self.lower_bush_rear,
+                           "ball_joint": self.lower_ball_joint,
+                           "damper_mount": self.damper_lower}
+        if self.bump_stop_pad is not None:
+            self.arm_points["bump_stop"] = self.bump_stop_pad
+        self.bush_spacing = float(np.linalg.norm(self.lower_bush_front - self.lower_bush_rear))
+        com_arm, self._arm_inertia_per_kg = self._arm_mass_model()
+        self.lower_arm_com = self.to_corner(com_arm)
+        self.arm_accel_points = {
+            "loc1": hp["ball_joint"] - np.array([0.0, 0.020, 0.0]),
+            "cg": com_arm,
+            "loc2": np.array([0.0, 0.020, 0.0]),
+        }
+        self.lever_ball_joint = float(hp["ball_joint"][1])
+        """Horizontal distance of the ball joint from the pivot axis, L [m]."""
+
+    def _arm_mass_model(self) -> tuple[np.ndarray, np.ndarray]:
+        """(centre of mass in the arm frame [m], diagonal inertia per kg [m^2])."""
+        if self.builtin:
+            props = la.MASS_PROPERTIES
+            inertia = np.array(props["inertia_kg_m2"], dtype=float)
+            return (np.array(props["centre_of_mass_m"], dtype=float),
+                    np.diag(inertia) / float(props["mass_kg"]))
+        hp = self.arm_hardpoints
+        pts = np.array([hp["bush_front"], hp["bush_rear"], hp["ball_joint"]])
+        com = pts.mean(axis=0)
+        r = pts - com
+        per_kg = np.array([np.mean(r[:, 1] ** 2 + r[:, 2] ** 2),
+                           np.mean(r[:, 0] ** 2 + r[:, 2] ** 2),
+                           np.mean(r[:, 0] ** 2 + r[:, 1] ** 2)])
+        return com, per_kg + 0.1 * per_kg.sum() / 2.0
+
+    def to_corner(self, point_arm: np.ndarray) -> np.ndarray:
+        """An arm-frame point in the static corner frame [m]."""
+        out: np.ndarray = self.arm_origin + self.arm_rotation @ np.asarray(point_arm, float)
+        return out
+
+    def to_arm_frame(self, point: np.ndarray) -> np.ndarray:
+        """A corner-frame point in the arm frame [m]."""
+        out: np.ndarray = self.arm_rotation.T @ (np.asarray(point, dtype=float)
+                                                 - self.arm_origin)
+        return out
+
+    def lower_arm_inertia(self, mass: float) -> np.ndarray:
+        """(I_xx, I_yy, I_zz) of the lower arm about its centre of mass [kg m^2]."""
+        if self.builtin:  # the FE arm's tensor scaled to ``mass``, as before (same bits)
+            props = la.MASS_PROPERTIES
+            inertia = np.array(props["inertia_kg_m2"], dtype=float)
+            out: np.ndarray = np.diag(inertia) * mass / float(props["mass_kg"])
+            return out
+        return self._arm_inertia_per_kg * mass
+
+    def urdf(self, pr: CornerMasses) -> str:
+        """URDF of the corner (links, inertias, joints) for the given masses. The lower arm's
+        link axes are the corner's (the revolute joint's axis is the arm frame's x, given in
+        them)."""
+        la_o = 0.5 * (self.lower_bush_front + self.lower_bush_rear)
+        ua_o = 0.5 * (self.upper_bush_front + self.upper_bush_rear)
+        ua_com = (self.upper_bush_front + self.upper_bush_rear + self.upper_ball_joint) / 3.0
+        tr_com = 0.5 * (self.tie_rod_inner + self.tie_rod_outer)
+        tr_len = float(np.linalg.norm(self.tie_rod_outer - self.tie_rod_inner))
+        body_com = np.array([0.0, -self.half_track, 0.25])  # on the vehicle centreline
+        la_axis = _fmt(self.arm_rotation[:, 0])
+        ua_axis = self.upper_bush_front - self.upper_bush_rear
+        ua_axis = _fmt(ua_axis / np.linalg.norm(ua_axis))
+        s = ""
+        s += _link("ground", 0, [0, 0, 0], (0, 0, 0))
+        s += _link("body", pr.body_mass, body_com, (100, 100, 100))
+        s += _link("lower_arm", pr.lower_arm_mass, self.lower_arm_com - la_o,
+                   self.lower_arm_inertia(pr.lower_arm_mass))
+        # hub + wheel ~ a disc about y; upper arm a small triangle
+        s += _link("hub", pr.hub_mass, self.wheel_centre - self.lower_ball_joint,
+                   (1.2, 2.0, 1.2))
+        s += _link("upper_arm", pr.upper_arm_mass, ua_com - ua_o, (0.012, 0.01, 0.02))
+        # slender rod along y: I_perp = m L^2 / 12, I_axis = m r^2 / 2 with r = 10 mm
+        i_perp = pr.tie_rod_mass * tr_len ** 2 / 12.0
+        s += _link("tie_rod", pr.tie_rod_mass, tr_com - self.tie_rod_inner,
+                   (i_perp, pr.tie_rod_mass * 1e-4 / 2.0, i_perp))
+        s += _joint("body_z", "prismatic", "ground", "body", [0, 0, 0], "0 0 1")
+        s += _joint("lower_arm_pivot", "revolute", "body", "lower_arm", la_o, la_axis)
+        s += _joint("lower_ball_joint", "spherical", "lower_arm", "hub",
+                    self.lower_ball_joint - la_o)
+        s += _joint("upper_arm_pivot", "revolute", "body", "upper_arm", ua_o, ua_axis)
+        s += _joint("tie_rod_inner", "spherical", "body", "tie_rod", self.tie_rod_inner)
+        return f'<?xml version="1.0"?>\n<robot name="double_wishbone">\n{s}</robot>\n'
+
+
+_G = CornerGeometry(corner_file.builtin())
+"""The built-in corner's geometry; the constants below are its."""
+
 # ---- hardpoints in the corner frame [m] (see module docstring) ----
-WHEEL_CENTRE = np.array([0.0, 0.0, 0.0])
+WHEEL_CENTRE = _G.wheel_centre
 ARM_ORIGIN = la.ARM_ORIGIN
 """Lower-arm frame origin (bush midpoint) in the corner frame; arm axes = corner axes."""
-# lower arm: cosim.lower_arm, arm frame -> corner frame
-LOWER_BUSH_FRONT = la.to_corner(la.BUSH_FRONT)
-LOWER_BUSH_REAR = la.to_corner(la.BUSH_REAR)
-LOWER_BALL_JOINT = la.to_corner(la.BALL_JOINT)
-DAMPER_LOWER = la.to_corner(la.DAMPER_MOUNT)
-BUMP_STOP_PAD = la.to_corner(la.BUMP_STOP_PAD)
-DAMPER_UPPER = np.array([DAMPER_LOWER[0], -0.206, 0.40])  # above the seat: no fore-aft lean
-UPPER_BUSH_FRONT = np.array([0.14, -0.34, 0.18])
-UPPER_BUSH_REAR = np.array([-0.14, -0.34, 0.18])
-UPPER_BALL_JOINT = np.array([-0.005, -0.10, 0.20])
-TIE_ROD_INNER = np.array([-0.14, -0.350, -0.037])
-TIE_ROD_OUTER = np.array([-0.14, -0.072, -0.03])
-HALF_TRACK = 0.7055
+LOWER_BUSH_FRONT = _G.lower_bush_front
+LOWER_BUSH_REAR = _G.lower_bush_rear
+LOWER_BALL_JOINT = _G.lower_ball_joint
+DAMPER_LOWER = _G.damper_lower
+BUMP_STOP_PAD: np.ndarray = _G.bump_stop_pad  # type: ignore[assignment]  # the built-in has one
+DAMPER_UPPER = _G.damper_upper  # above the seat: no fore-aft lean
+UPPER_BUSH_FRONT = _G.upper_bush_front
+UPPER_BUSH_REAR = _G.upper_bush_rear
+UPPER_BALL_JOINT = _G.upper_ball_joint
+TIE_ROD_INNER = _G.tie_rod_inner
+TIE_ROD_OUTER = _G.tie_rod_outer
+HALF_TRACK = _G.half_track
 
-LOWER_ARM_COM = la.to_corner(np.array(la.MASS_PROPERTIES["centre_of_mass_m"]))
+LOWER_ARM_COM = _G.lower_arm_com
 """Lower arm's centre of mass (corner frame) [m]: the FE arm's (cosim.lower_arm)."""
 
 
 def arm_frame() -> tuple[np.ndarray, np.ndarray]:
     """(origin, R): the lower-arm frame in the corner frame at static ride height; columns of
     R are the arm's x, y, z axes, so p_arm = R.T @ (p_corner - origin)."""
-    o = 0.5 * (LOWER_BUSH_FRONT + LOWER_BUSH_REAR)
-    ex = LOWER_BUSH_FRONT - LOWER_BUSH_REAR
-    ex /= np.linalg.norm(ex)
-    d = LOWER_BALL_JOINT - o
-    ey = d - ex * (d @ ex)
-    ey /= np.linalg.norm(ey)
-    return o, np.column_stack([ex, ey, np.cross(ex, ey)])
+    return la.arm_frame_of(_G.corner)
 
 
 def to_arm_frame(point: np.ndarray) -> np.ndarray:
     """A corner-frame point in the arm frame [m]."""
     o, R = arm_frame()
-    return R.T @ (np.asarray(point, dtype=float) - o)
+    out: np.ndarray = R.T @ (np.asarray(point, dtype=float) - o)
+    return out
 
 
-ARM_POINTS = {
-    "bush_front": LOWER_BUSH_FRONT, "bush_rear": LOWER_BUSH_REAR,
-    "ball_joint": LOWER_BALL_JOINT, "damper_mount": DAMPER_LOWER,
-    "bump_stop": BUMP_STOP_PAD,
-}
+ARM_POINTS = _G.arm_points
 """The lower arm's load points (corner frame); :func:`to_arm_frame` gives them in the arm frame
 (equal to :data:`cosim.lower_arm.HARDPOINTS`, tested)."""
 
-ARM_ACCEL_POINTS = {
-    "loc1": la.BALL_JOINT - np.array([0.0, 0.020, 0.0]),
-    "cg": np.array(la.MASS_PROPERTIES["centre_of_mass_m"], dtype=float),
-    "loc2": np.array([0.0, 0.020, 0.0]),
-}
+ARM_ACCEL_POINTS = _G.arm_accel_points
 """Points of the lower arm whose accelerations ``plant/response`` carries (thesis Table 5.4),
 in the arm frame [m]. The thesis names them only "Loc1" (near the hub), the arm's "CG" and
 "Loc2" (near the body pivot / gearbox); its arm drawing is not available, so:
@@ -157,11 +274,12 @@ in the arm frame [m]. The thesis names them only "Loc1" (near the hub), the arm'
 
 For an arm turning about its pivot axis (x) the vertical acceleration of a point is the
 body's plus the arm's angular acceleration times the point's distance from that axis, so
-it falls from Loc1 to the CG to Loc2, as in Table 5.4."""
+it falls from Loc1 to the CG to Loc2, as in Table 5.4. (Another corner: the same rule on its
+own arm.)"""
 
 ARM_ROTATION = arm_frame()[1]
 """The arm frame's axes in the corner frame at static ride height (columns x, y, z)."""
-BUSH_SPACING = float(np.linalg.norm(LOWER_BUSH_FRONT - LOWER_BUSH_REAR))
+BUSH_SPACING = _G.bush_spacing
 """Distance between the two lower bush centres, d [m]."""
 
 
@@ -182,41 +300,12 @@ def _joint(name, kind, parent, child, origin, axis="1 0 0"):
 
 
 def lower_arm_inertia(mass: float) -> np.ndarray:
-    """(I_xx, I_yy, I_zz) of the lower arm about its centre of mass [kg m^2]: the FE arm's
-    inertia tensor (:data:`cosim.lower_arm.MASS_PROPERTIES`) scaled to ``mass``; its one
+    """(I_xx, I_yy, I_zz) of the built-in lower arm about its centre of mass [kg m^2]: the FE
+    arm's inertia tensor (:data:`cosim.lower_arm.MASS_PROPERTIES`) scaled to ``mass``; its one
     product of inertia (I_xy, 6 % of I_xx) is dropped (the URDF link is axis-aligned)."""
-    props = la.MASS_PROPERTIES
-    inertia = np.array(props["inertia_kg_m2"], dtype=float)
-    return np.diag(inertia) * mass / float(props["mass_kg"])
-
-
-# link indices (joint index = child link index)
-BODY, LOWER_ARM, HUB, UPPER_ARM, TIE_ROD = 0, 1, 2, 3, 4
+    return _G.lower_arm_inertia(mass)
 
 
 def corner_urdf(pr: CornerMasses) -> str:
-    """URDF of the corner (links, inertias, joints) for the given masses."""
-    la_o = 0.5 * (LOWER_BUSH_FRONT + LOWER_BUSH_REAR)
-    ua_o = 0.5 * (UPPER_BUSH_FRONT + UPPER_BUSH_REAR)
-    ua_com = (UPPER_BUSH_FRONT + UPPER_BUSH_REAR + UPPER_BALL_JOINT) / 3.0
-    tr_com = 0.5 * (TIE_ROD_INNER + TIE_ROD_OUTER)
-    tr_len = float(np.linalg.norm(TIE_ROD_OUTER - TIE_ROD_INNER))
-    body_com = np.array([0.0, -HALF_TRACK, 0.25])  # on the vehicle centreline
-    s = ""
-    s += _link("ground", 0, [0, 0, 0], (0, 0, 0))
-    s += _link("body", pr.body_mass, body_com, (100, 100, 100))
-    s += _link("lower_arm", pr.lower_arm_mass, LOWER_ARM_COM - la_o,
-               lower_arm_inertia(pr.lower_arm_mass))
-    # hub + wheel ~ a disc about y; upper arm a small triangle
-    s += _link("hub", pr.hub_mass, WHEEL_CENTRE - LOWER_BALL_JOINT, (1.2, 2.0, 1.2))
-    s += _link("upper_arm", pr.upper_arm_mass, ua_com - ua_o, (0.012, 0.01, 0.02))
-    # slender rod along y: I_perp = m L^2 / 12, I_axis = m r^2 / 2 with r = 10 mm
-    i_perp = pr.tie_rod_mass * tr_len ** 2 / 12.0
-    s += _link("tie_rod", pr.tie_rod_mass, tr_com - TIE_ROD_INNER,
-               (i_perp, pr.tie_rod_mass * 1e-4 / 2.0, i_perp))
-    s += _joint("body_z", "prismatic", "ground", "body", [0, 0, 0], "0 0 1")
-    s += _joint("lower_arm_pivot", "revolute", "body", "lower_arm", la_o)
-    s += _joint("lower_ball_joint", "spherical", "lower_arm", "hub", LOWER_BALL_JOINT - la_o)
-    s += _joint("upper_arm_pivot", "revolute", "body", "upper_arm", ua_o)
-    s += _joint("tie_rod_inner", "spherical", "body", "tie_rod", TIE_ROD_INNER)
-    return f'<?xml version="1.0"?>\n<robot name="double_wishbone">\n{s}</robot>\n'
+    """URDF of the built-in corner (links, inertias, joints) for the given masses."""
+    return _G.urdf(pr)

@@ -4,10 +4,13 @@
 
 * ``quarter_car_lumped`` (Ch. 3 Table 3.1 defaults; Ch. 4 Table 4.3 via the scenario):
   ``sprung_mass``, ``unsprung_mass``, ``spring_stiffness``.
-* ``quarter_car_double_wishbone`` (Table 4.2): ``body_mass``, ``hub_mass``,
+* ``quarter_car_double_wishbone`` (Table 4.2): ``corner``, the corner file (hardpoints,
+  masses, spring, bumper: :mod:`cosim.corner`, docs/corners.md; default the built-in MPV
+  corner ``cosim/corners/mpv_front.toml``; a relative path is relative to the scenario
+  file); the file's values can be overridden by ``body_mass``, ``hub_mass``,
   ``lower_arm_mass``, ``upper_arm_mass``, ``tie_rod_mass``, ``torsion_stiffness_nm_per_deg``;
-  its jounce bumper (:mod:`.bump_stop`): ``bump_stop`` (true/false, default true),
-  ``bump_stop_clearance`` [m], ``bump_stop_initial_rate`` [N/m], ``bump_stop_stroke`` [m].
+  its jounce bumper (:mod:`.bump_stop`): ``bump_stop`` (true/false), ``bump_stop_clearance``
+  [m], ``bump_stop_initial_rate`` [N/m], ``bump_stop_stroke`` [m], ``bump_stop_transition``.
 * ``full_vehicle_7dof`` (Table 4.4): ``sprung_mass_front``, ``sprung_mass_rear``,
   ``unsprung_mass``, ``spring_stiffness``, ``pitch_inertia``, ``roll_inertia``, ``wheelbase``,
   ``track``, ``mass_basis`` ("corner" | "axle").
@@ -23,20 +26,25 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
+from cosim import corner as corner_file
 from cosim.config import ConfigReader
+from cosim.corner import Corner
+from cosim.errors import ScenarioError
 
 from .model import PlantModel
 
 MODELS = ("quarter_car_lumped", "quarter_car_double_wishbone", "full_vehicle_7dof")
 
 
-def _params(cls, r: ConfigReader, choices: dict[str, tuple[str, ...]] | None = None):
-    """``cls(**kwargs)`` from the keys the table gives (the dataclass fills the others)."""
+def _params(cls, r: ConfigReader, choices: dict[str, tuple[str, ...]] | None = None,
+            base: Any = None, extra: tuple[str, ...] = ()):
+    """``cls(**kwargs)`` from the keys the table gives (the dataclass, or ``base``'s values,
+    fill the others); ``extra``: keys of the table read elsewhere."""
     fields = {f.name: f for f in dataclasses.fields(cls)}
-    r.only(["model", *fields])
+    r.only(["model", *extra, *fields])
     kwargs: dict[str, Any] = {}
     for key in r.names():
-        if key == "model":
+        if key == "model" or key in extra:
             continue
         if choices and key in choices:
             kwargs[key] = r.choice(key, choices[key])
@@ -44,7 +52,7 @@ def _params(cls, r: ConfigReader, choices: dict[str, tuple[str, ...]] | None = N
             kwargs[key] = r.boolean(key)
         else:
             kwargs[key] = r.number(key, positive=True)
-    return cls(**kwargs)
+    return cls(**kwargs) if base is None else dataclasses.replace(base, **kwargs)
 
 
 def build_plant_model(cfg: Mapping[str, Any], key_prefix: str = "vehicle") -> PlantModel:
@@ -59,4 +67,19 @@ def build_plant_model(cfg: Mapping[str, Any], key_prefix: str = "vehicle") -> Pl
         return FullVehicle7DOF(_params(FullVehicleParams, r,
                                        {"mass_basis": ("corner", "axle")}))
     from .double_wishbone import DoubleWishboneCorner, DoubleWishboneParams  # the third model
-    return DoubleWishboneCorner(_params(DoubleWishboneParams, r))
+    corner = read_corner(r)
+    params = _params(DoubleWishboneParams, r, base=DoubleWishboneParams.from_corner(corner),
+                     extra=("corner",))
+    try:
+        return DoubleWishboneCorner(params, corner=corner)
+    except ValueError as exc:  # what the PyBullet corner cannot build from that file
+        raise ScenarioError(r.key("corner"), corner.source, str(exc)) from None
+
+
+def read_corner(r: ConfigReader) -> Corner:
+    """The ``corner`` key's corner file (the built-in MPV corner when absent or
+    ``"builtin"``); a bad file raises :class:`cosim.errors.InputFileError`."""
+    path = r.string("corner", "builtin")
+    if path == "builtin":
+        return corner_file.builtin()
+    return corner_file.load(path)
