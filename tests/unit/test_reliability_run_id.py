@@ -14,9 +14,8 @@ from cosim import keys
 from cosim import scenario as sc
 from cosim.bus import MemoryBus
 from cosim.errors import InputFileError, ScenarioError
-from cosim.run_lock import FolderInUseError, RunIdInUseError, RunLock
+from cosim.run_lock import FolderInUseError, RunIdInUseError, RunLock, check_run_id_free
 from nodes.tyre_road import profile_csv
-from orchestrator.runner import check_run_id_free
 from tests.conftest import CH3_STEP, ROOT, node_pids, suscosim
 
 
@@ -61,17 +60,18 @@ def test_suscosim_run_into_a_folder_in_use_exits_2_before_writing(tmp_path) -> N
 
 def test_a_run_id_live_on_the_bus_is_refused_unless_its_node_is_external() -> None:
     bus = MemoryBus()
-    check_run_id_free(bus, "r", [])
+    free = lambda rid, ext: check_run_id_free(bus, rid, ext, settle_s=0.05)  # noqa: E731
+    free("r", [])
     tok = bus.token(keys.key("r", "plant", keys.ALIVE))  # a node started elsewhere
-    check_run_id_free(bus, "r", ["plant"])
+    free("r", ["plant"])
     with pytest.raises(RunIdInUseError, match="plant"):
-        check_run_id_free(bus, "r", [])
+        free("r", [])
     tok.undeclare()
     bus.token(keys.key("r", keys.ORCHESTRATOR, keys.ALIVE))  # another run's orchestrator
     with pytest.raises(RunIdInUseError, match="already live on the bus") as err:
-        check_run_id_free(bus, "r", ["plant"])
+        free("r", ["plant"])
     assert err.value.exit_code == 2
-    check_run_id_free(bus, "other", [])
+    free("other", [])
 
 
 def test_run_ids_of_one_invocation_share_a_random_part() -> None:
