@@ -49,7 +49,15 @@ from .auth import RunKey
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import RunError, WireError
-from .wire import MAX_MESSAGE_BYTES, Message, decode, encode
+from .wire import (
+    MAX_MESSAGE_BYTES,
+    ChannelCodec,
+    Message,
+    codec,
+    decode,
+    encode,
+    plausible_records,
+)
 
 log = logging.getLogger("suscosim.node")
 
@@ -100,6 +108,8 @@ class Participant:
         self._floor: dict[Channel, int] = {}  # the step a stepped input was last waited for
         self._keyof: dict[Channel, str] = {_CLOCK_TAG: keys.key(run, *_CLOCK_TAG)}
         self.rejected = 0
+        self._codecs: dict[str, ChannelCodec | bool] = {}
+        self._out_codecs: dict[str, ChannelCodec] = {}
         self._outputs: dict[str, Any] = {}
         self._records: list[tuple[str, bytes]] = []
         self._records_bytes = 0
@@ -144,8 +154,35 @@ class Participant:
 
     def open(self, key: str, raw: bytes) -> Message:
         """Verify (with the run's key) and decode a message received on ``key``; raises
-        :class:`WireError` (an :class:`cosim.auth.AuthError` for a bad signature)."""
-        return decode(self.auth.verify(key, raw) if self.auth is not None else raw)
+        :class:`WireError` (an :class:`cosim.auth.AuthError` for a bad signature). A data
+        channel's message is checked against its schema (:class:`cosim.wire.ChannelCodec`:
+        finite, within the channel's bounds, ``k``, ``t`` >= 0; a records batch message by
+        message)."""
+        body = self.auth.verify(key, raw) if self.auth is not None else raw
+        dec = self._codecs.get(key)
+        if dec is None:
+            dec = self._codec_of(key)
+        if not isinstance(dec, ChannelCodec):
+            return decode(body)
+        msg = dec.decode(body)
+        if msg.kind == "records" and dec.records:
+            msg, why = plausible_records(dec.node, msg)
+            for reason in why:
+                self.reject((dec.node, keys.RECORDS), reason)
+        return msg
+
+    def _codec_of(self, key: str) -> ChannelCodec | bool:
+        """The codec of the channel of ``key`` (False: a control key, decoded generically)."""
+        try:
+            _, node, channel = keys.parse_key(key)
+        except ValueError:
+            return False
+        dec: ChannelCodec | bool = False
+        if node != keys.ORCHESTRATOR and channel not in (keys.CTL, keys.ALIVE):
+            dec = codec(f"{node}/{channel}")
+        if len(self._codecs) < 256:
+            self._codecs[key] = dec
+        return dec
 
     def _listen(self, tag: Channel) -> None:
         put = self.inbox.put
@@ -178,6 +215,7 @@ class Participant:
     def output(self, channel: str) -> None:
         """Declare an output channel (a publisher on ``suscosim/<run>/<node>/<channel>``)."""
         self._outputs[channel] = self._publisher(keys.key(self.run, self.node, channel))
+        self._out_codecs[channel] = codec(f"{self.node}/{channel}")
         if self._records_pub is None:
             self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
 
@@ -209,6 +247,11 @@ class Participant:
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "
                            f"(at most {MAX_MESSAGE_BYTES}: split it)")
+        try:  # what a consumer would reject is never sent: a diverged model ends here
+            self._out_codecs[channel].decode(raw)
+        except WireError as exc:
+            raise RunError(f"{self.node} cannot publish {exc} (did the model diverge?)") \
+                from None
         self._outputs[channel](raw)
         if record:
             if self._records_bytes + len(raw) > MAX_MESSAGE_BYTES - 1024:

@@ -1,0 +1,233 @@
+"""The typed channel schema, declared once: every data channel's fields, units and bounds.
+
+From :data:`CHANNELS` the rest is derived:
+
+* the wire codec's plausibility checks (:func:`cosim.wire.decode` with a channel, and
+  :meth:`cosim.participant.Participant.publish`): a data message of a declared channel is
+  decoded by a compiled msgspec decoder whose numbers are bounded by the channel's
+  :attr:`Channel.limit` (NaN fails every bound; +-inf and e.g. 1e308 fail a finite one), its
+  non-negative fields checked after it; a producer refuses to publish what a consumer would
+  reject (a diverged model ends the run naming the field, rather than filling the table with
+  NaN);
+* the fields a consumer requires (:func:`required`) and the coupling fields a force node
+  provides (:func:`coupling`, the registry's ``provides``), the registry's output channels
+  (:func:`writes`);
+* the docs' channel table (:func:`doc_table`, in docs/cosim.md; a test keeps them equal) and
+  the recorder's column names (``node/channel/field``, :func:`columns`).
+
+Bounds. The thesis fixes none: they are plausibility limits, chosen far outside anything a
+road vehicle's suspension produces, so that they never reject a real run and always reject
+garbage. The channel limit is ``|x| <= 1e9`` in SI units (a force of 1 GN, a displacement of
+1e6 km, a stiffness of 1e9 N/m: the Chapter 6 corner's largest, the bump stop at full
+compression, is below 1e6 N/m and 1e5 N); fields declared ``nonneg`` must be ``>= 0``
+(DESIGN.md: the tyre force is compressive-positive and never negative). Fields a channel
+does not declare (a law's extras, a user's node's outputs, a channel not declared here) are
+type-checked only (numbers or lists of them): a law's extra may be NaN by design (TSS3's
+``F_demand`` where it demands nothing). The compiled decoder bounds every number of a
+message; a message it refuses is taken after all when only undeclared fields were out of
+bounds (the slow path, taken only by such messages).
+
+Per-corner fields are a number for a quarter car and a list of 4 (FL, FR, RL, RR) for a
+full vehicle (:data:`cosim.channels.CORNERS`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Annotated, Any
+
+import msgspec
+
+LIMIT = 1e9
+"""The bound of every number of a vehicle channel [SI units] (see the module's docstring)."""
+DEFAULT_LIMIT = LIMIT
+"""The bound of the compiled decoder of a channel this schema does not declare (its fields
+are undeclared: out of it, they take the slow path and are type-checked only)."""
+
+
+@dataclass(frozen=True)
+class Field:
+    """One field of a channel: ``name``, SI ``unit``, ``meaning``; ``nonneg``: >= 0;
+    ``required``: a message of the channel without it is rejected by the consumers that
+    couple through it; ``models``: the plant models (or nodes) that publish it, for the
+    docs ("" : all)."""
+
+    name: str
+    unit: str
+    meaning: str
+    nonneg: bool = False
+    required: bool = False
+    models: str = ""
+
+
+@dataclass(frozen=True)
+class Channel:
+    """One data channel ``node/channel`` (key ``suscosim/<run>/<node>/<channel>``)."""
+
+    node: str
+    channel: str
+    fields: tuple[Field, ...]
+    meaning: str
+    limit: float = LIMIT
+    """Every number of a message is within ``[-limit, limit]`` (inf: only NaN is refused)."""
+    stepped: bool = True
+    """One message per communication step (else a block channel: not recorded in the table)."""
+
+    @property
+    def name(self) -> str:
+        return f"{self.node}/{self.channel}"
+
+
+_PTS = ("loc1", "cg", "loc2")
+_ARM_POINTS = ("ball_joint", "damper_mount", "bush_front", "bush_rear")
+_DW = "double wishbone"
+_FV = "7-DOF full vehicle"
+
+CHANNELS: tuple[Channel, ...] = (
+    Channel("plant", "state", (
+        Field("z_b", "m", "body displacement at the corner from static equilibrium, at t_k",
+              required=True),
+        Field("v_b", "m/s", "body velocity at the corner", required=True),
+        Field("z_w", "m", "wheel displacement from static equilibrium", required=True),
+        Field("v_w", "m/s", "wheel velocity", required=True),
+        Field("z_damper", "m", "damper compression from static", models=_DW),
+        Field("v_damper", "m/s", "damper compression velocity", models=_DW),
+        Field("arm_angle", "rad", "lower-arm angle from static", models=_DW),
+        Field("heave", "m", "body heave", models=_FV),
+        Field("pitch", "rad", "body pitch", models=_FV),
+        Field("roll", "rad", "body roll", models=_FV),
+        Field("v_heave", "m/s", "heave velocity", models=_FV),
+        Field("w_pitch", "rad/s", "pitch rate", models=_FV),
+        Field("w_roll", "rad/s", "roll rate", models=_FV),
+    ), "the plant's state at t_k (what the force nodes compute step k's forces from)"),
+    Channel("plant", "response", (
+        Field("a_b", "m/s^2", "body acceleration at t_k under the forces of step k"),
+        Field("a_w", "m/s^2", "wheel acceleration at t_k"),
+        Field("F_t", "N", "tyre force the plant applied at t_k"),
+        Field("F_d", "N", "damper force the plant applied at t_k"),
+        Field("F_s", "N", "suspension spring force on the body, dynamic part"),
+        Field("F_bs", "N", "jounce-bumper force, compression-positive", nonneg=True,
+              models=_DW),
+        *(Field(f"a_arm_{p}_{ax}", "m/s^2", f"acceleration of arm point {p} along {ax} "
+                "(thesis Table 5.4; kinematic, 0 at rest)", models=_DW)
+          for p in _PTS for ax in "xyz"),
+        Field("alpha_pitch", "rad/s^2", "body pitch acceleration", models=_FV),
+        Field("alpha_roll", "rad/s^2", "body roll acceleration", models=_FV),
+    ), "the plant's response of step k (published with the state of step k + 1)"),
+    Channel("plant", "arm", (
+        *(Field(f"{p}_{ax}", "N", f"load ON the lower arm at {p}, arm-frame {ax} axis "
+                "(cosim/lower_arm.py)", models=_DW)
+          for p in _ARM_POINTS for ax in "xyz"),
+        Field("bump_stop_y", "N", "bumper force on the arm at its pad, arm-frame y",
+              models=_DW),
+        Field("bump_stop_z", "N", "bumper force on the arm at its pad, arm-frame z (<= 0)",
+              models=_DW),
+        Field("torsion_bar_mx", "N m", "torsion-bar moment on the arm about its x axis, "
+              "preload included", models=_DW),
+    ), "the component loads of step k (realistic models only)"),
+    Channel("tyre_road", "force", (
+        Field("F_t", "N", "tyre force, compressive-positive, absolute", nonneg=True,
+              required=True),
+        Field("k_t", "N/m", "dF_t/d(z_g - z_w), 0 when lifted off (for coupling)",
+              nonneg=True, required=True),
+        Field("z_g", "m", "road height under the wheel's contact centre"),
+    ), "the tyre force of step k"),
+    Channel("controller", "force", (
+        Field("F_d", "N", "damper force on the body, upward positive", required=True),
+        Field("c_eff", "N s/m", "dF_d/d(v_w - v_b) (for coupling)", required=True),
+        Field("I", "A", "MR damper current (MR laws)"),
+        Field("state", "-", "switching state, 1 hard / 0 soft (two-state laws)"),
+    ), "the damper force of step k, and the law's extras"),
+    Channel("recorder", "loads", (
+        Field("k0", "-", "first step of the block", nonneg=True, required=True),
+        Field("t", "s", "(n,) times of the steps", nonneg=True, required=True),
+    ), "a block of steps k0..k of plant/arm in step order (each plant/arm field as an (n,) "
+       "list); only with a live fatigue node", stepped=False),
+    Channel("fatigue", "damage", (
+        Field("max_damage", "-", "largest Miner damage of any node so far", nonneg=True),
+        Field("critical_node_id", "-", "the node of it"),
+        Field("distance_m", "m", "road covered so far", nonneg=True),
+        Field("life_km", "km", "projected minimum life (inf: no damage yet)", nonneg=True),
+    ), "the live fatigue node's damage so far", limit=math.inf, stepped=False),
+)
+"""Every declared data channel (see the module's docstring)."""
+
+BY_NAME: dict[str, Channel] = {c.name: c for c in CHANNELS}
+
+
+def channel(node: str, name: str) -> Channel | None:
+    """The declared channel ``node/name`` (None: not declared)."""
+    return BY_NAME.get(f"{node}/{name}")
+
+
+def required(node: str, name: str) -> tuple[str, ...]:
+    """The fields a message of ``node/name`` must have for the consumers that couple
+    through it."""
+    c = channel(node, name)
+    return tuple(f.name for f in c.fields if f.required) if c else ()
+
+
+def coupling(node: str) -> tuple[str, ...]:
+    """The coupling fields of ``node``'s ``force`` (the registry's ``provides``)."""
+    return required(node, "force")
+
+
+def writes(node: str) -> tuple[str, ...]:
+    """The declared data channels ``node`` publishes, in declaration order."""
+    return tuple(c.channel for c in CHANNELS if c.node == node)
+
+
+def columns(node: str, name: str, fields: Iterable[str] | None = None) -> list[str]:
+    """The table's column names of ``node/name``: ``node/name/field`` (the declared fields,
+    or ``fields``)."""
+    c = channel(node, name)
+    names = list(fields) if fields is not None else [f.name for f in c.fields] if c else []
+    return [f"{node}/{name}/{f}" for f in names]
+
+
+def doc_table() -> str:
+    """The channel table of docs/cosim.md (markdown), from :data:`CHANNELS`."""
+    rows = ["| channel | field | unit | bound | meaning |", "|---|---|---|---|---|"]
+    for c in CHANNELS:
+        lim = "finite" if c.limit == math.inf else f"abs <= {c.limit:.0e}"
+        rows.append(f"| `{c.name}` | | | {lim} | {c.meaning} |")
+        for f in c.fields:
+            bound = ">= 0" if f.nonneg else ""
+            extra = (" (required)" if f.required else "") + (f" ({f.models})" if f.models else "")
+            rows.append(f"| | `{f.name}` | {f.unit} | {bound} | {f.meaning}{extra} |")
+    return "\n".join(rows)
+
+
+# ---- the compiled decoders ------------------------------------------------------------------
+def _number(limit: float) -> Any:
+    """int | float within [-limit, limit] (NaN fails any bound: comparisons with it are
+    false); a bool is not a number."""
+    if limit == math.inf:
+        return int | Annotated[float, msgspec.Meta(ge=-math.inf, le=math.inf)]
+    return Annotated[int, msgspec.Meta(ge=-int(limit), le=int(limit))] | \
+        Annotated[float, msgspec.Meta(ge=-limit, le=limit)]
+
+
+def payload_type(limit: float) -> Any:
+    """The type of a data payload: field -> a bounded number or a non-empty list of them."""
+    num = _number(limit)
+    return dict[str, num | Annotated[list[num], msgspec.Meta(min_length=1)]]  # type: ignore
+
+
+def nonneg_fields(node: str, name: str) -> tuple[str, ...]:
+    """The fields of ``node/name`` that must be >= 0."""
+    c = channel(node, name)
+    return tuple(f.name for f in c.fields if f.nonneg) if c else ()
+
+
+def negative(d: dict[str, Any], names: tuple[str, ...]) -> str | None:
+    """The first of ``names`` in ``d`` with a value < 0 (None: none)."""
+    for f in names:
+        v = d.get(f)
+        if v is None:
+            continue
+        if (min(v) if type(v) is list else v) < 0:
+            return f
+    return None
