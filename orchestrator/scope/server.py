@@ -8,12 +8,19 @@
     GET /<file>           the page's script and style, and the vendored uPlot files
 
 Loopback only unless told otherwise (``--host``): the page shows a run's data to whoever
-reaches the port.
+reaches the port. A request must also name the server in its ``Host`` header by a name it
+answers to (:func:`allowed_hosts`), else it gets 403: a web page elsewhere whose name is made
+to resolve to 127.0.0.1 (DNS rebinding) would otherwise read the run's data through the
+browser. Served on loopback, the names are ``localhost``, ``127.0.0.1`` and ``[::1]`` with
+the port; served on an address (``--host 192.168.1.5``) that address and this machine's host
+names too; on every address (``--host 0.0.0.0`` or ``::``) any IP address literal as well.
 """
 
 from __future__ import annotations
 
+import ipaddress
 import json
+import socket
 import threading
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
@@ -31,7 +38,76 @@ FILES = {"/": ("scope.html", "text/html; charset=utf-8"),
          "/uPlot.LICENSE": ("uPlot.LICENSE", "text/plain; charset=utf-8")}
 
 
-def _handler(state: ScopeState) -> type[BaseHTTPRequestHandler]:
+LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
+"""The host names a loopback-only scope answers to (with its port)."""
+
+
+def _is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False
+
+
+def _is_wildcard(host: str) -> bool:
+    return host.strip("[]") in ("", "0.0.0.0", "::")
+
+
+def allowed_hosts(host: str) -> tuple[set[str], bool]:
+    """The names a scope served on ``host`` answers to in a ``Host`` header (lower case,
+    without the port), and whether any IP address literal is accepted too (``host`` a
+    wildcard: every address of the machine is served)."""
+    names = set(LOOPBACK_NAMES)
+    if _is_loopback(host):
+        return names, False
+    if not _is_wildcard(host):
+        bare = host.strip("[]").lower()
+        names.add(f"[{bare}]" if ":" in bare else bare)
+    for name in (socket.gethostname(), socket.getfqdn()):
+        if name:
+            names.add(name.lower())
+    return names, _is_wildcard(host)
+
+
+def host_header_ok(value: str | None, names: set[str], any_ip: bool, port: int) -> bool:
+    """Whether a request's ``Host`` header ``value`` names this server: one of ``names`` (or
+    an IP literal when ``any_ip``) with ``port`` (or without one when the port is 80)."""
+    if not value:
+        return False
+    value = value.strip().lower()
+    if value.startswith("["):
+        name, _, rest = value.partition("]")
+        name += "]"
+        given = rest[1:] if rest.startswith(":") else None
+        if rest and given is None:
+            return False
+    else:
+        name, sep, given_s = value.rpartition(":")
+        if not sep:
+            name, given_s = value, ""
+        given = given_s if sep else None
+    if given is None:
+        if port != 80:
+            return False
+    elif given != str(port):
+        return False
+    if name in names:
+        return True
+    if any_ip:
+        try:
+            ipaddress.ip_address(name.strip("[]"))
+            return name.startswith("[") == (":" in name)  # IPv6 only in brackets
+        except ValueError:
+            return False
+    return False
+
+
+def _handler(state: ScopeState, names: set[str] | None = None,
+             any_ip: bool = False) -> type[BaseHTTPRequestHandler]:
+    """The request handler; ``names`` (None: every Host accepted) and ``any_ip`` as
+    :func:`allowed_hosts` gives them."""
     class Handler(BaseHTTPRequestHandler):
         server_version = "suscosim-scope"
 
@@ -53,6 +129,15 @@ def _handler(state: ScopeState) -> type[BaseHTTPRequestHandler]:
         def do_GET(self) -> None:  # noqa: N802 (stdlib name)
             url = urlsplit(self.path)
             try:
+                host = self.headers.get("Host")
+                addr = self.server.server_address  # (host, port) of an IP socket
+                port = int(addr[1]) if isinstance(addr, tuple) else 0
+                if names is not None and not host_header_ok(host, names, any_ip, port):
+                    self._json({"error": f"Host {host!r}: this scope answers to "
+                                         f"{', '.join(sorted(names))} with port {port} "
+                                         "(serve it with --host to be reached by another "
+                                         "name)"}, 403)
+                    return
                 if url.path == "/data":
                     q = parse_qs(url.query)
                     try:
@@ -78,7 +163,9 @@ class ScopeServer:
     """The HTTP server on ``host:port`` (port 0: a free one), serving in a thread."""
 
     def __init__(self, state: ScopeState, host: str = "127.0.0.1", port: int = 0) -> None:
-        self.httpd = ThreadingHTTPServer((host, port), _handler(state))
+        self.allowed_names, any_ip = allowed_hosts(host)
+        self.httpd = ThreadingHTTPServer((host, port), _handler(state, self.allowed_names,
+                                                                any_ip))
         self.httpd.daemon_threads = True
         self._thread = threading.Thread(target=self.httpd.serve_forever, name="scope-http",
                                         daemon=True)

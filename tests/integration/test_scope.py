@@ -488,3 +488,48 @@ def test_open_hands_the_url_to_the_browser(tmp_path, unwatched) -> None:
         assert seen.read_text() == url
     finally:
         _stop(scope)
+
+
+# ---- the Host header (DNS rebinding, #30 item 16; a real server, no run) --------------------
+def _get_with_host(port: int, host: str | None) -> int:
+    """The status of ``GET /meta`` sent to 127.0.0.1:port with ``Host: host`` (None: none)."""
+    import http.client
+
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+    try:
+        conn.putrequest("GET", "/meta", skip_host=True)
+        if host is not None:
+            conn.putheader("Host", host)
+        conn.endheaders()
+        return conn.getresponse().status
+    finally:
+        conn.close()
+
+
+def test_the_scope_answers_only_to_loopback_host_names() -> None:
+    from orchestrator.scope.selection import Selection
+    from orchestrator.scope.server import ScopeServer, allowed_hosts, host_header_ok
+    from orchestrator.scope.state import ScopeState
+
+    server = ScopeServer(ScopeState("r1", Selection(["plant/state"])), "127.0.0.1", 0)
+    server.start()
+    try:
+        port = server.httpd.server_address[1]
+        for ok in (f"localhost:{port}", f"127.0.0.1:{port}", f"[::1]:{port}",
+                   f"LOCALHOST:{port}"):
+            assert _get_with_host(port, ok) == 200, ok
+        for bad in (f"evil.example:{port}", "evil.example", f"localhost:{port + 1}",
+                    "localhost", f"127.0.0.1.evil.example:{port}", f"10.0.0.1:{port}", None):
+            assert _get_with_host(port, bad) == 403, bad
+    finally:
+        server.close()
+    # served on every address: loopback names, this machine's names and IP literals
+    names, any_ip = allowed_hosts("0.0.0.0")
+    assert any_ip and "localhost" in names
+    assert host_header_ok("192.168.1.5:8470", names, any_ip, 8470)
+    assert host_header_ok("[fe80::1]:8470", names, any_ip, 8470)
+    assert not host_header_ok("evil.example:8470", names, any_ip, 8470)
+    names, any_ip = allowed_hosts("192.168.1.5")
+    assert not any_ip and host_header_ok("192.168.1.5:80", names, any_ip, 80)
+    assert host_header_ok("192.168.1.5", names, any_ip, 80)
+    assert not host_header_ok("192.168.1.6:80", names, any_ip, 80)
