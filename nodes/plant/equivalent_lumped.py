@@ -38,9 +38,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from cosim import lower_arm as la
+from cosim.corner import Corner
 
-from .double_wishbone import DAMPER_LOWER, DAMPER_UPPER, DoubleWishboneCorner
+from .double_wishbone import DoubleWishboneCorner
 from .model import PlantModel
 from .quarter_car_lumped import LumpedQuarterCar, LumpedQuarterCarParams
 
@@ -128,23 +128,28 @@ def geometric_estimates(dw: DoubleWishboneCorner) -> dict[str, float]:
     """What the corner's geometry predicts at the ball joint: k = K_theta / L^2 [N/m] with
     L = the ball-joint lever, c = C (MR cos(lean))^2 [N s/m] with MR = damper seat lever / L and
     the damper's lean from the vertical in the plane normal to the pivot axis."""
-    L = la.lever_ball_joint()
-    axis = DAMPER_UPPER - DAMPER_LOWER
+    g = dw.geom
+    L = g.lever_ball_joint
+    axis = g.damper_upper - g.damper_lower
     lean = float(np.arctan2(abs(axis[1]), axis[2]))
+    mr = float(g.arm_hardpoints["damper_mount"][1] / g.arm_hardpoints["ball_joint"][1])
     return {"k_s_lever": dw.params.k_theta / L ** 2,
-            "c_s_lever": C_DAMPER * (la.motion_ratio_damper() * np.cos(lean)) ** 2,
+            "c_s_lever": C_DAMPER * (mr * np.cos(lean)) ** 2,
             "lever_m": L, "damper_lean_deg": float(np.degrees(lean))}
 
 
-def identify(step: float = 0.01, dt: float = 1e-3, t_end: float = 4.0) -> dict[str, float]:
-    """Equivalent lumped parameters of the realistic corner (steps 1-5 of the module doc):
+def identify(step: float = 0.01, dt: float = 1e-3, t_end: float = 4.0,
+             corner: Corner | None = None) -> dict[str, float]:
+    """Equivalent lumped parameters of the realistic corner (``corner``: a corner file,
+    default the built-in; its nominal damper rate is used) (steps 1-5 of the module doc):
     ``k_s``, ``c_s`` (2-DOF equivalent), ``k_s_app2``, ``c_s_app2`` (Appendix II as printed),
     ``m_b``, ``m_w`` [kg], ``k_t``, the log decrement's ``delta``, ``zeta``, ``T`` [s],
     ``omega_n`` [rad/s], ``f_n`` [Hz], and the geometric estimates."""
-    dw = DoubleWishboneCorner()
+    dw = DoubleWishboneCorner(corner=corner)
+    c_d = C_DAMPER if corner is None else corner.damper_c_nominal
     try:
         r = simulate(dw, t_end, dt, lambda t: step if t >= 0.05 else 0.0,
-                     lambda st: C_DAMPER * float(st["v_damper"][0]))
+                     lambda st: c_d * float(st["v_damper"][0]))
         m_b, m_w = dw.params.body_mass, dw.params.unsprung_mass
         geo = geometric_estimates(dw)
     finally:
