@@ -19,10 +19,17 @@ endurance              "haibach"            below the S-N curve's Se: "haibach" 
                                             Miner, slope 2k-1), "elementary" (no damage) or
                                             "none"; tested on the mean-corrected amplitude
 endurance_limit        (old key)            true = "elementary", false = "none"
-material               {}                   overrides: E, nu, rho, Su, Sy, sf', b, ef', c,
+material               {}                   name = a material of the shipped database
+                                            (materials/materials.toml, default "817M40");
+                                            overrides: E, nu, rho, Su, Sy, sf', b, ef', c,
                                             K', n', Se (Pa; primes optional); and
                                             cyclic = "uml" | "table_6_2" | "compatible"
-component              {}                   the arm's S-N curve (Marin factors), below
+component              {}                   the arm's S-N curve (Shigley or FKM), below
+sn_curve               none                 an S-N curve as data (replaces the component
+                                            curve): type = "points" (points = [[N, S], ..],
+                                            stress = "amplitude" | "range") or "segments"
+                                            (nCode: sri1_pa (range at 1 cycle), b1, nc1,
+                                            b2); name, source (text); `sn_data`
 mesh_size_m            0.02                 built-in FE element size (m)
 nodes                  "surface"            "surface" or "all" nodes analysed
 track_length_m         none                 length of one pass (m); else from the road/run
@@ -49,6 +56,15 @@ reliability            0.5                  R of the curve: ke = 1 - 0.08 z_a (0
 temperature_c          20.0                 operating temperature (°C) for kd
 kf                     1.0                  miscellaneous-effects factor (peening, ...)
 knee_cycles            1e6                  cycles Ne at the knee (Se)
+method                 "shigley"            the primary curve: "shigley" (Marin chain) or
+                                            "fkm" (FKM guideline, `fkm`); batch results give
+                                            the life under both (``sn_methods`` in summary)
+survival_probability   0.975                the second probability the lives are given at
+fkm                    {}                   FKM inputs (`fkm.FKMSpec`): rz_um 200,
+                                            f_w_sigma 0.45, a_r_sigma 0.22, rm_n_min_pa 4e8,
+                                            a_m 0.35, b_m -0.1, k_slope 5, support_factor 1,
+                                            k_v 1, k_s 1, k_a 1, d_eff_m none, a_dm 0.3,
+                                            d_eff_n_m 0.016 (knee_cycles shared)
 =====================  ===================  =================================================
 """
 
@@ -58,11 +74,14 @@ import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 from cosim.config import ConfigReader
+from cosim.errors import ScenarioError
 
 from .damage import METHODS
 from .equivalent_stress import EQUIVALENTS
+from .fkm import FKMSpec, fkm_sn_curve
 from .life_models import ENDURANCE_MODES
 from .material import (
     ALIASES,
@@ -73,11 +92,16 @@ from .material import (
     Material,
     compatibility,
     component_sn_curve,
+    database_material,
+    material_names,
     material_sn_curve,
-    steel_817M40,
     with_overrides,
 )
 from .mean_stress import MEAN_STRESS_METHODS
+from .sn_data import TabulatedSN, ncode_curve, points_curve
+
+SN_METHODS = ("shigley", "fkm")
+"""Named component S-N methods (``component.method``)."""
 
 NODE_SETS = ("surface", "all")
 RESIDUES = ("repeated", "half_cycles")
@@ -97,7 +121,12 @@ class FatigueConfig:
     endurance: str = "haibach"
     material_overrides: tuple[tuple[str, float], ...] = ()
     cyclic: str = "uml"
+    material_name: str = "817M40"
     component: ComponentSpec | None = field(default_factory=ComponentSpec)
+    sn_method: str = "shigley"
+    survival_probability: float = 0.975
+    fkm: FKMSpec = field(default_factory=FKMSpec)
+    sn_table: TabulatedSN | None = None
     mesh_size_m: float = 0.02
     nodes: str = "surface"
     track_length_m: float | None = None
@@ -113,10 +142,18 @@ class FatigueConfig:
 
     @property
     def material(self) -> Material:
-        """817M40 with the overrides, its S-N curve (component or material) attached."""
-        mat = with_overrides(steel_817M40(self.cyclic), dict(self.material_overrides))
-        if self.component is None:
+        """The named material with the overrides, its S-N curve attached: the data curve
+        (``sn_curve``), else the component's by ``component.method``, else the material's."""
+        mat = with_overrides(database_material(self.material_name, self.cyclic),
+                             dict(self.material_overrides))
+        sn: Any
+        if self.sn_table is not None:
+            sn = self.sn_table.with_endurance(self.endurance)
+        elif self.component is None:
             sn = material_sn_curve(mat, self.endurance)
+        elif self.sn_method == "fkm":
+            sn = fkm_sn_curve(mat.Su, replace(self.fkm, knee_cycles=self.component.knee_cycles),
+                              self.endurance, self.component.reliability)
         else:
             sn = component_sn_curve(mat, self.component, self.endurance)
         return replace(mat, sn=sn)
@@ -139,6 +176,9 @@ class FatigueConfig:
         d["mapping"] = {c: {"file": f, "scale": s} for c, f, s in self.mapping}
         d["material"] = dict(self.material_overrides)
         d["material"]["cyclic"] = self.cyclic
+        d["material"]["name"] = self.material_name
+        d["sn_curve"] = None if self.sn_table is None else self.sn_table.as_dict()
+        del d["sn_table"]
         if self.component is None:
             d["component"] = {"enabled": False}
         else:
@@ -146,7 +186,7 @@ class FatigueConfig:
             comp["equivalent_diameter_m"] = comp.pop("d_e_m")
             d["component"] = {"enabled": True, **comp}
         d["fatigue_properties"] = self.fatigue_properties()
-        del d["material_overrides"], d["base_dir"], d["cyclic"]
+        del d["material_overrides"], d["base_dir"], d["cyclic"], d["material_name"]
         return d
 
     @classmethod
@@ -161,7 +201,15 @@ class FatigueConfig:
                           "a mapping of load channels to case files for imported tables")
         raw_mat = r.section("material", expected="a table of material overrides")
         cyclic = raw_mat.choice("cyclic", CYCLIC_CURVES, "uml")
+        names = material_names()
+        material_name = raw_mat.choice("name", names, "817M40")
         material_overrides = _material_overrides(raw_mat)
+        raw_comp = r.section("component",
+                             expected="a table of component (S-N method) settings")
+        sn_method = raw_comp.choice("method", SN_METHODS, "shigley")
+        survival = raw_comp.number("survival_probability", 0.975, lo=0.5, hi=0.999999,
+                                   expected="a survival probability between 0.5 and 0.999999")
+        fkm = _fkm(raw_comp.section("fkm", expected="a table of FKM guideline inputs"))
         cfg = cls(
             influence=influence,
             mapping=mapping,
@@ -173,8 +221,12 @@ class FatigueConfig:
             endurance=_endurance(r),
             material_overrides=material_overrides,
             cyclic=cyclic,
-            component=_component(r.section(
-                "component", expected="a table of component (Marin factor) settings")),
+            material_name=material_name,
+            component=_component(raw_comp),
+            sn_method=sn_method,
+            survival_probability=survival,
+            fkm=fkm,
+            sn_table=_sn_table(r, material_name),
             mesh_size_m=r.number("mesh_size_m", 0.02, lo=0.002, hi=0.1, unit="m"),
             nodes=r.choice("nodes", NODE_SETS, "surface"),
             track_length_m=r.optional_number("track_length_m", positive=True),
@@ -184,7 +236,8 @@ class FatigueConfig:
             base_dir=str(base_dir),
         )
         try:
-            mat0 = with_overrides(steel_817M40(cfg.cyclic), dict(cfg.material_overrides))
+            mat0 = with_overrides(database_material(cfg.material_name, cfg.cyclic),
+                                  dict(cfg.material_overrides))
         except ValueError as e:
             raise r.error("material", dict(raw_mat.cfg),
                           f"a consistent material ({e})") from None
@@ -198,7 +251,7 @@ class FatigueConfig:
 
 
 FATIGUE_KEYS = ("influence", "mapping", "stress_scale", "equivalent", "method", "mean_stress",
-                "residue", "endurance", "endurance_limit", "material", "component",
+                "residue", "endurance", "endurance_limit", "material", "component", "sn_curve",
                 "mesh_size_m", "nodes", "track_length_m", "repeats_basis_m", "block_samples",
                 "live")
 """The keys of ``[fatigue]`` (module docstring)."""
@@ -224,10 +277,10 @@ def _mapping(r: ConfigReader) -> tuple[tuple[str, str, float], ...]:
 
 def _material_overrides(r: ConfigReader) -> tuple[tuple[str, float], ...]:
     """``[fatigue.material]`` besides ``cyclic``: (property name, value in SI units)."""
-    r.only([*ALIASES, "cyclic"])
+    r.only([*ALIASES, "cyclic", "name"])
     mat: list[tuple[str, float]] = []
     for mk in r.names():
-        if mk == "cyclic":
+        if mk in ("cyclic", "name"):
             continue
         mv = r.number(mk, expected="a finite number (SI units)")
         name = ALIASES[mk]
@@ -267,11 +320,62 @@ def _live(r: ConfigReader) -> bool | str:
 
 
 COMPONENT_KEYS = ("enabled", "surface", "section_h_m", "section_b_m", "equivalent_diameter_m",
-                  "loading", "reliability", "temperature_c", "kf", "knee_cycles")
+                  "loading", "reliability", "temperature_c", "kf", "knee_cycles", "method",
+                  "survival_probability", "fkm")
+FKM_KEYS = tuple(f for f in FKMSpec.__dataclass_fields__ if f != "knee_cycles")
+SN_TABLE_KEYS = ("type", "points", "stress", "sri1_pa", "b1", "nc1", "b2", "name", "source")
+
+
+def _fkm(r: ConfigReader) -> FKMSpec:
+    """``[fatigue.component.fkm]``: the FKM inputs; a bad value names its key."""
+    r.only(FKM_KEYS)
+    kw: dict[str, Any] = {}
+    for k in FKM_KEYS:
+        if r.has(k):
+            kw[k] = r.number(k, expected="a finite number (see fkm.FKMSpec)")
+    try:
+        return FKMSpec(**kw)
+    except ValueError as e:
+        bad = str(e).split(" ", 1)[0]
+        raise r.error(bad if bad in kw else "fkm", kw.get(bad, kw), str(e)) from None
+
+
+def _sn_table(r: ConfigReader, material_name: str) -> TabulatedSN | None:
+    """``[fatigue.sn_curve]`` (or the named material's ``sn`` in the database)."""
+    from .material import load_database
+
+    if r.has("sn_curve"):
+        t = r.section("sn_curve", expected="a table (type = \"points\" | \"segments\")")
+        key_name = r.key("sn_curve")
+    else:
+        raw = load_database()[material_name].get("sn")
+        if not raw:
+            return None
+        t = ConfigReader(raw, f"materials.toml [{material_name}.sn]")
+        key_name = t.name
+    t.only(SN_TABLE_KEYS)
+    kind = t.choice("type", ("points", "segments"))
+    name = t.string("name", f"S-N {kind} ({key_name})")
+    source = t.string("source", "scenario", empty=True)
+    try:
+        if kind == "points":
+            pts = t.value("points")
+            if not isinstance(pts, list) or not all(
+                    isinstance(p, list) and len(p) == 2 for p in pts):
+                raise t.error("points", pts, "a list of [N cycles, S Pa] pairs")
+            return points_curve(pts, t.choice("stress", ("amplitude", "range"), "amplitude"),
+                                name=name, source=source)
+        return ncode_curve(t.number("sri1_pa", positive=True), t.number("b1", hi=0.0),
+                           t.number("nc1", lo=1.0), t.number("b2", 0.0, hi=0.0),
+                           name=name, source=source)
+    except (ValueError, TypeError) as e:
+        if isinstance(e, ScenarioError):
+            raise
+        raise t.error("points" if kind == "points" else "b1", dict(t.cfg), str(e)) from None
 
 
 def _component(r: ConfigReader) -> ComponentSpec | None:
-    """Validate ``[fatigue.component]``; ScenarioError names the key (``prefix.<key>``)."""
+    """Validate ``[fatigue.component]``'s Marin keys; ScenarioError names the key."""
     r.only(COMPONENT_KEYS)
     enabled = r.boolean("enabled", True)
     defaults = ComponentSpec()

@@ -85,8 +85,9 @@ def cycle_reversals(
     mode = _endurance(curve, endurance_limit)
     sa_e = 0.5 * np.abs(s1 - s2)
     sm_e = 0.5 * (s1 + s2)
+    M = (curve.meta or {}).get("mean_stress_sensitivity")
     if method == "stress_life":
-        sar = equivalent_amplitude(sa_e, sm_e, mean_stress, mat.Su, mat.sf)
+        sar = equivalent_amplitude(sa_e, sm_e, mean_stress, mat.Su, mat.sf, M)
         return curve.with_endurance(mode).reversals(sar)
     if method != "strain_life":
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -97,7 +98,7 @@ def cycle_reversals(
     sign = np.where(peak_e >= 0.0, 1.0, -1.0)
     peak = sign * neuber(np.abs(peak_e), mat)
     sm = peak - sign * sa
-    sar = equivalent_amplitude(sa, sm, mean_stress, mat.Su, mat.sf)
+    sar = equivalent_amplitude(sa, sm, mean_stress, mat.Su, mat.sf, M)
     if mean_stress == "none":
         rev = cmb_reversals(ea, mat)
     elif mean_stress == "morrow":

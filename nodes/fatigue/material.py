@@ -52,8 +52,10 @@ log(2 Ne) (Fig 6-18; f = 0.9 for Sut < 490 MPa); below 10³ cycles the conservat
 from __future__ import annotations
 
 import math
+import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
 from statistics import NormalDist
 from typing import Any
 
@@ -131,41 +133,106 @@ def specimen_endurance_limit(Su: float) -> float:
     return 0.5 * Su if Su <= 1400 * MPa else 700 * MPa
 
 
+DATABASE = Path(__file__).with_name("materials") / "materials.toml"
+"""The shipped material database (schema in its header; docs/fatigue.md)."""
+_REQUIRED = ("E", "nu", "rho", "Su", "Sy")
+_OPTIONAL = ("sf", "b", "ef", "c", "K", "n", "Se", "K_table", "n_table")
+
+
+def load_database(path: Path | None = None) -> dict[str, dict[str, Any]]:
+    """The material tables of a database file (default: the shipped one), by name.
+
+    Raises ValueError naming the file and the material for a missing or non-numeric value.
+    """
+    path = Path(path) if path is not None else DATABASE
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise ValueError(f"{path}: unreadable material database ({exc})") from None
+    for name, entry in data.items():
+        if not isinstance(entry, dict):
+            raise ValueError(f"{path}: [{name}] is not a table")
+        for k in _REQUIRED:
+            if k not in entry:
+                raise ValueError(f"{path}: [{name}] lacks {k}")
+        for k in (*_REQUIRED, *_OPTIONAL):
+            v = entry.get(k)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                raise ValueError(f"{path}: [{name}] {k} = {v!r} is not a number")
+    return data
+
+
+def material_names(path: Path | None = None) -> list[str]:
+    """The names in a material database (default: the shipped one)."""
+    return list(load_database(path))
+
+
+def database_material(name: str = "817M40", cyclic: str = "uml",
+                      path: Path | None = None) -> Material:
+    """Material ``name`` of the database: its values with their sources; each strain-life
+    constant it lacks from the UML, Se' from Shigley Eq 6-8 if absent.
+
+    ``cyclic`` chooses K', n': "uml" (the file's K, n, else 1.65 σu, 0.15), "table_6_2"
+    (the file's K_table, n_table) or "compatible" (σ'f/ε'f^(b/c), b/c).
+    """
+    if cyclic not in CYCLIC_CURVES:
+        raise ValueError(f"cyclic must be one of {CYCLIC_CURVES}, got {cyclic!r}")
+    db = load_database(path)
+    if name not in db:
+        raise ValueError(f"material {name!r} is not in {path or DATABASE} (it has "
+                         + ", ".join(db) + ")")
+    e = db[name]
+    src_file = dict(e.get("source") or {})
+    Su, E = float(e["Su"]), float(e["E"])
+    uml = uniform_material_law(Su, E)
+    est = "Uniform Material Law (Bäumel & Seeger 1990)"
+    vals: dict[str, float] = {}
+    source: dict[str, str] = {}
+    for k in ("E", "nu", "rho", "Su", "Sy"):
+        vals[k] = float(e[k])
+        source[k] = str(src_file.get(k, f"material database [{name}]"))
+    for k in ("sf", "b", "ef", "c"):
+        vals[k] = float(e[k]) if k in e else uml[k]
+        source[k] = str(src_file.get(k, f"material database [{name}]")) if k in e else est
+    if cyclic == "uml":
+        for k in ("K", "n"):
+            vals[k] = float(e[k]) if k in e else uml[k]
+            source[k] = str(src_file.get(k, f"material database [{name}]")) if k in e \
+                else est
+    elif cyclic == "table_6_2":
+        if "K_table" not in e or "n_table" not in e:
+            raise ValueError(f"material {name!r} has no K_table, n_table for "
+                             'cyclic = "table_6_2"')
+        vals["K"], vals["n"] = float(e["K_table"]), float(e["n_table"])
+        source["K"] = str(src_file.get("K_table", "material database"))
+        source["n"] = str(src_file.get("n_table", "material database"))
+    else:
+        vals["n"] = vals["b"] / vals["c"]
+        vals["K"] = vals["sf"] / vals["ef"] ** vals["n"]
+        source["K"] = source["n"] = "compatible with σ'f, ε'f, b, c (Eq 6.7, 6.8)"
+    if "Se" in e:
+        vals["Se"] = float(e["Se"])
+        source["Se"] = str(src_file.get("Se", f"material database [{name}]"))
+    else:
+        vals["Se"] = specimen_endurance_limit(Su)
+        source["Se"] = ("Se' = 0.5 Su (Shigley 9th ed. Eq 6-8, Su <= 1400 MPa)"
+                        if Su <= 1400 * MPa else "Se' = 700 MPa (Shigley 9th ed. Eq 6-8)")
+    return Material(name=name, source=source, **vals)
+
+
 def steel_817M40(cyclic: str = "uml") -> Material:
-    """817M40 quenched and tempered (≈ EN24T / AISI 4340): Table 6.2 + UML estimates.
+    """817M40 quenched and tempered (≈ EN24T / AISI 4340): Table 6.2 + UML estimates, from
+    the shipped database (`database_material`).
 
     ``cyclic`` chooses K', n': "uml" (1.65 σu, 0.15; default), "table_6_2" (1166 MPa, 0.0246,
     implausible, see module docstring) or "compatible" (σ'f/ε'f^(b/c), b/c).
     """
-    if cyclic not in CYCLIC_CURVES:
-        raise ValueError(f"cyclic must be one of {CYCLIC_CURVES}, got {cyclic!r}")
-    Su, E = 1277 * MPa, 200e9
-    uml = uniform_material_law(Su, E)
-    t62 = "thesis Table 6.2"
-    est = "Uniform Material Law (Bäumel & Seeger 1990)"
-    if cyclic == "uml":
-        K, n, ksrc = uml["K"], uml["n"], est
-    elif cyclic == "table_6_2":
-        K, n, ksrc = 1166 * MPa, 0.0246, t62 + " (implausible: n' ~ 0, K' = σy)"
-    else:
-        n = uml["b"] / uml["c"]
-        K, ksrc = uml["sf"] / uml["ef"] ** n, "compatible with UML σ'f, ε'f, b, c (Eq 6.7, 6.8)"
-    return Material(
-        name="817M40",
-        E=E, nu=0.3, rho=7800.0, Su=Su, Sy=1166 * MPa,
-        sf=uml["sf"], b=uml["b"], ef=uml["ef"], c=uml["c"],
-        K=K, n=n,
-        Se=specimen_endurance_limit(Su),
-        source={
-            "E": t62, "nu": t62, "rho": t62, "Su": t62, "Sy": t62, "K": ksrc, "n": ksrc,
-            "sf": est, "b": est, "ef": est, "c": est,
-            "Se": "Se' = 0.5 Su (Shigley 9th ed. Eq 6-8, Su <= 1400 MPa)",
-        },
-    )
+    return database_material("817M40", cyclic)
 
 
 def with_overrides(mat: Material, overrides: Mapping[str, float]) -> Material:
-    """Return ``mat`` with some properties replaced (keys as in `ALIASES`, SI units).
+    """Return ``mat`` with some properties replaced (keys as in `ALIASES`, SI units); its
+    name then says so ("817M40 with Su, Sy overridden"): it is no longer the database's.
 
     Raises KeyError for an unknown name and ValueError for a non-finite value; the config
     layer turns both into a ScenarioError naming the key.
@@ -180,7 +247,10 @@ def with_overrides(mat: Material, overrides: Mapping[str, float]) -> Material:
             raise ValueError(key)
         changes[ALIASES[key]] = v
         src[ALIASES[key]] = "scenario override"
-    return replace(mat, source=src, **changes)
+    name = mat.name
+    if changes:
+        name = f"{mat.name} with {', '.join(changes)} overridden"
+    return replace(mat, name=name, source=src, **changes)
 
 
 def compatibility(mat: Material) -> dict[str, float]:

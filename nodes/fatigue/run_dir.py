@@ -4,7 +4,13 @@ measured load file (RPC III, MDF 4, CSV, Parquet) mapped to the arm's load chann
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -73,11 +79,47 @@ def _merge(base: dict, overrides: dict) -> dict:
     return out
 
 
-def write_results(result: FatigueResult, out: Path) -> None:
-    """damage_per_node.csv, summary.json, damage_map.png in ``out``."""
-    out.mkdir(parents=True, exist_ok=True)
+def strict_json(obj):
+    """``obj`` made strict JSON: inf -> "inf", -inf -> "-inf", NaN -> None, NumPy scalars and
+    arrays -> Python numbers and lists (``json.dumps(..., allow_nan=False)`` then holds)."""
+    if isinstance(obj, dict):
+        return {str(k): strict_json(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [strict_json(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return strict_json(obj.tolist())
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        if math.isnan(v):
+            return None
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return v
+    return obj
+
+
+def summary_dict(result: FatigueResult, extra: dict | None = None) -> dict:
+    """What ``summary.json`` holds: the result's summary, ``fails_first_cycle`` (a node whose
+    damage per pass is infinite: life 0, not an error), and ``extra`` merged in."""
+    s = result.summary()
+    fails = bool(np.isinf(np.asarray(result.damage, dtype=float)).any())
+    s["fails_first_cycle"] = fails
+    if fails:
+        s["min_life_km"] = 0.0
+        s["min_life_repeats"] = 0.0
+        s["verdict"] = ("fails on the first cycle: a cycle's stress (mean-stress corrected) "
+                        "is at or beyond the strength; life 0 km")
+    s.update(extra or {})
+    return strict_json(s)
+
+
+def _write_csv(result: FatigueResult, path: Path) -> None:
     life = result.life_repeats_per_node()
-    with open(out / "damage_per_node.csv", "w", newline="") as fh:
+    with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["node_id", "x_m", "y_m", "z_m", "damage_per_pass", "life_repeats",
                     "life_km", "eq_range_max_pa", "eq_max_pa", "eq_min_pa", "cycles"])
@@ -89,8 +131,62 @@ def write_results(result: FatigueResult, out: Path) -> None:
                         f"{life[i] * result.track_length_m / 1000:.6e}",
                         f"{result.eq_range_max[i]:.6e}", f"{result.eq_max[i]:.6e}",
                         f"{result.eq_min[i]:.6e}", f"{result.n_cycles[i]:g}"])
-    (out / "summary.json").write_text(result.to_json())
-    plot_damage_map(result, out / "damage_map.png")
+
+
+def replace_folder(tmp: Path, out: Path) -> None:
+    """Put the finished folder ``tmp`` at ``out``: the old ``out`` (if any) is renamed aside
+    first and removed after, so ``out`` is always one whole result, never a mix."""
+    old = out.with_name(f".{out.name}.old-{os.getpid()}")
+    if out.exists():
+        if old.exists():
+            shutil.rmtree(old)
+        os.replace(out, old)
+    os.replace(tmp, out)
+    if old.exists():
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def write_results(result: FatigueResult, out: Path, extra: dict | None = None,
+                  extra_files: Callable[[Path], None] | None = None) -> None:
+    """damage_per_node.csv, summary.json (strict JSON, `summary_dict`), damage_map.png in
+    ``out``, written into a folder beside it and renamed into place (`replace_folder`).
+
+    ``extra``: more summary keys; ``extra_files(folder)``: writes more files into the new
+    folder before it is renamed (the batch outputs of :mod:`outputs`).
+    """
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.new-", dir=out.parent))
+    try:
+        tmp.chmod(0o755)  # mkdtemp makes it 0700; a results folder is as readable as others
+        _write_csv(result, tmp / "damage_per_node.csv")
+        if extra_files is not None:
+            extra_files(tmp)
+        text = json.dumps(summary_dict(result, extra), indent=2, allow_nan=False)
+        (tmp / "summary.json").write_text(text)
+        plot_damage_map(result, tmp / "damage_map.png")
+        replace_folder(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def settings_hash(overrides: dict) -> str:
+    """8 hex digits of the SHA-256 of the what-if settings (sorted JSON)."""
+    text = json.dumps(strict_json(overrides), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:8]
+
+
+def unmapped_channels(loads: dict[str, np.ndarray], cases: list[str]) -> list[dict]:
+    """Load channels that no influence case answers to (their load is not in the stresses):
+    ``[{"channel", "peak_abs"}]`` (N or N m)."""
+    out = []
+    for name, v in loads.items():
+        if short_channel(name) not in cases:
+            a = np.asarray(v, dtype=float)
+            out.append({"channel": name, "peak_abs": float(np.max(np.abs(a))) if a.size
+                        else 0.0})
+    return out
 
 
 def _scenario_json(sc_path: Path) -> dict:
@@ -125,17 +221,39 @@ def settings_source(source: Path | None) -> tuple[dict, Path]:
     return sc.load(source), source.parent
 
 
+def _analyse_and_write(t: np.ndarray, loads: dict[str, np.ndarray], cfg: FatigueConfig,
+                       L: float, out: Path, source: str, what_if: dict | None,
+                       progress: Callable[[str], None] | None) -> FatigueResult:
+    """Check the loads, analyse, compute the batch outputs and write ``out`` whole."""
+    from .load_file import check_loads
+    from .outputs import batch_outputs
+
+    check_loads(loads, t, source)
+    say = progress or (lambda _msg: None)
+    say(f"fatigue: {len(t)} samples x {len(loads)} channels, primary S-N curve")
+    result = analyse(t, loads, cfg, L)
+    extra: dict = {"unmapped_channels": unmapped_channels(loads,
+                                                          list(load_influence(cfg).case_names))}
+    if what_if:
+        extra["what_if"] = {"settings": what_if, "hash": settings_hash(what_if)}
+    files, more = batch_outputs(t, loads, cfg, L, result, say)
+    extra.update(more)
+    write_results(result, out, extra, files)
+    return result
+
+
 def fatigue_load_file(path: Path, overrides: dict | None = None,
                       settings: Path | None = None, mapping: dict | None = None,
-                      out: Path | None = None) -> FatigueResult:
+                      out: Path | None = None,
+                      progress: Callable[[str], None] | None = None) -> FatigueResult:
     """Fatigue of the arm under a load file (RPC III / MDF 4 / CSV / Parquet).
 
     The fatigue section (and the road's length, for life in km) come from ``settings`` (a run
     folder or a scenario, see :func:`settings_source`) with ``overrides`` merged in; the track
     length is ``track_length_m`` if given, else the scenario's road. The file's channels are
     mapped to the arm's load channels by :func:`load_file.arm_loads` (``mapping`` from
-    :func:`load_file.parse_map`). Results go to ``out`` (default ``<file>.fatigue/`` beside
-    the file), written as for a run.
+    :func:`load_file.parse_map`), checked by :func:`load_file.check_loads`. Results go to
+    ``out`` (default ``<file>.fatigue/`` beside the file), written as for a run.
     """
     from cosim.formats import read_channels
 
@@ -157,18 +275,31 @@ def fatigue_load_file(path: Path, overrides: dict | None = None,
         raise ScenarioError("fatigue.track_length_m", None,
                             f"the length of road {path.name} covers (m): --set "
                             "track_length_m=... or --scenario RUN_DIR|SCENARIO.toml")
-    result = analyse(cs.t, loads, cfg, L)
+    out = Path(out) if out is not None else path.with_name(path.name + ".fatigue")
+    result = _analyse_and_write(np.asarray(cs.t, dtype=float), loads, cfg, L, out,
+                                str(path), None, progress)
     result.source = f"file:{path.name}"
-    write_results(result, Path(out) if out is not None else
-                  path.with_name(path.name + ".fatigue"))
     return result
 
 
-def fatigue_run_dir(run_dir: Path, overrides: dict | None = None) -> FatigueResult:
-    """Run the fatigue worker on a finished run folder and write ``run_dir/fatigue/``.
+def results_folder(run_dir: Path, overrides: dict | None, out: Path | None = None) -> Path:
+    """Where batch results of a run go: ``out`` if given; else ``run_dir/fatigue`` without
+    overrides (the live results' place) or ``run_dir/fatigue-<settings_hash>`` for a what-if
+    (any override: the live ``fatigue/`` stays)."""
+    if out is not None:
+        return Path(out)
+    return Path(run_dir) / ("fatigue" if not overrides
+                            else f"fatigue-{settings_hash(overrides)}")
+
+
+def fatigue_run_dir(run_dir: Path, overrides: dict | None = None, out: Path | None = None,
+                    progress: Callable[[str], None] | None = None) -> FatigueResult:
+    """Run the fatigue worker on a finished run folder and write its results folder
+    (`results_folder`: ``fatigue/``, ``fatigue-<hash>/`` for a what-if, or ``out``).
 
     Reads ``table.parquet`` (or ``table.csv``) and ``scenario.json`` (its ``fatigue``
-    section, with ``overrides`` merged in: dotted keys relative to that section).
+    section, with ``overrides`` merged in: dotted keys relative to that section). A what-if's
+    settings are in its ``summary.json`` (``what_if``).
     """
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
@@ -176,12 +307,7 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None) -> FatigueResu
     sc_path = run_dir / "scenario.json"
     if not sc_path.is_file():
         raise InputFileError(str(sc_path), "resolved scenario not found")
-    try:
-        scenario = json.loads(sc_path.read_text())
-    except json.JSONDecodeError as exc:
-        raise InputFileError(str(sc_path), f"invalid JSON ({exc.msg})", exc.lineno) from None
-    if not isinstance(scenario, dict):
-        raise InputFileError(str(sc_path), "top level is not an object")
+    scenario = _scenario_json(sc_path)
     section = scenario.get("fatigue", {}) or {}
     if not isinstance(section, dict):
         raise ScenarioError("fatigue", section, "a table")
@@ -191,6 +317,5 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None) -> FatigueResu
     if not any(short_channel(k) for k in loads):
         raise InputFileError(str(run_dir / "table"), "no plant/arm/... load columns")
     L = cfg.track_length_m if cfg.track_length_m is not None else track_length(scenario, t)
-    result = analyse(t, loads, cfg, L)
-    write_results(result, run_dir / "fatigue")
-    return result
+    return _analyse_and_write(t, loads, cfg, L, results_folder(run_dir, overrides, out),
+                              str(run_dir / "table"), overrides or None, progress)

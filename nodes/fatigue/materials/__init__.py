@@ -1,0 +1,1 @@
+"""Shipped material database (materials.toml); read by nodes.fatigue.material."""

@@ -1,0 +1,215 @@
+"""The batch outputs beside the damage (``suscosim fatigue``; files in the results folder).
+
+* ``sn_methods`` (summary): the minimum life under both named component S-N methods,
+  Shigley/Marin (with the scenario's mean-stress correction) and FKM (its own Haigh diagram,
+  M_σ), each at the scenario's reliability (``component.reliability``, median by default)
+  and at ``component.survival_probability``; ``life_range_km`` their range. Each is a full
+  re-analysis of the same loads with that curve (the critical node may move).
+* ``critical_stress.csv``: t, the six stress components and the equivalent stress at the
+  critical node (Pa), by superposition of the recorded loads.
+* ``rainflow_matrix.csv``: the range-mean rainflow matrix (long form, non-empty bins) of the
+  critical node's equivalent stress (Pa) and of every load channel (N, N m).
+* ``pseudo_damage.csv`` and ``pseudo_damage`` (summary): every load channel's pseudo-damage
+  (:mod:`pseudo_damage`, k = 5).
+* ``sn_plot.png`` / ``sn_plot.json``: the S-N curves (both methods, median) with the
+  critical node's cycles on them (its cumulative spectrum of σar per pass, and the same
+  spectrum x the life: the cycles to failure).
+* ``damage.vtu``: the assessed nodes with damage per pass, life (km) and log10 damage as
+  point data (VTK vertices), for ParaView.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from .config import SN_METHODS, FatigueConfig
+from .counting import count_series
+from .damage import sn_curve
+from .equivalent_stress import equivalent
+from .influence import short_channel
+from .mean_stress import equivalent_amplitude
+from .pseudo_damage import K_REF, channel_pseudo_damage, matrix_rows, rainflow_matrix
+from .superposition import stress_history
+from .worker import FatigueResult, analyse, load_influence
+
+
+def method_config(cfg: FatigueConfig, method: str, P: float) -> FatigueConfig | None:
+    """``cfg`` with the component curve of ``method`` at survival probability P (FKM with
+    its own mean-stress rule); None without a component curve (a data curve or none)."""
+    if cfg.component is None or cfg.sn_table is not None:
+        return None
+    ms = "fkm" if method == "fkm" else (cfg.mean_stress if cfg.mean_stress != "fkm"
+                                        else "goodman")
+    return replace(cfg, sn_method=method, mean_stress=ms,
+                   component=replace(cfg.component, reliability=P))
+
+
+def method_lives(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
+                 primary: FatigueResult, say: Callable[[str], None]) -> dict | None:
+    """``sn_methods``: {method: {"P=...": {life_km, critical_node_id, ...}}} and the range."""
+    if cfg.component is None or cfg.sn_table is not None:
+        return None
+    out: dict = {}
+    lives = []
+    for m in SN_METHODS:
+        out[m] = {}
+        for P in dict.fromkeys((cfg.component.reliability, cfg.survival_probability)):
+            c = method_config(cfg, m, P)
+            assert c is not None
+            same = (m == cfg.sn_method and c.mean_stress == cfg.mean_stress
+                    and P == cfg.component.reliability)
+            if same:
+                r = primary
+            else:
+                say(f"fatigue: S-N method {m} at P = {P:g}")
+                r = analyse(t, loads, c, L)
+            sn = c.material.sn
+            out[m][f"{P:g}"] = {
+                "survival_probability": P, "mean_stress": c.mean_stress,
+                "life_km": r.life_km, "life_repeats": r.life_repeats,
+                "critical_node_id": r.critical_node_id, "max_damage_per_pass": r.max_damage,
+                "Se_pa": sn.Se, "k": sn.k, "curve": sn.as_dict()}
+            lives.append(r.life_km)
+    return {"methods": out, "life_range_km": [min(lives), max(lives)]}
+
+
+def _case_matrix(loads: dict, cases: list[str], n: int) -> np.ndarray:
+    F = np.zeros((n, len(cases)))
+    by_short = {short_channel(k): np.asarray(v, dtype=float) for k, v in loads.items()}
+    for j, c in enumerate(cases):
+        if c in by_short:
+            F[:, j] = by_short[c]
+    return F
+
+
+def critical_history(t: np.ndarray, loads: dict, cfg: FatigueConfig,
+                     result: FatigueResult) -> tuple[np.ndarray, np.ndarray]:
+    """(stress (n, 6) Pa, equivalent stress (n,) Pa) at the critical node."""
+    inf = load_influence(cfg)
+    c = result.critical_node
+    F = _case_matrix(loads, list(inf.case_names), len(t))
+    s = stress_history(F, inf.coefficients[:, c:c + 1, :])
+    return s[:, 0, :], equivalent(s, cfg.equivalent)[:, 0]
+
+
+def sn_plot(path_png: Path, cfg: FatigueConfig, eq: np.ndarray, result: FatigueResult,
+            methods: dict | None) -> dict:
+    """The S-N plot (PNG) and its data (returned, and written as JSON beside it)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cyc = count_series(eq, cfg.residue)
+    mat = cfg.material
+    curve = sn_curve(mat)
+    M = (curve.meta or {}).get("mean_stress_sensitivity")
+    sar = equivalent_amplitude(0.5 * cyc.range, cyc.mean, cfg.mean_stress, mat.Su, mat.sf, M)
+    order = np.argsort(sar)[::-1]
+    s_sorted = sar[order]
+    cum = np.cumsum(cyc.count[order])
+    keep = np.isfinite(s_sorted) & (s_sorted > 0)
+    N = np.logspace(0, 9, 200)
+    curves = {"primary": {"name": curve.name, "N": N.tolist(),
+                          "S_pa": curve.stress(2 * N).tolist()}}
+    for m in SN_METHODS:
+        c = method_config(cfg, m, cfg.component.reliability) if cfg.component else None
+        if c is not None:
+            sn = c.material.sn
+            curves[m] = {"name": sn.name, "N": N.tolist(), "S_pa": sn.stress(2 * N).tolist()}
+    life = result.life_repeats if np.isfinite(result.life_repeats) else None
+    data = {"curves": curves, "critical_node_id": result.critical_node_id,
+            "mean_stress": cfg.mean_stress,
+            "spectrum": {"S_pa": s_sorted[keep].tolist(), "cumulative_cycles": cum[keep].tolist()},
+            "life_repeats": life}
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for key, cv in curves.items():
+        ax.loglog(cv["N"], np.asarray(cv["S_pa"]) / 1e6, "-" if key == "primary" else "--",
+                  label=f"{key}: {cv['name']}")
+    if keep.any():
+        ax.loglog(cum[keep], s_sorted[keep] / 1e6, "k.", ms=3,
+                  label=f"node {result.critical_node_id}: cycles per pass")
+        if life:
+            ax.loglog(cum[keep] * life, s_sorted[keep] / 1e6, ".", color="tab:red", ms=3,
+                      label=f"x life ({life:.3g} passes)")
+    ax.set_xlabel("cycles N")
+    ax.set_ylabel(f"σar (MPa, {cfg.mean_stress} corrected amplitude)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(f"S-N curves and the cycles of the critical node {result.critical_node_id}")
+    fig.tight_layout()
+    fig.savefig(path_png, dpi=100)
+    plt.close(fig)
+    path_png.with_suffix(".json").write_text(json.dumps(data, allow_nan=False))
+    return data
+
+
+def write_vtu(path: Path, result: FatigueResult) -> bool:
+    """``damage.vtu``: the nodes as VTK vertices with damage, life and log10 damage."""
+    if result.node_xyz is None:
+        return False
+    import meshio
+
+    D = np.asarray(result.damage, dtype=float)
+    with np.errstate(divide="ignore"):
+        life = np.where(D > 0, result.track_length_m / 1000.0 / D, np.inf)
+        logd = np.where(D > 0, np.log10(np.where(D > 0, D, 1.0)), -300.0)
+    big = np.finfo(float).max
+    pts = np.asarray(result.node_xyz, dtype=float)
+    mesh = meshio.Mesh(pts, [("vertex", np.arange(len(pts)).reshape(-1, 1))],
+                       point_data={"damage_per_pass": np.minimum(D, big),
+                                   "life_km": np.minimum(life, big),
+                                   "log10_damage": np.minimum(logd, 300.0),
+                                   "node_id": np.asarray(result.node_ids, dtype=np.int64)})
+    mesh.write(path)
+    return True
+
+
+def batch_outputs(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
+                  result: FatigueResult, say: Callable[[str], None]
+                  ) -> tuple[Callable[[Path], None], dict]:
+    """(a writer of the output files into a folder, the summary keys) for one analysis."""
+    methods = method_lives(t, loads, cfg, L, result, say)
+    say("fatigue: critical-node history, rainflow matrices, pseudo-damage")
+    s6, eq = critical_history(t, loads, cfg, result)
+    pd = channel_pseudo_damage(loads, K_REF, cfg.residue)
+    extra = {"sn_methods": methods,
+             "pseudo_damage": {"k": K_REF, "channels": [p.as_dict() for p in pd]},
+             "outputs": ["critical_stress.csv", "rainflow_matrix.csv", "pseudo_damage.csv",
+                         "sn_plot.png", "sn_plot.json", "damage.vtu"]}
+
+    def write(folder: Path) -> None:
+        with open(folder / "critical_stress.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t_s", "sxx_pa", "syy_pa", "szz_pa", "sxy_pa", "syz_pa", "szx_pa",
+                        f"eq_{cfg.equivalent}_pa"])
+            for i in range(len(t)):
+                w.writerow([f"{t[i]:.9g}", *(f"{v:.6e}" for v in s6[i]), f"{eq[i]:.6e}"])
+        with open(folder / "rainflow_matrix.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["series", "unit", "range_lo", "range_hi", "mean_lo", "mean_hi",
+                        "cycles"])
+            cyc = count_series(eq, cfg.residue)
+            w.writerows(matrix_rows(f"node_{result.critical_node_id}", "Pa",
+                                    rainflow_matrix(cyc)))
+            for name, v in loads.items():
+                unit = "N m" if short_channel(name).endswith("_mx") else "N"
+                w.writerows(matrix_rows(name, unit, rainflow_matrix(
+                    count_series(np.asarray(v, dtype=float), cfg.residue))))
+        with open(folder / "pseudo_damage.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["channel", "k", "ref_range", "n_ref", "cycles", "max_range",
+                        "pseudo_damage", "equivalent_range"])
+            for p in pd:
+                w.writerow([p.channel, p.k, p.ref_range, p.n_ref, p.cycles, p.max_range,
+                            f"{p.pseudo_damage:.6e}", f"{p.equivalent_range:.6e}"])
+        sn_plot(folder / "sn_plot.png", cfg, eq, result, methods)
+        write_vtu(folder / "damage.vtu", result)
+
+    return write, extra
