@@ -1,24 +1,34 @@
-"""The recorder node: every data channel of a run into the journal, then the run's table.
+"""The recorder node: every data channel of a run into the journal and, as the rows complete,
+into the run's table.
 
 It subscribes to the records feed of every producer node of the run
 (``suscosim/<run>/<node>/records``: the node's data messages exactly as it published them, in
 batches of a few steps), appends each valid data message to the append-only journal as it
-arrives, and once every channel has
-delivered every step 0..N, exports ``table.csv`` / ``table.parquet`` and reports per-channel
-statistics to the orchestrator. On an abort it flushes, exports what is complete, and stops.
+arrives (:mod:`cosim.journal`: the durable record) and gives it to the table
+(:class:`cosim.table_writer.TableWriter`: ``table.csv`` / ``table.parquet`` written as rows
+complete, in place when the run ends: #28 item 5, the table comes from what the recorder
+holds, not from re-reading the journal). Once every channel has delivered every step 0..N it
+reports per-channel statistics to the orchestrator. On an abort it flushes, puts the rows
+that are complete in place, and stops. Its memory does not grow with the run (#32): the steps
+each channel delivered are kept as ranges (:class:`~nodes.recorder.steps.StepSet`), the table
+holds only the steps not yet complete.
 
 When the run has a live fatigue node, the recorder also streams the load channel
 (``plant/arm``) to it as blocks on ``recorder/loads`` (see cosim.channels): steps in order,
 no gaps, ``fatigue.block_samples`` steps per block, the last block at the end of the run.
 
 A batch must be signed with the run's key (:meth:`Participant.open`); each data message in
-it must decode and keep the shape of its channel (:class:`ChannelShapes`: a field is a number
-or a list of one length, as in the channel's first message). Anything else is rejected and
-counted, never journaled: one ragged batch cannot make a complete journal unexportable.
+it must decode, be on a channel its node declared, and keep the layout of its channel (the
+same fields, each a number or a list of one length, as in the channel's first message).
+Anything else is rejected and counted, never journaled: one ragged batch cannot make a
+complete journal unexportable. A second message for a step a channel already gave (a
+duplicate: a records batch replayed into the run, #30 item 12) is counted (``duplicates``,
+and as rejected), not journaled: a replay cannot fill the disk.
 """
 
 from __future__ import annotations
 
+import logging
 import queue
 import threading
 import time
@@ -29,47 +39,35 @@ from cosim import channels as ch
 from cosim import keys
 from cosim import node_kinds as nk
 from cosim.errors import RunError, WireError
-from cosim.journal import JournalWriter, read_journal
+from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
 from cosim.load_blocks import LoadStreamer, wire_pieces
 from cosim.participant import Participant
-from cosim.table import build_table, channel_stats, export
-from cosim.wire import decode
+from cosim.table_writer import TableWriter, table_of_journal
+from cosim.wire import Message, decode
 
+from .steps import StepSet
+
+log = logging.getLogger("suscosim.node")
 FLUSH_PERIOD_S = 0.05
-
-
-class ChannelShapes:
-    """The shape of each field of each channel (None: a number; n: a list of n numbers), as
-    its first data message gives it; a later message must match for the fields it shares."""
-
-    def __init__(self) -> None:
-        self.shapes: dict[str, dict[str, int | None]] = {}
-
-    def check(self, channel: str, d: dict[str, Any]) -> str | None:
-        """None if ``d`` fits the channel (the first message fixes it), else what is wrong."""
-        got = {f: (len(v) if type(v) is list else None) for f, v in d.items()}
-        known = self.shapes.get(channel)
-        if known is None:
-            self.shapes[channel] = got
-            return None
-        bad = [f for f, n in got.items() if f in known and known[f] != n]
-        if bad:
-            f = bad[0]
-            return (f"field '{f}' has shape {got[f]} where the channel's first message had "
-                    f"{known[f]} (None: a number)")
-        for f, n in got.items():
-            known.setdefault(f, n)
-        return None
+EARLY_MAX = 100_000
+"""Data messages held before the clock's start says which channels the run has."""
 
 
 def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
-    """Table, exports and stats from a journal on disk (also used after a crash)."""
-    contents = read_journal(journal_path)
-    table, bad = build_table(contents.records)
-    files = export(table, folder) if len(table["t"]) else {}
-    return {"stats": channel_stats(table), "files": files, "rows": int(len(table["t"])),
-            "torn": contents.torn, "undecodable": bad}
+    """Table, exports and stats from a journal on disk, streamed (a crashed recorder's)."""
+    reader: list[JournalReader] = []
+
+    def records() -> JournalReader:
+        reader.append(JournalReader(journal_path))
+        return reader[-1]
+
+    writer, bad = table_of_journal(records, folder)
+    files = writer.close() if writer is not None else {}
+    rows = writer.rows if writer is not None else 0
+    torn = reader[-1].contents().torn if reader else False
+    return {"stats": writer.stats() if writer is not None else {}, "files": files,
+            "rows": rows, "torn": torn, "undecodable": bad}
 
 
 class BlockSender:
@@ -102,12 +100,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
 
     Producers (the coupled kinds of the registry, :func:`cosim.node_kinds.producers`) send
     their data messages, exactly as they published them, in batches on ``<node>/records``
-    (see cosim.participant); each one is validated and journaled.
+    (see cosim.participant); each one is validated, journaled and put in the table.
     """
     run_cfg = scenario["run"]
     folder = Path(run_cfg["dir"])
     journal_path = folder / "journal.msgpack"
     journal = JournalWriter(journal_path, part.run)
+    warm = threading.Thread(target=_import_pyarrow, name="pyarrow-import", daemon=True)
+    warm.start()  # the table's first row group needs it; importing takes seconds when loaded
     producers = [n for n in run_cfg["nodes"] if n in nk.producers() and n != part.node]
     streamer: LoadStreamer | None = None
     sender: BlockSender | None = None
@@ -120,31 +120,47 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     listener = Listener(part, run_cfg["start_timeout_s"])
     for node in producers:
         listener.feed(node, keys.RECORDS, kinds=("records",))
-    shapes = ChannelShapes()
     expected: set[str] = set()
-    got: dict[str, set[int]] = {}
+    got: dict[str, StepSet] = {}
+    table: TableWriter | None = None
+    early: list[tuple[str, str, bytes, Message]] = []
     n_steps = None
+    duplicates = 0
 
-    def record(node: str, channel: str, raw: bytes) -> None:
-        """Validate and journal one data message of ``node/channel``."""
-        try:
-            msg = decode(raw)
-        except WireError as exc:
-            part.reject((node, channel), str(exc))
-            return
+    def record(node: str, channel: str, raw: bytes, msg: Message | None = None) -> None:
+        """Validate, journal and tabulate one data message of ``node/channel``."""
+        nonlocal duplicates
+        if msg is None:
+            try:
+                msg = decode(raw)
+            except WireError as exc:
+                part.reject((node, channel), str(exc))
+                return
         if msg.kind != "data" or msg.k < 0:
+            return
+        if table is None:  # before the start: which channels the run has is not known yet
+            if len(early) < EARLY_MAX:
+                early.append((node, channel, raw, msg))
+            else:
+                part.reject((node, channel), "data before the run's start")
             return
         name = f"{node}/{channel}"
         if n_steps is not None and msg.k > n_steps:
             part.reject((node, channel), f"step {msg.k} after the last step {n_steps}")
             return
-        wrong = shapes.check(name, msg.d)
-        if wrong:
-            part.reject((node, channel), f"step {msg.k}: {wrong}")
+        steps = got.get(name)
+        if steps is None:
+            part.reject((node, channel), f"{name} is not an output {node} declared")
             return
-        # Everything valid is journaled, duplicates included: the table keeps, per step,
-        # the first message that has the channel's fields (see table.build_table).
-        got.setdefault(name, set()).add(msg.k)
+        if msg.k in steps:
+            duplicates += 1
+            part.reject((node, channel), f"step {msg.k} again (a duplicate: not journaled)")
+            return
+        wrong = table.add(name, msg.k, msg.t, msg.d)
+        if wrong:
+            part.reject((node, channel), wrong)
+            return
+        steps.add(msg.k)
         journal.append(name, raw)
         if streamer is not None and sender is not None and name == load_name:
             streamer.add(msg.k, msg.t, msg.d)
@@ -159,12 +175,15 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 continue
             record(batch.node, channel, one)
 
+    def done_k() -> int:
+        return min(got[c].count for c in expected) - 1
+
     last_flush = last_data = time.monotonic()
     try:
         while True:
             now = time.monotonic()
             if n_steps is not None and now - last_data > part.stall_timeout_s:
-                missing = sorted(c for c in expected if len(got.get(c, ())) <= n_steps)
+                missing = sorted(c for c in expected if got[c].count <= n_steps)
                 raise RunError(f"recorder: no data for {part.stall_timeout_s:.1f} s; "
                                f"incomplete: {', '.join(missing)}")
             if now - last_flush >= FLUSH_PERIOD_S:
@@ -177,29 +196,53 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                     if node not in producers:
                         continue  # e.g. the fatigue node: not a per-step channel
                     expected.update(f"{node}/{c}" for c in info.get("outputs", []))
+                got.update((c, StepSet()) for c in expected)
+                if expected:
+                    table = TableWriter(expected, folder)
+                for node, channel, raw, msg in early:
+                    record(node, channel, raw, msg)
+                early.clear()
                 last_data = time.monotonic()
             if batch is None:
                 continue
             feed(batch)
             last_data = time.monotonic()
-            if n_steps is not None:
-                done_k = min(len(got.get(c, ())) for c in expected) - 1
-                part.progress(done_k, done_k * run_cfg["h"])
-                if done_k >= n_steps:
+            if n_steps is not None and expected:
+                k = done_k()
+                part.progress(k, k * run_cfg["h"])
+                if k >= n_steps:
                     break
     except RunError:
         for batch in listener.drain():  # the other nodes' last batches, sent as they stop
             feed(batch)
         journal.close()
-        finalize(journal_path, folder)
+        if table is not None:
+            try:
+                table.close()  # the rows that are complete, in place
+            except OSError as exc:  # a full disk: the journal is the record
+                table.abandon()
+                log.warning("recorder: table not written: %s", exc)
         raise
     journal.close()
-    result = _with_heartbeat(part, n_steps, n_steps * run_cfg["h"],
-                             lambda: finalize(journal_path, folder),
+
+    def finish_table() -> dict[str, Any]:
+        assert table is not None
+        files = table.close()
+        return {"stats": table.stats(), "files": files, "rows": table.rows, "torn": False,
+                "undecodable": 0, "duplicates": duplicates}
+
+    result = _with_heartbeat(part, n_steps, n_steps * run_cfg["h"], finish_table,
                              min(1.0, part.stall_timeout_s / 4))
     if sender is not None:
         sender.close()
     part.finish(n_steps, n_steps * run_cfg["h"], **result)
+
+
+def _import_pyarrow() -> None:
+    try:
+        import pyarrow.parquet  # noqa: F401
+    except ImportError:  # the table's writer says so when it needs it
+        pass
 
 
 def _with_heartbeat(part: Participant, k: int, t: float, work: Any,

@@ -1,5 +1,6 @@
-"""#15 item 1 on a real run's journal: one flipped byte in the middle costs one record, not the
-rest of the run; ``suscosim export`` says so (exit 2, table written alongside) and ``suscosim
+"""#15 item 1, #32 on a real run's journal: one flipped byte in the middle costs the segment it
+hits (the records of one ~50 ms flush), not the rest of the run, and the records lost are
+counted exactly; ``suscosim export`` says so (exit 2, table written alongside) and ``suscosim
 runs`` gives the same record count."""
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from cosim.journal import read_journal
+from cosim.journal import read_journal, segment_index
 from cosim.table import read_table
 
 from ..conftest import CH3_STEP, suscosim
@@ -19,7 +20,7 @@ pytestmark = pytest.mark.integration
 
 def test_flipped_byte_in_a_real_journal(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    res = suscosim("run", str(CH3_STEP), "--set", "run.t_end=0.3", "--out", str(out),
+    res = suscosim("run", str(CH3_STEP), "--set", "run.t_end=2.0", "--out", str(out),
                    "--mode", "monolithic", "--quiet")
     assert res.returncode == 0, res.stdout + res.stderr
     journal = out / "journal.msgpack"
@@ -27,21 +28,25 @@ def test_flipped_byte_in_a_real_journal(tmp_path: Path) -> None:
     rows = len(read_table(out / "table.csv")["t"])
     table_csv = (out / "table.csv").read_bytes()
     data = bytearray(journal.read_bytes())
-    data[len(data) // 2] ^= 0x10
+    hit = len(data) // 2
+    (segment,) = [s for s in segment_index(journal) if s[0] <= hit < s[0] + s[1]]
+    data[hit] ^= 0x10
     journal.write_bytes(bytes(data))
 
     res = suscosim("export", str(journal))
     assert res.returncode == 2, res.stdout + res.stderr
-    assert str(journal) in res.stderr and "1 damaged record(s) skipped" in res.stderr
-    assert "Traceback" not in res.stderr
     exported = json.loads(res.stdout)
-    assert exported["records"] == len(intact.records) - 1 and exported["skipped_records"] == 1
+    lost = exported["skipped_records"]
+    assert str(journal) in res.stderr and f"{lost} damaged record(s) skipped" in res.stderr
+    assert "Traceback" not in res.stderr
+    assert exported["records"] == len(intact.records) - lost  # counted exactly
+    assert lost == segment[2] < len(intact.records) // 2  # one segment, not the rest
     assert (out / "table.csv").read_bytes() == table_csv  # never replaced by a smaller one
     recovered = read_table(out / "table.recovered.csv")
-    assert rows - 1 <= len(recovered["t"]) <= rows  # at most the damaged record's step lost
+    assert rows - lost <= len(recovered["t"]) < rows  # at most the damaged segment's steps
 
     res = suscosim("runs", str(out), "--json")
     assert res.returncode == 0, res.stderr
     (info,) = json.loads(res.stdout)
-    assert info["records"] == exported["records"] and info["skipped_records"] == 1
-    assert "1 damaged record(s) skipped" in info["error"]
+    assert info["records"] == exported["records"] and info["skipped_records"] == lost
+    assert f"{lost} damaged record(s) skipped" in info["error"]

@@ -5,17 +5,20 @@ from cosim.table import build_table, channel_stats
 from cosim.wire import encode
 
 
-def _write(path, n):
-    w = JournalWriter(path, "run1")
+def _write(path, n, version=2, every=1):
+    """``n`` steps of two channels; version 3: a segment every ``every`` steps."""
+    w = JournalWriter(path, "run1", version=version)
     for k in range(n):
         w.append("plant/state", encode("data", k, k * 0.001, {"z_b": 0.001 * k}))
         w.append("tyre_road/force", encode("data", k, k * 0.001, {"F_t": [1.0 * k, 2.0 * k]}))
+        if (k + 1) % every == 0:
+            w.flush()
     w.close()
 
 
 def test_journal_roundtrip_to_table(tmp_path):
     p = tmp_path / "j.msgpack"
-    _write(p, 10)
+    _write(p, 10, version=3, every=3)
     c = read_journal(p)
     assert c.run_id == "run1" and not c.torn and len(c.records) == 20
     table, bad = build_table(c.records)
@@ -40,6 +43,18 @@ def test_torn_last_record_is_tolerated(tmp_path):
     assert len(table["t"]) == 9  # only complete steps (step 9 lost its second channel)
 
 
+def test_a_torn_last_segment_loses_that_segment_and_says_how_many_records(tmp_path):
+    p = tmp_path / "j.msgpack"
+    _write(p, 10, version=3, every=2)  # 5 segments of 4 records
+    with open(p, "r+b") as f:  # a crash in the middle of the last write
+        f.truncate(os.path.getsize(p) - 7)
+    c = read_journal(p)
+    assert c.torn and "torn segment" in c.problem and "4 records" in c.problem
+    assert len(c.records) == 16 and c.torn_records == 4 and not c.skipped
+    table, _ = build_table(c.records)
+    assert len(table["t"]) == 8
+
+
 def test_corrupted_last_record_is_skipped_and_reported(tmp_path):
     p = tmp_path / "j.msgpack"
     _write(p, 5)
@@ -48,6 +63,17 @@ def test_corrupted_last_record_is_skipped_and_reported(tmp_path):
     p.write_bytes(bytes(data))
     c = read_journal(p)
     assert len(c.records) == 9 and c.skipped_records == 1 and "1 damaged record" in c.problem
+
+
+def test_a_corrupted_last_segment_is_skipped_with_its_records_counted(tmp_path):
+    p = tmp_path / "j.msgpack"
+    _write(p, 6, version=3, every=2)
+    data = bytearray(p.read_bytes())
+    data[-6] ^= 0xFF  # inside the last segment's body: its CRC fails
+    p.write_bytes(bytes(data))
+    c = read_journal(p)
+    assert len(c.records) == 8 and c.skipped_records == 4 and not c.torn
+    assert c.problem.startswith("4 damaged record(s) skipped")
 
 
 def test_a_stray_first_message_neither_crashes_nor_displaces_the_channel():

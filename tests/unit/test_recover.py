@@ -12,9 +12,12 @@ from orchestrator import run_recovery, runner
 
 
 def _journal(folder, n: int, pad: int = 0) -> None:
+    import random
+
+    rng = random.Random(1)  # values zstd cannot shrink (the journal's size is the point)
     w = JournalWriter(folder / "journal.msgpack", "r")
     for k in range(n):
-        d = {"z": 1.0 * k} | ({"pad": [0.5] * pad} if pad else {})
+        d = {"z": 1.0 * k} | ({"pad": [rng.random() for _ in range(pad)]} if pad else {})
         w.append("plant/state", encode("data", k, k * 1e-3, d))
         w.append("tyre_road/force", encode("data", k, k * 1e-3, {"F": -2.0 * k}))
     w.close()

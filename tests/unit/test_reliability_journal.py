@@ -1,5 +1,6 @@
-"""#15 item 1: a damaged record costs that record only, and every reader agrees (synthetic
-journals; the real-run version is tests/integration/test_reliability_journal.py)."""
+"""#15 item 1, #32: a damaged segment (version 3) or record (version 2) costs that segment or
+record only, the records lost are counted exactly (#30 item 15), and every reader agrees
+(synthetic journals; the real-run version is tests/integration/test_reliability_journal.py)."""
 
 from __future__ import annotations
 
@@ -16,14 +17,18 @@ from orchestrator.cli import main as cli_main
 CHANNELS = ("plant/state", "tyre_road/force")
 
 
-def _write(path: Path, n: int) -> list[tuple[str, bytes]]:
-    w = JournalWriter(path, "rel")
+def _write(path: Path, n: int, version: int = 2, every: int = 2
+           ) -> list[tuple[str, bytes]]:
+    """``n`` steps of two channels; version 3: a segment every ``every`` steps."""
+    w = JournalWriter(path, "rel", version=version)
     records = []
     for k in range(n):
         for ch in CHANNELS:
             raw = encode("data", k, k * 1e-3, {"z": 0.001 * k, "F": [1.0 * k, -2.0 * k]})
             w.append(ch, raw)
             records.append((ch, raw))
+        if (k + 1) % every == 0:
+            w.flush()
     w.close()
     return records
 
@@ -51,6 +56,55 @@ def test_every_single_byte_flip_costs_one_record_at_most(tmp_path: Path) -> None
         assert all(r in original for r in kept), i  # nothing forged by the damage
         assert [original.index(r) for r in kept] == sorted(original.index(r) for r in kept)
         assert c.skipped_records == 1 or (c.torn and kept == original[:-1]), (i, c.problem)
+
+
+def test_every_single_byte_flip_costs_one_segment_at_most_counted_exactly(
+        tmp_path: Path) -> None:
+    """Version 3: flip each byte after the header in turn: the reader keeps every record but
+    those of the one segment hit (2 steps, 4 records here), in order, and says it lost 4."""
+    p = tmp_path / "j.msgpack"
+    original = _write(p, 6, version=3, every=2)
+    clean = p.read_bytes()
+    per_segment = 2 * len(CHANNELS)
+    for i in range(_header_len(p), len(clean)):
+        data = bytearray(clean)
+        data[i] ^= 0x5A
+        p.write_bytes(bytes(data))
+        c = read_journal(p)
+        kept = c.records
+        assert len(kept) == len(original) - per_segment, (i, c.problem)
+        idx = [original.index(r) for r in kept]
+        assert idx == sorted(idx), i  # in order, nothing forged by the damage
+        lost = sorted(set(range(len(original))) - set(idx))
+        assert lost == list(range(lost[0], lost[0] + per_segment)), i  # one whole segment
+        if c.torn:  # the last segment hit: a torn tail, its records counted from its header
+            assert lost[-1] == len(original) - 1 and c.torn_records in (per_segment, None), i
+        else:
+            assert c.skipped_records == per_segment, (i, c.problem)
+
+
+def test_4_kib_of_zeros_count_what_they_cost(tmp_path: Path) -> None:
+    """#30 item 15: 4 KiB of zeros over a journal reported "1 damaged record" when 41 were
+    lost. Version 3 counts them from the segments around (exact); version 2 estimates them
+    from the stretch's length and says so."""
+    p = tmp_path / "j.msgpack"
+    original = _write(p, 400, version=3, every=5)
+    data = bytearray(p.read_bytes())
+    data[len(data) // 3:len(data) // 3 + 4096] = bytes(4096)
+    p.write_bytes(bytes(data))
+    c = read_journal(p)
+    assert c.skipped_records == len(original) - len(c.records) > 40
+    assert f"{c.skipped_records} damaged record(s) skipped" in c.problem
+    assert "estimated" not in c.problem
+    p2 = tmp_path / "v2.msgpack"
+    original = _write(p2, 400, version=2)
+    data = bytearray(p2.read_bytes())
+    data[len(data) // 3:len(data) // 3 + 4096] = bytes(4096)
+    p2.write_bytes(bytes(data))
+    c = read_journal(p2)
+    lost = len(original) - len(c.records)
+    assert lost > 40 and abs(c.skipped_records - lost) <= 0.1 * lost, (lost, c.problem)
+    assert "(estimated from its length)" in c.problem
 
 
 def test_a_flipped_length_byte_mid_journal_is_not_taken_for_a_torn_tail(tmp_path: Path) -> None:
@@ -93,7 +147,7 @@ def test_version_1_journals_are_still_read(tmp_path: Path) -> None:
 def test_export_of_a_damaged_journal_writes_alongside_and_exits_2(tmp_path: Path,
                                                                    capsys) -> None:
     p = tmp_path / "journal.msgpack"
-    original = _write(p, 100)
+    original = _write(p, 100, version=3, every=1)  # a segment a step
     assert cli_main(["export", str(p)]) == 0  # intact: table.csv, exit 0
     good_csv = (tmp_path / "table.csv").read_bytes()
     capsys.readouterr()
@@ -102,18 +156,18 @@ def test_export_of_a_damaged_journal_writes_alongside_and_exits_2(tmp_path: Path
     p.write_bytes(bytes(data))
     assert cli_main(["export", str(p)]) == 2
     out, err = capsys.readouterr()
-    assert str(p) in err and "1 damaged record(s) skipped" in err and "table.recovered.csv" in err
+    assert str(p) in err and "2 damaged record(s) skipped" in err and "table.recovered.csv" in err
     assert (tmp_path / "table.csv").read_bytes() == good_csv  # left as it was
     recovered = (tmp_path / "table.recovered.csv").read_text().splitlines()
-    assert len(recovered) - 1 == 99  # the step that lost a channel's record, and only it
+    assert len(recovered) - 1 == 99  # the step of the damaged segment, and only it
     import json
 
     res = json.loads(out)
-    assert res["records"] == len(original) - 1 and res["skipped_records"] == 1
+    assert res["records"] == len(original) - 2 and res["skipped_records"] == 2
     # `suscosim runs` reads it with the same reader: the same counts, and a note.
     (tmp_path / "scenario.json").write_text(json.dumps({"run": {"id": "rel", "n_steps": 99}}))
     info = run_folder.run_info(tmp_path)
-    assert info["records"] == res["records"] and info["skipped_records"] == 1
+    assert info["records"] == res["records"] and info["skipped_records"] == 2
     assert "damaged" in info["error"]
 
 
@@ -137,3 +191,11 @@ def test_tail_readers_skip_damage_too(tmp_path: Path) -> None:
     p.write_bytes(bytes(data))
     assert last_step(p) == 2999
     assert read_journal(p, tail_bytes=4096).skipped_records == 1
+    p3 = tmp_path / "j3.msgpack"
+    _write(p3, 3000, version=3, every=10)
+    data = bytearray(p3.read_bytes())
+    data[-30] ^= 0xFF  # inside the last segment's body: steps 2990-2999 are lost
+    p3.write_bytes(bytes(data))
+    assert last_step(p3) == 2989
+    c = read_journal(p3, tail_bytes=4096)
+    assert c.skipped_records == 20 and not c.torn and 0 < len(c.records) < 6000

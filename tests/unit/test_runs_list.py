@@ -27,12 +27,18 @@ def _dead_pid() -> int:
 
 def _journal(folder: Path, run_id: str, last_k: int, lagging: int = 0) -> None:
     """Records of every channel for k = 0..last_k; the last channel stops ``lagging`` earlier."""
+    import random
+
+    rng = random.Random(k_seed := last_k)  # values zstd cannot shrink: a journal's real size
     w = JournalWriter(folder / "journal.msgpack", run_id)
     for k in range(last_k + 1):
         for i, name in enumerate(CHANNELS):
             if i == len(CHANNELS) - 1 and k > last_k - lagging:
                 continue
-            w.append(name, encode("data", k, k * 1e-3, {"x": float(k), "y": [1.0, 2.0]}))
+            w.append(name, encode("data", k, k * 1e-3, {"x": float(k), "y": [1.0, 2.0],
+                                                        "n": rng.random() + k_seed}))
+        if k % 50 == 49:
+            w.flush()  # a segment every 50 steps, as a recorder's 50 ms flushes make them
     w.close()
 
 
@@ -107,7 +113,7 @@ def test_status_of_each_fabricated_run(fabricated: Path) -> None:
 
 def test_steps_read_from_the_tail_of_a_big_journal(tmp_path: Path) -> None:
     folder = _run(tmp_path, "big", n_steps=5000, last_k=4321, lagging=1)
-    assert (folder / "journal.msgpack").stat().st_size > 4 * TAIL_BYTES
+    assert (folder / "journal.msgpack").stat().st_size > 3 * TAIL_BYTES
     assert last_step(folder / "journal.msgpack") == 4320
     # A torn last record (the recorder was killed mid-write) is tolerated.
     with open(folder / "journal.msgpack", "ab") as f:
