@@ -18,6 +18,18 @@ under another run. A message that is unsigned or badly signed is rejected
 keyed natively (no HMAC double hash) and is the fastest keyed hash of :mod:`hashlib`: about
 1 us a message.
 
+**A run instance's nonce** (issue #30 item 11). The key binds the run id, and one secret
+with one run id can serve two runs (a sweep's ids can repeat, a run can be started again): a
+keyless tap that recorded run 1's signed ``ready`` and ``done`` could replay them into run 2
+and end it "ok" with run 1's statistics. So the orchestrator draws a fresh 16-byte nonce for
+every run it starts (:func:`new_nonce`) and every message of the run is signed bound to it
+(``RunKey(key, nonce)``: the MAC is a keyed BLAKE2b with person ``suscosim-msg-v2`` of
+``nonce + keyexpr + "\0" + F``). Only the scenario the orchestrator serves is signed without
+it (the key alone): that reply announces the nonce (field ``session``, hex) to the nodes,
+started by it or elsewhere, which bind to it before they say anything
+(:meth:`cosim.participant.Participant.bind`). A message of another instance of the run does
+not verify ("bad signature"), is rejected and counted.
+
 Where the key comes from (:func:`run_key_from_env`), in this order:
 
 * ``SUSCOSIM_RUN_KEY``: the run key itself, hex (the orchestrator hands it to the nodes it
@@ -54,6 +66,10 @@ ENV_KEY_FILE = "SUSCOSIM_KEY_FILE"
 ENV_KEY = "SUSCOSIM_KEY"
 KEY_FILE_NAME = "run.key"
 _PERSON = b"suscosim-msg-v1"
+_PERSON_BOUND = b"suscosim-msg-v2"
+NONCE_BYTES = 16
+SESSION_FIELD = "session"
+"""The field of the served scenario that announces the run instance's nonce (hex)."""
 _CACHE_MAX = 256
 
 
@@ -77,15 +93,33 @@ def derive_run_key(secret: bytes, run_id: str) -> bytes:
                            person=b"suscosim-run-key", digest_size=KEY_BYTES).digest()
 
 
-class RunKey:
-    """Signs and verifies the messages of one run."""
+def new_nonce() -> bytes:
+    """A fresh nonce for one run instance [16 bytes]."""
+    return secrets.token_bytes(NONCE_BYTES)
 
-    def __init__(self, key: bytes) -> None:
+
+class RunKey:
+    """Signs and verifies the messages of one run (of one instance of it, with ``nonce``)."""
+
+    def __init__(self, key: bytes, nonce: bytes = b"") -> None:
         if not isinstance(key, bytes) or len(key) < 16:
             raise ValueError("a run key is at least 16 bytes")
-        self.key = key
-        self._base = hashlib.blake2b(key=key, person=_PERSON, digest_size=TAG_BYTES)
+        if not isinstance(nonce, bytes) or len(nonce) not in (0, NONCE_BYTES):
+            raise ValueError(f"a run nonce is {NONCE_BYTES} bytes (or none)")
+        self.key, self.nonce = key, nonce
+        self._base = hashlib.blake2b(key=key, person=_PERSON_BOUND if nonce else _PERSON,
+                                     digest_size=TAG_BYTES)
+        if nonce:
+            self._base.update(nonce)
         self._per: dict[str, Any] = {}
+
+    def unbound(self) -> RunKey:
+        """The key without the nonce (what the served scenario is signed with)."""
+        return RunKey(self.key) if self.nonce else self
+
+    def bound(self, nonce: bytes) -> RunKey:
+        """The key bound to the run instance's ``nonce``."""
+        return RunKey(self.key, nonce)
 
     def _hasher(self, keyexpr: str) -> Any:
         h = self._per.get(keyexpr)

@@ -45,7 +45,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from . import keys
-from .auth import RunKey
+from .auth import NONCE_BYTES, SESSION_FIELD, RunKey
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import RunError, WireError
@@ -219,22 +219,51 @@ class Participant:
         if self._records_pub is None:
             self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
 
+    def bind(self, nonce: bytes) -> None:
+        """Bind every message this node signs or takes from now on to the run instance's
+        ``nonce`` (:mod:`cosim.auth`): a message of another instance of the run (the same
+        id and key, replayed) no longer verifies."""
+        if self.auth is None or self.auth.nonce == nonce:
+            return
+        self.auth = self.auth.bound(nonce)
+        self._ctl = self._publisher(keys.key(self.run, self.node, keys.CTL))
+        for channel in list(self._outputs):
+            self._outputs[channel] = self._publisher(keys.key(self.run, self.node, channel))
+        if self._records_pub is not None:
+            self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
+
     def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
         """The resolved scenario, from the orchestrator's queryable (retried until it answers).
         Only a reply signed with the run's key counts: a rogue queryable on the run's key
-        (another process on the bus) is rejected and counted, never run."""
+        (another process on the bus) is rejected and counted, never run. The reply announces
+        the run instance's nonce: the node binds to it (:meth:`bind`)."""
         deadline = time.monotonic() + timeout_s
         key = keys.key(self.run, keys.ORCHESTRATOR, keys.SCENARIO)
+        tag = (keys.ORCHESTRATOR, keys.SCENARIO)
         while time.monotonic() < deadline:
             for raw in self.bus.query_all(key, timeout=1.0):
                 try:
-                    msg = self.open(key, raw)
+                    body = self.auth.unbound().verify(key, raw) if self.auth else raw
+                    msg = decode(body)
                 except WireError as exc:
-                    self.reject((keys.ORCHESTRATOR, keys.SCENARIO), str(exc))
+                    self.reject(tag, str(exc))
                     continue
-                if msg.kind == "start" and isinstance(msg.d.get("run"), dict):
-                    return msg.d
-                self.reject((keys.ORCHESTRATOR, keys.SCENARIO), "not a scenario")
+                if msg.kind != "start" or not isinstance(msg.d.get("run"), dict):
+                    self.reject(tag, "not a scenario")
+                    continue
+                scenario = dict(msg.d)
+                session = scenario.pop(SESSION_FIELD, None)
+                if self.auth is not None:
+                    try:
+                        nonce = bytes.fromhex(session) if isinstance(session, str) else b""
+                        if len(nonce) != NONCE_BYTES:
+                            raise ValueError
+                    except ValueError:
+                        self.reject(tag, f"the scenario announces no run nonce "
+                                         f"('{SESSION_FIELD}': {session!r:.40})")
+                        continue
+                    self.bind(nonce)
+                return scenario
             time.sleep(0.1)
         raise RunError(f"{self.node}: no orchestrator answered for run '{self.run}' "
                        f"within {timeout_s:.0f} s (is it running, and is --connect right?)")

@@ -29,7 +29,7 @@ from typing import Any
 
 from cosim import channels as ch
 from cosim import keys
-from cosim.auth import RunKey
+from cosim.auth import SESSION_FIELD, RunKey
 from cosim.bus import Bus
 from cosim.control import check_node_control
 from cosim.errors import RunError, ScenarioError, WireError
@@ -92,10 +92,14 @@ class Clock:
         pub = bus.publisher(clock_key)
         sign = auth.signer(clock_key) if auth else (lambda raw: raw)
         self._clock = lambda raw: pub(sign(raw))
-        blob = encode("start", -1, 0.0, scenario)  # raises on a number msgpack cannot hold
+        # the served scenario announces the run instance's nonce (cosim.auth): signed with
+        # the key alone, as the nodes that fetch it do not know the nonce yet
+        served = {**scenario, SESSION_FIELD: auth.nonce.hex()} if auth and auth.nonce \
+            else scenario
+        blob = encode("start", -1, 0.0, served)  # raises on a number msgpack cannot hold
         scenario_key = keys.key(run, keys.ORCHESTRATOR, keys.SCENARIO)
         if auth:
-            blob = auth.sign(scenario_key, blob)
+            blob = auth.unbound().sign(scenario_key, blob)
         # the nodes watch this token: a killed orchestrator ends its nodes too
         self._token = bus.token(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE))
         bus.serve(scenario_key, lambda: blob)

@@ -50,10 +50,12 @@ def node_callable(name: str, scenario: dict[str, Any]) -> Callable[[Participant]
 
 
 def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
-             spin_s: float = 0.0, key: bytes | None = None) -> int:
+             spin_s: float = 0.0, key: bytes | None = None, nonce: bytes = b"") -> int:
     """Run node ``name`` on ``bus``; report errors to the orchestrator; return an exit code.
 
-    ``key``: the run key (default: from the environment, see the module's docstring)."""
+    ``key``: the run key (default: from the environment, see the module's docstring).
+    ``nonce``: the run instance's (:mod:`cosim.auth`) when ``scenario`` is given; else the
+    node learns it with the scenario it fetches."""
     log = logging.getLogger(f"suscosim.{name}")
     try:
         auth = RunKey(key if key is not None else run_key_from_env(run_id))
@@ -64,6 +66,8 @@ def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
     try:
         if scenario is None:
             scenario = part.fetch_scenario()
+        elif nonce:
+            part.bind(nonce)
         run = scenario["run"]
         part.stall_timeout_s = float(run["stall_timeout_s"])
         part.expect_start = {"n_steps": run.get("n_steps"), "h": run.get("h"),

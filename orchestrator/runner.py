@@ -230,7 +230,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
                               else [n for n in run["nodes"] if n in (external or [])])
     except OSError as exc:
         raise _folder_error(exc, folder) from None
-    auth = au.RunKey(run_key)
+    auth = au.RunKey(run_key, au.new_nonce())  # this instance of the run (issue #30 item 11)
     t0, started = time.monotonic(), time.time()
     if run["mode"] == "reference":
         from .reference import run_reference
@@ -274,7 +274,8 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         codes: dict[str, int] = {}
 
         def body(name: str) -> None:
-            codes[name] = run_node(bus, run["id"], name, scenario, key=run_key)
+            codes[name] = run_node(bus, run["id"], name, scenario, key=run_key,
+                                   nonce=auth.nonce)
 
         check = lambda: next((f"node '{n}' failed (exit code {c})"  # noqa: E731
                               for n, c in codes.items() if c), None)

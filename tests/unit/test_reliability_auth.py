@@ -151,13 +151,17 @@ def test_a_rogue_scenario_queryable_is_not_run() -> None:
     """#15 item 4: a rogue scenario queryable on a router: nodes ran it and wrote where it
     said. Only the reply signed with the run's key is taken."""
     key = keys.key("r", keys.ORCHESTRATOR, keys.SCENARIO)
-    real = au.RunKey(KEY).sign(key, encode("start", -1, 0.0, {"run": {"dir": "/ok"}}))
-    rogue = encode("start", -1, 0.0, {"run": {"dir": "/tmp/evil"}})
+    nonce = au.new_nonce()
+    real = au.RunKey(KEY).sign(key, encode("start", -1, 0.0, {"run": {"dir": "/ok"},
+                                                             "session": nonce.hex()}))
+    rogue = encode("start", -1, 0.0, {"run": {"dir": "/tmp/evil"}, "session": nonce.hex()})
     rogue_other = au.RunKey(OTHER).sign(key, rogue)
-    bus = _TwoQueryables([rogue, rogue_other, real])
+    no_nonce = au.RunKey(KEY).sign(key, encode("start", -1, 0.0, {"run": {"dir": "/old"}}))
+    bus = _TwoQueryables([rogue, rogue_other, no_nonce, real])
     part = Participant(bus, "r", "plant", auth=au.RunKey(KEY))
-    assert part.fetch_scenario(timeout_s=5)["run"]["dir"] == "/ok"
-    assert part.rejected == 2
+    assert part.fetch_scenario(timeout_s=5) == {"run": {"dir": "/ok"}}
+    assert part.rejected == 3
+    assert part.auth is not None and part.auth.nonce == nonce  # bound to the run instance
     bus.replies = [rogue]
     with pytest.raises(RunError, match="no orchestrator answered"):
         part.fetch_scenario(timeout_s=0.5)
@@ -191,3 +195,18 @@ def test_a_node_without_a_key_exits_2_without_a_word_on_the_bus(monkeypatch) -> 
     bus.subscribe("suscosim/**", lambda k, raw: said.append(k))
     assert run_node(bus, "r", "plant") == 2
     assert said == []
+
+
+def test_a_message_of_another_instance_of_the_run_does_not_verify() -> None:
+    """#30 item 11: the same key and run id, another nonce: bad signature."""
+    key = keys.key("r", "plant", keys.CTL)
+    body = encode("done", 5, 0.005, {"rejected": 0})
+    one, two = au.RunKey(KEY, au.new_nonce()), au.RunKey(KEY, au.new_nonce())
+    assert one.verify(key, one.sign(key, body))
+    for other in (two, au.RunKey(KEY)):
+        with pytest.raises(au.AuthError, match="bad signature"):
+            other.verify(key, one.sign(key, body))
+    with pytest.raises(au.AuthError, match="bad signature"):
+        one.verify(key, au.RunKey(KEY).sign(key, body))
+    with pytest.raises(ValueError, match="nonce"):
+        au.RunKey(KEY, b"short")
