@@ -5,6 +5,15 @@ load history (RPC III ``.rsp/.tim/.rpc/.drv``, MDF 4 ``.mf4``, CSV, Parquet) map
 arm's load channels (by name, or ``--map SOURCE=TARGET[*SCALE]``), with the fatigue settings
 and road length of ``--scenario RUN_DIR|SCENARIO.toml`` (else the defaults and
 ``--set track_length_m=...``); results in ``--out`` (default ``LOAD_FILE.fatigue/``).
+
+Where a run's results go: ``RUN_DIR/fatigue/`` without settings (the live node's place);
+with any ``--set``/``--method``/... (a what-if) ``RUN_DIR/fatigue-<8 hex of the settings>/``
+(its settings in its ``summary.json`` ``what_if``), so the live results stay; ``--out DIR``
+anywhere. The folder is written aside and renamed into place: never half-replaced.
+
+Exit codes: 0 a result (also a part that fails on the first cycle: life 0 km, printed as
+"fails on the first cycle"); 2 bad input (a scenario key, a load file, a non-finite or
+non-physical load sample: one line naming it); 1 an unexpected internal error.
 """
 
 from __future__ import annotations
@@ -41,8 +50,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="load file only: file channel SOURCE is the arm's load channel TARGET "
                         "(e.g. LCA_Fz=ball_joint_z*-1); by default channels are matched by "
                         "name (plant/arm/ball_joint_z or ball_joint_z)")
-    p.add_argument("--out", type=Path, help="load file only: results folder "
-                                            "(default LOAD_FILE.fatigue/)")
+    p.add_argument("--out", type=Path, help="results folder (default LOAD_FILE.fatigue/, "
+                                            "RUN_DIR/fatigue/, or RUN_DIR/fatigue-<hash>/ "
+                                            "for a what-if with settings)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.add_argument("--equivalent", choices=EQUIVALENTS)
     p.add_argument("--method", choices=METHODS)
     p.add_argument("--mean-stress", choices=MEAN_STRESS_METHODS)
@@ -70,21 +81,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, k) is not None:
             overrides[k] = getattr(args, k)
     from nodes.fatigue.load_file import parse_map
-    from nodes.fatigue.run_dir import fatigue_load_file, fatigue_run_dir
+    from nodes.fatigue.run_dir import fatigue_load_file, fatigue_run_dir, results_folder
 
     is_file = args.run_dir.is_file()
-    if not is_file and (args.scenario or args.map or args.out):
-        print(f"error: {args.run_dir}: --scenario, --map and --out are for a load file",
+    if not is_file and (args.scenario or args.map):
+        print(f"error: {args.run_dir}: --scenario and --map are for a load file",
               file=sys.stderr)
         return 2
+
+    def progress(msg: str) -> None:
+        if not args.quiet:
+            print(msg, file=sys.stderr, flush=True)
+
     try:
         if is_file:
             out = args.out or args.run_dir.with_name(args.run_dir.name + ".fatigue")
             r = fatigue_load_file(args.run_dir, overrides, args.scenario,
-                                  parse_map(args.map), out)
+                                  parse_map(args.map), out, progress)
         else:
-            out = Path(args.run_dir) / "fatigue"
-            r = fatigue_run_dir(args.run_dir, overrides)
+            out = results_folder(args.run_dir, overrides, args.out)
+            r = fatigue_run_dir(args.run_dir, overrides, args.out, progress)
     except SuscosimError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return exc.exit_code if exc.exit_code else 2
@@ -94,14 +110,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"fatigue: {s['n_nodes']} nodes, {r.n_samples} samples, track {r.track_length_m:.1f} m")
     print(f"  method {r.config['method']}, mean stress {r.config['mean_stress']}, "
           f"equivalent {r.config['equivalent']}")
-    print(f"  min life {r.life_km:.4g} km = {r.life_repeats:.4g} repeats of the track"
-          + ("" if r.life_repeats_basis is None
-             else f" = {r.life_repeats_basis:.4g} repeats of {r.repeats_basis_m:g} m"))
+    summary = _read_summary(out)
+    if summary.get("fails_first_cycle"):
+        print("  fails on the first cycle: life 0 km (a cycle's mean-stress corrected "
+              "stress is at or beyond the strength)")
+    else:
+        print(f"  min life {r.life_km:.4g} km = {r.life_repeats:.4g} repeats of the track"
+              + ("" if r.life_repeats_basis is None
+                 else f" = {r.life_repeats_basis:.4g} repeats of {r.repeats_basis_m:g} m"))
+    sm = summary.get("sn_methods") or {}
+    for m, by_p in (sm.get("methods") or {}).items():
+        print(f"  S-N {m}: " + ", ".join(
+            f"{v['life_km']:.4g} km at P = {p}" if isinstance(v.get("life_km"), float)
+            else f"{v.get('life_km')} km at P = {p}" for p, v in by_p.items()))
     print(f"  critical node {r.critical_node_id}{where}, max damage/pass {r.max_damage:.3e}")
     if r.missing_channels:
         print("  no load given for " + ", ".join(r.missing_channels) + " (zero)")
+    loaded = [u["channel"] for u in summary.get("unmapped_channels") or []
+              if u.get("peak_abs")]
+    if loaded:
+        print("  warning: no influence case for " + ", ".join(loaded)
+              + " (their loads are not in the stresses)")
     print(f"  results in {out}")
     return 0
+
+
+def _read_summary(out: Path) -> dict:
+    try:
+        d = json.loads((Path(out) / "summary.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return d if isinstance(d, dict) else {}
 
 
 if __name__ == "__main__":  # pragma: no cover

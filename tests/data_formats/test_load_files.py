@@ -96,3 +96,63 @@ def test_malformed_load_file_from_the_command_line(tmp_path: Path) -> None:
     assert str(f) in res.stderr and "Traceback" not in res.stderr
     res = suscosim("fatigue", str(tmp_path / "nowhere.mf4"), "--map", "a=b")
     assert res.returncode == 2 and "nowhere.mf4" in res.stderr
+
+
+@pytest.mark.parametrize("bad, says", [
+    ("1e308", ["'plant/arm/ball_joint_z' sample 123", "beyond the plausible"]),
+    ("1e12", ["'plant/arm/ball_joint_z' sample 123", "beyond the plausible"]),
+    # the CSV reader itself refuses these, naming the line (header + 123 + 1)
+    ("nan", ["loads.csv:125", "non-finite"]), ("inf", ["loads.csv:125", "non-finite"])])
+def test_non_physical_load_sample_is_exit_2_naming_channel_and_sample(tmp_path: Path,
+                                                                       bad: str,
+                                                                       says: list[str],
+                                                                       capsys) -> None:
+    """#30 item 14: one absurd sample is bad input naming the channel and the sample, not
+    a life with a NaN in summary.json (1e308) or an internal ValueError (1e12)."""
+    t = np.arange(0, 0.5, 1e-3)
+    f = tmp_path / "loads.csv"
+    vals = [repr(3000 * math.sin(40 * a)) for a in t.tolist()]
+    vals[123] = bad
+    f.write_text("t,ball_joint_z\n" + "".join(f"{a!r},{v}\n" for a, v in
+                                               zip(t.tolist(), vals, strict=True)))
+    rc, out, err = cli(capsys, "fatigue", str(f), "--set", "track_length_m=5")
+    assert rc == 2, out + err
+    assert all(w in err for w in says), err
+    assert "internal error" not in err
+    assert not (tmp_path / "loads.csv.fatigue").exists()
+
+
+def test_summary_is_strict_json_and_every_output_written(tmp_path: Path, capsys) -> None:
+    """summary.json parses with NaN/Infinity refused; the batch outputs are in the folder
+    (#30 item 5) and the VTU holds the CSV's damage per node."""
+    import csv
+
+    import meshio
+
+    t = np.arange(0, 0.5, 1e-3)
+    f = tmp_path / "loads.csv"
+    f.write_text("t,ball_joint_z\n" + "".join(f"{a!r},{4000 + 3000 * math.sin(40 * a)!r}\n"
+                                               for a in t.tolist()))
+    rc, out, err = cli(capsys, "fatigue", str(f), "--set", "track_length_m=5")
+    assert rc == 0, out + err
+    d = tmp_path / "loads.csv.fatigue"
+
+    def refuse(x: str) -> None:
+        raise AssertionError(f"non-strict JSON constant {x}")
+
+    s = json.loads((d / "summary.json").read_text(), parse_constant=refuse)
+    for name in s["outputs"]:
+        assert (d / name).is_file(), name
+    rows = list(csv.DictReader(open(d / "damage_per_node.csv")))
+    vtu = meshio.read(d / "damage.vtu")
+    assert len(vtu.points) == len(rows)
+    np.testing.assert_allclose(vtu.point_data["damage_per_pass"],
+                               [float(r["damage_per_pass"]) for r in rows], rtol=1e-6)
+    hist = list(csv.DictReader(open(d / "critical_stress.csv")))
+    assert len(hist) == t.size
+    # the critical node's equivalent-stress range in its history is the CSV's largest range
+    eq = np.array([float(r[list(r)[-1]]) for r in hist])
+    crit = max(rows, key=lambda r: float(r["damage_per_pass"]))
+    assert np.ptp(eq) == pytest.approx(float(crit["eq_range_max_pa"]), rel=1e-5)
+    assert s["sn_methods"]["life_range_km"][0] <= s["min_life_km"] <= \
+        s["sn_methods"]["life_range_km"][1]
