@@ -169,6 +169,7 @@ class TableWriter:
         for vals in row[3:]:
             flat += vals
         self._rows.append(flat)
+        self.rows += 1
         self.last_k = k
         if len(self._rows) >= self.chunk_rows:
             self._chunk()
@@ -209,7 +210,6 @@ class TableWriter:
         ts = vals[:, 0]
         for j, st in enumerate(self._stats):
             st.add(vals[:, j + 1], ts)
-        self.rows += len(rows)
         if self.folder is None:
             return
         ks_l = ks.tolist()
@@ -281,7 +281,9 @@ class TableWriter:
                 tmp.unlink(missing_ok=True)
 
     def stats(self) -> dict[str, dict[str, float]]:
-        """:func:`cosim.table.channel_stats` of the rows written so far."""
+        """:func:`cosim.table.channel_stats` of the rows complete so far."""
+        if self._rows:
+            self._chunk()
         if self.columns is None:
             return {}
         return {c: s.result() for c, s in zip(self.columns[2:], self._stats, strict=True)

@@ -37,8 +37,9 @@ def recover_table(folder: Path, interrupted: bool = False, since: float | None =
     journal = folder / "journal.msgpack"
     if not journal.exists():
         return {}
-    from cosim.journal import read_journal
-    from cosim.table import build_table, channel_stats, export, export_target
+    from cosim.journal import JournalReader
+    from cosim.table import export_target
+    from cosim.table_writer import table_of_journal
 
     deadline = time.monotonic() + (wait_s if recorder_elsewhere else 0.0)
     while (taken := _recorders_table(folder, journal, since)) is None \
@@ -56,33 +57,50 @@ def recover_table(folder: Path, interrupted: bool = False, since: float | None =
         return {"rows": 0 if reached is None else reached + 1, "files": {},
                 "note": f"{why}: the table was not rebuilt here from the journal "
                         f"({size / 2**20:.0f} MB); `suscosim export {journal}` does it"}
-    try:
-        contents = read_journal(journal)
-        table, bad = build_table(contents.records)
-    except Exception as exc:  # the run already failed: report, do not mask that error
-        return {"error": f"journal unreadable: {type(exc).__name__}: {exc}"}
-    rows = int(len(table["t"]))
-    rec: dict[str, Any] = {"stats": channel_stats(table), "files": {}, "rows": rows,
-                           "torn": contents.torn, "undecodable": bad,
-                           "skipped_records": contents.skipped_records}
-    if contents.problem:
-        rec["journal"] = contents.problem
-    if not rows:
-        return rec
+    readers: list[JournalReader] = []
+
+    def records() -> JournalReader:
+        readers.append(JournalReader(journal))
+        return readers[-1]
+
     stem = "table"
     try:
+        writer, bad = table_of_journal(records, folder)  # streamed: bounded memory (#32)
+    except OSError as exc:
+        _remove_tables(folder, stem)
+        return {"error": f"table not written: {exc.strerror or exc}"}
+    except Exception as exc:  # the run already failed: report, do not mask that error
+        return {"error": f"journal unreadable: {type(exc).__name__}: {exc}"}
+    contents = readers[-1].contents()
+    rows = writer.rows if writer is not None else 0
+    rec: dict[str, Any] = {"stats": {}, "files": {}, "rows": rows, "torn": contents.torn,
+                           "undecodable": bad, "skipped_records": contents.skipped_records}
+    if contents.problem:
+        rec["journal"] = contents.problem
+    if writer is None or not rows:
+        if writer is not None:
+            writer.abandon()
+        return rec
+    try:
         stem, why = export_target(folder, rows, contents.damaged)
-        rec["files"] = export(table, folder, stem)
+        rec["files"] = writer.close(stem)
+        rec["stats"] = writer.stats()
         if why:
             rec["note"] = f"table written as {stem}.*: {why}"
     except OSError as exc:
-        for suffix in (".csv", ".parquet"):
-            try:
-                (folder / f"{stem}{suffix}").unlink(missing_ok=True)
-            except OSError:
-                pass
+        writer.abandon()
+        _remove_tables(folder, stem)
         rec["error"] = f"table not written: {exc.strerror or exc}"
     return rec
+
+
+def _remove_tables(folder: Path, stem: str) -> None:
+    """A table that could not be written whole is not left half-written."""
+    for suffix in (".csv", ".parquet"):
+        try:
+            (folder / f"{stem}{suffix}").unlink(missing_ok=True)
+        except OSError:
+            pass
 
 
 def _recorders_table(folder: Path, journal: Path, since: float | None

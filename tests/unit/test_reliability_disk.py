@@ -96,11 +96,11 @@ def test_salvaged_table_is_removed_rather_than_left_truncated(tmp_path, monkeypa
         w.append("plant/state", encode("data", k, k * 1e-3, {"z": 1.0 * k}))
     w.close()
 
-    def write_parquet(table, path):
-        Path(path).write_bytes(b"PAR1")  # half a file, then the disk is full
+    def write_group(self):
+        self._tmp["parquet"].write_bytes(b"PAR1")  # half a file, then the disk is full
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr("cosim.table.write_parquet", write_parquet)
+    monkeypatch.setattr("cosim.table_writer.TableWriter._write_group", write_group)
     from orchestrator.run_recovery import recover_table
 
     rec = recover_table(tmp_path)

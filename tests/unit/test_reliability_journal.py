@@ -12,7 +12,7 @@ import msgpack
 from cosim import run_folder
 from cosim.journal import JournalWriter, last_step, read_journal
 from cosim.wire import encode
-from orchestrator.cli import main as cli_main
+from orchestrator.export import main as export_main
 
 CHANNELS = ("plant/state", "tyre_road/force")
 
@@ -148,13 +148,13 @@ def test_export_of_a_damaged_journal_writes_alongside_and_exits_2(tmp_path: Path
                                                                    capsys) -> None:
     p = tmp_path / "journal.msgpack"
     original = _write(p, 100, version=3, every=1)  # a segment a step
-    assert cli_main(["export", str(p)]) == 0  # intact: table.csv, exit 0
+    assert export_main([str(p)]) == 0  # intact: table.csv, exit 0
     good_csv = (tmp_path / "table.csv").read_bytes()
     capsys.readouterr()
     data = bytearray(p.read_bytes())
     data[len(data) // 2] ^= 0x01
     p.write_bytes(bytes(data))
-    assert cli_main(["export", str(p)]) == 2
+    assert export_main([str(p)]) == 2
     out, err = capsys.readouterr()
     assert str(p) in err and "2 damaged record(s) skipped" in err and "table.recovered.csv" in err
     assert (tmp_path / "table.csv").read_bytes() == good_csv  # left as it was
@@ -174,10 +174,10 @@ def test_export_of_a_damaged_journal_writes_alongside_and_exits_2(tmp_path: Path
 def test_export_never_replaces_a_larger_table(tmp_path: Path, capsys) -> None:
     p = tmp_path / "journal.msgpack"
     _write(p, 100)
-    assert cli_main(["export", str(p)]) == 0
+    assert export_main([str(p)]) == 0
     good_csv = (tmp_path / "table.csv").read_bytes()
     _write(p, 10)  # an intact but shorter journal in its place
-    assert cli_main(["export", str(p)]) == 2
+    assert export_main([str(p)]) == 2
     err = capsys.readouterr().err
     assert "more rows (100 > 10)" in err
     assert (tmp_path / "table.csv").read_bytes() == good_csv

@@ -1,0 +1,119 @@
+"""A run's table written as CSV or Parquet of the formats' layout (:mod:`.tables`) chunk by
+chunk, read from ``table.parquet`` in record batches (or ``table.csv`` line by line): memory
+by the chunk, not the run (#32). The output is that of :func:`.tables.write_csv` /
+:func:`.tables.write_parquet` on the whole table (CSV byte for byte; Parquet the same
+columns, values and units, written in row groups)."""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cosim.errors import InputFileError
+
+BATCH_ROWS = 65536
+
+
+def table_columns(src: str | Path) -> list[str]:
+    """The column names of a run's ``table.parquet`` / ``table.csv``."""
+    src = Path(src)
+    if src.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        try:
+            return list(pq.ParquetFile(src).schema_arrow.names)
+        except Exception as exc:  # pyarrow raises several types for a bad file
+            raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
+    with open(src, newline="") as fh:
+        head = next(csv.reader(fh), None)
+    if not head:
+        raise InputFileError(str(src), "no header row", 1)
+    return head
+
+
+def iter_chunks(src: str | Path, names: list[str], rows: int = BATCH_ROWS
+                ) -> Iterator[dict[str, np.ndarray]]:
+    """The columns ``names`` of a run's table in chunks of up to ``rows`` rows."""
+    src = Path(src)
+    if src.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        try:
+            pf = pq.ParquetFile(src)
+            for batch in pf.iter_batches(batch_size=rows, columns=names):
+                yield {n: batch.column(n).to_numpy(zero_copy_only=False) for n in names}
+        except InputFileError:
+            raise
+        except Exception as exc:
+            raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
+        return
+    with open(src, newline="") as fh:
+        reader = csv.reader(fh)
+        head = next(reader, None) or []
+        idx = [head.index(n) for n in names]
+        buf: list[list[str]] = []
+        for lineno, row in enumerate(reader, start=2):
+            if len(row) != len(head):
+                raise InputFileError(str(src), f"expected {len(head)} fields, got {len(row)}",
+                                     lineno)
+            buf.append([row[i] for i in idx])
+            if len(buf) >= rows:
+                yield _columns(buf, names, str(src))
+                buf = []
+        if buf:
+            yield _columns(buf, names, str(src))
+
+
+def _columns(rows: list[list[str]], names: list[str], src: str) -> dict[str, np.ndarray]:
+    try:
+        arr = np.asarray(rows, dtype=float).reshape(len(rows), len(names))
+    except ValueError:
+        raise InputFileError(src, "non-numeric value") from None
+    return {n: arr[:, j] for j, n in enumerate(names)}
+
+
+def write_stream(src: str | Path, path: str | Path, fmt: str, names: list[str],
+                 units: dict[str, str], units_in_header: bool = True) -> int:
+    """Write ``t`` and the channels ``names`` of the table ``src`` to ``path`` as ``fmt``
+    (``csv`` or ``parquet``); return the rows written."""
+    rows = 0
+    cols = ["t", *names]
+    if fmt == "csv":
+        def head(n: str) -> str:
+            u = units.get(n, "")
+            return f"{n} [{u}]" if units_in_header and u else n
+
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow([head("t") if units_in_header else "t"] + [head(n) for n in names])
+            for chunk in iter_chunks(src, cols):
+                body = io.StringIO(newline="")
+                bw = csv.writer(body)
+                for row in zip(*(np.asarray(chunk[c], dtype=float).tolist() for c in cols),
+                               strict=True):
+                    bw.writerow(row)
+                fh.write(body.getvalue())
+                rows += len(chunk["t"])
+        return rows
+    if fmt != "parquet":
+        raise ValueError(f"streamed formats are csv and parquet, not {fmt!r}")
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    fields = [pa.field("t", pa.float64(), metadata={"unit": "s"})]
+    fields += [pa.field(n, pa.float64(), metadata={"unit": units.get(n, "")}) for n in names]
+    schema = pa.schema(fields)
+    writer: Any = pq.ParquetWriter(str(path), schema)
+    try:
+        for chunk in iter_chunks(src, cols):
+            arrays = [pa.array(np.asarray(chunk[c], dtype=float)) for c in cols]
+            writer.write_table(pa.Table.from_arrays(arrays, schema=schema))
+            rows += len(chunk["t"])
+    finally:
+        writer.close()
+    return rows
