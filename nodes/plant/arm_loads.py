@@ -1,0 +1,101 @@
+"""The loads ON the lower arm of the double-wishbone corner (:mod:`.double_wishbone`), read
+from PyBullet's joint sensors and the forces the corner applied (the ``arm`` channel)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .double_wishbone_geometry import HUB, LOWER_ARM
+from .point_kinematics import cross3
+from .quiet_pybullet import p
+
+if TYPE_CHECKING:
+    from .double_wishbone import DoubleWishboneCorner
+
+
+def _rot(quat) -> np.ndarray:
+    return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+
+
+def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
+    """Loads ON the lower arm during the latest substep, in the arm frame (which turns with
+    the arm) at the start of that substep, t_k [N, N m].
+
+    Where each acts (arm-frame points: :data:`cosim.lower_arm.HARDPOINTS`):
+
+    * ``ball_joint_{x,y,z}``: force from the hub at the ball joint;
+    * ``damper_mount_{x,y,z}``: force from the damper at its seat, -F_d along the damper axis;
+    * ``bush_front_{x,y,z}``, ``bush_rear_{x,y,z}``: forces from the body at the two bush
+      centres;
+    * ``bump_stop_y``, ``bump_stop_z``: force from the jounce bumper at the pad
+      (``BUMP_STOP_PAD``): (0, 0, -F_bs) in world axes, i.e. ``bump_stop_z`` = -F_bs cos(theta)
+      <= 0 (pushes the arm down) and ``bump_stop_y`` = -F_bs sin(theta) for an arm turned by
+      theta (jounce positive); its arm-frame x component is zero (the arm turns about x and
+      the body only heaves). Both are 0 while the bumper is clear;
+    * ``torsion_bar_mx`` [N m]: the torsion-spring moment about the arm's x axis (static
+      preload included). It is a pure moment; it enters the arm through its pivot, half at each
+      bush eye (:data:`cosim.lower_arm.TORSION_SPRING_POINTS`, as the thesis split its
+      revolute joint's loads over nodes A and B); for the rigid arm's balance its point does
+      not matter, for the FE it does.
+
+    These loads and the arm's weight are in equilibrium with its inertia: sum F + m g =
+    m a_com and sum (r x F) + M_x e_x = d(H)/dt (tested, static and in bumper contact, in
+    tests/vehicles/test_double_wishbone.py).
+
+    Extraction:
+
+    * PyBullet's joint force-torque sensor (``enableJointForceTorqueSensor``,
+      ``getJointState(...)[2]``; ``getJointStateMultiDof`` for spherical joints) reports the
+      wrench that the **parent exerts on the child**, in the **child link frame**, the moment
+      taken about the child's **centre of mass**, with the joint motor torque included. It
+      includes the forces of the loop-closing POINT2POINT constraints. The child frame is
+      the one at the **start** of the substep (where the step's forces are evaluated), so
+      every load is rotated with the arm's and hub's orientation at t_k, the time the loads
+      belong to (the orientation after the step misplaces them by omega dt: 0.2 % of the
+      joint forces at 4 rad/s and 0.5 ms, enough to spoil the dynamic balance).
+    * ball joint: minus the lower-ball-joint sensor wrench's force (parent arm -> child hub),
+      rotated from the hub frame to the arm frame;
+    * damper mount and bump stop: the actuator forces we applied in that substep;
+    * bushes: the lower-arm pivot sensor wrench (body -> arm), moved to the arm-frame origin
+      (midpoint of the bushes): F, M_O = M_com + r_com x F. With the bushes at x = +-d/2 on the
+      pivot axis, the moments about y and z split the force between them:
+      F_front,z = F_z/2 - M_y/d, F_rear,z = F_z/2 + M_y/d, F_front,y = F_y/2 + M_z/d,
+      F_rear,y = F_y/2 - M_z/d; the axial force F_x is shared equally (statically
+      indeterminate between two bushes of equal stiffness). M_x is the torsion-bar moment.
+    (``getConstraintState`` of a POINT2POINT returns the 3 force components the constraint
+    applies on its child body B, world axes; it is not needed here.)
+    """
+    c, b = model.client, model.body
+    R_af = model.geom.arm_rotation
+    R_arm, hub_quat, u = model._applied_pose  # the pose at the start of the substep
+    to_arm = R_af.T @ R_arm.T  # world -> arm frame
+    r_com = model._arm_r_com  # the arm's centre of mass in its link frame
+
+    w = p.getJointState(b, LOWER_ARM, physicsClientId=c)[2]
+    rxF = cross3(r_com, w[:3])
+    M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
+    F0, F1, F2 = (R_af.T @ np.array(w[:3])).tolist()
+    M0, M1, M2 = (R_af.T @ np.array(M_link)).tolist()
+    d = model.geom.bush_spacing
+    front = (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d)
+    rear = (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d)
+
+    w_bj = np.array(p.getJointStateMultiDof(b, HUB, physicsClientId=c)[2][:3])
+    ball = (to_arm @ (-(_rot(hub_quat) @ w_bj))).tolist()
+    F_d = -model._F_d
+    damper = (to_arm @ np.array([F_d * u[0], F_d * u[1], F_d * u[2]])).tolist()
+    bump = (to_arm @ np.array([0.0, 0.0, -model._F_bs])).tolist()
+
+    out: dict[str, float] = {}
+    for names, f in ((_BALL, ball), (_DAMPER, damper), (_FRONT, front), (_REAR, rear)):
+        out[names[0]], out[names[1]], out[names[2]] = f
+    out["bump_stop_y"] = bump[1]
+    out["bump_stop_z"] = bump[2]
+    out["torsion_bar_mx"] = M0
+    return out
+
+
+_BALL, _DAMPER, _FRONT, _REAR = (tuple(f"{name}_{axis}" for axis in "xyz") for name in
+                                 ("ball_joint", "damper_mount", "bush_front", "bush_rear"))
