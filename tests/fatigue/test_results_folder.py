@@ -86,3 +86,31 @@ def test_out_for_a_run_folder(run_dir: Path, tmp_path: Path, capsys) -> None:
     assert sh["0.975"]["life_km"] < sh["0.5"]["life_km"] == pytest.approx(s["min_life_km"])
     assert sm["methods"]["fkm"]["0.5"]["mean_stress"] == "fkm"
     assert not math.isnan(sm["methods"]["fkm"]["0.975"]["Se_pa"])
+
+
+def test_channel_no_influence_file_maps_is_named(run_dir: Path, tmp_path: Path,
+                                                 capsys) -> None:
+    """#30 item 6: a load channel of the table that the imported influence tables do not map
+    is named (with its peak load) instead of silently dropped."""
+    inf = tmp_path / "inf"
+    inf.mkdir()
+    rng = np.random.default_rng(4)
+    for name in ("bj_z.csv", "tb_mx.csv"):
+        rows = ["node,x,y,z,Sx,Sy,Sz,Sxy,Syz,Szx"]
+        for i in range(6):
+            vals = rng.normal(0, 2e4, 6)
+            rows.append(",".join([str(i + 1), f"{0.01 * i}", "0.1", "0.0",
+                                  *(f"{v:.6g}" for v in vals)]))
+        (inf / name).write_text("\n".join(rows) + "\n")
+    sc = json.loads((run_dir / "scenario.json").read_text())
+    sc["fatigue"] = {"influence": str(inf), "mapping": {
+        "plant/arm/ball_joint_z": "bj_z.csv", "plant/arm/torsion_bar_mx": "tb_mx.csv"}}
+    (run_dir / "scenario.json").write_text(json.dumps(sc))
+    capsys.readouterr()
+    assert main([str(run_dir), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    s = strict((run_dir / "fatigue" / "summary.json").read_text())
+    un = {u["channel"]: u["peak_abs"] for u in s["unmapped_channels"]}
+    assert set(un) == {"plant/arm/bush_front_z", "plant/arm/bush_rear_z"}
+    assert un["plant/arm/bush_rear_z"] == pytest.approx(4000.0, rel=1e-3)
+    assert "no influence case for plant/arm/bush_front_z, plant/arm/bush_rear_z" in out
