@@ -123,6 +123,11 @@ class Participant:
         self._orchestrator_gone: float | None = None
         bus.watch(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE), self._on_orchestrator)
         self._blocked: tuple[Any, float] | None = None  # (feed, stall deadline) while waiting
+        self._awaited: tuple[Channel, int, float] | None = None
+        """(input, step, since when [monotonic s]) while :meth:`wait` is blocked on it: the
+        watchdog tells the orchestrator whom this node waits for (``waiting``), so that a
+        stall is blamed on the node that stopped, not on the ones waiting for it."""
+        self._last_waiting = 0.0
         self._wakes = 0  # wake-ups sent by the watchdog, not yet received
         self._wake_lock = threading.Lock()
         self._closed = threading.Event()
@@ -374,11 +379,26 @@ class Participant:
             feed, deadline = blocked
             gone = self._orchestrator_gone
             now = time.monotonic()
+            self._say_waiting(now)
             if (not self.inbox.empty() or now >= deadline
                     or (gone is not None and now - gone > _ORCHESTRATOR_GONE_S)):
                 with self._wake_lock:
                     self._wakes += 1
                 feed.wake()
+
+    def _say_waiting(self, now: float) -> None:
+        """``waiting`` (the input and step this node is blocked on) to the orchestrator, every
+        :data:`WAITING_PERIOD_S` while it is blocked longer than that (the watchdog's)."""
+        awaited = self._awaited
+        if awaited is None or now - awaited[2] < WAITING_PERIOD_S \
+                or now - self._last_waiting < WAITING_PERIOD_S:
+            return
+        self._last_waiting = now
+        (node, channel), k, _ = awaited
+        try:
+            self.ctl("waiting", k, 0.0, missing=[f"{node}/{channel}"])
+        except Exception:  # the session is closing: the main thread will say why
+            pass
 
     def handle(self, tag: Channel, raw: bytes) -> Message | None:
         """Decode and file one received message; return it if it is a clock message."""
@@ -434,6 +454,8 @@ class Participant:
         deadline = time.monotonic() + self.stall_timeout_s
         for tag, k in needs.items():
             box, feed = self.mailbox[tag], self.feeds[tag]
+            if k not in box:
+                self._awaited = (tag, k, time.monotonic())
             while k not in box:
                 raw = self._poll(feed) if self.spin_s else None
                 if raw is None:
@@ -449,6 +471,7 @@ class Participant:
                     late = sorted({t[0] for t, j in needs.items() if j not in self.mailbox[t]})
                     raise RunError(f"{self.node}: no input from {', '.join(late)} for "
                                    f"{self.stall_timeout_s:.1f} s (step {max(needs.values())})")
+        self._awaited = None
         out = {}
         for tag, k in needs.items():
             box = self.mailbox[tag]

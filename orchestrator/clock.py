@@ -91,7 +91,20 @@ class Clock:
         clock_key = keys.key(run, keys.ORCHESTRATOR, keys.CLOCK)
         pub = bus.publisher(clock_key)
         sign = auth.signer(clock_key) if auth else (lambda raw: raw)
-        self._clock = lambda raw: pub(sign(raw))
+        self._sent: set[bytes] = set()  # the aborts this clock signed (a handful)
+        self.foreign_abort: str | None = None
+        """Why the run was aborted by someone else: a validly signed ``abort`` on the clock's
+        key that this clock did not send (an insider with the run's key, issue #30 item
+        15): the run's error says so instead of blaming the nodes that obeyed it."""
+
+        def clock_pub(raw: bytes) -> None:
+            signed = sign(raw)
+            if raw[:40].find(b"abort") >= 0 and len(self._sent) < 64:
+                self._sent.add(signed)
+            pub(signed)
+
+        self._clock = clock_pub
+        bus.subscribe(clock_key, self._on_clock)
         # the served scenario announces the run instance's nonce (cosim.auth): signed with
         # the key alone, as the nodes that fetch it do not know the nonce yet
         served = {**scenario, SESSION_FIELD: auth.nonce.hex()} if auth and auth.nonce \
@@ -107,6 +120,21 @@ class Clock:
                       lambda k, raw: self.events.put(("ctl", k, raw)))
         bus.watch(keys.key(run, "*", keys.ALIVE),
                   lambda k, alive: self.events.put(("alive", k, alive)))
+
+    def _on_clock(self, key: str, raw: bytes) -> None:
+        """A message on the clock's own key (on the bus's thread): an ``abort`` this clock
+        did not send is noted (:attr:`foreign_abort`)."""
+        if raw in self._sent or self.foreign_abort is not None:
+            return
+        try:
+            msg = decode(self.auth.verify(key, raw) if self.auth else raw)
+        except WireError:
+            return  # the nodes reject it too
+        if msg.kind == "abort":
+            reason = str(msg.d.get("reason", "?"))[:200]
+            self.foreign_abort = (f"the run was aborted by an abort this orchestrator did not "
+                                  f"send (signed with the run's key: an insider; its reason: "
+                                  f"{reason!r})")
 
     # ---- events -------------------------------------------------------------------------
     def _node_of(self, key: str) -> str | None:
@@ -145,7 +173,8 @@ class Clock:
                     print(f"suscosim: rejected control message #{self.rejected} on {key}: "
                           f"{exc}", file=sys.stderr)
                 continue
-            st.last_seen = now
+            if msg.kind != "waiting" or not st.started:  # waiting on an input is no progress
+                st.last_seen = now
             st.rejected = msg.d.get("rejected", st.rejected)
             if msg.kind == "ready":
                 st.ready, st.info, st.waiting_for = True, dict(msg.d.get("info", {})), []
@@ -153,6 +182,8 @@ class Clock:
                 st.waiting_for = [str(x) for x in msg.d.get("missing", [])][:8]
             elif msg.kind == "progress":
                 st.started = st.started or st.ready
+                if msg.k > st.k:
+                    st.waiting_for = []
                 st.k = max(st.k, msg.k)
             elif msg.kind == "done":
                 st.done, st.k, st.result = True, msg.k, dict(msg.d)
@@ -170,8 +201,12 @@ class Clock:
 
     def _tick(self) -> None:
         now = self._last_tick = time.monotonic()
+        if self.foreign_abort is not None:
+            raise RunError(self.foreign_abort)  # every node has it already
         dead = self.check_processes()
         if dead:
+            if self.foreign_abort is not None:  # a node that obeyed it exited meanwhile
+                raise RunError(self.foreign_abort)
             self.abort(dead)
         for node, st in self.status.items():
             if st.gone_since is not None and not st.done \
@@ -185,6 +220,26 @@ class Clock:
         """Tell every node to stop, then raise (the error names the node)."""
         self.announce_abort(reason)
         raise err if err is not None else RunError(reason)
+
+    def _blame(self, stale: list[tuple[int, str]], stall: float) -> str:
+        """The stall's error, naming the node that stopped: of the stale nodes, one that
+        others wait for (their ``waiting``) and that waits for nobody itself; else one that
+        others wait for; else a node of the coupling; else the one furthest behind."""
+        waiters: dict[str, list[str]] = {}
+        for name, st in self.status.items():
+            if st.done:
+                continue
+            for inp in st.waiting_for:
+                waiters.setdefault(inp.partition("/")[0], []).append(f"{name} ({inp})")
+        tiers = ([(k, n) for k, n in stale if n in waiters and not self.status[n].waiting_for],
+                 [(k, n) for k, n in stale if n in waiters],
+                 [(k, n) for k, n in stale if n in ch.COUPLED], stale)
+        k, node = min(next(t for t in tiers if t))
+        text = (f"node '{node}' made no progress for {stall:.1f} s (stalled at step {k} of "
+                f"{self.n_steps})")
+        if waiters.get(node):
+            text += "; waiting for it: " + ", ".join(waiters[node])
+        return text
 
     def _why_not_ready(self, node: str) -> str:
         st = self.status[node]
@@ -228,10 +283,8 @@ class Clock:
             now = time.monotonic()
             stale = [(st.k, node) for node, st in self.status.items()
                      if not st.done and now - st.last_seen > stall]
-            if stale:  # the one furthest behind is the one holding the others up
-                k, node = min(stale)
-                self.abort(f"node '{node}' made no progress for {stall:.1f} s "
-                           f"(stalled at step {k} of {self.n_steps})")
+            if stale:
+                self.abort(self._blame(stale, stall))
         run_wall = time.monotonic() - t_run
         for _ in range(3):
             self._clock(encode("done", self.n_steps, self.n_steps * cfg["h"], {}))
