@@ -138,6 +138,9 @@ def sn_plot(path_png: Path, cfg: FatigueConfig, eq: np.ndarray, result: FatigueR
         if life:
             ax.loglog(cum[keep] * life, s_sorted[keep] / 1e6, ".", color="tab:red", ms=3,
                       label=f"x life ({life:.3g} passes)")
+    ax.set_ylim(bottom=0.05 * curve.Se / 1e6, top=1.5 * mat.Su / 1e6)
+    ax.axhline(mat.Su / 1e6, color="grey", lw=0.8, ls=":")
+    ax.annotate("Su", (1.5, mat.Su / 1e6), fontsize=7, color="grey")
     ax.set_xlabel("cycles N")
     ax.set_ylabel(f"σar (MPa, {cfg.mean_stress} corrected amplitude)")
     ax.grid(True, which="both", alpha=0.3)

@@ -101,26 +101,25 @@ def totals_section(duty: dict[str, Any]) -> str:
 
 
 def map_section(duty: dict[str, Any], cols: dict[str, np.ndarray] | None, problem: str) -> str:
+    """The damage of one schedule on the arm, drawn by the one map renderer
+    (nodes/fatigue/map_render.py: all nodes projected, plan and side views)."""
     if cols is None:
         return section("map", "Damage map", note(esc(problem or "no damage_per_node.csv")))
     d = cols["damage_per_schedule"]
-    on = d > 0
-    fig, (ax,) = new_figure(1, width=7.5, row_h=6.0)
-    if on.any():
-        from matplotlib.colors import LogNorm
+    if not np.any(d > 0) or "z_m" not in cols:
+        return section("map", "Damage map", note("no damage in this schedule" if "z_m" in cols
+                                                 else "damage_per_node.csv has no z_m"))
+    from matplotlib.figure import Figure
 
-        lo = max(float(d[on].min()), float(d[on].max()) * 1e-8)
-        sc = ax.scatter(cols["x_m"][on] * 1e3, cols["y_m"][on] * 1e3, c=np.maximum(d[on], lo),
-                        norm=LogNorm(lo, float(d[on].max())), s=12, cmap="inferno_r")
-        fig.colorbar(sc, ax=ax, label="damage per schedule")
-        c = int(np.argmax(d))
-        ax.plot(cols["x_m"][c] * 1e3, cols["y_m"][c] * 1e3, "c*", ms=14,
-                label=f"critical node {duty.get('critical_node_id')}")
-        ax.legend(loc="upper right", fontsize=8)
-    ax.set_xlabel("x [mm] (forward, along the pivot axis)")
-    ax.set_ylabel("y [mm] (outward to the ball joint)")
-    ax.set_aspect("equal")
-    ax.set_title("lower arm, plan view: damage of one schedule (all events)")
+    from cosim import lower_arm as geo
+    from nodes.fatigue.map_render import draw
+
+    fig = Figure(figsize=(12, 5.2))
+    xyz = np.column_stack([cols["x_m"], cols["y_m"], cols["z_m"]])
+    ids = cols["node_id"].astype(int) if "node_id" in cols else None
+    draw(fig, xyz, d, node_ids=ids, hardpoints=geo.HARDPOINTS,
+         label="damage per schedule")
+    fig.suptitle("lower arm: damage of one schedule (all events)")
     return section("map", "Damage map", img(fig_uri(fig), "damage map of one schedule"))
 
 

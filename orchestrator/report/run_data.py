@@ -29,6 +29,7 @@ class RunData:
     table_note: str = ""
     fatigue: dict | None = None
     damage_map: Path | None = None
+    sn_plot: Path | None = None
     problems: list[str] = field(default_factory=list)
 
     @property
@@ -109,4 +110,6 @@ def load_run(d: Path) -> RunData:
     r.fatigue = fs if isinstance(fs, dict) else None
     if (d / "fatigue" / "damage_map.png").is_file():
         r.damage_map = d / "fatigue" / "damage_map.png"
+    if (d / "fatigue" / "sn_plot.png").is_file():
+        r.sn_plot = d / "fatigue" / "sn_plot.png"
     return r
