@@ -43,6 +43,7 @@ class ProgressBar:
         self.t0 = time.monotonic()
         self._last = 0.0
         self._first: tuple[float, int] | None = None  # (wall time, k) of the first step shown
+        self._done_at: float | None = None  # wall time the last step was first shown
         self._width_written = 0
         self.phases: list[tuple[str, float]] = []
         """The start-up phases shown, with their start (s after the bar was made)."""
@@ -71,6 +72,9 @@ class ProgressBar:
         if self._first is None:
             self._first = (now, k)
         t_first, k_first = self._first
+        if k >= n:  # the rate of the steps, not of the wait for the table export after them
+            self._done_at = self._done_at if self._done_at is not None else now
+            now = self._done_at
         frac = max(0.0, min(1.0, (k + 1) / (n + 1)))
         fill = int(frac * self.width)
         dt = now - t_first

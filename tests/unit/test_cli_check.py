@@ -142,3 +142,10 @@ def test_the_channel_printout_carries_si_units(capsys) -> None:
             if ln.split() and ln.split()[0].count("/") == 2}
     assert rows == {"tyre_road/force/F_t": "N", "plant/state/v_b": "m/s",
                     "tyre_road/force/k_t": "N/m"}
+
+
+def test_the_rate_stops_at_the_last_step() -> None:
+    bar = ProgressBar("r", stream=_Tty(), start_phase="")
+    bar.line(0, 100, now=0.0)
+    assert "100 steps/s" in bar.line(100, 100, now=1.0)
+    assert "100 steps/s" in bar.line(100, 100, now=5.0)  # the recorder exporting: same rate
