@@ -99,8 +99,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             r = fatigue_load_file(args.run_dir, overrides, args.scenario,
                                   parse_map(args.map), out, progress)
         else:
-            out = results_folder(args.run_dir, overrides, args.out)
             r = fatigue_run_dir(args.run_dir, overrides, args.out, progress)
+            out = getattr(r, "results_dir", results_folder(args.run_dir, overrides, args.out))
     except SuscosimError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return exc.exit_code if exc.exit_code else 2

@@ -299,7 +299,9 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None, out: Path | No
 
     Reads ``table.parquet`` (or ``table.csv``) and ``scenario.json`` (its ``fatigue``
     section, with ``overrides`` merged in: dotted keys relative to that section). A what-if's
-    settings are in its ``summary.json`` (``what_if``).
+    settings are in its ``summary.json`` (``what_if``); overrides that leave the run's own
+    settings as they are (``--set mesh_size_m=0.03`` on a run made with it) are not a
+    what-if: they rewrite ``fatigue/``.
     """
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
@@ -311,11 +313,16 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None, out: Path | No
     section = scenario.get("fatigue", {}) or {}
     if not isinstance(section, dict):
         raise ScenarioError("fatigue", section, "a table")
-    section = _merge(section, overrides or {})
-    cfg = FatigueConfig.from_dict(section, "fatigue", base_dir=run_dir)
+    cfg = FatigueConfig.from_dict(_merge(section, overrides or {}), "fatigue",
+                                  base_dir=run_dir)
+    if overrides and cfg == FatigueConfig.from_dict(section, "fatigue", base_dir=run_dir):
+        overrides = {}  # settings that only repeat the run's own: not a what-if
     t, loads = read_table(run_dir)
     if not any(short_channel(k) for k in loads):
         raise InputFileError(str(run_dir / "table"), "no plant/arm/... load columns")
     L = cfg.track_length_m if cfg.track_length_m is not None else track_length(scenario, t)
-    return _analyse_and_write(t, loads, cfg, L, results_folder(run_dir, overrides, out),
-                              str(run_dir / "table"), overrides or None, progress)
+    folder = results_folder(run_dir, overrides, out)
+    result = _analyse_and_write(t, loads, cfg, L, folder, str(run_dir / "table"),
+                                overrides or None, progress)
+    result.results_dir = folder  # type: ignore[attr-defined]  # where it went, for the CLI
+    return result

@@ -70,13 +70,18 @@ def test_first_cycle_failure_is_life_zero_and_whatif_keeps_live_results(run_dir:
     assert not (live / "stale_from_an_old_result.png").exists()
     assert strict((live / "summary.json").read_text())["min_life_km"] > 0
     assert not [p for p in run_dir.iterdir() if p.name.startswith(".")]
+    # a setting that repeats the run's own is not a what-if: it rewrites fatigue/
+    capsys.readouterr()
+    assert main([str(run_dir), "--quiet", "--set", "mesh_size_m=0.02"]) == 0
+    assert f"results in {live}\n" in capsys.readouterr().out
+    assert "what_if" not in strict((live / "summary.json").read_text())
 
 
 def test_out_for_a_run_folder(run_dir: Path, tmp_path: Path, capsys) -> None:
     dest = tmp_path / "elsewhere"
-    assert main([str(run_dir), "--quiet", "--method", "stress_life", "--out", str(dest)]) == 0
+    assert main([str(run_dir), "--quiet", "--mean-stress", "gerber", "--out", str(dest)]) == 0
     s = strict((dest / "summary.json").read_text())
-    assert s["what_if"]["settings"] == {"method": "stress_life"}
+    assert s["what_if"]["settings"] == {"mean_stress": "gerber"}
     assert not (run_dir / "fatigue").exists()
     # the life under both S-N methods and at the survival probability, the range given
     sm = s["sn_methods"]
