@@ -61,7 +61,7 @@ def compare(sources: Sequence[Path], k: float = 5.0, n_ref: float = 1e6) -> dict
     table: dict[str, list] = {}
     for n in names:
         first = per[0].get(n)
-        row = []
+        row: list[dict | None] = []
         for d in per:
             p = d.get(n)
             if p is None:

@@ -32,11 +32,12 @@ from .life_models import (
 )
 from .material import Material, material_sn_curve
 from .mean_stress import equivalent_amplitude
+from .sn_data import TabulatedSN
 
 METHODS = ("stress_life", "strain_life")
 
 
-def _endurance(curve: SNCurve, endurance_limit: bool | str | None) -> str:
+def _endurance(curve: SNCurve | TabulatedSN, endurance_limit: bool | str | None) -> str:
     """The endurance treatment: the curve's, or the argument (True = "elementary",
     False = "none", or a mode name)."""
     if endurance_limit is None:
@@ -51,7 +52,7 @@ def _endurance(curve: SNCurve, endurance_limit: bool | str | None) -> str:
     return endurance_limit
 
 
-def sn_curve(mat: Material) -> SNCurve:
+def sn_curve(mat: Material) -> SNCurve | TabulatedSN:
     """The S-N curve damage uses for ``mat``: ``mat.sn`` or the material's Basquin line."""
     return mat.sn if mat.sn is not None else material_sn_curve(mat)
 

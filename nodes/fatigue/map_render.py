@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -102,8 +103,9 @@ def project(xyz: np.ndarray, values: np.ndarray, view: str = "plan",
                       grid, idx)
 
 
-def draw(fig, xyz: np.ndarray, damage: np.ndarray, *, node_ids: Sequence[int] | None = None,
-         hardpoints: Mapping[str, Sequence[float]] | None = None,
+def draw(fig: Any, xyz: np.ndarray, damage: np.ndarray, *,
+         node_ids: Sequence[int] | np.ndarray | None = None,
+         hardpoints: Mapping[str, Any] | None = None,
          label: str = "Miner damage per pass", views: Sequence[str] = ("plan", "side"),
          h: float | None = None) -> dict:
     """Draw the views of ``damage`` on ``fig`` (one axes per view, side by side); return

@@ -57,9 +57,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from statistics import NormalDist
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .life_models import ENDURANCE_MODES, SNCurve
+
+if TYPE_CHECKING:
+    from .sn_data import TabulatedSN
 
 MPa = 1.0e6
 
@@ -97,7 +100,7 @@ class Material:
     n: float
     Se: float
     source: Mapping[str, str] = field(default_factory=dict, compare=False)
-    sn: SNCurve | None = field(default=None, compare=False)
+    sn: SNCurve | TabulatedSN | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         for k in ("E", "rho", "Su", "Sy", "sf", "ef", "K", "n", "Se"):
@@ -217,7 +220,9 @@ def database_material(name: str = "817M40", cyclic: str = "uml",
         vals["Se"] = specimen_endurance_limit(Su)
         source["Se"] = ("Se' = 0.5 Su (Shigley 9th ed. Eq 6-8, Su <= 1400 MPa)"
                         if Su <= 1400 * MPa else "Se' = 700 MPa (Shigley 9th ed. Eq 6-8)")
-    return Material(name=name, source=source, **vals)
+    return Material(name=name, E=vals["E"], nu=vals["nu"], rho=vals["rho"], Su=vals["Su"],
+                    Sy=vals["Sy"], sf=vals["sf"], b=vals["b"], ef=vals["ef"], c=vals["c"],
+                    K=vals["K"], n=vals["n"], Se=vals["Se"], source=source)
 
 
 def steel_817M40(cyclic: str = "uml") -> Material:

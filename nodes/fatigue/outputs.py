@@ -70,6 +70,7 @@ def method_lives(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
                 say(f"fatigue: S-N method {m} at P = {P:g}")
                 r = analyse(t, loads, c, L)
             sn = c.material.sn
+            assert sn is not None  # a FatigueConfig's material always has its curve
             out[m][f"{P:g}"] = {
                 "survival_probability": P, "mean_stress": c.mean_stress,
                 "life_km": r.life_km, "life_repeats": r.life_repeats,
@@ -120,8 +121,8 @@ def sn_plot(path_png: Path, cfg: FatigueConfig, eq: np.ndarray, result: FatigueR
                           "S_pa": curve.stress(2 * N).tolist()}}
     for m in SN_METHODS:
         c = method_config(cfg, m, cfg.component.reliability) if cfg.component else None
-        if c is not None:
-            sn = c.material.sn
+        sn = c.material.sn if c is not None else None
+        if sn is not None:
             curves[m] = {"name": sn.name, "N": N.tolist(), "S_pa": sn.stress(2 * N).tolist()}
     life = result.life_repeats if np.isfinite(result.life_repeats) else None
     data = {"curves": curves, "critical_node_id": result.critical_node_id,
@@ -157,7 +158,7 @@ def write_vtu(path: Path, result: FatigueResult) -> bool:
     """``damage.vtu``: the nodes as VTK vertices with damage, life and log10 damage."""
     if result.node_xyz is None:
         return False
-    import meshio
+    import meshio  # type: ignore[import-untyped]
 
     D = np.asarray(result.damage, dtype=float)
     with np.errstate(divide="ignore"):

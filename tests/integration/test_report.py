@@ -138,6 +138,30 @@ def test_run_report_realistic_with_fatigue(runs, tmp_path):
     assert fat["config"]["method"] in page and fat["config"]["mean_stress"] in page
     # the damage map is the fatigue worker's own image, embedded byte for byte
     assert (d / "fatigue" / "damage_map.png").read_bytes() in pngs
+    # #26 item 4: the life under both S-N methods and probabilities, the range shown;
+    # #30 item 5: the S-N plot with the critical node's cycles
+    assert "Life by S-N method" in page
+    lo, hi = fat["sn_methods"]["life_range_km"]
+    assert lo <= fat["min_life_km"] <= hi and lo < hi
+    assert f"{_g(lo)}" in page and f"{_g(hi)}" in page
+    assert (d / "fatigue" / "sn_plot.png").read_bytes() in pngs
+    # #30 item 1: the map's data (all nodes projected) has the critical node at its damage
+    import csv
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from nodes.fatigue.map_render import draw
+
+    rows = list(csv.DictReader(open(d / "fatigue" / "damage_per_node.csv")))
+    xyz = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows])
+    dmg = np.array([float(r["damage_per_pass"]) for r in rows])
+    drawn = draw(Figure(), xyz, dmg, node_ids=[int(r["node_id"]) for r in rows])
+    assert drawn["critical_id"] == fat["critical_node_id"]
+    assert drawn["projections"]["plan"].value_at(drawn["critical"]) == \
+        pytest.approx(fat["max_damage_per_pass"], rel=1e-5)
     import pyarrow.parquet as pq
 
     arm = [c for c in pq.read_schema(d / "table.parquet").names if c.startswith("plant/arm/")]
