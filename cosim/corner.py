@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -84,6 +84,16 @@ class Corner:
     def point(self, name: str) -> np.ndarray:
         """A hardpoint in the corner frame [m] (a copy)."""
         return self.points[name].copy()
+
+    def mirrored(self) -> Corner:
+        """The right-hand corner: every point mirrored in the vehicle's xz plane,
+        (x, y, z) -> (x, -y, z) (a full vehicle's FR and RR from the left corner's file).
+        Its lower-arm frame (:func:`cosim.lower_arm.arm_frame_of`: x forward, y outboard, so
+        z down) is the left arm's frame mirrored: the arm's points and loads in it are the
+        left part's."""
+        m = np.array([1.0, -1.0, 1.0])
+        return replace(self, points={k: v * m for k, v in self.points.items()},
+                       name=f"{self.name} (mirrored)")
 
 
 def _err(path: str, exc: ScenarioError) -> InputFileError:

@@ -14,6 +14,11 @@
 * ``full_vehicle_7dof`` (Table 4.4): ``sprung_mass_front``, ``sprung_mass_rear``,
   ``unsprung_mass``, ``spring_stiffness``, ``pitch_inertia``, ``roll_inertia``, ``wheelbase``,
   ``track``, ``mass_basis`` ("corner" | "axle").
+* ``full_vehicle_double_wishbone`` (#31 item 2, first piece: vertical tyre forces):
+  ``front``, ``rear`` (corner files of the left corners, default the built-in; the rear
+  defaults to the front), the body's ``sprung_mass``, ``cg_to_front_axle``, ``wheelbase``,
+  ``pitch_inertia``, ``roll_inertia``, ``yaw_inertia``, ``cg_height``
+  (:mod:`.full_vehicle_dw`).
 
 Missing parameters take the defaults of the model's params dataclass. Numbers must be > 0,
 switches true or false. Bad keys or values raise :class:`cosim.errors.ScenarioError`.
@@ -33,7 +38,8 @@ from cosim.errors import ScenarioError
 
 from .model import PlantModel
 
-MODELS = ("quarter_car_lumped", "quarter_car_double_wishbone", "full_vehicle_7dof")
+MODELS = ("quarter_car_lumped", "quarter_car_double_wishbone", "full_vehicle_7dof",
+          "full_vehicle_double_wishbone")
 
 
 def _params(cls, r: ConfigReader, choices: dict[str, tuple[str, ...]] | None = None,
@@ -66,6 +72,15 @@ def build_plant_model(cfg: Mapping[str, Any], key_prefix: str = "vehicle") -> Pl
         from .full_vehicle_7dof import FullVehicle7DOF, FullVehicleParams
         return FullVehicle7DOF(_params(FullVehicleParams, r,
                                        {"mass_basis": ("corner", "axle")}))
+    if model == "full_vehicle_double_wishbone":
+        from .full_vehicle_dw import FullVehicleDoubleWishbone, FullVehicleDWParams
+        front = read_corner(r, "front")
+        rear = read_corner(r, "rear") if r.has("rear") else front
+        fv = _params(FullVehicleDWParams, r, extra=("front", "rear"))
+        try:
+            return FullVehicleDoubleWishbone(fv, front=front, rear=rear)
+        except ValueError as exc:
+            raise ScenarioError(r.key("front"), front.source, str(exc)) from None
     from .double_wishbone import DoubleWishboneCorner, DoubleWishboneParams  # the third model
     corner = read_corner(r)
     params = _params(DoubleWishboneParams, r, base=DoubleWishboneParams.from_corner(corner),
@@ -76,10 +91,10 @@ def build_plant_model(cfg: Mapping[str, Any], key_prefix: str = "vehicle") -> Pl
         raise ScenarioError(r.key("corner"), corner.source, str(exc)) from None
 
 
-def read_corner(r: ConfigReader) -> Corner:
-    """The ``corner`` key's corner file (the built-in MPV corner when absent or
-    ``"builtin"``); a bad file raises :class:`cosim.errors.InputFileError`."""
-    path = r.string("corner", "builtin")
+def read_corner(r: ConfigReader, key: str = "corner") -> Corner:
+    """The ``key``'s corner file (the built-in MPV corner when absent or ``"builtin"``); a
+    bad file raises :class:`cosim.errors.InputFileError`."""
+    path = r.string(key, "builtin")
     if path == "builtin":
         return corner_file.builtin()
     return corner_file.load(path)

@@ -1,0 +1,364 @@
+"""Full vehicle on four double-wishbone corners built from corner files (#31 item 2, the first
+piece: the multi-body model; docs/corners.md has the design of the rest).
+
+One PyBullet multibody: the **body** is the floating base (6 DOF; its frame at the CG at ride
+height, mass and inertias there); each corner FL, FR, RL, RR is the quarter car's linkage
+(:class:`.double_wishbone_geometry.CornerGeometry` of its corner file: lower and upper arm on
+revolute joints to the body, the hub on a spherical joint at the lower ball joint, the tie rod
+on a spherical joint at the rack end, the upper ball joint and the tie rod's outer joint closed
+by POINT2POINT constraints). The front corners are the ``front`` corner file, the rear ones
+the ``rear`` file (both the left corner's; FR and RR are mirrored, :meth:`cosim.corner.Corner
+.mirrored`), placed with their static wheel centres at (x_i, +-half track, r - h_cg) from the
+CG: x = a ahead for the front axle, b = L - a behind for the rear.
+
+Forces per corner, as the quarter car applies them (:mod:`.double_wishbone`): the torsion bar
+tau = tau_0 - K_theta theta on the lower arm's joint, the damper force F_d along the damper
+axis (compression-positive on the body), the jounce bumper along the body's z, the tyre force
+F_t vertical at the wheel centre (this first piece takes the vertical tyre models' F_t; the
+3-D tyre of the design is the next step).
+
+**Static state.** The tyre loads W_i balance the weight of every link and its moment about the
+CG (left = right; the two axles from the force and pitch-moment balance), and the four torsion
+preloads tau_0,i are those for which the arms have no angular acceleration under them: the
+arms' accelerations are affine in the four torques, so five trial steps from rest (all zero,
+then each in turn) give them (a 4 x 4 solve). The body is then at rest too.
+
+Body (defaults: Table 4.4 read per corner, as ``full_vehicle_7dof``'s ``corner`` basis):
+1870 kg, the CG a = 1.181 m behind the front axle (L = 2.774 m), I_pitch = 3522.5,
+I_roll = 930.8 kg m^2 (sum m_i x_i^2, sum m_i y_i^2 of the corner masses), I_yaw their sum;
+CG height h_cg = 0.55 m (ours: a small MPV's unladen CG, the thesis gives none; with
+vertical forces only it does not enter the motion).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cosim import corner as corner_file
+from cosim.channels import CORNERS
+from cosim.corner import Corner
+
+from .bump_stop import BumpStopParams, bump_stop_force
+from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
+from .model import GRAVITY, PlantModel
+from .quarter_car_lumped import load_urdf_text, new_direct_client
+from .quiet_pybullet import p
+
+
+@dataclass(frozen=True)
+class FullVehicleDWParams:
+    """The body of the four-corner vehicle (module docstring) [kg, kg m^2, m]."""
+
+    sprung_mass: float = 1870.0
+    cg_to_front_axle: float = 2.774 * 800.0 / 1870.0
+    """a [m]: the 7-DOF's, from 535 / 400 kg per front / rear corner."""
+    wheelbase: float = 2.774
+    pitch_inertia: float = 3522.5
+    roll_inertia: float = 930.8
+    yaw_inertia: float = 3522.5 + 930.8
+    cg_height: float = 0.55
+
+
+def _rot(quat) -> np.ndarray:
+    return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+
+
+class FullVehicleDoubleWishbone(PlantModel):
+    """Four double-wishbone corners on a free body; corners FL, FR, RL, RR."""
+
+    n_corners = 4
+    name = "full_vehicle_double_wishbone"
+
+    def __init__(self, params: FullVehicleDWParams | None = None, front: Corner | None = None,
+                 rear: Corner | None = None, static_dt: float = 1e-3) -> None:
+        self.params = pr = params or FullVehicleDWParams()
+        f = front or corner_file.builtin()
+        r = rear or f
+        for c in (f, r):
+            if c.coil_n_per_m > 0.0:
+                raise ValueError(f"{c.source}: the PyBullet corner has no coil spring yet")
+        self.corners = [f, f.mirrored(), r, r.mirrored()]
+        self.geoms = [CornerGeometry(c) for c in self.corners]
+        self.side = np.array([1.0, -1.0, 1.0, -1.0])  # +1 left: arm angle + = jounce
+        a, b = pr.cg_to_front_axle, pr.wheelbase - pr.cg_to_front_axle
+        self.wheel_centres = np.array([
+            [x, s * c.half_track, c.tyre_loaded_radius - pr.cg_height]
+            for x, s, c in zip((a, a, -b, -b), self.side, self.corners, strict=True)])
+        self.k_theta = np.array([c.torsion_bar_nm_per_deg * 180.0 / np.pi
+                                 for c in self.corners])
+        self.bump = [None if c.bump_stop is None else BumpStopParams(**c.bump_stop)
+                     for c in self.corners]
+        self.client = cl = new_direct_client()
+        p.setPhysicsEngineParameter(numSolverIterations=200, erp=0.2,
+                                    solverResidualThreshold=1e-12, physicsClientId=cl)
+        self.body = bd = load_urdf_text(self._urdf(), cl, useFixedBase=False,
+                                        basePosition=[0.0, 0.0, pr.cg_height],
+                                        flags=p.URDF_USE_INERTIA_FROM_FILE)
+        names = {p.getJointInfo(bd, j, physicsClientId=cl)[1].decode(): j
+                 for j in range(p.getNumJoints(bd, physicsClientId=cl))}
+        self.link = [{k: names[f"{k}_{n}"] for k in ("lower_arm", "hub", "upper_arm",
+                                                     "tie_rod")} for n in CORNERS]
+        for j in names.values():
+            info = p.getJointInfo(bd, j, physicsClientId=cl)
+            if info[2] == p.JOINT_SPHERICAL:
+                p.setJointMotorControlMultiDof(bd, j, p.POSITION_CONTROL, [0, 0, 0, 1],
+                                               targetVelocity=[0, 0, 0], positionGain=0,
+                                               velocityGain=0, force=[0, 0, 0],
+                                               physicsClientId=cl)
+            else:
+                p.setJointMotorControl2(bd, j, p.VELOCITY_CONTROL, force=0, physicsClientId=cl)
+        for j in [-1, *names.values()]:
+            p.changeDynamics(bd, j, linearDamping=0, angularDamping=0, jointDamping=0,
+                             physicsClientId=cl)
+        for i, g in enumerate(self.geoms):
+            wc, lk = self.wheel_centres[i], self.link[i]
+            for parent, child, pt in (("upper_arm", "hub", g.upper_ball_joint),
+                                      ("tie_rod", "hub", g.tie_rod_outer)):
+                cid = p.createConstraint(bd, lk[parent], bd, lk[child], p.JOINT_POINT2POINT,
+                                         [0, 0, 0], self._local(lk[parent], wc + pt),
+                                         self._local(lk[child], wc + pt), physicsClientId=cl)
+                p.changeConstraint(cid, maxForce=1e9, physicsClientId=cl)
+        self._pad_body = [None if g.bump_stop_pad is None else self.wheel_centres[i]
+                          + g.bump_stop_pad for i, g in enumerate(self.geoms)]
+        self._F_t = np.zeros(4)
+        self._F_d = np.zeros(4)
+        self._tau = np.zeros(4)
+        self._dt: float | None = None
+        self._read()
+        self._s0 = self._snapshot()
+        self.tau0 = np.zeros(4)
+        self._W = self._static_loads()
+        self.tau0 = self._static_torques(static_dt)
+        self._read()
+
+    # --- build ---
+    def _urdf(self) -> str:
+        pr = self.params
+        s = _link("body", pr.sprung_mass, [0, 0, 0],
+                  (pr.roll_inertia, pr.pitch_inertia, pr.yaw_inertia))
+        joints = ""
+        for i, (g, c, n) in enumerate(zip(self.geoms, self.corners, CORNERS, strict=True)):
+            wc, m = self.wheel_centres[i], c.masses
+            la_o = wc + 0.5 * (g.lower_bush_front + g.lower_bush_rear)
+            ua_o = wc + 0.5 * (g.upper_bush_front + g.upper_bush_rear)
+            bj = wc + g.lower_ball_joint
+            tri = wc + g.tie_rod_inner
+            ua_com = wc + (g.upper_bush_front + g.upper_bush_rear + g.upper_ball_joint) / 3.0
+            tr_com = wc + 0.5 * (g.tie_rod_inner + g.tie_rod_outer)
+            tr_len = float(np.linalg.norm(g.tie_rod_outer - g.tie_rod_inner))
+            i_perp = m["tie_rod"] * tr_len ** 2 / 12.0
+            s += _link(f"lower_arm_{n}", m["lower_arm"], wc + g.lower_arm_com - la_o,
+                       g.lower_arm_inertia(m["lower_arm"]))
+            s += _link(f"hub_{n}", m["hub"], wc - bj, (1.2, 2.0, 1.2))
+            s += _link(f"upper_arm_{n}", m["upper_arm"], ua_com - ua_o, (0.012, 0.01, 0.02))
+            s += _link(f"tie_rod_{n}", m["tie_rod"], tr_com - tri,
+                       (i_perp, m["tie_rod"] * 1e-4 / 2.0, i_perp))
+            ua_axis = g.upper_bush_front - g.upper_bush_rear
+            joints += _joint(f"lower_arm_{n}", "revolute", "body", f"lower_arm_{n}", la_o,
+                             _fmt(g.arm_rotation[:, 0]))
+            joints += _joint(f"hub_{n}", "spherical", f"lower_arm_{n}", f"hub_{n}", bj - la_o)
+            joints += _joint(f"upper_arm_{n}", "revolute", "body", f"upper_arm_{n}", ua_o,
+                             _fmt(ua_axis / np.linalg.norm(ua_axis)))
+            joints += _joint(f"tie_rod_{n}", "spherical", "body", f"tie_rod_{n}", tri)
+        return f'<?xml version="1.0"?>\n<robot name="full_vehicle_dw">\n{s}{joints}</robot>\n'
+
+    def _local(self, link: int, body_point: np.ndarray) -> list[float]:
+        """A point given in the body frame at build time, in ``link``'s centre-of-mass
+        frame (the link frames are parallel to the body's then)."""
+        ls = p.getLinkState(self.body, link, computeForwardKinematics=1,
+                            physicsClientId=self.client)
+        base, _ = p.getBasePositionAndOrientation(self.body, physicsClientId=self.client)
+        return (np.asarray(body_point) + np.asarray(base) - np.asarray(ls[0])).tolist()
+
+    def _static_loads(self) -> np.ndarray:
+        """W_i [N]: the force and pitch-moment balance of every link's weight, left = right."""
+        cl, bd = self.client, self.body
+        base, _ = p.getBasePositionAndOrientation(bd, physicsClientId=cl)
+        masses = [p.getDynamicsInfo(bd, -1, physicsClientId=cl)[0]]
+        xs = [0.0]
+        for lk in self.link:
+            for j in lk.values():
+                masses.append(p.getDynamicsInfo(bd, j, physicsClientId=cl)[0])
+                xs.append(p.getLinkState(bd, j, physicsClientId=cl)[0][0] - base[0])
+        W = float(np.sum(masses)) * GRAVITY
+        M_y = float(np.dot(masses, xs)) * GRAVITY  # sum m g x
+        xf, xr = self.wheel_centres[0, 0], self.wheel_centres[2, 0]
+        # W_f + W_r = W, W_f xf + W_r xr = M_y (each axle's load shared left = right)
+        W_f = (M_y - W * xr) / (xf - xr)
+        return np.array([W_f, W_f, W - W_f, W - W_f]) / 2.0
+
+    def _static_torques(self, dt: float) -> np.ndarray:
+        cl, bd = self.client, self.body
+        p.setTimeStep(dt, physicsClientId=cl)
+        sid = p.saveState(physicsClientId=cl)
+        trials = [np.zeros(4)] + [np.eye(4)[i] * 1000.0 for i in range(4)]
+        om = []
+        for tau in trials:
+            p.restoreState(sid, physicsClientId=cl)
+            self._read()
+            self._F_t, self._F_d, self._tau = self._W.copy(), np.zeros(4), tau
+            self._apply()
+            p.stepSimulation(physicsClientId=cl)
+            om.append([p.getJointState(bd, lk["lower_arm"], physicsClientId=cl)[1]
+                       for lk in self.link])
+        p.restoreState(sid, physicsClientId=cl)
+        p.removeState(sid, physicsClientId=cl)
+        self._dt = dt
+        om0 = np.array(om[0])
+        A = np.column_stack([(np.array(om[i + 1]) - om0) / 1000.0 for i in range(4)])
+        return np.linalg.solve(A, -om0)
+
+    # --- state ---
+    def _read(self) -> None:
+        cl, bd = self.client, self.body
+        pos, quat = p.getBasePositionAndOrientation(bd, physicsClientId=cl)
+        v, w = p.getBaseVelocity(bd, physicsClientId=cl)
+        self._base = (np.array(pos), _rot(quat), np.array(v), np.array(w), quat)
+        st: dict[str, list] = {k: [] for k in ("theta", "omega", "hub", "vhub", "top", "bot",
+                                                "vtop", "vbot", "pad")}
+        R, P, V, Wb = self._base[1], self._base[0], self._base[2], self._base[3]
+        for i, (g, lk) in enumerate(zip(self.geoms, self.link, strict=True)):
+            js = p.getJointState(bd, lk["lower_arm"], physicsClientId=cl)
+            st["theta"].append(js[0])
+            st["omega"].append(js[1])
+            hub = p.getLinkState(bd, lk["hub"], computeLinkVelocity=1,
+                                 computeForwardKinematics=1, physicsClientId=cl)
+            st["hub"].append(np.array(hub[0]))
+            st["vhub"].append(np.array(hub[6]))
+            arm = p.getLinkState(bd, lk["lower_arm"], computeLinkVelocity=1,
+                                 computeForwardKinematics=1, physicsClientId=cl)
+            Ra = _rot(arm[5])
+            la_o = self.wheel_centres[i] + 0.5 * (g.lower_bush_front + g.lower_bush_rear)
+            bot = np.array(arm[4]) + Ra @ (self.wheel_centres[i] + g.damper_lower - la_o)
+            top = P + R @ (self.wheel_centres[i] + g.damper_upper)
+            st["top"].append(top)
+            st["bot"].append(bot)
+            st["vtop"].append(V + np.cross(Wb, top - P))
+            st["vbot"].append(np.array(arm[6]) + np.cross(arm[7], bot - np.array(arm[0])))
+            pad = self._pad_body[i]
+            st["pad"].append(None if pad is None else np.array(arm[4]) + Ra @ (pad - la_o))
+        self._st = st
+
+    def _snapshot(self) -> dict[str, np.ndarray]:
+        """Positions at build time (static): wheel centres, damper lengths, pads, body."""
+        st = self._st
+        return {"hub_z": np.array([h[2] for h in st["hub"]]),
+                "L_d": np.array([np.linalg.norm(t - b) for t, b in
+                                 zip(st["top"], st["bot"], strict=True)]),
+                "theta": np.array(st["theta"]), "base": self._base[0].copy(),
+                "pad_z": np.array([np.nan if q is None else q[2] for q in st["pad"]]),
+                "bumper_z": np.array([np.nan if q is None else
+                                      (self._base[0] + self._base[1] @ q)[2]
+                                      for q in self._pad_body])}
+
+    def _corner_body_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """World z and vertical velocity of the body points at the static wheel centres."""
+        P, R, V, Wb = self._base[:4]
+        z = np.empty(4)
+        vz = np.empty(4)
+        for i, wc in enumerate(self.wheel_centres):
+            pt = P + R @ wc
+            z[i] = pt[2]
+            vz[i] = (V + np.cross(Wb, pt - P))[2]
+        return z, vz
+
+    def _bump_forces(self) -> np.ndarray:
+        F = np.zeros(4)
+        s0 = self._s0
+        for i, bs in enumerate(self.bump):
+            pad = self._st["pad"][i]
+            if bs is None or pad is None:
+                continue
+            bumper_z = (self._base[0] + self._base[1] @ self._pad_body[i])[2]
+            d = (pad[2] - s0["pad_z"][i]) - (bumper_z - s0["bumper_z"][i]) - bs.clearance
+            F[i] = bump_stop_force(d, bs)
+        return F
+
+    def _apply(self) -> None:
+        cl, bd = self.client, self.body
+        bump = self._bump_forces() if hasattr(self, "_s0") else np.zeros(4)
+        ez = self._base[1][:, 2]
+        for i, lk in enumerate(self.link):
+            p.setJointMotorControl2(bd, lk["lower_arm"], p.TORQUE_CONTROL,
+                                    force=float(self._tau[i]), physicsClientId=cl)
+            p.applyExternalForce(bd, lk["hub"], [0.0, 0.0, float(self._F_t[i])],
+                                 self._st["hub"][i].tolist(), p.WORLD_FRAME, physicsClientId=cl)
+            top, bot = self._st["top"][i], self._st["bot"][i]
+            u = (top - bot) / np.linalg.norm(top - bot)
+            f = self._F_d[i] * u
+            p.applyExternalForce(bd, -1, f.tolist(), top.tolist(), p.WORLD_FRAME,
+                                 physicsClientId=cl)
+            p.applyExternalForce(bd, lk["lower_arm"], (-f).tolist(), bot.tolist(),
+                                 p.WORLD_FRAME, physicsClientId=cl)
+            if bump[i] > 0.0:
+                pad = self._st["pad"][i]
+                p.applyExternalForce(bd, -1, (bump[i] * ez).tolist(), pad.tolist(),
+                                     p.WORLD_FRAME, physicsClientId=cl)
+                p.applyExternalForce(bd, lk["lower_arm"], (-bump[i] * ez).tolist(),
+                                     pad.tolist(), p.WORLD_FRAME, physicsClientId=cl)
+
+    # --- PlantModel ---
+    def static_tyre_load(self) -> np.ndarray:
+        return self._W.copy()
+
+    def state(self) -> dict[str, np.ndarray]:
+        st, s0 = self._st, self._s0
+        zb, vb = self._corner_body_points()
+        L_d = np.array([np.linalg.norm(t - b) for t, b in zip(st["top"], st["bot"],
+                                                              strict=True)])
+        u = [(t - b) / np.linalg.norm(t - b) for t, b in zip(st["top"], st["bot"],
+                                                              strict=True)]
+        v_d = np.array([-float(ui @ (vt - vbt)) for ui, vt, vbt in
+                        zip(u, st["vtop"], st["vbot"], strict=True)])
+        R = self._base[1]
+        roll, pitch = float(np.arctan2(R[2, 1], R[2, 2])), float(np.arcsin(-R[2, 0]))
+        w_body = R.T @ self._base[3]
+        zc = self._s0["base"][2]
+        return {"z_b": zb - (zc + self.wheel_centres[:, 2]), "v_b": vb,
+                "z_w": np.array([h[2] for h in st["hub"]]) - s0["hub_z"],
+                "v_w": np.array([v[2] for v in st["vhub"]]),
+                "z_damper": s0["L_d"] - L_d, "v_damper": v_d,
+                "arm_angle": self.side * (np.array(st["theta"]) - s0["theta"]),
+                "heave": np.array([self._base[0][2] - zc]), "pitch": np.array([pitch]),
+                "roll": np.array([roll]), "v_heave": np.array([self._base[2][2]]),
+                "w_pitch": np.array([w_body[1]]), "w_roll": np.array([w_body[0]])}
+
+    def spring_force(self) -> np.ndarray:
+        """Torsion-bar torque's dynamic part as a vertical force at each ball joint [N]."""
+        dth = np.array(self._st["theta"]) - self._s0["theta"]
+        lever = np.array([g.lever_ball_joint for g in self.geoms])
+        return self.side * self.k_theta * dth / lever
+
+    def extra_response(self) -> dict[str, np.ndarray]:
+        return {"F_bs": self._bump_forces()}
+
+    def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
+        if dt != self._dt:
+            p.setTimeStep(dt, physicsClientId=self.client)
+            self._dt = dt
+        self._F_t = np.asarray(F_t, dtype=float).copy()
+        self._F_d = np.asarray(F_d, dtype=float).copy()
+        self._tau = self.tau0 - self.k_theta * (np.array(self._st["theta"]) - self._s0["theta"])
+        self._apply()
+        p.stepSimulation(physicsClientId=self.client)
+        self._read()
+
+    def info(self) -> dict[str, object]:
+        d = super().info()
+        pr = self.params
+        d.update({"model": self.name, "corner_names": list(CORNERS),
+                  "corners": [c.name for c in self.corners],
+                  "wheel_x": [0.0, 0.0, -pr.wheelbase, -pr.wheelbase],
+                  "wheel_track": [0, 1, 0, 1], "wheelbase": pr.wheelbase,
+                  "cg_to_front_axle": pr.cg_to_front_axle, "body_mass": pr.sprung_mass,
+                  "unsprung_mass": [sum(c.masses[k] for k in
+                                        ("hub", "lower_arm", "upper_arm", "tie_rod"))
+                                    for c in self.corners],
+                  "torsion_preload_nm": [float(x) for x in self.tau0]})
+        return d
+
+    def close(self) -> None:
+        if p.isConnected(self.client):
+            p.disconnect(self.client)
