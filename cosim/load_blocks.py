@@ -1,4 +1,6 @@
-"""The load-block encoding between the recorder (writer) and the live fatigue node (reader).
+"""Load blocks: the live fatigue node's blocks of plant steps (:class:`StepBlocks`), and the
+recorder's ``recorder/loads`` relay (:class:`LoadStreamer`, :func:`wire_pieces`: kept while
+the recorder still publishes it; the fatigue node reads ``plant/arm`` itself now).
 
 A block is consecutive steps of the load channel (``plant/arm``, :data:`cosim.channels.
 LOAD_CHANNEL`) as one bus message on ``recorder/loads``: ``{"k0": first step, "t": [s],
@@ -18,6 +20,52 @@ from .wire import MAX_MESSAGE_BYTES
 
 META = ("k0", "t")
 """The keys of a block that are not load fields."""
+
+
+class StepBlocks:
+    """Consecutive steps of the load channel gathered into blocks of ``block_steps`` rows.
+
+    :meth:`add` takes one step's time [s] and fields (the message's payload: every number
+    field is a load column, in the first step's order; a later step must have them all);
+    :attr:`full` says a block is complete; :meth:`take` returns (t (n,), loads (n, fields))
+    and starts the next block. Steps are taken in the order given (the caller checks it).
+    """
+
+    def __init__(self, block_steps: int) -> None:
+        self.block_steps = max(1, int(block_steps))
+        self.fields: list[str] = []
+        self._t: list[float] = []
+        self._rows: list[list[float]] = []
+
+    def add(self, t: float, d: dict[str, Any]) -> None:
+        """One step; a ValueError names a missing or non-numeric field."""
+        if not self.fields:
+            self.fields = [f for f, v in d.items()
+                           if f not in META and type(v) in (int, float)]
+            if not self.fields:
+                raise ValueError("no load field (numbers) in the step")
+        try:
+            row = [float(d[f]) for f in self.fields]
+        except KeyError as exc:
+            raise ValueError(f"no field {exc}") from None
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"a field is not a number ({exc})") from None
+        self._t.append(float(t))
+        self._rows.append(row)
+
+    @property
+    def full(self) -> bool:
+        return len(self._t) >= self.block_steps
+
+    def __len__(self) -> int:
+        return len(self._t)
+
+    def take(self) -> tuple[np.ndarray, np.ndarray]:
+        """(t [s] (n,), loads (n, len(fields))) of the steps gathered; starts a new block."""
+        t = np.asarray(self._t, dtype=float)
+        loads = np.asarray(self._rows, dtype=float).reshape(t.size, len(self.fields))
+        self._t, self._rows = [], []
+        return t, loads
 
 
 class LoadStreamer:

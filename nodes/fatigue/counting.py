@@ -137,6 +137,20 @@ class StreamingRainflow:
         """Number of residue points per history."""
         return self._depth.copy()
 
+    @property
+    def last(self) -> np.ndarray | None:
+        """The last sample fed of each history (None before the first feed)."""
+        return self._last
+
+    def residue_variation(self) -> np.ndarray:
+        """Total variation of each history's residue, Σ |r_(j+1) - r_j| (Pa)."""
+        m = int(self._depth.max()) if self.n else 0
+        if m < 2:
+            return np.zeros(self.n)
+        d = np.abs(np.diff(self._stack[:, :m], axis=1))
+        valid = np.arange(m - 1)[None, :] < (self._depth - 1)[:, None]
+        return np.where(valid, d, 0.0).sum(axis=1)
+
     def residue(self, i: int) -> np.ndarray:
         """Turning points not yet closed into cycles, history ``i``."""
         return self._stack[i, : self._depth[i]].copy()
@@ -149,6 +163,33 @@ class StreamingRainflow:
         other._rows = self._rows
         other._last = None if self._last is None else self._last.copy()
         return other
+
+    def take(self, idx: np.ndarray) -> StreamingRainflow:
+        """A counter of the histories ``idx`` only (their states copied, in that order)."""
+        idx = np.asarray(idx, dtype=np.int64)
+        other = StreamingRainflow(idx.size, self._cap)
+        other._stack[:] = self._stack[idx]
+        other._depth[:] = self._depth[idx]
+        other._last = None if self._last is None else self._last[idx].copy()
+        return other
+
+    @staticmethod
+    def join(parts: list[StreamingRainflow]) -> StreamingRainflow:
+        """One counter of the histories of ``parts``, in order (states copied). Every part
+        must have been fed as far (all fed, or none): their ``feed`` calls continue alike."""
+        fed = {p._last is not None for p in parts if p.n}
+        if len(fed) > 1:
+            raise ValueError("cannot join a counter that was fed with one that was not")
+        cap = max([p._cap for p in parts] + [64])
+        out = StreamingRainflow(sum(p.n for p in parts), cap)
+        i = 0
+        for p in parts:
+            out._stack[i:i + p.n, : p._cap] = p._stack
+            out._depth[i:i + p.n] = p._depth
+            i += p.n
+        if fed == {True}:
+            out._last = np.concatenate([p._last for p in parts if p._last is not None])
+        return out
 
     def _grow(self) -> None:
         new = np.zeros((self.n, 2 * self._cap))

@@ -1,11 +1,14 @@
 """The fatigue node: damage of the lower arm computed while the run goes on.
 
-It listens to the recorder's load blocks (``recorder/loads``: the ``plant/arm`` channel, in
-step order), feeds them to :class:`LiveFatigue` block by block, and publishes the damage so
-far on ``fatigue/damage`` (any tap can follow the arm's projected life live). After the block
-that ends at the run's last step it writes ``<run dir>/fatigue/`` (damage per node CSV,
-summary.json, damage map PNG) — the same files, and the same numbers, as the batch
-``suscosim fatigue RUN_DIR`` on the recorded table.
+It subscribes to the plant's load stream itself (``plant/arm``, :data:`cosim.channels.
+LOAD_CHANNEL`: one message per step, as the scope does; Zenoh delivers a publisher's messages
+reliably and in order, and a step missing or out of order is an error, never skipped),
+gathers the steps into blocks of ``fatigue.block_samples`` counted from step 0, feeds each
+block to :class:`LiveFatigue` (which screens: :mod:`.screening`), and publishes the damage so
+far on ``fatigue/damage`` (any tap can follow the arm's projected life live). After the
+run's last step it writes ``<run dir>/fatigue/`` (damage per node CSV, summary.json, damage
+map PNG) — the same files, and the same numbers, as the batch ``suscosim fatigue RUN_DIR``
+on the recorded table (the batch cuts the same blocks). docs/live_fatigue.md.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import numpy as np
 from cosim import channels as ch
 from cosim.errors import RunError, ScenarioError
 from cosim.listener import Listener, Received
-from cosim.load_blocks import block_loads, load_fields
+from cosim.load_blocks import StepBlocks
 from cosim.participant import Participant
 
 from .config import FatigueConfig
@@ -32,22 +35,22 @@ REPORT_PERIOD_S = 0.5
 """At most this often (wall time) the damage so far is published on ``fatigue/damage``."""
 NICE = 10
 """The node lowers its scheduling priority by this much (``os.nice``): it is off the coupled
-chain's critical path (it reads the recorder's load blocks, in arrears), so on a 2-core machine
-the plant, tyre/road and controller take the cores first and the fatigue node works in their
+chain's critical path (it takes the plant's steps as they come, in arrears), so on a 2-core
+machine the plant, tyre/road and controller take the cores first and the fatigue node works in their
 idle time; its numbers do not depend on when it runs."""
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
-    """Consume load blocks until the last step, then write the run's fatigue results."""
+    """Consume the plant's load steps until the last one, then write the run's results."""
     run_cfg = scenario["run"]
     cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
     with contextlib.suppress(OSError):
         os.nice(NICE)
     load_influence(cfg)  # FE solve or cache read: before ready, not inside the run
     listener = Listener(part, run_cfg["start_timeout_s"])
-    tag = listener.feed(ch.RECORDER, ch.LOADS, required=("k0", "t"))
+    tag = listener.feed(*ch.LOAD_CHANNEL)
     part.output(ch.DAMAGE)
-    early: list[Received] = []  # a block that overtook the start (another sender)
+    early: list[Received] = []  # steps that overtook the start (another sender)
     while listener.start is None:  # the handshake
         if (got := listener.poll(timeout=0.05)) is not None:
             early.append(got)
@@ -55,8 +58,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     h = float(run_cfg["h"])
     L = cfg.track_length_m if cfg.track_length_m is not None else \
         track_length(scenario, np.array([0.0, run_cfg["t_end"]]))
+    steps = StepBlocks(max(1, cfg.block_samples))
     live: LiveFatigue | None = None
-    fields: list[str] = []  # the load fields of the blocks, in the order LiveFatigue takes
     next_k = 0
     t_last = 0.0
     last_input = time.monotonic()
@@ -65,32 +68,31 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         got = early.pop(0) if early else listener.poll(timeout=0.05)  # raises on abort
         now = time.monotonic()
         if got is not None:
-            k, d = got.msg.k, got.msg.d
-            if k < next_k:  # a block of steps already taken (a duplicate)
-                part.reject(tag, f"load block of steps {d['k0']}..{k} again")
+            k, t = got.msg.k, got.msg.t
+            if k < next_k:  # a step already taken (a duplicate)
+                part.reject(tag, f"load step {k} again")
                 continue
-            if int(d["k0"]) != next_k:
-                raise RunError(f"fatigue: load block starts at step {d['k0']}, expected "
-                               f"{next_k} (a block was lost)")
-            if live is None:
-                fields = load_fields(d)
-                live = LiveFatigue(cfg, [f"{ch.PLANT}/{ch.ARM}/{f}" for f in fields], L)
+            if k != next_k:
+                raise RunError(f"fatigue: load step {k} came where step {next_k} was "
+                               "expected (a step was lost)")
             try:
-                t, loads = block_loads(d, fields)
+                steps.add(t, got.msg.d)
             except ValueError as exc:
-                raise RunError(f"fatigue: malformed load block at step {d['k0']}: "
-                               f"{exc}") from None
-            live.update(t, loads)
-            next_k, t_last = k + 1, float(t[-1])
+                raise RunError(f"fatigue: malformed load step {k}: {exc}") from None
+            next_k, t_last = k + 1, t
             last_input = now
-            part.progress(k, k * h)
-            if next_k <= n_steps and now - last_report >= REPORT_PERIOD_S:
-                last_report = now
-                # residue closed: what the life would be if the run ended here
-                _report(part, live.result(), k, t_last, L * next_k / (n_steps + 1))
-        part.progress(next_k - 1, (next_k - 1) * h)
+            if steps.full or next_k > n_steps:
+                if live is None:
+                    live = LiveFatigue(cfg, [f"{ch.PLANT}/{ch.ARM}/{f}" for f in steps.fields],
+                                       L, total_samples=n_steps + 1)
+                live.update(*steps.take())
+                part.progress(k, k * h)
+                if next_k <= n_steps and now - last_report >= REPORT_PERIOD_S:
+                    last_report = now
+                    # residue closed: what the life would be if the run ended here
+                    _report(part, live.result(), k, t_last, L * next_k / (n_steps + 1))
         if now - last_input > max(30.0, 6.0 * part.stall_timeout_s):  # orchestrator gone too
-            raise RunError(f"fatigue: no load block from the recorder after step {next_k - 1}")
+            raise RunError(f"fatigue: no load step from the plant after step {next_k - 1}")
     assert live is not None
     result = live.result()
     result.source = "live"

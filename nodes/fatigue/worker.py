@@ -22,11 +22,12 @@ import numpy as np
 from cosim.errors import ScenarioError
 
 from .config import FatigueConfig
-from .counting import StreamingRainflow
-from .damage import miner_per_node
+from .counting import Cycles, StreamingRainflow
+from .damage import cycle_damage
 from .equivalent_stress import equivalent
 from .influence import InfluenceSet, builtin_influence, import_influence, short_channel
-from .superposition import stress_history
+from .screening import SCREEN_FRACTION, Screening, unsupported
+from .superposition import ROWS, node_major, superpose
 
 _INFLUENCE_MEMO: dict[tuple, InfluenceSet] = {}
 
@@ -70,6 +71,10 @@ class FatigueResult:
     missing_channels: list[str] = field(default_factory=list)
     repeats_basis_m: float | None = None
     source: str = "batch"  # "batch" (a finished run's table) or "live" (during the run)
+    screened: np.ndarray | None = None
+    """Per node: True where screening left the node out (its damage, extremes and range are
+    then upper bounds, its cycle count NaN); None: every node computed."""
+    screening: dict = field(default_factory=dict)
 
     @property
     def critical_node(self) -> int:
@@ -139,6 +144,7 @@ class FatigueResult:
             "config": self.config,
             "influence": self.influence_meta,
             "source": self.source,
+            **({"screening": self.screening} if self.screening else {}),
         }
 
     def to_json(self) -> str:
@@ -146,12 +152,22 @@ class FatigueResult:
 
 
 class _Engine:
-    """Block-by-block superposition, equivalent stress, streaming rainflow and Miner."""
+    """Block-by-block superposition, equivalent stress, streaming rainflow and Miner, over the
+    nodes that screening keeps (all of them with ``screen=None``).
 
-    def __init__(self, cfg: FatigueConfig, inf: InfluenceSet) -> None:
+    Blocks are cut every ``block_samples`` samples from the first (batch and live alike: the
+    same blocks, the same screening, the same bits). A node's damage is the sum of its cycles'
+    damages in the order they close (``np.add.at``), so it does not depend on how the history
+    was cut, nor on which other nodes were computed with it (:mod:`.superposition`).
+    """
+
+    def __init__(self, cfg: FatigueConfig, inf: InfluenceSet,
+                 screen: float | None = SCREEN_FRACTION, total: int | None = None) -> None:
         self.cfg, self.inf = cfg, inf
         self.mat = cfg.material
         n = inf.n_nodes
+        self.per_node = node_major(inf.coefficients)
+        self.cols = np.arange(n)  # the nodes computed (their order in the counter)
         self.rf = StreamingRainflow(n)
         self.damage = np.zeros(n)
         self.ncyc = np.zeros(n)
@@ -159,40 +175,106 @@ class _Engine:
         self.eq_max = np.full(n, -np.inf)
         self.eq_min = np.full(n, np.inf)
         self.n_samples = 0
+        self.block = max(1, int(cfg.block_samples))
+        why = None if not screen else unsupported(self.mat, cfg.method, cfg.mean_stress)
+        self.screen_note = "off" if not screen else (why or "")
+        self.scr: Screening | None = None
+        if screen and why is None:
+            self.scr = Screening(inf.coefficients, cfg.equivalent, self.mat, cfg.method,
+                                 cfg.mean_stress, cfg.endurance_limit, float(screen))
+            self.scr.total = total
 
     def push(self, F: np.ndarray) -> None:
-        """F: (n_samples, n_cases) loads in case order (N)."""
-        if F.shape[0] == 0:
-            return
-        step = max(1, min(self.cfg.block_samples, 2_000_000 // max(1, 6 * self.inf.n_nodes)))
-        for i in range(0, F.shape[0], step):
-            s = stress_history(F[i:i + step], self.inf.coefficients)
-            eq = equivalent(s, self.cfg.equivalent)
-            np.maximum(self.eq_max, eq.max(axis=0), out=self.eq_max)
-            np.minimum(self.eq_min, eq.min(axis=0), out=self.eq_min)
-            self._add(self.rf.feed(eq), self.damage, self.ncyc, self.rmax)
+        """F: (n_samples, n_cases) loads in case order (N), cut into blocks of
+        ``block_samples`` from its first sample (the live node pushes one block at a time)."""
+        for i in range(0, F.shape[0], self.block):
+            self._block(F[i:i + self.block])
         self.n_samples += F.shape[0]
 
-    def _add(self, cyc, damage, ncyc, rmax) -> None:
+    def _block(self, F: np.ndarray) -> None:
+        scr = self.scr
+        if scr is not None:
+            out = np.setdiff1d(np.arange(self.inf.n_nodes), self.cols, assume_unique=True)
+            scr.add_block(F, out)
+        self._exact(F, self.cols, self.rf)
+        if scr is None:
+            return
+        scr.settle(self.cols, self.damage[self.cols], self.rf.residue_variation())
+        drop, back = scr.decide(self.cols, self.eq_max, self.eq_min)
+        if drop.size:
+            keep = ~np.isin(self.cols, drop)
+            self.rf = self.rf.take(np.nonzero(keep)[0])
+            self.cols = self.cols[keep]
+        if back.size:
+            self._replay(back)
+
+    def _exact(self, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow) -> None:
+        """Nodes ``idx`` (the counter ``rf``'s series) through block ``F``, exactly."""
+        if idx.size == 0:
+            return
+        coef = self.per_node[idx]
+        rows = max(ROWS, (2_000_000 // (6 * idx.size)) // ROWS * ROWS)
+        hi = np.full(idx.size, -np.inf)
+        lo = np.full(idx.size, np.inf)
+        for i in range(0, F.shape[0], rows):
+            eq = equivalent(superpose(F[i:i + rows], coef), self.cfg.equivalent)
+            np.maximum(hi, eq.max(axis=0), out=hi)
+            np.minimum(lo, eq.min(axis=0), out=lo)
+            self._add(rf.feed(eq), idx, self.damage, self.ncyc, self.rmax)
+        self.eq_max[idx] = np.maximum(self.eq_max[idx], hi)
+        self.eq_min[idx] = np.minimum(self.eq_min[idx], lo)
+        if self.scr is not None:
+            self.scr.envelope(idx, hi, lo)
+
+    def _replay(self, idx: np.ndarray) -> None:
+        """Bring nodes ``idx`` back: recompute them from the first sample (kept blocks)."""
+        assert self.scr is not None
+        for a in (self.damage, self.ncyc, self.rmax):
+            a[idx] = 0.0
+        self.eq_max[idx], self.eq_min[idx] = -np.inf, np.inf
+        self.scr.reset(idx)
+        self.scr.replayed += idx.size
+        rf = StreamingRainflow(idx.size)
+        for F in self.scr.history:
+            self._exact(F, idx, rf)
+        self.rf = StreamingRainflow.join([self.rf, rf])
+        self.cols = np.concatenate([self.cols, idx])
+
+    def _add(self, cyc: Cycles, idx: np.ndarray, damage: np.ndarray, ncyc: np.ndarray,
+             rmax: np.ndarray) -> None:
         if len(cyc) == 0:
             return
-        n = self.inf.n_nodes
-        damage += miner_per_node(cyc, n, self.mat, self.cfg.method, self.cfg.mean_stress,
-                                 self.cfg.endurance_limit)
-        ncyc += np.bincount(cyc.series, weights=cyc.count, minlength=n)
-        np.maximum.at(rmax, cyc.series, cyc.range)
+        node = idx[cyc.series]
+        np.add.at(damage, node, cycle_damage(cyc, self.mat, self.cfg.method,
+                                             self.cfg.mean_stress, self.cfg.endurance_limit))
+        np.add.at(ncyc, node, cyc.count)
+        np.maximum.at(rmax, node, cyc.range)
 
     def result(self, track_length_m: float, duration_s: float,
                missing: list[str]) -> FatigueResult:
         damage, ncyc, rmax = self.damage.copy(), self.ncyc.copy(), self.rmax.copy()
-        self._add(self.rf.residue_cycles(self.cfg.residue), damage, ncyc, rmax)
+        eq_max, eq_min = self.eq_max.copy(), self.eq_min.copy()
+        self._add(self.rf.residue_cycles(self.cfg.residue), self.cols, damage, ncyc, rmax)
+        screened = np.ones(damage.size, dtype=bool)
+        screened[self.cols] = False
+        meta: dict = {"fraction": None if self.scr is None else self.scr.fraction,
+                      "screened_nodes": 0, "note": self.screen_note}
+        if self.scr is not None and screened.any():
+            # a left-out node: its bounds (damage <= U, envelope [LO, HI]), cycles unknown
+            out = np.nonzero(screened)[0]
+            damage[out] = self.scr.bound(out)
+            eq_max[out], eq_min[out] = self.scr.hi[out], self.scr.lo[out]
+            rmax[out] = self.scr.hi[out] - self.scr.lo[out]
+            ncyc[out] = np.nan
+            meta.update(screened_nodes=int(out.size), threshold=self.scr.threshold,
+                        replayed_nodes=self.scr.replayed)
         return FatigueResult(
             damage=damage, node_ids=self.inf.node_ids, node_xyz=self.inf.node_xyz,
-            eq_max=self.eq_max.copy(), eq_min=self.eq_min.copy(), eq_range_max=rmax,
+            eq_max=eq_max, eq_min=eq_min, eq_range_max=rmax,
             n_cycles=ncyc, track_length_m=float(track_length_m), duration_s=float(duration_s),
             n_samples=self.n_samples, config=self.cfg.as_dict(),
             influence_meta=self.inf.meta, missing_channels=missing,
-            repeats_basis_m=self.cfg.repeats_basis_m,
+            repeats_basis_m=self.cfg.repeats_basis_m, screened=screened, screening=meta,
         )
 
 
@@ -224,7 +306,7 @@ def _matrix(cols: list, data: Sequence[np.ndarray], n: int) -> np.ndarray:
 
 
 def analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: FatigueConfig,
-            track_length_m: float) -> FatigueResult:
+            track_length_m: float, screen: float | None = SCREEN_FRACTION) -> FatigueResult:
     """Fatigue of the arm for one pass of recorded loads.
 
     Args:
@@ -234,6 +316,10 @@ def analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: FatigueConfig,
             channel get zero load (listed in ``missing_channels``).
         cfg: validated configuration.
         track_length_m: length of road covered by the history (m), for life in km.
+        screen: screening fraction f (:mod:`.screening`; None: every node computed). The
+            lives of the nodes that can reach f of the largest damage, the critical node,
+            the ten most damaged nodes and the extremes of the equivalent stress are the
+            unscreened ones bit for bit; a node left out reports upper bounds.
     """
     t = np.asarray(t, dtype=float)
     inf = load_influence(cfg)
@@ -243,7 +329,7 @@ def analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: FatigueConfig,
     for k, a in zip(names, data, strict=True):
         if a.shape != t.shape:
             raise ScenarioError(f"loads.{k}", a.shape, f"an array of shape {t.shape} like t")
-    eng = _Engine(cfg, inf)
+    eng = _Engine(cfg, inf, screen, t.size)
     eng.push(_matrix(cols, data, t.size))
     duration = float(t[-1] - t[0] + (t[1] - t[0])) if t.size > 1 else 0.0
     return eng.result(track_length_m, duration, missing)
@@ -255,16 +341,20 @@ class LiveFatigue:
     ``channels`` names the load columns of the blocks (recorder column names). ``update`` takes
     consecutive blocks: ``t_block`` (n,) and ``loads_block`` either (n, len(channels)) array
     or a mapping channel -> (n,) array. ``result()`` may be called at any time; at the end it
-    equals `analyse` on the concatenated loads.
+    equals `analyse` on the concatenated loads, bit for bit when the blocks are those
+    `analyse` cuts (``block_samples`` samples from the first; the live node's). ``screen``:
+    the screening fraction (None: every node computed); ``total_samples``: the history's
+    length when known (the run's steps), which lets screening leave nodes out sooner.
     """
 
     def __init__(self, cfg: FatigueConfig, channels: Sequence[str],
-                 track_length_m: float | None = None) -> None:
+                 track_length_m: float | None = None, screen: float | None = SCREEN_FRACTION,
+                 total_samples: int | None = None) -> None:
         self.cfg = cfg
         self.channels = list(channels)
         self.inf = load_influence(cfg)
         self._cols, self._missing = _case_columns(self.inf.case_names, self.channels)
-        self._eng = _Engine(cfg, self.inf)
+        self._eng = _Engine(cfg, self.inf, screen, total_samples)
         self.track_length_m = track_length_m if track_length_m is not None \
             else cfg.track_length_m
         self._t0: float | None = None

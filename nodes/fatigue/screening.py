@@ -1,0 +1,374 @@
+"""Screening: an upper bound of each node's Miner damage from the loads' block statistics.
+
+Computing a node's damage exactly costs its stresses at every sample (superposition, the
+equivalent stress, rainflow). This module bounds it from what a block of load samples gives
+in a few matrix-vector products for all nodes at once, so that a node whose bound stays below
+a stated fraction of the damage already reached need not be computed (:mod:`.worker`).
+
+**The bound** (one node, equivalent-stress history e_k, k = 0..N-1, Pa). With the node's
+influence coefficients A_c (6 components per load case c) the stress is σ(t) = Σ_c A_c F_c(t).
+Per block of loads (the previous block's last sample included):
+
+1. *Envelope* [lo, hi] of e over the block. With F_mid the middle and h_c the half range of
+   each load over the block, σ(t) = σ_mid + E(t), |E_ij| <= R_ij = Σ_c |A_c,ij| h_c; the
+   spectral norm ||E|| <= λmax(R) =: ρ (a non-negative matrix bounds |E|'s spectral radius,
+   Perron-Frobenius). Weyl's inequality puts each principal stress within ρ of σ_mid's.
+   *abs_max_principal*: e = σ1 where σ1 + σ3 >= 0 (then σ1 >= 0), else σ3 (< 0); σ1 + σ3 moves
+   by at most 2ρ, which tells which branches the block can take. *signed_von_mises*: the von
+   Mises stress is a seminorm (|vm(a) - vm(b)| <= vm(a - b)), vm(E) <= sqrt(R·|Q|·R) with Q its
+   quadratic form; the hydrostatic stress, linear in the loads, has the exact interval
+   tr(σ_mid)/3 ± Σ_c |tr A_c|/3 h_c.
+2. *Total variation* TV = Σ_k |e_k - e_(k-1)|. On a step that keeps the branch,
+   |Δe| <= N(Δσ) with N the Frobenius norm (>= the spectral norm, 1-Lipschitz for σ1, σ3) or
+   vm. A step that changes the branch jumps by at most 2 N(Δσ) + J: J = 2 max min(|σ1|, |σ3|)
+   (the jump's ends are both near the switching surface |σ1| = |σ3|), or 2 max vm for the
+   signed von Mises. Σ_k N(Δσ_k) over the block is at most the smaller of
+   Σ_m N(A v_m) Σ_k |z_mk| (the loads' increments in the principal axes v_m of their scatter
+   matrix S = Σ_k ΔF_k ΔF_kᵀ, z = Vᵀ ΔF) and sqrt(n Σ_m λ_m N(A v_m)²) (Cauchy-Schwarz,
+   Σ_k N(Δσ_k)² = tr(G S) for N² = ΔFᵀ G ΔF). A block where the branch can change counts
+   every step as a possible change.
+3. *Damage.* The rainflow count removes pairs b, c from a, b, c, d with |b - c| <= |a - b|,
+   |c - d|: the history's total variation drops by exactly 2|b - c|. So the full cycles' ranges
+   sum to (TV - TV(residue)) / 2; half cycles of the residue sum to TV(residue) / 2, and the
+   repeated residue closes cycles whose 2Δ sum to at most 2 TV(residue) + |r_m - r_1|:
+   Σ count·Δ <= TV + (HI - LO) / 2 in both residue modes (HI, LO: the envelope over all
+   blocks). A cycle's damage d(σa, σm) (stress-life) grows with σm and d / σa grows with σa
+   (Basquin slopes k >= 1, Haibach 2k - 1, SWT needs k >= 2); a cycle of amplitude a in
+   [LO, HI] has σm <= HI - a, so on a grid a_j = j A / K (A = (HI - LO) / 2) every cycle has
+   d <= Δ · max_j d(a_(j+1), HI - a_j) / (2 a_(j+1)) =: Δ · g, and D <= g (TV + (HI - LO)/2).
+
+The bound is rigorous for every history (the tests check it against exact counts); it is not
+tight (it takes every cycle as large as the largest one can be), which only costs how many
+nodes are screened out, never a wrong result. Rounding: the bound is raised by
+:data:`ROUNDING_MARGIN` (relative), far above the float error of its few sums.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .damage import cycle_reversals, sn_curve
+from .equivalent_stress import principal_extremes, von_mises
+from .life_models import SNCurve
+from .material import Material
+
+SCREEN_FRACTION = 1e-3
+"""Default screening fraction f: a node is left out while its damage bound is below f times
+the largest damage reached (and below the tenth largest, and its stress envelope inside the
+computed nodes' extremes); see :func:`.worker` ``_Engine``."""
+TOP_NODES = 10
+"""The reported most damaged nodes (``summary.json`` ``top_nodes``): never screened out."""
+ROUNDING_MARGIN = 1e-9
+SUB_SAMPLES = 25
+"""Samples per sub-block of the envelope (:class:`StressScreen`)."""
+GRID = 8
+"""Amplitude intervals of the damage-per-range bound g."""
+
+_FROB = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
+"""Frobenius norm² of a symmetric tensor from its 6 components (σx σy σz τxy τyz τzx)."""
+_VM = np.array([[1.0, -0.5, -0.5, 0, 0, 0], [-0.5, 1.0, -0.5, 0, 0, 0],
+                [-0.5, -0.5, 1.0, 0, 0, 0], [0, 0, 0, 3.0, 0, 0], [0, 0, 0, 0, 3.0, 0],
+                [0, 0, 0, 0, 0, 3.0]])
+"""vm² = sᵀ Q s (von Mises, 6 components)."""
+
+
+def unsupported(mat: Material, method: str, mean_stress: str) -> str | None:
+    """Why the damage bound does not hold for these settings (None: it does): stress-life,
+    a mean-stress correction linear in σa at a given σm (or SWT), S-N slopes k >= 1 (2 for
+    SWT) on every segment, so that a cycle's damage per unit of range grows with its range."""
+    if method != "stress_life":
+        return f"method {method!r} (the bound is proven for stress_life)"
+    if mean_stress not in ("none", "goodman", "gerber", "morrow", "swt"):
+        return f"mean_stress {mean_stress!r} (the bound is proven for none, goodman, " \
+               "gerber, morrow, swt)"
+    curve = sn_curve(mat)
+    if isinstance(curve, SNCurve):
+        slopes = [curve.k]
+        if curve.lcf_Su is not None:
+            b_lcf = np.log(curve.lcf_stress / curve.lcf_Su) / np.log(curve.lcf_reversals / 2.0)
+            slopes.append(-1.0 / b_lcf)
+    elif hasattr(curve, "n_cycles") and hasattr(curve, "s_amp"):  # a tabulated curve
+        logn, logs = np.log(np.asarray(curve.n_cycles)), np.log(np.asarray(curve.s_amp))
+        slopes = list(-np.diff(logn) / np.diff(logs))
+        tail = getattr(curve, "tail_b", None)
+        if tail is not None and tail < 0.0:
+            slopes.append(-1.0 / tail)
+    else:
+        return f"an S-N curve of type {type(curve).__name__}"
+    need = 2.0 if mean_stress == "swt" else 1.0
+    if min(slopes) < need:
+        return f"an S-N slope k = {min(slopes):.3g} < {need:g} (damage per range must grow)"
+    return None
+
+
+def damage_per_range(hi: np.ndarray, lo: np.ndarray, mat: Material, method: str,
+                     mean_stress: str, endurance: str | bool | None) -> np.ndarray:
+    """g (1/Pa): every cycle with both extremes in [lo, hi] (Pa) has damage <= g · its range."""
+    hi = np.asarray(hi, dtype=float)
+    lo = np.asarray(lo, dtype=float)
+    A = np.maximum(0.5 * (hi - lo), 0.0)
+    j = np.arange(GRID, dtype=float)
+    a0 = A[:, None] * (j / GRID)
+    a1 = A[:, None] * ((j + 1.0) / GRID)
+    m = hi[:, None] - a0
+    finite = np.isfinite(a1) & np.isfinite(m)
+    a1f, mf = np.where(finite, a1, 0.0), np.where(finite, m, 0.0)
+    rev = cycle_reversals(mf + a1f, mf - a1f, mat, method, mean_stress, endurance)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.where(a1f > 0.0, (2.0 / rev) / (2.0 * a1f), 0.0)
+    g = np.where(finite, g, np.inf)
+    return g.max(axis=1) if g.size else np.zeros(hi.shape)
+
+
+class StressScreen:
+    """Bounds of the equivalent stress of any set of nodes over a block of loads, from the
+    loads alone (module docstring): the envelope [lo, hi] and the total variation TV. Each
+    block is cut into sub-blocks of ``sub_samples``: the smaller a sub-block's load ranges,
+    the tighter its envelope, and only sub-blocks where the branch can change count their
+    steps as jumps; the cost grows with the number of sub-blocks."""
+
+    def __init__(self, coefficients: np.ndarray, equivalent: str) -> None:
+        C = np.asarray(coefficients, dtype=float)
+        self.n_cases, self.n, _ = C.shape
+        self.C = C  # (cases, n, 6)
+        self.abs_tr3 = np.abs(C[:, :, 0] + C[:, :, 1] + C[:, :, 2]) / 3.0  # (cases, n)
+        self.kind = equivalent
+        self.Q = np.diag(_FROB) if equivalent == "abs_max_principal" else _VM
+        self.NA = self._norms(C)  # N(A_c) per case and node
+        self.G = np.einsum("cni,ij,dnj->ncd", C, self.Q, C).reshape(self.n, -1)
+        """N(Σ_c A_c x_c)² = xᵀ G x per node (n, cases²)."""
+        self.V: np.ndarray | None = None
+        self.CV = self.NAV = np.zeros(0)
+
+    def _norms(self, C: np.ndarray) -> np.ndarray:
+        """N of each case's stress tensor per node: (cases, n)."""
+        return np.sqrt(np.maximum(np.einsum("mni,ij,mnj->mn", C, self.Q, C), 0.0))
+
+    def set_axes(self, F: np.ndarray) -> None:
+        """Principal axes of a block of loads (the first): correlated loads (joint loads in
+        equilibrium) bound much tighter along them than channel by channel."""
+        X = np.asarray(F, dtype=float)
+        X = X - X.mean(axis=0)
+        _, V = np.linalg.eigh(X.T @ X)
+        self.V = V
+        self.CV = np.einsum("cm,cnj->mnj", V, self.C)
+        self.NAV = self._norms(self.CV)
+
+    def block(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(hi, lo, tv) of nodes ``idx`` over the samples of ``Fe`` (n_e, cases): the block's
+        loads with the previous block's last sample first (its increment counts; the
+        envelope covers it too). TV covers the n_e - 1 increments."""
+        if self.V is None:
+            self.set_axes(Fe)
+        assert self.V is not None
+        C, CV = self.C[:, idx], self.CV[:, idx]
+        k = idx.size
+        Z = Fe @ self.V
+        n_e, L = Fe.shape[0], max(1, int(sub_samples))
+        starts = np.arange(0, max(n_e - 1, 1), L)
+        stops = np.minimum(starts + L + 1, n_e)
+        M = np.array([0.5 * (Fe[a:b].min(axis=0) + Fe[a:b].max(axis=0))
+                      for a, b in zip(starts, stops, strict=True)])
+        H = np.array([0.5 * (Fe[a:b].max(axis=0) - Fe[a:b].min(axis=0))
+                      for a, b in zip(starts, stops, strict=True)])
+        ZH = np.array([0.5 * (Z[a:b].max(axis=0) - Z[a:b].min(axis=0))
+                       for a, b in zip(starts, stops, strict=True)])
+        J = M.shape[0]
+        s_mid = (M @ C.reshape(self.n_cases, -1)).reshape(J, k, 6)
+        R = np.minimum(H @ np.abs(C).reshape(self.n_cases, -1),
+                       ZH @ np.abs(CV).reshape(self.n_cases, -1)).reshape(J, k, 6)
+        if self.kind == "abs_max_principal":
+            s1, s3 = principal_extremes(s_mid)
+            rho = np.maximum(principal_extremes(R)[0], 0.0)
+            p = s1 + s3
+            br1, br3 = p + 2.0 * rho >= 0.0, p - 2.0 * rho < 0.0
+            hi1, lo1 = s1 + rho, np.maximum(s1 - rho, 0.0)
+            hi3, lo3 = np.minimum(s3 + rho, 0.0), s3 - rho
+            jump = 2.0 * (np.minimum(np.abs(s1), np.abs(s3)) + rho)
+        else:
+            vm = von_mises(s_mid)
+            r_vm = np.sqrt(np.einsum("jni,ik,jnk->jn", R, np.abs(self.Q), R))
+            h = (s_mid[..., 0] + s_mid[..., 1] + s_mid[..., 2]) / 3.0
+            r_h = H @ self.abs_tr3[:, idx]
+            br1, br3 = h + r_h >= 0.0, h - r_h < 0.0
+            hi1, lo1 = vm + r_vm, np.maximum(vm - r_vm, 0.0)
+            hi3, lo3 = -lo1, -hi1
+            jump = 2.0 * (vm + r_vm)
+        hi = np.maximum(np.where(br1, hi1, -np.inf), np.where(br3, hi3, -np.inf))
+        lo = np.minimum(np.where(br1, lo1, np.inf), np.where(br3, lo3, np.inf))
+        pad = ROUNDING_MARGIN * (np.abs(hi) + np.abs(lo) + np.abs(R).sum(axis=2))
+        hi_b, lo_b = (hi + pad).max(axis=0), (lo - pad).min(axis=0)
+        if n_e < 2:
+            return hi_b, lo_b, np.zeros(k)
+        dF = np.diff(Fe, axis=0)
+        tvF = np.add.reduceat(np.abs(dF), starts, axis=0)  # (J, cases)
+        tvZ = np.add.reduceat(np.abs(np.diff(Z, axis=0)), starts, axis=0)
+        outer = (dF[:, :, None] * dF[:, None, :]).reshape(dF.shape[0], -1)
+        S = np.add.reduceat(outer, starts, axis=0)  # (J, cases²) scatter per sub-block
+        n_incr = (stops - starts - 1).astype(float)
+        tri = np.minimum(tvF @ self.NA[:, idx], tvZ @ self.NAV[:, idx])
+        cs = np.sqrt(np.maximum(n_incr[:, None] * (S @ self.G[idx].T), 0.0))
+        sumN = np.minimum(tri, cs)
+        step_tv = np.where(br1 & br3, 2.0 * sumN + n_incr[:, None] * jump, sumN)
+        return hi_b, lo_b, step_tv.sum(axis=0) * (1.0 + ROUNDING_MARGIN)
+
+
+def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, method: str,
+                 mean_stress: str, endurance: str | bool | None) -> np.ndarray:
+    """Upper bound of each node's damage (residue closed, either mode) from its envelope
+    [lo, hi] and total variation tv over the history: g (TV + (HI - LO)/2), raised by the
+    rounding margin; inf where the envelope is not finite."""
+    hi = np.asarray(hi, dtype=float)
+    lo = np.asarray(lo, dtype=float)
+    out = np.full(hi.shape, np.inf)
+    seen = np.isfinite(hi) & np.isfinite(lo)
+    if not seen.any():
+        return out
+    g = damage_per_range(hi[seen], lo[seen], mat, method, mean_stress, endurance)
+    with np.errstate(invalid="ignore"):
+        U = g * (tv[seen] + 0.5 * (hi[seen] - lo[seen]))
+    out[seen] = np.where(np.isnan(U), np.inf, U) * (1.0 + ROUNDING_MARGIN) + 1e-300
+    return out
+
+
+COARSE_SAMPLES = 500
+"""Sub-block length of the first, cheap bound of a left-out node over a block."""
+FINE_SAMPLES = 25
+"""Sub-block length of the second bound, for the left-out nodes the first one cannot keep
+out (the tighter envelope costs ~20 times the first bound per node)."""
+DROP_MARGIN = 0.25
+"""Without a known history length, a computed node is left out only when its bound is below
+this share of the threshold (:meth:`Screening.projected`): its bound grows faster once it is
+no longer computed exactly (hysteresis, fewer replays)."""
+
+
+class Screening:
+    """Which nodes must be computed exactly, block by block (the rule of :mod:`.worker`).
+
+    Per node it keeps the envelope [LO, HI] of the equivalent stress over the history (exact
+    for the blocks in which the node was computed, bounds of :class:`StressScreen` for the
+    others), the damage D0 of the cycles closed when it was last computed (exact), and TVr:
+    the total variation of its rainflow residue then plus the bounds of the variation of
+    every block since. The rest of the count is the counter run on the residue and the
+    later samples, so (module docstring, step 3, on that sequence)
+
+        D <= U = D0 + g(HI, LO) (TVr + (HI - LO)/2)
+
+    bounds the node's damage so far, residue closed, however each block was taken. The load
+    blocks are kept (:attr:`history`) so that a node brought back is recomputed from the
+    first sample.
+    """
+
+    def __init__(self, coefficients: np.ndarray, equivalent: str, mat: Material, method: str,
+                 mean_stress: str, endurance: str | bool | None, fraction: float) -> None:
+        self.bounds = StressScreen(coefficients, equivalent)
+        n = self.bounds.n
+        self.fraction = float(fraction)
+        self.law = (mat, method, mean_stress, endurance)
+        self.hi = np.full(n, -np.inf)
+        self.lo = np.full(n, np.inf)
+        self.d0 = np.zeros(n)
+        self.tv_r = np.zeros(n)
+        self.threshold = 0.0
+        self.total: int | None = None
+        """Samples the whole history will have, when known (batch, or the run's steps)."""
+        self.samples = 0
+        self.hi_c = np.full(n, -np.inf)
+        self.lo_c = np.full(n, np.inf)
+        self.tv_c = np.zeros(n)
+        self.history: list[np.ndarray] = []
+        self._prev: np.ndarray | None = None
+        self.replayed = 0
+        """Nodes brought back so far (each recomputed from the first sample)."""
+
+    def _u(self, idx: np.ndarray | slice, hi: np.ndarray, lo: np.ndarray,
+           tv: np.ndarray) -> np.ndarray:
+        return self.d0[idx] + damage_bound(hi, lo, tv, *self.law)
+
+    def bound(self, idx: np.ndarray | None = None) -> np.ndarray:
+        """U of nodes ``idx`` (all when None)."""
+        s = slice(None) if idx is None else idx
+        return self._u(s, self.hi[s], self.lo[s], self.tv_r[s])
+
+    def envelope(self, idx: np.ndarray, hi: np.ndarray, lo: np.ndarray) -> None:
+        """A block's exact extremes of the equivalent stress of computed nodes ``idx``."""
+        self.hi[idx] = np.maximum(self.hi[idx], hi)
+        self.lo[idx] = np.minimum(self.lo[idx], lo)
+
+    def settle(self, idx: np.ndarray, closed: np.ndarray, residue_tv: np.ndarray) -> None:
+        """Computed nodes ``idx`` now: closed-cycle damage and their residue's variation."""
+        self.d0[idx] = closed
+        self.tv_r[idx] = residue_tv
+
+    def reset(self, idx: np.ndarray) -> None:
+        """Nodes about to be recomputed from the first sample (exact values follow)."""
+        self.hi[idx], self.lo[idx] = -np.inf, np.inf
+        self.d0[idx], self.tv_r[idx] = 0.0, 0.0
+
+    def add_block(self, F: np.ndarray, left_out: np.ndarray) -> None:
+        """Keep the block; bound it coarsely for every node (the projection of
+        :meth:`decide`), and for the nodes ``left_out`` also finely where the coarse bound
+        would reach the threshold."""
+        F = np.asarray(F, dtype=float)
+        Fe = F if self._prev is None else np.vstack([self._prev, F])
+        self._prev = F[-1].copy()
+        self.history.append(F.copy())
+        self.samples += F.shape[0]
+        hi, lo, tv = self.bounds.block(Fe, np.arange(self.hi.size), COARSE_SAMPLES)
+        np.maximum(self.hi_c, hi, out=self.hi_c)
+        np.minimum(self.lo_c, lo, out=self.lo_c)
+        self.tv_c += tv
+        if left_out.size == 0:
+            return
+        hi, lo, tv = hi[left_out], lo[left_out], tv[left_out]
+        U = self._u(left_out, np.maximum(self.hi[left_out], hi),
+                    np.minimum(self.lo[left_out], lo), self.tv_r[left_out] + tv)
+        near = np.nonzero(U >= self.threshold)[0]
+        if near.size:
+            hf, lf, tf = self.bounds.block(Fe, left_out[near], FINE_SAMPLES)
+            hi[near] = np.minimum(hi[near], hf)
+            lo[near] = np.maximum(lo[near], lf)
+            tv[near] = np.minimum(tv[near], tf)
+        self.envelope(left_out, hi, lo)
+        self.tv_r[left_out] += tv
+
+    def projected(self, idx: np.ndarray) -> np.ndarray:
+        """U of nodes ``idx`` at the end of the history (:attr:`total` samples), if the rest
+        varies as the coarse bound says the past did (a guess, for the cost only: leaving a
+        node out that will be brought back costs its history twice); without a known total
+        U / DROP_MARGIN."""
+        if self.total is None or self.samples == 0:
+            return self.bound(idx) / DROP_MARGIN
+        rest = max(self.total - self.samples, 0) / self.samples
+        hi = np.maximum(self.hi[idx], self.hi_c[idx])
+        lo = np.minimum(self.lo[idx], self.lo_c[idx])
+        return self._u(idx, hi, lo, self.tv_r[idx] + rest * self.tv_c[idx])
+
+    def decide(self, active: np.ndarray, eq_max: np.ndarray, eq_min: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """(computed nodes to leave out, left-out nodes to bring back) after a block
+        (:meth:`settle` done for the computed nodes ``active``).
+
+        The threshold T = min(f D1, D10), D1 and D10 the largest and the tenth largest
+        closed-cycle damage of the computed nodes (lower bounds of the final ones), only
+        grows. A node may stay out while U < T and its envelope lies strictly inside the
+        computed nodes' extremes of the equivalent stress: then it is not the critical node,
+        not among the ten most damaged and below f of the largest damage, and the reported
+        extremes are computed ones. A computed node is left out when it qualifies and is
+        projected (:meth:`projected`) to qualify at the end as well."""
+        n = self.hi.size
+        Da = self.d0[active]
+        if Da.size >= TOP_NODES:
+            d10 = float(np.partition(Da, Da.size - TOP_NODES)[Da.size - TOP_NODES])
+            self.threshold = max(self.threshold, min(self.fraction * float(Da.max()), d10))
+        T = self.threshold
+        U = self.bound()
+        top, bottom = float(eq_max[active].max()), float(eq_min[active].min())
+        inside = (self.hi < top) & (self.lo > bottom)
+        is_active = np.zeros(n, dtype=bool)
+        is_active[active] = True
+        cand = np.nonzero(is_active & inside & (U < T))[0]
+        drop = cand[self.projected(cand) < T]
+        back = np.nonzero(~is_active & ~(inside & (U < T)))[0]
+        return drop, back
