@@ -39,7 +39,7 @@ Layout = tuple[tuple[str, int | None], ...]
 """A channel's fields in table order: (name, None for a number or n for a list of n)."""
 
 CHUNK_ROWS = 4096  # rows turned into arrays (and CSV lines) at a time
-GROUP_ROWS = 65536  # rows per Parquet row group (~23 MB of a 43-column corner at most)
+GROUP_ROWS = 16384  # rows per Parquet row group (~6 MB of a 43-column corner at most)
 
 
 def layout_of(d: Mapping[str, Any]) -> Layout:
@@ -90,7 +90,7 @@ class TableWriter:
 
     def __init__(self, channels: Iterable[str], folder: str | Path | None,
                  layout: Mapping[str, Layout] | None = None, first: Iterable[str] = (),
-                 chunk_rows: int = CHUNK_ROWS, group_rows: int = GROUP_ROWS,
+                 chunk_rows: int | None = None, group_rows: int | None = None,
                  strict: bool = True) -> None:
         self.channels = sorted(set(channels))
         if not self.channels:
@@ -99,7 +99,9 @@ class TableWriter:
         self.layout: dict[str, Layout] = dict(layout or {})
         self._rank: dict[str, int] = {c: i for i, c in enumerate(first)}
         self.folder = None if folder is None else Path(folder)
-        self.chunk_rows, self.group_rows, self.strict = chunk_rows, group_rows, strict
+        self.chunk_rows = CHUNK_ROWS if chunk_rows is None else chunk_rows
+        self.strict = strict
+        self.group_rows = GROUP_ROWS if group_rows is None else group_rows
         self._pending: dict[int, list[Any]] = {}  # k -> [t, rank of t, n, vals per channel]
         self._heap: list[int] = []
         self._rows: list[list[Any]] = []
@@ -350,7 +352,7 @@ def journal_layout(records: Iterable[tuple[str, bytes]]
 
 
 def table_of_journal(open_records: Any, folder: str | Path | None,
-                     chunk_rows: int = CHUNK_ROWS) -> tuple[TableWriter | None, int]:
+                     chunk_rows: int | None = None) -> tuple[TableWriter | None, int]:
     """The second pass: a :class:`TableWriter` fed the journal's data messages (``open_records``
     is called once per pass and returns an iterable of (channel, payload)); returns it (not
     closed: the caller picks the stem) and the records left out as bad, or (None, bad) when
