@@ -9,7 +9,8 @@ A run folder holds, in the order they are written:
 ``scenario.json``   the scenario as resolved (written before anything starts)
 ``run.json``        who runs it and where its bus is: ``{"run_id", "pid", "pid_start", "host",
                     "started", "mode", "endpoints": {"listen", "connect"}, "lowlatency",
-                    "state"}`` (:func:`write_run_json`)
+                    "state"}`` (:func:`write_run_json`; ``state`` "started", then the run's
+                    status and ``ended`` by :func:`mark_run_ended`)
 ``journal.msgpack`` every data message as received (:mod:`cosim.journal`)
 ``table.*``         every channel against time (:mod:`cosim.table`)
 ``summary.json``    how the run ended: the authority on ``ok`` / ``failed``
@@ -41,7 +42,7 @@ import socket
 from pathlib import Path
 from typing import Any
 
-from .journal import last_step, read_journal
+from .journal import last_step, scan_journal
 
 SCENARIO_JSON = "scenario.json"
 RUN_JSON = "run.json"
@@ -113,6 +114,18 @@ def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
 
 
 
+def mark_run_ended(folder: Path, status: str) -> None:
+    """Say in ``run.json`` that the run has ended (``"state": status``, ``"ended"``): written
+    after ``summary.json``, so that run.json no longer says "started" (#30 item 8)."""
+    path = Path(folder) / RUN_JSON
+    info = _dict(read_json(path))
+    if info is None:
+        return
+    info["state"] = status
+    info["ended"] = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
+    write_json(info, path)
+
+
 # ---- reading a run folder ----------------------------------------------------------------
 def pid_alive(pid: int, pid_start: int | None = None) -> bool:
     """Whether process ``pid`` exists (and is not a zombie), and is the one that started at
@@ -140,12 +153,14 @@ def pid_alive(pid: int, pid_start: int | None = None) -> bool:
 
 def journal_integrity(path: Path) -> dict[str, Any]:
     """What ``suscosim export`` would find in the journal: intact ``records``,
-    ``skipped_records`` (damaged, stepped over), ``torn`` and ``problem`` (one line)."""
+    ``skipped_records`` (damaged, stepped over), ``torn`` and ``problem`` (one line). The
+    segments' CRCs are checked and their records counted, nothing decompressed: memory and
+    time by the segment, not the journal."""
     try:
-        c = read_journal(path)
+        c = scan_journal(path)
     except (OSError, ValueError) as exc:
         return {"records": None, "skipped_records": None, "torn": False, "problem": str(exc)}
-    return {"records": len(c.records), "skipped_records": c.skipped_records, "torn": c.torn,
+    return {"records": c.count, "skipped_records": c.skipped_records, "torn": c.torn,
             "problem": c.problem}
 
 
@@ -185,8 +200,17 @@ def run_info(folder: Path, host: str | None = None) -> dict[str, Any]:
         integrity = journal_integrity(journal)
         info["records"] = integrity["records"]
         info["skipped_records"] = integrity["skipped_records"]
-        if integrity["skipped_records"] or integrity["records"] is None:
+        note = ""
+        if integrity["skipped_records"] or integrity["records"] is None or integrity["torn"]:
             note = f"journal: {integrity['problem']}"
+        n_steps, steps = info["n_steps"], info["steps"]
+        if info["status"] == "ok" and isinstance(n_steps, int) and (steps is None
+                                                                    or steps < n_steps):
+            # #30 item 15: an ok run whose journal ends early was cut after the run
+            reach = f"ends at step {steps}" if steps is not None else "holds no complete step"
+            note = (f"{note}; " if note else "journal: ") + \
+                f"{reach} of {n_steps}: cut short after the run (the table is the record)"
+        if note:
             info["error"] = f"{info['error']}; {note}" if info["error"] else note
     elif summary is not None and summary.get("rows"):
         info["steps"] = int(summary["rows"]) - 1

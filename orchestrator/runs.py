@@ -16,10 +16,11 @@ a restarted orchestrator (or anyone with the folder) can tell what happened:
   existed; or the orchestrator ran on another host).
 
 Steps are the last step ``k`` every channel of the journal has reached, read from the
-journal's last 64 KiB only, against ``run.n_steps``. The whole journal is also walked (frames
-and CRCs only, ~2.5 us a record) by the reader ``suscosim export`` uses, so both give the same
-``records`` and ``skipped_records``; a damaged journal is named in the NOTE column (and in
-``--json``) with what export will skip.
+journal's last segments only, against ``run.n_steps``. The whole journal is also walked
+(segment headers and CRCs, nothing decompressed) by the reader ``suscosim export`` uses, so
+both give the same ``records`` and ``skipped_records``; a damaged or torn journal is named in
+the NOTE column (and in ``--json``) with what export will skip, and so is an ``ok`` run whose
+journal ends before its last step (cut short after the run). DIR is each run's folder.
 
 ``run.json`` is written by the runner right after ``scenario.json``:
 ``{"run_id", "pid", "pid_start", "host", "started", "mode", "endpoints": {"listen": [...],
@@ -76,13 +77,13 @@ def _steps_text(r: dict[str, Any]) -> str:
 
 def format_table(runs: list[dict[str, Any]]) -> str:
     """A plain-text table of :func:`list_runs`' result."""
-    rows = [("ID", "NAME", "MODE", "STATUS", "STEPS", "STARTED", "NOTE")]
+    rows = [("ID", "NAME", "MODE", "STATUS", "STEPS", "STARTED", "DIR", "NOTE")]
     for r in runs:
         note = r["error"]
         if r["status"] == "running" and r["endpoints"].get("listen"):
             note = f"tap: suscosim tap {r['dir']}"
         rows.append((r["id"], r["name"], r["mode"], r["status"], _steps_text(r),
-                     (r["started"] or "")[:19].replace("T", " "), note))
+                     (r["started"] or "")[:19].replace("T", " "), r["dir"], note))
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]) - 1)]
     return "\n".join("  ".join(c.ljust(w) for c, w in zip(row[:-1], widths, strict=True))
                      + ("  " + row[-1] if row[-1] else "") for row in rows).rstrip()
