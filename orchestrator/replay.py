@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -47,26 +48,31 @@ class ReplayInputError(ValueError):
     """Bad replay input: exit code 2 with this message."""
 
 
-def load(path: str | Path) -> tuple[str, list[tuple[str, str, bytes, float]], int, str]:
-    """Read a journal (or a run folder's): (run id, [(node, channel, raw, t)], skipped, problem).
+Record = tuple[str, str, bytes, float]
+"""(node, channel, raw message, t [s])."""
 
-    ``skipped`` counts records that do not decode or whose channel is not ``node/channel``
-    (none in a journal the recorder wrote); ``problem`` says whether the tail was torn.
-    """
-    from cosim.journal import read_journal
 
+def _journal_path(path: str | Path) -> Path:
     p = Path(path)
     if p.is_dir():
         p = p / "journal.msgpack"
     if not p.is_file():
         raise ReplayInputError(f"{p}: no such journal file")
+    return p
+
+
+def _records(p: Path, counts: dict[str, Any] | None = None) -> Iterator[Record]:
+    """The journal's data records as (node, channel, raw, t), streamed; ``counts`` gets the
+    records skipped (undecodable, or a channel that is not ``node/channel``) and the
+    reader's problem line."""
+    from cosim.journal import JournalReader
+
     try:
-        contents = read_journal(p)
+        reader = JournalReader(p)
     except (OSError, ValueError) as exc:
         raise ReplayInputError(str(exc)) from None
-    records: list[tuple[str, str, bytes, float]] = []
     skipped = 0
-    for channel, raw in contents.records:
+    for channel, raw in reader:
         parts = channel.split("/")
         try:
             if len(parts) != 2:
@@ -77,8 +83,49 @@ def load(path: str | Path) -> tuple[str, list[tuple[str, str, bytes, float]], in
         except (ValueError, ScenarioError, WireError):
             skipped += 1
             continue
-        records.append((parts[0], parts[1], raw, t))
-    return contents.run_id, records, skipped, contents.problem
+        yield parts[0], parts[1], raw, t
+    if counts is not None:
+        counts.update(run_id=reader.run_id, skipped=skipped,
+                      problem=reader.contents().problem)
+
+
+class Recorded:
+    """A journal's records for a replay, streamed from the file each time it is iterated
+    (memory by the segment, not the run: #32). A first pass counts them: ``count``,
+    ``channels``, ``t_first``/``t_last`` [s], ``skipped``, ``problem``, ``run_id``."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = _journal_path(path)
+        counts: dict[str, Any] = {}
+        self.count, self.channels = 0, set()
+        self.t_first = self.t_last = 0.0
+        for node, channel, _raw, t in _records(self.path, counts):
+            if not self.count:
+                self.t_first = t
+            self.count += 1
+            self.channels.add((node, channel))
+            self.t_last = t
+        self.run_id: str = counts["run_id"]
+        self.skipped: int = counts["skipped"]
+        self.problem: str = counts["problem"]
+
+    def __iter__(self) -> Iterator[Record]:
+        return _records(self.path)
+
+    def __len__(self) -> int:
+        return self.count
+
+
+def load(path: str | Path) -> tuple[str, list[Record], int, str]:
+    """Read a journal (or a run folder's) whole: (run id, [(node, channel, raw, t)], skipped,
+    problem); :class:`Recorded` streams it instead.
+
+    ``skipped`` counts records that do not decode or whose channel is not ``node/channel``
+    (none in a journal the recorder wrote); ``problem`` says whether the tail was torn.
+    """
+    counts: dict[str, Any] = {}
+    records = list(_records(_journal_path(path), counts))
+    return counts["run_id"], records, counts["skipped"], counts["problem"]
 
 
 def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
@@ -97,24 +144,27 @@ def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
     return False
 
 
-def replay(bus: Any, run_id: str, records: list[tuple[str, str, bytes, float]],
-           speed: float | None, wait_s: float = 5.0,
-           log: Any = None) -> tuple[int, float]:
-    """Publish ``records`` under ``run_id`` on ``bus``; ``speed`` None = as fast as possible.
+def replay(bus: Any, run_id: str, records: Iterable[Record], speed: float | None,
+           wait_s: float = 5.0, log: Any = None) -> tuple[int, float]:
+    """Publish ``records`` (a list, or a streamed :class:`Recorded`) under ``run_id`` on
+    ``bus``; ``speed`` None = as fast as possible.
 
     Returns (messages published, wall seconds from the first to the last).
     """
     log = log or (lambda text: None)
     pubs: dict[tuple[str, str], Any] = {}
-    for node, channel, _raw, _t in records:
-        if (node, channel) not in pubs:
-            pubs[node, channel] = bus.publisher(keys.key(run_id, node, channel))
+    channels = records.channels if isinstance(records, Recorded) else \
+        dict.fromkeys((n, c) for n, c, _r, _t in records)
+    for node, channel in sorted(channels):
+        pubs[node, channel] = bus.publisher(keys.key(run_id, node, channel))
     if wait_s > 0 and not _wait_for_subscriber(list(pubs.values()), wait_s):
         log(f"no subscriber after {wait_s:g} s: publishing anyway")
-    t_first = records[0][3]
+    t_first: float | None = None
     start = time.monotonic()
     sent = 0
     for node, channel, raw, t in records:
+        if t_first is None:
+            t_first = t
         if speed is not None:
             ahead = start + (t - t_first) / speed - time.monotonic()
             if ahead > 0.0005:
@@ -154,10 +204,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.wait < 0:
         return _fail(f"--wait {args.wait:g}: expected a time >= 0 s")
     try:
-        original, records, skipped, problem = load(args.journal)
+        records = Recorded(args.journal)
     except ReplayInputError as exc:
         return _fail(str(exc))
-    if not records:
+    original, skipped, problem = records.run_id, records.skipped, records.problem
+    if not records.count:
         return _fail(f"{args.journal}: the journal holds no data message to replay")
     run_id = args.run or f"{original}-replay"
     try:
@@ -177,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
     except SessionOpenError as exc:
         return _fail(exc.message(f"listen {listen or 'loopback'}, connect {connect}"), exc.code)
     where = ", ".join(connect or listen or [])
-    n_ch = len({(n, c) for n, c, _r, _t in records})
+    n_ch = len(records.channels)
     pace_text = "as fast as possible" if args.fast else f"at {args.speed:g}x the recorded pace"
     print(f"suscosim replay: {len(records)} messages on {n_ch} channels of run {original} as "
           f"suscosim/{run_id}/** via {where} ({mode} session), {pace_text}", file=sys.stderr,
@@ -193,7 +244,7 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     finally:
         bus.close()
-    t_span = records[-1][3] - records[0][3]
+    t_span = records.t_last - records.t_first
     print(f"replayed {sent} messages as run {run_id}: {t_span:.4g} s of run time in "
           f"{wall:.3g} s wall")
     return 0
