@@ -67,26 +67,36 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     (``getConstraintState`` of a POINT2POINT returns the 3 force components the constraint
     applies on its child body B, world axes; it is not needed here.)
     """
-    c, b = model.client, model.body
-    R_af = model.geom.arm_rotation
-    R_arm, hub_quat, u = model._applied_pose  # the pose at the start of the substep
-    to_arm = R_af.T @ R_arm.T  # world -> arm frame
-    r_com = model._arm_r_com  # the arm's centre of mass in its link frame
+    return arm_loads_at(model.client, model.body, LOWER_ARM, HUB, model.geom.arm_rotation,
+                        model._applied_pose, model._arm_r_com, model._F_d,
+                        np.array([0.0, 0.0, -model._F_bs]), model.geom.bush_spacing)
 
-    w = p.getJointState(b, LOWER_ARM, physicsClientId=c)[2]
+
+def arm_loads_at(c: int, b: int, arm_link: int, hub_link: int, R_af: np.ndarray,
+                 applied_pose: tuple, r_com: np.ndarray, F_d_axial: float,
+                 bump_on_arm: np.ndarray, d: float) -> dict[str, float]:
+    """:func:`arm_loads` of one corner of any model: PyBullet client ``c`` and body ``b``,
+    the lower arm's and hub's link indices, the arm frame's axes in the arm link's frame
+    ``R_af``, the pose the substep's forces were applied in (the arm link's world rotation,
+    the hub's world quaternion, the damper's unit vector arm -> body), the arm's centre of
+    mass in its link frame [m], the damper's axial force F_d [N] (compression-positive on the
+    body), the bumper's force on the arm (world vector) [N] and the bush spacing d [m]."""
+    R_arm, hub_quat, u = applied_pose  # the pose at the start of the substep
+    to_arm = R_af.T @ R_arm.T  # world -> arm frame
+
+    w = p.getJointState(b, arm_link, physicsClientId=c)[2]
     rxF = cross3(r_com, w[:3])
     M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
     F0, F1, F2 = (R_af.T @ np.array(w[:3])).tolist()
     M0, M1, M2 = (R_af.T @ np.array(M_link)).tolist()
-    d = model.geom.bush_spacing
     front = (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d)
     rear = (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d)
 
-    w_bj = np.array(p.getJointStateMultiDof(b, HUB, physicsClientId=c)[2][:3])
+    w_bj = np.array(p.getJointStateMultiDof(b, hub_link, physicsClientId=c)[2][:3])
     ball = (to_arm @ (-(_rot(hub_quat) @ w_bj))).tolist()
-    F_d = -model._F_d
+    F_d = -F_d_axial
     damper = (to_arm @ np.array([F_d * u[0], F_d * u[1], F_d * u[2]])).tolist()
-    bump = (to_arm @ np.array([0.0, 0.0, -model._F_bs])).tolist()
+    bump = (to_arm @ bump_on_arm).tolist()
 
     out: dict[str, float] = {}
     for names, f in ((_BALL, ball), (_DAMPER, damper), (_FRONT, front), (_REAR, rear)):

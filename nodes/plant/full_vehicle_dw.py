@@ -40,6 +40,7 @@ from cosim import corner as corner_file
 from cosim.channels import CORNERS
 from cosim.corner import Corner
 
+from .arm_loads import arm_loads_at
 from .bump_stop import BumpStopParams, bump_stop_force
 from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
 from .model import GRAVITY, PlantModel
@@ -109,6 +110,7 @@ class FullVehicleDoubleWishbone(PlantModel):
                                                physicsClientId=cl)
             else:
                 p.setJointMotorControl2(bd, j, p.VELOCITY_CONTROL, force=0, physicsClientId=cl)
+            p.enableJointForceTorqueSensor(bd, j, True, physicsClientId=cl)
         for j in [-1, *names.values()]:
             p.changeDynamics(bd, j, linearDamping=0, angularDamping=0, jointDamping=0,
                              physicsClientId=cl)
@@ -120,6 +122,8 @@ class FullVehicleDoubleWishbone(PlantModel):
                                          [0, 0, 0], self._local(lk[parent], wc + pt),
                                          self._local(lk[child], wc + pt), physicsClientId=cl)
                 p.changeConstraint(cid, maxForce=1e9, physicsClientId=cl)
+        self._arm_r_com = [np.array(p.getLinkState(bd, lk["lower_arm"], physicsClientId=cl)[2])
+                           for lk in self.link]
         self._pad_body = [None if g.bump_stop_pad is None else self.wheel_centres[i]
                           + g.bump_stop_pad for i, g in enumerate(self.geoms)]
         self._F_t = np.zeros(4)
@@ -217,7 +221,7 @@ class FullVehicleDoubleWishbone(PlantModel):
         v, w = p.getBaseVelocity(bd, physicsClientId=cl)
         self._base = (np.array(pos), _rot(quat), np.array(v), np.array(w), quat)
         st: dict[str, list] = {k: [] for k in ("theta", "omega", "hub", "vhub", "top", "bot",
-                                                "vtop", "vbot", "pad")}
+                                                "vtop", "vbot", "pad", "R_arm", "hub_q")}
         R, P, V, Wb = self._base[1], self._base[0], self._base[2], self._base[3]
         for i, (g, lk) in enumerate(zip(self.geoms, self.link, strict=True)):
             js = p.getJointState(bd, lk["lower_arm"], physicsClientId=cl)
@@ -226,10 +230,12 @@ class FullVehicleDoubleWishbone(PlantModel):
             hub = p.getLinkState(bd, lk["hub"], computeLinkVelocity=1,
                                  computeForwardKinematics=1, physicsClientId=cl)
             st["hub"].append(np.array(hub[0]))
+            st["hub_q"].append(hub[5])
             st["vhub"].append(np.array(hub[6]))
             arm = p.getLinkState(bd, lk["lower_arm"], computeLinkVelocity=1,
                                  computeForwardKinematics=1, physicsClientId=cl)
             Ra = _rot(arm[5])
+            st["R_arm"].append(Ra)
             la_o = self.wheel_centres[i] + 0.5 * (g.lower_bush_front + g.lower_bush_rear)
             bot = np.array(arm[4]) + Ra @ (self.wheel_centres[i] + g.damper_lower - la_o)
             top = P + R @ (self.wheel_centres[i] + g.damper_upper)
@@ -280,6 +286,12 @@ class FullVehicleDoubleWishbone(PlantModel):
         cl, bd = self.client, self.body
         bump = self._bump_forces() if hasattr(self, "_s0") else np.zeros(4)
         ez = self._base[1][:, 2]
+        st = self._st
+        # the pose and forces of this substep, for the arm loads (:meth:`corner_arm_loads`)
+        self._applied = [(st["R_arm"][i], st["hub_q"][i],
+                          (st["top"][i] - st["bot"][i]) / np.linalg.norm(st["top"][i]
+                                                                         - st["bot"][i]),
+                          float(self._F_d[i]), -bump[i] * ez) for i in range(4)]
         for i, lk in enumerate(self.link):
             p.setJointMotorControl2(bd, lk["lower_arm"], p.TORQUE_CONTROL,
                                     force=float(self._tau[i]), physicsClientId=cl)
@@ -344,6 +356,28 @@ class FullVehicleDoubleWishbone(PlantModel):
         self._apply()
         p.stepSimulation(physicsClientId=self.client)
         self._read()
+
+    def corner_arm_loads(self) -> dict[str, dict[str, float]]:
+        """The loads ON each corner's lower arm during the latest substep, by corner name,
+        the ``arm`` channel's fields (:func:`.arm_loads.arm_loads_at`) [N, N m]. The left
+        arms' in their arm frame (x forward along the pivot axis, y outboard, z up); the
+        right arms' in the **mirrored** frame (x forward, y outboard, z up: left-handed in
+        vehicle axes), where a force's components and a moment's (the torsion bar's M_x,
+        sign flipped: a moment is a pseudovector) are those of the left part under the
+        mirrored load: the left part's FE unit cases give the right arm's stresses.
+        (No channel carries them yet: the per-corner arm channels are #31's, docs/corners.md.)
+        """
+        out: dict[str, dict[str, float]] = {}
+        for i, (g, lk, name) in enumerate(zip(self.geoms, self.link, CORNERS, strict=True)):
+            R_arm, hub_q, u, F_d, bump = self._applied[i]
+            loads = arm_loads_at(self.client, self.body, lk["lower_arm"], lk["hub"],
+                                 g.arm_rotation, (R_arm, hub_q, u), self._arm_r_com[i], F_d,
+                                 bump, g.bush_spacing)
+            if self.side[i] < 0:  # proper frame (x, y out, z down) -> mirrored (z up)
+                loads = {k: (-v if k.endswith("_z") or k == "torsion_bar_mx" else v)
+                         for k, v in loads.items()}
+            out[name] = loads
+        return out
 
     def info(self) -> dict[str, object]:
         d = super().info()

@@ -52,6 +52,35 @@ def test_it_stays_in_static_equilibrium(car):
         assert np.abs(st[key]).max() < 1e-6, key
 
 
+def test_static_arm_loads_mirror_left_right_and_match_the_quarter_car(car):
+    from nodes.plant.double_wishbone import DoubleWishboneCorner
+
+    W = car.static_tyre_load()
+    car.substep(1e-3, W, 3800.0 * car.state()["v_damper"])
+    loads = car.corner_arm_loads()
+    fl, fr = loads["FL"], loads["FR"]
+    for k, v in fl.items():  # the right arm in its mirrored frame carries the left's loads
+        assert fr[k] == pytest.approx(v, rel=1e-6, abs=1e-3), k
+    # each arm in balance with its weight (static): forces in its frame, z up
+    for name in ("FL", "FR", "RL", "RR"):
+        a = loads[name]
+        for ax in "xyz":
+            total = sum(a[f"{pt}_{ax}"] for pt in ("ball_joint", "damper_mount", "bush_front",
+                                                   "bush_rear"))
+            total += a.get(f"bump_stop_{ax}", 0.0)
+            weight = 5.0 * GRAVITY if ax == "z" else 0.0
+            assert total == pytest.approx(weight, abs=0.05), (name, ax)
+    # the front corner is the quarter car under its (0.03 % smaller) static load
+    q = DoubleWishboneCorner()
+    try:
+        q.substep(1e-3, q.static_tyre_load(), 3800.0 * q.state()["v_damper"])
+        lq = q.loads()["arm"]
+    finally:
+        q.close()
+    for k in ("ball_joint_z", "bush_front_z", "bush_rear_z", "torsion_bar_mx"):
+        assert fl[k] == pytest.approx(lq[k], rel=1e-3), k
+
+
 def test_heave_is_the_corner_checks_quarter_car_and_left_equals_right():
     m = FullVehicleDoubleWishbone(DECOUPLED)
     try:
@@ -63,9 +92,12 @@ def test_heave_is_the_corner_checks_quarter_car_and_left_equals_right():
             st = m.state()
             heave[k], zw[k] = st["heave"][0], st["z_w"]
             assert abs(st["roll"][0]) < 1e-6 and abs(st["pitch"][0]) < 1e-5
+        loads = m.corner_arm_loads()
     finally:
         m.close()
     assert np.abs(zw[:, 0] - zw[:, 1]).max() < 1e-6  # mirrored corners move alike
+    for k, v in loads["FL"].items():  # and their arms carry mirrored loads in motion too
+        assert loads["FR"][k] == pytest.approx(v, rel=1e-4, abs=1e-2), k
     # period of the body mode from the up-crossings of the oscillation about 10 mm
     x = heave - 0.01
     up = np.where((x[:-1] < 0) & (x[1:] >= 0))[0]
