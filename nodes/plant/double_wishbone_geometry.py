@@ -123,12 +123,16 @@ class CornerGeometry:
         self.tie_rod_inner = P["tie_rod_inner"]
         self.tie_rod_outer = P["tie_rod_outer"]
         self.half_track = c.half_track
-        self.builtin = c.source == str(corner_file.BUILTIN)
         o, R = la.arm_frame_of(c)
         self.arm_origin, self.arm_rotation = o, R
         hp = la.hardpoints_of(c)
         self.arm_hardpoints = hp
         """The lower arm's load points in its arm frame [m]."""
+        self.fe_arm = hp.keys() == la.HARDPOINTS.keys() and all(
+            np.array_equal(hp[k], la.HARDPOINTS[k]) for k in hp)
+        """Whether the lower arm is the FE part (:mod:`cosim.lower_arm`: the built-in
+        corner's arm points, in its arm frame; a mirrored corner's too): its mass
+        properties are then the FE arm's."""
         self.arm_points = {"bush_front": self.lower_bush_front,
                            "bush_rear": self.lower_bush_rear,
                            "ball_joint": self.lower_ball_joint,
@@ -148,7 +152,7 @@ class CornerGeometry:
 
     def _arm_mass_model(self) -> tuple[np.ndarray, np.ndarray]:
         """(centre of mass in the arm frame [m], diagonal inertia per kg [m^2])."""
-        if self.builtin:
+        if self.fe_arm:
             props = la.MASS_PROPERTIES
             inertia = np.array(props["inertia_kg_m2"], dtype=float)
             return (np.array(props["centre_of_mass_m"], dtype=float),
@@ -175,7 +179,7 @@ class CornerGeometry:
 
     def lower_arm_inertia(self, mass: float) -> np.ndarray:
         """(I_xx, I_yy, I_zz) of the lower arm about its centre of mass [kg m^2]."""
-        if self.builtin:  # the FE arm's tensor scaled to ``mass``, as before (same bits)
+        if self.fe_arm:  # the FE arm's tensor scaled to ``mass``, as before (same bits)
             props = la.MASS_PROPERTIES
             inertia = np.array(props["inertia_kg_m2"], dtype=float)
             out: np.ndarray = np.diag(inertia) * mass / float(props["mass_kg"])
