@@ -204,8 +204,8 @@ def doc_table() -> str:
 def _number(limit: float) -> Any:
     """int | float within [-limit, limit] (NaN fails any bound: comparisons with it are
     false); a bool is not a number."""
-    if limit == math.inf:
-        return int | Annotated[float, msgspec.Meta(ge=-math.inf, le=math.inf)]
+    if limit == math.inf:  # msgspec bounds are finite: NaN is refused by the codec's check
+        return int | float
     return Annotated[int, msgspec.Meta(ge=-int(limit), le=int(limit))] | \
         Annotated[float, msgspec.Meta(ge=-limit, le=limit)]
 

@@ -9,9 +9,17 @@ outputs (:attr:`cosim.node_kinds.NodeKind.writes`), listens to its inputs
     out = node.step(k, t, inputs)                 # every step k = 0..N, t = k h [s]
     node.close()                                  # at the end, if it has one
 
+The kind's own nodes are stepped classes too (the tyre/road node's ``TyreRoad``, the
+controller's ``Controller``): the shell is written once, here, and takes from the kind
+(:mod:`cosim.node_kinds`) what to listen to and publish, from :class:`cosim.run_settings.
+RunSettings` the step size, the exchange's lag and the timeouts. A class may have a
+``FIELDS`` mapping of ``"node/channel"`` to the fields it needs of that input (default: the
+input's required fields of :mod:`cosim.schema`); a message without them is rejected.
+
 ``start`` is the orchestrator's start payload (``n_steps``, ``h``, ``info``: every node's
 facts, e.g. ``start["info"]["plant"]["n_corners"]``). ``inputs`` maps ``"node/channel"`` to
-that input's fields as numpy arrays (``inputs["plant/state"]["v_b"]``), the plant's state of
+that input's fields as numpy arrays (``inputs["plant/state"]["v_b"]``: a read-only
+mapping that converts a field when it is first read), the plant's state of
 step k (of step k - 1 in the parallel exchange). ``step`` returns the fields of its output:
 ``{"F_d": ..., "c_eff": ...}`` for a kind with one output channel, or ``{channel: fields}``.
 The fields the plant couples through (:attr:`NodeKind.provides`: F_d and c_eff for the
@@ -23,60 +31,105 @@ method) is run by the orchestrator before any process starts (see
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
+import numpy as np
+
 from . import node_kinds as nk
+from . import schema
 from .errors import RunError
 from .participant import Participant
+from .run_settings import LAGGED, RunSettings
+from .wire import Message
 
-LAGGED = (("plant", "state"),)
-"""Inputs a node takes from the previous step in the parallel exchange (the force nodes
-compute step k's forces from the state of step k - 1)."""
+__all__ = ["LAGGED", "Fields", "outputs_of", "run_stepped"]
+
+
+class Fields(Mapping[str, np.ndarray]):
+    """The fields of one input message as float arrays, each converted when first read
+    (:meth:`cosim.wire.Message.array`; a node that reads one field of seven converts one)."""
+
+    __slots__ = ("_msg", "_cache")
+
+    def __init__(self, msg: Message) -> None:
+        self._msg = msg
+        self._cache: dict[str, np.ndarray] = {}
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        a = self._cache.get(name)
+        if a is None:
+            if name not in self._msg.d:
+                raise KeyError(name)
+            a = self._cache[name] = self._msg.array(name)
+        return a
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._msg.d
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._msg.d)
+
+    def __len__(self) -> int:
+        return len(self._msg.d)
+
+
+class _Outputs:
+    """``step``'s result as channel -> fields, checked (see the module's docstring)."""
+
+    def __init__(self, kind: nk.NodeKind) -> None:
+        self.kind = kind
+        self.channels = [c for c in kind.writes if c != "records"]
+        self.single = self.channels[0] if len(self.channels) == 1 else None
+
+    def __call__(self, out: Any, k: int) -> dict[str, Mapping[str, Any]]:
+        kind = self.kind
+        if not isinstance(out, Mapping):
+            raise RunError(f"{kind.name}: step {k} returned a {type(out).__name__}, expected a "
+                           "mapping of field -> value")
+        if out and all(c in self.channels and isinstance(v, Mapping) for c, v in out.items()):
+            by_channel = dict(out)
+        elif self.single is not None:
+            by_channel = {self.single: out}
+        else:
+            raise RunError(f"{kind.name}: step {k} must return {{channel: fields}} for the "
+                           f"channels {', '.join(self.channels)}")
+        fields = by_channel.get("force")
+        if kind.provides and fields is not None:
+            missing = [f for f in kind.provides if f not in fields]
+            if missing:
+                raise RunError(f"{kind.name}: step {k}'s force lacks {', '.join(missing)} "
+                               "(the plant couples through them)")
+        return by_channel
 
 
 def outputs_of(kind: nk.NodeKind, out: Any, k: int) -> dict[str, Mapping[str, Any]]:
     """``step``'s result as channel -> fields (see the module's docstring)."""
-    channels = [c for c in kind.writes if c != "records"]
-    if not isinstance(out, Mapping):
-        raise RunError(f"{kind.name}: step {k} returned a {type(out).__name__}, expected a "
-                       "mapping of field -> value")
-    if out and all(c in channels and isinstance(v, Mapping) for c, v in out.items()):
-        by_channel = dict(out)
-    elif len(channels) == 1:
-        by_channel = {channels[0]: out}
-    else:
-        raise RunError(f"{kind.name}: step {k} must return {{channel: fields}} for the "
-                       f"channels {', '.join(channels)}")
-    fields = by_channel.get("force")
-    if kind.provides and fields is not None:
-        missing = [f for f in kind.provides if f not in fields]
-        if missing:
-            raise RunError(f"{kind.name}: step {k}'s force lacks {', '.join(missing)} "
-                           "(the plant couples through them)")
-    return by_channel
+    return _Outputs(kind)(out, k)
 
 
 def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str) -> None:
     """Run the stepped node class ``cls`` as node ``name`` (a kind of the registry)."""
     kind = nk.kind(name)
-    run_cfg = scenario["run"]
-    h = float(run_cfg["h"])
-    lag = 0 if run_cfg["exchange"] == "sequential" else 1
-    for channel in kind.writes:
-        if channel != "records":
-            part.output(channel)
-    tags = [part.listen(node, channel) for node, channel in nk.inputs(name)]
-    start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
+    settings = RunSettings.of(scenario)
+    wanted = getattr(cls, "FIELDS", None) or {}
+    outputs = _Outputs(kind)
+    for channel in outputs.channels:
+        part.output(channel)
+    tags = [part.listen(node, channel,
+                        required=wanted.get(f"{node}/{channel}", schema.required(node, channel)))
+            for node, channel in nk.inputs(name)]
+    names = {tag: f"{tag[0]}/{tag[1]}" for tag in tags}
+    start = part.handshake(timeout_s=settings.start_timeout_s)
     n = int(start["n_steps"])
+    h = settings.h
     node = cls(scenario, start)
     try:
         for k in range(n + 1):
             t = k * h
-            msgs = part.wait({tag: max(k - lag, 0) if tag in LAGGED else k for tag in tags})
-            inputs = {f"{tag[0]}/{tag[1]}": {f: m.array(f) for f in m.d}
-                      for tag, m in msgs.items()}
-            for channel, fields in outputs_of(kind, node.step(k, t, inputs), k).items():
+            msgs = part.wait(settings.needs(tags, k))
+            inputs = {names[tag]: Fields(m) for tag, m in msgs.items()}
+            for channel, fields in outputs(node.step(k, t, inputs), k).items():
                 part.publish(channel, k, t, fields)
             part.progress(k, t)
     finally:

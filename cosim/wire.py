@@ -174,6 +174,11 @@ class ChannelCodec:
         if m.v != SCHEMA_VERSION:
             raise WireError(_version(m.v))
         d = m.d
+        if kind == "data" and self.limit == math.inf:  # unbounded: NaN is still refused
+            bad = next((f for f in self.declared if f in d and _beyond(d[f], math.inf)), None)
+            if bad is not None:
+                raise WireError(f"{self.name} step {m.k}: field '{bad}'={d[bad]!r:.40} is "
+                                "not a number (NaN)")
         if kind == "data" and self.nonneg:
             bad = schema.negative(d, self.nonneg)
             if bad is not None:

@@ -13,41 +13,52 @@ current motion ratio; a plant without ``v_damper`` ends the run with a clear err
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
+
+import numpy as np
 
 from cosim import channels as ch
 from cosim.errors import RunError, ScenarioError
 from cosim.participant import Participant
+from cosim.stepped import run_stepped
 
 from .laws import build_controller
+
+STATE = f"{ch.PLANT}/{ch.STATE}"
+
+
+class Controller:
+    """The controller node as a stepped class (the shell: :func:`cosim.stepped.run_stepped`)."""
+
+    FIELDS = {STATE: ch.STATE_FIELDS}
+    """What it needs of its input (the law may read more: ``v_damper``...)."""
+
+    def __init__(self, scenario: dict[str, Any], start: dict[str, Any]) -> None:
+        self.plant = start["info"][ch.PLANT]
+        self.law = build_controller(scenario["controller"], int(self.plant["n_corners"]),
+                                    scenario["run"]["h"])
+
+    def step(self, k: int, t: float, inputs: Mapping[str, Mapping[str, np.ndarray]]
+             ) -> dict[str, Any]:
+        """F_d, c_eff and the law's extras of step k from the plant's state."""
+        values = inputs[STATE]
+        law = self.law
+        if law.velocity == "damper" and "v_damper" not in values:
+            model = self.plant.get("model", "?")
+            raise RunError(f"controller.velocity = 'damper' but the plant model '{model}' "
+                           "publishes no v_damper (only the double-wishbone corner does)")
+        out = law.step(t, values)
+        c_eff = law.plant_slope(out.c_eff, values)
+        return {"F_d": out.F_d, "c_eff": c_eff, **out.extra}
+
+    def close(self) -> None:
+        self.law.close()  # an FMU law terminates and frees its instances
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Run the controller node until the last step (or until the run is aborted)."""
-    run_cfg = scenario["run"]
-    h, lag = run_cfg["h"], 0 if run_cfg["exchange"] == "sequential" else 1
-    part.output(ch.FORCE)
-    state = part.listen(ch.PLANT, ch.STATE, required=ch.STATE_FIELDS)
-    start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
-    n_corners = int(start["info"][ch.PLANT]["n_corners"])
-    law = build_controller(scenario["controller"], n_corners, h)
-    n = int(start["n_steps"])
-    try:
-        for k in range(n + 1):
-            t = k * h
-            msg = part.wait({state: max(k - lag, 0)})[state]
-            values = {name: msg.array(name) for name in msg.d}
-            if law.velocity == "damper" and "v_damper" not in values:
-                model = start["info"][ch.PLANT].get("model", "?")
-                raise RunError(f"controller.velocity = 'damper' but the plant model '{model}' "
-                               "publishes no v_damper (only the double-wishbone corner does)")
-            out = law.step(t, values)
-            c_eff = law.plant_slope(out.c_eff, values)
-            part.publish(ch.FORCE, k, t, {"F_d": out.F_d, "c_eff": c_eff, **out.extra})
-            part.progress(k, t)
-    finally:
-        law.close()  # an FMU law terminates and frees its instances
-    part.finish(n, n * h)
+    run_stepped(Controller, part, scenario, ch.CONTROLLER)
 
 
 #: Plant models whose state carries ``v_damper`` (for ``controller.velocity = "damper"``).

@@ -21,6 +21,7 @@ from typing import Any, cast
 from cosim import channels as ch
 from cosim import node_kinds as nk
 from cosim.participant import Participant
+from cosim.run_settings import RunSettings
 
 from .coupling import StepInputs, substep_forces
 from .models import build_plant_model
@@ -28,9 +29,8 @@ from .models import build_plant_model
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Run the plant node until the last step (or until the run is aborted)."""
-    run_cfg = scenario["run"]
-    h, n_sub, mode = run_cfg["h"], run_cfg["substeps"], run_cfg["coupling"]
-    lag = 0 if run_cfg["exchange"] == "sequential" else 1
+    settings = RunSettings.of(scenario)
+    h, n_sub, mode, lag = settings.h, settings.substeps, settings.coupling, settings.lag
     model = build_plant_model(scenario["vehicle"])
     try:
         outputs = [ch.STATE, ch.RESPONSE, *model.loads().keys()]
@@ -41,7 +41,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                    for node, fields in nk.force_sources()]
         provides = dict(nk.force_sources())
         info = dict(model.info(), outputs=outputs)
-        start = part.handshake(info=info, timeout_s=run_cfg["start_timeout_s"])
+        start = part.handshake(info=info, timeout_s=settings.start_timeout_s)
         n = int(start["n_steps"])
         dt = h / n_sub
         before: StepInputs | None = None

@@ -9,15 +9,19 @@ publishes ``force``: F_t [N] (absolute, compressive-positive, >= 0), k_t = dF_t/
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from cosim import channels as ch
 from cosim.participant import Participant
+from cosim.stepped import run_stepped
 
 from .config import build_road, build_tyre
 from .wheel_paths import road_heights
+
+STATE = f"{ch.PLANT}/{ch.STATE}"
 
 
 def wheel_geometry(info: dict[str, Any]) -> dict[str, Any]:
@@ -32,28 +36,32 @@ def wheel_geometry(info: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+class TyreRoad:
+    """The tyre/road node as a stepped class (the shell: :func:`cosim.stepped.run_stepped`)."""
+
+    FIELDS = {"plant/state": ("z_w",)}
+    """What it reads of its input (the wheel's displacement)."""
+
+    def __init__(self, scenario: dict[str, Any], start: dict[str, Any]) -> None:
+        self.road = build_road(scenario["road"])
+        self.tyre = build_tyre(scenario["tyre"])
+        self.geo = wheel_geometry(start["info"][ch.PLANT])
+        self.offsets = np.asarray(self.tyre.contact_offsets, dtype=float)
+        self.centre = int(np.argmin(np.abs(self.offsets)))
+
+    def step(self, k: int, t: float, inputs: Mapping[str, Mapping[str, np.ndarray]]
+             ) -> dict[str, Any]:
+        """F_t, k_t, z_g of step k from the plant's state (of step k, or k - 1: parallel)."""
+        geo = self.geo
+        z_g = road_heights(self.road, t, geo["wheel_x"], geo["wheel_track"], self.offsets,
+                           geo["corner_names"])
+        F_t, k_eff = self.tyre.force(inputs[STATE]["z_w"], z_g, geo["W"])
+        return {"F_t": F_t, "k_t": k_eff, "z_g": z_g[:, self.centre]}
+
+
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Run the tyre/road node until the last step (or until the run is aborted)."""
-    run_cfg = scenario["run"]
-    h, lag = run_cfg["h"], 0 if run_cfg["exchange"] == "sequential" else 1
-    road = build_road(scenario["road"])
-    tyre = build_tyre(scenario["tyre"])
-    part.output(ch.FORCE)
-    state = part.listen(ch.PLANT, ch.STATE, required=("z_w",))
-    start = part.handshake(timeout_s=run_cfg["start_timeout_s"])
-    geo = wheel_geometry(start["info"][ch.PLANT])
-    offsets = np.asarray(tyre.contact_offsets, dtype=float)
-    centre = int(np.argmin(np.abs(offsets)))
-    n = int(start["n_steps"])
-    for k in range(n + 1):
-        t = k * h
-        msg = part.wait({state: max(k - lag, 0)})[state]
-        z_g = road_heights(road, t, geo["wheel_x"], geo["wheel_track"], offsets,
-                           geo["corner_names"])
-        F_t, k_eff = tyre.force(msg.array("z_w"), z_g, geo["W"])
-        part.publish(ch.FORCE, k, t, {"F_t": F_t, "k_t": k_eff, "z_g": z_g[:, centre]})
-        part.progress(k, t)
-    part.finish(n, n * h)
+    run_stepped(TyreRoad, part, scenario, ch.TYRE_ROAD)
 
 
 def static_check(scenario: dict[str, Any]) -> float | None:

@@ -1,0 +1,79 @@
+"""The run's settings, typed and read once: :class:`RunSettings` from the resolved scenario's
+``[run]`` table, and the lag rule of the exchange in one place (:meth:`RunSettings.step_of`).
+
+The exchange (``run.exchange``, DESIGN.md "Lock-step co-simulation"):
+
+* ``sequential`` (the thesis's scheme): the plant publishes its state at t_k, the force
+  nodes answer with forces at t_k computed from it, the plant integrates to t_{k+1};
+* ``parallel`` (Jacobi): every node steps on the previous step's inputs, so a force node
+  computes step k's forces from the state of step k - 1 (step 0: from step 0's).
+
+The inputs that lag are :data:`LAGGED` (the plant's state, for the force nodes); the plant's
+own inputs (the forces of step k) never do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from .errors import ScenarioError
+
+LAGGED: frozenset[tuple[str, str]] = frozenset({("plant", "state")})
+"""Inputs a node takes from the previous step in the parallel exchange."""
+EXCHANGES = ("sequential", "parallel")
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """The settings of one run every node shell needs (``[run]`` of the resolved scenario)."""
+
+    h: float
+    """Communication step [s]."""
+    n_steps: int | None
+    """N: steps k = 0..N (None before the scenario is resolved)."""
+    exchange: str
+    coupling: str
+    substeps: int
+    stall_timeout_s: float
+    start_timeout_s: float
+
+    @classmethod
+    def of(cls, scenario: Mapping[str, Any]) -> RunSettings:
+        """The settings of ``scenario`` (resolved: :func:`orchestrator.runner.resolve`);
+        ScenarioError naming a key that is missing or of the wrong type."""
+        run = scenario.get("run")
+        if not isinstance(run, Mapping):
+            raise ScenarioError("run", run, "a [run] table")
+        try:
+            n = run.get("n_steps")
+            settings = cls(h=float(run["h"]), n_steps=None if n is None else int(n),
+                           exchange=str(run.get("exchange", "sequential")),
+                           coupling=str(run.get("coupling", "jacobian")),
+                           substeps=int(run.get("substeps", 1)),
+                           stall_timeout_s=float(run.get("stall_timeout_s", 5.0)),
+                           start_timeout_s=float(run.get("start_timeout_s", 60.0)))
+        except KeyError as exc:
+            raise ScenarioError(f"run.{exc.args[0]}", None, "a value") from None
+        except (TypeError, ValueError) as exc:
+            raise ScenarioError("run", dict(run), f"numbers where numbers go ({exc})") from None
+        if settings.exchange not in EXCHANGES:
+            raise ScenarioError("run.exchange", settings.exchange, " or ".join(EXCHANGES))
+        return settings
+
+    @property
+    def lag(self) -> int:
+        """Steps a lagged input is behind: 0 sequential, 1 parallel."""
+        return 0 if self.exchange == "sequential" else 1
+
+    def step_of(self, tag: tuple[str, str], k: int) -> int:
+        """The step of input ``tag`` (node, channel) that step ``k`` is computed from."""
+        return max(k - self.lag, 0) if tag in LAGGED else k
+
+    def needs(self, tags: list[tuple[str, str]], k: int) -> dict[tuple[str, str], int]:
+        """``{input: step}`` for :meth:`cosim.participant.Participant.wait` at step ``k``."""
+        lag = self.lag
+        if not lag:
+            return {tag: k for tag in tags}
+        return {tag: max(k - lag, 0) if tag in LAGGED else k for tag in tags}
