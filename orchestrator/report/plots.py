@@ -53,14 +53,22 @@ def img(uri: str, alt: str) -> str:
 
 def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS
              ) -> tuple[np.ndarray, np.ndarray]:
-    """At most ~n_max points for a line plot, keeping each bucket's min and max (peaks stay)."""
+    """At most ~n_max points for a line plot, keeping each bucket's min and max in their
+    order (peaks stay; the last, shorter bucket too). NaN samples do not hide a bucket's
+    extremes (they are left out of it; an all-NaN bucket stays a gap)."""
     n = x.size
     if n <= n_max:
         return t, x
     b = int(math.ceil(n / (n_max // 2)))
-    m = (n // b) * b
-    xb, tb = x[:m].reshape(-1, b), t[:m].reshape(-1, b)
-    i_lo, i_hi = xb.argmin(axis=1), xb.argmax(axis=1)
+    pad = (-n) % b  # the last bucket filled up with its own last sample
+    if pad:
+        x = np.concatenate([x, np.repeat(x[-1:], pad)])
+        t = np.concatenate([t, np.repeat(t[-1:], pad)])
+    xb, tb = x.reshape(-1, b), t.reshape(-1, b)
+    with np.errstate(invalid="ignore"):
+        nan = np.isnan(xb)
+        i_lo = np.where(nan, np.inf, xb).argmin(axis=1)
+        i_hi = np.where(nan, -np.inf, xb).argmax(axis=1)
     first = np.minimum(i_lo, i_hi)
     second = np.maximum(i_lo, i_hi)
     rows = np.arange(xb.shape[0])

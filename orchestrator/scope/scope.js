@@ -75,6 +75,31 @@ function windowed(key, x0) {
   return i;
 }
 
+function minMaxColumns(data, columns) {
+  // #32: a long window is drawn as each pixel column's min and max (peaks kept), not as
+  // every sample: two points a column, the first at the column's first time with every
+  // line's min, the second at its last time with every line's max.
+  const t = data[0], n = t.length;
+  if (n <= 2 * columns) return data;
+  const per = n / columns, out = data.map(() => []);
+  for (let c = 0; c < columns; c++) {
+    const a = Math.floor(c * per), b = Math.min(n, Math.floor((c + 1) * per));
+    if (b <= a) continue;
+    out[0].push(t[a], t[b - 1]);
+    for (let s = 1; s < data.length; s++) {
+      let lo = null, hi = null;
+      for (let i = a; i < b; i++) {
+        const v = data[s][i];
+        if (v === null || v === undefined) continue;
+        if (lo === null || v < lo) lo = v;
+        if (hi === null || v > hi) hi = v;
+      }
+      out[s].push(lo, hi);
+    }
+  }
+  return out;
+}
+
 function plotFor(group) {
   if (S.plots[group]) return S.plots[group];
   const keys = S.groups[group];
@@ -114,12 +139,13 @@ function drawPlots() {
     const tEnd = l0.t[l0.t.length - 1];
     const x0 = S.windowS > 0 ? tEnd - S.windowS : null;
     const i0 = windowed(p.keys[0], x0);
-    const data = [l0.t.slice(i0)];
+    let data = [l0.t.slice(i0)];
     for (const key of p.keys) {
       const l = S.lines[key];
       const j = windowed(key, x0);
       data.push(l.y.slice(j, j + data[0].length));
     }
+    data = minMaxColumns(data, Math.max(100, p.u.bbox.width / (window.devicePixelRatio || 1)));
     p.u.setData(data);
     p.div.dataset.lastK = l0.k[l0.k.length - 1];
     p.div.dataset.points = data[0].length;
