@@ -126,15 +126,16 @@ def two_dof_equivalent(m_b: float, m_w: float, k_t: float, omega_n: float, zeta:
 
 def geometric_estimates(dw: DoubleWishboneCorner) -> dict[str, float]:
     """What the corner's geometry predicts at the ball joint: k = K_theta / L^2 [N/m] with
-    L = the ball-joint lever, c = C (MR cos(lean))^2 [N s/m] with MR = damper seat lever / L and
-    the damper's lean from the vertical in the plane normal to the pivot axis."""
+    L = the ball-joint lever, c = C (MR cos(lean))^2 [N s/m] (C the corner file's nominal
+    damper) with MR = damper seat lever / L and the damper's lean from the vertical in the
+    plane normal to the pivot axis."""
     g = dw.geom
     L = g.lever_ball_joint
     axis = g.damper_upper - g.damper_lower
     lean = float(np.arctan2(abs(axis[1]), axis[2]))
     mr = float(g.arm_hardpoints["damper_mount"][1] / g.arm_hardpoints["ball_joint"][1])
     return {"k_s_lever": dw.params.k_theta / L ** 2,
-            "c_s_lever": C_DAMPER * (mr * np.cos(lean)) ** 2,
+            "c_s_lever": dw.corner.damper_c_nominal * (mr * np.cos(lean)) ** 2,
             "lever_m": L, "damper_lean_deg": float(np.degrees(lean))}
 
 
@@ -165,7 +166,7 @@ def identify(step: float = 0.01, dt: float = 1e-3, t_end: float = 4.0,
 
 
 def compare_on_road(eq: dict[str, float], dt: float = 1e-3,
-                    k_s_key: str = "k_s") -> dict[str, float]:
+                    k_s_key: str = "k_s", corner: Corner | None = None) -> dict[str, float]:
     """Body and wheel displacement of the realistic corner vs its lumped equivalent on the
     Ch. 4 bump + pothole road (15 m at 34 km/h, run 3 s so the decay is seen)."""
     t_end = 3.0
@@ -173,9 +174,10 @@ def compare_on_road(eq: dict[str, float], dt: float = 1e-3,
     def road(t: float) -> float:
         return float(ch4_bump_pothole(SPEED * t))
 
-    dw = DoubleWishboneCorner()
+    dw = DoubleWishboneCorner(corner=corner)
+    c_d = C_DAMPER if corner is None else corner.damper_c_nominal
     try:
-        r1 = simulate(dw, t_end, dt, road, lambda st: C_DAMPER * float(st["v_damper"][0]))
+        r1 = simulate(dw, t_end, dt, road, lambda st: c_d * float(st["v_damper"][0]))
     finally:
         dw.close()
     lq = LumpedQuarterCar(LumpedQuarterCarParams(eq["m_b"], eq["m_w"], eq[k_s_key]))

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
+from cosim import corner as corner_file
+from cosim.errors import SuscosimError
 from nodes.plant.equivalent_lumped import TABLE_4_3, compare_on_road, identify
 
 
@@ -14,11 +17,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--step", type=float, default=0.01, help="road step height [m]")
     ap.add_argument("--dt", type=float, default=1e-3, help="time step [s]")
     ap.add_argument("--no-compare", action="store_true", help="skip the road comparison")
+    ap.add_argument("--corner", default=None, metavar="FILE",
+                    help="corner file (default: the built-in MPV corner; docs/corners.md)")
     ap.add_argument("--json", action="store_true",
                     help="print one JSON object (SI units): k_s, c_s, m_s, m_u, ...")
     args = ap.parse_args(argv)
-    eq = identify(args.step, args.dt)
-    cmp = None if args.no_compare else compare_on_road(eq, args.dt)
+    corner = None
+    if args.corner is not None:
+        try:
+            corner = corner_file.load(args.corner)
+        except SuscosimError as exc:
+            print(f"suscosim equivalent-lumped: error: {exc}", file=sys.stderr)
+            return exc.exit_code
+    eq = identify(args.step, args.dt, corner=corner)
+    cmp = None if args.no_compare else compare_on_road(eq, args.dt, corner=corner)
     if args.json:
         out = {"k_s": eq["k_s"], "c_s": eq["c_s"], "m_s": eq["m_b"], "m_u": eq["m_w"],
                "k_t": eq["k_t"], "zeta": eq["zeta"], "f_n": eq["f_n"], "delta": eq["delta"],
