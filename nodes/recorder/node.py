@@ -13,9 +13,8 @@ that are complete in place, and stops. Its memory does not grow with the run (#3
 each channel delivered are kept as ranges (:class:`~nodes.recorder.steps.StepSet`), the table
 holds only the steps not yet complete.
 
-When the run has a live fatigue node, the recorder also streams the load channel
-(``plant/arm``) to it as blocks on ``recorder/loads`` (see cosim.channels): steps in order,
-no gaps, ``fatigue.block_samples`` steps per block, the last block at the end of the run.
+A live fatigue node takes the load channel (``plant/arm``) straight from the plant's stream
+(#28 item 4); the recorder no longer relays it as blocks on ``recorder/loads``.
 
 A batch must be signed with the run's key (:meth:`Participant.open`); each data message in
 it must decode, be on a channel its node declared, and keep the layout of its channel (the
@@ -29,19 +28,16 @@ and as rejected), not journaled: a replay cannot fill the disk.
 from __future__ import annotations
 
 import logging
-import queue
 import threading
 import time
 from pathlib import Path
 from typing import Any
 
-from cosim import channels as ch
 from cosim import keys
 from cosim import node_kinds as nk
 from cosim.errors import RunError, WireError
 from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
-from cosim.load_blocks import LoadStreamer, wire_pieces
 from cosim.participant import Participant
 from cosim.table_writer import TableWriter, table_of_journal
 from cosim.wire import Message, decode
@@ -70,31 +66,6 @@ def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
             "rows": rows, "torn": torn, "undecodable": bad}
 
 
-class BlockSender:
-    """Publishes load blocks from a thread of its own: a put to a busy fatigue node may block
-    (reliable, blocking congestion control), and the recorder must go on journaling."""
-
-    def __init__(self, part: Participant) -> None:
-        self.part = part
-        self.queue: queue.SimpleQueue[dict[str, Any] | None] = queue.SimpleQueue()
-        self.thread = threading.Thread(target=self._loop, name="load-blocks", daemon=True)
-        self.thread.start()
-
-    def send(self, blk: dict[str, Any]) -> None:
-        self.queue.put(blk)
-
-    def _loop(self) -> None:
-        while (blk := self.queue.get()) is not None:
-            for piece in wire_pieces(blk):
-                k_last = piece["k0"] + len(piece["t"]) - 1
-                self.part.publish(ch.LOADS, k_last, piece["t"][-1], piece, record=False)
-
-    def close(self, timeout_s: float = 60.0) -> None:
-        """Let the queued blocks go out (bounded), then stop the thread."""
-        self.queue.put(None)
-        self.thread.join(timeout=timeout_s)
-
-
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Record the run until every channel is complete (or the run is aborted).
 
@@ -109,14 +80,6 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     warm = threading.Thread(target=_import_pyarrow, name="pyarrow-import", daemon=True)
     warm.start()  # the table's first row group needs it; importing takes seconds when loaded
     producers = [n for n in run_cfg["nodes"] if n in nk.producers() and n != part.node]
-    streamer: LoadStreamer | None = None
-    sender: BlockSender | None = None
-    if ch.FATIGUE in run_cfg["nodes"]:
-        part.output(ch.LOADS)
-        block = (scenario.get("fatigue") or {}).get("block_samples", 500)
-        streamer = LoadStreamer(block)
-        sender = BlockSender(part)
-    load_name = "/".join(ch.LOAD_CHANNEL)
     listener = Listener(part, run_cfg["start_timeout_s"])
     for node in producers:
         listener.feed(node, keys.RECORDS, kinds=("records",))
@@ -162,10 +125,6 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             return
         steps.add(msg.k)
         journal.append(name, raw)
-        if streamer is not None and sender is not None and name == load_name:
-            streamer.add(msg.k, msg.t, msg.d)
-            for blk in streamer.blocks(n_steps):
-                sender.send(blk)
 
     def feed(batch: Received) -> None:
         """One ``records`` batch (verified by the listener): its data messages."""
@@ -233,8 +192,6 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
 
     result = _with_heartbeat(part, n_steps, n_steps * run_cfg["h"], finish_table,
                              min(1.0, part.stall_timeout_s / 4))
-    if sender is not None:
-        sender.close()
     part.finish(n_steps, n_steps * run_cfg["h"], **result)
 
 
