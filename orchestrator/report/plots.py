@@ -14,8 +14,10 @@ from cosim.channels import CORNERS
 
 from .markup import esc
 
-MAX_PLOT_POINTS = 40000
-"""Longer signals are decimated (min/max per bucket) before plotting."""
+MAX_PLOT_POINTS = 4000
+"""Longer signals are decimated (min/max per bucket) before plotting: a panel is 11 in at
+90 dpi, ~990 pixel columns, so 4000 points are two buckets' min and max a column -- every
+peak drawn, and a 35-minute run (4.2 million steps) drawn as fast as a 4-second one."""
 
 
 
