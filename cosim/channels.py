@@ -1,5 +1,9 @@
 """The data channels of a run and their fields (SI units). Schema version: see cosim.wire.
 
+The fields, units and bounds are declared once, in :mod:`cosim.schema`; the table below is
+their description (docs/cosim.md has the table generated from the schema), and the field
+tuples of this module are derived from it.
+
 Per-corner fields are a number for a quarter car and a list of 4 (FL, FR, RL, RR) for a full
 vehicle. Every channel carries one message per communication step k = 0..N (N = t_end / h).
 
@@ -61,6 +65,8 @@ fatigue/damage        max_damage   largest Miner damage of any node for the hist
 
 from __future__ import annotations
 
+from . import schema as _schema
+
 PLANT, TYRE_ROAD, CONTROLLER, RECORDER = "plant", "tyre_road", "controller", "recorder"
 STATE, RESPONSE, ARM, FORCE = "state", "response", "arm", "force"
 FATIGUE, LOADS, DAMAGE = "fatigue", "loads", "damage"
@@ -88,6 +94,6 @@ LOAD_CHANNEL = (PLANT, ARM)
 CORNERS = ("FL", "FR", "RL", "RR")
 """The corners of a full vehicle, in the order of every per-corner list field (front left,
 front right, rear left, rear right); a quarter car is the front-left corner."""
-STATE_FIELDS = ("z_b", "v_b", "z_w", "v_w")
-TYRE_FIELDS = ("F_t", "k_t", "z_g")
-DAMPER_FIELDS = ("F_d", "c_eff")
+STATE_FIELDS = _schema.required(PLANT, STATE)  # z_b, v_b, z_w, v_w
+TYRE_FIELDS = tuple(f.name for f in _schema.BY_NAME["tyre_road/force"].fields)  # F_t, k_t, z_g
+DAMPER_FIELDS = _schema.coupling(CONTROLLER)  # F_d, c_eff

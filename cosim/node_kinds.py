@@ -34,6 +34,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from . import schema
 from .errors import ScenarioError
 
 COUPLED, LISTENER, OPTIONAL = "coupled", "listener", "optional"
@@ -82,9 +83,11 @@ class NodeKind:
     reads: tuple[tuple[str, str], ...] = ()
     """(node, channel) inputs; node ``*``: every coupled kind that writes that channel."""
     writes: tuple[str, ...] = ()
-    """Output channels (under ``suscosim/<run>/<name>/``)."""
+    """Output channels (under ``suscosim/<run>/<name>/``): the kind's channels of the schema
+    (:func:`cosim.schema.writes`) and its records feed."""
     provides: tuple[str, ...] = ()
-    """The coupling fields of its ``force`` output the plant applies (F_t, k_t / F_d, c_eff)."""
+    """The coupling fields of its ``force`` output the plant applies (F_t, k_t / F_d, c_eff):
+    the schema's required fields of that channel (:func:`cosim.schema.coupling`)."""
     path_keys: tuple[str, ...] = ()
     """Dotted scenario keys of its that hold file paths (relative: to the scenario file)."""
     cores: tuple[int, int, int] = (1, 0, 3)
@@ -100,26 +103,27 @@ _CONTROLLER_CHECK = Check("nodes.controller.node:static_check", takes=("n_corner
 
 KINDS: tuple[NodeKind, ...] = (
     NodeKind("plant", COUPLED, Impl("nodes.plant.node:run", Check("nodes.plant.node:preflight")),
-             reads=(("*", "force"),), writes=("state", "response", "arm", "records"),
+             reads=(("*", "force"),), writes=(*schema.writes("plant"), "records"),
              cores=(0, 0, 0)),
     NodeKind("tyre_road", COUPLED,
              Impl("nodes.tyre_road.node:run",
                   Check("nodes.tyre_road.node:static_check", gives="duration_s")),
-             reads=(("plant", "state"),), writes=("force", "records"),
-             provides=("F_t", "k_t"), path_keys=("road.path",), cores=(1, 1, 1)),
+             reads=(("plant", "state"),), writes=(*schema.writes("tyre_road"), "records"),
+             provides=schema.coupling("tyre_road"), path_keys=("road.path",), cores=(1, 1, 1)),
     NodeKind("controller", COUPLED, Impl("nodes.controller.node:run", _CONTROLLER_CHECK),
-             reads=(("plant", "state"),), writes=("force", "records"),
-             provides=("F_d", "c_eff"), path_keys=("controller.curve", "controller.fmu"),
+             reads=(("plant", "state"),), writes=(*schema.writes("controller"), "records"),
+             provides=schema.coupling("controller"),
+             path_keys=("controller.curve", "controller.fmu"),
              cores=(0, 2, 2),
              alternatives={"fmu": Impl("nodes.controller.node:run",
                                        Check("nodes.controller.node:fmu_check",
                                              takes=("n_corners",)))}),
     NodeKind("recorder", LISTENER, Impl("nodes.recorder.node:run"),
-             reads=(("*", "records"),), writes=("loads",), run_folder=True),
+             reads=(("*", "records"),), writes=schema.writes("recorder"), run_folder=True),
     NodeKind("fatigue", OPTIONAL,
              Impl("nodes.fatigue.node:run",
                   Check("nodes.fatigue.node:preflight", takes=("load_channels",))),
-             reads=(("recorder", "loads"),), writes=("damage",),
+             reads=(("recorder", "loads"),), writes=schema.writes("fatigue"),
              path_keys=("fatigue.influence",)),
 )
 """Every node kind, in start order."""
