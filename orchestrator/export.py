@@ -92,7 +92,7 @@ def write_format(src: Path, fmt: str, path: Path, patterns: list[str] | None,
     if not names:
         raise ValueError(f"no column matches --channels {' '.join(patterns or [])}")
     units = {c: si_unit(c) for c in names}
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")  # writers go by suffix
     try:
         if fmt in ("csv", "parquet"):
             rows = write_stream(src, tmp, fmt, names, units)

@@ -36,10 +36,12 @@ def table_columns(src: str | Path) -> list[str]:
     return head
 
 
-def iter_chunks(src: str | Path, names: list[str], rows: int = BATCH_ROWS
+def iter_chunks(src: str | Path, names: list[str], rows: int | None = None
                 ) -> Iterator[dict[str, np.ndarray]]:
-    """The columns ``names`` of a run's table in chunks of up to ``rows`` rows."""
+    """The columns ``names`` of a run's table in chunks of up to ``rows`` rows (default
+    :data:`BATCH_ROWS`)."""
     src = Path(src)
+    rows = BATCH_ROWS if rows is None else rows
     if src.suffix == ".parquet":
         import pyarrow.parquet as pq
 
