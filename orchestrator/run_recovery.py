@@ -35,6 +35,8 @@ def recover_table(folder: Path, interrupted: bool = False, since: float | None =
     larger than :data:`INTERRUPT_REBUILD_BYTES` is not rebuilt here (the recorder's own
     table, or ``suscosim export``): the summary says so and how."""
     journal = folder / "journal.msgpack"
+    if not recorder_elsewhere:
+        _remove_stale_tables(folder)
     if not journal.exists():
         return {}
     from cosim.journal import JournalReader
@@ -92,6 +94,22 @@ def recover_table(folder: Path, interrupted: bool = False, since: float | None =
         _remove_tables(folder, stem)
         rec["error"] = f"table not written: {exc.strerror or exc}"
     return rec
+
+
+def _remove_stale_tables(folder: Path) -> None:
+    """The tables a killed recorder was writing beside their place (``.table.csv.PID.TID.tmp``,
+    as long as its run: up to hundreds of MB) are removed once that process is gone; the
+    journal is the record."""
+    from cosim.run_folder import pid_alive
+
+    for tmp in folder.glob(".table.*.tmp"):
+        parts = tmp.name.split(".")
+        pid = int(parts[3]) if len(parts) > 4 and parts[3].isdigit() else None
+        if pid is not None and not pid_alive(pid):
+            try:
+                tmp.unlink()
+            except OSError:
+                pass
 
 
 def _remove_tables(folder: Path, stem: str) -> None:

@@ -110,3 +110,22 @@ def test_a_recorder_elsewhere_is_waited_for_then_left_its_long_table(tmp_path, m
                                      recorder_elsewhere=True, wait_s=5.0)
     later.join()
     assert rec["note"] == "the table the recorder exported" and rec["rows"] == 200
+
+
+def test_the_tables_a_killed_recorder_was_writing_are_removed(tmp_path):
+    """#32: the recorder writes table.csv/.parquet beside their place as the run goes; a
+    killed one leaves them (hundreds of MB on a long run): recovery removes those whose
+    writer is gone, not a live writer's."""
+    import os
+    import subprocess
+    import sys
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    dead = tmp_path / f".table.csv.{gone.pid}.7.tmp"
+    live = tmp_path / f".table.parquet.{os.getpid()}.7.tmp"
+    dead.write_text("half a table")
+    live.write_text("being written")
+    _journal(tmp_path, 5)
+    rec = run_recovery.recover_table(tmp_path, since=time.time() - 60)
+    assert rec["rows"] == 5 and not dead.exists() and live.exists()
