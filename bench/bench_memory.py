@@ -1,0 +1,198 @@
+"""Memory and disk of long runs (#32): peak RSS per process, journal and table bytes per
+coupled step, wall time; then ``suscosim export`` of the journal (its own peak RSS) and
+whether the table it rebuilds equals the recorder's ``table.parquet`` bit for bit.
+
+    python bench/bench_memory.py [--steps 10000 100000 1000000] [--corner-steps 100000]
+                                 [--keep DIR] [--report]
+
+Cases: the Chapter 3 lumped quarter car (distributed, h = 1 ms: ``run.t_end`` = steps x h)
+at each ``--steps``; the Chapter 6 realistic corner with live fatigue (h = 0.5 ms; the road
+made long enough for ``--corner-steps``: ``road.length_m``, 4235 steps per 20 m) once.
+Peak RSS is each process's VmHWM (``/proc/PID/status``) as last sampled (every 0.1 s, and
+it only grows). ``values`` is the table's columns less ``k`` and ``t``: the 8-byte values a
+step carries; the journal's bar is 1.5x that. ``--report`` also builds ``suscosim report`` of
+each run and gives its wall time and peak RSS. Markdown table on stdout; docs/memory.md
+holds the measured one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+CH3 = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
+CH6 = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
+CH6_STEPS_PER_M = 4235 / 20.0
+
+
+def _children(pid: int) -> list[int]:
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            kids = [int(x) for x in Path(f"/proc/{p}/task/{p}/children").read_text().split()]
+        except OSError:
+            kids = []
+        out += kids
+        todo += kids
+    return out
+
+
+def _sample(pid: int) -> tuple[str, int] | None:
+    """(process name, VmHWM bytes) of a live suscosim process."""
+    try:
+        args = [a.decode(errors="replace")
+                for a in Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0") if a]
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return None
+    if "orchestrator.export" in args:
+        name = "export"
+    elif "node" in args:
+        name = args[args.index("node") + 1]
+    elif any(a in ("run", "export", "report") for a in args):
+        name = next(a for a in args if a in ("run", "export", "report"))
+        name = "orchestrator" if name == "run" else name
+    else:
+        return None
+    hwm = next((int(line.split()[1]) * 1024 for line in status.splitlines()
+                if line.startswith("VmHWM:")), 0)
+    return name, hwm
+
+
+def measured(cmd: list[str]) -> tuple[float, dict[str, int], str]:
+    """Run ``cmd``; (wall s, peak RSS by process name, stderr tail)."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    peak: dict[int, tuple[str, int]] = {}
+    while proc.poll() is None:
+        for pid in [proc.pid, *_children(proc.pid)]:
+            s = _sample(pid)
+            if s is not None:
+                peak[pid] = s
+        time.sleep(0.1)
+    wall = time.perf_counter() - t0
+    err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
+    by_name: dict[str, int] = {}
+    for name, hwm in peak.values():
+        by_name[name] = max(by_name.get(name, 0), hwm)
+    if proc.returncode:
+        raise RuntimeError(f"{' '.join(cmd[2:5])}: exit {proc.returncode}: {err[-600:]}")
+    return wall, by_name, err[-600:]
+
+
+def same_table(a: Path, b: Path) -> str:
+    """'bytes' when the two Parquet files are identical, 'values' when every column is equal
+    bit for bit (read in batches), else what differs."""
+    if a.read_bytes() == b.read_bytes():
+        return "bytes"
+    import pyarrow.parquet as pq
+
+    fa, fb = pq.ParquetFile(a), pq.ParquetFile(b)
+    if fa.schema_arrow != fb.schema_arrow or fa.metadata.num_rows != fb.metadata.num_rows:
+        return "schema or rows differ"
+    for ba, bb in zip(fa.iter_batches(65536), fb.iter_batches(65536), strict=True):
+        if not ba.equals(bb):
+            return "values differ"
+    return "values"
+
+
+def case(label: str, scenario: Path, sets: list[str], work: Path, report: bool) -> dict:
+    out = work / label
+    shutil.rmtree(out, ignore_errors=True)
+    cmd = [sys.executable, "-m", "orchestrator", "run", str(scenario), "--out", str(out),
+           "--quiet", "--set", f'run.id="mem-{label}"']
+    for s in sets:
+        cmd += ["--set", s]
+    wall, rss, _err = measured(cmd)
+    summary = json.loads((out / "summary.json").read_text())
+    steps = int(summary["rows"])
+    import pyarrow.parquet as pq
+
+    values = len(pq.ParquetFile(out / "table.parquet").schema_arrow.names) - 2
+    size = {n: (out / n).stat().st_size for n in ("journal.msgpack", "table.csv",
+                                                   "table.parquet")}
+    rebuilt = work / f"{label}-export"
+    shutil.rmtree(rebuilt, ignore_errors=True)
+    ex_wall, ex_rss, _ = measured([sys.executable, "-m", "orchestrator.export",
+                                   str(out / "journal.msgpack"), "--out", str(rebuilt)])
+    row = {"case": label, "steps": steps, "values": values, "wall_s": wall,
+           "steps_per_s": summary.get("steps_per_s"), "rss_mb": {n: v / 2**20
+                                                                  for n, v in rss.items()},
+           "journal_B_per_step": size["journal.msgpack"] / steps,
+           "journal_x_values": size["journal.msgpack"] / steps / (8 * values),
+           "csv_B_per_step": size["table.csv"] / steps,
+           "parquet_B_per_step": size["table.parquet"] / steps,
+           "export_s": ex_wall, "export_rss_mb": ex_rss.get("export", 0) / 2**20,
+           "parquet_equals_rebuilt": same_table(out / "table.parquet",
+                                                rebuilt / "table.parquet")}
+    if report:
+        r_wall, r_rss, _ = measured([sys.executable, "-m", "orchestrator", "report", str(out),
+                                     "--out", str(work / f"{label}.html")])
+        row["report_s"], row["report_rss_mb"] = r_wall, r_rss.get("report", 0) / 2**20
+    shutil.rmtree(rebuilt, ignore_errors=True)
+    return row
+
+
+def table(rows: list[dict]) -> str:
+    names = sorted({n for r in rows for n in r["rss_mb"]})
+    head = ["case", "steps", "wall s", "steps/s", *[f"{n} MB" for n in names],
+            "journal B/step (x values)", "csv B/step", "parquet B/step", "export s (MB)",
+            "parquet = rebuilt"]
+    if any("report_s" in r for r in rows):
+        head.append("report s (MB)")
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        cells = [r["case"], str(r["steps"]), f"{r['wall_s']:.0f}", f"{r['steps_per_s']:.0f}",
+                 *[f"{r['rss_mb'].get(n, 0):.0f}" if n in r["rss_mb"] else "-" for n in names],
+                 f"{r['journal_B_per_step']:.0f} ({r['journal_x_values']:.2f}x)",
+                 f"{r['csv_B_per_step']:.0f}", f"{r['parquet_B_per_step']:.0f}",
+                 f"{r['export_s']:.0f} ({r['export_rss_mb']:.0f})",
+                 r["parquet_equals_rebuilt"]]
+        if "report_s" in r:
+            cells.append(f"{r['report_s']:.0f} ({r['report_rss_mb']:.0f})")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, nargs="*", default=[10_000, 100_000, 1_000_000],
+                    help="coupled steps of the lumped quarter car runs")
+    ap.add_argument("--corner-steps", type=int, default=100_000,
+                    help="coupled steps of the realistic corner with live fatigue (0: none)")
+    ap.add_argument("--keep", help="keep the run folders here (default: a temporary folder)")
+    ap.add_argument("--report", action="store_true", help="also time suscosim report")
+    args = ap.parse_args(argv)
+    work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bench_memory-"))
+    work.mkdir(parents=True, exist_ok=True)
+    rows = []
+    print(f"# load average at the start: {os.getloadavg()[0]:.1f}", file=sys.stderr)
+    for n in args.steps:
+        rows.append(case(f"ch3-{n}", CH3, [f"run.t_end={n * 1e-3:g}",
+                                           "run.stall_timeout_s=120"], work, args.report))
+        print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    if args.corner_steps:
+        length = args.corner_steps / CH6_STEPS_PER_M
+        rows.append(case(f"ch6-fatigue-{args.corner_steps}", CH6,
+                         [f"road.length_m={length:.3f}", "run.stall_timeout_s=120"], work,
+                         args.report))
+        print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    print(f"# load average at the end: {os.getloadavg()[0]:.1f}", file=sys.stderr)
+    print(table(rows))
+    if not args.keep:
+        shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
