@@ -119,8 +119,11 @@ class TableWriter:
 
     # ---- taking messages ------------------------------------------------------------------
     def add(self, channel: str, k: int, t: float, d: Mapping[str, Any]) -> str | None:
-        """Take ``channel``'s message of step ``k``: None when it is the step's, else why it
-        is left out (not a channel of the table, another layout, a step already given)."""
+        """Take ``channel``'s message of step ``k``: None when it is valid for the table, else
+        why it is left out (not a channel of the table, another layout, a step already
+        given). A valid message of a step at or before the last row written cannot make a
+        row any more: it is taken and counted in :attr:`late` (a channel's records out of
+        their own order; never in a run)."""
         ci = self._index.get(channel)
         if ci is None:
             return f"channel {channel} is not one of the table's"
@@ -133,8 +136,8 @@ class TableWriter:
             return (f"step {k}: fields {_text(layout_of(d))} where the channel has "
                     f"{_text(lay)}")
         if k <= self.last_k:  # its row was written, or a later one was: it cannot be one
-            self.late += 1
-            return f"step {k}, at or before step {self.last_k} already written"
+            self.late += 1  # taken all the same (the journal keeps it), counted
+            return None
         row = self._pending.get(k)
         if row is None:
             row = self._pending[k] = [t, self._rank[channel], 0] + [None] * len(self.channels)
@@ -380,4 +383,4 @@ def table_of_journal(open_records: Any, folder: str | Path | None,
             continue
         if m.kind == "data" and m.k >= 0 and writer.add(channel, m.k, m.t, m.d) is not None:
             bad += 1
-    return writer, bad
+    return writer, bad + writer.late
