@@ -144,8 +144,7 @@ class FatigueConfig:
     def material(self) -> Material:
         """The named material with the overrides, its S-N curve attached: the data curve
         (``sn_curve``), else the component's by ``component.method``, else the material's."""
-        mat = with_overrides(database_material(self.material_name, self.cyclic),
-                             dict(self.material_overrides))
+        mat = with_overrides(self._base_material(), dict(self.material_overrides))
         sn: Any
         if self.sn_table is not None:
             sn = self.sn_table.with_endurance(self.endurance)
@@ -157,6 +156,12 @@ class FatigueConfig:
         else:
             sn = component_sn_curve(mat, self.component, self.endurance)
         return replace(mat, sn=sn)
+
+    def _base_material(self) -> Material:
+        """The named material with overridden E, ν, ρ, σu, σy applied before the estimated
+        constants (UML σ'f, ε'f, K'; Shigley Se'), so that those follow them."""
+        base = {k: v for k, v in self.material_overrides if k in ("E", "nu", "rho", "Su", "Sy")}
+        return database_material(self.material_name, self.cyclic, base=base)
 
     def fatigue_properties(self) -> dict:
         """What the summary reports: the material constants with their sources, K'/n'
@@ -236,8 +241,7 @@ class FatigueConfig:
             base_dir=str(base_dir),
         )
         try:
-            mat0 = with_overrides(database_material(cfg.material_name, cfg.cyclic),
-                                  dict(cfg.material_overrides))
+            mat0 = with_overrides(cfg._base_material(), dict(cfg.material_overrides))
         except ValueError as e:
             raise r.error("material", dict(raw_mat.cfg),
                           f"a consistent material ({e})") from None

@@ -171,9 +171,14 @@ def material_names(path: Path | None = None) -> list[str]:
 
 
 def database_material(name: str = "817M40", cyclic: str = "uml",
-                      path: Path | None = None) -> Material:
+                      path: Path | None = None,
+                      base: Mapping[str, float] | None = None) -> Material:
     """Material ``name`` of the database: its values with their sources; each strain-life
     constant it lacks from the UML, Se' from Shigley Eq 6-8 if absent.
+
+    ``base`` replaces the file's E, nu, rho, Su, Sy *before* those estimates, so that the
+    estimated values follow an overridden strength (σ'f = 1.5 Su, Se' = 0.5 Su, ...; a
+    value the file gives itself stays).
 
     ``cyclic`` chooses K', n': "uml" (the file's K, n, else 1.65 σu, 0.15), "table_6_2"
     (the file's K_table, n_table) or "compatible" (σ'f/ε'f^(b/c), b/c).
@@ -184,8 +189,13 @@ def database_material(name: str = "817M40", cyclic: str = "uml",
     if name not in db:
         raise ValueError(f"material {name!r} is not in {path or DATABASE} (it has "
                          + ", ".join(db) + ")")
-    e = db[name]
+    e = dict(db[name])
     src_file = dict(e.get("source") or {})
+    for k, v in (base or {}).items():
+        if k not in _REQUIRED:
+            raise ValueError(f"base may replace {_REQUIRED} only, got {k!r}")
+        e[k] = float(v)
+        src_file[k] = "scenario override"
     Su, E = float(e["Su"]), float(e["E"])
     uml = uniform_material_law(Su, E)
     est = "Uniform Material Law (Bäumel & Seeger 1990)"

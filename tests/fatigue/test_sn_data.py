@@ -136,3 +136,13 @@ def test_config_selects_the_curve_and_names_bad_keys() -> None:
         with pytest.raises(ScenarioError) as e:
             FatigueConfig.from_dict(bad)
         assert e.value.key == key, (bad, e.value)
+
+
+def test_estimates_follow_an_overridden_strength() -> None:
+    """σ'f = 1.5 σu (UML) and Se' = 0.5 σu (Shigley) follow an overridden σu; a constant
+    given explicitly stays."""
+    m = FatigueConfig.from_dict({"material": {"Su": 310e6, "Sy": 275e6}}).material
+    assert m.sf == pytest.approx(1.5 * 310e6) and m.Se == pytest.approx(0.5 * 310e6)
+    assert m.source["Su"] == "scenario override"
+    m2 = FatigueConfig.from_dict({"material": {"Su": 310e6, "sf": 2e9}}).material
+    assert m2.sf == 2e9 and m2.K == pytest.approx(1.65 * 310e6)
