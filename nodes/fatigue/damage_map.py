@@ -17,9 +17,9 @@ from cosim import lower_arm as geo  # noqa: E402
 from .map_render import draw  # noqa: E402
 
 
-def life_text(life_km: float, life_repeats: float) -> str:
+def life_text(life_km: float, life_repeats: float, fails: bool = False) -> str:
     """'min life 410.3 km (2.05e4 repeats)', or 'fails on the first cycle (life 0 km)'."""
-    if not life_km > 0.0:
+    if fails:
         return "fails on the first cycle (life 0 km)"
     return f"min life {life_km:.4g} km ({life_repeats:.4g} repeats)"
 
@@ -43,8 +43,8 @@ def plot_damage_map(result, path: Path, title: str = "") -> Path:
         ax.tick_params(axis="x", rotation=90)
     else:
         draw(fig, result.node_xyz, D, node_ids=result.node_ids, hardpoints=geo.HARDPOINTS)
-    fig.suptitle(title or f"Lower arm fatigue damage - "
-                          f"{life_text(result.life_km, result.life_repeats)}")
+    life = life_text(result.life_km, result.life_repeats, bool(np.isinf(D).any()))
+    fig.suptitle(title or f"Lower arm fatigue damage - {life}")
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
