@@ -1,0 +1,233 @@
+"""Parametric CAD of the built-in lower arm: a forged H-section wishbone in gmsh/OpenCASCADE.
+
+The parameters are data (``data/lower_arm_cad.toml``, schema in docs/parts.md); the joint
+centres are the plant's hardpoints, read through :mod:`cosim.lower_arm` (one definition).
+
+Shape (arm frame: x along the pivot axis, y outward to the ball joint, z up; symmetric about
+z = 0, the forging's parting plane):
+
+* **plan**: the convex hull of circles round the two bush eyes and the ball joint, with a
+  rounded triangular lightening hole (hull of three equal circles), so two legs and a base
+  member between the eyes;
+* **web**: the plan face less the hole, ``section.web`` thick (>= 6 mm: a web thinner than
+  about 1/50 of the plan size does not fill in a closed die);
+* **ribs** along the outer edge and round the hole (the H's flanges), ``rib_depth_root`` deep
+  at the legs' roots, tapering linearly to ``rib_depth_tip`` toward the ball joint (the
+  bending moment of the wheel load falls toward the ball joint);
+* **bush eyes**: hollow tubes along x (the pivot axis), bore = the bushes' outer sleeves;
+* **ball-joint housing**: a vertical ring with a through bore for the joint's cartridge;
+* **damper seat and bump-stop pad**: round bosses on the legs;
+* **fillets** of radius ``section.fillet`` (>= 5 mm) on every edge where a rib, an eye, the
+  housing or a pad meets the web (the re-entrant edges of the section).
+
+Lengths in metres. :func:`build` leaves the solid in the current gmsh model and returns the
+tags of the fillet faces (for mesh refinement); :func:`write_step` writes the STEP file.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cosim import lower_arm as geo
+from cosim.errors import InputFileError
+
+DATA = Path(__file__).parent / "data"
+DEFAULT_PARAMS = DATA / "lower_arm_cad.toml"
+
+
+def load_params(path: Path = DEFAULT_PARAMS) -> dict[str, Any]:
+    """The CAD parameters (TOML) as nested dicts; a missing table or key is an
+    `InputFileError` naming it."""
+    try:
+        with open(path, "rb") as fh:
+            p = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise InputFileError(str(path), str(exc)) from None
+    need = {"plan": ("bush_boss_radius", "ball_joint_boss_radius", "hole_corners",
+                     "hole_corner_radii"),
+            "section": ("web", "outer_rib_width", "hole_rib_width", "rib_depth_root",
+                        "rib_depth_tip", "taper_y", "fillet"),
+            "bush_eye": ("outer_radius", "bore_radius", "length"),
+            "ball_joint": ("outer_radius", "bore_radius", "depth")}
+    for table, keys in need.items():
+        for k in keys:
+            if k not in p.get(table, {}):
+                raise InputFileError(str(path), f"missing key [{table}] {k}")
+    s = p["section"]
+    if s["web"] < 0.006 - 1e-12:
+        raise InputFileError(str(path), f"[section] web = {s['web']}: a forging needs >= 0.006 m")
+    if s["fillet"] < 0.005 - 1e-12:
+        raise InputFileError(str(path), f"[section] fillet = {s['fillet']}: expected >= 0.005 m")
+    return p
+
+
+def _hull_face(centres: np.ndarray, radii: np.ndarray, z: float = 0.0) -> int:
+    """A plane face (tag) bounded by the convex hull of circles given counter-clockwise:
+    outer tangent lines joined by arcs (every circle on the hull)."""
+    from gmsh import model
+
+    occ = model.occ
+    n = len(centres)
+    tangents = []  # (p_on_i, p_on_j) for the edge i -> i+1
+    for i in range(n):
+        j = (i + 1) % n
+        c1, c2, r1, r2 = centres[i], centres[j], radii[i], radii[j]
+        d = c2 - c1
+        L = float(np.hypot(*d))
+        d = d / L
+        n0 = np.array([d[1], -d[0]])  # right of the edge: outward for a CCW polygon
+        s = (r1 - r2) / L
+        nrm = math.sqrt(1.0 - s * s) * n0 + s * d
+        tangents.append((c1 + r1 * nrm, c2 + r2 * nrm))
+    A = [occ.addPoint(a[0], a[1], z) for a, _ in tangents]
+    B = [occ.addPoint(b[0], b[1], z) for _, b in tangents]
+    tags = []
+    for i in range(n):
+        j = (i + 1) % n
+        tags.append(occ.addLine(A[i], B[i]))
+        pc = occ.addPoint(centres[j][0], centres[j][1], z)
+        tags.append(occ.addCircleArc(B[i], pc, A[j]))
+    loop = occ.addCurveLoop(tags)
+    return int(occ.addPlaneSurface([loop]))
+
+
+def _ccw(points: np.ndarray) -> np.ndarray:
+    """Indices ordering points counter-clockwise about their mean."""
+    c = points.mean(axis=0)
+    return np.argsort(np.arctan2(points[:, 1] - c[1], points[:, 0] - c[0]))
+
+
+def _slab(face_tag: int, z0: float, z1: float) -> list[tuple[int, int]]:
+    from gmsh import model
+
+    occ = model.occ
+    occ.translate([(2, face_tag)], 0, 0, z0)
+    out = occ.extrude([(2, face_tag)], 0, 0, z1 - z0)
+    return [e for e in out if e[0] == 3]
+
+
+def build(params: dict[str, Any]) -> dict[str, list[int]]:
+    """Build the arm as one OCC volume in the current gmsh model (gmsh initialised by the
+    caller). Returns {"volume": [tag], "fillets": [face tags]}."""
+    from gmsh import model
+
+    occ = model.occ
+    pl, sec = params["plan"], params["section"]
+    eye, bj = params["bush_eye"], params["ball_joint"]
+    hp = {k: np.asarray(v, dtype=float) for k, v in geo.HARDPOINTS.items()}
+    centres = np.array([hp["bush_front"][:2], hp["ball_joint"][:2], hp["bush_rear"][:2]])
+    radii = np.array([pl["bush_boss_radius"], pl["ball_joint_boss_radius"],
+                      pl["bush_boss_radius"]])
+    order = _ccw(centres)
+    centres, radii = centres[order], radii[order]
+    hole = np.asarray(pl["hole_corners"], dtype=float)
+    rh = np.asarray(pl["hole_corner_radii"], dtype=float)
+    k = _ccw(hole)
+    hole, rh = hole[k], rh[k]
+    w_out, w_hole = float(sec["outer_rib_width"]), float(sec["hole_rib_width"])
+    t = float(sec["web"])
+    D0, D1 = float(sec["rib_depth_root"]), float(sec["rib_depth_tip"])
+
+    L, ro = float(eye["length"]), float(eye["outer_radius"])
+    b = hp["ball_joint"]
+    # web: plan less hole (the hole opens the base: no member between the eyes)
+    plan = _hull_face(centres, radii)
+    hole_f = _hull_face(hole, rh)
+    web_face, _ = occ.cut([(2, plan)], [(2, hole_f)])
+    web = _slab(web_face[0][1], -t / 2, t / 2)
+    # rib bands: outline less the outline offset inward (less the hole); hole offset
+    # outward less the hole (within the outline)
+    plan2 = _hull_face(centres, radii)
+    inner = _hull_face(centres, radii - w_out)
+    band_out, _ = occ.cut([(2, plan2)], [(2, inner), (2, _hull_face(hole, rh))])
+    hole_o = _hull_face(hole, rh + w_hole)
+    hole_i = _hull_face(hole, rh)
+    band_hole, _ = occ.cut([(2, hole_o)], [(2, hole_i)])
+    band_hole, _ = occ.intersect(band_hole, [(2, _hull_face(centres, radii))])
+    ribs = []
+    for f in band_out + band_hole:
+        ribs += _slab(f[1], -D0 / 2, D0 / 2)
+    # taper envelope: a prism along x whose (y, z) section follows the rib depth
+    y0, y1 = (float(v) for v in sec["taper_y"])
+    ylo, yhi = -0.2, 0.6
+    prof = [(ylo, -D0 / 2), (y0, -D0 / 2), (y1, -D1 / 2), (yhi, -D1 / 2),
+            (yhi, D1 / 2), (y1, D1 / 2), (y0, D0 / 2), (ylo, D0 / 2)]
+    pts = [occ.addPoint(-0.4, y, z) for y, z in prof]
+    lines = [occ.addLine(pts[i], pts[(i + 1) % len(pts)]) for i in range(len(pts))]
+    env_face = occ.addPlaneSurface([occ.addCurveLoop(lines)])
+    env = occ.extrude([(2, env_face)], 0.8, 0, 0)
+    env_vol = [e for e in env if e[0] == 3]
+    ribs_cut, _ = occ.intersect(ribs, env_vol)
+    body, _ = occ.fuse(web, ribs_cut)
+    # the legs end on the eyes' outer cylinders: clear everything within ro of the pivot axis
+    axis_cyl = [(3, occ.addCylinder(-0.5, 0.0, 0.0, 1.0, 0, 0, ro)),
+                (3, occ.addBox(-0.5, -0.5, -0.5, 1.0, 0.5, 1.0))]  # and all behind the axis
+    body, _ = occ.cut(body, axis_cyl)
+    tubes = [(3, occ.addCylinder(hp[n][0] - L / 2, hp[n][1], hp[n][2], L, 0, 0, ro))
+             for n in ("bush_front", "bush_rear")]
+    housing = [(3, occ.addCylinder(b[0], b[1], -bj["depth"] / 2, 0, 0, bj["depth"],
+                                   bj["outer_radius"]))]
+    solid, _ = occ.fuse(body, tubes + housing)
+    # bores: the bushes' outer sleeves, the ball joint's cartridge
+    zmax = 0.5 * max(D0, D1, 2 * ro, bj["depth"]) + 0.01
+    bores = [(3, occ.addCylinder(hp[n][0] - L / 2 - 0.01, hp[n][1], hp[n][2], L + 0.02, 0, 0,
+                                 eye["bore_radius"])) for n in ("bush_front", "bush_rear")]
+    bores.append((3, occ.addCylinder(b[0], b[1], -zmax, 0, 0, 2 * zmax, bj["bore_radius"])))
+    solid, _ = occ.cut(solid, bores)
+    occ.synchronize()
+    vols = [e[1] for e in solid if e[0] == 3]
+    if len(vols) != 1:
+        raise RuntimeError(f"the arm CAD gave {len(vols)} volumes, expected 1")
+    # fillets: every curve in the web's planes z = +-t/2 (where ribs and bosses meet it)
+    r = float(sec["fillet"])
+    root_curves = []
+    tol = 1e-6  # OCC bounding boxes carry a gap of ~1e-7 m
+    for dim, tag in model.getBoundary([(3, vols[0])], combined=False, oriented=False):
+        for _, c in model.getBoundary([(dim, tag)], combined=False, oriented=False):
+            bb = model.getBoundingBox(1, abs(c))
+            if abs(bb[2] - t / 2) < tol and abs(bb[5] - t / 2) < tol or \
+                    abs(bb[2] + t / 2) < tol and abs(bb[5] + t / 2) < tol:
+                root_curves.append(abs(c))
+    from .features import SHARP_SHARE, edge_share
+
+    root_curves = [c for c in sorted(set(root_curves))
+                   if edge_share(c, vols[0], 0.5e-3)[0] > SHARP_SHARE]
+    out = occ.fillet(vols, root_curves, [r])
+    occ.synchronize()
+    vols = [e[1] for e in out if e[0] == 3]
+    fillets = []
+    for _, s in model.getBoundary([(3, vols[0])], combined=False, oriented=False):
+        s = abs(s)
+        if model.getType(2, s) == "Plane":
+            continue
+        bb = model.getBoundingBox(2, s)
+        lo, hi = bb[2], bb[5]
+        if (lo >= t / 2 - tol and hi <= t / 2 + r + tol) or \
+                (hi <= -t / 2 + tol and lo >= -t / 2 - r - tol):
+            fillets.append(s)
+    return {"volume": vols, "fillets": fillets, "root_curves": root_curves}
+
+
+def write_step(path: Path, params: dict[str, Any] | None = None) -> dict[str, list[int]]:
+    """Build the arm and write it as STEP (metres)."""
+    import gmsh
+
+    own = not gmsh.isInitialized()
+    if own:
+        gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("lower_arm")
+        tags = build(load_params() if params is None else params)
+        gmsh.option.setString("Geometry.OCCTargetUnit", "M")
+        gmsh.write(str(path))
+        gmsh.model.remove()
+        return tags
+    finally:
+        if own:
+            gmsh.finalize()

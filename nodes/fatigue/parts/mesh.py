@@ -1,0 +1,196 @@
+"""Tetrahedral meshes of a part: gmsh from CAD (STEP or the built-in arm's parametric CAD),
+meshio from a mesh file (Gmsh ``.msh``, Abaqus/CalculiX ``.inp``, Nastran ``.bdf``).
+
+Both give a `TetMesh`: vertex coordinates [m], tetrahedra (4 vertices; a 10-node input keeps
+its corner nodes: the FE puts its quadratic nodes at the straight edges' midpoints, so a
+curved-edge input mesh is taken with straight edges), the input's node labels, and named node
+sets. The FE (``solid.py``) uses quadratic tetrahedra (scikit-fem ``ElementTetP2``) on it.
+
+gmsh meshing: a size field refines to ``fillet_size`` on the fillet faces and along the
+sharp re-entrant edges (``features.py``), growing to ``size`` over 4 fillet sizes; mesh
+algorithm HXT/Delaunay, optimised (``Mesh.Optimize``), deterministic on one thread.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from cosim.errors import InputFileError
+
+MESH_SUFFIXES = {".msh": "gmsh", ".inp": "abaqus", ".bdf": "nastran", ".nas": "nastran"}
+CAD_SUFFIXES = (".step", ".stp")
+
+
+@dataclass
+class TetMesh:
+    """Linear tetrahedral mesh: p (n, 3) m, t (m, 4) vertex indices; labels (n,) of the
+    input; node_sets name -> vertex indices; sharp_edges (k, 3) sample points [m] of the
+    CAD's sharp re-entrant edges (empty without CAD)."""
+
+    p: np.ndarray
+    t: np.ndarray
+    labels: np.ndarray
+    node_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    sharp_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    fillet_faces: int = 0
+    source: str = ""
+
+
+def _orient(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Tetrahedra with positive volume (swap two vertices of the inverted ones)."""
+    a, b, c, d = (p[t[:, k]] for k in range(4))
+    vol = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)
+    t = t.copy()
+    neg = vol < 0
+    t[neg, 1], t[neg, 2] = t[neg, 2], t[neg, 1].copy()
+    if np.any(np.abs(vol) < 1e-30):
+        raise ValueError("degenerate tetrahedra (zero volume) in the mesh")
+    return t
+
+
+def _compact(p: np.ndarray, t: np.ndarray, labels: np.ndarray,
+             sets: dict[str, np.ndarray]) -> TetMesh:
+    """Keep only the vertices the tetrahedra use, renumbered."""
+    used = np.unique(t)
+    new = -np.ones(p.shape[0], dtype=np.int64)
+    new[used] = np.arange(used.size)
+    out_sets = {k: new[v][new[v] >= 0] for k, v in sets.items()}
+    return TetMesh(p[used], _orient(p[used], new[t]), labels[used], out_sets)
+
+
+def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
+    """A tetrahedral mesh file through meshio (tetra or tetra10 cells; other cells are
+    ignored; no tetrahedra is an `InputFileError`). ``scale`` converts its lengths to m.
+    Node sets: meshio's point sets (Abaqus *NSET) by name."""
+    import meshio
+
+    path = Path(path)
+    fmt = MESH_SUFFIXES.get(path.suffix.lower())
+    if fmt is None:
+        raise InputFileError(str(path), f"unknown mesh type {path.suffix!r}: expected one of "
+                                        f"{sorted(MESH_SUFFIXES)}")
+    if not path.is_file():
+        raise InputFileError(str(path), "file not found")
+    try:
+        m = meshio.read(str(path), file_format=fmt)
+    except Exception as exc:  # meshio raises many types for a malformed file
+        raise InputFileError(str(path), f"meshio could not read it: {exc}") from None
+    tets = [c.data[:, :4] for c in m.cells if c.type in ("tetra", "tetra10")]
+    if not tets:
+        raise InputFileError(str(path), f"no tetrahedra (cells: {[c.type for c in m.cells]})")
+    t = np.vstack(tets).astype(np.int64)
+    p = np.asarray(m.points, dtype=float)[:, :3] * scale
+    labels = np.arange(1, p.shape[0] + 1)
+    for key in ("nastran:ref", "abaqus:ref", "gmsh:node"):
+        if key in m.point_data:
+            labels = np.asarray(m.point_data[key]).astype(np.int64)
+    sets = {str(k): np.asarray(v, dtype=np.int64) for k, v in (m.point_sets or {}).items()}
+    try:
+        mesh = _compact(p, t, labels, sets)
+    except ValueError as exc:
+        raise InputFileError(str(path), str(exc)) from None
+    mesh.source = str(path)
+    return mesh
+
+
+def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
+                        sharp_curves: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """Mesh the current gmsh model's volumes (first order); (p, t) with gmsh's node tags."""
+    import gmsh
+
+    fld = gmsh.model.mesh.field
+    fields = []
+    if fillets or sharp_curves:
+        d = fld.add("Distance")
+        if fillets:
+            fld.setNumbers(d, "SurfacesList", fillets)
+        if sharp_curves:
+            fld.setNumbers(d, "CurvesList", sharp_curves)
+        fld.setNumber(d, "Sampling", 40)
+        th = fld.add("Threshold")
+        fld.setNumber(th, "InField", d)
+        fld.setNumber(th, "SizeMin", fillet_size)
+        fld.setNumber(th, "SizeMax", size)
+        fld.setNumber(th, "DistMin", 0.25 * fillet_size)
+        fld.setNumber(th, "DistMax", 4.0 * fillet_size + size)
+        fields.append(th)
+    if fields:
+        fld.setAsBackgroundMesh(fields[0])
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", min(fillet_size, size) * 0.5)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0 if fields else 1)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 1)  # Delaunay: deterministic single-threaded
+    gmsh.option.setNumber("Mesh.Optimize", 1)
+    gmsh.option.setNumber("General.NumThreads", 1)
+    gmsh.model.mesh.generate(3)
+    tags, xyz, _ = gmsh.model.mesh.getNodes()
+    p = xyz.reshape(-1, 3)
+    index = np.zeros(int(tags.max()) + 1, dtype=np.int64)
+    index[tags.astype(np.int64)] = np.arange(tags.size)
+    etypes, _, enodes = gmsh.model.mesh.getElements(3)
+    t = [index[np.asarray(n, dtype=np.int64).reshape(-1, 4)]
+         for et, n in zip(etypes, enodes, strict=True) if et == 4]
+    if not t:
+        raise ValueError("gmsh made no tetrahedra")
+    return p, np.vstack(t)
+
+
+def mesh_cad(step: Path | None, size: float, fillet_size: float, scale: float = 1.0,
+             builtin_params: dict | None = None) -> TetMesh:
+    """Mesh a STEP file (or, with ``builtin_params``, the built-in arm's parametric CAD)
+    with gmsh; also finds the CAD's sharp re-entrant edges (``features.py``)."""
+    import gmsh
+
+    from .features import sharp_reentrant_edges
+
+    own = not gmsh.isInitialized()
+    if own:
+        gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("part")
+        fillets: list[int] = []
+        if builtin_params is not None:
+            from .cad_arm import build
+
+            tags = build(builtin_params)
+            fillets = tags["fillets"]
+            source = "built-in parametric CAD (cad_arm.py)"
+        else:
+            assert step is not None
+            if not Path(step).is_file():
+                raise InputFileError(str(step), "file not found")
+            try:
+                gmsh.option.setString("Geometry.OCCTargetUnit", "M")
+                gmsh.model.occ.importShapes(str(step))
+                gmsh.model.occ.synchronize()
+            except Exception as exc:
+                raise InputFileError(str(step), f"gmsh could not read the STEP: {exc}") \
+                    from None
+            if scale != 1.0:
+                ents = gmsh.model.getEntities(3)
+                gmsh.model.occ.dilate(ents, 0, 0, 0, scale, scale, scale)
+                gmsh.model.occ.synchronize()
+            source = str(step)
+        vols = [v for _, v in gmsh.model.getEntities(3)]
+        if not vols:
+            raise InputFileError(str(step or "CAD"), "no solid (volume) in the geometry")
+        sharp = []
+        for v in vols:
+            sharp += sharp_reentrant_edges(v)
+        p, t = _mesh_current_model(size, fillet_size, fillets, [e["curve"] for e in sharp])
+        mesh = _compact(p, t, np.arange(1, p.shape[0] + 1), {})
+        mesh.labels = np.arange(1, mesh.p.shape[0] + 1)
+        mesh.sharp_edges = (np.vstack([e["points_m"] for e in sharp]) if sharp
+                            else np.zeros((0, 3)))
+        mesh.fillet_faces = len(fillets)
+        mesh.source = source
+        gmsh.model.remove()
+        return mesh
+    finally:
+        if own:
+            gmsh.finalize()

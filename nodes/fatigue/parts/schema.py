@@ -1,0 +1,301 @@
+"""A part file (TOML): geometry, material card, joints. Schema in docs/parts.md.
+
+```toml
+[part]
+name = "lower_arm"
+geometry = "lower_arm.step"       # STEP (gmsh) or a mesh (.msh/.inp/.bdf, meshio), relative
+                                  # to this file; "builtin:lower_arm" = the parametric CAD
+length_unit = "m"                 # of the geometry file: "m" or "mm"
+material = "817M40"               # a card by name, or an inline table [part.material]
+
+[mesh]                            # gmsh only
+size = 0.012                      # element size [m]
+fillet_size = 0.004               # on fillet faces and sharp re-entrant edges [m]
+convergence = [0.016, 0.012, 0.009]   # sizes of the convergence table (fillet size scaled)
+
+[[joint]]
+name = "ball_joint"
+centre = [0.025, 0.294, 0.0]      # [m], or "hardpoint:ball_joint" (cosim.lower_arm)
+radius = 0.0195                   # nodes within this distance of the centre (or of the
+axis = [0, 0, 1]                  # axis through it, if given), and within length/2 along it
+length = 0.040
+node_set = "BJ"                   # instead of centre/radius: a named node set of the mesh
+coupling = "distributing"         # or "rigid"
+mass_kg = 0.35                    # joint hardware, spread over the joint's nodes
+zone = 0.012                      # nodes within this distance of the joint's nodes: not assessed
+forces = { x = "ball_joint_x", y = "ball_joint_y", z = "ball_joint_z" }   # unit force cases
+moments = {}                      # unit moments about the centre, e.g. { x = "torsion_bar_mx" }
+```
+
+A load channel named at several joints is divided equally between them (the torsion bar's
+moment, half at each bush eye). Every error is an `InputFileError` naming the file and key.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cosim.errors import InputFileError
+
+COUPLINGS = ("distributing", "rigid")
+UNITS = {"m": 1.0, "mm": 1e-3}
+AXES = ("x", "y", "z")
+BUILTIN_PREFIX = "builtin:"
+
+
+@dataclass(frozen=True)
+class PartMaterial:
+    """Elastic card: E [Pa], ν [-], ρ [kg/m³], yield S_y [Pa] (for the 3 g check)."""
+
+    name: str
+    E: float
+    nu: float
+    rho: float
+    Sy: float
+
+
+@dataclass
+class Joint:
+    """A joint: its node selection, coupling, hardware mass and unit load channels."""
+
+    name: str
+    centre: np.ndarray
+    radius: float | None
+    axis: np.ndarray | None
+    length: float | None
+    node_set: str | None
+    coupling: str
+    mass_kg: float
+    zone: float
+    forces: dict[str, str] = field(default_factory=dict)   # axis -> channel
+    moments: dict[str, str] = field(default_factory=dict)  # axis -> channel
+
+
+@dataclass
+class Part:
+    """A validated part file."""
+
+    path: Path
+    name: str
+    geometry: str  # absolute path, or "builtin:lower_arm"
+    kind: str  # "cad", "mesh" or "builtin"
+    scale: float
+    material: PartMaterial
+    joints: list[Joint]
+    mesh_size: float
+    fillet_size: float
+    convergence: list[float]
+    digest: str
+
+    @property
+    def channels(self) -> list[str]:
+        """Load channels in first-appearance order."""
+        out: list[str] = []
+        for j in self.joints:
+            for ch in list(j.forces.values()) + list(j.moments.values()):
+                if ch not in out:
+                    out.append(ch)
+        return out
+
+
+def material_card(name: str) -> PartMaterial:
+    """A material card by name (817M40: Table 6.2 via nodes.fatigue.material)."""
+    if name.upper() in ("817M40", "EN24T"):
+        from ..material import steel_817M40
+
+        m = steel_817M40()
+        return PartMaterial("817M40", m.E, m.nu, m.rho, m.Sy)
+    raise KeyError(name)
+
+
+def _num(src: str, key: str, v: Any, lo: float = 0.0, hi: float = math.inf) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
+            or not lo < v <= hi:
+        raise InputFileError(src, f"key {key}: got {v!r}, expected a number in ({lo}, {hi}]")
+    return float(v)
+
+
+def _vec(src: str, key: str, v: Any) -> np.ndarray:
+    if not isinstance(v, list) or len(v) != 3 or not all(
+            isinstance(c, int | float) and not isinstance(c, bool) for c in v):
+        raise InputFileError(src, f"key {key}: got {v!r}, expected [x, y, z] numbers")
+    return np.asarray(v, dtype=float)
+
+
+def _check_keys(src: str, where: str, table: dict, allowed: tuple[str, ...]) -> None:
+    for k in table:
+        if k not in allowed:
+            raise InputFileError(src, f"unknown key {where}{k} (accepted: {', '.join(allowed)})")
+
+
+def _joint(src: str, i: int, raw: Any, scale_hp: float) -> Joint:
+    where = f"joint[{i}]."
+    if not isinstance(raw, dict):
+        raise InputFileError(src, f"[[joint]] {i} is not a table")
+    _check_keys(src, where, raw, ("name", "centre", "radius", "axis", "length", "node_set",
+                                  "coupling", "mass_kg", "zone", "forces", "moments"))
+    name = raw.get("name")
+    if not isinstance(name, str) or not name:
+        raise InputFileError(src, f"key {where}name: expected a non-empty string")
+    where = f"joint '{name}'."
+    c = raw.get("centre")
+    if isinstance(c, str) and c.startswith("hardpoint:"):
+        from cosim import lower_arm
+
+        hp = c[len("hardpoint:"):]
+        if hp not in lower_arm.HARDPOINTS:
+            raise InputFileError(src, f"key {where}centre: unknown hardpoint {hp!r} (known: "
+                                      f"{', '.join(lower_arm.HARDPOINTS)})")
+        centre = np.asarray(lower_arm.HARDPOINTS[hp], dtype=float)
+    elif c is None:
+        raise InputFileError(src, f"key {where}centre: missing (a point [m] or "
+                                  f"\"hardpoint:NAME\")")
+    else:
+        centre = _vec(src, where + "centre", c) * scale_hp
+    node_set = raw.get("node_set")
+    if node_set is not None and not isinstance(node_set, str):
+        raise InputFileError(src, f"key {where}node_set: expected a string")
+    radius = raw.get("radius")
+    if radius is None and node_set is None:
+        raise InputFileError(src, f"key {where}radius: give radius (or node_set)")
+    radius = None if radius is None else _num(src, where + "radius", radius, 0.0, 10.0)
+    axis = raw.get("axis")
+    if axis is not None:
+        axis = _vec(src, where + "axis", axis)
+        if np.linalg.norm(axis) == 0:
+            raise InputFileError(src, f"key {where}axis: zero vector")
+        axis = axis / np.linalg.norm(axis)
+    length = raw.get("length")
+    length = None if length is None else _num(src, where + "length", length, 0.0, 10.0)
+    coupling = raw.get("coupling", "distributing")
+    if coupling not in COUPLINGS:
+        raise InputFileError(src, f"key {where}coupling: got {coupling!r}, expected one of "
+                                  f"{', '.join(COUPLINGS)}")
+    mass = raw.get("mass_kg", 0.0)
+    mass = 0.0 if mass == 0 else _num(src, where + "mass_kg", mass, 0.0, 1e4)
+    zone = _num(src, where + "zone", raw.get("zone", 0.010), 0.0, 10.0)
+    loads: dict[str, dict[str, str]] = {}
+    for kind in ("forces", "moments"):
+        t = raw.get(kind, {})
+        if not isinstance(t, dict):
+            raise InputFileError(src, f"key {where}{kind}: expected a table {{x = \"channel\"}}")
+        for ax, ch in t.items():
+            if ax not in AXES or not isinstance(ch, str) or not ch:
+                raise InputFileError(src, f"key {where}{kind}.{ax}: expected x/y/z = "
+                                          f"\"channel name\", got {ax} = {ch!r}")
+        loads[kind] = {ax: short(ch) for ax, ch in t.items()}
+    return Joint(name, centre, radius, axis, length, node_set, coupling, mass, zone,
+                 loads["forces"], loads["moments"])
+
+
+def short(ch: str) -> str:
+    """``plant/arm/ball_joint_z`` -> ``ball_joint_z`` (as influence.short_channel)."""
+    return ch[len("plant/arm/"):] if ch.startswith("plant/arm/") else ch
+
+
+def load_part(path: str | Path) -> Part:
+    """Read and validate a part file; an `InputFileError` names the file and the key."""
+    path = Path(path).expanduser().resolve()
+    src = str(path)
+    try:
+        raw_bytes = path.read_bytes()
+        raw = tomllib.loads(raw_bytes.decode())
+    except FileNotFoundError:
+        raise InputFileError(src, "file not found") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise InputFileError(src, f"not a readable TOML file: {exc}") from None
+    _check_keys(src, "", raw, ("part", "mesh", "joint"))
+    p = raw.get("part")
+    if not isinstance(p, dict):
+        raise InputFileError(src, "missing table [part]")
+    _check_keys(src, "part.", p, ("name", "geometry", "length_unit", "material"))
+    name = p.get("name", path.stem)
+    geometry = p.get("geometry")
+    if not isinstance(geometry, str) or not geometry:
+        raise InputFileError(src, "key part.geometry: expected a STEP or mesh file name, or "
+                                  "\"builtin:lower_arm\"")
+    unit = p.get("length_unit", "m")
+    if unit not in UNITS:
+        raise InputFileError(src, f"key part.length_unit: got {unit!r}, expected m or mm")
+    digest_parts = [raw_bytes]
+    if geometry.startswith(BUILTIN_PREFIX):
+        if geometry != "builtin:lower_arm":
+            raise InputFileError(src, f"key part.geometry: unknown built-in {geometry!r} "
+                                      f"(known: builtin:lower_arm)")
+        from .cad_arm import DEFAULT_PARAMS
+
+        kind, geo_path = "builtin", geometry
+        digest_parts.append(DEFAULT_PARAMS.read_bytes())
+    else:
+        gp = (path.parent / geometry).resolve()
+        suffix = gp.suffix.lower()
+        from .mesh import CAD_SUFFIXES, MESH_SUFFIXES
+
+        if suffix in CAD_SUFFIXES:
+            kind = "cad"
+        elif suffix in MESH_SUFFIXES:
+            kind = "mesh"
+        else:
+            raise InputFileError(src, f"key part.geometry: {geometry!r} is neither STEP "
+                                      f"({', '.join(CAD_SUFFIXES)}) nor a mesh "
+                                      f"({', '.join(MESH_SUFFIXES)})")
+        if not gp.is_file():
+            raise InputFileError(src, f"key part.geometry: file not found: {gp}")
+        geo_path = str(gp)
+        digest_parts.append(gp.read_bytes())
+    mat_raw = p.get("material", "817M40")
+    if isinstance(mat_raw, str):
+        try:
+            material = material_card(mat_raw)
+        except KeyError:
+            raise InputFileError(src, f"key part.material: unknown card {mat_raw!r} (known: "
+                                      f"817M40; or an inline table E, nu, rho, Sy)") from None
+    elif isinstance(mat_raw, dict):
+        _check_keys(src, "part.material.", mat_raw, ("name", "E", "nu", "rho", "Sy"))
+        for k in ("E", "nu", "rho", "Sy"):
+            if k not in mat_raw:
+                raise InputFileError(src, f"key part.material.{k}: missing")
+        material = PartMaterial(str(mat_raw.get("name", "inline")),
+                                _num(src, "part.material.E", mat_raw["E"]),
+                                _num(src, "part.material.nu", mat_raw["nu"], 0.0, 0.4999),
+                                _num(src, "part.material.rho", mat_raw["rho"]),
+                                _num(src, "part.material.Sy", mat_raw["Sy"]))
+    else:
+        raise InputFileError(src, "key part.material: expected a card name or a table")
+    m = raw.get("mesh", {})
+    if not isinstance(m, dict):
+        raise InputFileError(src, "key mesh: expected a table")
+    _check_keys(src, "mesh.", m, ("size", "fillet_size", "convergence"))
+    size = _num(src, "mesh.size", m.get("size", 0.012), 1e-4, 1.0)
+    fsize = _num(src, "mesh.fillet_size", m.get("fillet_size", size / 3), 1e-5, 1.0)
+    conv = m.get("convergence", [size])
+    if not isinstance(conv, list) or not conv:
+        raise InputFileError(src, "key mesh.convergence: expected a list of element sizes [m]")
+    conv = [_num(src, "mesh.convergence", v, 1e-4, 1.0) for v in conv]
+    joints_raw = raw.get("joint", [])
+    if not isinstance(joints_raw, list) or not joints_raw:
+        raise InputFileError(src, "missing [[joint]] tables (at least one joint)")
+    joints = [_joint(src, i, j, UNITS[unit]) for i, j in enumerate(joints_raw)]
+    names = [j.name for j in joints]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise InputFileError(src, f"joint names repeated: {sorted(dup)}")
+    for j in joints:
+        if not j.forces and not j.moments:
+            raise InputFileError(src, f"key joint '{j.name}': no forces or moments (a joint "
+                                      f"carries at least one load channel)")
+        if j.coupling == "rigid":
+            raise InputFileError(src, f"key joint '{j.name}'.coupling: \"rigid\" is not "
+                                      f"implemented yet; use \"distributing\"")
+    h = hashlib.sha256()
+    for b in digest_parts:
+        h.update(hashlib.sha256(b).digest())
+    return Part(path, str(name), geo_path, kind, UNITS[unit], material, joints, size, fsize,
+                conv, h.hexdigest()[:16])
