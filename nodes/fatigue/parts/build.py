@@ -99,7 +99,7 @@ def part_model(part: Part, mesh_size: float | None = None,
 
         mesh = mesh_cad(None, size, fsize, builtin_params=load_params())
     elif part.kind == "cad":
-        mesh = mesh_cad(Path(part.geometry), size, fsize, scale=part.scale)
+        mesh = mesh_cad(Path(part.geometry), size, fsize)  # a STEP carries its unit
     else:
         mesh = read_mesh(Path(part.geometry), scale=part.scale)
     mat = part.material
