@@ -69,7 +69,7 @@ def load_params(path: Path = DEFAULT_PARAMS) -> dict[str, Any]:
 def _hull_face(centres: np.ndarray, radii: np.ndarray, z: float = 0.0) -> int:
     """A plane face (tag) bounded by the convex hull of circles given counter-clockwise:
     outer tangent lines joined by arcs (every circle on the hull)."""
-    from gmsh import model
+    from gmsh import model  # type: ignore[import-untyped]
 
     occ = model.occ
     n = len(centres)
@@ -103,7 +103,7 @@ def _ccw(points: np.ndarray) -> np.ndarray:
 
 
 def _slab(face_tag: int, z0: float, z1: float) -> list[tuple[int, int]]:
-    from gmsh import model
+    from gmsh import model  # type: ignore[import-untyped]
 
     occ = model.occ
     occ.translate([(2, face_tag)], 0, 0, z0)
@@ -114,7 +114,7 @@ def _slab(face_tag: int, z0: float, z1: float) -> list[tuple[int, int]]:
 def build(params: dict[str, Any]) -> dict[str, list[int]]:
     """Build the arm as one OCC volume in the current gmsh model (gmsh initialised by the
     caller). Returns {"volume": [tag], "fillets": [face tags]}."""
-    from gmsh import model
+    from gmsh import model  # type: ignore[import-untyped]
 
     occ = model.occ
     pl, sec = params["plan"], params["section"]
@@ -215,7 +215,7 @@ def build(params: dict[str, Any]) -> dict[str, list[int]]:
 
 def write_step(path: Path, params: dict[str, Any] | None = None) -> dict[str, list[int]]:
     """Build the arm and write it as STEP (metres)."""
-    import gmsh
+    import gmsh  # type: ignore[import-untyped]
 
     own = not gmsh.isInitialized()
     if own:

@@ -21,7 +21,7 @@ N_SAMPLES = 24
 
 def edge_share(curve: int, volume: int, delta: float) -> tuple[float, np.ndarray]:
     """(material share on the circle round the edge's midpoint, midpoint xyz [m])."""
-    from gmsh import model
+    from gmsh import model  # type: ignore[import-untyped]
 
     lo, hi = model.getParametrizationBounds(1, curve)
     u = 0.5 * (lo[0] + hi[0])
@@ -44,7 +44,7 @@ def sharp_reentrant_edges(volume: int, delta: float = 0.5e-3,
                           share: float = SHARP_SHARE) -> list[dict]:
     """Every sharp re-entrant edge of ``volume``: [{"curve", "share", "midpoint_m",
     "points_m" (sampled along the edge, (k, 3))}]."""
-    from gmsh import model
+    from gmsh import model  # type: ignore[import-untyped]
 
     out = []
     curves = {abs(c) for face in model.getBoundary([(3, volume)], combined=False,

@@ -65,7 +65,7 @@ def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
     """A tetrahedral mesh file through meshio (tetra or tetra10 cells; other cells are
     ignored; no tetrahedra is an `InputFileError`). ``scale`` converts its lengths to m.
     Node sets: meshio's point sets (Abaqus *NSET) by name."""
-    import meshio
+    import meshio  # type: ignore[import-untyped]
 
     path = Path(path)
     fmt = MESH_SUFFIXES.get(path.suffix.lower())
@@ -99,7 +99,7 @@ def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
 def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
                         sharp_curves: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """Mesh the current gmsh model's volumes (first order); (p, t) with gmsh's node tags."""
-    import gmsh
+    import gmsh  # type: ignore[import-untyped]
 
     fld = gmsh.model.mesh.field
     fields = []
@@ -143,7 +143,7 @@ def mesh_cad(step: Path | None, size: float, fillet_size: float, scale: float = 
              builtin_params: dict | None = None) -> TetMesh:
     """Mesh a STEP file (or, with ``builtin_params``, the built-in arm's parametric CAD)
     with gmsh; also finds the CAD's sharp re-entrant edges (``features.py``)."""
-    import gmsh
+    import gmsh  # type: ignore[import-untyped]
 
     from .features import sharp_reentrant_edges
 

@@ -164,7 +164,7 @@ class PartFE(SolidModel):
         M = self.mass_matrix()
         phi = self.rigid_body_modes()
         try:
-            import pyamg
+            import pyamg  # type: ignore[import-untyped]
             if self.K_size < DIRECT_MAX_DOFS:
                 raise ImportError
         except ImportError:
@@ -202,7 +202,7 @@ def spd_solve(A: sp.csr_matrix, B: np.ndarray, near_null: np.ndarray) -> np.ndar
     import scipy.sparse.linalg as spla
 
     try:
-        import pyamg
+        import pyamg  # type: ignore[import-untyped]
     except ImportError:
         pyamg = None
     if pyamg is None or A.shape[0] < DIRECT_MAX_DOFS:

@@ -1,0 +1,170 @@
+"""A part's model card: mass, centre of mass, first flexible modes with a shape label,
+static and 3 g stresses, hot spots (and whether one sits on a sharp re-entrant edge), the
+joint-zone rule, the mesh convergence table. Pure numerics; ``orchestrator/studies/
+part_check.py`` prints it.
+
+Mode labels (:func:`label_mode`): the part's principal axes (inertia tensor): the **normal**
+n (largest moment: a plate-like part's out-of-plane axis), the **long** axis a (smallest) and
+the transverse b. A mode whose displacement is mostly along n is out of plane: its n
+displacement w(a, b) is fitted by a quadratic; the twist term a·b dominating gives
+"torsion", the a², b² terms "vertical bending" (the names of the arm, whose n is the body's
+vertical); a mode mostly in the plane is "in-plane bending", mostly along a "axial"; a fit
+explaining < 50 % of w is "higher-order or local" (a second bending, an eye).
+
+Convergence (:func:`convergence`): the ten hot spots are the ten assessed nodes of highest
+von Mises stress under the static load set on the finest mesh (the ten "most damaged" by the
+static + 3 g cases, which scale together); on every mesh each unit case's von Mises stress is
+taken at the assessed node nearest each spot; the change between the two finest meshes is
+per spot the largest over the cases of |Δσ| / (the spot's largest unit-case stress).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..equivalent_stress import von_mises
+from .build import PartModel, part_model, solve_part
+from .schema import Part
+
+N_HOT = 10
+ZONE_RULE = ("a surface node is assessed unless it lies within its joint's zone (distance "
+             "[m], per joint below) of any node of that joint's coupling: there the stress is "
+             "the idealised load introduction's, not the pressed-in sleeve's or cartridge's")
+
+
+def principal_axes(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(long, transverse, normal) unit axes: smallest, middle, largest principal moment."""
+    w, v = np.linalg.eigh(np.asarray(inertia))
+    return v[:, 0], v[:, 1], v[:, 2]
+
+
+def label_mode(xyz: np.ndarray, u: np.ndarray, inertia: np.ndarray,
+               com: np.ndarray) -> str:
+    """Shape label of a mode (displacements u (n, 3) at nodes xyz (n, 3))."""
+    a_ax, b_ax, n_ax = principal_axes(inertia)
+    r = xyz - com
+    a, b = r @ a_ax, r @ b_ax
+    a, b = a / np.abs(a).max(), b / np.abs(b).max()
+    e = np.array([np.sum((u @ ax) ** 2) for ax in (a_ax, b_ax, n_ax)])
+    e /= e.sum()
+    if e[2] < 0.5:
+        return "axial" if e[0] > 0.7 else "in-plane bending"
+    w = u @ n_ax
+    X = np.c_[np.ones_like(a), a, b, a * a, b * b, a * b]
+    c, *_ = np.linalg.lstsq(X, w, rcond=None)
+    fit = X @ c
+    r2 = 1.0 - np.sum((w - fit) ** 2) / max(np.sum((w - w.mean()) ** 2), 1e-300)
+    if r2 < 0.5:
+        return "higher-order or local"
+    twist = np.var(c[5] * a * b)
+    bend = np.var(c[3] * a * a + c[4] * b * b)
+    return "torsion" if twist > bend else "vertical bending"
+
+
+def _hot_spots(pm: PartModel, coef: np.ndarray, f: np.ndarray, labels: np.ndarray,
+               n: int = N_HOT) -> tuple[list[dict], np.ndarray]:
+    S = np.einsum("c,cnk->nk", f, coef)
+    vm = von_mises(S)
+    idx = np.argsort(np.where(pm.assessed, vm, -1.0))[::-1][:n]
+    sharp = pm.mesh.sharp_edges
+    tree = cKDTree(sharp) if sharp.shape[0] else None
+    out = []
+    for i in idx:
+        d = float(tree.query(pm.fe.node_xyz[i])[0]) if tree is not None else float("inf")
+        out.append({"node": int(labels[i]), "index": int(i),
+                    "xyz_m": [float(v) for v in pm.fe.node_xyz[i]],
+                    "von_mises_mpa": float(vm[i]) / 1e6,
+                    "distance_to_sharp_edge_m": d,
+                    "on_sharp_reentrant_edge": bool(d < pm.fillet_size)})
+    return out, vm
+
+
+def card(part: Part, loads: Mapping[str, float] | None, mesh_size: float | None = None,
+         n_modes: int = 6) -> tuple[dict[str, Any], PartModel, dict]:
+    """The model card (dict; MPa where a key says so), the model and the full-field
+    results. ``loads``: the static joint loads [N, N m] by channel (the plant's)."""
+    pm = part_model(part, mesh_size)
+    inf, ex = solve_part(pm, n_modes)
+    meta = inf.meta
+    mp = pm.fe.mass_properties()
+    shapes = ex["shapes"]
+    labels_m = []
+    if shapes is not None:
+        for k in range(shapes.shape[1]):
+            u = shapes[:, k][pm.fe.node_dofs]
+            labels_m.append(label_mode(pm.fe.node_xyz, u, np.asarray(mp["inertia"]),
+                                       np.asarray(mp["centre_of_mass"])))
+    c: dict[str, Any] = {
+        "part": part.name, "file": str(part.path), "geometry": part.geometry,
+        "material": part.material.name, "yield_mpa": part.material.Sy / 1e6,
+        "mass_kg": meta["mass_kg"], "solid_mass_kg": meta["solid_mass_kg"],
+        "hardware_mass_kg": meta["hardware_mass_kg"],
+        "centre_of_mass_m": meta["centre_of_mass_m"],
+        "modes": [{"hz": f, "shape": s} for f, s in
+                  zip(meta["natural_frequencies_hz"], labels_m, strict=True)],
+        "mesh_size_m": pm.mesh_size, "fillet_size_m": pm.fillet_size,
+        "n_elements": meta["n_elements"], "n_nodes": meta["n_nodes"],
+        "n_nodes_assessed": meta["n_surface_nodes_analysed"], "element": meta["element"],
+        "supports": meta["supports"], "load_cases": list(inf.case_names),
+        "joint_zone_rule": ZONE_RULE, "joints": meta["joints"],
+        "sharp_reentrant_edge_points": int(pm.mesh.sharp_edges.shape[0]),
+        "fillet_faces": pm.mesh.fillet_faces,
+    }
+    names = list(inf.case_names)
+    used = {k: v for k, v in (loads or {}).items() if k in names}
+    if used:
+        f = np.array([used.get(n, 0.0) for n in names])
+        hot, vm = _hot_spots(pm, ex["coef"], f, ex["labels"])
+        zone = ~pm.assessed
+        c.update({
+            "static_loads": used,
+            "static_hotspot_stress_mpa": hot[0]["von_mises_mpa"],
+            "max_stress_3g_mpa": 3.0 * hot[0]["von_mises_mpa"],
+            "ratio_3g_to_yield": 3.0 * hot[0]["von_mises_mpa"] * 1e6 / part.material.Sy,
+            "hot_spots": hot,
+            "static_joint_zone_peak_mpa": float(vm[zone].max()) / 1e6 if zone.any() else None,
+            "hot_spot_on_sharp_reentrant_edge": any(h["on_sharp_reentrant_edge"] for h in hot),
+        })
+    return c, pm, ex
+
+
+def convergence(part: Part, sizes: Sequence[float], loads: Mapping[str, float]) -> dict:
+    """The convergence table over mesh sizes (module docstring), finest last."""
+    sizes = sorted((float(s) for s in sizes), reverse=True)
+    runs = []
+    for s in sizes:
+        pm = part_model(part, s)
+        inf, ex = solve_part(pm, n_modes=1)
+        runs.append((pm, inf, ex))
+    pm_f, inf_f, ex_f = runs[-1]
+    names = list(inf_f.case_names)
+    f = np.array([loads.get(n, 0.0) for n in names])
+    hot, _ = _hot_spots(pm_f, ex_f["coef"], f, ex_f["labels"])
+    spots = np.array([h["xyz_m"] for h in hot])
+    rows, per_mesh = [], []
+    for (pm, inf, ex), s in zip(runs, sizes, strict=True):
+        a = np.nonzero(pm.assessed)[0]
+        d, j = cKDTree(pm.fe.node_xyz[a]).query(spots)
+        nodes = a[j]
+        unit = np.stack([von_mises(ex["coef"][k][nodes]) for k in range(len(names))])
+        per_mesh.append(unit)
+        S = np.einsum("c,cnk->nk", f, ex["coef"])
+        vm = von_mises(S)
+        rows.append({"size_m": s, "fillet_size_m": pm.fillet_size,
+                     "n_nodes": int(pm.fe.n_nodes),
+                     "n_assessed": int(pm.assessed.sum()),
+                     "mass_kg": inf.meta["mass_kg"],
+                     "mode_1_hz": inf.meta["natural_frequencies_hz"][0],
+                     "static_hotspot_mpa": float(vm[pm.assessed].max()) / 1e6,
+                     "spot_distance_max_m": float(d.max())})
+    change = None
+    if len(per_mesh) >= 2:
+        a_, b_ = per_mesh[-2], per_mesh[-1]
+        ref = np.maximum(b_.max(axis=0), 1e-30)
+        change = (np.abs(a_ - b_).max(axis=0) / ref).tolist()
+    return {"rows": rows, "hot_spots": hot, "unit_change_two_finest": change,
+            "max_unit_change_two_finest": None if change is None else max(change)}
