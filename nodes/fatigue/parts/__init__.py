@@ -1,0 +1,14 @@
+"""Parts as data (#26): a part file (TOML: geometry as STEP or a mesh, a material card, the
+joints and their load channels) -> the FE influence coefficients the fatigue worker uses.
+
+API: ``load_part(path) -> Part`` (validated; a bad file is an `InputFileError` naming the
+key), ``part_influence(part, mesh_size=None) -> InfluenceSet`` (the assessed surface nodes,
+cached on disk), ``frd_influence(frd, case_names)`` (unit cases solved by CalculiX).
+Schema and the built-in arm's design: docs/parts.md.
+"""
+
+from .build import part_influence
+from .calculix import frd_influence
+from .schema import Part, load_part
+
+__all__ = ["Part", "frd_influence", "load_part", "part_influence"]
