@@ -185,3 +185,23 @@ def test_missing_geometry_and_selection(tmp_path, capsys):
     assert "part.geometry" in capsys.readouterr().err
     with pytest.raises(InputFileError, match="file not found"):
         load_part(tmp_path / "nope.toml")
+
+
+def test_amg_paths_match_the_direct_solver(link, monkeypatch):
+    """The iterative paths (AMG-CG statics, AMG-LOBPCG modes) that large meshes take give the
+    direct solver's answers."""
+    import nodes.fatigue.parts.solid as solid
+
+    _, path, _ = link
+    pm = part_model(load_part(path))
+    from nodes.fatigue.parts.build import load_vectors, support_nodes
+
+    _, B = load_vectors(pm)
+    sup = support_nodes(pm.fe.node_xyz)
+    U_direct, _ = pm.fe.solve_loads(B, sup)
+    f_direct, _ = pm.fe.modes(3)
+    monkeypatch.setattr(solid, "DIRECT_MAX_DOFS", 0)
+    U_amg, _ = pm.fe.solve_loads(B, sup)
+    f_amg, _ = pm.fe.modes(3)
+    np.testing.assert_allclose(U_amg, U_direct, atol=1e-8 * np.abs(U_direct).max())
+    np.testing.assert_allclose(f_amg, f_direct, rtol=1e-6)
