@@ -1,0 +1,1 @@
+"""Part files shipped as package data (docs/parts.md)."""
