@@ -168,15 +168,24 @@ def build(params: dict[str, Any]) -> dict[str, list[int]]:
     axis_cyl = [(3, occ.addCylinder(-0.5, 0.0, 0.0, 1.0, 0, 0, ro)),
                 (3, occ.addBox(-0.5, -0.5, -0.5, 1.0, 0.5, 1.0))]  # and all behind the axis
     body, _ = occ.cut(body, axis_cyl)
-    tubes = [(3, occ.addCylinder(hp[n][0] - L / 2, hp[n][1], hp[n][2], L, 0, 0, ro))
-             for n in ("bush_front", "bush_rear")]
+    xs = sorted((hp["bush_front"][0], hp["bush_rear"][0]))
+    if eye.get("pivot_tube", False):  # one tube along the pivot axis from eye to eye
+        tubes = [(3, occ.addCylinder(xs[0] - L / 2, 0.0, 0.0, xs[1] - xs[0] + L, 0, 0, ro))]
+    else:
+        tubes = [(3, occ.addCylinder(hp[n][0] - L / 2, hp[n][1], hp[n][2], L, 0, 0, ro))
+                 for n in ("bush_front", "bush_rear")]
     housing = [(3, occ.addCylinder(b[0], b[1], -bj["depth"] / 2, 0, 0, bj["depth"],
                                    bj["outer_radius"]))]
     solid, _ = occ.fuse(body, tubes + housing)
     # bores: the bushes' outer sleeves, the ball joint's cartridge
     zmax = 0.5 * max(D0, D1, 2 * ro, bj["depth"]) + 0.01
-    bores = [(3, occ.addCylinder(hp[n][0] - L / 2 - 0.01, hp[n][1], hp[n][2], L + 0.02, 0, 0,
-                                 eye["bore_radius"])) for n in ("bush_front", "bush_rear")]
+    if eye.get("pivot_tube", False):
+        bores = [(3, occ.addCylinder(xs[0] - L / 2 - 0.01, 0.0, 0.0, xs[1] - xs[0] + L + 0.02,
+                                     0, 0, eye["bore_radius"]))]
+    else:
+        bores = [(3, occ.addCylinder(hp[n][0] - L / 2 - 0.01, hp[n][1], hp[n][2], L + 0.02,
+                                     0, 0, eye["bore_radius"])) for n in ("bush_front",
+                                                                          "bush_rear")]
     bores.append((3, occ.addCylinder(b[0], b[1], -zmax, 0, 0, 2 * zmax, bj["bore_radius"])))
     solid, _ = occ.cut(solid, bores)
     occ.synchronize()
