@@ -112,7 +112,7 @@ def test_user_step_through_influence_api(link, tmp_path, monkeypatch):
 
 def test_user_step_through_part_check(link, capsys):
     _, path, _ = link
-    assert part_main(["check", str(path), "--json"]) == 0
+    assert part_main(["check", str(path), "--json", "--mesh-size", "0.02"]) == 0
     card = json.loads(capsys.readouterr().out)
     assert card["part"] == "link" and len(card["modes"]) == 6
     assert set(card["joints"]) == {"a", "b"}
@@ -193,15 +193,15 @@ def test_amg_paths_match_the_direct_solver(link, monkeypatch):
     import nodes.fatigue.parts.solid as solid
 
     _, path, _ = link
-    pm = part_model(load_part(path))
+    pm = part_model(load_part(path), 0.02)
     from nodes.fatigue.parts.build import load_vectors, support_nodes
 
     _, B = load_vectors(pm)
     sup = support_nodes(pm.fe.node_xyz)
     U_direct, _ = pm.fe.solve_loads(B, sup)
-    f_direct, _ = pm.fe.modes(3)
+    f_direct, _ = pm.fe.modes(2)
     monkeypatch.setattr(solid, "DIRECT_MAX_DOFS", 0)
     U_amg, _ = pm.fe.solve_loads(B, sup)
-    f_amg, _ = pm.fe.modes(3)
+    f_amg, _ = pm.fe.modes(2)
     np.testing.assert_allclose(U_amg, U_direct, atol=1e-8 * np.abs(U_direct).max())
     np.testing.assert_allclose(f_amg, f_direct, rtol=1e-6)
