@@ -188,6 +188,11 @@ def build(params: dict[str, Any]) -> dict[str, list[int]]:
                                                                           "bush_rear")]
     bores.append((3, occ.addCylinder(b[0], b[1], -zmax, 0, 0, 2 * zmax, bj["bore_radius"])))
     solid, _ = occ.cut(solid, bores)
+    pb = eye.get("pivot_tube_bore")
+    if eye.get("pivot_tube", False) and pb is not None:  # a thinner wall between the eyes
+        span = xs[1] - xs[0] - L
+        solid, _ = occ.cut(solid, [(3, occ.addCylinder(xs[0] + L / 2, 0.0, 0.0, span, 0, 0,
+                                                       float(pb)))])
     occ.synchronize()
     vols = [e[1] for e in solid if e[0] == 3]
     if len(vols) != 1:
