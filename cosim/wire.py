@@ -84,9 +84,10 @@ def _plain(value: Any) -> Any:
 
 
 def _enc_hook(obj: Any) -> Any:
-    """numpy scalars (msgpack took ``np.float64``, a float subclass) as Python numbers."""
-    if isinstance(obj, np.generic):
-        return obj.item()
+    """numpy values as :func:`_plain` makes them (called by the compiled encoder for the
+    types it does not know: no Python loop over the fields of a message)."""
+    if type(obj) is np.ndarray or isinstance(obj, np.generic):
+        return _plain(obj)
     raise TypeError(f"can not serialize {type(obj).__name__!r} object")
 
 
@@ -95,7 +96,7 @@ _encoder = msgspec.msgpack.Encoder(enc_hook=_enc_hook)
 
 def encode(kind: str, k: int, t: float, d: Mapping[str, Any] | None = None) -> bytes:
     """Encode one message. ``d`` values may be numpy arrays."""
-    payload = {name: _plain(v) for name, v in (d or {}).items()}
+    payload = d if type(d) is dict else dict(d or {})
     return _encoder.encode({"v": SCHEMA_VERSION, "kind": kind, "k": int(k), "t": float(t),
                             "d": payload})
 
