@@ -62,7 +62,7 @@ def test_cad_fillets_every_web_root_and_leaves_sharp_edges_only_in_joint_zones()
         # none left on the web's surfaces (every rib root there is filleted) ...
         assert not np.all(np.abs(np.abs(pts[:, 2]) - t / 2) < 1e-6)
         # ... and every one within a joint zone of a bore: distance to the bore surface
-        def bore_gap(name: str, bore: float) -> float:
+        def bore_gap(name: str, bore: float, pts: np.ndarray = pts) -> float:
             j = part[name]
             r = pts - j.centre
             d = np.linalg.norm(r - np.outer(r @ j.axis, j.axis), axis=1)
