@@ -1,7 +1,16 @@
 """The workloads side by side: coupled steps/s, CPU per step and peak RSS of every process, and
-the ratio to the bare Zenoh round-trip rate measured in the same bench run (issue #16).
+the ratio to the bare Zenoh round-trip rate measured in the same bench run (issue #16); and
+every row of issue #28's table in one command, with its bar.
 
-    python bench/bench_workloads.py [--repeats 2] [--t-end 4]
+    python bench/bench_workloads.py [--repeats 2] [--t-end 4] [--rows null,lumped,...]
+
+``--rows`` (default ``null,lumped,corner_fatigue,corner,full``; ``sweep`` on request: it takes
+minutes): ``null`` is bench/bench_null_chain.py's 5-process sequential chain, raw and through
+the protocol, measured in the same run, and their ratio (bar >= 0.6); ``lumped`` the Ch 3
+quarter car (bar >= 3000 steps/s); ``corner_fatigue`` the realistic corner with live fatigue
+(bar >= 1600; CPU per step per process, fatigue <= 100 us); ``corner`` the same without
+fatigue; ``full`` the 7-DOF vehicle; ``sweep`` the wall time of ``suscosim sweep
+scenarios/thesis/ch6_fatigue.toml`` (bar < 240 s). The load average is printed with each row.
 
 Workloads: the lumped quarter car (Ch 3, h = 1 ms), the realistic double-wishbone corner
 (Ch 6 base scenario, h = 0.5 ms) with the live fatigue node on and off, and the 7-DOF full
@@ -34,13 +43,16 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 WORKLOADS = [
-    ("lumped quarter car (ch3, h 1 ms)", "scenarios/ch3_step_quarter_car.toml", None),
-    ("realistic corner + live fatigue (ch6, h 0.5 ms)", "scenarios/thesis/ch6_realistic_qvm.toml",
-     True),
-    ("realistic corner, no fatigue (ch6, h 0.5 ms)", "scenarios/thesis/ch6_realistic_qvm.toml",
-     False),
-    ("7-DOF full vehicle (ch4, h 2 ms)", "scenarios/ch4_fvm_random.toml", None),
+    ("lumped", "lumped quarter car (ch3, h 1 ms)", "scenarios/ch3_step_quarter_car.toml", None),
+    ("corner_fatigue", "realistic corner + live fatigue (ch6, h 0.5 ms)",
+     "scenarios/thesis/ch6_realistic_qvm.toml", True),
+    ("corner", "realistic corner, no fatigue (ch6, h 0.5 ms)",
+     "scenarios/thesis/ch6_realistic_qvm.toml", False),
+    ("full", "7-DOF full vehicle (ch4, h 2 ms)", "scenarios/ch4_fvm_random.toml", None),
 ]
+BARS = {"lumped": 3000.0, "corner_fatigue": 1600.0}
+"""Issue #28's bars [coupled steps/s, quiet 2-core machine]."""
+ROWS = ("null", "lumped", "corner_fatigue", "corner", "full", "sweep")
 TICK = os.sysconf("SC_CLK_TCK")
 
 
@@ -118,22 +130,72 @@ def marginal_cpu_us(long: dict, short: dict) -> dict[str, float]:
             for n in long["per"]}
 
 
+def _load() -> str:
+    return Path("/proc/loadavg").read_text().split()[0]
+
+
+def null_chain(repeats: int, steps: int) -> tuple[float, float]:
+    """(raw, protocol) steps/s of bench/bench_null_chain.py's 5-process sequential chain,
+    medians of ``repeats``, measured in one run of it."""
+    out = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_null_chain.py"),
+                          "--counts", "5", "--exchanges", "sequential", "--wires",
+                          "raw,protocol", "--repeats", str(repeats), "--steps", str(steps),
+                          "--pingpong-n", "300"], cwd=ROOT, capture_output=True, text=True,
+                         check=True).stdout
+    rates = {}
+    for line in out.splitlines():
+        for wire in ("raw", "protocol"):
+            head = f"5 processes, {wire}, sequential: "
+            if line.strip().startswith(head):
+                rates[wire] = float(line.strip()[len(head):].split()[0])
+    return rates["raw"], rates["protocol"]
+
+
+def sweep_wall_s() -> float:
+    """Wall time of the Chapter 6 sweep (16 runs, live fatigue) [s]."""
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.monotonic()
+        subprocess.run([sys.executable, "-m", "orchestrator", "sweep",
+                        str(ROOT / "scenarios/thesis/ch6_fatigue.toml"), "--out", tmp],
+                       cwd=ROOT, check=True, stdout=subprocess.DEVNULL,
+                       env=dict(os.environ, PYTHONPATH=str(ROOT)))
+        return time.monotonic() - t0
+
+
 def main() -> int:
     from bench_zenoh_pingpong import one as pingpong
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--t-end", type=float, default=4.0, help="simulated seconds per run")
+    ap.add_argument("--rows", default="null,lumped,corner_fatigue,corner,full",
+                    help=f"rows of issue #28's table, of {','.join(ROWS)}")
+    ap.add_argument("--null-steps", type=int, default=3000)
     args = ap.parse_args()
-    rtts = [pingpong(2000, fifo=False, ll=True, express=True)["rtt_us"] for _ in range(2)]
-    rtt = statistics.median(rtts)
-    rate = 1e6 / rtt
-    print(f"bare Zenoh round trip: {rtt:.0f} us ({rate:.0f} round trips/s), "
-          f"median of {len(rtts)}\n")
-    print("| workload | coupled steps/s | ratio to round trips/s | CPU per step per process "
-          "(us) | peak RSS per process (MB) |")
-    print("|---|---|---|---|---|")
-    for label, scenario, fatigue in WORKLOADS:
+    rows = [r for r in args.rows.split(",") if r]
+    bad = [r for r in rows if r not in ROWS]
+    if bad:
+        print(f"--rows: unknown {', '.join(bad)} (of {', '.join(ROWS)})", file=sys.stderr)
+        return 2
+    print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} CPUs, "
+          f"load {_load()}\n")
+    if "null" in rows:
+        raw, proto = null_chain(args.repeats, args.null_steps)
+        print(f"null chain, 5 processes, sequential: raw {raw:.0f}, protocol {proto:.0f} "
+              f"steps/s; protocol/raw {proto / raw:.2f} (bar >= 0.6; load {_load()})\n")
+    rate = 0.0
+    if any(r in rows for r, *_ in WORKLOADS):
+        rtts = [pingpong(2000, fifo=False, ll=True, express=True)["rtt_us"] for _ in range(2)]
+        rtt = statistics.median(rtts)
+        rate = 1e6 / rtt
+        print(f"bare Zenoh round trip: {rtt:.0f} us ({rate:.0f} round trips/s), "
+              f"median of {len(rtts)}\n")
+        print("| workload | coupled steps/s | bar | ratio to round trips/s | CPU per step per "
+              "process (us) | peak RSS per process (MB) | load |")
+        print("|---|---|---|---|---|---|---|")
+    for key, label, scenario, fatigue in WORKLOADS:
+        if key not in rows:
+            continue
         runs = [one_run(scenario, fatigue, args.t_end) for _ in range(args.repeats)]
         sps = statistics.median(r["steps_per_s"] for r in runs)
         best = max(runs, key=lambda r: r["steps_per_s"])
@@ -143,8 +205,12 @@ def main() -> int:
         cpu = ", ".join(f"{n} {per_step[n]:.0f}" for n in names)
         rss = ", ".join(f"{n} {best['per'][n]['peak_rss_mb']:.0f}" for n in names)
         each = ", ".join(f"{r['steps_per_s']:.0f}" for r in runs)
-        print(f"| {label} | {sps:.0f} ({each}) "
-              f"| {sps / rate:.2f} | {cpu} | {rss} |", flush=True)
+        bar = f">= {BARS[key]:.0f}" if key in BARS else ""
+        print(f"| {label} | {sps:.0f} ({each}) | {bar} "
+              f"| {sps / rate:.2f} | {cpu} | {rss} | {_load()} |", flush=True)
+    if "sweep" in rows:
+        print(f"\nsuscosim sweep scenarios/thesis/ch6_fatigue.toml: {sweep_wall_s():.0f} s "
+              f"(bar < 240 s; load {_load()})")
     print("\nlive fatigue: n/a for the lumped and 7-DOF models (no lower-arm joint loads)")
     return 0
 

@@ -77,7 +77,7 @@ def _sizes(key_bytes: bytes) -> dict[str, int]:
 def _pieces() -> list[dict[str, Any]]:
     """A load block as the recorder sends it: cut into pieces that fit one message (Zenoh's
     low-latency transport does not fragment)."""
-    from nodes.recorder.node import wire_pieces
+    from cosim.load_blocks import wire_pieces
 
     return wire_pieces(LOAD_BLOCK)
 
