@@ -93,11 +93,12 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
     replay = folder is not None and (args.replay or (folder / "summary.json").exists())
     bus = None
     if replay:
-        from ..replay import ReplayInputError, load
+        from ..replay import Recorded, ReplayInputError
 
         assert folder is not None  # replay is only ever set for a run folder
         try:
-            run_id, records, _skipped, problem = load(folder)
+            records = Recorded(folder)  # streamed from the journal (#32): not held whole
+            run_id, problem = records.run_id, records.problem
         except ReplayInputError as exc:
             raise ScopeInputError(f"{exc} (a finished run is replayed from its journal)") \
                 from None

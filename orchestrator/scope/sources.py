@@ -140,10 +140,12 @@ class LiveSource:
 
 
 class JournalSource:
-    """Replay ``records`` ([(node, channel, raw, t)], as :func:`orchestrator.replay.load`
-    gives them) into the state at ``speed`` x the recorded pace (None: as fast as possible)."""
+    """Replay ``records`` ((node, channel, raw, t) in order: a list as
+    :func:`orchestrator.replay.load` gives it, or a streamed
+    :class:`orchestrator.replay.Recorded`) into the state at ``speed`` x the recorded pace
+    (None: as fast as possible)."""
 
-    def __init__(self, records: list[tuple[str, str, bytes, float]], state: ScopeState,
+    def __init__(self, records: Any, state: ScopeState,
                  speed: float | None = 1.0, damage: DamageMap | None = None) -> None:
         self.records, self.state, self.speed = records, state, speed
         self.router = _Router(state, damage)
@@ -156,14 +158,16 @@ class JournalSource:
     def _loop(self) -> None:
         st = self.state
         st.run_event("stepping")
-        if not self.records:
+        if not len(self.records):
             st.run_event("done")
             return
-        t_first = self.records[0][3]
+        t_first: float | None = None
         start = time.monotonic()
         for node, channel, raw, t in self.records:
             if self._stop.is_set():
                 return
+            if t_first is None:
+                t_first = t
             if self.speed is not None:
                 ahead = start + (t - t_first) / self.speed - time.monotonic()
                 if ahead > 0.0005:
