@@ -69,7 +69,8 @@ class Corner:
     tyre_loaded_radius: float
     """Static wheel centre height above the ground [m]."""
     masses: dict[str, float]
-    """body, hub, lower_arm, upper_arm, tie_rod [kg]."""
+    """body, hub, lower_arm, upper_arm, tie_rod [kg]; ``wheel`` (the spinning part of the
+    hub: wheel, tyre, disc) when the file gives it."""
     torsion_bar_nm_per_deg: float
     """K_theta about the lower arm's pivot axis [N m/deg] (0: none)."""
     coil_n_per_m: float
@@ -156,8 +157,11 @@ def from_dict(data: dict[str, Any], source: str = "<corner>") -> Corner:
         points = raw
         half_track = fr.number("half_track", positive=True, unit="m")
     radius = fr.number("tyre_loaded_radius", 0.30, positive=True, unit="m")
-    ms = top.section("masses", MASSES)
+    ms = top.section("masses", (*MASSES, "wheel"))
     masses = {n: ms.number(n, positive=True, unit="kg") for n in MASSES}
+    if ms.has("wheel"):  # the spinning part of the hub's mass (the full vehicle's wheel)
+        masses["wheel"] = ms.number("wheel", lo=0.0, hi=masses["hub"], lo_open=True,
+                                    hi_open=True, unit="kg (part of masses.hub)")
     sp = top.section("spring", ("torsion_bar_nm_per_deg", "coil_n_per_m"))
     k_theta = sp.number("torsion_bar_nm_per_deg", 0.0, lo=0.0, unit="N m/deg")
     k_coil = sp.number("coil_n_per_m", 0.0, lo=0.0, unit="N/m")

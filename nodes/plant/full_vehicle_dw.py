@@ -62,6 +62,23 @@ class FullVehicleDWParams:
     cg_height: float = 0.55
 
 
+WHEEL_SHARE = 0.62
+"""The spinning share of a corner's hub mass when its file gives no ``masses.wheel`` [-]: of
+the MPV's 38.75 kg (Table 4.2), a 15-16 in steel wheel (8-9 kg), its tyre (8-9 kg), the brake
+disc (5 kg) and the bearing's inner ring spin, about 24 kg (ours; the upright, calliper and
+bearing housing the rest)."""
+WHEEL_GYRATION = 0.205
+"""Radius of gyration of the spinning wheel about its axis [m]: the tyre's mass at ~0.28 m,
+the rim's at ~0.18 m, the disc's at ~0.1 m give I_spin ~ 1.0 kg m^2 for 24 kg (ours); its
+diametral inertia is taken as 0.6 I_spin (a thin ring would have 0.5, a tyre's width adds)."""
+
+
+def wheel_mass(c: Corner) -> float:
+    """The spinning part of the corner's hub mass [kg] (``masses.wheel`` or
+    :data:`WHEEL_SHARE` of ``masses.hub``)."""
+    return c.masses.get("wheel", WHEEL_SHARE * c.masses["hub"])
+
+
 def _rot(quat) -> np.ndarray:
     return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
 
@@ -100,7 +117,7 @@ class FullVehicleDoubleWishbone(PlantModel):
         names = {p.getJointInfo(bd, j, physicsClientId=cl)[1].decode(): j
                  for j in range(p.getNumJoints(bd, physicsClientId=cl))}
         self.link = [{k: names[f"{k}_{n}"] for k in ("lower_arm", "hub", "upper_arm",
-                                                     "tie_rod")} for n in CORNERS]
+                                                     "tie_rod", "wheel")} for n in CORNERS]
         for j in names.values():
             info = p.getJointInfo(bd, j, physicsClientId=cl)
             if info[2] == p.JOINT_SPHERICAL:
@@ -155,7 +172,10 @@ class FullVehicleDoubleWishbone(PlantModel):
             i_perp = m["tie_rod"] * tr_len ** 2 / 12.0
             s += _link(f"lower_arm_{n}", m["lower_arm"], wc + g.lower_arm_com - la_o,
                        g.lower_arm_inertia(m["lower_arm"]))
-            s += _link(f"hub_{n}", m["hub"], wc - bj, (1.2, 2.0, 1.2))
+            m_w = wheel_mass(c)
+            s += _link(f"hub_{n}", m["hub"] - m_w, wc - bj, (0.15, 0.15, 0.15))
+            i_spin = m_w * WHEEL_GYRATION ** 2
+            s += _link(f"wheel_{n}", m_w, [0, 0, 0], (0.6 * i_spin, i_spin, 0.6 * i_spin))
             s += _link(f"upper_arm_{n}", m["upper_arm"], ua_com - ua_o, (0.012, 0.01, 0.02))
             s += _link(f"tie_rod_{n}", m["tie_rod"], tr_com - tri,
                        (i_perp, m["tie_rod"] * 1e-4 / 2.0, i_perp))
@@ -166,6 +186,8 @@ class FullVehicleDoubleWishbone(PlantModel):
             joints += _joint(f"upper_arm_{n}", "revolute", "body", f"upper_arm_{n}", ua_o,
                              _fmt(ua_axis / np.linalg.norm(ua_axis)))
             joints += _joint(f"tie_rod_{n}", "spherical", "body", f"tie_rod_{n}", tri)
+            joints += _joint(f"wheel_{n}", "continuous", f"hub_{n}", f"wheel_{n}", wc - bj,
+                             "0 1 0")
         return f'<?xml version="1.0"?>\n<robot name="full_vehicle_dw">\n{s}{joints}</robot>\n'
 
     def _local(self, link: int, body_point: np.ndarray) -> list[float]:
