@@ -41,7 +41,14 @@ def principal_extremes(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     s = np.asarray(s, dtype=float)
     shape = s.shape[:-1]
-    sx, sy, sz, txy, tyz, tzx = np.ascontiguousarray(s.reshape(-1, 6).T)
+    s1, s3 = principal_extremes_of(np.ascontiguousarray(s.reshape(-1, 6).T))
+    return s1.reshape(shape), s3.reshape(shape)
+
+
+def principal_extremes_of(comp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(σ1, σ3) of components laid out first, ``comp[6, ...]`` (each contiguous), the
+    arithmetic of :func:`principal_extremes`."""
+    sx, sy, sz, txy, tyz, tzx = comp
     q = sx + sy
     q += sz
     q /= 3.0
@@ -82,13 +89,24 @@ def principal_extremes(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     s3 = np.cos(phi, out=phi)
     s3 *= two_p
     s3 += q
-    return s1.reshape(shape), s3.reshape(shape)
+    return s1, s3
 
 
 def abs_max_principal(s: np.ndarray) -> np.ndarray:
     """Principal stress of largest magnitude, signed."""
     s1, s3 = principal_extremes(s)
     return np.where(np.abs(s1) >= np.abs(s3), s1, s3)
+
+
+def equivalent_of(comp: np.ndarray, kind: str) -> np.ndarray:
+    """Equivalent stress of components laid out first, ``comp[6, ...]`` (the same values as
+    :func:`equivalent` of the components laid out last)."""
+    if kind == "abs_max_principal":
+        s1, s3 = principal_extremes_of(comp)
+        return np.where(np.abs(s1) >= np.abs(s3), s1, s3)
+    if kind == "signed_von_mises":
+        return signed_von_mises(np.moveaxis(comp, 0, -1))
+    raise ValueError(f"equivalent must be one of {EQUIVALENTS}, got {kind!r}")
 
 
 def equivalent(s: np.ndarray, kind: str) -> np.ndarray:

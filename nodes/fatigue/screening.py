@@ -52,8 +52,9 @@ from .equivalent_stress import principal_extremes, von_mises
 from .life_models import SNCurve
 from .material import Material
 
-SCREEN_FRACTION = 1e-3
-"""Default screening fraction f: a node is left out while its damage bound is below f times
+SCREEN_FRACTION = 1e-2
+"""Suggested screening fraction f (screening is off unless asked for: ``screen=`` of
+:func:`.worker.analyse` / :class:`.worker.LiveFatigue`; docs/live_fatigue.md): a node is left out while its damage bound is below f times
 the largest damage reached (and below the tenth largest, and its stress envelope inside the
 computed nodes' extremes); see :func:`.worker` ``_Engine``."""
 TOP_NODES = 10
@@ -172,8 +173,10 @@ class StressScreen:
                       for a, b in zip(starts, stops, strict=True)])
         H = np.array([0.5 * (Fe[a:b].max(axis=0) - Fe[a:b].min(axis=0))
                       for a, b in zip(starts, stops, strict=True)])
-        ZH = np.array([0.5 * (Z[a:b].max(axis=0) - Z[a:b].min(axis=0))
-                       for a, b in zip(starts, stops, strict=True)])
+        # deviation along the principal axes from the same centre (F_mid in those axes)
+        Mz = M @ self.V
+        ZH = np.array([np.maximum(Z[a:b].max(axis=0) - Mz[j], Mz[j] - Z[a:b].min(axis=0))
+                       for j, (a, b) in enumerate(zip(starts, stops, strict=True))])
         J = M.shape[0]
         s_mid = (M @ C.reshape(self.n_cases, -1)).reshape(J, k, 6)
         R = np.minimum(H @ np.abs(C).reshape(self.n_cases, -1),
@@ -237,10 +240,9 @@ COARSE_SAMPLES = 500
 FINE_SAMPLES = 25
 """Sub-block length of the second bound, for the left-out nodes the first one cannot keep
 out (the tighter envelope costs ~20 times the first bound per node)."""
-DROP_MARGIN = 0.25
-"""Without a known history length, a computed node is left out only when its bound is below
-this share of the threshold (:meth:`Screening.projected`): its bound grows faster once it is
-no longer computed exactly (hysteresis, fewer replays)."""
+DROP_MARGIN = 0.5
+"""A computed node is left out only when its bound is below this share of the threshold: its
+bound grows faster once it is no longer computed exactly (hysteresis: fewer catch-ups)."""
 
 
 class Screening:
@@ -256,8 +258,8 @@ class Screening:
         D <= U = D0 + g(HI, LO) (TVr + (HI - LO)/2)
 
     bounds the node's damage so far, residue closed, however each block was taken. The load
-    blocks are kept (:attr:`history`) so that a node brought back is recomputed from the
-    first sample.
+    blocks are kept (:attr:`history`) so that a node brought back is recomputed from where
+    it was left out (its exact state then is kept by the engine).
     """
 
     def __init__(self, coefficients: np.ndarray, equivalent: str, mat: Material, method: str,
@@ -274,13 +276,10 @@ class Screening:
         self.total: int | None = None
         """Samples the whole history will have, when known (batch, or the run's steps)."""
         self.samples = 0
-        self.hi_c = np.full(n, -np.inf)
-        self.lo_c = np.full(n, np.inf)
-        self.tv_c = np.zeros(n)
         self.history: list[np.ndarray] = []
         self._prev: np.ndarray | None = None
-        self.replayed = 0
-        """Nodes brought back so far (each recomputed from the first sample)."""
+        self.caught_up = 0
+        """Nodes brought back so far (each recomputed from where it was left out)."""
 
     def _u(self, idx: np.ndarray | slice, hi: np.ndarray, lo: np.ndarray,
            tv: np.ndarray) -> np.ndarray:
@@ -301,27 +300,17 @@ class Screening:
         self.d0[idx] = closed
         self.tv_r[idx] = residue_tv
 
-    def reset(self, idx: np.ndarray) -> None:
-        """Nodes about to be recomputed from the first sample (exact values follow)."""
-        self.hi[idx], self.lo[idx] = -np.inf, np.inf
-        self.d0[idx], self.tv_r[idx] = 0.0, 0.0
-
     def add_block(self, F: np.ndarray, left_out: np.ndarray) -> None:
-        """Keep the block; bound it coarsely for every node (the projection of
-        :meth:`decide`), and for the nodes ``left_out`` also finely where the coarse bound
-        would reach the threshold."""
+        """Keep the block; bound it for the nodes ``left_out``: coarsely, then finely where
+        the coarse bound would reach the threshold."""
         F = np.asarray(F, dtype=float)
         Fe = F if self._prev is None else np.vstack([self._prev, F])
         self._prev = F[-1].copy()
         self.history.append(F.copy())
         self.samples += F.shape[0]
-        hi, lo, tv = self.bounds.block(Fe, np.arange(self.hi.size), COARSE_SAMPLES)
-        np.maximum(self.hi_c, hi, out=self.hi_c)
-        np.minimum(self.lo_c, lo, out=self.lo_c)
-        self.tv_c += tv
         if left_out.size == 0:
             return
-        hi, lo, tv = hi[left_out], lo[left_out], tv[left_out]
+        hi, lo, tv = self.bounds.block(Fe, left_out, COARSE_SAMPLES)
         U = self._u(left_out, np.maximum(self.hi[left_out], hi),
                     np.minimum(self.lo[left_out], lo), self.tv_r[left_out] + tv)
         near = np.nonzero(U >= self.threshold)[0]
@@ -333,18 +322,6 @@ class Screening:
         self.envelope(left_out, hi, lo)
         self.tv_r[left_out] += tv
 
-    def projected(self, idx: np.ndarray) -> np.ndarray:
-        """U of nodes ``idx`` at the end of the history (:attr:`total` samples), if the rest
-        varies as the coarse bound says the past did (a guess, for the cost only: leaving a
-        node out that will be brought back costs its history twice); without a known total
-        U / DROP_MARGIN."""
-        if self.total is None or self.samples == 0:
-            return self.bound(idx) / DROP_MARGIN
-        rest = max(self.total - self.samples, 0) / self.samples
-        hi = np.maximum(self.hi[idx], self.hi_c[idx])
-        lo = np.minimum(self.lo[idx], self.lo_c[idx])
-        return self._u(idx, hi, lo, self.tv_r[idx] + rest * self.tv_c[idx])
-
     def decide(self, active: np.ndarray, eq_max: np.ndarray, eq_min: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
         """(computed nodes to leave out, left-out nodes to bring back) after a block
@@ -355,8 +332,8 @@ class Screening:
         grows. A node may stay out while U < T and its envelope lies strictly inside the
         computed nodes' extremes of the equivalent stress: then it is not the critical node,
         not among the ten most damaged and below f of the largest damage, and the reported
-        extremes are computed ones. A computed node is left out when it qualifies and is
-        projected (:meth:`projected`) to qualify at the end as well."""
+        extremes are computed ones. A computed node is left out when it qualifies with
+        U < DROP_MARGIN T (hysteresis: its bound grows faster once it is left out)."""
         n = self.hi.size
         Da = self.d0[active]
         if Da.size >= TOP_NODES:
@@ -368,7 +345,6 @@ class Screening:
         inside = (self.hi < top) & (self.lo > bottom)
         is_active = np.zeros(n, dtype=bool)
         is_active[active] = True
-        cand = np.nonzero(is_active & inside & (U < T))[0]
-        drop = cand[self.projected(cand) < T]
+        drop = np.nonzero(is_active & inside & (U < DROP_MARGIN * T))[0]
         back = np.nonzero(~is_active & ~(inside & (U < T)))[0]
         return drop, back

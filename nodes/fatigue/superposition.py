@@ -48,6 +48,25 @@ def superpose(loads: np.ndarray, per_node: np.ndarray) -> np.ndarray:
     return out
 
 
+def superpose_components(loads: np.ndarray, per_node: np.ndarray) -> np.ndarray:
+    """:func:`superpose` laid out by component first: (6, n_samples, k), each component
+    contiguous (for :func:`.equivalent_stress.equivalent_of`); the same values."""
+    F = np.asarray(loads, dtype=float)
+    k, n_cases, n_comp = per_node.shape
+    if F.ndim != 2 or F.shape[1] != n_cases:
+        raise ValueError(f"loads {F.shape} and coefficients {per_node.shape} do not match")
+    n = F.shape[0]
+    out = np.empty((n_comp, n, k))
+    buf = np.zeros((1, ROWS, n_cases))
+    for r in range(0, n, ROWS):
+        m = min(ROWS, n - r)
+        buf[0, :m] = F[r:r + m]
+        if m < ROWS:
+            buf[0, m:] = 0.0
+        out[:, r:r + m] = np.matmul(buf, per_node)[:, :m].transpose(2, 1, 0)
+    return out
+
+
 def stress_history(loads: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
     """Stress components of every node over time.
 

@@ -24,10 +24,10 @@ from cosim.errors import ScenarioError
 from .config import FatigueConfig
 from .counting import Cycles, StreamingRainflow
 from .damage import cycle_damage
-from .equivalent_stress import equivalent
+from .equivalent_stress import equivalent_of
 from .influence import InfluenceSet, builtin_influence, import_influence, short_channel
-from .screening import SCREEN_FRACTION, Screening, unsupported
-from .superposition import ROWS, node_major, superpose
+from .screening import Screening, unsupported
+from .superposition import ROWS, node_major, superpose_components
 
 _INFLUENCE_MEMO: dict[tuple, InfluenceSet] = {}
 
@@ -151,6 +151,17 @@ class FatigueResult:
         return json.dumps(self.summary(), indent=2)
 
 
+@dataclass
+class _Parked:
+    """Nodes left out at the end of block ``block``: their counter and exact envelope then."""
+
+    block: int
+    nodes: np.ndarray
+    rf: StreamingRainflow
+    hi: np.ndarray
+    lo: np.ndarray
+
+
 class _Engine:
     """Block-by-block superposition, equivalent stress, streaming rainflow and Miner, over the
     nodes that screening keeps (all of them with ``screen=None``).
@@ -162,7 +173,7 @@ class _Engine:
     """
 
     def __init__(self, cfg: FatigueConfig, inf: InfluenceSet,
-                 screen: float | None = SCREEN_FRACTION, total: int | None = None) -> None:
+                 screen: float | None = None, total: int | None = None) -> None:
         self.cfg, self.inf = cfg, inf
         self.mat = cfg.material
         n = inf.n_nodes
@@ -179,6 +190,7 @@ class _Engine:
         why = None if not screen else unsupported(self.mat, cfg.method, cfg.mean_stress)
         self.screen_note = "off" if not screen else (why or "")
         self.scr: Screening | None = None
+        self.parked: list[_Parked] = []
         if screen and why is None:
             self.scr = Screening(inf.coefficients, cfg.equivalent, self.mat, cfg.method,
                                  cfg.mean_stress, cfg.endurance_limit, float(screen))
@@ -202,11 +214,9 @@ class _Engine:
         scr.settle(self.cols, self.damage[self.cols], self.rf.residue_variation())
         drop, back = scr.decide(self.cols, self.eq_max, self.eq_min)
         if drop.size:
-            keep = ~np.isin(self.cols, drop)
-            self.rf = self.rf.take(np.nonzero(keep)[0])
-            self.cols = self.cols[keep]
+            self._park(drop)
         if back.size:
-            self._replay(back)
+            self._catch_up(back)
 
     def _exact(self, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow) -> None:
         """Nodes ``idx`` (the counter ``rf``'s series) through block ``F``, exactly."""
@@ -217,7 +227,8 @@ class _Engine:
         hi = np.full(idx.size, -np.inf)
         lo = np.full(idx.size, np.inf)
         for i in range(0, F.shape[0], rows):
-            eq = equivalent(superpose(F[i:i + rows], coef), self.cfg.equivalent)
+            eq = equivalent_of(superpose_components(F[i:i + rows], coef),
+                               self.cfg.equivalent)
             np.maximum(hi, eq.max(axis=0), out=hi)
             np.minimum(lo, eq.min(axis=0), out=lo)
             self._add(rf.feed(eq), idx, self.damage, self.ncyc, self.rmax)
@@ -226,19 +237,43 @@ class _Engine:
         if self.scr is not None:
             self.scr.envelope(idx, hi, lo)
 
-    def _replay(self, idx: np.ndarray) -> None:
-        """Bring nodes ``idx`` back: recompute them from the first sample (kept blocks)."""
+    def _park(self, nodes: np.ndarray) -> None:
+        """Leave computed nodes out: keep their exact state at the end of this block."""
         assert self.scr is not None
-        for a in (self.damage, self.ncyc, self.rmax):
-            a[idx] = 0.0
-        self.eq_max[idx], self.eq_min[idx] = -np.inf, np.inf
-        self.scr.reset(idx)
-        self.scr.replayed += idx.size
-        rf = StreamingRainflow(idx.size)
-        for F in self.scr.history:
-            self._exact(F, idx, rf)
-        self.rf = StreamingRainflow.join([self.rf, rf])
-        self.cols = np.concatenate([self.cols, idx])
+        out = np.isin(self.cols, nodes)
+        pos = np.nonzero(out)[0]
+        ids = self.cols[pos]
+        self.parked.append(_Parked(len(self.scr.history) - 1, ids, self.rf.take(pos),
+                                   self.scr.hi[ids].copy(), self.scr.lo[ids].copy()))
+        keep = np.nonzero(~out)[0]
+        self.rf, self.cols = self.rf.take(keep), self.cols[keep]
+
+    def _catch_up(self, nodes: np.ndarray) -> None:
+        """Bring left-out nodes back: from their state when they were left out, through
+        the blocks since (kept loads), exactly as if they had never been left out."""
+        assert self.scr is not None
+        want = np.zeros(self.inf.n_nodes, dtype=bool)
+        want[nodes] = True
+        parts, cols, still = [self.rf], [self.cols], []
+        for g in self.parked:
+            m = want[g.nodes]
+            if not m.any():
+                still.append(g)
+                continue
+            pos, rest = np.nonzero(m)[0], np.nonzero(~m)[0]
+            ids, rf = g.nodes[pos], g.rf.take(pos)
+            self.scr.hi[ids], self.scr.lo[ids] = g.hi[pos], g.lo[pos]  # exact until then
+            for F in self.scr.history[g.block + 1:]:
+                self._exact(F, ids, rf)
+            self.scr.caught_up += ids.size
+            parts.append(rf)
+            cols.append(ids)
+            if rest.size:
+                still.append(_Parked(g.block, g.nodes[rest], g.rf.take(rest), g.hi[rest],
+                                     g.lo[rest]))
+        self.parked = still
+        self.rf = StreamingRainflow.join(parts)
+        self.cols = np.concatenate(cols)
 
     def _add(self, cyc: Cycles, idx: np.ndarray, damage: np.ndarray, ncyc: np.ndarray,
              rmax: np.ndarray) -> None:
@@ -267,7 +302,7 @@ class _Engine:
             rmax[out] = self.scr.hi[out] - self.scr.lo[out]
             ncyc[out] = np.nan
             meta.update(screened_nodes=int(out.size), threshold=self.scr.threshold,
-                        replayed_nodes=self.scr.replayed)
+                        caught_up_nodes=self.scr.caught_up)
         return FatigueResult(
             damage=damage, node_ids=self.inf.node_ids, node_xyz=self.inf.node_xyz,
             eq_max=eq_max, eq_min=eq_min, eq_range_max=rmax,
@@ -306,7 +341,7 @@ def _matrix(cols: list, data: Sequence[np.ndarray], n: int) -> np.ndarray:
 
 
 def analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: FatigueConfig,
-            track_length_m: float, screen: float | None = SCREEN_FRACTION) -> FatigueResult:
+            track_length_m: float, screen: float | None = None) -> FatigueResult:
     """Fatigue of the arm for one pass of recorded loads.
 
     Args:
@@ -348,7 +383,7 @@ class LiveFatigue:
     """
 
     def __init__(self, cfg: FatigueConfig, channels: Sequence[str],
-                 track_length_m: float | None = None, screen: float | None = SCREEN_FRACTION,
+                 track_length_m: float | None = None, screen: float | None = None,
                  total_samples: int | None = None) -> None:
         self.cfg = cfg
         self.channels = list(channels)

@@ -9,6 +9,7 @@ import pytest
 
 from cosim.errors import InputFileError, ScenarioError
 from nodes.fatigue.config import FatigueConfig
+from nodes.fatigue.screening import SCREEN_FRACTION
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import LiveFatigue, analyse
 from orchestrator.fatigue_cli import main
@@ -75,16 +76,17 @@ def test_live_equals_batch_random_blocks(kw):
 
 
 def test_screened_live_in_blocks_of_block_samples_is_the_batch_bit_for_bit():
-    """Screening on (the default): the live engine fed the blocks the batch cuts
+    """Screening on: the live engine fed the blocks the batch cuts
     (``block_samples`` from the first sample, as the live node does) leaves out the same
     nodes with the same bounds; fed other blocks, the reported quantities still agree."""
     cfg = FatigueConfig.from_dict({**COARSE, "block_samples": 300})
     t, loads = pave_like_loads(4.0, seed=2, static_n=6000, rms_n=4000)
-    batch = analyse(t, loads, cfg, 40.0)
+    batch = analyse(t, loads, cfg, 40.0, screen=SCREEN_FRACTION)
     assert batch.screened is not None and batch.screened.any()
     channels = list(loads)
     arr = np.stack([loads[c] for c in channels], axis=1)
-    live = LiveFatigue(cfg, channels, track_length_m=40.0, total_samples=t.size)
+    live = LiveFatigue(cfg, channels, track_length_m=40.0, screen=SCREEN_FRACTION,
+                       total_samples=t.size)
     for i in range(0, t.size, 300):
         live.update(t[i:i + 300], arr[i:i + 300])
     res = live.result()
@@ -92,7 +94,7 @@ def test_screened_live_in_blocks_of_block_samples_is_the_batch_bit_for_bit():
     np.testing.assert_array_equal(res.screened, batch.screened)
     np.testing.assert_array_equal(res.eq_max, batch.eq_max)
     assert res.summary()["top_nodes"] == batch.summary()["top_nodes"]
-    other = LiveFatigue(cfg, channels, track_length_m=40.0)
+    other = LiveFatigue(cfg, channels, track_length_m=40.0, screen=SCREEN_FRACTION)
     rng = np.random.default_rng(7)
     i = 0
     while i < t.size:

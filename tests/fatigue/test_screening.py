@@ -1,0 +1,78 @@
+"""Screening: the bound holds on exact counts, and the screened result's reported quantities
+(the critical node, the ten most damaged, every node computed, the stress extremes) are the
+unscreened ones bit for bit; left-out nodes carry bounds above their true damage."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.fatigue.config import FatigueConfig
+from nodes.fatigue.counting import count_series
+from nodes.fatigue.damage import miner_per_node
+from nodes.fatigue.equivalent_stress import equivalent
+from nodes.fatigue.screening import StressScreen, damage_bound, unsupported
+from nodes.fatigue.superposition import stress_history
+from nodes.fatigue.synthetic import pave_like_loads
+from nodes.fatigue.worker import analyse, load_influence
+
+COARSE = {"mesh_size_m": 0.03}
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("SUSCOSIM_CACHE", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+@pytest.mark.parametrize("kw", [{}, {"equivalent": "signed_von_mises", "mean_stress": "swt",
+                                     "residue": "half_cycles"}])
+def test_the_bound_is_above_the_exact_envelope_variation_and_damage(kw):
+    cfg = FatigueConfig.from_dict({**COARSE, **kw})
+    inf = load_influence(cfg)
+    t, loads = pave_like_loads(1.5, seed=4, static_n=6000, rms_n=4000)
+    F = np.stack([loads.get(f"plant/arm/{c}", np.zeros(t.size)) for c in inf.case_names], 1)
+    e = equivalent(stress_history(F, inf.coefficients), cfg.equivalent)
+    scr = StressScreen(inf.coefficients, cfg.equivalent)
+    idx = np.arange(inf.n_nodes)
+    hi, lo, tv = np.full(idx.size, -np.inf), np.full(idx.size, np.inf), np.zeros(idx.size)
+    prev = None
+    for i in range(0, t.size, 200):  # blocks with the previous sample first
+        Fe = F[i:i + 200] if prev is None else np.vstack([prev, F[i:i + 200]])
+        h, lo_b, v = scr.block(Fe, idx, 25)
+        hi, lo, tv, prev = np.maximum(hi, h), np.minimum(lo, lo_b), tv + v, F[i:i + 200][-1]
+    assert np.all(hi >= e.max(0)) and np.all(lo <= e.min(0))
+    assert np.all(tv >= np.abs(np.diff(e, axis=0)).sum(0))
+    U = damage_bound(hi, lo, tv, cfg.material, cfg.method, cfg.mean_stress,
+                     cfg.endurance_limit)
+    for node in np.argsort(U)[::-1][:5].tolist() + [0, inf.n_nodes // 2]:
+        cyc = count_series(e[:, node], cfg.residue)
+        d = miner_per_node(cyc, 1, cfg.material, cfg.method, cfg.mean_stress,
+                           cfg.endurance_limit)[0]
+        assert 0 < d <= U[node]
+
+
+def test_screened_reported_quantities_are_the_unscreened_bit_for_bit():
+    cfg = FatigueConfig.from_dict({**COARSE, "block_samples": 250})
+    t, loads = pave_like_loads(5.0, seed=2, static_n=6000, rms_n=4000)
+    ref = analyse(t, loads, cfg, 50.0, screen=None)
+    res = analyse(t, loads, cfg, 50.0, screen=0.01)
+    out = res.screened
+    assert out is not None and 0 < out.sum() < out.size
+    assert res.critical_node_id == ref.critical_node_id and res.life_km == ref.life_km
+    assert res.summary()["top_nodes"] == ref.summary()["top_nodes"]
+    for f in ("eq_stress_max_pa", "eq_stress_min_pa", "critical_eq_range_max_pa"):
+        assert res.summary()[f] == ref.summary()[f]
+    np.testing.assert_array_equal(res.damage[~out], ref.damage[~out])
+    np.testing.assert_array_equal(res.n_cycles[~out], ref.n_cycles[~out])
+    # left out: below f of the largest damage, its bound above its true damage
+    assert np.all(ref.damage[out] < 0.01 * ref.max_damage)
+    assert np.all(res.damage[out] >= ref.damage[out]) and np.all(np.isnan(res.n_cycles[out]))
+    assert res.summary()["screening"]["screened_nodes"] == int(out.sum())
+
+
+def test_screening_is_off_where_the_bound_is_not_proven():
+    cfg = FatigueConfig.from_dict({**COARSE, "method": "strain_life"})
+    assert "strain_life" in unsupported(cfg.material, cfg.method, cfg.mean_stress)
+    t, loads = pave_like_loads(0.5, seed=1)
+    r = analyse(t, loads, cfg, 5.0, screen=0.01)
+    assert not r.screened.any() and "strain_life" in r.screening["note"]
