@@ -56,7 +56,8 @@ SCREEN_FRACTION = 1e-2
 """Suggested screening fraction f (screening is off unless asked for: ``screen=`` of
 :func:`.worker.analyse` / :class:`.worker.LiveFatigue`; docs/live_fatigue.md): a node
 is left out while its damage bound is below f times the largest damage reached (and below
-the tenth largest, and its stress envelope inside the computed nodes' extremes); see :func:`.worker` ``_Engine``."""
+the tenth largest, and its stress envelope inside the computed nodes' extremes); see
+:mod:`.worker` ``_Engine``."""
 TOP_NODES = 10
 """The reported most damaged nodes (``summary.json`` ``top_nodes``): never screened out."""
 ROUNDING_MARGIN = 1e-9
