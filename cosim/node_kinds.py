@@ -104,7 +104,7 @@ _CONTROLLER_CHECK = Check("nodes.controller.node:static_check", takes=("n_corner
 KINDS: tuple[NodeKind, ...] = (
     NodeKind("plant", COUPLED, Impl("nodes.plant.node:run", Check("nodes.plant.node:preflight")),
              reads=(("*", "force"),), writes=(*schema.writes("plant"), "records"),
-             cores=(0, 0, 0)),
+             path_keys=("vehicle.corner", "vehicle.front", "vehicle.rear"), cores=(0, 0, 0)),
     NodeKind("tyre_road", COUPLED,
              Impl("nodes.tyre_road.node:run",
                   Check("nodes.tyre_road.node:static_check", gives="duration_s")),
@@ -123,7 +123,7 @@ KINDS: tuple[NodeKind, ...] = (
     NodeKind("fatigue", OPTIONAL,
              Impl("nodes.fatigue.node:run",
                   Check("nodes.fatigue.node:preflight", takes=("load_channels",))),
-             reads=(("recorder", "loads"),), writes=schema.writes("fatigue"),
+             reads=(("plant", "arm"),), writes=schema.writes("fatigue"),
              path_keys=("fatigue.influence",)),
 )
 """Every node kind, in start order."""

@@ -43,6 +43,16 @@ def _print_summary(summary: dict) -> None:
         for name, st in chans.items():
             print(f"  {name:<34} {st['peak']:>12.5g} {st['rms']:>12.5g}  "
                   f"{si_unit(name) or '-'}")
+    res = summary.get("coupling_energy_residual")
+    if res:
+        from .runner import RESIDUAL_WARNING
+
+        bonds = ", ".join(f"{b} {100 * v:.3g} %" for b, v in res.items() if b != "total")
+        print(f"  coupling energy residual {100 * res['total']:.3g} % ({bonds})")
+        if res["total"] > RESIDUAL_WARNING:
+            print(f"  warning: the coupling residual is above {100 * RESIDUAL_WARNING:g} % "
+                  "(about 1 % peak error, docs/coupling_residual.md): a smaller run.h or "
+                  "the jacobian coupling would be more accurate")
     fat = summary.get("fatigue")
     if fat:
         print(f"  fatigue (live): lower-arm min life {_num(fat['min_life_km'])} km = "
@@ -111,122 +121,6 @@ def cmd_check(args: argparse.Namespace) -> int:
     return 0
 
 
-def _table_channels(table: dict, patterns: list[str] | None):
-    """A ChannelSet of a run's table (``k`` dropped, SI units from the channel schema), the
-    columns filtered by shell-style ``patterns`` (e.g. ``plant/arm/*``)."""
-    from fnmatch import fnmatchcase
-
-    from cosim.formats import ChannelSet, si_unit
-
-    names = [c for c in table if c not in ("k", "t")]
-    if patterns:
-        names = [c for c in names if any(fnmatchcase(c, p) for p in patterns)]
-    return ChannelSet(t=table["t"], channels={c: table[c] for c in names},
-                      units={c: si_unit(c) for c in names})
-
-
-def _write_format(table: dict, fmt: str, path: Path, args: argparse.Namespace) -> dict:
-    """Write a table in ``fmt`` to ``path``; what the format reports (RPC III resolution)."""
-    from cosim.formats import write_channels
-
-    cs = _table_channels(table, args.channels)
-    if not cs.channels:
-        raise ValueError(f"no column matches --channels {' '.join(args.channels)}")
-    opts = {"datatype": args.rpc3_type} if fmt == "rpc3" else \
-        {"units_in_header": True} if fmt == "csv" else {}
-    info = write_channels(cs, path, fmt, **opts)
-    return {"channels": len(cs.channels), **info}
-
-
-def _export_run_dir(run_dir: Path, args: argparse.Namespace) -> int:
-    """``export RUN_DIR --format F``: the run's table as ``<out>/table.<ext>`` (out default
-    ``RUN_DIR/export``)."""
-    from cosim.formats.channel_set import EXTENSION
-    from cosim.table import read_table
-
-    out = Path(args.out) if args.out else run_dir / "export"
-    src = next((run_dir / n for n in ("table.parquet", "table.csv")
-                if (run_dir / n).is_file()), None)
-    if src is None:
-        print(f"suscosim export: {run_dir}: no table.parquet or table.csv in the run folder "
-              "(give its journal.msgpack to rebuild one)", file=sys.stderr)
-        return 2
-    path = out / f"table{EXTENSION[args.format]}"
-    try:
-        table = read_table(src)
-        if "t" not in table or len(table["t"]) < 2:
-            raise ValueError(f"{src}: no time column 't' or fewer than 2 rows")
-        out.mkdir(parents=True, exist_ok=True)
-        info = _write_format(table, args.format, path, args)
-    except (OSError, ValueError) as exc:
-        print(f"suscosim export: {exc}", file=sys.stderr)
-        return 2
-    print(json.dumps({"rows": int(len(table["t"])), "source": str(src),
-                      "files": {args.format: str(path)}, **info}, indent=2))
-    return 0
-
-
-def cmd_export(args: argparse.Namespace) -> int:
-    """Table from a journal, or a run's table in another format.
-
-    ``export JOURNAL`` (or ``export RUN_DIR`` without ``--format``: its journal). Exit 0:
-    every record intact (a torn last record, normal after a crash, is only noted). Exit 2 with
-    a message naming the journal: it is not one, it holds no complete step, or records were
-    lost in it (damaged records are skipped, the rest kept), or the table already in the
-    folder is larger; in the last two cases the table is written alongside as
-    ``table.recovered.csv/.parquet`` and ``table.*`` is left as it was. With ``--format
-    mdf4|rpc3`` the rebuilt table is also written as ``<stem>.mf4`` / ``<stem>.rsp``.
-
-    ``export RUN_DIR --format mdf4|rpc3|csv|parquet``: the run's table (names and SI units)
-    as ``RUN_DIR/export/table.<ext>`` (or ``--out``); see docs/data_formats.md.
-    """
-    from cosim.journal import read_journal
-    from cosim.table import build_table, export_safely
-
-    journal = Path(args.journal)
-    if journal.is_dir():
-        if args.format:
-            return _export_run_dir(journal, args)
-        journal = journal / "journal.msgpack"
-    out = Path(args.out) if args.out else journal.parent
-    extra_fmt = args.format if args.format in ("mdf4", "rpc3") else None
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        contents = read_journal(journal)
-        table, bad = build_table(contents.records)
-        rows = int(len(table["t"]))
-        files, why = export_safely(table, out, contents.damaged) if rows else ({}, "")
-        info: dict = {}
-        if extra_fmt and rows > 1:
-            from cosim.formats.channel_set import EXTENSION
-
-            stem = Path(files["csv"]).name[:-len(".csv")]
-            path = out / f"{stem}{EXTENSION[extra_fmt]}"
-            info = _write_format(table, extra_fmt, path, args)
-            files = {**files, extra_fmt: str(path)}
-    except (OSError, ValueError) as exc:
-        print(f"suscosim export: {exc}", file=sys.stderr)
-        return 2
-    print(json.dumps({"rows": rows, "files": files, "torn": contents.torn, "undecodable": bad,
-                      "records": len(contents.records),
-                      "skipped_records": contents.skipped_records,
-                      "skipped": [vars(s) for s in contents.skipped], **info}, indent=2))
-    if contents.problem:
-        print(f"suscosim export: {journal}: {contents.problem}", file=sys.stderr)
-    if not rows:
-        print(f"suscosim export: {journal}: no complete step in the journal: nothing written",
-              file=sys.stderr)
-        return 2
-    if why:
-        lost = (f"{contents.skipped_records} damaged record(s) skipped, "
-                if contents.damaged else "")
-        print(f"suscosim export: {journal}: {lost}{rows} rows rebuilt; {why}: wrote "
-              f"{files['csv']} and .parquet alongside, {out / 'table.csv'} left as it was",
-              file=sys.stderr)
-        return 2
-    return 0
-
-
 def _delegate(module: str, argv: list[str]) -> int:
     import importlib
 
@@ -235,6 +129,10 @@ def _delegate(module: str, argv: list[str]) -> int:
 
 DELEGATED: tuple[tuple[str, str, str], ...] = (
     ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
+    ("export", "orchestrator.export",
+     "a run's table from its journal, or as MDF 4 / RPC III / CSV / Parquet (streamed)"),
+    ("pseudo-damage", "orchestrator.pseudo_damage_cli",
+     "pseudo-damage of every load channel of runs or load files, side by side"),
     ("fatigue", "orchestrator.fatigue_cli",
      "fatigue life of the lower arm from a finished run or a load file"),
     ("equivalent-lumped", "orchestrator.studies.equivalent_lumped",
@@ -262,7 +160,8 @@ DELEGATED: tuple[tuple[str, str, str], ...] = (
 COMMAND_GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("everyday commands", ("run", "check", "sweep", "report", "fatigue", "duty", "scope",
                            "part", "corner")),
-    ("results and model cards", ("runs", "ride", "export", "arm", "equivalent-lumped")),
+    ("results and model cards", ("runs", "ride", "export", "pseudo-damage", "arm",
+                                  "equivalent-lumped")),
     ("plumbing (several machines, the bus, other tools)",
      ("node", "router", "cluster", "tap", "replay", "export-fmu")),
 )
@@ -341,18 +240,6 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", action="store_true",
                    help="print the resolved scenario as JSON (as a run's scenario.json)")
     c.set_defaults(func=cmd_check)
-    e = add("export", "a run's table from its journal, or as MDF 4 / RPC III / CSV / Parquet")
-    e.add_argument("journal", metavar="RUN_DIR|JOURNAL")
-    e.add_argument("--out", help="output folder (default: the journal's folder; for RUN_DIR "
-                                 "--format: RUN_DIR/export)")
-    e.add_argument("--format", choices=("mdf4", "rpc3", "csv", "parquet"),
-                   help="write the run's table in this format (names and SI units)")
-    e.add_argument("--channels", nargs="+", metavar="PATTERN",
-                   help="only these columns (shell patterns, e.g. 'plant/arm/*')")
-    e.add_argument("--rpc3-type", choices=("int", "float"), default="int",
-                   help="RPC III data type: int = 16-bit SHORT_INTEGER (resolution max|x|/32752 "
-                        "per channel), float = 32-bit FLOATING_POINT")
-    e.set_defaults(func=cmd_export)
     for name, module, text in DELEGATED:
         p = add(name, text, add_help=False)
         p.add_argument("rest", nargs=argparse.REMAINDER)

@@ -48,7 +48,7 @@ def test_channel_names_of_the_registry_are_the_protocol_s() -> None:
         assert set(k.writes) <= known, k.name
         for node, channel in k.reads:
             assert channel in known and (node == "*" or node in nk.BY_NAME), (k.name, node)
-    assert nk.inputs("fatigue") == ((ch.RECORDER, ch.LOADS),)
+    assert nk.inputs("fatigue") == (ch.LOAD_CHANNEL,)  # straight from the plant (#28 item 4)
     assert nk.inputs("controller") == nk.inputs("tyre_road") == ((ch.PLANT, ch.STATE),)
 
 
