@@ -4,6 +4,11 @@ Synthetic 37 s x 500 Hz load history (the thesis's pavé track length in time) o
 built-in arm, all surface nodes: superposition, equivalent stress, rainflow, Miner.
 
     python bench/bench_fatigue.py [--equivalent signed_von_mises] [--method strain_life]
+    python bench/bench_fatigue.py --run RUN_DIR [--screen 0.01]
+
+``--run``: CPU time (process_time, not wall) per coupled step of the live engine fed a run's
+recorded ``plant/arm`` loads in blocks of ``fatigue.block_samples`` as the live node does
+(e.g. a Ch 6 realistic-corner run folder), unscreened and with ``--screen`` f.
 """
 
 from __future__ import annotations
@@ -22,7 +27,12 @@ def main() -> None:
     p.add_argument("--method", default="stress_life")
     p.add_argument("--mean-stress", default="goodman")
     p.add_argument("--nodes", default="surface")
+    p.add_argument("--run", default=None, help="a run folder: live engine CPU per step")
+    p.add_argument("--screen", type=float, default=0.01)
     a = p.parse_args()
+    if a.run:
+        _run_cpu(a.run, a.screen)
+        return
     cfg = FatigueConfig.from_dict({"equivalent": a.equivalent, "method": a.method,
                                    "mean_stress": a.mean_stress, "nodes": a.nodes})
     t0 = time.perf_counter()
@@ -38,6 +48,32 @@ def main() -> None:
     print(f"chain: {t.size} samples x {inf.n_nodes} nodes = {ns:.3g} node-samples in {dt:.2f} s"
           f" -> {ns / dt:.3g} node-samples/s ({a.equivalent}, {a.method}, {a.mean_stress})")
     print(f"min life {r.life_km:.3g} km, critical node {r.critical_node_id}")
+
+
+def _run_cpu(run: str, screen: float) -> None:
+    import json
+    from pathlib import Path
+
+    import numpy as np
+
+    from nodes.fatigue.run_dir import read_table
+    from nodes.fatigue.worker import LiveFatigue
+
+    sc = json.loads((Path(run) / "scenario.json").read_text())
+    cfg = FatigueConfig.from_dict(sc.get("fatigue"))
+    t, loads = read_table(Path(run))
+    names = list(loads)
+    arr = np.stack([loads[c] for c in names], axis=1)
+    n = cfg.block_samples
+    for f in (None, screen):
+        live = LiveFatigue(cfg, names, 1.0, screen=f, total_samples=t.size)
+        c0 = time.process_time()
+        for i in range(0, t.size, n):
+            live.update(t[i:i + n], arr[i:i + n])
+        r = live.result()
+        cpu = time.process_time() - c0
+        print(f"screen {f}: {cpu / t.size * 1e6:.0f} us CPU per step over {t.size} steps, "
+              f"critical node {r.critical_node_id}, screened {r.screening.get('screened_nodes')}")
 
 
 if __name__ == "__main__":
