@@ -3,6 +3,7 @@ highest assessed nodes of every case (#26 item 3); and the .frd importer."""
 
 from __future__ import annotations
 
+import os
 import shutil
 
 import numpy as np
@@ -17,10 +18,18 @@ from nodes.fatigue.parts.schema import load_part
 from .test_part_user import make_link, write_part
 
 
+NO_CCX = "CalculiX ccx not installed (apt-get install calculix-ccx; .ci/run does it as root)"
+
+
 def test_ccx_is_installed():
-    assert shutil.which("ccx"), "CalculiX ccx is required (apt-get install calculix-ccx)"
+    # CI installs ccx and must run the check: there its absence is a failure, not a skip
+    if not shutil.which("ccx"):
+        if os.environ.get("CI"):
+            pytest.fail(NO_CCX)
+        pytest.skip(NO_CCX)
 
 
+@pytest.mark.skipif(not shutil.which("ccx") and not os.environ.get("CI"), reason=NO_CCX)
 def test_calculix_agrees_at_the_ten_highest_nodes(tmp_path):
     make_link(tmp_path)
     pm = part_model(load_part(write_part(tmp_path)))
