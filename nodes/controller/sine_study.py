@@ -97,7 +97,7 @@ def sine_response(law: Mapping[str, Any], freqs: Sequence[float], *, amplitude: 
 
     keys = ("z_g", "z_b", "z_w", "v_rel", "F_d", "a_b", "a_w", "I")
     out = {k: np.empty((n + 1, m)) for k in keys}
-    out["t"] = np.arange(n + 1) * h
+    out["t"] = np.arange(n + 1) * h  # type: ignore[assignment]  # 1-D, the others 2-D
     dt = h / substeps
     try:
         for k in range(n + 1):
