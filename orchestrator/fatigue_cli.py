@@ -58,6 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=METHODS)
     p.add_argument("--mean-stress", choices=MEAN_STRESS_METHODS)
     p.add_argument("--residue", choices=RESIDUES)
+    p.add_argument("--part", type=Path, metavar="PART.toml",
+                   help="the part to assess: a part file (STEP or mesh, material, joints; "
+                        "docs/parts.md) instead of the scenario's influence (a what-if)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a fatigue key, e.g. --set material.sf=1.9e9 "
                         "--set mesh_size_m=0.03 (values parsed as JSON when possible)")
@@ -80,6 +83,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     for k in ("equivalent", "method", "mean_stress", "residue"):
         if getattr(args, k) is not None:
             overrides[k] = getattr(args, k)
+    if args.part is not None:
+        if not args.part.is_file():
+            print(f"suscosim fatigue: error: --part {args.part}: no such part file",
+                  file=sys.stderr)
+            return 2
+        overrides["influence"] = str(args.part.resolve())
     from nodes.fatigue.load_file import parse_map
     from nodes.fatigue.run_dir import fatigue_load_file, fatigue_run_dir, results_folder
 

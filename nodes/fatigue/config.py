@@ -5,7 +5,8 @@ Keys (all optional; SI units):
 =====================  ===================  =================================================
 key                    default              meaning
 =====================  ===================  =================================================
-influence              "builtin"            "builtin" (FE arm) or path to the imported CSV
+influence              "builtin"            "builtin" (FE arm), a part file (*.toml, docs/
+                                            parts.md) or path to the imported CSV
                                             folder (relative to the scenario's folder)
 mapping                {}                   imported only: channel -> file or
                                             {file = "...", scale = -1.0}
@@ -199,9 +200,10 @@ class FatigueConfig:
                   base_dir: str | Path = ".") -> FatigueConfig:
         """Validate a scenario section; a bad key or value raises ScenarioError(dotted key)."""
         r = ConfigReader(d or {}, key_prefix, FATIGUE_KEYS)
-        influence = r.string("influence", "builtin", expected='"builtin" or a path to CSV files')
+        influence = r.string("influence", "builtin",
+                             expected='"builtin", a part file (*.toml) or a path to CSV files')
         mapping = _mapping(r.section("mapping", expected="a table channel -> case file"))
-        if influence != "builtin" and not mapping:
+        if influence != "builtin" and not influence.lower().endswith(".toml") and not mapping:
             raise r.error("mapping", r.table("mapping"),
                           "a mapping of load channels to case files for imported tables")
         raw_mat = r.section("material", expected="a table of material overrides")

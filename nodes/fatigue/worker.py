@@ -33,13 +33,18 @@ _INFLUENCE_MEMO: dict[tuple, InfluenceSet] = {}
 
 
 def load_influence(cfg: FatigueConfig) -> InfluenceSet:
-    """Influence coefficients for a config (built in or imported), node set applied."""
+    """Influence coefficients for a config (built in, a part file ``*.toml`` meshed and solved
+    by :mod:`nodes.fatigue.parts`, or imported), node set applied."""
     memo_key = (cfg.influence, str(cfg.influence_path), cfg.mapping, cfg.stress_scale,
                 cfg.mesh_size_m, cfg.material, cfg.nodes)
     if memo_key in _INFLUENCE_MEMO:
         return _INFLUENCE_MEMO[memo_key]
     if cfg.influence == "builtin":
         inf = builtin_influence(cfg.mesh_size_m, cfg.material)
+    elif cfg.influence_path.suffix.lower() == ".toml":  # a part file (#26): its own mesh size
+        from .parts import load_part, part_influence
+
+        inf = part_influence(load_part(cfg.influence_path))
     else:
         mapping = {c: {"file": f, "scale": s} for c, f, s in cfg.mapping}
         inf = import_influence(cfg.influence_path, mapping, cfg.stress_scale)
