@@ -103,7 +103,38 @@ def read_profile_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarr
         raise InputFileError(path, f"need at least 2 data rows, found {rows}")
     x, z_l = np.frombuffer(cols[0], dtype=float).copy(), np.frombuffer(cols[1], dtype=float)
     z_r = np.frombuffer(cols[2], dtype=float) if n_cols == 3 else z_l
+    for j, z in enumerate((z_l, z_r)[: n_cols - 1]):
+        _check_physical(path, z, j + 2)
     return x, z_l.copy(), z_r.copy()
+
+
+MAX_RELIEF_M = 10.0
+"""Largest height a profile may reach from its first sample [m]: a durability track's profile
+is its surface about the road's line (the vehicle models are vertical, no grade), and a proving
+ground's largest feature is a kerb or a pothole of 0.1-0.2 m; 10 m leaves room for measured
+roads not detrended, and refuses a number that is not a road (a 50 m or 1e300 m "bump")."""
+MAX_STEP_M = 0.5
+"""Largest height change between two adjacent samples [m]: a kerb strike is 0.1-0.15 m."""
+
+
+def _check_physical(path: str | Path, z: np.ndarray, column: int) -> None:
+    """InputFileError naming the first sample beyond :data:`MAX_RELIEF_M` or
+    :data:`MAX_STEP_M` (``column``: the file's column, 1-based; the line is its data row)."""
+    relief = np.abs(z - z[0])
+    bad = np.flatnonzero(relief > MAX_RELIEF_M)
+    if bad.size:
+        i = int(bad[0])
+        raise InputFileError(path, f"column {column}: height {z[i]!r} m is {relief[i]:.4g} m "
+                                   f"from the first sample's (at most {MAX_RELIEF_M:g} m: not "
+                                   f"a road profile; heights are in metres)")
+    steps = np.abs(np.diff(z))
+    bad = np.flatnonzero(steps > MAX_STEP_M)
+    if bad.size:
+        i = int(bad[0])
+        raise InputFileError(path, f"column {column}: the height changes by {steps[i]:.4g} m "
+                                   f"between data rows {i + 1} and {i + 2} (at most "
+                                   f"{MAX_STEP_M:g} m between samples: a kerb is 0.15 m; "
+                                   "heights are in metres)")
 
 
 def csv_road(path: str | Path, speed: float, length: float | None = None,
