@@ -276,7 +276,10 @@ def test_dask_fatigue_in_a_shared_runs_dir_and_a_fatigue_only_rerun(tmp_path, cl
     assert summary.stat().st_mtime_ns == mtime  # the run was not redone
     again = json.loads((run_dir / "fatigue" / "summary.json").read_text())
     assert again.pop("source") == "batch" and fat.pop("source") == "live"  # node, then worker
-    assert again == fat
+    # the batch adds what only it computes (both S-N methods, pseudo-damage, the extra
+    # output files); everything the live node wrote is the same
+    assert set(fat) <= set(again)
+    assert {k: again[k] for k in fat} == fat
     meta = json.loads((run_dir / "point.json").read_text())
     assert meta["fatigue_worker"]["executor"] == "dask"
 
