@@ -275,12 +275,16 @@ class TableWriter:
         return paths
 
     def abandon(self) -> None:
-        """Close and remove the files aside (an error while writing them)."""
+        """Close and remove the files aside (an error while writing them). Closing flushes
+        what is buffered, which fails again on a full disk: the files are discarded anyway,
+        so that error is not the one to report."""
         try:
-            if self._pq is not None:
-                self._pq.close()
-            if self._csv is not None:
-                self._csv.close()
+            for f in (self._pq, self._csv):
+                if f is not None:
+                    try:
+                        f.close()
+                    except OSError:
+                        pass
         finally:
             for tmp in self._tmp.values():
                 tmp.unlink(missing_ok=True)

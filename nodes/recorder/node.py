@@ -27,6 +27,7 @@ and as rejected), not journaled: a replay cannot fill the disk.
 
 from __future__ import annotations
 
+import errno
 import logging
 import threading
 import time
@@ -182,6 +183,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 table.abandon()
                 log.warning("recorder: table not written: %s", exc)
         raise
+    except OSError as exc:  # the journal or the table could not be written (a full disk)
+        if table is not None:
+            table.abandon()
+        try:
+            journal.close()
+        except OSError:
+            pass
+        raise _write_error(exc, folder) from None
     journal.close()
 
     def finish_table() -> dict[str, Any]:
@@ -190,9 +199,21 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         return {"stats": table.stats(), "files": files, "rows": table.rows, "torn": False,
                 "undecodable": 0, "duplicates": duplicates}
 
-    result = _with_heartbeat(part, n_steps, n_steps * run_cfg["h"], finish_table,
-                             min(1.0, part.stall_timeout_s / 4))
+    try:
+        result = _with_heartbeat(part, n_steps, n_steps * run_cfg["h"], finish_table,
+                                 min(1.0, part.stall_timeout_s / 4))
+    except OSError as exc:
+        if table is not None:
+            table.abandon()
+        raise _write_error(exc, folder) from None
     part.finish(n_steps, n_steps * run_cfg["h"], **result)
+
+
+def _write_error(exc: OSError, folder: Any) -> RunError:
+    """The run's error for a journal or table that could not be written (a full disk)."""
+    full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
+    return RunError(f"recorder: cannot write the run's journal or table in {folder}: "
+                    f"{exc.strerror or exc}{full}")
 
 
 def _import_pyarrow() -> None:
