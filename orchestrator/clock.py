@@ -159,7 +159,8 @@ class Clock:
             now = time.monotonic()
             if what == "alive":
                 st.alive = bool(payload)
-                st.last_seen = now
+                if payload:  # a token that drops (a paused process's lease) is no sign of life
+                    st.last_seen = now
                 st.gone_since = None if payload else (st.gone_since or now)
                 continue
             try:
@@ -231,7 +232,14 @@ class Clock:
                 continue
             for inp in st.waiting_for:
                 waiters.setdefault(inp.partition("/")[0], []).append(f"{name} ({inp})")
-        tiers = ([(k, n) for k, n in stale if n in waiters and not self.status[n].waiting_for],
+        # the node others wait for may pass the stall a moment after one of them (its last
+        # progress was later): it is a candidate as soon as it has been quiet over half the stall
+        now = time.monotonic()
+        quiet = [(st.k, n) for n, st in self.status.items()
+                 if n in waiters and not st.done and (st.k, n) not in stale
+                 and now - st.last_seen > stall / 2]
+        tiers = ([(k, n) for k, n in stale + quiet
+                  if n in waiters and not self.status[n].waiting_for],
                  [(k, n) for k, n in stale if n in waiters],
                  [(k, n) for k, n in stale if n in ch.COUPLED], stale)
         k, node = min(next(t for t in tiers if t))
