@@ -17,7 +17,6 @@ from nodes.fatigue.parts.schema import load_part
 
 from .test_part_user import make_link, write_part
 
-
 NO_CCX = "CalculiX ccx not installed (apt-get install calculix-ccx; .ci/run does it as root)"
 
 
