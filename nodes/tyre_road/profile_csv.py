@@ -103,7 +103,7 @@ def read_profile_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarr
         raise InputFileError(path, f"need at least 2 data rows, found {rows}")
     x, z_l = np.frombuffer(cols[0], dtype=float).copy(), np.frombuffer(cols[1], dtype=float)
     z_r = np.frombuffer(cols[2], dtype=float) if n_cols == 3 else z_l
-    for j, z in enumerate((z_l, z_r)[: n_cols - 1]):
+    for j, z in enumerate((z_l, z_r)[: len(cols) - 1]):
         _check_physical(path, z, j + 2)
     return x, z_l.copy(), z_r.copy()
 
@@ -124,14 +124,14 @@ def _check_physical(path: str | Path, z: np.ndarray, column: int) -> None:
     bad = np.flatnonzero(relief > MAX_RELIEF_M)
     if bad.size:
         i = int(bad[0])
-        raise InputFileError(path, f"column {column}: height {z[i]!r} m is {relief[i]:.4g} m "
+        raise InputFileError(str(path), f"column {column}: height {z[i]!r} m is {relief[i]:.4g} m "
                                    f"from the first sample's (at most {MAX_RELIEF_M:g} m: not "
                                    f"a road profile; heights are in metres)")
     steps = np.abs(np.diff(z))
     bad = np.flatnonzero(steps > MAX_STEP_M)
     if bad.size:
         i = int(bad[0])
-        raise InputFileError(path, f"column {column}: the height changes by {steps[i]:.4g} m "
+        raise InputFileError(str(path), f"column {column}: the height changes by {steps[i]:.4g} m "
                                    f"between data rows {i + 1} and {i + 2} (at most "
                                    f"{MAX_STEP_M:g} m between samples: a kerb is 0.15 m; "
                                    "heights are in metres)")
