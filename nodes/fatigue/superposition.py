@@ -18,6 +18,8 @@ same samples for the same bits (the live node and the batch cut at the same step
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 
 ROWS = 64
@@ -29,41 +31,41 @@ def node_major(coefficients: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(coefficients, dtype=float).transpose(1, 0, 2))
 
 
-def superpose(loads: np.ndarray, per_node: np.ndarray) -> np.ndarray:
-    """Stress components (n_samples, k, 6) [Pa] of the nodes of ``per_node`` (k, n_cases, 6)
-    (:func:`node_major`, any subset of nodes) under ``loads`` (n_samples, n_cases) [N, N m]."""
+def _row_blocks(loads: np.ndarray, per_node: np.ndarray
+                ) -> Iterator[tuple[int, int, np.ndarray]]:
+    """(first row r, rows m, stresses (k, m, 6)) of ``loads`` in blocks of :data:`ROWS`: each
+    block one matmul of a fixed shape (the last padded with zeros), so a node's stresses do
+    not depend on which nodes or how many samples are computed with it."""
     F = np.asarray(loads, dtype=float)
     k, n_cases, n_comp = per_node.shape
     if F.ndim != 2 or F.shape[1] != n_cases:
         raise ValueError(f"loads {F.shape} and coefficients {per_node.shape} do not match")
-    n = F.shape[0]
-    out = np.empty((n, k, n_comp))
     buf = np.zeros((1, ROWS, n_cases))
-    for r in range(0, n, ROWS):
-        m = min(ROWS, n - r)
+    for r in range(0, F.shape[0], ROWS):
+        m = min(ROWS, F.shape[0] - r)
         buf[0, :m] = F[r:r + m]
         if m < ROWS:
             buf[0, m:] = 0.0
-        out[r:r + m] = np.matmul(buf, per_node)[:, :m].transpose(1, 0, 2)
+        yield r, m, np.matmul(buf, per_node)[:, :m]
+
+
+def superpose(loads: np.ndarray, per_node: np.ndarray) -> np.ndarray:
+    """Stress components (n_samples, k, 6) [Pa] of the nodes of ``per_node`` (k, n_cases, 6)
+    (:func:`node_major`, any subset of nodes) under ``loads`` (n_samples, n_cases) [N, N m]."""
+    k, _, n_comp = per_node.shape
+    out = np.empty((np.shape(loads)[0], k, n_comp))
+    for r, m, block in _row_blocks(loads, per_node):
+        out[r:r + m] = block.transpose(1, 0, 2)
     return out
 
 
 def superpose_components(loads: np.ndarray, per_node: np.ndarray) -> np.ndarray:
     """:func:`superpose` laid out by component first: (6, n_samples, k), each component
     contiguous (for :func:`.equivalent_stress.equivalent_of`); the same values."""
-    F = np.asarray(loads, dtype=float)
-    k, n_cases, n_comp = per_node.shape
-    if F.ndim != 2 or F.shape[1] != n_cases:
-        raise ValueError(f"loads {F.shape} and coefficients {per_node.shape} do not match")
-    n = F.shape[0]
-    out = np.empty((n_comp, n, k))
-    buf = np.zeros((1, ROWS, n_cases))
-    for r in range(0, n, ROWS):
-        m = min(ROWS, n - r)
-        buf[0, :m] = F[r:r + m]
-        if m < ROWS:
-            buf[0, m:] = 0.0
-        out[:, r:r + m] = np.matmul(buf, per_node)[:, :m].transpose(2, 1, 0)
+    k, _, n_comp = per_node.shape
+    out = np.empty((n_comp, np.shape(loads)[0], k))
+    for r, m, block in _row_blocks(loads, per_node):
+        out[:, r:r + m] = block.transpose(2, 1, 0)
     return out
 
 
