@@ -16,7 +16,8 @@ progress   ``rejected``: int >= 0 (messages this node rejected so far)          
 done       ``rejected``: int >= 0; recorder: ``rows`` int >= 0, ``files`` map      node
            str -> str, ``stats`` map, ``torn`` bool, ``undecodable`` int >= 0;
            fatigue: ``files`` str (its folder)
-error      ``message``: str; ``exit_code``: 1 or 2                                 node
+error      ``message``: str; ``exit_code``: 1 or 2; ``late``: list of str (the    node
+           nodes whose input did not come, when that is the error)
 start      ``n_steps``: int >= 1, ``h``: number > 0 [s], ``info``: map node -> map  clock
 abort      ``reason``: str                                                         clock
 done       (nothing)                                                               clock
@@ -85,6 +86,7 @@ def check_node_control(kind: str, d: Mapping[str, Any]) -> None:
             raise WireError(f"{kind}: field 'message' is not a string")
         if d.get("exit_code", 1) not in (1, 2) or type(d.get("exit_code", 1)) is not int:
             raise WireError(f"{kind}: field 'exit_code'={d.get('exit_code')!r:.40} is not 1 or 2")
+        _str_list(d, "late", kind)
     else:
         raise WireError(f"a node does not send '{kind}' on its control key")
 

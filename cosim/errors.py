@@ -67,3 +67,12 @@ class WireError(SuscosimError):
 
 class RunError(SuscosimError):
     """A run that had to stop: dead node, stall, abort. The message names the node."""
+
+
+class InputLate(RunError):
+    """A node's input did not come within the stall timeout: ``late`` names the nodes it
+    waited for, so the orchestrator blames them and not the node that noticed."""
+
+    def __init__(self, message: str, late: list[str]) -> None:
+        super().__init__(message)
+        self.late = list(late)

@@ -48,7 +48,7 @@ from . import keys
 from .auth import NONCE_BYTES, SESSION_FIELD, RunKey
 from .bus import Bus, Feed
 from .control import check_clock, check_start
-from .errors import RunError, WireError
+from .errors import InputLate, RunError, WireError
 from .wire import (
     MAX_MESSAGE_BYTES,
     ChannelCodec,
@@ -469,8 +469,9 @@ class Participant:
                 self.check_orchestrator()
                 if time.monotonic() >= deadline:
                     late = sorted({t[0] for t, j in needs.items() if j not in self.mailbox[t]})
-                    raise RunError(f"{self.node}: no input from {', '.join(late)} for "
-                                   f"{self.stall_timeout_s:.1f} s (step {max(needs.values())})")
+                    raise InputLate(f"{self.node}: no input from {', '.join(late)} for "
+                                    f"{self.stall_timeout_s:.1f} s (step {max(needs.values())})",
+                                    late)
         self._awaited = None
         out = {}
         for tag, k in needs.items():

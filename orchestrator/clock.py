@@ -191,6 +191,9 @@ class Clock:
                 st.done_at = st.done_at or now
             elif msg.kind == "error":
                 code = msg.d.get("exit_code", 1)
+                late = [n for n in msg.d.get("late", []) if n in self.status and n != node]
+                if late:  # the node that noticed a silent producer: blame the producer
+                    self.abort(self._blame_late(node, late, msg.d.get("message", "")))
                 err: RunError | ScenarioError = RunError(f"node '{node}': {msg.d.get('message')}")
                 if code == 2:
                     err.exit_code = 2
@@ -248,6 +251,15 @@ class Clock:
         if waiters.get(node):
             text += "; waiting for it: " + ", ".join(waiters[node])
         return text
+
+    def _blame_late(self, noticed_by: str, late: list[str], message: str) -> str:
+        """The error when ``noticed_by`` gave up waiting for the nodes ``late``: the blame
+        goes to them (the stall timeout of a node and of this clock are the same, so which
+        of the two notices first is a race; the answer must not be)."""
+        stall = self.scenario["run"]["stall_timeout_s"]
+        k, node = min((self.status[n].k, n) for n in late)
+        return (f"node '{node}' made no progress for {stall:.1f} s (stalled at step {k} of "
+                f"{self.n_steps}); waiting for it: {noticed_by} ({message})")
 
     def _why_not_ready(self, node: str) -> str:
         st = self.status[node]

@@ -28,7 +28,7 @@ from cosim import node_kinds as nk
 from cosim import zenoh_options as zo
 from cosim.auth import ENV_KEY_FILE, RunKey, run_key_from_env
 from cosim.bus import ZenohBus, zenoh_config
-from cosim.errors import RunError, SuscosimError
+from cosim.errors import InputLate, RunError, SuscosimError
 from cosim.participant import Participant
 from cosim.stepped import run_stepped
 
@@ -76,7 +76,8 @@ def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
         return 0
     except SuscosimError as exc:
         if not (isinstance(exc, RunError) and "aborted by the orchestrator" in str(exc)):
-            part.ctl("error", message=str(exc), exit_code=exc.exit_code)
+            late = {"late": exc.late} if isinstance(exc, InputLate) else {}
+            part.ctl("error", message=str(exc), exit_code=exc.exit_code, **late)
         log.error("%s", exc)
         return exc.exit_code
     except Exception as exc:  # a bug: say where, tell the orchestrator, never hang

@@ -13,6 +13,7 @@ import pytest
 from cosim import auth as au
 from cosim import keys
 from cosim.bus import MemoryBus
+from cosim.errors import InputLate
 from cosim.journal import read_journal
 from cosim.participant import MAILBOX_MAX, MAILBOX_WINDOW, Participant
 from cosim.table import build_table
@@ -73,6 +74,38 @@ def test_the_clock_takes_only_control_messages_signed_with_the_run_key() -> None
     assert clock.rejected == 3 and not clock.status["recorder"].done
     _feed(clock, "recorder", au.RunKey(KEY).sign(keys.key("r", "recorder", keys.CTL), done))
     assert clock.status["recorder"].done and clock.status["recorder"].result["rows"] == 99999
+
+
+def test_a_node_that_gives_up_on_a_silent_producer_gets_the_producer_blamed() -> None:
+    """#30 item 15: a node's stall timeout and the clock's are the same, so which notices a
+    paused producer first is a race (CI: "node 'controller': no input from plant"); the
+    error names the producer either way, and the node that noticed as waiting for it."""
+    clock = _clock()
+    _feed(clock, "plant", encode("progress", 3, 0.003, {"rejected": 0}))
+    msg = "recorder: no input from plant for 5.0 s (step 4)"
+    with pytest.raises(Exception) as err:
+        _feed(clock, "recorder", encode("error", -1, 0.0, {"message": msg, "exit_code": 1,
+                                                           "late": ["plant"]}))
+    text = str(err.value)
+    assert text.startswith("node 'plant' made no progress for 5.0 s (stalled at step 3 of 10)")
+    assert "waiting for it: recorder (" + msg + ")" in text
+    clock = _clock()  # without 'late' the node that failed is the one named
+    with pytest.raises(Exception) as err:
+        _feed(clock, "recorder", encode("error", -1, 0.0, {"message": "disk full"}))
+    assert str(err.value) == "node 'recorder': disk full"
+    clock = _clock()
+    _feed(clock, "recorder", encode("error", -1, 0.0, {"message": "x", "late": "plant"}))
+    assert clock.rejected == 1  # a malformed 'late' is rejected, not believed
+
+
+def test_a_late_input_names_its_producer_in_the_error() -> None:
+    bus = MemoryBus()
+    part = Participant(bus, "r", "recorder")
+    part.stall_timeout_s = 0.2
+    tag = part.listen("plant", "state")
+    with pytest.raises(InputLate) as err:
+        part.wait({tag: 0})
+    assert err.value.late == ["plant"] and "no input from plant" in str(err.value)
 
 
 def test_far_ahead_steps_are_rejected_and_the_mailbox_stays_bounded() -> None:
