@@ -32,6 +32,7 @@ from cosim import lower_arm as geo
 from cosim.errors import InputFileError, ScenarioError
 
 from .material import Material
+from .prnsol import looks_like_prnsol, read_prnsol
 
 CACHE_VERSION = "arm-fe-v2"
 AXES = ("x", "y", "z")
@@ -266,7 +267,7 @@ def import_influence(base: Path, mapping: Mapping[str, str | Mapping[str, Any]],
         else:
             fname, scale = spec["file"], float(spec.get("scale", 1.0))
         path = folder / fname
-        ids, xyz, s = read_case_csv(path)
+        ids, xyz, s = read_prnsol(path) if looks_like_prnsol(path) else read_case_csv(path)
         if ids_ref is None:
             ids_ref, xyz_ref = ids, xyz
         elif ids.shape != ids_ref.shape or not np.array_equal(ids, ids_ref):

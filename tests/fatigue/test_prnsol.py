@@ -63,3 +63,22 @@ def test_principal_listing_refused_naming_the_format(tmp_path: Path) -> None:
     g.write_text("just words\n")
     with pytest.raises(InputFileError, match="PRNSOL,S,COMP"):
         read_prnsol(g)
+
+
+def test_an_influence_mapping_takes_a_prnsol_listing_beside_a_csv(tmp_path: Path) -> None:
+    """The cases of one mapping, one a PRNSOL listing and one a CSV of the same nodes, give
+    the coefficients of their files (before, the listing was "no numeric rows")."""
+    from nodes.fatigue.influence import import_influence
+
+    rng = np.random.default_rng(1)
+    ids = np.array([3, 5, 8, 13, 21, 34])
+    a, b = np.round(rng.normal(0, 1e3, (2, 6, 6)), 1)
+    (tmp_path / "z.lis").write_text(listing(a, ids, 4))
+    (tmp_path / "x.csv").write_text("node,Sx,Sy,Sz,Sxy,Syz,Szx\n" + "".join(
+        f"{i}," + ",".join(str(v) for v in row) + "\n" for i, row in zip(ids, b, strict=True)))
+    inf = import_influence(tmp_path, {"plant/arm/ball_joint_z": "z.lis",
+                                      "ball_joint_x": {"file": "x.csv", "scale": -1.0}})
+    assert inf.case_names == ["ball_joint_z", "ball_joint_x"]
+    np.testing.assert_array_equal(inf.node_ids, ids)
+    np.testing.assert_allclose(inf.coefficients[0], a, rtol=1e-4)
+    np.testing.assert_allclose(inf.coefficients[1], -b)
