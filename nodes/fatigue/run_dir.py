@@ -282,6 +282,36 @@ def fatigue_load_file(path: Path, overrides: dict | None = None,
     return result
 
 
+def _stream_and_write(run_dir: Path, scenario: dict, cfg: FatigueConfig, out: Path,
+                      what_if: dict | None, progress: Callable[[str], None] | None
+                      ) -> FatigueResult:
+    """A run's table read in row batches (:mod:`.run_stream`, #32: memory that does not grow
+    with the run), analysed by the live node's block engine, the batch outputs computed as the
+    batches pass, ``out`` written whole."""
+    from . import run_stream as rs
+
+    src = rs.table_source(run_dir)
+    batches = rs.table_batches(src)
+    source = str(run_dir / "table")
+    s = rs.scan(batches, str(src), cfg.residue, source)
+    if not s.channels:
+        raise InputFileError(source, "no plant/arm/... load columns")
+    L = cfg.track_length_m if cfg.track_length_m is not None else \
+        track_length(scenario, np.array([s.t0, s.t_last]))
+    say = progress or (lambda _msg: None)
+    result, methods, matrices = rs.analyse_streamed(batches, cfg, L, s, say)
+    cases = list(load_influence(cfg).case_names)
+    extra: dict = {"unmapped_channels": [
+        {"channel": c, "peak_abs": ch.peak_abs} for c, ch in s.channels.items()
+        if short_channel(c) not in cases]}
+    if what_if:
+        extra["what_if"] = {"settings": what_if, "hash": settings_hash(what_if)}
+    files, more = rs.outputs_streamed(batches, cfg, s, result, methods, matrices, say)
+    extra.update(more)
+    write_results(result, out, extra, files)
+    return result
+
+
 def results_folder(run_dir: Path, overrides: dict | None, out: Path | None = None) -> Path:
     """Where batch results of a run go: ``out`` if given; else ``run_dir/fatigue`` without
     overrides (the live results' place) or ``run_dir/fatigue-<settings_hash>`` for a what-if
@@ -317,12 +347,7 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None, out: Path | No
                                   base_dir=run_dir)
     if overrides and cfg == FatigueConfig.from_dict(section, "fatigue", base_dir=run_dir):
         overrides = {}  # settings that only repeat the run's own: not a what-if
-    t, loads = read_table(run_dir)
-    if not any(short_channel(k) for k in loads):
-        raise InputFileError(str(run_dir / "table"), "no plant/arm/... load columns")
-    L = cfg.track_length_m if cfg.track_length_m is not None else track_length(scenario, t)
     folder = results_folder(run_dir, overrides, out)
-    result = _analyse_and_write(t, loads, cfg, L, folder, str(run_dir / "table"),
-                                overrides or None, progress)
+    result = _stream_and_write(run_dir, scenario, cfg, folder, overrides or None, progress)
     result.results_dir = folder  # type: ignore[attr-defined]  # where it went, for the CLI
     return result

@@ -1,0 +1,412 @@
+"""Batch fatigue of a run folder read in row batches (#32): memory that does not grow with the run.
+
+``suscosim fatigue RUN_DIR`` reads ``table.parquet`` (or ``table.csv``) in batches of
+:data:`BATCH_ROWS` rows, never whole, and feeds the same block engine the live fatigue node
+uses (:class:`.worker.LiveFatigue`, blocks of ``fatigue.block_samples`` cut from the first
+sample, so the damage is :func:`.worker.analyse`'s bit for bit). Three passes over the file:
+
+1. **check** (:func:`scan`): times finite and strictly increasing, every load sample finite
+   and plausible (:func:`.load_file.check_loads`'s rule and message, the sample index counted
+   from the table's first row), the peak of every load channel, and each load channel's
+   rainflow cycles counted streamed (their count, largest range and mean extremes: the
+   rainflow matrix's axes) and their pseudo-damage terms summed;
+2. **damage**: the primary analysis and every S-N method of :func:`.outputs.method_lives`
+   (each its own engine, all fed the same batches), and each load channel's range-mean
+   matrix accumulated batch by batch on the axes of pass 1;
+3. **critical node**: its six stress components and equivalent stress by superposition,
+   written to ``critical_stress.csv`` row by row; its equivalent stress (8 B a row) is kept
+   for the S-N plot and its rainflow matrix (:func:`.outputs.sn_plot` counts it whole).
+
+Memory: a batch of the arm's columns (~16 columns x 65 536 rows x 8 B = 8 MB), the engines'
+per-node state, the rainflow residues, and the critical node's equivalent stress (8 B a
+row: 8 MB at 10^6 steps, the one piece that grows).
+
+Bit-identity with the whole-table path (``analyse`` and ``outputs.batch_outputs``): the
+damage, lives, extremes, cycles, S-N method lives, the critical-node files and the rainflow
+matrices' counts (sums of 0.5 and 1) are identical; a channel's pseudo-damage is the sum of
+its cycles' terms accumulated batch by batch instead of one ``np.sum`` (pairwise) over all
+of them, so it can differ in the last digit (a few 1e-16 relative): unavoidable without
+holding every cycle of every channel, which grows with the run.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from cosim.errors import InputFileError
+
+from .config import SN_METHODS, FatigueConfig
+from .counting import Cycles, StreamingRainflow, count_series
+from .equivalent_stress import equivalent
+from .influence import short_channel
+from .load_file import MAX_FORCE_N, MAX_MOMENT_NM
+from .outputs import method_config, sn_plot, write_vtu
+from .pseudo_damage import (
+    K_REF,
+    N_REF,
+    ChannelPseudoDamage,
+    equivalent_range,
+    matrix_rows,
+    rainflow_matrix,
+    reference_range,
+)
+from .superposition import stress_history
+from .worker import FatigueResult, LiveFatigue, load_influence
+
+BATCH_ROWS = 65_536
+"""Rows of the table read at a time (a multiple of any ``block_samples`` it is rechunked to)."""
+N_BINS = 32
+"""Bins of a range-mean rainflow matrix, as :func:`.pseudo_damage.rainflow_matrix`."""
+
+Batches = Callable[[], Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]]
+"""A function that starts a pass: an iterator of (t, {load column: values}) batches."""
+
+
+def table_source(run_dir: Path) -> Path:
+    """``table.parquet``, else ``table.csv`` of a run folder (InputFileError if neither)."""
+    src = next((p for p in (run_dir / "table.parquet", run_dir / "table.csv") if p.is_file()),
+               None)
+    if src is None:
+        raise InputFileError(str(run_dir), "no table.parquet or table.csv in the run folder")
+    return src
+
+
+def table_batches(src: Path, rows: int = BATCH_ROWS) -> Batches:
+    """Batches of ``t`` and the ``plant/arm/...`` columns of a run's table.
+
+    Parquet: read ``rows`` rows at a time (pyarrow's ``iter_batches``). CSV (a run that left
+    no Parquet table): read whole by :func:`cosim.table.read_table`, then cut (bounded only
+    for Parquet)."""
+    if src.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        try:
+            names = pq.ParquetFile(src).schema_arrow.names
+        except Exception as exc:  # pyarrow raises several types for a bad file
+            raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
+        if "t" not in names:
+            raise InputFileError(str(src), "no column 't'")
+        cols = [n for n in names if n.startswith("plant/arm/")]
+
+        def parquet() -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
+            try:
+                for b in pq.ParquetFile(src).iter_batches(rows, columns=["t", *cols]):
+                    t = b.column(0).to_numpy().astype(float, copy=False)
+                    yield t, {c: b.column(i + 1).to_numpy().astype(float, copy=False)
+                              for i, c in enumerate(cols)}
+            except (OSError, ValueError) as exc:
+                raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
+        return parquet
+
+    from cosim.table import read_table
+
+    whole = {n: np.asarray(v, dtype=float)
+             for n, v in read_table(src, keep=lambda n: n.startswith("plant/arm/")).items()}
+    whole.pop("k", None)
+    if "t" not in whole:
+        raise InputFileError(str(src), "no column 't'", 1)
+    t_all = whole.pop("t")
+
+    def from_csv() -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
+        for i in range(0, t_all.size, rows):
+            yield t_all[i:i + rows], {c: v[i:i + rows] for c, v in whole.items()}
+    return from_csv
+
+
+@dataclass
+class _Channel:
+    """Pass 1's view of one load channel: its first bad sample, cycles and their axes."""
+
+    first_bad: tuple[int, float, float] | None = None  # (sample, value, t)
+    n_bad: int = 0
+    peak_abs: float = 0.0
+    rf: StreamingRainflow = field(default_factory=lambda: StreamingRainflow(1))
+    cycles: float = 0.0
+    max_range: float = 0.0
+    r_hi: float = -np.inf
+    m_lo: float = np.inf
+    m_hi: float = -np.inf
+    pd_sum: float = 0.0
+    n_cyc: int = 0
+
+
+@dataclass
+class Scan:
+    """What pass 1 found: sample count, the times needed for the duration, per channel."""
+
+    n: int = 0
+    t0: float = np.nan
+    t1: float = np.nan
+    t_last: float = np.nan
+    channels: dict[str, _Channel] = field(default_factory=dict)
+
+    @property
+    def duration_s(self) -> float:
+        """As :func:`.worker.analyse`: t[-1] - t[0] + (t[1] - t[0]) [s]."""
+        return float(self.t_last - self.t0 + (self.t1 - self.t0)) if self.n > 1 else 0.0
+
+
+def _cycles_done(ch: _Channel, cyc: Cycles) -> None:
+    """Fold closed cycles into a channel's totals (pass 1)."""
+    if len(cyc) == 0:
+        return
+    r, m = cyc.range, cyc.mean
+    ch.n_cyc += len(cyc)
+    ch.cycles += float(cyc.count.sum())
+    ch.max_range = max(ch.max_range, float(r.max()))
+    ch.r_hi = max(ch.r_hi, float(r.max()))
+    ch.m_lo, ch.m_hi = min(ch.m_lo, float(m.min())), max(ch.m_hi, float(m.max()))
+    ch.pd_sum += float(np.sum(cyc.count * (r / ch_ref(ch)) ** K_REF))
+
+
+def ch_ref(_ch: _Channel) -> float:
+    """ΔF_ref of a channel (:func:`.pseudo_damage.reference_range`: 1 kN or 1 kN m)."""
+    return reference_range("")
+
+
+def scan(batches: Batches, source: str, residue: str, loads_source: str | None = None) -> Scan:
+    """Pass 1 (module docstring): raise InputFileError for a bad time (naming ``source``, the
+    table file) or load sample (naming ``loads_source``), the first one, in the words of
+    ``run_dir.read_table`` and :func:`.load_file.check_loads`."""
+    where = loads_source or source
+    s = Scan()
+    t_prev = -np.inf
+    for t, loads in batches():
+        if not s.channels:
+            s.channels = {c: _Channel() for c in loads}
+        if t.size and (not np.all(np.isfinite(t)) or t[0] <= t_prev
+                       or np.any(np.diff(t) <= 0)):
+            raise InputFileError(source, "column 't' is not strictly increasing")
+        if t.size:
+            if s.n == 0:
+                s.t0 = float(t[0])
+            if s.n <= 1 < s.n + t.size:
+                s.t1 = float(t[1 - s.n])
+            s.t_last = t_prev = float(t[-1])
+        for name, v in loads.items():
+            ch = s.channels[name]
+            limit = MAX_MOMENT_NM if short_channel(name).endswith("_mx") else MAX_FORCE_N
+            bad = np.flatnonzero(~np.isfinite(v) | (np.abs(v) > limit))
+            if bad.size:
+                if ch.first_bad is None:
+                    i = int(bad[0])
+                    ch.first_bad = (s.n + i, float(v[i]), float(t[i]))
+                ch.n_bad += bad.size
+            elif ch.first_bad is None and v.size:
+                ch.peak_abs = max(ch.peak_abs, float(np.max(np.abs(v))))
+                _cycles_done(ch, ch.rf.feed(v.reshape(-1, 1)))
+        s.n += t.size
+    if s.n < 2:
+        raise InputFileError(source, "fewer than 2 samples")
+    for name, ch in s.channels.items():
+        if ch.first_bad is not None:
+            i, x, when = ch.first_bad
+            moment = short_channel(name).endswith("_mx")
+            limit = MAX_MOMENT_NM if moment else MAX_FORCE_N
+            what = "not finite" if not np.isfinite(x) else \
+                f"beyond the plausible {limit:.0e} {'N m' if moment else 'N'}"
+            raise InputFileError(where, f"channel {name!r} sample {i} (t = {when:.6g} s) is "
+                                         f"{x!r}: {what}; {ch.n_bad} such sample(s) in the "
+                                         "channel")
+        _cycles_done(ch, ch.rf.residue_cycles(residue))
+    return s
+
+
+def _rechunk(batches: Batches, block: int
+             ) -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
+    """The batches re-cut so that every piece but the last is a multiple of ``block`` rows
+    (the engine cuts its blocks from each piece's first sample: the same blocks as whole)."""
+    held_t: list[np.ndarray] = []
+    held: list[dict[str, np.ndarray]] = []
+    n_held = 0
+    for t, loads in batches():
+        held_t.append(t)
+        held.append(loads)
+        n_held += t.size
+        cut = n_held // block * block
+        if cut == 0:
+            continue
+        tt = np.concatenate(held_t)
+        ll = {c: np.concatenate([h[c] for h in held]) for c in loads}
+        yield tt[:cut], {c: v[:cut] for c, v in ll.items()}
+        held_t, held = [tt[cut:]], [{c: v[cut:] for c, v in ll.items()}]
+        n_held -= cut
+    if n_held:
+        tt = np.concatenate(held_t)
+        yield tt, {c: np.concatenate([h[c] for h in held]) for c in held[0]}
+
+
+def method_configs(cfg: FatigueConfig) -> list[tuple[str, float, FatigueConfig, bool]]:
+    """(method, P, config, same as the primary) for :func:`.outputs.method_lives`'s table
+    (empty without a component curve)."""
+    if cfg.component is None or cfg.sn_table is not None:
+        return []
+    out = []
+    for m in SN_METHODS:
+        for P in dict.fromkeys((cfg.component.reliability, cfg.survival_probability)):
+            c = method_config(cfg, m, P)
+            assert c is not None
+            same = (m == cfg.sn_method and c.mean_stress == cfg.mean_stress
+                    and P == cfg.component.reliability)
+            out.append((m, P, c, same))
+    return out
+
+
+def _matrix_axes(ch: _Channel) -> tuple[float, float, float] | None:
+    """(r_hi, m_lo, m_hi) of a channel's matrix as :func:`rainflow_matrix` sets them."""
+    if ch.n_cyc == 0:
+        return None
+    r_hi = ch.r_hi or 1.0
+    m_lo, m_hi = ch.m_lo, ch.m_hi
+    if m_hi <= m_lo:
+        m_lo, m_hi = m_lo - 0.5, m_hi + 0.5
+    return r_hi, m_lo, m_hi
+
+
+def _hist_add(H: np.ndarray | None, cyc: Cycles, axes: tuple[float, float, float]
+              ) -> tuple[np.ndarray | None, list, list]:
+    r_hi, m_lo, m_hi = axes
+    h, re, me = np.histogram2d(cyc.range, cyc.mean, bins=N_BINS,
+                               range=[[0.0, r_hi], [m_lo, m_hi]], weights=cyc.count)
+    return (h if H is None else H + h), re.tolist(), me.tolist()
+
+
+def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
+                     say: Callable[[str], None]
+                     ) -> tuple[FatigueResult, dict | None, dict[str, dict]]:
+    """Pass 2: (primary result, ``sn_methods`` as :func:`.outputs.method_lives`, every load
+    channel's :func:`rainflow_matrix` dict)."""
+    names = list(s.channels)
+    primary = LiveFatigue(cfg, names, L)
+    others = [(m, P, c, LiveFatigue(c, names, L)) for m, P, c, same in method_configs(cfg)
+              if not same]
+    axes = {c: _matrix_axes(ch) for c, ch in s.channels.items()}
+    rfs = {c: StreamingRainflow(1) for c in names}
+    H: dict[str, np.ndarray | None] = dict.fromkeys(names)
+    edges: dict[str, tuple[list, list]] = {}
+    say(f"fatigue: {s.n} samples x {len(names)} channels, primary S-N curve"
+        + (f" and {len(others)} more" if others else "") + " (streamed)")
+    for t, loads in _rechunk(batches, max(1, cfg.block_samples)):
+        primary.update(t, loads)
+        for *_, lf in others:
+            lf.update(t, loads)
+        for c, v in loads.items():
+            ax = axes[c]
+            if ax is not None:
+                cyc = rfs[c].feed(v.reshape(-1, 1))
+                if len(cyc):
+                    H[c], *e = _hist_add(H[c], cyc, ax)
+                    edges[c] = (e[0], e[1])
+    matrices: dict[str, dict] = {}
+    for c in names:
+        ax = axes[c]
+        if ax is None:
+            matrices[c] = rainflow_matrix(Cycles.empty())
+            continue
+        cyc = rfs[c].residue_cycles(cfg.residue)
+        if len(cyc):
+            H[c], *e = _hist_add(H[c], cyc, ax)
+            edges[c] = (e[0], e[1])
+        h = H[c]
+        assert h is not None
+        matrices[c] = {"range_edges": edges[c][0], "mean_edges": edges[c][1],
+                       "counts": h.tolist()}
+    result = _finish(primary, s)
+    methods = None
+    table = method_configs(cfg)
+    if table:
+        done = {(m, P): _finish(lf, s) for m, P, _c, lf in others}
+        out: dict = {}
+        lives = []
+        for m, P, mc, same in table:
+            r = result if same else done[(m, P)]
+            sn = mc.material.sn
+            assert sn is not None
+            out.setdefault(m, {})[f"{P:g}"] = {
+                "survival_probability": P, "mean_stress": mc.mean_stress,
+                "life_km": r.life_km, "life_repeats": r.life_repeats,
+                "critical_node_id": r.critical_node_id, "max_damage_per_pass": r.max_damage,
+                "Se_pa": sn.Se, "k": sn.k, "curve": sn.as_dict()}
+            lives.append(r.life_km)
+        methods = {"methods": out, "life_range_km": [min(lives), max(lives)]}
+    return result, methods, matrices
+
+
+def _finish(lf: LiveFatigue, s: Scan) -> FatigueResult:
+    r = lf.result()
+    r.duration_s = s.duration_s  # analyse's t[-1] - t[0] + (t[1] - t[0]), not the last dt
+    r.source = "batch"
+    return r
+
+
+def pseudo_damage_of(s: Scan, n_ref: float = N_REF) -> list[ChannelPseudoDamage]:
+    """Every load channel's pseudo-damage from pass 1's sums (module docstring)."""
+    out = []
+    for name, ch in s.channels.items():
+        ref = reference_range(name)
+        d = ch.pd_sum / n_ref if ch.n_cyc else 0.0
+        out.append(ChannelPseudoDamage(
+            channel=name, cycles=ch.cycles, max_range=ch.max_range, pseudo_damage=d,
+            equivalent_range=equivalent_range(d, K_REF, ref), k=K_REF, ref_range=ref,
+            n_ref=n_ref))
+    return out
+
+
+def outputs_streamed(batches: Batches, cfg: FatigueConfig, s: Scan, result: FatigueResult,
+                     methods: dict | None, matrices: dict[str, dict],
+                     say: Callable[[str], None]) -> tuple[Callable[[Path], None], dict]:
+    """As :func:`.outputs.batch_outputs`: (writer of the files into a folder, summary keys);
+    the writer runs pass 3 (the critical node's history)."""
+    pd = pseudo_damage_of(s)
+    extra = {"sn_methods": methods,
+             "pseudo_damage": {"k": K_REF, "channels": [p.as_dict() for p in pd]},
+             "outputs": ["critical_stress.csv", "rainflow_matrix.csv", "pseudo_damage.csv",
+                         "sn_plot.png", "sn_plot.json", "damage.vtu"]}
+    inf = load_influence(cfg)
+    cases = list(inf.case_names)
+    coef = inf.coefficients[:, result.critical_node:result.critical_node + 1, :]
+
+    def write(folder: Path) -> None:
+        say("fatigue: critical-node history, rainflow matrices, pseudo-damage")
+        eq_parts: list[np.ndarray] = []
+        with open(folder / "critical_stress.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["t_s", "sxx_pa", "syy_pa", "szz_pa", "sxy_pa", "syz_pa", "szx_pa",
+                        f"eq_{cfg.equivalent}_pa"])
+            for t, loads in batches():
+                F = np.zeros((t.size, len(cases)))
+                by_short = {short_channel(k): v for k, v in loads.items()}
+                for j, c in enumerate(cases):
+                    if c in by_short:
+                        F[:, j] = by_short[c]
+                st = stress_history(F, coef)
+                s6, eq = st[:, 0, :], equivalent(st, cfg.equivalent)[:, 0]
+                eq_parts.append(eq)
+                for i in range(t.size):
+                    w.writerow([f"{t[i]:.9g}", *(f"{v:.6e}" for v in s6[i]), f"{eq[i]:.6e}"])
+        eq_all = np.concatenate(eq_parts)
+        with open(folder / "rainflow_matrix.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["series", "unit", "range_lo", "range_hi", "mean_lo", "mean_hi",
+                        "cycles"])
+            w.writerows(matrix_rows(f"node_{result.critical_node_id}", "Pa",
+                                    rainflow_matrix(count_series(eq_all, cfg.residue))))
+            for name, mat in matrices.items():
+                unit = "N m" if short_channel(name).endswith("_mx") else "N"
+                w.writerows(matrix_rows(name, unit, mat))
+        with open(folder / "pseudo_damage.csv", "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["channel", "k", "ref_range", "n_ref", "cycles", "max_range",
+                        "pseudo_damage", "equivalent_range"])
+            for p in pd:
+                w.writerow([p.channel, p.k, p.ref_range, p.n_ref, p.cycles, p.max_range,
+                            f"{p.pseudo_damage:.6e}", f"{p.equivalent_range:.6e}"])
+        sn_plot(folder / "sn_plot.png", cfg, eq_all, result, methods)
+        write_vtu(folder / "damage.vtu", result)
+
+    return write, extra
