@@ -94,11 +94,11 @@ def table_batches(src: Path, rows: int = BATCH_ROWS) -> Batches:
         cols = [n for n in names if n.startswith("plant/arm/")]
 
         def parquet() -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
+            from cosim.table_batches import parquet_batches
+
             try:
-                for b in pq.ParquetFile(src).iter_batches(rows, columns=["t", *cols]):
-                    t = b.column(0).to_numpy().astype(float, copy=False)
-                    yield t, {c: b.column(i + 1).to_numpy().astype(float, copy=False)
-                              for i, c in enumerate(cols)}
+                for b in parquet_batches(src, ["t", *cols], rows):
+                    yield b["t"], {c: b[c] for c in cols}
             except (OSError, ValueError) as exc:
                 raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
         return parquet

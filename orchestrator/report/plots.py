@@ -53,15 +53,17 @@ def img(uri: str, alt: str) -> str:
     return f'<img class="plot" src="{uri}" alt="{esc(alt)}">'
 
 
-def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS
-             ) -> tuple[np.ndarray, np.ndarray]:
+def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS,
+             bucket: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """At most ~n_max points for a line plot, keeping each bucket's min and max in their
     order (peaks stay; the last, shorter bucket too). NaN samples do not hide a bucket's
-    extremes (they are left out of it; an all-NaN bucket stays a gap)."""
+    extremes (they are left out of it; an all-NaN bucket stays a gap). ``bucket``: the
+    bucket's samples (default ``ceil(n / (n_max // 2))``; :class:`.stream.StreamDecimator`
+    gives the whole signal's)."""
     n = x.size
-    if n <= n_max:
+    if n <= n_max and bucket is None:
         return t, x
-    b = int(math.ceil(n / (n_max // 2)))
+    b = bucket if bucket is not None else int(math.ceil(n / (n_max // 2)))
     pad = (-n) % b  # the last bucket filled up with its own last sample
     if pad:
         x = np.concatenate([x, np.repeat(x[-1:], pad)])
@@ -79,7 +81,9 @@ def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS
     return tt, xx
 
 
-def plot_panels(t: np.ndarray, panels: list[tuple], width: float = 11.0) -> str:
+def plot_panels(t: np.ndarray | None, panels: list[tuple], width: float = 11.0) -> str:
+    """Stacked panels ``[(title, unit, [(label, y)])]``: ``y`` a signal on ``t`` (decimated
+    here) or an already decimated ``(t, y)`` pair (:class:`.stream.StreamDecimator`)."""
     fig, axes = new_figure(len(panels), width=width, sharex=True)
     styles = ("-", "--", ":", "-.")
     for ax, (title, unit, lines) in zip(axes, panels, strict=True):
@@ -93,7 +97,12 @@ def plot_panels(t: np.ndarray, panels: list[tuple], width: float = 11.0) -> str:
                              ls=styles[quantities.index(head) % len(styles)])
             else:
                 style = dict(color=f"C{i % 10}")
-            ax.plot(*decimate(t, y), lw=0.9, label=lab, **style)
+            if isinstance(y, tuple):
+                tt, yy = y
+            else:
+                assert t is not None, "a signal without its times"
+                tt, yy = decimate(t, y)
+            ax.plot(tt, yy, lw=0.9, label=lab, **style)
         ax.set_title(title, fontsize=10, loc="left")
         ax.set_ylabel(unit)
         ax.grid(alpha=0.3)

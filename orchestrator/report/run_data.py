@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from .stream import TableSource
+
 
 class BadInput(Exception):
     """Bad input for the report (exit code 2)."""
@@ -25,7 +27,8 @@ class RunData:
     path: Path
     scenario: dict | None = None
     summary: dict | None = None
-    table: dict[str, np.ndarray] | None = None
+    source: TableSource | None = None
+    """The table, read in batches (:mod:`.stream`): the run page never holds it whole."""
     table_note: str = ""
     fatigue: dict | None = None
     damage_map: Path | None = None
@@ -45,8 +48,21 @@ class RunData:
                 return str(src.get("run_id") or src.get("id"))
         return self.path.name
 
+    @property
+    def table(self) -> dict[str, np.ndarray] | None:
+        """Every column whole (8 B a row each), read on first use: for the sweep pages,
+        which chart short runs side by side; the run page reads :attr:`source` in batches."""
+        if self.source is None:
+            return None
+        if self._whole is None:
+            self._whole = self.source.whole()
+        return self._whole
+
+    _whole: dict[str, np.ndarray] | None = field(default=None, repr=False)
+
     def has_arm(self) -> bool:
-        return self.table is not None and any(c.startswith("plant/arm/") for c in self.table)
+        return self.source is not None and any(c.startswith("plant/arm/")
+                                               for c in self.source.names)
 
 
 def _read_json(path: Path, problems: list[str]) -> Any:
@@ -69,9 +85,8 @@ def is_sweep_dir(d: Path) -> bool:
 
 
 def load_run(d: Path) -> RunData:
-    """Read every piece of a run folder that exists; never raises for a bad piece."""
-    from cosim.table import read_table
-
+    """Read every piece of a run folder that exists; never raises for a bad piece (a
+    Parquet table: its schema only, the columns are read in batches when used)."""
     r = RunData(path=d)
     sc = _read_json(d / "scenario.json", r.problems)
     r.scenario = sc if isinstance(sc, dict) else None
@@ -79,14 +94,20 @@ def load_run(d: Path) -> RunData:
     r.summary = sm if isinstance(sm, dict) else None
     for name in ("table.parquet", "table.csv"):
         p = d / name
-        if p.is_file() and r.table is None:
+        if p.is_file() and r.source is None:
             try:
-                tab = read_table(p)
+                if name == "table.parquet":
+                    src = TableSource(path=p)  # its schema and row count only
+                else:
+                    from cosim.table import read_table
+
+                    src = TableSource(table={k: np.asarray(v, dtype=float)
+                                             for k, v in read_table(p).items()})
             except Exception as exc:  # a torn or foreign file: say so, try the next source
                 r.problems.append(f"{name}: unreadable ({type(exc).__name__}: {exc})")
                 continue
-            r.table, r.table_note = tab, name
-    if r.table is None and (d / "journal.msgpack").is_file():
+            r.source, r.table_note = src, name
+    if r.source is None and (d / "journal.msgpack").is_file():
         try:
             from cosim.journal import read_journal
             from cosim.table import build_table
@@ -95,17 +116,16 @@ def load_run(d: Path) -> RunData:
             tab, _bad = build_table(contents.records)
             extra = f"; journal: {contents.problem}" if contents.problem else ""
             if len(tab["t"]):
-                r.table = tab
+                r.source = TableSource(table={k: np.asarray(v, dtype=float)
+                                              for k, v in tab.items()})
                 r.table_note = "rebuilt from journal.msgpack (the run left no table)" + extra
             else:
                 r.table_note = "journal.msgpack holds no complete step" + extra
         except Exception as exc:
             r.problems.append(f"journal.msgpack: unreadable ({type(exc).__name__}: {exc})")
-    if r.table is not None:
-        r.table = {k: np.asarray(v, dtype=float) for k, v in r.table.items() if k != "k"}
-        if "t" not in r.table or r.table["t"].size < 2:
-            r.problems.append(f"{r.table_note}: fewer than 2 samples")
-            r.table = None
+    if r.source is not None and ("t" not in r.source.names or r.source.n_rows < 2):
+        r.problems.append(f"{r.table_note}: fewer than 2 samples")
+        r.source = None
     fs = _read_json(d / "fatigue" / "summary.json", r.problems)
     r.fatigue = fs if isinstance(fs, dict) else None
     if (d / "fatigue" / "damage_map.png").is_file():

@@ -4,6 +4,8 @@ loads, fatigue, logs) and the page itself."""
 from __future__ import annotations
 
 import datetime as _dt
+import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +26,7 @@ from .markup import (
     section,
     table_html,
 )
-from .plots import fig_uri, file_uri, img, new_figure, plot_panels
+from .plots import MAX_PLOT_POINTS, fig_uri, file_uri, img, new_figure, plot_panels
 from .run_data import RunData, load_run
 from .signals import (
     BODY_ACC,
@@ -33,10 +35,16 @@ from .signals import (
     arm_groups,
     corner_label,
     first_present,
-    sample_rate,
     time_history_panels,
     unit_of,
-    welch_psd,
+)
+from .stream import (
+    PSD_MAX_NPERSEG,
+    StreamDecimator,
+    StreamWelch,
+    TableSource,
+    column_stats,
+    psd_nperseg,
 )
 
 RUN_KEYS = ("name", "id", "mode", "exchange", "coupling", "h", "substeps", "t_end",
@@ -133,71 +141,123 @@ def scenario_section(r: RunData) -> str:
     return section("scenario", "Scenario", row(*parts))
 
 
-def _table(r: RunData) -> dict[str, np.ndarray]:
+def _source(r: RunData) -> TableSource:
     """The run's table, for the sections that :func:`run_body` shows only when there is one."""
-    assert r.table is not None, "a table section of a run without a table"
-    return r.table
+    assert r.source is not None, "a table section of a run without a table"
+    return r.source
+
+
+def streamed_panels(src: TableSource, build: Callable[[dict], tuple[list[tuple], list[str]]]
+                    ) -> tuple[list[tuple], list[str], tuple[float, float]]:
+    """``build(batch)``'s panels with each line decimated as the batches pass
+    (:class:`.stream.StreamDecimator`: lines ``(label, (t, y))``), the titles it misses, and
+    the table's first and last time [s]."""
+    decs: list[list[StreamDecimator]] | None = None
+    shape: list[tuple] = []
+    missing: list[str] = []
+    t0 = t1 = float("nan")
+    for b in src.batches():
+        panels, missing = build(b)
+        if decs is None:
+            t0 = float(b["t"][0])
+            shape = panels
+            decs = [[StreamDecimator(src.n_rows, MAX_PLOT_POINTS) for _ in lines]
+                    for _t, _u, lines in panels]
+        for ds, (_t, _u, lines) in zip(decs, panels, strict=True):
+            for d, (_lab, y) in zip(ds, lines, strict=True):
+                d.add(b["t"], y)
+        t1 = float(b["t"][-1])
+    out = [(title, unit, [(lab, d.result()) for d, (lab, _y) in zip(ds, lines, strict=True)])
+           for ds, (title, unit, lines) in zip(decs or [], shape, strict=True)]
+    return out, missing, (t0, t1)
 
 
 def time_section(r: RunData) -> str:
-    table = _table(r)
-    t = table["t"]
-    panels, missing = time_history_panels(table)
-    body = f'<p class="meta">from {esc(r.table_note)}: {t.size} samples, ' \
-           f"t = {fmt(float(t[0]))} … {fmt(float(t[-1]))} s</p>"
+    src = _source(r)
+    panels, missing, (t0, t1) = streamed_panels(src, time_history_panels)
+    body = f'<p class="meta">from {esc(r.table_note)}: {src.n_rows} samples, ' \
+           f"t = {fmt(t0)} … {fmt(t1)} s</p>"
     if panels:
-        body += img(plot_panels(t, panels), "time histories")
+        body += img(plot_panels(None, panels), "time histories")
     if missing:
         body += note("not in this run's table: " + esc(", ".join(missing)))
     return section("time", "Time histories", body)
 
 
+def _stream_rate(src: TableSource) -> float | None:
+    """The table's sampling rate [Hz] (the first batch's median step), None if any step is
+    more than 1 % off it (:func:`nodes.recorder.ride_metrics.sample_rate`'s rule)."""
+    step = None
+    last = None
+    for b in src.batches(["t"]):
+        t = b["t"] if last is None else np.r_[last, b["t"]]
+        if t.size < 2:
+            continue
+        dt = np.diff(t)
+        if step is None:
+            step = float(np.median(dt))
+            if step <= 0.0:
+                return None
+        if np.max(np.abs(dt - step)) > 0.01 * step:
+            return None
+        last = t[-1:]
+    return None if step is None else 1.0 / step
+
+
 def psd_section(r: RunData) -> str:
-    table = _table(r)
-    t = table["t"]
-    fs = sample_rate(t)
+    src = _source(r)
+    fs = _stream_rate(src)
     if fs is None:
         return section("psd", "Power spectral densities",
                        note("the time column is not uniformly sampled (a run with missing "
                             "steps?): no PSD."))
-    sigs = []
-    _b, acc = first_present(table, BODY_ACC)
-    if acc:
-        sigs.append(("Body acceleration", "(m/s²)²/Hz", acc))
-    _b, ft = first_present(table, TYRE_FORCE)
-    if ft:
-        sigs.append(("Tyre force", "N²/Hz", ft))
+    n = src.n_rows
+    nperseg = psd_nperseg(n)
+    sigs: list[tuple[str, str, tuple[str, ...], list[tuple[str, StreamWelch]]]] = []
+    for b in src.batches():
+        if not sigs:
+            wanted: tuple[tuple[str, str, tuple[str, ...]], ...] = (
+                ("Body acceleration", "(m/s²)²/Hz", BODY_ACC),
+                ("Tyre force", "N²/Hz", TYRE_FORCE))
+            for title, unit, bases in wanted:
+                _b, cols = first_present(b, bases)
+                if cols:
+                    sigs.append((title, unit, bases,
+                                 [(c, StreamWelch(fs, nperseg)) for c, _x in cols]))
+            if not sigs:
+                break
+        for _t, _u, bases, ws in sigs:
+            _b, cols = first_present(b, bases)
+            for (_c, w), (_c2, x) in zip(ws, cols, strict=True):
+                w.add(x)
     if not sigs:
         return section("psd", "Power spectral densities",
                        note("no body acceleration or tyre force in the table."))
     fmax = min(fs / 2, PSD_F_MAX_HZ)
     fig, axes = new_figure(1, len(sigs), row_h=3.4)
-    for ax, (title, unit, cols) in zip(axes, sigs, strict=True):
-        for c, x in cols:
-            f, p = welch_psd(x, fs)
+    for ax, (title, unit, _bases, ws) in zip(axes, sigs, strict=True):
+        for c, w in ws:
+            f, p = w.result()
             keep = (f > 0) & (f <= fmax)
             ax.semilogy(f[keep], np.maximum(p[keep], 1e-30), lw=1.0, label=c or None)
         ax.set_title(title, fontsize=10, loc="left")
         ax.set_xlabel("f [Hz]")
         ax.set_ylabel(unit)
         ax.grid(alpha=0.3, which="both")
-        if len(cols) > 1:
+        if len(ws) > 1:
             ax.legend(fontsize=7)
-    n = t.size
     body = img(fig_uri(fig), "PSDs") + (
-        f'<p class="meta">Welch, Hann window, {min(n, max(256, n // 4))} samples per segment, '
-        f"50 % overlap, mean removed; fs = {fmt(fs)} Hz; shown to {fmt(fmax)} Hz.</p>")
+        f'<p class="meta">Welch, Hann window, {nperseg} samples per segment '
+        f"(n/4, at most {PSD_MAX_NPERSEG}), 50 % overlap, mean removed, segments accumulated "
+        f"as the table is read; fs = {fmt(fs)} Hz; shown to {fmt(fmax)} Hz.</p>")
     return section("psd", "Power spectral densities", body)
 
 
 def stats_section(r: RunData) -> str:
     chans = (r.summary or {}).get("channels") or {}
     src = "summary.json"
-    if not chans and r.table is not None:
-        from cosim.table import channel_stats
-
-        chans = channel_stats({"t": r.table["t"], **{k: v for k, v in r.table.items()
-                                                      if k != "t"}})
+    if not chans and r.source is not None:
+        chans = column_stats(r.source)
         src = r.table_note
     if not chans:
         return section("stats", "RMS and peak of every channel",
@@ -212,11 +272,31 @@ def stats_section(r: RunData) -> str:
     return section("stats", "RMS and peak of every channel", body)
 
 
+def streamed_ride_metrics(src: TableSource) -> dict[str, float]:
+    """:func:`nodes.recorder.ride_metrics.run_metrics` of the table, one group of columns at
+    a time (``t`` and one base's corners; ``z_b`` with ``z_w``): the metrics' periodograms
+    (thesis Eq 4.8/4.9) take whole signals, so the memory is 8 B a row for ``t`` and a
+    group's columns, not the whole table; the same values, in the same order."""
+    from nodes.recorder.ride_metrics import ARM_ACCEL_FIELDS, ROTATION_FIELDS, run_metrics
+
+    groups = [("plant/response/a_b",), ("plant/response/a_w",),
+              *((f"plant/response/{f}",) for f in (*ARM_ACCEL_FIELDS, *ROTATION_FIELDS)),
+              ("plant/state/z_b", "plant/state/z_w"), ("tyre_road/force/F_t",),
+              ("controller/force/F_d",)]
+    out: dict[str, float] = {}
+    for bases in groups:
+        def keep(name: str, bases: tuple[str, ...] = bases) -> bool:
+            return re.sub(r"\[\d+\]$", "", name) in bases
+        if not any(keep(n) for n in src.names):
+            continue
+        out.update(run_metrics(src.read(keep)))
+    return out
+
+
 def ride_section(r: RunData) -> str:
-    from nodes.recorder.ride_metrics import run_metrics
 
     try:
-        m = run_metrics(_table(r))
+        m = streamed_ride_metrics(_source(r))
     except (ValueError, KeyError) as exc:
         return section("ride", "Ride metrics", note(f"no ride metrics: {esc(exc)}"))
     if not m:
@@ -229,22 +309,25 @@ def ride_section(r: RunData) -> str:
     return section("ride", "Ride metrics", body)
 
 
-def loads_section(r: RunData) -> str:
-    table = _table(r)
-    t = table["t"]
+def _load_panels(b: dict) -> tuple[list[tuple], list[str]]:
     panels = []
-    _b, ft = first_present(table, TYRE_FORCE)
+    _b, ft = first_present(b, TYRE_FORCE)
     if ft:
         panels.append(("Tyre force (vertical, compressive +)", "N",
                        [(corner_label("F_t", c), x) for c, x in ft]))
-    groups = arm_groups(table)
-    for point, comps in groups.items():
+    for point, comps in arm_groups(b).items():
         unit = "N·m" if all(a.startswith("m") for a, _ in comps) else "N"
         panels.append((f"Lower arm: {point.replace('_', ' ')} (arm frame)", unit, comps))
+    return panels, []
+
+
+def loads_section(r: RunData) -> str:
+    src = _source(r)
+    panels, _m, _t = streamed_panels(src, _load_panels)
     body = ""
     if panels:
-        body += img(plot_panels(t, panels), "load histories")
-    if not groups:
+        body += img(plot_panels(None, panels), "load histories")
+    if not r.has_arm():
         model = ((r.scenario or {}).get("vehicle") or {}).get("model", "?")
         body += note(f"no lower-arm load channels (<code>plant/arm/...</code>) in this run: the "
                      f"vehicle model {cmd(model)} has no arm. The double-wishbone corner "
@@ -325,7 +408,7 @@ def sn_methods_table(fs: dict) -> str:
 def fatigue_section(r: RunData) -> str:
     d = cmd(f"suscosim fatigue {r.path}")
     if r.fatigue is None:
-        if r.table is not None and not r.has_arm():
+        if r.source is not None and not r.has_arm():
             text = ("no fatigue results: this run has no lower-arm loads (the fatigue analysis "
                     "needs the double-wishbone corner).")
         else:
@@ -387,7 +470,7 @@ def logs_section(r: RunData) -> str:
 def run_body(r: RunData) -> str:
     """The sections of a run page (without the page frame)."""
     parts = [scenario_section(r)]
-    if r.table is None:
+    if r.source is None:
         j = r.path / "journal.msgpack"
         if r.table_note:
             hint = esc(r.table_note)

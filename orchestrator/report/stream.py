@@ -1,0 +1,180 @@
+"""A run's table read in row batches for the report (#32): the time histories decimated
+(min/max per bucket) as the batches pass, the PSDs by Welch segments accumulated, the
+statistics combined batch by batch; the report's memory does not grow with the run.
+
+* :class:`TableSource`: ``table.parquet`` read :data:`BATCH_ROWS` rows at a time (pyarrow
+  ``iter_batches``, only the columns asked for), or a table already in memory (a CSV table or
+  one rebuilt from the journal: runs that left no Parquet file).
+* :class:`StreamDecimator`: :func:`.plots.decimate`'s points (each bucket's min and max in
+  their order) computed from batches; the same points as ``decimate`` on the whole signal.
+* :class:`StreamWelch`: ``scipy.signal.welch`` (Hann, 50 % overlap, mean removed per
+  segment, density, one-sided) from batches, holding one segment; at most
+  :data:`PSD_MAX_NPERSEG` samples a segment (below it the report's segment length as before).
+* :func:`column_stats`: max/min/peak/mean/rms/std of every column (the recorder's combiner,
+  :class:`cosim.table_writer._Stats`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+
+BATCH_ROWS = 65_536
+"""Rows of the table read at a time (~0.5 MB a column)."""
+PSD_MAX_NPERSEG = 32_768
+"""Largest Welch segment [samples]. The report took n/4 samples a segment (~8 averages);
+over an hour at 2 kHz that is a 1.8 million-sample segment (1/900 Hz resolution, memory
+that grows with the run). Capped at 2^15 (16 s at 2 kHz: 0.06 Hz resolution, well below the
+body's ~1 Hz and the wheel's ~10 Hz modes the PSD plot is read for; Welch 1967: more
+averages, a lower variance of each estimate). Runs up to 131 072 samples are unchanged."""
+
+
+class TableSource:
+    """The columns of a run's table, read in batches (``names``, ``n_rows``, :meth:`batches`)."""
+
+    def __init__(self, path: Path | None = None,
+                 table: dict[str, np.ndarray] | None = None) -> None:
+        self.path, self._table = path, table
+        if table is not None:
+            self.names = [n for n in table if n != "k"]
+            self.n_rows = int(np.asarray(table["t"]).size) if "t" in table else 0
+        else:
+            import pyarrow.parquet as pq
+
+            assert path is not None
+            f = pq.ParquetFile(path)
+            self.names = [n for n in f.schema_arrow.names if n != "k"]
+            self.n_rows = int(f.metadata.num_rows)
+
+    def batches(self, columns: Sequence[str] | None = None, rows: int = BATCH_ROWS
+                ) -> Iterator[dict[str, np.ndarray]]:
+        """``{column: float values}`` of ``columns`` (default all; ``t`` always), ``rows``
+        rows at a time."""
+        cols = list(dict.fromkeys(["t", *(self.names if columns is None else columns)]))
+        cols = [c for c in cols if c in self.names]
+        if self._table is not None:
+            tab = self._table
+            for i in range(0, self.n_rows, rows):
+                yield {c: np.asarray(tab[c][i:i + rows], dtype=float) for c in cols}
+            return
+        from cosim.table_batches import parquet_batches
+
+        assert self.path is not None
+        yield from parquet_batches(self.path, cols, rows)
+
+    def read(self, keep: Callable[[str], bool]) -> dict[str, np.ndarray]:
+        """The columns ``keep`` accepts (and ``t``), whole (the ride metrics' periodograms)."""
+        cols = [c for c in self.names if c == "t" or keep(c)]
+        parts: dict[str, list[np.ndarray]] = {c: [] for c in cols}
+        for b in self.batches(cols):
+            for c in cols:
+                parts[c].append(b[c])
+        return {c: np.concatenate(v) if v else np.zeros(0) for c, v in parts.items()}
+
+    def whole(self) -> dict[str, np.ndarray]:
+        """Every column whole (the sweep pages, which plot short runs side by side)."""
+        return self.read(lambda _n: True)
+
+
+class StreamDecimator:
+    """:func:`.plots.decimate` of a signal of ``n`` samples fed in batches (module docstring):
+    whole buckets of ``b = ceil(n / (n_max // 2))`` samples reduced as they complete (the
+    samples of an incomplete one held, fewer than ``b``), the last one at :meth:`result`, by
+    ``decimate`` itself: the same points as ``decimate`` on the whole signal."""
+
+    def __init__(self, n: int, n_max: int) -> None:
+        self.n, self.n_max = n, n_max
+        self.whole = n <= n_max
+        self.b = n if self.whole else int(math.ceil(n / (n_max // 2)))
+        self.t_parts: list[np.ndarray] = []
+        self.x_parts: list[np.ndarray] = []
+        self.held_t, self.held_x = np.zeros(0), np.zeros(0)
+
+    def add(self, t: np.ndarray, x: np.ndarray) -> None:
+        from .plots import decimate
+
+        self.held_t = np.concatenate([self.held_t, t])
+        self.held_x = np.concatenate([self.held_x, x])
+        if self.whole:
+            return
+        cut = self.held_x.size // self.b * self.b
+        if cut:
+            # whole buckets only: decimate of 2 * (cut / b) points ... buckets of exactly b
+            tt, xx = decimate(self.held_t[:cut], self.held_x[:cut], 2 * (cut // self.b),
+                              bucket=self.b)
+            self.t_parts.append(tt)
+            self.x_parts.append(xx)
+            self.held_t, self.held_x = self.held_t[cut:], self.held_x[cut:]
+
+    def result(self) -> tuple[np.ndarray, np.ndarray]:
+        """(t, x) of the decimated line."""
+        from .plots import decimate
+
+        if self.whole:
+            return self.held_t, self.held_x
+        if self.held_x.size:
+            tt, xx = decimate(self.held_t, self.held_x, 2, bucket=self.b)
+            self.t_parts.append(tt)
+            self.x_parts.append(xx)
+            self.held_t, self.held_x = np.zeros(0), np.zeros(0)
+        return np.concatenate(self.t_parts), np.concatenate(self.x_parts)
+
+
+def psd_nperseg(n: int) -> int:
+    """Welch segment of an ``n``-sample signal: the report's n/4 (at least 256, at most n),
+    capped at :data:`PSD_MAX_NPERSEG`."""
+    return int(min(n, max(256, n // 4), PSD_MAX_NPERSEG))
+
+
+class StreamWelch:
+    """``scipy.signal.welch(x, fs, nperseg, detrend="constant")`` of a signal fed in batches,
+    holding one segment (module docstring)."""
+
+    def __init__(self, fs: float, nperseg: int) -> None:
+        from scipy.signal import get_window
+
+        self.fs, self.nperseg = fs, nperseg
+        self.step = nperseg - nperseg // 2
+        self.win = get_window("hann", nperseg)
+        self.scale = 1.0 / (fs * float((self.win * self.win).sum()))
+        self.buf = np.zeros(0)
+        self.acc = np.zeros(nperseg // 2 + 1)
+        self.count = 0
+
+    def add(self, x: np.ndarray) -> None:
+        self.buf = np.concatenate([self.buf, np.asarray(x, dtype=float)])
+        while self.buf.size >= self.nperseg:
+            seg = self.buf[:self.nperseg]
+            spec = np.fft.rfft(self.win * (seg - seg.mean()))
+            self.acc += (spec.real ** 2 + spec.imag ** 2)
+            self.count += 1
+            self.buf = self.buf[self.step:]
+
+    def result(self) -> tuple[np.ndarray, np.ndarray]:
+        """(f [Hz], P [unit²/Hz]) one-sided; empty arrays before a whole segment."""
+        f = np.fft.rfftfreq(self.nperseg, 1.0 / self.fs)
+        if self.count == 0:
+            return f[:0], f[:0]
+        p = self.acc * self.scale / self.count
+        if self.nperseg % 2:
+            p[1:] *= 2.0
+        else:
+            p[1:-1] *= 2.0
+        return f, p
+
+
+def column_stats(src: TableSource) -> dict[str, dict[str, float]]:
+    """Max, min, peak (signed) and its time, mean, rms, std of every column but ``t``."""
+    from cosim.table_writer import _Stats
+
+    stats: dict[str, _Stats] = {}
+    for b in src.batches():
+        t = b["t"]
+        for c, x in b.items():
+            if c != "t" and x.size:
+                stats.setdefault(c, _Stats()).add(x, t)
+    return {c: s.result() for c, s in stats.items()}
+
