@@ -4,6 +4,7 @@ whether the table it rebuilds equals the recorder's ``table.parquet`` bit for bi
 
     python bench/bench_memory.py [--steps 10000 100000 1000000] [--corner-steps 100000]
                                  [--keep DIR] [--report]
+    python bench/bench_memory.py --post RUN_DIR ... [--scope-s 120]
 
 Cases: the Chapter 3 lumped quarter car (distributed, h = 1 ms: ``run.t_end`` = steps x h)
 at each ``--steps``; the Chapter 6 realistic corner with live fatigue (h = 0.5 ms; the road
@@ -11,8 +12,10 @@ made long enough for ``--corner-steps``: ``road.length_m``, 4235 steps per 20 m)
 Peak RSS is each process's VmHWM (``/proc/PID/status``) as last sampled (every 0.1 s, and
 it only grows). ``values`` is the table's columns less ``k`` and ``t``: the 8-byte values a
 step carries; the journal's bar is 1.5x that. ``--report`` also builds ``suscosim report`` of
-each run and gives its wall time and peak RSS. Markdown table on stdout; docs/memory.md
-holds the measured one.
+each run and gives its wall time and peak RSS. ``--post`` measures, on finished run folders
+(those ``--keep`` kept, or longer ones made by ``bench/tile_table.py``), every command that
+reads one: ``report``, batch ``fatigue``, ``export``, ``replay``, ``scope``. Markdown table
+on stdout; docs/memory.md holds the measured one.
 """
 
 from __future__ import annotations
@@ -31,6 +34,8 @@ ROOT = Path(__file__).resolve().parent.parent
 CH3 = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
 CH6 = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
 CH6_STEPS_PER_M = 4235 / 20.0
+POST = ("run", "export", "report", "fatigue", "replay", "scope")
+"""The suscosim commands whose processes are sampled (``run``: the orchestrator)."""
 
 
 def _children(pid: int) -> list[int]:
@@ -58,8 +63,8 @@ def _sample(pid: int) -> tuple[str, int] | None:
         name = "export"
     elif "node" in args:
         name = args[args.index("node") + 1]
-    elif any(a in ("run", "export", "report") for a in args):
-        name = next(a for a in args if a in ("run", "export", "report"))
+    elif any(a in POST for a in args):
+        name = next(a for a in args if a in POST)
         name = "orchestrator" if name == "run" else name
     else:
         return None
@@ -143,6 +148,54 @@ def case(label: str, scenario: Path, sets: list[str], work: Path, report: bool) 
     return row
 
 
+def post(label: str, run: Path, work: Path, scope_s: float) -> dict:
+    """Peak RSS [MB] and wall time [s] of the commands that read a finished run folder:
+    ``report``, batch ``fatigue`` (a run with ``plant/arm`` loads), ``export RUN --format
+    parquet`` (batches of the table), ``replay --fast`` (the journal republished, nobody
+    listening), ``scope --fast`` (the journal replayed into the page's state, at most
+    ``scope_s`` s)."""
+    import pyarrow.parquet as pq
+
+    py = sys.executable
+    names = pq.ParquetFile(run / "table.parquet").schema_arrow.names
+    cmds = {"report": [py, "-m", "orchestrator", "report", str(run), "--out",
+                       str(work / f"{label}.html")],
+            "export": [py, "-m", "orchestrator", "export", str(run), "--format", "parquet",
+                       "--out", str(work / f"{label}-export-parquet")]}
+    if any(n.startswith("plant/arm/") for n in names):
+        cmds["fatigue"] = [py, "-m", "orchestrator", "fatigue", str(run), "--quiet", "--out",
+                           str(work / f"{label}-fatigue")]
+    if (run / "journal.msgpack").is_file():
+        cmds["replay"] = [py, "-m", "orchestrator", "replay", str(run), "--fast", "--wait",
+                          "0", "--listen", "tcp/127.0.0.1:0"]
+        cmds["scope"] = [py, "-m", "orchestrator", "scope", str(run), "--replay", "--fast",
+                         "--port", "0", "--duration", f"{scope_s:g}"]
+    out: dict = {"case": label, "rows": pq.ParquetFile(run / "table.parquet").metadata.num_rows}
+    for name, cmd in cmds.items():
+        try:
+            wall, rss, _ = measured(cmd)
+            out[name] = (wall, rss.get(name, 0) / 2**20)
+        except RuntimeError as exc:
+            out[name] = (float("nan"), float("nan"))
+            print(f"# {label} {name}: {exc}", file=sys.stderr)
+        print(f"# {label} {name}: {out[name]}", file=sys.stderr, flush=True)
+    for d in ("export-parquet", "fatigue"):
+        shutil.rmtree(work / f"{label}-{d}", ignore_errors=True)
+    return out
+
+
+def post_table(rows: list[dict]) -> str:
+    names = ["report", "fatigue", "export", "replay", "scope"]
+    head = ["case", "rows", *[f"{n} s (MB)" for n in names]]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        cells = [r["case"], str(r["rows"])]
+        for n in names:
+            cells.append(f"{r[n][0]:.0f} ({r[n][1]:.0f})" if n in r else "-")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def table(rows: list[dict]) -> str:
     names = sorted({n for r in rows for n in r["rss_mb"]})
     head = ["case", "steps", "wall s", "steps/s", *[f"{n} MB" for n in names],
@@ -172,7 +225,18 @@ def main(argv: list[str] | None = None) -> int:
                     help="coupled steps of the realistic corner with live fatigue (0: none)")
     ap.add_argument("--keep", help="keep the run folders here (default: a temporary folder)")
     ap.add_argument("--report", action="store_true", help="also time suscosim report")
+    ap.add_argument("--post", nargs="*", default=None, metavar="RUN_DIR",
+                    help="measure only the commands that read these finished run folders "
+                         "(report, fatigue, export, replay, scope: `post`), no runs")
+    ap.add_argument("--scope-s", type=float, default=120.0,
+                    help="longest scope replay measured [s] (--post)")
     args = ap.parse_args(argv)
+    if args.post is not None:
+        work = Path(tempfile.mkdtemp(prefix="bench_memory-post-"))
+        rows = [post(Path(d).name, Path(d), work, args.scope_s) for d in args.post]
+        print(post_table(rows))
+        shutil.rmtree(work, ignore_errors=True)
+        return 0
     work = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bench_memory-"))
     work.mkdir(parents=True, exist_ok=True)
     rows = []

@@ -79,9 +79,9 @@ def table_source(run_dir: Path) -> Path:
 def table_batches(src: Path, rows: int = BATCH_ROWS) -> Batches:
     """Batches of ``t`` and the ``plant/arm/...`` columns of a run's table.
 
-    Parquet: read ``rows`` rows at a time (pyarrow's ``iter_batches``). CSV (a run that left
-    no Parquet table): read whole by :func:`cosim.table.read_table`, then cut (bounded only
-    for Parquet)."""
+    Parquet: a row group at a time (:func:`cosim.table_batches.parquet_batches`). CSV (a
+    run that left no Parquet table): read whole by :func:`cosim.table.read_table`, then cut
+    (bounded only for Parquet)."""
     if src.suffix == ".parquet":
         import pyarrow.parquet as pq
 

@@ -129,7 +129,7 @@ class DamageMap:
         """The steps before the scope joined, from the run's journal (the recorder writes it
         as the run goes): True when they are in (or when giving up after a few tries)."""
         from cosim.errors import WireError
-        from cosim.journal import read_journal
+        from cosim.journal import iter_records
         from cosim.wire import decode
 
         assert self.journal is not None, "backfill without a journal (its tries start used up)"
@@ -137,7 +137,7 @@ class DamageMap:
         want = "/".join(ch.LOAD_CHANNEL)
         early: dict[int, tuple[float, list[float]]] = {}
         try:
-            for channel, raw in read_journal(self.journal).records:
+            for channel, raw in iter_records(self.journal):  # a segment at a time (#32)
                 if channel != want:
                     continue
                 msg = decode(raw)
