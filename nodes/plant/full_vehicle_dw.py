@@ -14,8 +14,13 @@ CG: x = a ahead for the front axle, b = L - a behind for the rear.
 Forces per corner, as the quarter car applies them (:mod:`.double_wishbone`): the torsion bar
 tau = tau_0 - K_theta theta on the lower arm's joint, the damper force F_d along the damper
 axis (compression-positive on the body), the jounce bumper along the body's z, the tyre force
-F_t vertical at the wheel centre (this first piece takes the vertical tyre models' F_t; the
-3-D tyre of the design is the next step).
+F_t vertical at the wheel centre (the vertical tyre models); or, once
+:meth:`~.full_vehicle_dw_wheels.WheelsAndDriver.set_tyre_forces` gave the Magic Formula's
+road-plane F_x, F_y, M_z (:mod:`nodes.tyre_road.tyre_3d`), F_t along the road normal with
+them at the contact point on the wheel link. The driver's inputs (:meth:`set_driver`): a
+torque on each wheel's spin joint (brake or drive; the reaction on the upright) and the
+travel of the steering rack, a prismatic link across the body carrying the front tie rods'
+inner joints (held by a position motor; 2 kg, taken from the body at its CG).
 
 **Static state.** The tyre loads W_i balance the weight of every link and its moment about the
 CG (left = right; the two axles from the force and pitch-moment balance), and the four torsion
@@ -43,6 +48,7 @@ from cosim.corner import Corner
 from .arm_loads import arm_loads_at
 from .bump_stop import BumpStopParams, bump_stop_force
 from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
+from .full_vehicle_dw_wheels import WheelsAndDriver, steer_lever
 from .model import GRAVITY, PlantModel
 from .quarter_car_lumped import load_urdf_text, new_direct_client
 from .quiet_pybullet import p
@@ -60,7 +66,14 @@ class FullVehicleDWParams:
     roll_inertia: float = 930.8
     yaw_inertia: float = 3522.5 + 930.8
     cg_height: float = 0.55
+    speed_kmh: float = 0.0
+    """The forward speed at t = 0 [km/h]: body and wheel centres at it, the wheels spinning
+    at v / r_l (free rolling on the tyre of :mod:`nodes.tyre_road.tyre_3d`)."""
 
+
+RACK_MASS = 2.0
+"""The steering rack's mass [kg], taken from ``sprung_mass`` (the rack is body) and placed at
+the CG, so the vehicle's mass and CG do not move (ours: a small car's rack and pinion)."""
 
 WHEEL_SHARE = 0.62
 """The spinning share of a corner's hub mass when its file gives no ``masses.wheel`` [-]: of
@@ -83,7 +96,7 @@ def _rot(quat) -> np.ndarray:
     return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
 
 
-class FullVehicleDoubleWishbone(PlantModel):
+class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
     """Four double-wishbone corners on a free body; corners FL, FR, RL, RR."""
 
     n_corners = 4
@@ -118,6 +131,7 @@ class FullVehicleDoubleWishbone(PlantModel):
                  for j in range(p.getNumJoints(bd, physicsClientId=cl))}
         self.link = [{k: names[f"{k}_{n}"] for k in ("lower_arm", "hub", "upper_arm",
                                                      "tie_rod", "wheel")} for n in CORNERS]
+        self.rack = names["rack"]
         for j in names.values():
             info = p.getJointInfo(bd, j, physicsClientId=cl)
             if info[2] == p.JOINT_SPHERICAL:
@@ -146,20 +160,28 @@ class FullVehicleDoubleWishbone(PlantModel):
         self._F_t = np.zeros(4)
         self._F_d = np.zeros(4)
         self._tau = np.zeros(4)
+        self.r_l = np.array([c.tyre_loaded_radius for c in self.corners])
+        self.steer_lever = float(np.mean([steer_lever(g) for g in self.geoms[:2]]))
+        self._F_road: np.ndarray | None = None  # (4, 3): Fx, Fy, Mz in the road plane
+        self._T_wheel = np.zeros(4)
+        self._rack = 0.0
         self._dt: float | None = None
         self._read()
         self._s0 = self._snapshot()
         self.tau0 = np.zeros(4)
         self._W = self._static_loads()
         self.tau0 = self._static_torques(static_dt)
+        if pr.speed_kmh > 0.0:
+            self._launch(pr.speed_kmh / 3.6)
         self._read()
 
     # --- build ---
     def _urdf(self) -> str:
         pr = self.params
-        s = _link("body", pr.sprung_mass, [0, 0, 0],
+        s = _link("body", pr.sprung_mass - RACK_MASS, [0, 0, 0],
                   (pr.roll_inertia, pr.pitch_inertia, pr.yaw_inertia))
-        joints = ""
+        s += _link("rack", RACK_MASS, [0, 0, 0], (0.01, 0.01, 0.01))
+        joints = _joint("rack", "prismatic", "body", "rack", [0, 0, 0], "0 1 0")
         for i, (g, c, n) in enumerate(zip(self.geoms, self.corners, CORNERS, strict=True)):
             wc, m = self.wheel_centres[i], c.masses
             la_o = wc + 0.5 * (g.lower_bush_front + g.lower_bush_rear)
@@ -185,7 +207,8 @@ class FullVehicleDoubleWishbone(PlantModel):
             joints += _joint(f"hub_{n}", "spherical", f"lower_arm_{n}", f"hub_{n}", bj - la_o)
             joints += _joint(f"upper_arm_{n}", "revolute", "body", f"upper_arm_{n}", ua_o,
                              _fmt(ua_axis / np.linalg.norm(ua_axis)))
-            joints += _joint(f"tie_rod_{n}", "spherical", "body", f"tie_rod_{n}", tri)
+            joints += _joint(f"tie_rod_{n}", "spherical", "rack" if i < 2 else "body",
+                             f"tie_rod_{n}", tri)
             joints += _joint(f"wheel_{n}", "continuous", f"hub_{n}", f"wheel_{n}", wc - bj,
                              "0 1 0")
         return f'<?xml version="1.0"?>\n<robot name="full_vehicle_dw">\n{s}{joints}</robot>\n'
@@ -202,8 +225,9 @@ class FullVehicleDoubleWishbone(PlantModel):
         """W_i [N]: the force and pitch-moment balance of every link's weight, left = right."""
         cl, bd = self.client, self.body
         base, _ = p.getBasePositionAndOrientation(bd, physicsClientId=cl)
-        masses = [p.getDynamicsInfo(bd, -1, physicsClientId=cl)[0]]
-        xs = [0.0]
+        masses = [p.getDynamicsInfo(bd, -1, physicsClientId=cl)[0],
+                  p.getDynamicsInfo(bd, self.rack, physicsClientId=cl)[0]]
+        xs = [0.0, 0.0]
         for lk in self.link:
             for j in lk.values():
                 masses.append(p.getDynamicsInfo(bd, j, physicsClientId=cl)[0])
@@ -243,7 +267,8 @@ class FullVehicleDoubleWishbone(PlantModel):
         v, w = p.getBaseVelocity(bd, physicsClientId=cl)
         self._base = (np.array(pos), _rot(quat), np.array(v), np.array(w), quat)
         st: dict[str, list] = {k: [] for k in ("theta", "omega", "hub", "vhub", "top", "bot",
-                                                "vtop", "vbot", "pad", "R_arm", "hub_q")}
+                                                "vtop", "vbot", "pad", "R_arm", "hub_q",
+                                                "wc", "vwc", "axis", "spin")}
         R, P, V, Wb = self._base[1], self._base[0], self._base[2], self._base[3]
         for i, (g, lk) in enumerate(zip(self.geoms, self.link, strict=True)):
             js = p.getJointState(bd, lk["lower_arm"], physicsClientId=cl)
@@ -267,6 +292,13 @@ class FullVehicleDoubleWishbone(PlantModel):
             st["vbot"].append(np.array(arm[6]) + np.cross(arm[7], bot - np.array(arm[0])))
             pad = self._pad_body[i]
             st["pad"].append(None if pad is None else np.array(arm[4]) + Ra @ (pad - la_o))
+            wh = p.getLinkState(bd, lk["wheel"], computeLinkVelocity=1,
+                                computeForwardKinematics=1, physicsClientId=cl)
+            ax = _rot(wh[5])[:, 1]
+            st["wc"].append(np.array(wh[0]))
+            st["vwc"].append(np.array(wh[6]))
+            st["axis"].append(ax)
+            st["spin"].append(float(np.dot(wh[7], ax)))
         self._st = st
 
     def _snapshot(self) -> dict[str, np.ndarray]:
@@ -306,6 +338,9 @@ class FullVehicleDoubleWishbone(PlantModel):
 
     def _apply(self) -> None:
         cl, bd = self.client, self.body
+        p.setJointMotorControl2(bd, self.rack, p.POSITION_CONTROL, targetPosition=self._rack,
+                                targetVelocity=0.0, positionGain=1.0, velocityGain=1.0,
+                                force=1e7, physicsClientId=cl)
         bump = self._bump_forces() if hasattr(self, "_s0") else np.zeros(4)
         ez = self._base[1][:, 2]
         st = self._st
@@ -317,8 +352,20 @@ class FullVehicleDoubleWishbone(PlantModel):
         for i, lk in enumerate(self.link):
             p.setJointMotorControl2(bd, lk["lower_arm"], p.TORQUE_CONTROL,
                                     force=float(self._tau[i]), physicsClientId=cl)
-            p.applyExternalForce(bd, lk["hub"], [0.0, 0.0, float(self._F_t[i])],
-                                 self._st["hub"][i].tolist(), p.WORLD_FRAME, physicsClientId=cl)
+            if self._F_road is None:
+                p.applyExternalForce(bd, lk["hub"], [0.0, 0.0, float(self._F_t[i])],
+                                     self._st["hub"][i].tolist(), p.WORLD_FRAME,
+                                     physicsClientId=cl)
+            else:
+                P, e = self.contact_frame(i)
+                Fx, Fy, Mz = self._F_road[i]
+                F = Fx * e[0] + Fy * e[1] + float(self._F_t[i]) * e[2]
+                p.applyExternalForce(bd, lk["wheel"], F.tolist(), P.tolist(), p.WORLD_FRAME,
+                                     physicsClientId=cl)
+                p.applyExternalTorque(bd, lk["wheel"], (Mz * e[2]).tolist(), p.WORLD_FRAME,
+                                      physicsClientId=cl)
+            p.setJointMotorControl2(bd, lk["wheel"], p.TORQUE_CONTROL,
+                                    force=float(self._T_wheel[i]), physicsClientId=cl)
             top, bot = self._st["top"][i], self._st["bot"][i]
             u = (top - bot) / np.linalg.norm(top - bot)
             f = self._F_d[i] * u
@@ -350,7 +397,8 @@ class FullVehicleDoubleWishbone(PlantModel):
         roll, pitch = float(np.arctan2(R[2, 1], R[2, 2])), float(np.arcsin(-R[2, 0]))
         w_body = R.T @ self._base[3]
         zc = self._s0["base"][2]
-        return {"z_b": zb - (zc + self.wheel_centres[:, 2]), "v_b": vb,
+        return {**self.wheel_kinematics(), **self.body_motion(),
+                "z_b": zb - (zc + self.wheel_centres[:, 2]), "v_b": vb,
                 "z_w": np.array([h[2] for h in st["hub"]]) - s0["hub_z"],
                 "v_w": np.array([v[2] for v in st["vhub"]]),
                 "z_damper": s0["L_d"] - L_d, "v_damper": v_d,

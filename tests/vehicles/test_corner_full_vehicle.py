@@ -39,7 +39,9 @@ def test_static_loads_carry_the_weight_and_balance_the_pitch_moment(car):
     front = 1870.0 * GRAVITY * (L - a) / L + 2 * 47.75 * GRAVITY
     assert W[0] + W[1] == pytest.approx(front, rel=2e-3)
     # the torsion preloads of mirrored corners are mirrored (the arm turns the other way)
-    assert car.tau0[1] == pytest.approx(-car.tau0[0], rel=1e-6)
+    # (the front pair within 1e-5: the steering rack's motor joins the constraint solve and
+    # its iterations leave 4.5e-6 of asymmetry between the two tie rods)
+    assert car.tau0[1] == pytest.approx(-car.tau0[0], rel=1e-5)
     assert car.tau0[3] == pytest.approx(-car.tau0[2], rel=1e-6)
 
 
@@ -60,7 +62,7 @@ def test_static_arm_loads_mirror_left_right_and_match_the_quarter_car(car):
     loads = car.corner_arm_loads()
     fl, fr = loads["FL"], loads["FR"]
     for k, v in fl.items():  # the right arm in its mirrored frame carries the left's loads
-        assert fr[k] == pytest.approx(v, rel=1e-5, abs=1e-3), k  # solver noise
+        assert fr[k] == pytest.approx(v, rel=5e-5, abs=5e-3), k  # solver noise (the rack's)
     # each arm in balance with its weight (static): forces in its frame, z up
     for name in ("FL", "FR", "RL", "RR"):
         a = loads[name]

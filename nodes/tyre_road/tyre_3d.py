@@ -1,0 +1,90 @@
+"""The 3-D tyre of the four-corner vehicle (#31 item 2): the Magic Formula's road-plane forces
+from the wheel's kinematics, beside the vertical force of the point-contact tyre. Pure
+numerics: no I/O (the tyre/road node and :mod:`nodes.plant.full_vehicle_dw_sim` call it).
+
+Per corner, from what the plant publishes (``FullVehicleDoubleWishbone.wheel_kinematics``,
+the fields ``vx_wc``, ``vy_wc``, ``omega_w``, ``gamma``, ``r_l`` of ``plant/state``):
+
+* the slips (ISO-W, the .tir file's axes): longitudinal slip
+  kappa = (omega r_l - V_x) / max(|V_x|, V_LOW) (the loaded radius taken as the effective
+  rolling radius: ours, below), slip angle alpha = atan(V_y / max(|V_x|, V_LOW)) (ISO 8855:
+  the angle from the wheel's x axis to the centre's velocity, positive about z up; the MF
+  gives F_y of the opposite sign, PKY1 < 0), inclination gamma;
+* transient slip: the slips that act are first-order lags of the kinematic ones over the
+  travelled distance with the MF 6.1 relaxation lengths sigma_x = K_xk / C_x,
+  sigma_y = |K_ya| / C_y of the current load (:func:`.magic_formula.relax`, held over the
+  communication step h: the node computes once per step);
+* F_z: the vertical tyre's F_t (point contact, W + k_t (z_g - z_w) >= 0, the thesis's);
+* F_x, F_y, M_z: :func:`.magic_formula.steady_state` at (F_z, kappa', alpha', gamma, V_x),
+  combined slip.
+
+Effective rolling radius (a choice the thesis does not make): the corner file's loaded
+radius r_l (0.30 m for the built-in), the same radius the plant rolls the wheel at (free
+rolling omega = V / r_l gives kappa = 0). A radial tyre's R_e is ~ R_0 - F_z / (3 k_z)
+(Pacejka 2012 Sec. 7.2.2, 0.34 m for the shipped .tir); any constant R_e only shifts the
+free-rolling spin, so the forces of a manoeuvre do not depend on it.
+
+V_LOW = 1 m/s (ours): below it the slips' denominator is held (MF-Tyre's low-speed
+treatment is not ported: magic_formula.py); the events run above 3 m/s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .magic_formula import MagicFormula, relax, steady_state
+
+V_LOW = 1.0
+"""The smallest |V_x| the slips divide by [m/s] (module docstring)."""
+
+
+def kinematic_slip(kin: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(kappa [-], alpha [rad]) per corner from the wheel kinematics (module docstring)."""
+    vx = np.asarray(kin["vx_wc"], dtype=float)
+    vy = np.asarray(kin["vy_wc"], dtype=float)
+    den = np.maximum(np.abs(vx), V_LOW)
+    kappa = (np.asarray(kin["omega_w"], dtype=float) * np.asarray(kin["r_l"], dtype=float)
+             - vx) / den
+    return kappa, np.arctan(vy / den)
+
+
+@dataclass
+class Tyre3D:
+    """The Magic Formula on every corner, with its transient slips as state."""
+
+    mf: MagicFormula
+    transient: bool = True
+    kappa: np.ndarray | None = field(default=None, init=False)
+    """The slips that act (after the relaxation), per corner."""
+    alpha: np.ndarray | None = field(default=None, init=False)
+
+    def forces(self, kin: Mapping[str, np.ndarray], F_z: np.ndarray,  # noqa: N803
+               h: float) -> dict[str, np.ndarray]:
+        """``Fx``, ``Fy`` [N] along the road-plane axes of the wheel (x forward in the wheel
+        plane, y left), ``Mz`` [N m] about the road normal, and the slips ``kappa``,
+        ``alpha`` that made them, the slip stiffnesses ``Kxk`` [N], ``Kya`` [N/rad] (for a
+        Jacobian coupling), after a step of ``h`` [s] from the previous call."""
+        kappa, alpha = kinematic_slip(kin)
+        vx = np.asarray(kin["vx_wc"], dtype=float)
+        gamma = np.asarray(kin["gamma"], dtype=float)
+        Fz = np.maximum(np.asarray(F_z, dtype=float), 0.0)  # noqa: N806
+        if self.transient:
+            if self.kappa is None or self.alpha is None:  # start: steady state
+                self.kappa, self.alpha = kappa, alpha
+            else:
+                sig = steady_state(self.mf, np.maximum(Fz, 1.0), self.kappa, self.alpha,
+                                   gamma, np.abs(vx) + V_LOW)
+                self.kappa = relax(self.kappa, kappa, vx, sig["sigma_x"], h)
+                self.alpha = relax(self.alpha, alpha, vx, sig["sigma_y"], h)
+            kappa, alpha = self.kappa, self.alpha
+        out = steady_state(self.mf, Fz, kappa, alpha, gamma, np.maximum(np.abs(vx), V_LOW))
+        return {"Fx": out["Fx"], "Fy": out["Fy"], "Mz": out["Mz"], "kappa": kappa,
+                "alpha": alpha, "Kxk": out["Kxk"], "Kya": out["Kya"]}
+
+    def checkpoint(self) -> dict[str, list[float] | None]:
+        """The transient slips (the node's state between steps), for a checkpoint."""
+        return {"kappa": None if self.kappa is None else self.kappa.tolist(),
+                "alpha": None if self.alpha is None else self.alpha.tolist()}

@@ -1,0 +1,131 @@
+"""The four-corner vehicle with Magic Formula tyres and the driver (#31 items 2-3): straight
+braking at 0.8 g and steady cornering at 0.5 g against hand calculations (the bars of #31),
+stepped in the co-simulation's exchange (nodes/plant/full_vehicle_dw_sim.py: h = 2 ms,
+4 substeps, the tyre and damper held over a step, as the Ch 4-6 scenarios run)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nodes.plant.driver import Driver
+from nodes.plant.full_vehicle_dw import FullVehicleDoubleWishbone, FullVehicleDWParams
+from nodes.plant.full_vehicle_dw_sim import simulate
+from nodes.plant.model import GRAVITY
+from nodes.tyre_road.magic_formula import MagicFormula
+from nodes.tyre_road.tyre_3d import Tyre3D, kinematic_slip
+
+H, SUB, K_T, C_D = 0.002, 4, 239000.0, 3800.0
+M_B, H_CG, L, T, R_L = 1870.0, 0.55, 2.774, 1.411, 0.30
+
+
+def _hand_mass_and_cg(car: FullVehicleDoubleWishbone) -> tuple[float, float]:
+    """m [kg] and the CG height [m] of body and unsprung masses (these at the wheel centres,
+    r_l above the road): independent of the URDF."""
+    m_u = sum(c.masses[k] for c in car.corners
+              for k in ("hub", "lower_arm", "upper_arm", "tie_rod"))
+    m = M_B + m_u
+    return m, (M_B * H_CG + m_u * R_L) / m
+
+
+def _run(speed_kmh: float, t_end: float, **driver):
+    car = FullVehicleDoubleWishbone(FullVehicleDWParams(speed_kmh=speed_kmh))
+    try:
+        m, h = _hand_mass_and_cg(car)
+        drv = Driver(mass=m, wheel_radius=R_L, wheelbase=L, **driver)
+        hist = simulate(car, Tyre3D(MagicFormula.from_tir()), drv, t_end, H, SUB, K_T, C_D)
+        return car, hist, m, h
+    finally:
+        car.close()
+
+
+def test_the_slips_of_a_free_rolling_and_a_sliding_wheel():
+    kin = {"vx_wc": np.array([10.0, 10.0, 10.0]), "vy_wc": np.array([0.0, 1.0, 0.0]),
+           "omega_w": np.array([10.0 / 0.3, 10.0 / 0.3, 9.0 / 0.3]),
+           "r_l": np.full(3, 0.3)}
+    kappa, alpha = kinematic_slip(kin)
+    assert kappa == pytest.approx([0.0, 0.0, -0.1], abs=1e-12)
+    assert alpha == pytest.approx([0.0, np.arctan(0.1), 0.0], abs=1e-12)
+    out = Tyre3D(MagicFormula.from_tir(), transient=False).forces(
+        {**kin, "gamma": np.zeros(3)}, np.full(3, 5000.0), H)
+    assert out["Fy"][1] < -3000.0  # a wheel sliding left is pushed right (ISO-W, PKY1 < 0)
+    assert out["Fx"][2] < -3000.0  # a wheel spinning slower than it rolls brakes
+
+
+@pytest.fixture(scope="module")
+def braking():
+    v0 = 50.0 / 3.6
+    a = 0.8 * GRAVITY
+    return _run(50.0, 1.6, speed=[(0.0, v0), (0.2, v0), (1.7, v0 - a * 1.5)])
+
+
+def test_braking_at_0_8_g_load_transfer_and_the_front_arm_bush_x_loads(braking):
+    car, hist, m, h = braking
+    win = (hist.t >= 0.6) & (hist.t <= 1.4)  # one pitch period (0.8 s) of steady braking
+    a_x = float(np.mean(hist.a_x[win]))
+    assert a_x == pytest.approx(-0.8 * GRAVITY, rel=0.03)
+    W = car.static_tyre_load()
+    # longitudinal load transfer: dFz = m a h / L per axle (hand), measured at the tyres
+    dFz_hand = m * 0.8 * GRAVITY * h / L
+    dFz = np.mean(hist.F_z[win], axis=0) - W
+    assert dFz[0] + dFz[1] == pytest.approx(dFz_hand, rel=0.10)
+    assert -(dFz[2] + dFz[3]) == pytest.approx(dFz_hand, rel=0.10)
+    # the tyre's Fx: the brake balance's front share of m a, each front tyre
+    Fx_hand = -0.72 / 2 * m * 0.8 * GRAVITY
+    assert np.mean(hist.F_x[win][:, 0]) == pytest.approx(Fx_hand, rel=0.05)
+    # the front-left lower arm's bush x-loads, by hand: the upright (hub and wheel) in side
+    # view takes the tyre's Fx, Fz at the contact patch (r_l below the wheel centre, x = 0),
+    # the lower ball joint's X_l, Z_l and the upper ball joint's x force (the upper arm
+    # carries no vertical load: its plane is near horizontal); moments about the upper ball
+    # joint give X_l, with the upright's and wheel's inertia (m_h a at the wheel centre,
+    # I_spin d(omega)/dt); the arm's bushes share X_l + m_arm a equally (pivot axis along x)
+    g = car.geoms[0]
+    c = car.corners[0]
+    Fz_hand = W[0] + dFz_hand / 2
+    x_l, z_l = g.lower_ball_joint[0], g.lower_ball_joint[2]
+    x_u, z_u = g.upper_ball_joint[0], g.upper_ball_joint[2]
+    a = -0.8 * GRAVITY
+    m_h = c.masses["hub"]
+    Z_l = -(Fz_hand - m_h * GRAVITY)
+    i_spin = 0.62 * m_h * 0.205 ** 2
+    lhs = (-R_L - z_u) * Fx_hand - (0.0 - x_u) * Fz_hand - (x_l - x_u) * Z_l
+    inertia = (0.0 - z_u) * m_h * a + i_spin * a / R_L
+    X_l = (inertia - lhs) / (z_l - z_u)  # on the upright, forward +
+    bush_hand = (X_l + c.masses["lower_arm"] * a) / 2  # on the arm: B - X_l = m_arm a
+    fl = hist.arm["FL"]
+    win_a = win[:-1]
+    for key in ("bush_front_x", "bush_rear_x"):
+        assert np.mean(fl[key][win_a]) == pytest.approx(bush_hand, rel=0.10), key
+    # the right arm, in its mirrored frame, carries the same fore-aft bush loads
+    assert np.mean(hist.arm["FR"]["bush_front_x"][win_a]) == pytest.approx(
+        np.mean(fl["bush_front_x"][win_a]), rel=0.02)
+
+
+@pytest.fixture(scope="module")
+def cornering():
+    R = 40.0
+    v0 = float(np.sqrt(0.5 * GRAVITY * R))
+    return _run(v0 * 3.6, 3.0, speed=[(0.0, v0)], radius=R)
+
+
+def test_steady_cornering_at_0_5_g_lateral_load_transfer(cornering):
+    car, hist, m, h = cornering
+    win = hist.t >= 1.5
+    a_y = float(np.mean(hist.a_y[win]))
+    assert a_y == pytest.approx(0.5 * GRAVITY, rel=0.05)
+    W = car.static_tyre_load()
+    dFz = np.mean(hist.F_z[win], axis=0) - W
+    transfer = (dFz[1] - dFz[0] + dFz[3] - dFz[2]) / 2  # to the outer (right) wheels, total
+    # hand: moments about the ground's centreline, dFz t = m a_y h + m_s g (h_s - h_rc) phi:
+    # the body's roll phi moves its CG outboard; with no anti-roll bar (the corner file has
+    # none) the roll is large: phi = m_s a_y (h_s - h_rc) / (K_phi - m_s g (h_s - h_rc)),
+    # K_phi = 2 k_ride t^2 / 2 from the corner check's wheel rate in series with the tyre
+    k_w = 29453.0  # N/m, `suscosim corner check` (docs/corners.md)
+    k_ride = k_w * K_T / (k_w + K_T)
+    arm = H_CG - 0.030  # the roll centre 30 mm up (docs/corners.md)
+    phi = M_B * a_y * arm / (2 * k_ride * T ** 2 / 2 - M_B * GRAVITY * arm)
+    assert float(np.mean(np.abs(hist.roll[win]))) == pytest.approx(phi, rel=0.10)
+    hand = (m * a_y * h + M_B * GRAVITY * arm * phi) / T
+    assert transfer == pytest.approx(hand, rel=0.10)
+    # the textbook m a_y h / t alone leaves out the roll's CG shift (docs/corners.md)
+    assert transfer > 1.1 * m * a_y * h / T
