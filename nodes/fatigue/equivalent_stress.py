@@ -100,7 +100,14 @@ def abs_max_principal(s: np.ndarray) -> np.ndarray:
 
 def equivalent_of(comp: np.ndarray, kind: str) -> np.ndarray:
     """Equivalent stress of components laid out first, ``comp[6, ...]`` (the same values as
-    :func:`equivalent` of the components laid out last)."""
+    :func:`equivalent` of the components laid out last).
+
+    The arithmetic is elementwise, so its bits do not depend on the memory layout; a
+    (6, n_samples, k) ``comp`` whose (6, k, n_samples) transpose is the contiguous one (as
+    :func:`.superposition.superpose_components` gives) is computed in that order and the
+    result handed back as its (n_samples, k) view, without a transposing copy."""
+    if comp.ndim == 3 and comp.strides[2] > comp.strides[1]:
+        return equivalent_of(comp.transpose(0, 2, 1), kind).T
     if kind == "abs_max_principal":
         s1, s3 = principal_extremes_of(comp)
         return np.where(np.abs(s1) >= np.abs(s3), s1, s3)
