@@ -12,7 +12,7 @@ import math
 import os
 import threading
 from collections import Counter
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -154,6 +154,30 @@ def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> T
                 raise InputFileError(str(path), "non-numeric value", lineno) from None
         raise
     return {cols[i]: arr[:, i] for i in cut}
+
+
+def iter_table(path: str | Path, keep: Callable[[str], bool] | None = None,
+               batch_rows: int = 65_536) -> Iterator[Table]:
+    """The rows of a ``table.parquet`` in blocks of at most ``batch_rows`` (the columns as
+    :func:`read_table` selects them), for what must not hold a long run in memory. A file
+    that is not such a table is an :class:`~cosim.errors.InputFileError` naming it."""
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    try:
+        f = pq.ParquetFile(path)
+        names = [n for n in f.schema_arrow.names if keep is None or n in ("k", "t") or keep(n)]
+        batches = f.iter_batches(batch_size=batch_rows, columns=names)
+        for b in batches:
+            yield {c: b.column(i).to_numpy() for i, c in enumerate(b.schema.names)}
+    except OSError as exc:
+        if not path.is_file():
+            raise
+        raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
+    except InputFileError:
+        raise
+    except Exception as exc:  # pyarrow raises several types for a bad file
+        raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
 
 
 def channel_stats(table: Table) -> dict[str, dict[str, float]]:
