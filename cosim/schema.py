@@ -84,6 +84,25 @@ _PTS = ("loc1", "cg", "loc2")
 _ARM_POINTS = ("ball_joint", "damper_mount", "bush_front", "bush_rear")
 _DW = "double wishbone"
 _FV = "7-DOF full vehicle"
+_FVDW = "full_vehicle_double_wishbone"
+_MF = "magic_formula tyre"
+_ARM_CORNERS = ("FL", "FR", "RL", "RR")
+
+
+def _arm_fields() -> tuple[Field, ...]:
+    """The lower arm's load fields (``plant/arm`` and the per-corner ``plant/arm_<C>``)."""
+    return (
+        *(Field(f"{p}_{ax}", "N", f"load ON the lower arm at {p}, arm-frame {ax} axis "
+                "(cosim/lower_arm.py)", models=_DW)
+          for p in _ARM_POINTS for ax in "xyz"),
+        Field("bump_stop_y", "N", "bumper force on the arm at its pad, arm-frame y",
+              models=_DW),
+        Field("bump_stop_z", "N", "bumper force on the arm at its pad, arm-frame z (<= 0)",
+              models=_DW),
+        Field("torsion_bar_mx", "N m", "torsion-bar moment on the arm about its x axis, "
+              "preload included", models=_DW),
+    )
+
 
 CHANNELS: tuple[Channel, ...] = (
     Channel("plant", "state", (
@@ -101,6 +120,24 @@ CHANNELS: tuple[Channel, ...] = (
         Field("v_heave", "m/s", "heave velocity", models=_FV),
         Field("w_pitch", "rad/s", "pitch rate", models=_FV),
         Field("w_roll", "rad/s", "roll rate", models=_FV),
+        Field("vx_wc", "m/s", "wheel centre's velocity along the wheel's road-plane x "
+              "(forward in the wheel plane)", models=_FVDW),
+        Field("vy_wc", "m/s", "wheel centre's velocity along the road-plane y (left)",
+              models=_FVDW),
+        Field("omega_w", "rad/s", "wheel spin rate, forward rolling positive", models=_FVDW),
+        Field("gamma", "rad", "inclination of the wheel plane to the road normal, top to +y "
+              "positive (ISO-W)", models=_FVDW),
+        Field("x_wc", "m", "wheel centre's world x (its place along the road)",
+              models=_FVDW),
+        Field("y_wc", "m", "wheel centre's world y", models=_FVDW),
+        Field("r_l", "m", "loaded radius: contact point below the centre, rolling radius",
+              nonneg=True, models=_FVDW),
+        Field("x", "m", "body CG's world x", models=_FVDW),
+        Field("y", "m", "body CG's world y", models=_FVDW),
+        Field("yaw", "rad", "body heading", models=_FVDW),
+        Field("u", "m/s", "CG's speed along the heading", models=_FVDW),
+        Field("v", "m/s", "CG's speed across the heading (left)", models=_FVDW),
+        Field("w_yaw", "rad/s", "yaw rate", models=_FVDW),
     ), "the plant's state at t_k (what the force nodes compute step k's forces from)"),
     Channel("plant", "response", (
         Field("a_b", "m/s^2", "body acceleration at t_k under the forces of step k"),
@@ -116,23 +153,24 @@ CHANNELS: tuple[Channel, ...] = (
         Field("alpha_pitch", "rad/s^2", "body pitch acceleration", models=_FV),
         Field("alpha_roll", "rad/s^2", "body roll acceleration", models=_FV),
     ), "the plant's response of step k (published with the state of step k + 1)"),
-    Channel("plant", "arm", (
-        *(Field(f"{p}_{ax}", "N", f"load ON the lower arm at {p}, arm-frame {ax} axis "
-                "(cosim/lower_arm.py)", models=_DW)
-          for p in _ARM_POINTS for ax in "xyz"),
-        Field("bump_stop_y", "N", "bumper force on the arm at its pad, arm-frame y",
-              models=_DW),
-        Field("bump_stop_z", "N", "bumper force on the arm at its pad, arm-frame z (<= 0)",
-              models=_DW),
-        Field("torsion_bar_mx", "N m", "torsion-bar moment on the arm about its x axis, "
-              "preload included", models=_DW),
-    ), "the component loads of step k (realistic models only)"),
+    Channel("plant", "arm", _arm_fields(),
+            "the component loads of step k (realistic models only; the four-corner vehicle: "
+            "the front-left arm's, as arm_FL)"),
+    *(Channel("plant", f"arm_{c}", _arm_fields(),
+              f"the {c} lower arm's loads of step k (four-corner vehicle; a right arm in its "
+              "mirrored frame, docs/corners.md)") for c in _ARM_CORNERS),
     Channel("tyre_road", "force", (
         Field("F_t", "N", "tyre force, compressive-positive, absolute", nonneg=True,
               required=True),
         Field("k_t", "N/m", "dF_t/d(z_g - z_w), 0 when lifted off (for coupling)",
               nonneg=True, required=True),
         Field("z_g", "m", "road height under the wheel's contact centre"),
+        Field("Fx", "N", "tyre force along the wheel's road-plane x (forward), at the contact "
+              "point", models=_MF),
+        Field("Fy", "N", "tyre force along the road-plane y (left)", models=_MF),
+        Field("Mz", "N m", "aligning moment about the road normal", models=_MF),
+        Field("kappa", "-", "longitudinal slip that acts (after the relaxation)", models=_MF),
+        Field("alpha", "rad", "slip angle that acts (ISO-W)", models=_MF),
     ), "the tyre force of step k"),
     Channel("controller", "force", (
         Field("F_d", "N", "damper force on the body, upward positive", required=True),

@@ -37,7 +37,9 @@ vertical forces only it does not enter the motion).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -48,6 +50,7 @@ from cosim.corner import Corner
 from .arm_loads import arm_loads_at
 from .bump_stop import BumpStopParams, bump_stop_force
 from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
+from .driver import Driver
 from .full_vehicle_dw_wheels import WheelsAndDriver, steer_lever
 from .model import GRAVITY, PlantModel
 from .quarter_car_lumped import load_urdf_text, new_direct_client
@@ -103,7 +106,8 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
     name = "full_vehicle_double_wishbone"
 
     def __init__(self, params: FullVehicleDWParams | None = None, front: Corner | None = None,
-                 rear: Corner | None = None, static_dt: float = 1e-3) -> None:
+                 rear: Corner | None = None, static_dt: float = 1e-3,
+                 driver: Mapping[str, Any] | None = None) -> None:
         self.params = pr = params or FullVehicleDWParams()
         f = front or corner_file.builtin()
         r = rear or f
@@ -174,6 +178,12 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         if pr.speed_kmh > 0.0:
             self._launch(pr.speed_kmh / 3.6)
         self._read()
+        self._time = 0.0
+        self.driver = None if driver is None else Driver(
+            mass=float(self._W.sum()) / GRAVITY, wheel_radius=float(self.r_l[0]),
+            wheelbase=pr.wheelbase, **driver)
+        """The driver the model runs itself each substep (a run over the bus: the scenario's
+        ``vehicle.driver``; :mod:`.driver`), or None (inputs by :meth:`set_driver`)."""
 
     # --- build ---
     def _urdf(self) -> str:
@@ -422,6 +432,12 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
             self._dt = dt
         self._F_t = np.asarray(F_t, dtype=float).copy()
         self._F_d = np.asarray(F_d, dtype=float).copy()
+        if self.driver is not None:
+            mo = self.body_motion()
+            torques, delta = self.driver.command(self._time, float(mo["u"][0]),
+                                                 float(mo["w_yaw"][0]), dt)
+            self.set_driver(torques, self.rack_for_steer(delta))
+        self._time += dt
         self._tau = self.tau0 - self.k_theta * (np.array(self._st["theta"]) - self._s0["theta"])
         self._apply()
         p.stepSimulation(physicsClientId=self.client)
@@ -448,6 +464,13 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                          for k, v in loads.items()}
             out[name] = loads
         return out
+
+    def loads(self) -> dict[str, dict[str, float]]:
+        """Every corner's lower-arm loads on its own channel ``arm_FL`` .. ``arm_RR``
+        (:meth:`corner_arm_loads`), and ``arm`` = the front-left's (what the live fatigue
+        node reads today: docs/corners.md)."""
+        al = self.corner_arm_loads()
+        return {"arm": al["FL"], **{f"arm_{c}": al[c] for c in CORNERS}}
 
     def info(self) -> dict[str, object]:
         d = super().info()

@@ -17,8 +17,10 @@
 * ``full_vehicle_double_wishbone`` (#31 item 2, first piece: vertical tyre forces):
   ``front``, ``rear`` (corner files of the left corners, default the built-in; the rear
   defaults to the front), the body's ``sprung_mass``, ``cg_to_front_axle``, ``wheelbase``,
-  ``pitch_inertia``, ``roll_inertia``, ``yaw_inertia``, ``cg_height``
-  (:mod:`.full_vehicle_dw`).
+  ``pitch_inertia``, ``roll_inertia``, ``yaw_inertia``, ``cg_height``, ``speed_kmh`` (the
+  speed at t = 0), ``driver`` (a table: ``speed`` [[t, v], ...] m/s, ``steer`` [[t, delta],
+  ...] rad or ``radius`` m, ``brake_balance``, ``driven``: :mod:`.driver`)
+  (:mod:`.full_vehicle_dw`; with ``[tyre] model = "magic_formula"`` its tyres act in 3-D).
 
 Missing parameters take the defaults of the model's params dataclass. Numbers must be > 0,
 switches true or false. Bad keys or values raise :class:`cosim.errors.ScenarioError`.
@@ -76,9 +78,10 @@ def build_plant_model(cfg: Mapping[str, Any], key_prefix: str = "vehicle") -> Pl
         from .full_vehicle_dw import FullVehicleDoubleWishbone, FullVehicleDWParams
         front = read_corner(r, "front")
         rear = read_corner(r, "rear") if r.has("rear") else front
-        fv = _params(FullVehicleDWParams, r, extra=("front", "rear"))
+        fv = _params(FullVehicleDWParams, r, extra=("front", "rear", "driver"))
+        drv = read_driver(r) if r.has("driver") else None
         try:
-            return FullVehicleDoubleWishbone(fv, front=front, rear=rear)
+            return FullVehicleDoubleWishbone(fv, front=front, rear=rear, driver=drv)
         except ValueError as exc:
             raise ScenarioError(r.key("front"), front.source, str(exc)) from None
     from .double_wishbone import DoubleWishboneCorner, DoubleWishboneParams  # the third model
@@ -98,3 +101,40 @@ def read_corner(r: ConfigReader, key: str = "corner") -> Corner:
     if path == "builtin":
         return corner_file.builtin()
     return corner_file.load(path)
+
+
+def read_driver(r: ConfigReader) -> dict[str, Any]:
+    """The ``vehicle.driver`` table as :class:`.driver.Driver`'s keyword arguments (the
+    vehicle's mass, wheel radius and wheelbase come from the model); bad keys or values
+    raise :class:`ScenarioError` naming the key."""
+    key = r.key("driver")
+    cfg = r.cfg["driver"]
+    if not isinstance(cfg, Mapping):
+        raise ScenarioError(key, cfg, "a table: speed, steer or radius, brake_balance, driven")
+    d = ConfigReader(cfg, key)
+    d.only(["speed", "steer", "radius", "brake_balance", "driven"])
+    out: dict[str, Any] = {}
+    for name in ("speed", "steer"):
+        if d.has(name):
+            pts = d.cfg[name]
+            ok = isinstance(pts, list) and pts and all(
+                isinstance(q, list) and len(q) == 2 and all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) for x in q)
+                for q in pts)
+            if not ok:
+                raise ScenarioError(d.key(name), pts, "a list of [t, value] pairs")
+            out[name] = [(float(q[0]), float(q[1])) for q in pts]
+    if "speed" not in out:
+        raise ScenarioError(d.key("speed"), None, "the speed profile [[t, v], ...] in m/s")
+    if d.has("radius"):
+        out["radius"] = d.number("radius")
+    if d.has("brake_balance"):
+        out["brake_balance"] = d.number("brake_balance", lo=0.0, hi=1.0)
+    if d.has("driven"):
+        out["driven"] = d.choice("driven", ("front", "rear", "all"))
+    try:
+        from .driver import Driver
+        Driver(mass=1.0, wheel_radius=1.0, wheelbase=1.0, **out)
+    except ValueError as exc:
+        raise ScenarioError(key, cfg, str(exc)) from None
+    return out

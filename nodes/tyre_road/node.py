@@ -5,6 +5,11 @@ step k-1 in the parallel one), evaluates the road height at each contact point o
 (wheel i at distance s_i = v t_k + x_i, x_i its offset from the front axle, on its track) and
 publishes ``force``: F_t [N] (absolute, compressive-positive, >= 0), k_t = dF_t/d(z_g - z_w)
 [N/m] for the plant's coupling, z_g [m] (road height at the contact centre).
+
+With ``[tyre] model = "magic_formula"`` (the four-corner vehicle, #31): F_t from the point
+contact as above, and the Magic Formula's road-plane Fx, Fy [N], Mz [N m] and the slips
+kappa, alpha from the wheel kinematics the plant publishes (:mod:`.tyre_3d`); the road is
+read where the wheels are (s = x_wc - x_wc,FL(0): the vehicle moves itself).
 """
 
 from __future__ import annotations
@@ -15,11 +20,15 @@ from typing import Any
 import numpy as np
 
 from cosim import channels as ch
+from cosim.errors import ScenarioError
 from cosim.participant import Participant
+from cosim.run_settings import RunSettings
 from cosim.stepped import run_stepped
 
 from .config import build_road, build_tyre
-from .wheel_paths import road_heights
+from .tyre_3d import KIN_FIELDS, build_tyre_3d, is_magic_formula
+from .tyres import Tyre
+from .wheel_paths import road_heights, road_heights_at
 
 STATE = f"{ch.PLANT}/{ch.STATE}"
 
@@ -44,7 +53,14 @@ class TyreRoad:
 
     def __init__(self, scenario: dict[str, Any], start: dict[str, Any]) -> None:
         self.road = build_road(scenario["road"])
-        self.tyre = build_tyre(scenario["tyre"])
+        self.mf = None
+        self.tyre: Tyre
+        if is_magic_formula(scenario["tyre"]):
+            self.tyre, self.mf = build_tyre_3d(scenario["tyre"])
+        else:
+            self.tyre = build_tyre(scenario["tyre"])
+        self._s0: float | None = None
+        self._h = RunSettings.of(scenario).h
         self.geo = wheel_geometry(start["info"][ch.PLANT])
         self.offsets = np.asarray(self.tyre.contact_offsets, dtype=float)
         self.centre = int(np.argmin(np.abs(self.offsets)))
@@ -53,10 +69,31 @@ class TyreRoad:
              ) -> dict[str, Any]:
         """F_t, k_t, z_g of step k from the plant's state (of step k, or k - 1: parallel)."""
         geo = self.geo
+        if self.mf is not None:
+            return self._step_3d(inputs[STATE])
         z_g = road_heights(self.road, t, geo["wheel_x"], geo["wheel_track"], self.offsets,
                            geo["corner_names"])
         F_t, k_eff = self.tyre.force(inputs[STATE]["z_w"], z_g, geo["W"])
         return {"F_t": F_t, "k_t": k_eff, "z_g": z_g[:, self.centre]}
+
+    def _step_3d(self, st: Mapping[str, np.ndarray]) -> dict[str, Any]:
+        """The Magic Formula's step: F_t (point contact) and Fx, Fy, Mz, kappa, alpha."""
+        assert self.mf is not None
+        try:
+            kin = {k: np.asarray(st[k], dtype=float) for k in KIN_FIELDS}
+        except KeyError as exc:
+            raise ScenarioError("tyre.model", "magic_formula",
+                                f"a vehicle whose plant/state carries the wheel kinematics "
+                                f"({exc} is missing): full_vehicle_double_wishbone") from None
+        if self._s0 is None:
+            self._s0 = float(kin["x_wc"][0])
+        geo = self.geo
+        z_g = road_heights_at(self.road, kin["x_wc"] - self._s0, geo["wheel_track"],
+                              self.offsets, geo["corner_names"])
+        F_t, k_eff = self.tyre.force(st["z_w"], z_g, geo["W"])
+        f = self.mf.forces(kin, F_t, self._h)
+        return {"F_t": F_t, "k_t": k_eff, "z_g": z_g[:, self.centre],
+                **{k: f[k] for k in ("Fx", "Fy", "Mz", "kappa", "alpha")}}
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
@@ -66,5 +103,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
 
 def static_check(scenario: dict[str, Any]) -> float | None:
     """Preflight: build road and tyre (raises ScenarioError); returns the road's duration [s]."""
-    build_tyre(scenario["tyre"])
+    if is_magic_formula(scenario["tyre"]):
+        build_tyre_3d(scenario["tyre"])
+    else:
+        build_tyre(scenario["tyre"])
     return build_road(scenario["road"]).duration_s

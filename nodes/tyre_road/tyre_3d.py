@@ -32,10 +32,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+from cosim.config import ConfigReader
+
 from .magic_formula import MagicFormula, relax, steady_state
+from .tyres import PointContact
 
 V_LOW = 1.0
 """The smallest |V_x| the slips divide by [m/s] (module docstring)."""
@@ -88,3 +92,32 @@ class Tyre3D:
         """The transient slips (the node's state between steps), for a checkpoint."""
         return {"kappa": None if self.kappa is None else self.kappa.tolist(),
                 "alpha": None if self.alpha is None else self.alpha.tolist()}
+
+
+MF_KEYS = ("model", "stiffness", "tir", "transient")
+KIN_FIELDS = ("vx_wc", "vy_wc", "omega_w", "gamma", "x_wc", "r_l")
+"""What the 3-D tyre reads of ``plant/state`` (the four-corner vehicle publishes them)."""
+
+
+def is_magic_formula(cfg: Mapping[str, Any]) -> bool:
+    """Whether the ``[tyre]`` section asks for the Magic Formula tyre."""
+    return cfg.get("model") == "magic_formula"
+
+
+def build_tyre_3d(cfg: Mapping[str, Any], key_prefix: str = "tyre") -> tuple[PointContact,
+                                                                              Tyre3D]:
+    """``[tyre] model = "magic_formula"``: ``tir`` (a .tir file, MF 6.1/6.2; ``"builtin"``
+    or absent: the shipped ``tyres/mpv_215_65r16.tir``), ``stiffness`` [N/m] of the vertical
+    point contact (default the file's VERTICAL_STIFFNESS), ``transient`` (true: the
+    relaxation lengths). Raises :class:`cosim.errors.ScenarioError` on a bad key or value,
+    :class:`cosim.errors.InputFileError` on a bad file."""
+    r = ConfigReader(cfg, key_prefix)
+    r.only(MF_KEYS)
+    path = r.string("tir", "builtin")
+    mf = MagicFormula.from_tir() if path == "builtin" else MagicFormula.from_tir(path)
+    k_default = mf.p.get("VERTICAL_STIFFNESS")
+    if k_default is None or not k_default > 0:
+        k_t = r.number("stiffness", positive=True, unit="N/m")
+    else:
+        k_t = r.number("stiffness", k_default, positive=True, unit="N/m")
+    return PointContact(k_t=k_t), Tyre3D(mf, transient=r.boolean("transient", True))

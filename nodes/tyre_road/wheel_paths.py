@@ -47,3 +47,20 @@ def road_heights(road: Road, t: float, wheel_x: Sequence[float], wheel_track: Se
             continue
         z[i] = road.height(s[i], int(track))
     return z
+
+
+def road_heights_at(road: Road, s: np.ndarray, wheel_track: Sequence[int],
+                    contact_offsets: np.ndarray | None = None,
+                    corner_names: Sequence[str] | None = None) -> np.ndarray:
+    """Road heights z_g [m] of shape (n_corners, n_points) for wheels whose contact centres
+    are at distances ``s`` [m] along the road (a vehicle that moves itself, the four-corner
+    vehicle: s from its wheel centres' world x, not v t)."""
+    offs = np.zeros(1) if contact_offsets is None else np.asarray(contact_offsets, dtype=float)
+    d = np.asarray(s, dtype=float)[:, None] + offs[None, :]
+    z = np.zeros(d.shape)
+    for i, track in enumerate(wheel_track):
+        if road.corners is not None and corner_names is not None \
+                and corner_names[i] not in road.corners:
+            continue
+        z[i] = road.height(d[i], int(track))
+    return z
