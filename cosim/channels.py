@@ -40,6 +40,9 @@ plant/arm             <pt>_<ax>    load ON the lower arm at point pt (ball_joint
                       torsion_bar_ the torsion-bar moment on the arm about its x axis, static
                       mx           preload included [N m]; it enters the arm through its
                                    pivot, half at each bush eye (cosim/lower_arm.py)
+plant/arm_<C>         (as arm)     C = FL, FR, RL, RR: each lower arm of the four-corner
+                                   vehicle (a right arm in its mirrored frame); plant/arm is
+                                   then the FL arm's
 tyre_road/force       F_t          tyre force, compressive-positive, >= 0, absolute [N]
                       k_t          dF_t/d(z_g - z_w), 0 when lifted off [N/m] (for coupling)
                       z_g          road height under the wheel [m]
@@ -94,6 +97,10 @@ LOAD_CHANNEL = (PLANT, ARM)
 CORNERS = ("FL", "FR", "RL", "RR")
 """The corners of a full vehicle, in the order of every per-corner list field (front left,
 front right, rear left, rear right); a quarter car is the front-left corner."""
+CORNER_ARMS = tuple(f"{ARM}_{c}" for c in CORNERS)
+"""The four-corner vehicle's per-corner lower-arm channels ``plant/arm_FL`` .. ``arm_RR``
+(the ``plant/arm`` fields, each arm in its own frame: a right arm's mirrored; ``plant/arm``
+is then the front-left's)."""
 STATE_FIELDS = _schema.required(PLANT, STATE)  # z_b, v_b, z_w, v_w
 TYRE_FIELDS = tuple(f.name for f in _schema.BY_NAME["tyre_road/force"].fields)  # F_t, k_t, z_g
 DAMPER_FIELDS = _schema.coupling(CONTROLLER)  # F_d, c_eff
