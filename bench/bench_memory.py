@@ -148,7 +148,8 @@ def case(label: str, scenario: Path, sets: list[str], work: Path, report: bool) 
     return row
 
 
-def post(label: str, run: Path, work: Path, scope_s: float) -> dict:
+def post(label: str, run: Path, work: Path, scope_s: float,
+         only: list[str] | None = None, fatigue_sets: list[str] | None = None) -> dict:
     """Peak RSS [MB] and wall time [s] of the commands that read a finished run folder:
     ``report``, batch ``fatigue`` (a run with ``plant/arm`` loads), ``export RUN --format
     parquet`` (batches of the table), ``replay --fast`` (the journal republished, nobody
@@ -170,8 +171,13 @@ def post(label: str, run: Path, work: Path, scope_s: float) -> dict:
                           "0", "--listen", "tcp/127.0.0.1:0"]
         cmds["scope"] = [py, "-m", "orchestrator", "scope", str(run), "--replay", "--fast",
                          "--port", "0", "--duration", f"{scope_s:g}"]
+    if "fatigue" in cmds:
+        for item in fatigue_sets or []:
+            cmds["fatigue"] += ["--set", item]
     out: dict = {"case": label, "rows": pq.ParquetFile(run / "table.parquet").metadata.num_rows}
     for name, cmd in cmds.items():
+        if only and name not in only:
+            continue
         try:
             wall, rss, _ = measured(cmd)
             out[name] = (wall, rss.get(name, 0) / 2**20)
@@ -230,10 +236,15 @@ def main(argv: list[str] | None = None) -> int:
                          "(report, fatigue, export, replay, scope: `post`), no runs")
     ap.add_argument("--scope-s", type=float, default=120.0,
                     help="longest scope replay measured [s] (--post)")
+    ap.add_argument("--only", nargs="*", help="--post: only these commands")
+    ap.add_argument("--fatigue-set", action="append", default=[], metavar="KEY=VALUE",
+                    help="--post: a --set of the batch fatigue measured (e.g. a coarser "
+                         "mesh, to measure 10^6 rows in minutes)")
     args = ap.parse_args(argv)
     if args.post is not None:
         work = Path(tempfile.mkdtemp(prefix="bench_memory-post-"))
-        rows = [post(Path(d).name, Path(d), work, args.scope_s) for d in args.post]
+        rows = [post(Path(d).name, Path(d), work, args.scope_s, args.only, args.fatigue_set)
+                for d in args.post]
         print(post_table(rows))
         shutil.rmtree(work, ignore_errors=True)
         return 0
