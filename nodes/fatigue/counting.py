@@ -213,6 +213,27 @@ class StreamingRainflow:
         self._last = x[-1].copy()
         return self._feed_rows(rows_in)
 
+    def feed_points(self, rows: np.ndarray, last: np.ndarray) -> Cycles:
+        """Advance every history by a block given as its candidate turning points.
+
+        Args:
+            rows: (m, n_series) each history's samples of the block that may be turning
+                points, in order, padded by repeating its last one (a superset of
+                :func:`turning_points`' rows, e.g. :func:`.turning_eq.turning_equivalent`'s;
+                any sample left out must lie strictly between its neighbours).
+            last: (n_series,) the block's last sample (it must be the last of ``rows``).
+
+        Returns the full cycles closed, the same as :meth:`feed` of the whole block.
+        """
+        x = np.asarray(rows, dtype=float)
+        if x.ndim != 2 or x.shape[1] != self.n or np.shape(last) != (self.n,):
+            raise ValueError(f"rows must have shape (m, {self.n}) and last ({self.n},), got "
+                             f"{x.shape} and {np.shape(last)}")
+        if x.shape[0] == 0:
+            return Cycles.empty()
+        self._last = np.array(last, dtype=float)
+        return self._feed_rows(x)
+
     def _feed_rows(self, rows_in: np.ndarray) -> Cycles:
         out_i: list[np.ndarray] = []
         out_b: list[np.ndarray] = []
