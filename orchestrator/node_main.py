@@ -76,7 +76,7 @@ def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
         return 0
     except SuscosimError as exc:
         if not (isinstance(exc, RunError) and "aborted by the orchestrator" in str(exc)):
-            late = {"late": exc.late} if isinstance(exc, InputLate) else {}
+            late: dict[str, Any] = {"late": exc.late} if isinstance(exc, InputLate) else {}
             part.ctl("error", message=str(exc), exit_code=exc.exit_code, **late)
         log.error("%s", exc)
         return exc.exit_code
