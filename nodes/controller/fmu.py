@@ -73,6 +73,20 @@ class FmuPlan:
     def version(self) -> str:
         return str(self.md.fmiVersion)
 
+    def checkpoint_refusal(self) -> str | None:
+        """Why this FMU's state cannot be checkpointed (None when it can): a checkpoint needs
+        both ``canGetAndSetFMUstate`` and ``canSerializeFMUstate`` (the state leaves the
+        process into the run folder) in the co-simulation description (FMI 2.0 / 3.0)."""
+        cs = self.md.coSimulation
+        missing = [flag for flag, ok in (("canGetAndSetFMUstate", cs.canGetAndSetFMUstate),
+                                         ("canSerializeFMUstate", cs.canSerializeFMUstate))
+                   if not ok]
+        if not missing:
+            return None
+        return (f"the FMU {self.path.name} cannot be checkpointed: its modelDescription.xml "
+                f"does not declare {' and '.join(missing)} (a resume would restart its "
+                "internal state wrong, so it is refused)")
+
 
 def _read_description(path: Path) -> Any:
     """The model description of ``path``; every way it can fail is an InputFileError."""
@@ -302,6 +316,57 @@ class FmuController(Controller):
         if self._unzipdir:
             shutil.rmtree(self._unzipdir, ignore_errors=True)
             self._unzipdir = None
+
+    # ------------------------------------------------------------------ checkpoints
+    def checkpoint_state(self) -> dict[str, Any]:
+        """Every corner's FMU state, serialised by the FMU itself (FMI get + serialize FMU
+        state), for a checkpoint (#29 item 6). Raises :class:`cosim.checkpoint.
+        CheckpointError` (exit 2) naming the FMU when it cannot, never a partial state."""
+        from cosim.checkpoint import CheckpointError
+
+        why = self.plan.checkpoint_refusal()
+        if why:
+            raise CheckpointError(why)
+        blobs: list[bytes] = []
+        for fmu in self._instances:
+            if self._fmi3:
+                st = fmu.getFMUState()
+                blobs.append(bytes(fmu.serializeFMUState(st)))
+                fmu.freeFMUState(st)
+            else:
+                st = fmu.getFMUstate()
+                blobs.append(bytes(fmu.serializeFMUstate(st)))
+                fmu.freeFMUstate(st)
+        return {"fmu": self.plan.path.name, "fmi": self.plan.version, "started": bool(blobs),
+                "states": blobs}
+
+    def restore_state(self, state: dict[str, Any], t: float,
+                      state_inputs: Mapping[str, np.ndarray]) -> None:
+        """Put every corner's FMU back into a :meth:`checkpoint_state` ``state``; ``t`` [s]
+        and ``state_inputs`` (the plant's state at the checkpoint) start the instances first."""
+        from cosim.checkpoint import CheckpointError
+
+        why = self.plan.checkpoint_refusal()
+        if why:
+            raise CheckpointError(why)
+        n_saved = len(state.get("states", ()))
+        if state.get("fmu") != self.plan.path.name or n_saved not in (0, self.n):
+            raise CheckpointError(f"the checkpoint holds the state of {state.get('fmu')!r} for "
+                                  f"{len(state.get('states', ()))} corners, not of "
+                                  f"{self.plan.path.name} for {self.n}")
+        if not state["states"]:
+            return  # checkpointed before its first step: nothing started yet
+        if not self._instances:
+            self._start(float(t), self._signals(state_inputs))
+        for fmu, blob in zip(self._instances, state["states"], strict=True):
+            if self._fmi3:
+                st = fmu.deserializeFMUState(blob)
+                fmu.setFMUState(st)
+                fmu.freeFMUState(st)
+            else:
+                st = fmu.deSerializeFMUstate(blob)
+                fmu.setFMUstate(st)
+                fmu.freeFMUstate(st)
 
     # ------------------------------------------------------------------ the law
     def _signals(self, state: Mapping[str, Any]) -> list[list[float]]:
