@@ -177,3 +177,32 @@ def load_for_resume(run_dir: Path, scenario: dict[str, Any],
     for node in ck.manifest.get("nodes", {}):
         read_node_state(ck, node)
     return ck
+
+
+def checkpoint_steps(every_s: float, h: float, n_steps: int) -> list[int]:
+    """The step boundaries k (a checkpoint after step k, at t = k h [s]) of
+    ``run.checkpoint_every_s`` = ``every_s`` [s]: every round(every_s / h) steps, the last
+    step excluded (the run's end is its own result). Every node computes the same list from
+    the scenario alone, so the boundary needs no negotiation; the clock's checkpoint message
+    only collects that each node has written its file."""
+    if not every_s > 0 or not h > 0:
+        raise ValueError(f"run.checkpoint_every_s = {every_s!r}: a positive number of seconds")
+    every = round(every_s / h)
+    if every < 1 or abs(every * h - every_s) > 1e-9 * every_s:
+        raise ValueError(f"run.checkpoint_every_s = {every_s:g} s: a whole number of steps "
+                         f"of h = {h:g} s")
+    return list(range(every, n_steps, every))
+
+
+def parse_fork(spec: str) -> tuple[Path, float]:
+    """``RUN_DIR@T`` of ``suscosim run --fork`` as (run folder, T [s]); ValueError naming it."""
+    folder, sep, t = spec.rpartition("@")
+    if not sep or not folder:
+        raise ValueError(f"--fork {spec!r}: expected RUN_DIR@T (T in seconds)")
+    try:
+        at = float(t)
+    except ValueError:
+        raise ValueError(f"--fork {spec!r}: T = {t!r} is not a number of seconds") from None
+    if not at >= 0:
+        raise ValueError(f"--fork {spec!r}: T must be >= 0 s")
+    return Path(folder), at

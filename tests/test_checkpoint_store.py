@@ -89,3 +89,16 @@ def test_fork_time_must_exist(tmp_path: Path) -> None:
     _save(tmp_path, 500, 0.5)
     with pytest.raises(ck.CheckpointError, match="no checkpoint at t=0.7"):
         ck.load_for_resume(tmp_path, SCEN, at_t=0.7)
+
+
+def test_checkpoint_schedule_and_fork_spec() -> None:
+    assert ck.checkpoint_steps(0.5, 0.001, 2000) == [500, 1000, 1500]
+    assert ck.checkpoint_steps(0.5, 0.001, 1500) == [500, 1000]
+    with pytest.raises(ValueError, match="whole number of steps"):
+        ck.checkpoint_steps(0.0015, 0.001, 100)
+    with pytest.raises(ValueError, match="positive"):
+        ck.checkpoint_steps(0.0, 0.001, 100)
+    assert ck.parse_fork("runs/a@b@1.25") == (Path("runs/a@b"), 1.25)
+    for bad in ("runs/a", "@1", "runs/a@x", "runs/a@-1"):
+        with pytest.raises(ValueError, match="--fork"):
+            ck.parse_fork(bad)
