@@ -111,9 +111,11 @@ def _slab(face_tag: int, z0: float, z1: float) -> list[tuple[int, int]]:
     return [e for e in out if e[0] == 3]
 
 
-def build(params: dict[str, Any]) -> dict[str, list[int]]:
+def build(params: dict[str, Any], fillet: bool = True) -> dict[str, list[int]]:
     """Build the arm as one OCC volume in the current gmsh model (gmsh initialised by the
-    caller). Returns {"volume": [tag], "fillets": [face tags]}."""
+    caller). Returns {"volume": [tag], "fillets": [face tags]}; with ``fillet=False`` the
+    unfilleted solid ({"volume": [tag], "fillets": [], "root_curves": []}: for the fillet
+    experiments of bench/arm_fillet_order.py)."""
     from gmsh import model  # type: ignore[import-untyped]
 
     occ = model.occ
@@ -197,6 +199,8 @@ def build(params: dict[str, Any]) -> dict[str, list[int]]:
     vols = [e[1] for e in solid if e[0] == 3]
     if len(vols) != 1:
         raise RuntimeError(f"the arm CAD gave {len(vols)} volumes, expected 1")
+    if not fillet:
+        return {"volume": vols, "fillets": [], "root_curves": []}
     # fillets: every curve in the web's planes z = +-t/2 (where ribs and bosses meet it)
     r = float(sec["fillet"])
     root_curves = []
