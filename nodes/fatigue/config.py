@@ -38,6 +38,9 @@ repeats_basis_m        none                 also give life in repeats of this le
 block_samples          500                  live: samples per update block
 live                   "auto"               run the fatigue node during the run (true /
                                             false; "auto": when the plant reports arm loads)
+corner                 none                 the four-corner vehicle: whose lower arm ("FL",
+                                            "FR", "RL", "RR": plant/arm_<corner>); none:
+                                            plant/arm (a quarter car's; the vehicle's FL)
 =====================  ===================  =================================================
 
 ``[fatigue.component]`` (Shigley's Marin factors, `material.ComponentSpec`; SI units):
@@ -134,7 +137,14 @@ class FatigueConfig:
     repeats_basis_m: float | None = None
     block_samples: int = 500
     live: bool | str = "auto"
+    corner: str | None = None
     base_dir: str = field(default=".", compare=False)
+
+    @property
+    def load_channel(self) -> str:
+        """The plant channel of the arm loads this analysis takes: ``arm`` (a quarter car; the
+        four-corner vehicle's front left), or ``arm_FL`` .. ``arm_RR`` by ``corner``."""
+        return "arm" if self.corner is None else f"arm_{self.corner}"
 
     @property
     def endurance_limit(self) -> str:
@@ -240,6 +250,7 @@ class FatigueConfig:
             repeats_basis_m=r.optional_number("repeats_basis_m", positive=True),
             block_samples=r.integer("block_samples", 500, lo=1),
             live=_live(r),
+            corner=r.choice("corner", CORNERS) if r.has("corner") else None,
             base_dir=str(base_dir),
         )
         try:
@@ -259,8 +270,10 @@ class FatigueConfig:
 FATIGUE_KEYS = ("influence", "mapping", "stress_scale", "equivalent", "method", "mean_stress",
                 "residue", "endurance", "endurance_limit", "material", "component", "sn_curve",
                 "mesh_size_m", "nodes", "track_length_m", "repeats_basis_m", "block_samples",
-                "live")
+                "live", "corner")
 """The keys of ``[fatigue]`` (module docstring)."""
+CORNERS = ("FL", "FR", "RL", "RR")
+"""``corner``: whose lower arm, on the four-corner vehicle (#31; its plant/arm_<corner>)."""
 
 
 def _mapping(r: ConfigReader) -> tuple[tuple[str, str, float], ...]:
