@@ -218,7 +218,29 @@ class ZenohBus:
         return [str(r.ok.key_expr) for r in
                 self.session.liveliness().get(keyexpr, timeout=timeout) if r.ok is not None]
 
+    def flush(self, timeout: float = 1.0) -> int:
+        """Wait until every router this session is connected to has routed what we sent.
+
+        A Zenoh ``close`` does not drain the session's transmission queues: the last
+        messages (abort, done) were lost under load (#30 item 17). A query travels on the
+        same reliable, FIFO link and priority lane (``Priority.DATA``) as our puts, so a
+        router's admin-space reply to ``@/<router zid>/router`` arrives only after the
+        router has taken every earlier message off the link and queued it to its
+        subscribers. Routers must run with ``adminspace`` read enabled (``suscosim router``
+        and ``deploy/zenoh/router.json5`` do); one without it does not reply and the wait
+        ends at ``timeout`` [s]. Returns the number of routers that replied.
+        """
+        answered = 0
+        try:
+            for zid in list(self.session.info.routers_zid()):
+                replies = self.session.get(f"@/{zid}/router", timeout=timeout)
+                answered += any(r.ok is not None for r in replies)
+        except Exception:  # a session already closing: nothing left to flush
+            pass
+        return answered
+
     def close(self) -> None:
+        self.flush()
         for obj in reversed(self._keep):
             try:
                 obj.undeclare()

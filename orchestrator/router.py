@@ -82,6 +82,10 @@ def router_config(listen: list[str] | None = None, config_file: str | None = Non
     except Exception as exc:
         raise ValueError(f"listen endpoints {endpoints}: {_one_line(exc)}") from exc
     conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+    # The admin space answers ZenohBus.flush's barrier query (#30 item 17: the last put
+    # before a close was lost); read only.
+    conf.insert_json5("adminspace/enabled", "true")
+    conf.insert_json5("adminspace/permissions/read", "true")
     return conf, endpoints
 
 
