@@ -62,7 +62,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
 
 
 #: Plant models whose state carries ``v_damper`` (for ``controller.velocity = "damper"``).
-DAMPER_VELOCITY_MODELS = ("quarter_car_double_wishbone",)
+DAMPER_VELOCITY_MODELS = ("quarter_car_double_wishbone", "full_vehicle_double_wishbone")
 
 
 def static_check(scenario: dict[str, Any], n_corners: int) -> None:

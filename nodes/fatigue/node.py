@@ -48,7 +48,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         os.nice(NICE)
     load_influence(cfg)  # FE solve or cache read: before ready, not inside the run
     listener = Listener(part, run_cfg["start_timeout_s"])
-    tag = listener.feed(*ch.LOAD_CHANNEL)
+    tag = listener.feed(ch.PLANT, cfg.load_channel)  # plant/arm, or a corner's arm_<C>
     part.output(ch.DAMAGE)
     early: list[Received] = []  # steps that overtook the start (another sender)
     while listener.start is None:  # the handshake
@@ -126,7 +126,7 @@ def preflight(scenario: dict[str, Any], load_channels: list[str] | None) -> bool
     the lower-arm loads (``load_channels`` from the plant's check); never in reference
     mode. ``live = true`` without those loads is a ScenarioError."""
     cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
-    has_loads = ch.LOAD_CHANNEL[1] in (load_channels or ())
+    has_loads = cfg.load_channel in (load_channels or ())
     if cfg.live is True and not has_loads:
         raise ScenarioError("fatigue.live", True, "false or \"auto\": this vehicle model "
                             "reports no lower-arm loads (use the realistic corner)")

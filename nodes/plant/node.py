@@ -58,6 +58,11 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             later.clear()
             msgs = part.wait({tag: k for tag in sources})
             forces = {f: msg.array(f) for tag, msg in msgs.items() for f in provides[tag[0]]}
+            road_plane = next((m for tag, m in msgs.items() if tag[0] == ch.TYRE_ROAD
+                               and "Fx" in m.d), None)  # a 3-D tyre (#31): Fx, Fy, Mz too
+            if road_plane is not None and hasattr(model, "set_tyre_forces"):
+                model.set_tyre_forces(road_plane.array("Fx"), road_plane.array("Fy"),
+                                      road_plane.array("Mz"))
             now = StepInputs(
                 F_t=forces["F_t"], k_t=forces["k_t"], F_d=forces["F_d"],
                 c_eff=forces["c_eff"], z_w=seen["z_w"], v_rel=seen["v_w"] - seen["v_b"],
