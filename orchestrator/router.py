@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from cosim.zenoh_options import add_listen_argument
+from orchestrator.cli_util import fail
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 DEFAULT_LEASE_MS = 2000
@@ -101,16 +102,13 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"link lease announced to peers [ms] (default {DEFAULT_LEASE_MS})")
     args = ap.parse_args(argv)
     if args.config and not Path(args.config).is_file():
-        print(f"suscosim router: {args.config}: no such file", file=sys.stderr)
-        return 2
+        return fail("suscosim router", f"{args.config}: no such file")
     if args.lease_ms <= 0:
-        print(f"suscosim router: --lease-ms {args.lease_ms}: expected > 0", file=sys.stderr)
-        return 2
+        return fail("suscosim router", f"--lease-ms {args.lease_ms}: expected > 0")
     try:
         conf, endpoints = router_config(args.listen, args.config, args.lease_ms)
     except ValueError as exc:
-        print(f"suscosim router: {exc}", file=sys.stderr)
-        return 2
+        return fail("suscosim router", str(exc))
 
     import zenoh
 
@@ -121,9 +119,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             session = zenoh.open(conf)
         except Exception as exc:  # bind failure, unreadable certificate...
-            print(f"suscosim router: cannot start on {', '.join(endpoints)}: {_one_line(exc)}",
-                  file=sys.stderr)
-            return 1
+            return fail("suscosim router",
+                        f"cannot start on {', '.join(endpoints)}: {_one_line(exc)}", code=1)
         try:
             print(f"suscosim router: {session.info.zid()} listening on "
                   f"{', '.join(endpoints)}", flush=True)

@@ -74,3 +74,12 @@ def test_last_put_before_close_is_delivered_under_load() -> None:
     finally:
         router.terminate()
         router.wait(10)
+
+
+def test_router_bad_input_uses_the_one_error_prefix() -> None:
+    """#30 item 8 (one error prefix): ``suscosim router`` errors come through cli_util.fail."""
+    res = subprocess.run([sys.executable, "-m", "orchestrator.router", "--lease-ms", "0"],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2
+    assert res.stderr.startswith("suscosim: error: "), res.stderr
+    assert "--lease-ms 0: expected > 0" in res.stderr and "Traceback" not in res.stderr
