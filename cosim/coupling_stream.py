@@ -19,10 +19,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-from .coupling_energy import BondResidual, _columns, applied_force
+from .coupling_energy import BondResidual, _columns, applied_force, summary
 
 
 @dataclass(frozen=True)
@@ -148,14 +149,22 @@ class ResidualStream:
                 for name, st in (self.bonds or {}).items()}
 
 
-def residual_of_table_file(path: str, h: float, coupling: str, exchange: str,
+def residual_of_table_file(path: str | Path, h: float, coupling: str, exchange: str,
                            batch_rows: int = 65_536) -> dict[str, BondResidual]:
-    """Both bonds' residual totals of a ``table.parquet``, read in blocks of ``batch_rows``
+    """Both bonds' residual totals of a ``table.parquet``, read a row group at a time
     (memory independent of the run's length; :func:`cosim.table.iter_table`)."""
     from .table import iter_table
 
-    wanted = tuple(COLUMNS)
     stream = ResidualStream(h, coupling, exchange)
-    for block in iter_table(path, keep=lambda c: c.startswith(wanted), batch_rows=batch_rows):
+    for block in iter_table(path, keep=lambda c: c.split("[")[0] in COLUMNS,
+                            batch_rows=batch_rows):
         stream.feed(block)
     return stream.result()
+
+
+def summary_of_table_file(path: str | Path, h: float, coupling: str, exchange: str
+                          ) -> dict[str, float]:
+    """``summary.json``'s ``coupling_energy_residual`` of a ``table.parquet`` read in row
+    groups (:func:`cosim.coupling_energy.summary`); ``{}`` for a run without either bond."""
+    res = residual_of_table_file(path, h, coupling, exchange)
+    return summary(res) if res else {}

@@ -159,17 +159,18 @@ def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> T
 def iter_table(path: str | Path, keep: Callable[[str], bool] | None = None,
                batch_rows: int = 65_536) -> Iterator[Table]:
     """The rows of a ``table.parquet`` in blocks of at most ``batch_rows`` (the columns as
-    :func:`read_table` selects them), for what must not hold a long run in memory. A file
-    that is not such a table is an :class:`~cosim.errors.InputFileError` naming it."""
+    :func:`read_table` selects them, as float), one row group at a time
+    (:func:`cosim.table_batches.parquet_batches`), for what must not hold a long run in
+    memory. A file that is not such a table is an :class:`~cosim.errors.InputFileError`."""
     import pyarrow.parquet as pq
+
+    from cosim.table_batches import parquet_batches
 
     path = Path(path)
     try:
         f = pq.ParquetFile(path)
         names = [n for n in f.schema_arrow.names if keep is None or n in ("k", "t") or keep(n)]
-        batches = f.iter_batches(batch_size=batch_rows, columns=names)
-        for b in batches:
-            yield {c: b.column(i).to_numpy() for i, c in enumerate(b.schema.names)}
+        yield from parquet_batches(path, names, batch_rows)
     except OSError as exc:
         if not path.is_file():
             raise

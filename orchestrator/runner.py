@@ -104,19 +104,13 @@ def _coupling_summary(scenario: dict[str, Any], rec: dict[str, Any],
     parquet = (rec.get("files") or {}).get("parquet")
     if status != "ok" or run["mode"] == "reference" or not parquet:
         return {}
-    from cosim import coupling_energy as ce
-    from cosim.table import read_table
+    from cosim.coupling_stream import summary_of_table_file
 
-    wanted = ("plant/state/v_w", "plant/state/v_b", "plant/state/z_w", "controller/force/",
-              "tyre_road/force/F_t", "tyre_road/force/k_t")
-    try:
-        table = read_table(parquet, keep=lambda c: c.startswith(wanted))
-        res = ce.coupling_residual(table, float(run["h"]), run["coupling"], run["exchange"])
+    try:  # by row groups (#32): the orchestrator's memory does not grow with the run
+        res = summary_of_table_file(parquet, float(run["h"]), run["coupling"], run["exchange"])
     except (OSError, SuscosimError, KeyError, ValueError):
         return {}
-    if not res:
-        return {}
-    return {"coupling_energy_residual": ce.summary(res)}
+    return {"coupling_energy_residual": res} if res else {}
 
 
 def strict_json(obj: Any, key: str = "", nulled: list[str] | None = None) -> Any:

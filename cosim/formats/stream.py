@@ -43,12 +43,10 @@ def iter_chunks(src: str | Path, names: list[str], rows: int | None = None
     src = Path(src)
     rows = BATCH_ROWS if rows is None else rows
     if src.suffix == ".parquet":
-        import pyarrow.parquet as pq
+        from cosim.table_batches import parquet_batches
 
         try:
-            pf = pq.ParquetFile(src)
-            for batch in pf.iter_batches(batch_size=rows, columns=names):
-                yield {n: batch.column(n).to_numpy(zero_copy_only=False) for n in names}
+            yield from parquet_batches(src, names, rows)  # a row group at a time (#32)
         except InputFileError:
             raise
         except Exception as exc:
