@@ -175,6 +175,18 @@ def write_vtu(path: Path, result: FatigueResult) -> bool:
     return True
 
 
+def write_pseudo_damage(path: Path, pd: list) -> None:
+    """``pseudo_damage.csv``: per load channel its Basquin slope k, reference range and count,
+    cycles, largest range, pseudo-damage and damage-equivalent range (:mod:`.pseudo_damage`)."""
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["channel", "k", "ref_range", "n_ref", "cycles", "max_range",
+                    "pseudo_damage", "equivalent_range"])
+        for p in pd:
+            w.writerow([p.channel, p.k, p.ref_range, p.n_ref, p.cycles, p.max_range,
+                        f"{p.pseudo_damage:.6e}", f"{p.equivalent_range:.6e}"])
+
+
 def batch_outputs(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
                   result: FatigueResult, say: Callable[[str], None]
                   ) -> tuple[Callable[[Path], None], dict]:
@@ -206,13 +218,7 @@ def batch_outputs(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
                 unit = "N m" if short_channel(name).endswith("_mx") else "N"
                 w.writerows(matrix_rows(name, unit, rainflow_matrix(
                     count_series(np.asarray(v, dtype=float), cfg.residue))))
-        with open(folder / "pseudo_damage.csv", "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["channel", "k", "ref_range", "n_ref", "cycles", "max_range",
-                        "pseudo_damage", "equivalent_range"])
-            for p in pd:
-                w.writerow([p.channel, p.k, p.ref_range, p.n_ref, p.cycles, p.max_range,
-                            f"{p.pseudo_damage:.6e}", f"{p.equivalent_range:.6e}"])
+        write_pseudo_damage(folder / "pseudo_damage.csv", pd)
         sn_plot(folder / "sn_plot.png", cfg, eq, result, methods)
         write_vtu(folder / "damage.vtu", result)
 

@@ -45,7 +45,7 @@ from .counting import Cycles, StreamingRainflow, count_series
 from .equivalent_stress import equivalent
 from .influence import short_channel
 from .load_file import MAX_FORCE_N, MAX_MOMENT_NM
-from .outputs import method_config, sn_plot, write_vtu
+from .outputs import method_config, sn_plot, write_pseudo_damage, write_vtu
 from .pseudo_damage import (
     K_REF,
     N_REF,
@@ -399,13 +399,7 @@ def outputs_streamed(batches: Batches, cfg: FatigueConfig, s: Scan, result: Fati
             for name, mat in matrices.items():
                 unit = "N m" if short_channel(name).endswith("_mx") else "N"
                 w.writerows(matrix_rows(name, unit, mat))
-        with open(folder / "pseudo_damage.csv", "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["channel", "k", "ref_range", "n_ref", "cycles", "max_range",
-                        "pseudo_damage", "equivalent_range"])
-            for p in pd:
-                w.writerow([p.channel, p.k, p.ref_range, p.n_ref, p.cycles, p.max_range,
-                            f"{p.pseudo_damage:.6e}", f"{p.equivalent_range:.6e}"])
+        write_pseudo_damage(folder / "pseudo_damage.csv", pd)
         sn_plot(folder / "sn_plot.png", cfg, eq_all, result, methods)
         write_vtu(folder / "damage.vtu", result)
 
