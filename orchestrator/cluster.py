@@ -87,15 +87,15 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     for name in ("workers", "threads"):
         if getattr(args, name) < 1:
-            print(f"suscosim cluster: error: --{name} must be >= 1", file=sys.stderr)
+            print(f"suscosim: error: cluster: --{name} must be >= 1", file=sys.stderr)
             return 2
     if not 0 < args.port < 65536:
-        print("suscosim cluster: error: --port must be in 1-65535", file=sys.stderr)
+        print("suscosim: error: cluster: --port must be in 1-65535", file=sys.stderr)
         return 2
     try:
         import distributed  # noqa: F401
     except ImportError:
-        print("suscosim cluster: error: needs the 'distributed' package (python3 -m pip "
+        print("suscosim: error: cluster: needs the 'distributed' package (python3 -m pip "
               "install 'dask[distributed]')", file=sys.stderr)
         return 2
     address = f"tcp://{args.host}:{args.port}"
@@ -117,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
         procs.append(sched)
         connect_host = "127.0.0.1" if args.host in ("0.0.0.0", "") else args.host
         if not _wait_port(connect_host, args.port, sched, 30.0):
-            print(f"suscosim cluster: error: the scheduler did not start on {address} (port "
+            print(f"suscosim: error: cluster: the scheduler did not start on {address} (port "
                   "in use?)", file=sys.stderr)
             return 1
         for i in range(args.workers):

@@ -344,10 +344,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = args.out or Path(duty.get("out") or Path("duty") / duty["name"])
         result = run_duty(duty, out, args.mode, args.rerun, args.set)
     except SuscosimError as exc:
-        print(f"suscosim duty: error: {exc}", file=sys.stderr)
+        print(f"suscosim: error: duty: {exc}", file=sys.stderr)
         return exc.exit_code
     except OSError as exc:
-        print(f"suscosim duty: error: {exc}", file=sys.stderr)
+        print(f"suscosim: error: duty: {exc}", file=sys.stderr)
         return 2
     if args.json:
         print(json.dumps(result, indent=2))

@@ -85,7 +85,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             overrides[k] = getattr(args, k)
     if args.part is not None:
         if not args.part.is_file():
-            print(f"suscosim fatigue: error: --part {args.part}: no such part file",
+            print(f"suscosim: error: fatigue: --part {args.part}: no such part file",
                   file=sys.stderr)
             return 2
         overrides["influence"] = str(args.part.resolve())

@@ -83,12 +83,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:
         return 0 if exc.code == 0 else 2
     if not (args.k > 0 and args.n_ref > 0):
-        print("suscosim pseudo-damage: --k and --n-ref must be > 0", file=sys.stderr)
+        print("suscosim: error: pseudo-damage: --k and --n-ref must be > 0", file=sys.stderr)
         return 2
     try:
         res = compare(args.sources, args.k, args.n_ref)
     except SuscosimError as exc:
-        print(f"suscosim pseudo-damage: {exc}", file=sys.stderr)
+        print(f"suscosim: error: pseudo-damage: {exc}", file=sys.stderr)
         return 2
     if args.json:
         print(json.dumps(res, indent=1))

@@ -139,10 +139,10 @@ def main(argv: list[str] | None = None) -> int:
             raise InputFileError("--travel", "REBOUND < JOUNCE")
         r = check(corner, tuple(args.travel), args.points, args.tyre_stiffness, args.identify)
     except SuscosimError as exc:
-        print(f"suscosim corner: error: {exc}", file=sys.stderr)
+        print(f"suscosim: error: corner: {exc}", file=sys.stderr)
         return exc.exit_code
     except ValueError as exc:  # the linkage does not close at ride height
-        print(f"suscosim corner: error: {args.file}: {exc}", file=sys.stderr)
+        print(f"suscosim: error: corner: {args.file}: {exc}", file=sys.stderr)
         return 2
     if args.json:
         print(json.dumps(r, indent=1))

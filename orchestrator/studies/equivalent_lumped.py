@@ -27,7 +27,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             corner = corner_file.load(args.corner)
         except SuscosimError as exc:
-            print(f"suscosim equivalent-lumped: error: {exc}", file=sys.stderr)
+            print(f"suscosim: error: equivalent-lumped: {exc}", file=sys.stderr)
             return exc.exit_code
     eq = identify(args.step, args.dt, corner=corner)
     cmp = None if args.no_compare else compare_on_road(eq, args.dt, corner=corner)

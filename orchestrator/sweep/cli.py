@@ -48,21 +48,21 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.jobs is not None and args.jobs < 1:
-        print("suscosim sweep: error: --jobs must be >= 1", file=sys.stderr)
+        print("suscosim: error: sweep: --jobs must be >= 1", file=sys.stderr)
         return 2
     if args.executor == "dask" and not args.scheduler:
-        print("suscosim sweep: error: --executor dask needs --scheduler tcp://HOST:8786 "
+        print("suscosim: error: sweep: --executor dask needs --scheduler tcp://HOST:8786 "
               "(start one with 'suscosim cluster')", file=sys.stderr)
         return 2
     if args.executor == "dask" and (args.external or args.serve or args.connect):
-        print("suscosim sweep: error: --executor dask runs every point whole on one worker; "
+        print("suscosim: error: sweep: --executor dask runs every point whole on one worker; "
               "--connect, --external and --serve are for the local executor", file=sys.stderr)
         return 2
     if args.scheduler and args.executor != "dask":
-        print("suscosim sweep: error: --scheduler needs --executor dask", file=sys.stderr)
+        print("suscosim: error: sweep: --scheduler needs --executor dask", file=sys.stderr)
         return 2
     if (args.external or args.serve) and not args.connect:
-        print("suscosim sweep: error: --external and --serve need --connect (a router "
+        print("suscosim: error: sweep: --external and --serve need --connect (a router "
               "both machines reach)", file=sys.stderr)
         return 2
     try:
@@ -73,18 +73,18 @@ def main(argv: list[str] | None = None) -> int:
               flush=True)
         validate_points(sweep, out)
     except SuscosimError as exc:
-        print(f"suscosim sweep: error: {exc}", file=sys.stderr)
+        print(f"suscosim: error: sweep: {exc}", file=sys.stderr)
         return exc.exit_code if exc.exit_code == 2 else 2
     if args.serve:
         from ..node_main import NODE_MODULES
 
         bad = [n for n in args.serve if n not in NODE_MODULES]
         if bad:
-            print(f"suscosim sweep: error: --serve {bad[0]}: expected one of "
+            print(f"suscosim: error: sweep: --serve {bad[0]}: expected one of "
                   + ", ".join(sorted(NODE_MODULES)), file=sys.stderr)
             return 2
         if not (os.environ.get("SUSCOSIM_KEY") or os.environ.get("SUSCOSIM_KEY_FILE")):
-            print("suscosim sweep: error: --serve needs the sweep's secret: set SUSCOSIM_KEY "
+            print("suscosim: error: sweep: --serve needs the sweep's secret: set SUSCOSIM_KEY "
                   "(or SUSCOSIM_KEY_FILE) to the same secret here and on the machine that runs "
                   "the sweep (the messages of a run are signed; docs/reliability.md)",
                   file=sys.stderr)
@@ -111,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             runner = DaskRunner(sweep, out, args.scheduler, sys.stderr)
         except SuscosimError as exc:
-            print(f"suscosim sweep: error: {exc}", file=sys.stderr)
+            print(f"suscosim: error: sweep: {exc}", file=sys.stderr)
             return 2
         where = runner.workers_text()
     else:
