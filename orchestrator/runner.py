@@ -33,6 +33,7 @@ from cosim import node_kinds as nk
 from cosim import run_folder
 from cosim import scenario as sc
 from cosim.bus import Bus, MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.coupling_energy import WARNING_THRESHOLD
 from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 from cosim.run_lock import RunLock, check_run_id_free
 
@@ -90,10 +91,8 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
       | _coupling_summary(scenario, rec, status)
 
 
-RESIDUAL_WARNING = 0.003
-"""A total coupling energy residual above this (0.3 %) is said after the run: through the
-Chapter 3 study's factor of ~3.5 between the held forces' peak error and their residual, it
-is about 1 % peak error (docs/coupling_residual.md)."""
+RESIDUAL_WARNING = WARNING_THRESHOLD
+"""The coupling residual said after a run (:data:`cosim.coupling_energy.WARNING_THRESHOLD`)."""
 
 
 def _coupling_summary(scenario: dict[str, Any], rec: dict[str, Any],

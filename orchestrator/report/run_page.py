@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from cosim.coupling_energy import WARNING_THRESHOLD
+
 from .markup import (
     badge,
     cmd,
@@ -82,9 +84,27 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
                 pairs.append((k, s[k]))
         rej = {k: v for k, v in (s.get("rejected_messages") or {}).items() if v}
         pairs.append(("rejected messages", rej or "none"))
+        pairs += coupling_residual_rows(s)
         status_tab = kv_table(pairs, "Run")
     out.append(row(glance, status_tab))
+    res = s.get("coupling_energy_residual") or {}
+    if res.get("total", 0.0) > WARNING_THRESHOLD:
+        out.append(note(f"the coupling energy residual ({100 * res['total']:.3g} %) is above "
+                        f"{100 * WARNING_THRESHOLD:g} % (about 1 % peak error, "
+                        "docs/coupling_residual.md): a smaller run.h or the jacobian coupling "
+                        "would be more accurate"))
     return "\n".join(out)
+
+
+def coupling_residual_rows(s: dict) -> list[tuple[str, Any]]:
+    """``summary.json``'s coupling energy residual (#29 item 1) as rows [%]: the total and
+    each power bond's (:mod:`cosim.coupling_energy`); none for a run without it."""
+    res = s.get("coupling_energy_residual") or {}
+    if "total" not in res:
+        return []
+    rows: list[tuple[str, Any]] = [("coupling energy residual [%]", 100 * res["total"])]
+    rows += [(f"  {b} bond [%]", 100 * v) for b, v in res.items() if b != "total"]
+    return rows
 
 
 def _scn(r: RunData, sec: str, key: str) -> Any:
