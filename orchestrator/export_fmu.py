@@ -115,9 +115,10 @@ def _stage(folder: Path, spec: dict[str, Any], module: str, fmi: int, user_file:
     return files
 
 
-def export_fmu(scenario: dict[str, Any], out: Path, fmi: int = 2, name: str | None = None,
-               ) -> dict[str, Any]:
+def export_fmu(scenario: dict[str, Any], out: Path | str, fmi: int = 2,
+               name: str | None = None) -> dict[str, Any]:
     """Build the FMU of ``scenario``'s law at ``out``; returns its interface (as written)."""
+    out = Path(out)
     if out.suffix != ".fmu":
         raise InputFileError(str(out), "the FMU to write must end in .fmu")
     spec = law_interface(scenario)
