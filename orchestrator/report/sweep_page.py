@@ -6,8 +6,8 @@ import datetime as _dt
 from pathlib import Path
 from typing import Any
 
+from .fatigue_section import fatigue_numbers
 from .markup import anchor_id, badge, cmd, esc, kv_table, nav, note, page, section, table_html
-from .run_page import fatigue_numbers
 from .signals import BODY_ACC, TYRE_FORCE
 from .sweep_charts import sweep_compare_section, sweep_maps_section, sweep_overlay_section
 from .sweep_data import Point, grid_keys, load_sweep, read_results, rms_of, vs_passive
