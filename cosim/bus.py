@@ -76,6 +76,12 @@ def free_loopback_endpoint() -> str:
 CLIENT_CONNECT_TIMEOUT_MS = 30000
 """How long a client session keeps trying to reach its router before giving up [ms]."""
 
+CONNECT_RETRY = {"period_init_ms": 100, "period_max_ms": 500, "period_increase_factor": 1.5}
+"""How often a session retries an endpoint it could not reach. Zenoh's own (1 s, doubling to
+4 s) left a session opened a moment before the run listened unconnected for up to 4 s: a tap
+or a test that queried the run then met nobody (#30; CI failed on it twice). A retry to a
+dead loopback port costs a refused SYN."""
+
 
 def _unset(conf: Any, key: str) -> bool:
     """True when ``key`` still holds Zenoh's own default (null, or a per-mode map)."""
@@ -128,6 +134,8 @@ def zenoh_config(
         conf.get_json("connect/endpoints"))
     conf.insert_json5("connect/endpoints", json.dumps(own + [c for c in connect
                                                              if c not in own]))
+    if json.loads(conf.get_json("connect/retry")) is None:  # a config file's own is kept
+        conf.insert_json5("connect/retry", json.dumps(CONNECT_RETRY))
     if mode == "client" and _unset(conf, "connect/timeout_ms"):
         conf.insert_json5("connect/timeout_ms", str(CLIENT_CONNECT_TIMEOUT_MS))
     conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
@@ -217,6 +225,20 @@ class ZenohBus:
         """The liveliness tokens matching ``keyexpr`` declared on the bus right now."""
         return [str(r.ok.key_expr) for r in
                 self.session.liveliness().get(keyexpr, timeout=timeout) if r.ok is not None]
+
+    def wait_linked(self, timeout: float = 10.0) -> bool:
+        """Wait until this session has a link to a peer or a router [timeout in s]: a put,
+        subscription or query before then meets nobody. True when linked."""
+        import time
+
+        deadline = time.monotonic() + timeout
+        while True:
+            info = self.session.info
+            if info.peers_zid() or info.routers_zid():
+                return True
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.02)
 
     def flush(self, timeout: float = 1.0) -> int:
         """Wait until every router this session is connected to has routed what we sent.

@@ -72,8 +72,11 @@ def test_an_abort_an_insider_signs_is_said_to_be_foreign(tmp_path, monkeypatch) 
     try:
         _under_way(out, proc)
         # the insider: the run's secret, the nonce read from the served scenario
-        reply = bus.query(keys.key(run_id, keys.ORCHESTRATOR, keys.SCENARIO), timeout=5.0)
-        assert reply is not None
+        assert bus.wait_linked(), "the test's session never reached the run"
+        reply, deadline = None, time.monotonic() + 20
+        while reply is None and time.monotonic() < deadline:  # its queryable's declaration
+            reply = bus.query(keys.key(run_id, keys.ORCHESTRATOR, keys.SCENARIO), timeout=2.0)
+        assert reply is not None, "the run's scenario was never served"
         nonce = bytes.fromhex(decode(reply).d[au.SESSION_FIELD])
         key = au.RunKey(au.derive_run_key(secret.encode(), run_id), nonce)
         clock = keys.key(run_id, keys.ORCHESTRATOR, keys.CLOCK)
