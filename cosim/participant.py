@@ -17,10 +17,7 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
    watchdog thread wakes a node blocked on its FIFO when the stall timeout passes, a control
    message (abort) comes, or the orchestrator is gone. Progress goes to the orchestrator
    at most every 0.1 s. Every published data message is also kept, as published, for the
-   recorder, which gets them in batches on ``<node>/records`` (at most ``RECORD_BATCH``
-   messages or ``RECORD_PERIOD_S`` old): one message per batch instead of one per step keeps
-   the recorder off the per-step critical path (it would otherwise take as much CPU per step
-   as the plant on a 2-core machine).
+   recorder, which gets them in batches on ``<node>/records`` (:mod:`cosim.record_batch`).
 4. **End**: ``done`` after the last step; an ``abort`` from the orchestrator, or an input that
    does not come within the stall timeout, ends the node with :class:`RunError`.
 
@@ -28,10 +25,8 @@ A message that does not decode or does not fit the schema (or lacks a field the 
 is rejected: logged, counted, never a crash. With a run key (:class:`cosim.auth.RunKey`)
 every message the node publishes is signed and every message it takes must be signed with
 that key (else rejected and counted, before it is decoded). A ``start`` must be plausible
-(:func:`cosim.control.check_start`). Each input's mailbox is bounded: a stepped input holds
-only the steps from the one the node waits for up to :data:`MAILBOX_WINDOW` ahead (a lock-step
-producer is at most a step or two ahead), any other input at most :data:`MAILBOX_MAX`
-messages; what falls outside is rejected and counted.
+(:func:`cosim.control.check_start`). Each input's mailbox is bounded
+(:mod:`cosim.mailbox`); what falls outside is rejected and counted.
 """
 
 from __future__ import annotations
@@ -49,6 +44,8 @@ from .auth import NONCE_BYTES, SESSION_FIELD, RunKey
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import InputLate, RunError, WireError
+from .mailbox import MAILBOX_MAX, MAILBOX_WINDOW, Mailbox
+from .record_batch import RecordBatch
 from .wire import (
     MAX_MESSAGE_BYTES,
     ChannelCodec,
@@ -58,6 +55,8 @@ from .wire import (
     encode,
     plausible_records,
 )
+
+__all__ = ["MAILBOX_MAX", "MAILBOX_WINDOW", "Channel", "Participant"]
 
 log = logging.getLogger("suscosim.node")
 
@@ -71,16 +70,10 @@ _ORCHESTRATOR_GONE_S = 2.0
 HELLO_PERIOD_S = 0.05
 PROGRESS_PERIOD_S = 0.1
 WAITING_PERIOD_S = 1.0
-RECORD_BATCH = 64
-RECORD_PERIOD_S = 0.05
 WATCHDOG_PERIOD_S = 0.05
 """How often the watchdog looks at a node blocked on an input (bounds the abort latency)."""
 FEED_CAPACITY = 1024
 """Messages an input's FIFO holds; lock-step producers are at most a few steps ahead."""
-MAILBOX_WINDOW = 64
-"""Steps ahead of the one a node waits for that a stepped input's mailbox accepts."""
-MAILBOX_MAX = 256
-"""Messages an input that is not stepped (load blocks) may hold before they are taken."""
 
 
 class Participant:
@@ -103,18 +96,14 @@ class Participant:
         costs most on a small VM (see docs/cosim.md). 0: block at once."""
         self.inbox: queue.SimpleQueue[tuple[Channel, bytes]] = queue.SimpleQueue()
         self.feeds: dict[Channel, Any] = {}
-        self.mailbox: dict[Channel, dict[int, Message]] = {}
-        self.required: dict[Channel, tuple[str, ...]] = {}
-        self._floor: dict[Channel, int] = {}  # the step a stepped input was last waited for
+        self.inputs: dict[Channel, Mailbox] = {}
         self._keyof: dict[Channel, str] = {_CLOCK_TAG: keys.key(run, *_CLOCK_TAG)}
         self.rejected = 0
         self._codecs: dict[str, ChannelCodec | bool] = {}
         self._out_codecs: dict[str, ChannelCodec] = {}
         self._outputs: dict[str, Any] = {}
-        self._records: list[tuple[str, bytes]] = []
-        self._records_bytes = 0
+        self._records = RecordBatch()
         self._records_pub: Any = None
-        self._records_k, self._records_t, self._records_since = -1, 0.0, time.monotonic()
         self._ctl = self._publisher(keys.key(run, node, keys.CTL))
         self._last_progress = 0.0
         self._token = bus.token(keys.key(run, node, keys.ALIVE))
@@ -132,6 +121,11 @@ class Participant:
         self._wake_lock = threading.Lock()
         self._closed = threading.Event()
         self._watchdog: threading.Thread | None = None
+
+    @property
+    def mailbox(self) -> dict[Channel, dict[int, Message]]:
+        """Each input's filed messages by step (a view for inspection)."""
+        return {tag: mb.box for tag, mb in self.inputs.items()}
 
     def _on_orchestrator(self, _key: str, alive: bool) -> None:
         """Liveliness of the run's orchestrator (called on the bus's thread)."""
@@ -202,10 +196,9 @@ class Participant:
         they come, not step by step: :meth:`handle` files them in :attr:`mailbox`).
         """
         tag = (node, channel)
-        if tag not in self.mailbox:
+        if tag not in self.inputs:
             self._keyof[tag] = keys.key(self.run, *tag)
-            self.mailbox[tag] = {}
-            self.required[tag] = tuple(required)
+            self.inputs[tag] = Mailbox(tuple(required), stepped)
             if stepped:
                 self.feeds[tag] = self.bus.feed(keys.key(self.run, *tag), FEED_CAPACITY)
             else:
@@ -288,22 +281,18 @@ class Participant:
                 from None
         self._outputs[channel](raw)
         if record:
-            if self._records_bytes + len(raw) > MAX_MESSAGE_BYTES - 1024:
+            if not self._records.fits(raw):
                 self.flush_records()  # the batch must fit one message too
-            self._records.append((channel, raw))
-            self._records_bytes += len(raw) + 8
-            self._records_k, self._records_t = k, t
-            if len(self._records) >= RECORD_BATCH or \
-                    time.monotonic() - self._records_since >= RECORD_PERIOD_S:
+            if self._records.add(channel, raw, k, t):
                 self.flush_records()
 
     def flush_records(self) -> None:
         """Send the kept data messages to the recorder (at the end, and before giving up)."""
-        self._records_since = time.monotonic()
-        if self._records and self._records_pub is not None:
-            batch, self._records, self._records_bytes = self._records, [], 0
-            self._records_pub(encode("records", self._records_k, self._records_t,
-                                     {"records": batch}))
+        if self._records_pub is None:
+            return
+        raw = self._records.take()
+        if raw is not None:
+            self._records_pub(raw)
 
     def publish_hello(self) -> None:
         """``hello`` on every output and the records feed (the start handshake's proof that
@@ -402,7 +391,7 @@ class Participant:
 
     def handle(self, tag: Channel, raw: bytes) -> Message | None:
         """Decode and file one received message; return it if it is a clock message."""
-        if tag != _CLOCK_TAG and tag not in self.mailbox:
+        if tag != _CLOCK_TAG and tag not in self.inputs:
             return None  # not an input of this node (e.g. the recorder's raw feed)
         try:
             msg = self.open(self._keyof[tag], raw)
@@ -415,30 +404,9 @@ class Participant:
             if msg.kind == "abort":
                 raise RunError(f"run aborted by the orchestrator: {msg.d.get('reason', '?')}")
             return msg
-        if msg.kind == "hello":
-            self.mailbox[tag].setdefault(-1, msg)
-            return None
-        if msg.kind != "data":
-            self.reject(tag, f"unexpected kind '{msg.kind}' on a data channel")
-            return None
-        missing = [f for f in self.required[tag] if f not in msg.d]
-        if missing:
-            self.reject(tag, f"step {msg.k}: missing field(s) {', '.join(missing)}")
-            return None
-        box = self.mailbox[tag]
-        if msg.k in box and msg.k >= 0:
-            self.reject(tag, f"duplicate message for step {msg.k}")
-            return None
-        if tag in self.feeds:  # a stepped input: a window of steps from the one waited for
-            floor = self._floor.get(tag, 0)
-            if not floor <= msg.k <= floor + MAILBOX_WINDOW:
-                self.reject(tag, f"step {msg.k} outside the window {floor}..."
-                                  f"{floor + MAILBOX_WINDOW}")
-                return None
-        elif len(box) >= MAILBOX_MAX:
-            self.reject(tag, f"step {msg.k}: {MAILBOX_MAX} messages already wait")
-            return None
-        box[msg.k] = msg
+        why = self.inputs[tag].file(msg)
+        if why is not None:
+            self.reject(tag, why)
         return None
 
     def wait(self, needs: Mapping[Channel, int]) -> dict[Channel, Message]:
@@ -453,7 +421,7 @@ class Participant:
             self._watchdog.start()
         deadline = time.monotonic() + self.stall_timeout_s
         for tag, k in needs.items():
-            box, feed = self.mailbox[tag], self.feeds[tag]
+            box, feed = self.inputs[tag].box, self.feeds[tag]
             if k not in box:
                 self._awaited = (tag, k, time.monotonic())
             while k not in box:
@@ -468,20 +436,13 @@ class Participant:
                 self._drain_inbox()  # raises on abort
                 self.check_orchestrator()
                 if time.monotonic() >= deadline:
-                    late = sorted({t[0] for t, j in needs.items() if j not in self.mailbox[t]})
+                    late = sorted({t[0] for t, j in needs.items()
+                                   if j not in self.inputs[t].box})
                     raise InputLate(f"{self.node}: no input from {', '.join(late)} for "
                                     f"{self.stall_timeout_s:.1f} s (step {max(needs.values())})",
                                     late)
         self._awaited = None
-        out = {}
-        for tag, k in needs.items():
-            box = self.mailbox[tag]
-            out[tag] = box[k]
-            self._floor[tag] = k
-            if len(box) > 1:  # at most MAILBOX_WINDOW + 2 entries: bounded
-                for old in [j for j in box if j < k]:
-                    del box[old]
-        return out
+        return {tag: self.inputs[tag].take(k) for tag, k in needs.items()}
 
     def handshake(self, info: Mapping[str, Any] | None = None,
                   timeout_s: float = 60.0) -> dict[str, Any]:
@@ -492,15 +453,15 @@ class Participant:
         while True:
             now = time.monotonic()
             if now >= deadline:
-                silent = [f"{n}/{c}" for (n, c), box in self.mailbox.items() if -1 not in box]
+                silent = [f"{n}/{c}" for (n, c), mb in self.inputs.items()
+                          if -1 not in mb.box]
                 raise RunError(f"{self.node}: not started within {timeout_s:.0f} s"
                                + (f"; never heard {', '.join(silent)}" if silent else ""))
             if now >= next_send:
                 next_send = now + HELLO_PERIOD_S
                 self.check_orchestrator()
                 self.publish_hello()
-                silent = [f"{n}/{c}" for (n, c), box in self.mailbox.items()
-                          if not (-1 in box or box)]
+                silent = [f"{n}/{c}" for (n, c), mb in self.inputs.items() if not mb.heard]
                 if not silent:
                     self.ctl("ready", info={"outputs": list(self._outputs), **(info or {})})
                 elif now >= next_waiting:  # tell the orchestrator what holds this node up

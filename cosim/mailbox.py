@@ -1,0 +1,75 @@
+"""An input's mailbox: the decoded messages of one input channel a node has not used yet.
+
+A node's :class:`cosim.participant.Participant` keeps one per input. The mailbox decides
+what a message that decoded and verified may do (file it, or reject it with a reason) and is
+bounded whatever a producer sends:
+
+* a **stepped** input (the lock-step inputs the node waits for step by step) holds only the
+  steps from the one last waited for up to :data:`MAILBOX_WINDOW` ahead: a lock-step producer
+  is at most a step or two ahead, so a flood of far-ahead steps is rejected, not stored;
+* any other input (load blocks, taken as they come) holds at most :data:`MAILBOX_MAX`
+  messages.
+
+``hello`` (the start handshake's, step -1) is kept once; a second message for a step already
+filed, a kind other than ``data`` or a message lacking a field the node needs is rejected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .wire import Message
+
+MAILBOX_WINDOW = 64
+"""Steps ahead of the one a node waits for that a stepped input's mailbox accepts."""
+MAILBOX_MAX = 256
+"""Messages an input that is not stepped (load blocks) may hold before they are taken."""
+
+
+@dataclass
+class Mailbox:
+    """The messages of one input by step ``k`` (``-1``: the handshake's ``hello``)."""
+
+    required: tuple[str, ...] = ()
+    """Fields every data message must carry."""
+    stepped: bool = True
+    box: dict[int, Message] = field(default_factory=dict)
+    floor: int = 0
+    """The step last taken (:meth:`take`): a stepped input accepts ``floor`` ...
+    ``floor + MAILBOX_WINDOW``."""
+
+    def file(self, msg: Message) -> str | None:
+        """File ``msg``; return why it is rejected instead (None: filed or kept)."""
+        if msg.kind == "hello":
+            self.box.setdefault(-1, msg)
+            return None
+        if msg.kind != "data":
+            return f"unexpected kind '{msg.kind}' on a data channel"
+        missing = [f for f in self.required if f not in msg.d]
+        if missing:
+            return f"step {msg.k}: missing field(s) {', '.join(missing)}"
+        if msg.k in self.box and msg.k >= 0:
+            return f"duplicate message for step {msg.k}"
+        if self.stepped:
+            if not self.floor <= msg.k <= self.floor + MAILBOX_WINDOW:
+                return f"step {msg.k} outside the window {self.floor}..." \
+                       f"{self.floor + MAILBOX_WINDOW}"
+        elif len(self.box) >= MAILBOX_MAX:
+            return f"step {msg.k}: {MAILBOX_MAX} messages already wait"
+        self.box[msg.k] = msg
+        return None
+
+    @property
+    def heard(self) -> bool:
+        """Anything came (a ``hello`` or data): the producer's data path is live."""
+        return bool(self.box)
+
+    def take(self, k: int) -> Message:
+        """The message of step ``k`` (it must be there); older steps are dropped and the
+        window moves on to ``k``. At most ``MAILBOX_WINDOW + 2`` entries remain."""
+        msg = self.box[k]
+        self.floor = k
+        if len(self.box) > 1:
+            for old in [j for j in self.box if j < k]:
+                del self.box[old]
+        return msg
