@@ -131,18 +131,17 @@ def resolve_mode(mode: str, config_file: str | None, connect: list[str],
     return session_mode(mode, connect, listen)
 
 
-CONNECT_RETRY = '{"period_init_ms": 100, "period_max_ms": 500, "period_increase_factor": 1.5}'
-"""How often a tap, replay or scope tries again to reach an endpoint that does not answer yet
-(Zenoh's default is 1 s, then doubling to 4 s: a scope started before its run connected
-seconds late and missed a short run's start and its nodes' end)."""
-
-
 def apply_mode(conf: Any, mode: str, connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS
                ) -> Any:
     """Make a :func:`cosim.bus.zenoh_config` a client's (no listening; keep trying to reach
     the endpoint for ``connect_timeout_ms``), or leave it a peer's; either tries again every
-    0.1-0.5 s (:data:`CONNECT_RETRY`)."""
-    conf.insert_json5("connect/retry", CONNECT_RETRY)
+    0.1-0.5 s (:data:`cosim.bus.CONNECT_RETRY`: a scope started before its run must not
+    connect seconds late and miss a short run's start), also with a config file's own retry."""
+    import json
+
+    from cosim.bus import CONNECT_RETRY
+
+    conf.insert_json5("connect/retry", json.dumps(CONNECT_RETRY))
     if mode == "client":
         conf.insert_json5("mode", '"client"')
         conf.insert_json5("listen/endpoints", "[]")
