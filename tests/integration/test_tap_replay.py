@@ -81,7 +81,11 @@ def test_tap_sees_a_live_run_without_changing_it(tmp_path, untapped) -> None:
     assert len(rows) == 400
     assert {r["key"] for r in rows} == {"suscosim/taptest/plant/state"}
     ks = np.array([int(r["k"]) for r in rows])
-    assert np.array_equal(ks, np.arange(ks[0], ks[0] + 400))  # in order, none missed
+    gaps = [(int(a), int(b)) for a, b in zip(ks[:-1], ks[1:], strict=True) if b != a + 1]
+    # in order, none missed (once, in a full CI suite, step 15 was missing with the tap
+    # joining at the run's start; not reproduced in 30 runs alone or under load: the gaps and
+    # the tap's printout say more if it comes back)
+    assert not gaps and len(ks) == 400, (gaps[:10], ks[:3].tolist(), tap.stderr[-2000:])
     # What the tap decoded is what the recorder recorded, to the last bit.
     table = read_table(out / "table.parquet")
     for name in STATE:
