@@ -16,6 +16,7 @@ from typing import Any
 
 from cosim import keys
 from cosim import scenario as sc
+from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
 
@@ -208,27 +209,24 @@ def load_sweep(path: str | Path, jobs: int | None = None,
         raise InputFileError(str(path), f"cannot read sweep file ({exc.strerror})") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputFileError(str(path), f"not valid TOML: {exc}") from None
-    sw = data.get("sweep")
-    if not isinstance(sw, dict):
-        raise ScenarioError("sweep", sw, "a [sweep] table (with base and grid)")
-    for k in sw:
-        if k not in SWEEP_KEYS:
-            raise ScenarioError(f"sweep.{k}", sw[k], "one of " + ", ".join(SWEEP_KEYS))
+    if not isinstance(data.get("sweep"), dict):
+        raise ScenarioError("sweep", data.get("sweep"), "a [sweep] table (with base and grid)")
+    sw = ConfigReader(data["sweep"], "sweep", SWEEP_KEYS)  # a typo: "did you mean"
     folder = path.resolve().parent
-    name = sw.get("name", path.stem)
+    name = sw.string("name", path.stem)
     check_name("sweep.name", name)
     if len(name) > 40:
-        raise ScenarioError("sweep.name", name, "at most 40 characters")
-    raw_base = sw.get("base", None)
+        raise sw.error("name", name, "at most 40 characters")
+    raw_base = sw.value("base")
     if raw_base is None:  # the sweep file is its own base scenario
         if not any(k != "sweep" for k in data):
-            raise ScenarioError("sweep.base", None, "a base scenario file (or scenario "
-                                "sections in the sweep file itself)")
+            raise sw.error("base", None, "a base scenario file (or scenario sections in the "
+                           "sweep file itself)")
         bases = [path.resolve()]
     else:
         items = raw_base if isinstance(raw_base, list) else [raw_base]
         if not items or not all(isinstance(b, str) and b for b in items):
-            raise ScenarioError("sweep.base", raw_base, "a scenario file or a list of them")
+            raise sw.error("base", raw_base, "a scenario file or a list of them")
         bases = []
         for b in items:
             p = Path(b).expanduser()
@@ -238,38 +236,32 @@ def load_sweep(path: str | Path, jobs: int | None = None,
                                      "relative to the sweep file)")
             bases.append(p.resolve())
     if jobs is None:
-        jobs = sw.get("jobs", max(1, (os.cpu_count() or 2) // 2))
-    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
-        raise ScenarioError("sweep.jobs", jobs, "an integer >= 1")
+        jobs = sw.integer("jobs", max(1, (os.cpu_count() or 2) // 2), lo=1)
+    elif isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise sw.error("jobs", jobs, "an integer >= 1")
     if fatigue is None:
-        fatigue = sw.get("fatigue", False)
-    if not isinstance(fatigue, bool):
-        raise ScenarioError("sweep.fatigue", fatigue, "true or false")
-    channels = sw.get("channels", list(DEFAULT_CHANNELS))
+        fatigue = sw.boolean("fatigue", False)
+    channels = sw.value("channels", list(DEFAULT_CHANNELS))
     if not isinstance(channels, list) or not all(isinstance(c, str) for c in channels):
-        raise ScenarioError("sweep.channels", channels, "a list of channel names")
-    fixed = sw.get("set", {})
-    if not isinstance(fixed, dict):
-        raise ScenarioError("sweep.set", fixed, "a table of dotted keys and values")
+        raise sw.error("channels", channels, "a list of channel names")
+    fixed = dict(sw.table("set"))
     for k, v in fixed.items():
         _check_override_key("sweep.set", k, v)
-    grid = sw.get("grid", {})
-    if not isinstance(grid, dict):
-        raise ScenarioError("sweep.grid", grid, "a table of axes")
+    grid = dict(sw.table("grid"))
     axes: list[Axis] = []
     design = None
-    if "design" in sw:
-        design = parse_design(sw["design"], _check_override_key)
+    if sw.has("design"):
+        design = parse_design(sw.value("design"), _check_override_key)
         for k in design.keys:
             if k in RESERVED or k in grid:
                 raise ScenarioError(f"sweep.design.ranges.{k}", None, "a key that is neither "
                                     "a grid axis nor one of " + ", ".join(RESERVED))
-    runs_dir = sw.get("runs_dir")
-    if runs_dir is not None:
-        if not isinstance(runs_dir, str) or not runs_dir:
-            raise ScenarioError("sweep.runs_dir", runs_dir, "a folder path")
-        runs_dir = Path(runs_dir).expanduser()
+    runs_dir = None
+    given_runs_dir = sw.optional_string("runs_dir")
+    if given_runs_dir is not None:
+        runs_dir = Path(given_runs_dir).expanduser()
         runs_dir = (runs_dir if runs_dir.is_absolute() else folder / runs_dir).resolve()
+    sw.value("description")  # free text
     if len(bases) > 1:
         axes.append(Axis("base", [b.stem for b in bases], [{} for _ in bases], bases))
     for key, spec in grid.items():

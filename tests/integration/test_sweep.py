@@ -119,6 +119,7 @@ def test_bad_sweep_files_exit_2_naming_the_key(tmp_path):
     bad_key = _write(tmp_path, "k.toml", GRID_2X2.replace("jobs = 2", "jbos = 2"))
     res = suscosim("sweep", str(bad_key), "--out", str(out))
     assert res.returncode == 2 and "sweep.jbos" in res.stderr, res.stderr
+    assert "did you mean 'jobs'" in res.stderr, res.stderr  # read with cosim's ConfigReader
     assert "Traceback" not in res.stderr
     bad_scenario_key = _write(tmp_path, "s.toml", GRID_2X2.replace('"run.t_end" = 0.6',
                                                                   '"road.sped_kmh" = 40.0'))
