@@ -20,11 +20,16 @@ equilibrium:
 
 from __future__ import annotations
 
+import copy
+import tempfile
 from abc import ABC, abstractmethod
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from . import quiet_pybullet  # noqa: F401 - pybullet imported without its banner, first
+from .quiet_pybullet import p
 
 GRAVITY = 9.81
 """g [m/s^2], the value the thesis uses."""
@@ -83,6 +88,51 @@ class PlantModel(ABC):
             "n_corners": self.n_corners,
             "static_tyre_load": [float(x) for x in self.static_tyre_load()],
         }
+
+    checkpoint_keep: tuple[str, ...] = ("client",)
+    """Attributes :meth:`restore_state` leaves as they are: the PyBullet client of this
+    process (a fresh model's id may differ; body and joint ids do not, the world being built
+    the same way from the same scenario)."""
+
+    def checkpoint_state(self) -> dict[str, Any]:
+        """The model's whole state at a step boundary (issue #29 item 4), picklable: the
+        PyBullet world as ``saveBullet`` writes it (positions, velocities, the solver's
+        state) and a deep copy of the model's own attributes (integrator memory, the
+        driver, held tyre forces, the last loads) but :attr:`checkpoint_keep`."""
+        client = getattr(self, "client", None)
+        if client is None:
+            raise TypeError(f"{type(self).__name__} has no PyBullet client to checkpoint")
+        with tempfile.TemporaryDirectory(prefix="suscosim-ckpt-") as folder:
+            path = Path(folder) / "world.bullet"
+            p.saveBullet(str(path), physicsClientId=client)
+            world = path.read_bytes()
+        attrs = {k: copy.deepcopy(v) for k, v in vars(self).items()
+                 if k not in self.checkpoint_keep}
+        # the engine's settings are not in a .bullet file (a model sets its time step lazily)
+        engine = p.getPhysicsEngineParameters(physicsClientId=client)
+        return {"model": self.name, "bullet": world, "attrs": attrs, "engine": engine}
+
+    def restore_state(self, state: dict[str, Any]) -> None:
+        """Continue from :meth:`checkpoint_state` of a model built from the same scenario:
+        the next substeps are the checkpointed model's, bit for bit (tested per model).
+        Raises ValueError when the state is another model's."""
+        if state.get("model") != self.name:
+            raise ValueError(f"a checkpoint of plant model {state.get('model')!r} cannot "
+                             f"restore a {self.name!r}")
+        with tempfile.TemporaryDirectory(prefix="suscosim-ckpt-") as folder:
+            path = Path(folder) / "world.bullet"
+            path.write_bytes(state["bullet"])
+            p.restoreState(fileName=str(path), physicsClientId=self.client)
+        e = state["engine"]
+        p.setGravity(e["gravityAccelerationX"], e["gravityAccelerationY"],
+                     e["gravityAccelerationZ"], physicsClientId=self.client)
+        p.setPhysicsEngineParameter(
+            fixedTimeStep=e["fixedTimeStep"], numSubSteps=e["numSubSteps"],
+            numSolverIterations=e["numSolverIterations"],
+            numNonContactInnerIterations=e["numNonContactInnerIterations"],
+            physicsClientId=self.client)
+        for k, v in state["attrs"].items():
+            setattr(self, k, copy.deepcopy(v))
 
     def close(self) -> None:  # noqa: B027 - optional hook
         """Release the PyBullet client."""

@@ -14,6 +14,7 @@ read where the wheels are (s = x_wc - x_wc,FL(0): the vehicle moves itself).
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
 from typing import Any
 
@@ -64,6 +65,19 @@ class TyreRoad:
         self.geo = wheel_geometry(start["info"][ch.PLANT])
         self.offsets = np.asarray(self.tyre.contact_offsets, dtype=float)
         self.centre = int(np.argmin(np.abs(self.offsets)))
+
+    STATE_ATTRS = ("_s0", "tyre", "mf")
+    """What changes as the run goes (the Magic Formula's relaxation states, the path origin);
+    the road, the wheel geometry and the step are rebuilt the same from the scenario."""
+
+    def checkpoint_state(self) -> dict[str, Any]:
+        """The node's state at a step boundary (issue #29 item 4), picklable."""
+        return {k: copy.deepcopy(getattr(self, k)) for k in self.STATE_ATTRS}
+
+    def restore_state(self, state: Mapping[str, Any]) -> None:
+        """Continue from :meth:`checkpoint_state` (of a node built from the same scenario)."""
+        for k in self.STATE_ATTRS:
+            setattr(self, k, copy.deepcopy(state[k]))
 
     def step(self, k: int, t: float, inputs: Mapping[str, Mapping[str, np.ndarray]]
              ) -> dict[str, Any]:
