@@ -119,18 +119,19 @@ class PlantModel(ABC):
         if state.get("model") != self.name:
             raise ValueError(f"a checkpoint of plant model {state.get('model')!r} cannot "
                              f"restore a {self.name!r}")
+        client = getattr(self, "client")  # noqa: B009 - every PyBullet model has one
         with tempfile.TemporaryDirectory(prefix="suscosim-ckpt-") as folder:
             path = Path(folder) / "world.bullet"
             path.write_bytes(state["bullet"])
-            p.restoreState(fileName=str(path), physicsClientId=self.client)
+            p.restoreState(fileName=str(path), physicsClientId=client)
         e = state["engine"]
         p.setGravity(e["gravityAccelerationX"], e["gravityAccelerationY"],
-                     e["gravityAccelerationZ"], physicsClientId=self.client)
+                     e["gravityAccelerationZ"], physicsClientId=client)
         p.setPhysicsEngineParameter(
             fixedTimeStep=e["fixedTimeStep"], numSubSteps=e["numSubSteps"],
             numSolverIterations=e["numSolverIterations"],
             numNonContactInnerIterations=e["numNonContactInnerIterations"],
-            physicsClientId=self.client)
+            physicsClientId=client)
         for k, v in state["attrs"].items():
             setattr(self, k, copy.deepcopy(v))
 
