@@ -12,7 +12,8 @@ the ``rear`` file (both the left corner's; FR and RR are mirrored, :meth:`cosim.
 CG: x = a ahead for the front axle, b = L - a behind for the rear.
 
 Forces per corner, as the quarter car applies them (:mod:`.double_wishbone`): the torsion bar
-tau = tau_0 - K_theta theta on the lower arm's joint, the damper force F_d along the damper
+tau = tau_0 - K_theta theta on the lower arm's joint (and the axle's anti-roll bar's torque
+there, :mod:`.anti_roll_bar`), the damper force F_d along the damper
 axis (compression-positive on the body), the jounce bumper along the body's z, the tyre force
 F_t vertical at the wheel centre (the vertical tyre models); or, once
 :meth:`~.full_vehicle_dw_wheels.WheelsAndDriver.set_tyre_forces` gave the Magic Formula's
@@ -31,8 +32,7 @@ then each in turn) give them (a 4 x 4 solve). The body is then at rest too.
 Body (defaults: Table 4.4 read per corner, as ``full_vehicle_7dof``'s ``corner`` basis):
 1870 kg, the CG a = 1.181 m behind the front axle (L = 2.774 m), I_pitch = 3522.5,
 I_roll = 930.8 kg m^2 (sum m_i x_i^2, sum m_i y_i^2 of the corner masses), I_yaw their sum;
-CG height h_cg = 0.55 m (ours: a small MPV's unladen CG, the thesis gives none; with
-vertical forces only it does not enter the motion).
+CG height h_cg = 0.55 m (ours: a small MPV's unladen CG, the thesis gives none).
 """
 
 from __future__ import annotations
@@ -47,6 +47,7 @@ from cosim import corner as corner_file
 from cosim.channels import CORNERS
 from cosim.corner import Corner
 
+from .anti_roll_bar import ARB_FRONT_NM_PER_DEG, ARB_REAR_NM_PER_DEG, axle_bars, axle_torques
 from .arm_loads import arm_loads_at
 from .bump_stop import BumpStopParams, bump_stop_force
 from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
@@ -69,6 +70,12 @@ class FullVehicleDWParams:
     roll_inertia: float = 930.8
     yaw_inertia: float = 3522.5 + 930.8
     cg_height: float = 0.55
+    anti_roll_bars: bool = True
+    """A bar on each axle (:mod:`.anti_roll_bar`); false: none (the model before #31's)."""
+    arb_front_nm_per_deg: float = ARB_FRONT_NM_PER_DEG
+    """The front bar's roll stiffness at the wheels [N m/deg] (the value's reasoning there)."""
+    arb_rear_nm_per_deg: float = ARB_REAR_NM_PER_DEG
+    """The rear bar's [N m/deg]."""
     speed_kmh: float = 0.0
     """The forward speed at t = 0 [km/h]: body and wheel centres at it, the wheels spinning
     at v / r_l (free rolling on the tyre of :mod:`nodes.tyre_road.tyre_3d`)."""
@@ -123,6 +130,8 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
             for x, s, c in zip((a, a, -b, -b), self.side, self.corners, strict=True)])
         self.k_theta = np.array([c.torsion_bar_nm_per_deg * 180.0 / np.pi
                                  for c in self.corners])
+        self.bars = axle_bars(f, r, pr.anti_roll_bars, pr.arb_front_nm_per_deg,
+                              pr.arb_rear_nm_per_deg)
         self.bump = [None if c.bump_stop is None else BumpStopParams(**c.bump_stop)
                      for c in self.corners]
         self.client = cl = new_direct_client()
@@ -438,7 +447,9 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                                                  float(mo["w_yaw"][0]), dt)
             self.set_driver(torques, self.rack_for_steer(delta))
         self._time += dt
-        self._tau = self.tau0 - self.k_theta * (np.array(self._st["theta"]) - self._s0["theta"])
+        dth = np.array(self._st["theta"]) - self._s0["theta"]
+        self._tau = self.tau0 - self.k_theta * dth + self.side * axle_torques(self.bars,
+                                                                              self.side * dth)
         self._apply()
         p.stepSimulation(physicsClientId=self.client)
         self._read()
@@ -483,7 +494,9 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                   "unsprung_mass": [sum(c.masses[k] for k in
                                         ("hub", "lower_arm", "upper_arm", "tie_rod"))
                                     for c in self.corners],
-                  "torsion_preload_nm": [float(x) for x in self.tau0]})
+                  "torsion_preload_nm": [float(x) for x in self.tau0],
+                  "anti_roll_bar_nm_per_rad": [0.0 if b is None else b.roll_stiffness
+                                               for b in self.bars]})
         return d
 
     def close(self) -> None:

@@ -1,0 +1,92 @@
+"""The four-corner vehicle's anti-roll bars (nodes/plant/anti_roll_bar.py) and the cornering on
+the pave they make possible (#31): the bar's torques against its definition, and 0.5 g on the
+Ch 6 pave without rolling over (scenarios/events/cornering_pave.toml's road, stepped in the
+co-simulation's exchange as tests/vehicles/test_full_vehicle_events.py does)."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from cosim import corner as corner_file
+from nodes.plant.anti_roll_bar import AntiRollBar, axle_bars, axle_torques, wheel_lever
+from nodes.plant.driver import Driver
+from nodes.plant.full_vehicle_dw import FullVehicleDoubleWishbone, FullVehicleDWParams
+from nodes.plant.full_vehicle_dw_sim import simulate
+from nodes.plant.model import GRAVITY
+from nodes.tyre_road.config import build_road
+from nodes.tyre_road.magic_formula import MagicFormula
+from nodes.tyre_road.tyre_3d import Tyre3D
+from tests.conftest import ROOT
+
+PAVE = ROOT / "scenarios" / "events" / "cornering_pave.toml"
+
+
+def test_the_bar_resists_roll_only_with_its_roll_stiffness_at_the_wheels():
+    bar = AntiRollBar(roll_stiffness=60000.0, track=1.4, lever=0.3)
+    # heave and pitch (both arms alike): no torque
+    assert bar.torques(0.05, 0.05) == (0.0, 0.0)
+    # the body rolled by phi over wheels on the ground: the arms by -+ t phi / (2 l)
+    phi = 0.02
+    aL, aR = -1.4 * phi / (2 * 0.3), 1.4 * phi / (2 * 0.3)
+    tL, tR = bar.torques(aL, aR)
+    assert tL == -tR and tL > 0  # the arm in rebound (left) turned toward jounce: resists roll
+    # as vertical forces at the wheel centres (torque / lever), their roll moment is K phi
+    moment = (tL / 0.3 - tR / 0.3) * 1.4 / 2
+    assert moment == pytest.approx(60000.0 * phi, rel=1e-12)
+    # per axle, FL/FR and RL/RR; an axle without a bar gets none
+    out = axle_torques((bar, None), np.array([aL, aR, aL, aR]))
+    assert out[:2] == pytest.approx([tL, tR]) and list(out[2:]) == [0.0, 0.0]
+    with pytest.raises(ValueError, match="track"):
+        AntiRollBar(1.0, 0.0, 0.3)
+
+
+def test_the_built_in_bars_and_switching_them_off():
+    c = corner_file.builtin()
+    # the corner's wheel-centre lever: 0.2984 m (nodes/plant/double_wishbone_geometry.py)
+    assert wheel_lever(c) == pytest.approx(0.2984, abs=2e-4)
+    f, r = axle_bars(c, c, True, 1200.0, 500.0)
+    assert f is not None and r is not None
+    assert f.roll_stiffness == pytest.approx(1200.0 * 180 / np.pi)
+    assert f.track == pytest.approx(1.411)
+    assert axle_bars(c, c, False, 1200.0, 500.0) == (None, None)
+    assert FullVehicleDWParams().anti_roll_bars  # on for the four-corner vehicle
+
+
+@pytest.fixture(scope="module")
+def pave_cornering():
+    with open(PAVE, "rb") as fh:
+        sc = tomllib.load(fh)
+    road = build_road(sc["road"])
+    R, v0 = 40.0, float(np.sqrt(0.5 * GRAVITY * 40.0))
+    car = FullVehicleDoubleWishbone(FullVehicleDWParams(speed_kmh=v0 * 3.6))
+    try:
+        x0 = float(car.state()["x_wc"][0])
+
+        def z_road(x: float, track: int) -> float:  # as the tyre/road node: s = x - x_FL(0)
+            return float(road.height(np.array([x - x0]), track)[0])
+
+        m = float(car.static_tyre_load().sum()) / GRAVITY
+        drv = Driver(mass=m, wheel_radius=0.30, wheelbase=2.774, speed=[(0.0, v0)], radius=R)
+        hist = simulate(car, Tyre3D(MagicFormula.from_tir()), drv, 2.5, 0.002, 4, 239000.0,
+                        3800.0, road=z_road)
+        return car, hist
+    finally:
+        car.close()
+
+
+def test_cornering_on_the_pave_does_not_roll_over(pave_cornering):
+    _, hist = pave_cornering
+    assert hist.t[-1] == pytest.approx(2.5)
+    assert np.all(np.isfinite(hist.roll)) and np.all(np.isfinite(hist.F_z))
+    # bounded: the run without bars and with independent long waves rolled 0.27 rad by 1.2 s
+    # and over (1.1 rad at 3 s); here the body rolls about the flat road's 0.049 rad
+    assert float(np.max(np.abs(hist.roll))) < 0.12
+    late = hist.t >= 1.5
+    assert float(np.mean(np.abs(hist.roll[late]))) == pytest.approx(0.049, rel=0.3)
+    # it still corners: the driver's 0.5 g on the setts
+    assert float(np.mean(hist.a_y[late])) == pytest.approx(0.5 * GRAVITY, rel=0.15)
+    # and the wheels stay on the road most of the time (the setts make them hop)
+    assert float(np.mean(hist.F_z[late] > 0.0)) > 0.8
