@@ -20,6 +20,21 @@ schedule drives it::
     run = "../../runs/ch6-bump"  # a finished run folder (its fatigue/ results)
     repeats = 50
 
+**Laws** (optional): the same schedule under each of several damper laws, every scenario event
+run once per law (its ``set`` applied after the event's own)::
+
+    [[laws]]
+    name = "passive"             # no set: the scenarios' own [controller]
+    [[laws]]
+    name = "skyhook_on_off"
+    set = ['controller = {law = "skyhook_on_off", preset = "realistic", velocity = "damper"}']
+
+The runs go to ``<out>/runs/<law>/<event>``, each law's sum to ``<out>/laws/<law>/`` (the
+files below), the first law's also to ``<out>/`` itself (the reference), and ``laws.csv``
+(one row per law and event) and ``duty.json``'s ``laws`` compare them at one node: the
+reference's critical node, where each event's damage per schedule under each law is given
+beside the reference's (``ratio``), with each law's own life and critical node.
+
 Every event's damage per node comes from its run's ``fatigue/`` (the live fatigue node's or
 ``suscosim fatigue``'s; computed in batch when absent); all events must share the fatigue
 settings and node set. The sum (nodes/fatigue/duty_cycle.py) is written to ``<out>/`` (default
@@ -46,6 +61,7 @@ from cosim.errors import InputFileError, ScenarioError, SuscosimError
 
 DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
 EVENT_KEYS = ("name", "scenario", "run", "set", "repeats", "distance_km")
+LAW_KEYS = ("name", "set")
 SAME_CONFIG_SKIP = ("track_length_m", "repeats_basis_m", "block_samples", "live")
 """Fatigue keys that may differ between events (they do not change a pass's damage)."""
 
@@ -71,8 +87,8 @@ def load_duty(path: str | Path) -> dict[str, Any]:
         raise InputFileError(str(path), f"not valid TOML: {exc}") from None
     base = path.resolve().parent
     for k in data:
-        if k not in ("duty", "events"):
-            raise ScenarioError(k, "(section)", "the sections [duty] and [[events]]")
+        if k not in ("duty", "events", "laws"):
+            raise ScenarioError(k, "(section)", "the sections [duty], [[events]] and [[laws]]")
     duty = data.get("duty", {})
     if not isinstance(duty, dict):
         raise ScenarioError("duty", duty, "a table")
@@ -154,13 +170,43 @@ def load_duty(path: str | Path) -> dict[str, Any]:
             e["distance_km"] = _number(ev["distance_km"], f"{q}.distance_km",
                                        "a distance > 0 (km)", lo_open=True)
         out["events"].append(e)
+    if "laws" in data:
+        out["laws"] = _load_laws(data["laws"], out["events"])
+    return out
+
+
+def _load_laws(laws: Any, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The ``[[laws]]`` tables: unique names, ``set`` a list of overrides; every event a
+    scenario (a finished run cannot be run again under another law)."""
+    if not isinstance(laws, list) or not laws:
+        raise ScenarioError("laws", laws, "a non-empty list of [[laws]] tables")
+    for i, ev in enumerate(events):
+        if "run" in ev:
+            raise ScenarioError(f"events[{i}].run", ev["run"], "a scenario (with [[laws]] "
+                                "every event is run under each law)")
+    out: list[dict[str, Any]] = []
+    for i, law in enumerate(laws):
+        q = f"laws[{i}]"
+        if not isinstance(law, dict):
+            raise ScenarioError(q, law, "a table")
+        for k in law:
+            if k not in LAW_KEYS:
+                raise ScenarioError(f"{q}.{k}", law[k], "one of " + ", ".join(LAW_KEYS))
+        name = law.get("name")
+        if not isinstance(name, str) or not name or "/" in name or \
+                name in {x["name"] for x in out}:
+            raise ScenarioError(f"{q}.name", name, "a unique law name without '/'")
+        sets = law.get("set", [])
+        if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
+            raise ScenarioError(f"{q}.set", sets, "a list of 'KEY=VALUE' strings")
+        out.append({"name": name, "set": sets})
     return out
 
 
 def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
-               sets: Sequence[str] = ()) -> Path:
+               sets: Sequence[str] = (), law_sets: Sequence[str] = ()) -> Path:
     """Run a scenario event into ``folder`` (reused when a finished run with fatigue is
-    there and ``rerun`` is false)."""
+    there and ``rerun`` is false); ``law_sets`` after the event's own overrides."""
     done = folder / "summary.json"
     if not rerun and done.is_file() and (folder / "fatigue" / "damage_per_node.csv").is_file():
         try:
@@ -172,7 +218,8 @@ def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
 
     from .runner import resolve, run_scenario
 
-    overrides = list(sets) + list(ev["set"]) + ([f'run.mode="{mode}"'] if mode else [])
+    overrides = list(sets) + list(ev["set"]) + list(law_sets) + \
+        ([f'run.mode="{mode}"'] if mode else [])
     scenario = resolve(sc.load(ev["scenario"], overrides), folder)
     print(f"suscosim duty: event {ev['name']}: run {scenario['run']['id']} -> {folder}",
           flush=True)
@@ -206,8 +253,68 @@ def _same_config(a: dict, b: dict) -> bool:
 
 def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
              rerun: bool = False, sets: Sequence[str] = ()) -> dict[str, Any]:
-    """Run/collect every event, sum the damage, write ``out/``; return duty.json's content.
-    ``sets``: overrides for every scenario event (before the event's own ``set``)."""
+    """Run/collect every event (under every law of ``duty["laws"]``, if any), sum the
+    damage, write ``out/``; return duty.json's content. ``sets``: overrides for every
+    scenario event (before the event's own ``set``)."""
+    laws = duty.get("laws")
+    if not laws:
+        return _schedule(duty, out, out / "runs", mode, rerun, sets)[0]
+    done = [(law["name"], *_schedule(duty, out / "laws" / law["name"],
+                                     out / "runs" / law["name"], mode, rerun, sets,
+                                     law["set"])) for law in laws]
+    result, res, first = done[0][1:]
+    result = {**result, "laws": _compare_laws(done, first)}
+    _write(out, result, res, first)
+    _write_laws(out, result["laws"])
+    return result
+
+
+def _compare_laws(done: list, first: dict) -> dict[str, Any]:
+    """duty.json's ``laws``: each law's damage per schedule of every event at the reference
+    (first) law's critical node, its ratio to the reference's, each law's own totals."""
+    from nodes.fatigue.duty_cycle import law_matrix
+
+    for name, _, _, fat in done[1:]:
+        if fat["ids"] != first["ids"]:
+            raise InputFileError(name, "this law's runs have other nodes than the first law's")
+    try:
+        c, D = law_matrix([r for _, _, r, _ in done])
+    except ValueError as exc:
+        raise ScenarioError("laws", [n for n, *_ in done], str(exc)) from None
+    ref = D[0]
+    names = done[0][2].names
+    return {
+        "reference": done[0][0], "node_id": int(first["ids"][c]), "events": names,
+        "laws": [{
+            "name": n, "damage_per_schedule_at_node": [float(x) for x in D[i]],
+            "ratio_to_reference": [float(x / y) if y > 0 else (1.0 if x == 0 else "inf")
+                                   for x, y in zip(D[i], ref, strict=True)],
+            "max_damage_per_pass": [float(e["max_damage_per_pass"]) for e in r["events"]],
+            "damage_per_schedule_at_node_total": float(D[i].sum()),
+            "max_damage_per_schedule": r["max_damage_per_schedule"],
+            "critical_node_id": r["critical_node_id"], "life_schedules": r["life_schedules"],
+            "life_km": r["life_km"], "dominant_event": r["dominant_event"],
+            "dominant_share": r["dominant_share"],
+        } for i, (n, r, _, _) in enumerate(done)]}
+
+
+def _write_laws(out: Path, laws: dict[str, Any]) -> None:
+    """laws.csv: one row per law and event (the comparison of :func:`_compare_laws`)."""
+    with open(out / "laws.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["law", "event", "max_damage_per_pass", "damage_per_schedule_at_node",
+                    "node_id", "ratio_to_reference"])
+        for law in laws["laws"]:
+            for j, ev in enumerate(laws["events"]):
+                w.writerow([law["name"], ev, law["max_damage_per_pass"][j],
+                            law["damage_per_schedule_at_node"][j], laws["node_id"],
+                            law["ratio_to_reference"][j]])
+
+
+def _schedule(duty: dict[str, Any], out: Path, runs: Path, mode: str | None, rerun: bool,
+              sets: Sequence[str], law_sets: Sequence[str] = ()) -> tuple[dict, Any, dict]:
+    """One schedule: run/collect every event into ``runs/<event>``, sum, write ``out/``;
+    (duty.json's content, the DutyResult, the first event's fatigue)."""
     import numpy as np
 
     from nodes.fatigue.duty_cycle import Event, life_factor, schedule_damage
@@ -217,7 +324,7 @@ def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
     events: list[Event] = []
     for ev in duty["events"]:
         run_dir = Path(ev["run"]) if "run" in ev else \
-            _run_event(ev, out / "runs" / ev["name"], mode, rerun, sets)
+            _run_event(ev, runs / ev["name"], mode, rerun, sets, law_sets)
         fat = _event_fatigue(run_dir)
         length = float(fat["summary"]["track_length_m"])
         if not (length > 0 and math.isfinite(length)):
@@ -281,7 +388,7 @@ def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
             "life_km": num(res.life_km * f),
         }
     _write(out, result, res, first)
-    return result
+    return result, res, first
 
 
 def _write(out: Path, result: dict, res, first: dict) -> None:
@@ -325,6 +432,22 @@ def _print(result: dict) -> None:
         print(f"  at {100 * cert['survival_probability']:g} % survival (s = "
               f"{cert['log10_std']:.3g} in log10 N): {fmt(cert['life_schedules'])} schedules = "
               f"{fmt(cert['life_km'])} km (x {cert['life_factor']:.3g})")
+    laws = result.get("laws")
+    if laws:
+        names = [law["name"] for law in laws["laws"]]
+        print(f"  damage per schedule at node {laws['node_id']} (the {laws['reference']} "
+              f"schedule's critical node) by law; (x) = ratio to {laws['reference']}:")
+        print(f"  {'event':<16} " + " ".join(f"{n:>26}" for n in names))
+        for j, ev in enumerate(laws["events"]):
+            cells = [f"{law['damage_per_schedule_at_node'][j]:.3e} "
+                     f"(x{_ratio(law['ratio_to_reference'][j])})" for law in laws["laws"]]
+            print(f"  {ev:<16} " + " ".join(f"{c:>26}" for c in cells))
+        print(f"  {'life [km]':<16} " + " ".join(f"{fmt(law['life_km']):>26}"
+                                                 for law in laws["laws"]))
+
+
+def _ratio(x: float | str) -> str:
+    return x if isinstance(x, str) else f"{x:.3g}"
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -115,3 +115,18 @@ def life_factor(probability: float, log10_std: float) -> float:
     if not (log10_std >= 0 and math.isfinite(log10_std)):
         raise ValueError(f"std of log10 N must be >= 0, got {log10_std!r}")
     return 10.0 ** (-float(norm.ppf(probability)) * log10_std)
+
+
+def law_matrix(results: Sequence[DutyResult]) -> tuple[int, np.ndarray]:
+    """The schedule under several damper laws (``results``, the first the reference, the
+    same events and nodes): (the reference's critical node c, D[law, event] = n_e D_e[c]
+    under each law). One node for every law, so that a law's effect on an event is a ratio
+    of damages at the same place (each law's own critical node and life are its result's)."""
+    if not results:
+        raise ValueError("no laws to compare")
+    ref = results[0]
+    for r in results[1:]:
+        if r.names != ref.names or r.per_event.shape != ref.per_event.shape:
+            raise ValueError("the laws' schedules have other events or nodes than the first's")
+    c = ref.critical
+    return c, np.stack([r.per_event[:, c] for r in results])

@@ -1,7 +1,7 @@
 """The duty-cycle page (``suscosim report duty/<name>``): the schedule's events, each one's
-share of the critical node's damage, totals, life at a survival probability and the damage
-map of one schedule, from the folder ``suscosim duty`` writes (duty.json, events.csv,
-damage_per_node.csv)."""
+share of the critical node's damage, totals, life at a survival probability, the events under
+each damper law (when the duty file has [[laws]]) and the damage map of one schedule, from the
+folder ``suscosim duty`` writes (duty.json, events.csv, damage_per_node.csv)."""
 
 from __future__ import annotations
 
@@ -73,6 +73,44 @@ def events_section(duty: dict[str, Any]) -> str:
     return section("events", "Events", body)
 
 
+def laws_section(duty: dict[str, Any]) -> str:
+    """The schedule under each damper law (duty.json's ``laws``): each event's damage per
+    schedule at the reference law's critical node, its ratio to the reference, each law's
+    own life; empty when the duty file had no [[laws]]."""
+    laws = duty.get("laws")
+    if not isinstance(laws, dict) or not laws.get("laws"):
+        return ""
+    names = [str(law.get("name")) for law in laws["laws"]]
+    header = ["event", *(f"{n}: damage per schedule at node {laws.get('node_id')}"
+                         for n in names), *(f"{n} / {laws.get('reference')}" for n in names[1:])]
+    rows = []
+    for j, ev in enumerate(laws.get("events", [])):
+        d = [law["damage_per_schedule_at_node"][j] for law in laws["laws"]]
+        r = [law["ratio_to_reference"][j] for law in laws["laws"][1:]]
+        rows.append([ev, *d, *r])
+    rows.append(["total at the node", *(law.get("damage_per_schedule_at_node_total")
+                                        for law in laws["laws"]),
+                 *(_ratio(law, laws["laws"][0]) for law in laws["laws"][1:])])
+    body = note(f"Every event run under each law; the damages at one node, the "
+                f"{esc(str(laws.get('reference')))} schedule's critical node "
+                f"{laws.get('node_id')}, so that a ratio compares the same place.")
+    body += table_html(header, rows)
+    body += table_html(["law", "life [schedules]", "life [km]", "its critical node",
+                        "dominant event"],
+                       [[law.get("name"), _life(law.get("life_schedules")),
+                         _life(law.get("life_km")), law.get("critical_node_id"),
+                         f"{law.get('dominant_event')} "
+                         f"({100.0 * float(law.get('dominant_share', 0.0)):.1f} %)"]
+                        for law in laws["laws"]])
+    return section("laws", "Damper laws", body)
+
+
+def _ratio(law: dict[str, Any], ref: dict[str, Any]) -> Any:
+    a, b = law.get("damage_per_schedule_at_node_total"), ref.get(
+        "damage_per_schedule_at_node_total")
+    return a / b if isinstance(a, float) and isinstance(b, float) and b > 0 else "?"
+
+
 def totals_section(duty: dict[str, Any]) -> str:
     xyz = duty.get("critical_node_xyz_m") or []
     pos = ", ".join(f"{1e3 * float(v):.0f}" for v in xyz) if xyz else "?"
@@ -132,6 +170,9 @@ def render_duty(d: Path) -> str:
             f"{cmd(str(duty.get('duty_file')))} · report written "
             f"{esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
     navs = [("totals", "Totals"), ("events", "Events"), ("map", "Damage map")]
-    body = "".join(head) + nav(navs) + totals_section(duty) + events_section(duty)
+    laws = laws_section(duty)
+    if laws:
+        navs.insert(2, ("laws", "Damper laws"))
+    body = "".join(head) + nav(navs) + totals_section(duty) + events_section(duty) + laws
     body += map_section(duty, cols, problem)
     return page(f"suscosim duty {name}", body)
