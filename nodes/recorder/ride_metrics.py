@@ -18,6 +18,9 @@ table's ``t`` column (s). Frequency bands are in Hz, never in bin indices.
   low-pass 100 Hz, both 2nd-order Butterworth, Q = 1/sqrt(2)) times the acceleration-velocity
   transition (f3 = f4 = 12.5 Hz, Q4 = 0.63) times the upward step (f5 = 2.37 Hz, Q5 = 0.91,
   f6 = 3.35 Hz, Q6 = 0.91), applied exactly in the frequency domain (zero-padded FFT).
+
+These take whole signals; :mod:`.ride_stream` computes the same metrics from a table read in
+row batches (``suscosim report``: the same periodogram, to rounding; Wk to ~1e-7).
 """
 
 from __future__ import annotations

@@ -4,7 +4,6 @@ loads, fatigue, logs) and the page itself."""
 from __future__ import annotations
 
 import datetime as _dt
-import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -293,24 +292,13 @@ def stats_section(r: RunData) -> str:
 
 
 def streamed_ride_metrics(src: TableSource) -> dict[str, float]:
-    """:func:`nodes.recorder.ride_metrics.run_metrics` of the table, one group of columns at
-    a time (``t`` and one base's corners; ``z_b`` with ``z_w``): the metrics' periodograms
-    (thesis Eq 4.8/4.9) take whole signals, so the memory is 8 B a row for ``t`` and a
-    group's columns, not the whole table; the same values, in the same order."""
-    from nodes.recorder.ride_metrics import ARM_ACCEL_FIELDS, ROTATION_FIELDS, run_metrics
+    """:func:`nodes.recorder.ride_metrics.run_metrics` of the table read a batch at a time
+    (:mod:`nodes.recorder.ride_stream`: the thesis's whole-record periodogram kept, only its
+    in-band bins held; the resampling, jerk, SWS bit for bit, the other RMS to rounding, Wk
+    to ~1e-7 beyond 131 s of record): ``{label: value}`` in ``run_metrics``' order."""
+    from nodes.recorder.ride_stream import streamed_run_metrics
 
-    groups = [("plant/response/a_b",), ("plant/response/a_w",),
-              *((f"plant/response/{f}",) for f in (*ARM_ACCEL_FIELDS, *ROTATION_FIELDS)),
-              ("plant/state/z_b", "plant/state/z_w"), ("tyre_road/force/F_t",),
-              ("controller/force/F_d",)]
-    out: dict[str, float] = {}
-    for bases in groups:
-        def keep(name: str, bases: tuple[str, ...] = bases) -> bool:
-            return re.sub(r"\[\d+\]$", "", name) in bases
-        if not any(keep(n) for n in src.names):
-            continue
-        out.update(run_metrics(src.read(keep)))
-    return out
+    return streamed_run_metrics(src.names, src.n_rows, lambda cols: src.batches(cols))
 
 
 def ride_section(r: RunData) -> str:
@@ -323,7 +311,8 @@ def ride_section(r: RunData) -> str:
         return section("ride", "Ride metrics", note("no ride channels in the table."))
     body = table_html(["metric", "value"], list(m.items()), cls="kv") + (
         '<p class="meta">nodes.recorder.ride_metrics.run_metrics: band RMS as the thesis '
-        "computes it (resampled to 500 Hz, periodogram, Eq 4.8/4.9), full-band RMS at the "
+        "computes it (resampled to 500 Hz, periodogram of the whole record, Eq 4.8/4.9; the "
+        "table read in batches, nodes.recorder.ride_stream), full-band RMS at the "
         "run's own rate, ISO 2631-1 Wk weighting, suspension "
         "working space (SWS), dynamic tyre load (DTL).</p>")
     return section("ride", "Ride metrics", body)

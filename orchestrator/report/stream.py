@@ -66,7 +66,8 @@ class TableSource:
         yield from parquet_batches(self.path, cols, rows)
 
     def read(self, keep: Callable[[str], bool]) -> dict[str, np.ndarray]:
-        """The columns ``keep`` accepts (and ``t``), whole (the ride metrics' periodograms)."""
+        """The columns ``keep`` accepts (and ``t``), whole (:meth:`whole`; the ride metrics
+        read batches since #32, :mod:`nodes.recorder.ride_stream`)."""
         cols = [c for c in self.names if c == "t" or keep(c)]
         parts: dict[str, list[np.ndarray]] = {c: [] for c in cols}
         for b in self.batches(cols):

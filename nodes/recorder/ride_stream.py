@@ -1,0 +1,441 @@
+"""Ride metrics of a run's table read in row batches (#32): :func:`.ride_metrics.metric_values`
+without holding whole columns (``suscosim report`` of an hour-long run).
+
+Every estimator below is compared with the whole-signal one of :mod:`.ride_metrics` on tables
+by ``tests/unit/test_ride_stream.py``; what each is, and how far it may differ:
+
+* **Resampling to 500 Hz** (:class:`StreamResampler`): ``scipy.signal.resample_poly``'s own
+  FIR, padding and trimming (Kaiser beta 8, :func:`.ride_metrics.resample_to`), applied by
+  ``upfirdn`` to windows of the signal that hold each output sample's whole support: the same
+  samples, bit for bit.
+* **Band RMS** (thesis Eq 4.8/4.9, :class:`BandPeriodogram`): *the same estimator*, the
+  MATLAB-style periodogram of the whole record (rectangular window, no detrend,
+  ``nfft = max(256, 2^nextpow2(N))`` with ``N`` known from the row count), not a Welch
+  average. Only the bins up to the band's top are kept: ``X_k = sum over segments of
+  e^{-2 pi i k n0 / nfft} DFT_segment(k)``, each segment's DFT at those bins by a Bluestein
+  chirp-z whose chirp phases are reduced exactly in integers. It differs from the whole-signal
+  FFT by rounding only (tested to 1e-11 relative). Memory: the in-band bins,
+  ``16 B x nfft x f2 / fs`` per signal (at most 1.3 B per 500 Hz sample for 0-20 Hz): it still
+  grows with the run, at 1/12 to 1/24 of one 8-byte column at 500 Hz (0.34 MB a signal for
+  10^6 rows at 1 kHz), the price of keeping the thesis's number. A Welch average of band
+  powers would be bounded but moves the Chapter 5 values (a Hann window's leakage and the
+  DC term differ from the rectangular periodogram's).
+* **ISO 2631-1 Wk** (:class:`StreamWk`): the whole-signal way multiplies the FFT of the
+  signal zero-padded to ``nfft >= 2N`` by H(f) exactly, i.e. a two-sided linear convolution
+  with the impulse response of H sampled on that grid. Streamed: H sampled on a fixed grid
+  of :data:`WK_GRID` points (262 s at 500 Hz), its impulse response cut to
+  +-:data:`WK_HALF` lags (65.5 s), applied by overlap-save. The difference is the response
+  beyond 65 s (its causal part has decayed to ~e^-100 by then; H's step at the Nyquist
+  frequency, |H(250 Hz)| ~ 0.01, leaves a ripple falling as 1/lag): tested to 1e-7 relative.
+* **Jerk**: ``np.gradient``'s differences sample by sample (bit for bit); its RMS below.
+* **Time-domain RMS** (full band, deflection, damper force): the sum of squares batch by
+  batch instead of one pairwise ``np.mean``: a few ulps (tested to 1e-12). **SWS**: max - min,
+  exact. **DTL**: Chan's combination of the batches' means and centred sums of squares
+  (tested to 1e-12).
+
+The peak memory is a batch of the ride columns, each signal's filter state (~1.5 MB for the
+Wk filter, 2 x 240 samples for the resampler) and the in-band bins above.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from fractions import Fraction
+
+import numpy as np
+from scipy.fft import next_fast_len
+from scipy.integrate import trapezoid
+from scipy.signal import fftconvolve, firwin, upfirdn
+
+from . import ride_metrics as rm
+
+WK_GRID = 1 << 17
+"""Points of the frequency grid the streamed Wk filter's impulse response is taken from."""
+WK_HALF = 1 << 15
+"""Lags each side of the streamed Wk filter's impulse response [samples] (65.5 s at 500 Hz)."""
+SEGMENT = 1 << 14
+"""Longest segment of a :class:`BandPeriodogram` DFT [samples] (bounds its workspace)."""
+
+Batches = Callable[[Sequence[str]], Iterable[dict[str, np.ndarray]]]
+"""``batches(columns)``: the table's ``{column: values}`` a batch at a time (``t`` always)."""
+
+
+def _output_len(len_h: int, n_in: int, up: int, down: int) -> int:
+    """Samples ``upfirdn`` returns for a filter of ``len_h`` taps and ``n_in`` inputs (scipy's
+    private ``_upfirdn._output_len``)."""
+    return ((n_in - 1) * up + len_h - 1) // down + 1
+
+
+_NOT_UNIFORM = "time column is not uniformly sampled (a run with missing steps?)"
+
+
+def stream_rate(batches: Iterable[dict[str, np.ndarray]]) -> float:
+    """Sampling frequency [Hz] of a uniform ``t`` column [s] read in batches, as
+    :func:`.ride_metrics.sample_rate` (its messages; the step the first batch's median)."""
+    step: float | None = None
+    last: np.ndarray | None = None
+    n = 0
+    for b in batches:
+        t = np.asarray(b["t"], dtype=float)
+        n += t.size
+        tt = t if last is None else np.r_[last, t]
+        if tt.size < 2:
+            last = tt if tt.size else last
+            continue
+        dt = np.diff(tt)
+        if step is None:
+            step = float(np.median(dt))
+            if step <= 0.0:
+                raise ValueError(_NOT_UNIFORM)
+        if np.max(np.abs(dt - step)) > 0.01 * step:
+            raise ValueError(_NOT_UNIFORM)
+        last = tt[-1:]
+    if step is None or n < 2:
+        raise ValueError("need at least 2 samples to know the sampling rate")
+    return 1.0 / step
+
+
+class StreamResampler:
+    """:func:`.ride_metrics.resample_to` of an ``n_in``-sample signal at ``fs_in`` [Hz] fed in
+    pieces: :meth:`add` and :meth:`finish` return the output samples [unit of x] that are
+    complete, in order (module docstring: the same samples, bit for bit)."""
+
+    def __init__(self, n_in: int, fs_in: float, fs_out: float = rm.THESIS_FS) -> None:
+        self.identity = abs(fs_in - fs_out) <= 1e-6 * fs_out
+        self.n_out = n_in
+        if self.identity:
+            return
+        ratio = Fraction(fs_out / fs_in).limit_denominator(10000)
+        if abs(float(ratio) - fs_out / fs_in) > 1e-6 * fs_out / fs_in:
+            raise ValueError(f"cannot resample {fs_in:g} Hz to {fs_out:g} Hz by a rational ratio")
+        up, down = ratio.numerator, ratio.denominator
+        if up == down == 1:
+            self.identity = True
+            return
+        # scipy.signal.resample_poly's filter, padding and trimming (scipy 1.17)
+        max_rate = max(up, down)
+        half_len = 10 * max_rate
+        h = firwin(2 * half_len + 1, 1.0 / max_rate, window=("kaiser", rm._AA_KAISER_BETA)) * up
+        n_pre_pad = down - half_len % down
+        n_post_pad = 0
+        self.n_out = n_in * up // down + bool(n_in * up % down)
+        self.pre_remove = (half_len + n_pre_pad) // down
+        while (_output_len(h.shape[0] + n_pre_pad + n_post_pad, n_in, up, down)
+               < self.n_out + self.pre_remove):
+            n_post_pad += 1
+        self.h = np.concatenate((np.zeros(n_pre_pad), h, np.zeros(n_post_pad)))
+        self.up, self.down = up, down
+        self.m_end = self.pre_remove + self.n_out
+        self.m_next = 0
+        self.s = 0  # input index of buf[0], a multiple of down
+        self.buf = np.zeros(0)
+
+    def add(self, x: np.ndarray) -> np.ndarray:
+        """Feed the next input samples; the output samples now complete."""
+        x = np.asarray(x, dtype=float)
+        if self.identity:
+            return x.copy()
+        self.buf = np.concatenate([self.buf, x])
+        e = self.s + self.buf.size
+        return self._emit(min((e * self.up - 1) // self.down, self.m_end - 1))
+
+    def finish(self) -> np.ndarray:
+        """The last output samples (the input ended: zeros beyond it, as resample_poly)."""
+        return np.zeros(0) if self.identity else self._emit(self.m_end - 1)
+
+    def _emit(self, m_hi: int) -> np.ndarray:
+        if m_hi < self.m_next:
+            return np.zeros(0)
+        y = upfirdn(self.h, self.buf, self.up, self.down)
+        off = self.s * self.up // self.down
+        lo, hi = self.m_next - off, m_hi - off + 1
+        out = y[lo:hi]
+        if out.size < hi - lo:
+            out = np.concatenate([out, np.zeros(hi - lo - out.size)])
+        first = self.m_next
+        self.m_next = m_hi + 1
+        need = -(-(self.m_next * self.down - self.h.size + 1) // self.up)
+        s_new = max(self.s, max(0, need) // self.down * self.down)
+        self.buf, self.s = self.buf[s_new - self.s:], s_new
+        return out[max(0, self.pre_remove - first):]
+
+
+def _chirp(j: np.ndarray, nfft: int) -> np.ndarray:
+    """``e^{-i pi j^2 / nfft}`` with ``j^2`` reduced modulo ``2 nfft`` in integers."""
+    j = np.asarray(j, dtype=np.int64)
+    return np.exp(-1j * np.pi * ((j * j) % (2 * nfft)) / nfft)
+
+
+class BandPeriodogram:
+    """The in-band bins of :func:`.ride_metrics.matlab_periodogram` of an ``n``-sample
+    signal at ``fs`` [Hz] fed in pieces, up to ``f_max`` [Hz] (module docstring)."""
+
+    def __init__(self, n: int, fs: float, f_max: float) -> None:
+        if n < 2:
+            raise ValueError("need at least 2 samples for a periodogram")
+        self.n, self.fs = n, fs
+        self.nfft = max(256, 1 << int(np.ceil(np.log2(n))))
+        val = 1.0 / (self.nfft * (1.0 / fs))  # scipy.fft.rfftfreq's bin width
+        k_top = min(self.nfft // 2, int(np.floor(f_max / val)) + 1)
+        self.f = np.arange(k_top + 1) * val
+        self.X = np.zeros(k_top + 1, dtype=complex)
+        self.pos = 0
+
+    def add(self, x: np.ndarray) -> None:
+        """Feed the next samples [unit]."""
+        x = np.asarray(x, dtype=float)
+        for i in range(0, x.size, SEGMENT):
+            self._segment(x[i:i + SEGMENT])
+
+    def _segment(self, seg: np.ndarray) -> None:
+        B, K, nfft = seg.size, self.X.size, self.nfft
+        if B == 0:
+            return
+        if self.pos + B > self.n:
+            raise ValueError(f"more than the {self.n} samples announced")
+        k = np.arange(K)
+        # Bluestein: X_k = c_k sum_b (x_b c_b) conj(c_{k-b}), c_j = e^{-i pi j^2 / nfft}
+        M = next_fast_len(B + K - 1)
+        v = np.zeros(M, dtype=complex)
+        v[:K] = np.conj(_chirp(k, nfft))
+        if B > 1:
+            v[M - (B - 1):] = np.conj(_chirp(np.arange(-(B - 1), 0), nfft))
+        u = seg * _chirp(np.arange(B), nfft)
+        conv = np.fft.ifft(np.fft.fft(u, M) * np.fft.fft(v))[:K]
+        shift = np.exp(-2j * np.pi * ((k.astype(np.int64) * self.pos) % nfft) / nfft)
+        self.X += shift * _chirp(k, nfft) * conv
+        self.pos += B
+
+    def band_rms(self, band: tuple[float, float]) -> float:
+        """``sqrt(trapz(P, f))`` over the bins with ``f1 <= f <= f2`` [unit], as
+        :func:`.ride_metrics.periodogram_band_rms`."""
+        if self.pos != self.n:
+            raise ValueError(f"{self.pos} samples fed of the {self.n} announced")
+        f1, f2 = rm._check_band(band, self.fs)
+        P = (self.X.real ** 2 + self.X.imag ** 2) / (self.fs * self.n)
+        k = np.arange(P.size)
+        P[(k >= 1) & (k < self.nfft // 2)] *= 2.0
+        keep = (self.f >= f1) & (self.f <= f2)
+        if np.count_nonzero(keep) < 2:
+            raise ValueError(f"band {band} Hz holds fewer than 2 frequency bins; record too short")
+        return float(np.sqrt(trapezoid(P[keep], self.f[keep])))
+
+
+class StreamWk:
+    """Sum of squares of the ISO 2631-1 Wk-weighted signal (:func:`.ride_metrics.iso2631_wk`)
+    of an ``n``-sample signal at ``fs`` [Hz] fed in pieces, by overlap-save with a fixed
+    two-sided impulse response (module docstring)."""
+
+    def __init__(self, n: int, fs: float) -> None:
+        nfft = 1 << int(np.ceil(np.log2(max(2 * n, 2))))  # iso2631_wk's grid
+        grid, self.half = (nfft, nfft // 2) if nfft <= WK_GRID else (WK_GRID, WK_HALF)
+        h = np.fft.irfft(rm.wk_response(np.fft.rfftfreq(grid, 1.0 / fs)), grid)
+        self.taps = np.concatenate([h[-self.half:], h[:self.half + 1]])  # lags -half..half
+        self.n = n
+        self.held = np.zeros(self.half)  # the zeros before the signal, then its last 2 half
+        self.done = 0
+        self.sumsq = 0.0
+
+    def add(self, x: np.ndarray) -> None:
+        """Feed the next samples [m/s^2]."""
+        buf = np.concatenate([self.held, np.asarray(x, dtype=float)])
+        if buf.size < 2 * self.half + 1:
+            self.held = buf
+            return
+        y = fftconvolve(buf, self.taps, mode="valid")[: self.n - self.done]
+        self.sumsq += float(np.sum(y * y))
+        self.done += y.size
+        self.held = buf[buf.size - 2 * self.half:]
+
+    def rms(self) -> float:
+        """The Wk-weighted RMS [m/s^2] (after every sample was fed)."""
+        self.add(np.zeros(self.half))  # the zeros after the signal
+        if self.done != self.n:
+            raise ValueError(f"Wk filter: {self.done} of {self.n} samples")
+        return float(np.sqrt(self.sumsq / self.n))
+
+
+class StreamJerk:
+    """Sum of squares of ``np.gradient(a, 1 / fs)`` (:func:`.ride_metrics.jerk`) of a signal
+    fed in pieces (the same differences, bit for bit)."""
+
+    def __init__(self, fs: float) -> None:
+        self.dx = 1.0 / fs
+        self.held = np.zeros(0)
+        self.n = 0
+        self.sumsq = 0.0
+
+    def add(self, a: np.ndarray) -> None:
+        """Feed the next samples [m/s^2]."""
+        a = np.asarray(a, dtype=float)
+        buf = np.concatenate([self.held, a])
+        if self.n < 2 <= self.n + a.size:
+            j0 = (buf[1] - buf[0]) / self.dx
+            self.sumsq += float(j0 * j0)
+        if buf.size >= 3:
+            j = (buf[2:] - buf[:-2]) / (2.0 * self.dx)
+            self.sumsq += float(np.sum(j * j))
+        self.n += a.size
+        self.held = buf[-2:]
+
+    def rms(self) -> float:
+        """RMS jerk [m/s^3] (after every sample was fed)."""
+        if self.n < 2:
+            raise ValueError("jerk of fewer than 2 samples")
+        j1 = (self.held[-1] - self.held[-2]) / self.dx
+        return float(np.sqrt((self.sumsq + float(j1 * j1)) / self.n))
+
+
+class Moments:
+    """Count, sum of squares, extremes, mean and centred sum of squares (Chan et al. 1979)
+    of a signal fed in pieces."""
+
+    def __init__(self) -> None:
+        self.n, self.sumsq, self.mean, self.m2 = 0, 0.0, 0.0, 0.0
+        self.lo, self.hi = np.inf, -np.inf
+
+    def add(self, x: np.ndarray) -> None:
+        """Feed the next samples."""
+        x = np.asarray(x, dtype=float)
+        if x.size == 0:
+            return
+        self.sumsq += float(np.sum(x * x))
+        self.lo, self.hi = min(self.lo, float(np.min(x))), max(self.hi, float(np.max(x)))
+        mb = float(np.mean(x))
+        m2b = float(np.sum((x - mb) ** 2))
+        n = self.n + x.size
+        delta = mb - self.mean
+        self.m2 += m2b + delta * delta * self.n * x.size / n
+        self.mean = mb if self.n == 0 else self.mean + delta * x.size / n
+        self.n = n
+
+    def rms(self) -> float:
+        """Root mean square [unit]."""
+        if self.n == 0:
+            raise ValueError("rms of an empty signal")
+        return float(np.sqrt(self.sumsq / self.n))
+
+    def centred_rms(self) -> float:
+        """RMS about the mean [unit] (the dynamic tyre load's)."""
+        if self.n == 0:
+            raise ValueError("rms of an empty signal")
+        return float(np.sqrt(self.m2 / self.n))
+
+
+def _series(names: Sequence[str], name: str) -> list[tuple[str, str]]:
+    """``[(label, column)]`` of a base as :func:`.ride_metrics.columns` finds them."""
+    if name in names:
+        return [("", name)]
+    out: list[tuple[str, str]] = []
+    while f"{name}[{len(out)}]" in names:
+        out.append((f"[{len(out)}]", f"{name}[{len(out)}]"))
+    return out
+
+
+class _Band:
+    """A signal's resampler and in-band periodogram (and, for the body, Wk and jerk)."""
+
+    def __init__(self, n: int, fs_in: float, fs_out: float, f_max: float, body: bool) -> None:
+        self.rs = StreamResampler(n, fs_in, fs_out)
+        self.pg = BandPeriodogram(self.rs.n_out, fs_out, f_max)
+        self.wk = StreamWk(self.rs.n_out, fs_out) if body else None
+        self.jerk = StreamJerk(fs_out) if body else None
+        self.raw = Moments()
+
+    def add(self, x: np.ndarray, last: bool = False) -> None:
+        self.raw.add(x)
+        y = self.rs.add(x)
+        if last:
+            y = np.concatenate([y, self.rs.finish()])
+        self.pg.add(y)
+        if self.wk is not None and self.jerk is not None:
+            self.wk.add(y)
+            self.jerk.add(y)
+
+
+def streamed_metric_values(
+    names: Sequence[str], n_rows: int, batches: Batches,
+    band_hz: tuple[float, float] = rm.THESIS_BAND, fs_out: float = rm.THESIS_FS,
+) -> dict[str, tuple[float, str, str]]:
+    """:func:`.ride_metrics.metric_values` of a table of ``n_rows`` rows and columns
+    ``names``, read by ``batches`` (two passes: ``t`` for the rate, then the ride columns
+    together): the same keys in the same order, ``{key: (value, unit, label)}``, by the
+    estimators of the module docstring."""
+    R = "plant/response/"
+    bases = (*(f"{R}{f}" for f in ("a_b", "a_w", *rm.ARM_ACCEL_FIELDS, *rm.ROTATION_FIELDS)),
+             "plant/state/z_b", "tyre_road/force/F_t", "controller/force/F_d")
+    if not any(_series(names, b) for b in bases):
+        return {}  # no ride channel: nothing to compute (and no rate needed)
+    fs = stream_rate(batches(["t"]))
+    f1, f2 = (float(b) for b in band_hz)
+    f_max = max(f2, rm.BAND_16[1])
+    band: dict[str, _Band] = {}
+    for base, body in ((f"{R}a_b", True), (f"{R}a_w", False),
+                       *((f"{R}{f}", False) for f in (*rm.ARM_ACCEL_FIELDS,
+                                                      *rm.ROTATION_FIELDS))):
+        for _lab, col in _series(names, base):
+            band[col] = _Band(n_rows, fs, fs_out, f_max, body)
+    zb, zw = _series(names, "plant/state/z_b"), _series(names, "plant/state/z_w")
+    pairs = list(zip(zb, zw, strict=False))
+    defl = {cb: Moments() for (_l, cb), _w in pairs}
+    plain = {col: Moments() for base in ("tyre_road/force/F_t", "controller/force/F_d")
+             for _l, col in _series(names, base)}
+    wanted = [*band, *(c for p in pairs for _l, c in p), *plain]
+    seen = 0
+    for b in batches(wanted):
+        seen += b["t"].size
+        last = seen >= n_rows
+        for col, sig in band.items():
+            sig.add(b[col], last)
+        for (_l, cb), (_l2, cw) in pairs:
+            defl[cb].add(rm.suspension_deflection(b[cb], b[cw]))
+        for col, mo in plain.items():
+            mo.add(b[col])
+    if seen != n_rows:
+        raise ValueError(f"the table gave {seen} rows of the {n_rows} announced")
+
+    m: dict[str, tuple[float, str, str]] = {}
+    for lab, col in _series(names, f"{R}a_b"):
+        s = band[col]
+        assert s.wk is not None and s.jerk is not None
+        m[f"a_b{lab}_rms"] = (s.pg.band_rms((f1, f2)), "m/s2",
+                              f"a_b{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
+        if (f1, f2) != rm.BAND_16:
+            m[f"a_b{lab}_rms_0_16"] = (s.pg.band_rms(rm.BAND_16), "m/s2",
+                                       f"a_b{lab} RMS 0-16 Hz [m/s2]")
+        m[f"a_b{lab}_rms_full"] = (s.raw.rms(), "m/s2", f"a_b{lab} RMS full band [m/s2]")
+        m[f"a_b{lab}_wk_rms"] = (s.wk.rms(), "m/s2", f"a_b{lab} Wk RMS [m/s2]")
+        m[f"jerk_b{lab}_rms"] = (s.jerk.rms(), "m/s3", f"jerk_b{lab} RMS [m/s3]")
+    for lab, col in _series(names, f"{R}a_w"):
+        s = band[col]
+        m[f"a_w{lab}_rms"] = (s.pg.band_rms((f1, f2)), "m/s2",
+                              f"a_w{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
+        m[f"a_w{lab}_rms_full"] = (s.raw.rms(), "m/s2", f"a_w{lab} RMS full band [m/s2]")
+    for name in rm.ARM_ACCEL_FIELDS:
+        for lab, col in _series(names, f"{R}{name}"):
+            m[f"{name}{lab}_rms"] = (band[col].pg.band_rms((f1, f2)), "m/s2",
+                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
+    for name in rm.ROTATION_FIELDS:
+        for lab, col in _series(names, f"{R}{name}"):
+            pg = band[col].pg
+            m[f"{name}{lab}_rms"] = (pg.band_rms((f1, f2)), "rad/s2",
+                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [rad/s2]")
+            if (f1, f2) != rm.BAND_16:
+                m[f"{name}{lab}_rms_0_16"] = (pg.band_rms(rm.BAND_16), "rad/s2",
+                                              f"{name}{lab} RMS 0-16 Hz [rad/s2]")
+    for (lab, cb), _w in pairs:
+        d = defl[cb]
+        m[f"sws{lab}"] = (1e3 * (d.hi - d.lo), "mm", f"SWS{lab} [mm]")
+        m[f"defl{lab}_rms"] = (1e3 * d.rms(), "mm", f"defl{lab} RMS [mm]")
+    for lab, col in _series(names, "tyre_road/force/F_t"):
+        m[f"dtl{lab}_rms"] = (plain[col].centred_rms(), "N", f"DTL{lab} RMS [N]")
+    for lab, col in _series(names, "controller/force/F_d"):
+        m[f"f_d{lab}_rms"] = (plain[col].rms(), "N", f"F_d{lab} RMS [N]")
+    return m
+
+
+def streamed_run_metrics(names: Sequence[str], n_rows: int, batches: Batches,
+                         band_hz: tuple[float, float] = rm.THESIS_BAND) -> dict[str, float]:
+    """:func:`.ride_metrics.run_metrics` (``{label: value}``) of a table read in batches."""
+    return {label: value for value, _u, label
+            in streamed_metric_values(names, n_rows, batches, band_hz).values()}
