@@ -63,7 +63,22 @@ fatigue/damage        max_damage   largest Miner damage of any node for the hist
                                    residue closed as at the end of a run [-]
                       critical_node_id, distance_m (road covered so far [m]),
                       life_km      projected minimum life: distance_m / max_damage / 1000
+recorder/coupling     k0           first step of the message's dE lists; ``k`` of the
+                                   message = last step k0 + n - 1, ``t`` its time [s]
+                      dE_damper,   (n,) the coupling energy residual of each step k0..k,
+                      dE_tyre      per power bond, summed over corners [J]
+                                   (cosim/coupling_energy.py; one message per batch of
+                                   table rows: cosim.coupling_stream.LiveResidual)
+                      res_<bond>,  running sum |dE| and energy the bond carried, sum h |F v|,
+                      carried_<b>  over the steps so far [J]
+                      rel_<bond>,  running relative residual res / carried [-]; ``total``:
+                      rel_total    all bonds' as ``summary.json``'s coupling_energy_residual
+                      threshold    the warning threshold of rel_total [-] (0.003)
 ====================  ===========  ==========================================================
+
+``recorder/coupling`` is published in every run whose table has a power bond (not only with
+the fatigue node); like the others it is not journaled nor in the table: it is computed from
+the table's own rows.
 """
 
 from __future__ import annotations
@@ -73,6 +88,9 @@ from . import schema as _schema
 PLANT, TYRE_ROAD, CONTROLLER, RECORDER = "plant", "tyre_road", "controller", "recorder"
 STATE, RESPONSE, ARM, FORCE = "state", "response", "arm", "force"
 FATIGUE, LOADS, DAMAGE = "fatigue", "loads", "damage"
+COUPLING = "coupling"
+COUPLING_CHANNEL = (RECORDER, COUPLING)
+"""The live coupling residual, per batch of table rows (docs/coupling_residual.md)."""
 
 
 def __getattr__(name: str) -> tuple[str, ...]:

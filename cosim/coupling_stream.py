@@ -17,9 +17,11 @@ columns the first block lacks is left out, as there.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections import deque
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -168,3 +170,147 @@ def summary_of_table_file(path: str | Path, h: float, coupling: str, exchange: s
     groups (:func:`cosim.coupling_energy.summary`); ``{}`` for a run without either bond."""
     res = residual_of_table_file(path, h, coupling, exchange)
     return summary(res) if res else {}
+
+
+# ---- the live channel: recorder/coupling ----------------------------------------------------
+MAX_STEPS = 1024
+"""Steps of ``dE`` in one ``recorder/coupling`` message at most: two bonds' (n,) lists of
+float64 are ~18 KB, inside :data:`cosim.wire.MAX_MESSAGE_BYTES` (48 KB) with room to spare."""
+_FIELDS: dict[str, tuple[str, ...]] = {}
+for _col in COLUMNS:  # the channels the residual reads, and their fields
+    _chan, _, _fld = _col.rpartition("/")
+    _FIELDS[_chan] = (*_FIELDS.get(_chan, ()), _fld)
+BOND_CHANNELS = tuple(_FIELDS)
+"""``plant/state``, ``controller/force``, ``tyre_road/force``: what the residual reads."""
+
+
+class LiveResidual:
+    """The residual of a run as its table's rows complete, cut into the messages of the
+    ``recorder/coupling`` channel (docs/coupling_residual.md, "The live channel").
+
+    The recorder gives it each data message it tabulates (:meth:`add`) and says when the
+    table wrote the row of a step (:meth:`row`): the rows it feeds to :class:`ResidualStream`
+    are then the table's own rows, in the table's order, with the same float64 values (the
+    table stores the message's numbers as float64; so does this). A step held but not a row
+    when a later row is written is dropped (at the next :meth:`take`), as the table drops
+    it. :meth:`take` feeds the rows complete since the last call, in blocks of at most
+    :data:`MAX_STEPS` rows, and returns one message per block that completed a step (a
+    block's ``dE`` ends ``1 + lag`` rows before its last row: a step is complete once the
+    force computed from its end state is in; the run's last ``1 + lag`` rows complete none,
+    as in the whole-table residual). Memory: the rows of one period between two takes and
+    the steps still incomplete.
+
+    Args:
+        h: the communication step [s]; ``coupling``, ``exchange``: as :class:`ResidualStream`.
+        channels: the table's channels (``node/channel``); those of :data:`BOND_CHANNELS`
+            among them are read.
+    """
+
+    def __init__(self, h: float, coupling: str, exchange: str,
+                 channels: Iterable[str]) -> None:
+        from .coupling_energy import WARNING_THRESHOLD
+
+        self.stream = ResidualStream(h, coupling, exchange)
+        have = set(channels)
+        self.channels = tuple(c for c in BOND_CHANNELS if c in have)
+        self.threshold = WARNING_THRESHOLD
+        self._held: dict[int, dict[str, Mapping[str, Any]]] = {}  # step -> channel -> fields
+        self._t: dict[int, float] = {}  # step -> plant/state's t [s]
+        self._rows: list[tuple[int, float, dict[str, Mapping[str, Any]]]] = []
+        self._last_row = -1
+        self._ks: deque[tuple[int, float]] = deque()  # (k, t) of rows fed, step not given yet
+        self._next = self.stream.lag  # row index of the next step to give (rows 0..lag-1: none)
+        self._first = 0  # row index of _ks[0]
+
+    def add(self, channel: str, k: int, t: float, d: Mapping[str, Any]) -> None:
+        """A data message the table took (``channel`` = ``node/channel``)."""
+        if channel not in self.channels or k <= self._last_row:
+            return
+        held = self._held.get(k)
+        if held is None:
+            held = self._held[k] = {}
+        held[channel] = d  # the message's own fields (kept until its row, not copied)
+        if channel == "plant/state":
+            self._t[k] = t
+
+    def row(self, k: int) -> None:
+        """The table wrote the row of step ``k`` (rows come in increasing ``k``)."""
+        self._last_row = k
+        self._rows.append((k, self._t.pop(k, 0.0), self._held.pop(k, {})))
+
+    @property
+    def pending(self) -> int:
+        """Rows complete, not yet fed by :meth:`take`."""
+        return len(self._rows)
+
+    def take(self) -> list[tuple[int, float, dict[str, Any]]]:
+        """Feed the rows complete so far; the messages to publish as (``k``: the last step
+        they give, its ``t`` [s], payload: :func:`message`), in step order."""
+        rows, self._rows = self._rows, []
+        for j in [j for j in self._held if j < self._last_row]:  # never rows now: the
+            del self._held[j]  # table dropped them (a channel's message came too late)
+            self._t.pop(j, None)
+        out: list[tuple[int, float, dict[str, Any]]] = []
+        for i in range(0, len(rows), MAX_STEPS):
+            part = rows[i:i + MAX_STEPS]
+            self._ks.extend((k, t) for k, t, _ in part)
+            dE = self.stream.feed(_block(part, self.channels))
+            n = len(next(iter(dE.values()))) if dE else 0
+            done = [self._ks[j - self._first] for j in range(self._next, self._next + n)]
+            self._next += n
+            while self._first < self._next and self._ks:  # keep the rows not yet given
+                self._ks.popleft()
+                self._first += 1
+            if n:
+                out += _messages(done, dE, self.stream.result(), self.threshold)
+        return out
+
+
+def _block(rows: list[tuple[int, float, dict[str, Mapping[str, Any]]]],
+           channels: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The rows' bond columns, named as the table names them (``v_w`` or ``v_w[i]``)."""
+    block: dict[str, np.ndarray] = {}
+    for chan in channels:
+        for fld in _FIELDS[chan]:
+            a = np.asarray([r[2][chan][fld] for r in rows], dtype=np.float64)
+            name = f"{chan}/{fld}"
+            if a.ndim == 1:
+                block[name] = a
+            else:
+                for i in range(a.shape[1]):
+                    block[f"{name}[{i}]"] = np.ascontiguousarray(a[:, i])
+    return block
+
+
+def _messages(done: list[tuple[int, float]], dE: Mapping[str, np.ndarray],
+              totals: Mapping[str, BondResidual], threshold: float
+              ) -> list[tuple[int, float, dict[str, Any]]]:
+    """One message per run of consecutive steps in ``done`` (one in a run: its rows are
+    every step; a step the table dropped would cut it)."""
+    ks = np.asarray([k for k, _ in done])
+    cuts = [0, *(np.flatnonzero(np.diff(ks) != 1) + 1).tolist(), len(ks)]
+    return [(int(ks[b - 1]), done[b - 1][1],
+             message(int(ks[a]), {n: v[a:b] for n, v in dE.items()}, totals, threshold))
+            for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+
+
+def message(k0: int, dE: Mapping[str, np.ndarray], totals: Mapping[str, BondResidual],
+            threshold: float) -> dict[str, Any]:
+    """The payload of one ``recorder/coupling`` message: the steps ``k0 .. k0 + n - 1``
+    (the message's own ``k`` is the last, ``k0 + n - 1``; its ``t`` that step's time [s]).
+
+    Fields: ``k0`` [-]; per bond B (``damper``, ``tyre``): ``dE_B``, (n,) [J], each step's
+    residual summed over corners; the running totals over the rows fed so far: ``res_B`` =
+    sum |dE| [J], ``carried_B`` = sum h |F v| [J], ``rel_B`` = res_B / carried_B [-];
+    ``rel_total`` [-] (all bonds' sum |dE| over all bonds' carried energy, as
+    ``summary.json``'s ``total``) and ``threshold`` [-]
+    (:data:`cosim.coupling_energy.WARNING_THRESHOLD`)."""
+    d: dict[str, Any] = {"k0": int(k0)}
+    for name, v in dE.items():
+        d[f"dE_{name}"] = [float(x) for x in v]
+    for name, r in totals.items():
+        d[f"res_{name}"], d[f"carried_{name}"] = r.abs_residual, r.carried
+    for name, rel in summary(totals).items():
+        d[f"rel_{name}"] = rel
+    d["threshold"] = float(threshold)
+    return d

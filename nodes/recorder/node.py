@@ -13,6 +13,13 @@ that are complete in place, and stops. Its memory does not grow with the run (#3
 each channel delivered are kept as ranges (:class:`~nodes.recorder.steps.StepSet`), the table
 holds only the steps not yet complete.
 
+As the table's rows complete, the recorder also publishes the run's coupling energy residual
+per step and bond on ``recorder/coupling`` (#29 item 1; :class:`cosim.coupling_stream.
+LiveResidual`, one message per :data:`LIVE_PERIOD_S` at most and at the end, signed as its
+other messages): computed from the table's own rows, it is what ``summary.json``'s
+``coupling_energy_residual`` sums, step by step, while the run goes. It is not journaled:
+a journal's table gives it again (docs/coupling_residual.md, "The live channel").
+
 A live fatigue node takes the load channel (``plant/arm``) straight from the plant's stream
 (#28 item 4); the recorder no longer relays it as blocks on ``recorder/loads``.
 
@@ -34,8 +41,10 @@ import time
 from pathlib import Path
 from typing import Any
 
+from cosim import channels as ch
 from cosim import keys
 from cosim import node_kinds as nk
+from cosim.coupling_stream import LiveResidual
 from cosim.errors import RunError, WireError
 from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
@@ -49,6 +58,8 @@ log = logging.getLogger("suscosim.node")
 FLUSH_PERIOD_S = 0.05
 EARLY_MAX = 100_000
 """Data messages held before the clock's start says which channels the run has."""
+LIVE_PERIOD_S = 0.1
+"""``recorder/coupling`` is published at most this often (wall time) while the run goes."""
 
 
 def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
@@ -81,12 +92,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     warm = threading.Thread(target=_import_pyarrow, name="pyarrow-import", daemon=True)
     warm.start()  # the table's first row group needs it; importing takes seconds when loaded
     producers = [n for n in run_cfg["nodes"] if n in nk.producers() and n != part.node]
+    part.output(ch.COUPLING)  # before the handshake: its hello proves the path live
     listener = Listener(part, run_cfg["start_timeout_s"])
     for node in producers:
         listener.feed(node, keys.RECORDS, kinds=("records",))
     expected: set[str] = set()
     got: dict[str, StepSet] = {}
     table: TableWriter | None = None
+    live: LiveResidual | None = None
     early: list[tuple[str, str, bytes, Message]] = []
     n_steps = None
     duplicates = 0
@@ -120,12 +133,31 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             duplicates += 1
             part.reject((node, channel), f"step {msg.k} again (a duplicate: not journaled)")
             return
+        rows = table.rows
         wrong = table.add(name, msg.k, msg.t, msg.d)
         if wrong:
             part.reject((node, channel), wrong)
             return
         steps.add(msg.k)
         journal.append(name, raw)
+        if live is not None:
+            live.add(name, msg.k, msg.t, msg.d)
+            if table.rows > rows:  # this message completed the row of its step
+                live.row(msg.k)
+
+    def publish_live() -> None:
+        """The residual of the rows complete so far on ``recorder/coupling``. A residual
+        that cannot be sent (a number beyond the channel's bound) ends the channel with a
+        warning, never the recording."""
+        nonlocal live
+        if live is None or not live.pending:
+            return
+        try:
+            for k, t, d in live.take():
+                part.publish(ch.COUPLING, k, t, d, record=False)
+        except (RunError, KeyError, ValueError) as exc:
+            log.warning("recorder: the live coupling residual stops: %s", exc)
+            live = None
 
     def feed(batch: Received) -> None:
         """One ``records`` batch (verified by the listener): its data messages."""
@@ -138,7 +170,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     def done_k() -> int:
         return min(got[c].count for c in expected) - 1
 
-    last_flush = last_data = time.monotonic()
+    last_flush = last_data = last_live = time.monotonic()
     try:
         while True:
             now = time.monotonic()
@@ -149,6 +181,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             if now - last_flush >= FLUSH_PERIOD_S:
                 journal.flush()
                 last_flush = now
+            if now - last_live >= LIVE_PERIOD_S:
+                publish_live()
+                last_live = now
             batch = listener.poll(timeout=0.05)  # the clock: raises RunError on abort
             if n_steps is None and listener.start is not None:
                 n_steps = int(listener.start["n_steps"])
@@ -159,6 +194,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 got.update((c, StepSet()) for c in expected)
                 if expected:
                     table = TableWriter(expected, folder)
+                    live = _live_residual(run_cfg, expected)
                 for node, channel, raw, msg in early:
                     record(node, channel, raw, msg)
                 early.clear()
@@ -192,6 +228,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             pass
         raise _write_error(exc, folder) from None
     journal.close()
+    publish_live()  # the last rows' residual, before done (the orchestrator then closes)
 
     def finish_table() -> dict[str, Any]:
         assert table is not None
@@ -207,6 +244,15 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             table.abandon()
         raise _write_error(exc, folder) from None
     part.finish(n_steps, n_steps * run_cfg["h"], **result)
+
+
+def _live_residual(run_cfg: dict[str, Any], channels: set[str]) -> LiveResidual | None:
+    """The live residual of the run's table (None: a scenario without its ``coupling`` and
+    ``exchange``, which a resolved scenario always has, says nothing to compute it by)."""
+    if "coupling" not in run_cfg or "exchange" not in run_cfg:
+        return None
+    return LiveResidual(float(run_cfg["h"]), run_cfg["coupling"], run_cfg["exchange"],
+                        channels)
 
 
 def _write_error(exc: OSError, folder: Any) -> RunError:

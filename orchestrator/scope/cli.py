@@ -149,7 +149,7 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
     if replay:
         from .sources import JournalSource
 
-        source: Any = JournalSource(records, state, pace_factor(args), damage)
+        source: Any = JournalSource(records, state, pace_factor(args), damage, run=run_cfg)
     else:
         from .sources import LiveSource
 

@@ -1,5 +1,7 @@
 // suscosim scope: polls /data?since=K, keeps the samples per line, draws them with uPlot
-// (rolling window, autoscale, pause), the node states, the progress and the damage map.
+// (rolling window, autoscale, pause), the node states, the progress, the damage map and the
+// coupling residual (recorder/coupling: the running relative residual per bond, the
+// warning threshold drawn).
 "use strict";
 const COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
                  "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"];
@@ -7,7 +9,8 @@ const POLL_MS = 250;
 const LAG_MAX = 5000;  // steps
 const MAX_POINTS = 200000;  // per line, in the page
 const S = {lines: {}, groups: {}, plots: {}, paused: false, windowS: 5, geometry: null,
-           map: null, fatigue: null, last: null, fetchingMeta: false};
+           map: null, fatigue: null, last: null, fetchingMeta: false,
+           coupling: {k: [], t: [], rel: {}, last: null, plot: null, bonds: []}};
 
 const $ = (id) => document.getElementById(id);
 const fmt = (x, n = 4) => (x === null || x === undefined) ? "-" :
@@ -49,6 +52,7 @@ function ingest(d) {
     }
   }
   if (d.fatigue) S.fatigue = d.fatigue;
+  if (d.coupling) ingestCoupling(d.coupling);
   if (d.map_geometry) S.geometry = d.map_geometry;
   if (d.damage_map) {
     if (d.damage_map.log10_damage) S.map = d.damage_map;
@@ -57,6 +61,64 @@ function ingest(d) {
     if (!S.geometry && !S.fetchingMeta) fetchMeta();
   }
   S.last = d;
+}
+
+function ingestCoupling(c) {
+  // one point per recorder/coupling message: k, t [s], rel[bond] [-] (running)
+  const C = S.coupling, last = C.k.length ? C.k[C.k.length - 1] : -1;
+  for (const b in c.rel) if (!(b in C.rel)) C.rel[b] = C.k.map(() => null);
+  for (let i = 0; i < c.k.length; i++) {
+    if (c.k[i] <= last) continue;
+    C.k.push(c.k[i]); C.t.push(c.t[i]);
+    for (const b in C.rel) C.rel[b].push(c.rel[b] ? c.rel[b][i] : null);
+  }
+  if (C.k.length > MAX_POINTS) {
+    const cut = C.k.length - MAX_POINTS;
+    C.k.splice(0, cut); C.t.splice(0, cut);
+    for (const b in C.rel) C.rel[b].splice(0, cut);
+  }
+  C.last = c.last; C.threshold = c.threshold; C.steps = c.steps; C.fromK = c.from_k;
+}
+
+function couplingSince() {
+  const C = S.coupling;
+  return C.k.length ? C.k[C.k.length - 1] : -1;
+}
+
+function drawCoupling() {
+  const C = S.coupling;
+  if (!C.last) return;
+  $("coupling-none").hidden = true; $("coupling-live").hidden = false;
+  const thr = C.threshold, tot = C.last.rel_total;
+  $("coupling-total").textContent = fmt(100 * tot);
+  $("coupling-warn").textContent = (thr !== null && tot > thr) ?
+    `above the ${fmt(100 * thr)} % warning threshold` : "";
+  const bonds = Object.keys(C.rel).sort((a, b) => (a === "total") - (b === "total") ||
+                                                  a.localeCompare(b));
+  $("coupling-facts").textContent = `steps ${C.fromK}..${C.last.k} (${C.steps} steps): ` +
+    bonds.filter((b) => b !== "total").map((b) => `${b} ${fmt(100 * C.last["rel_" + b])} %`)
+      .join(", ") + " (running: sum |dE| over the energy each bond carried)";
+  if (!C.plot || C.bonds.join() !== bonds.join()) {
+    if (C.plot) C.plot.destroy();
+    const div = $("coupling-plot");
+    div.innerHTML = "";
+    const series = [{label: "t [s]", value: (u, v) => fmt(v, 5)}].concat(bonds.map((b, i) => ({
+      label: b, stroke: COLOURS[i % COLOURS.length], width: b === "total" ? 2 : 1.2,
+      value: (u, v) => fmt(v)})));
+    series.push({label: "threshold", stroke: "#c53030", width: 1, dash: [6, 4],
+                 value: (u, v) => fmt(v)});
+    C.plot = new uPlot({width: Math.max(320, div.clientWidth || 540), height: 200,
+                        legend: {show: true}, scales: {x: {time: false}}, series,
+                        axes: [{label: "t [s]"}, {label: "residual [%]", size: 60}]},
+                       [[]].concat(series.slice(1).map(() => [])), div);
+    C.bonds = bonds;
+  }
+  const pct = (ys) => ys.map((y) => (y === null ? null : 100 * y));
+  const data = [C.t.slice()].concat(bonds.map((b) => pct(C.rel[b])));
+  data.push(C.t.map(() => (thr === null || thr === undefined ? null : 100 * thr)));
+  C.plot.setData(data);
+  const div = $("coupling-plot");
+  div.dataset.points = C.t.length; div.dataset.k = C.last.k;
 }
 
 async function fetchMeta() {
@@ -253,12 +315,12 @@ function drawMap() {
 
 async function poll() {
   try {
-    const r = await fetch(`/data?since=${since()}`);
+    const r = await fetch(`/data?since=${since()}&coupling_since=${couplingSince()}`);
     const d = await r.json();
     ingest(d);
     $("conn").textContent = "";
     drawStatus(d);
-    if (!S.paused) { drawPlots(); drawMap(); }
+    if (!S.paused) { drawPlots(); drawMap(); drawCoupling(); }
   } catch (e) {
     $("conn").textContent = `scope server not reachable (${e})`;
   }
@@ -268,7 +330,7 @@ async function poll() {
 $("pause").addEventListener("click", () => {
   S.paused = !S.paused;
   $("pause").textContent = S.paused ? "Resume" : "Pause";
-  if (!S.paused) { drawPlots(); drawMap(); }
+  if (!S.paused) { drawPlots(); drawMap(); drawCoupling(); }
 });
 $("window").addEventListener("change", (e) => { S.windowS = +e.target.value; drawPlots(); });
 window.addEventListener("resize", () => {

@@ -4,6 +4,7 @@
     GET /data?since=K     JSON: the samples of steps k > K of every plotted line, progress,
                           steps/s, node states, fatigue numbers, damage map (``K`` default -1:
                           everything kept); see :meth:`ScopeState.snapshot`
+          &coupling_since=C   the coupling residual's points of messages k > C (default -1)
     GET /meta             JSON: run id, lines and their units, the damage map's geometry
     GET /<file>           the page's script and style, and the vendored uPlot files
 
@@ -142,10 +143,12 @@ def _handler(state: ScopeState, names: set[str] | None = None,
                     q = parse_qs(url.query)
                     try:
                         since = int(q.get("since", ["-1"])[0])
+                        c_since = int(q.get("coupling_since", ["-1"])[0])
                     except ValueError:
-                        self._json({"error": "since: expected a step index (integer)"}, 400)
+                        self._json({"error": "since, coupling_since: expected a step index "
+                                             "(integer)"}, 400)
                         return
-                    self._json(state.snapshot(since))
+                    self._json(state.snapshot(since, coupling_since=c_since))
                 elif url.path == "/meta":
                     self._json(state.meta())
                 elif url.path in FILES:

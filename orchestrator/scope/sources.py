@@ -1,14 +1,19 @@
 """Where the scope's data come from: the bus of a live run, or the journal of a finished one.
 
 :class:`LiveSource` listens like ``suscosim tap``: plain Zenoh subscribers on the selected
-channels, the nodes' ``ctl`` messages, the orchestrator's clock, ``fatigue/damage`` and (for
-the damage map) ``plant/arm``, and a liveliness subscriber on the nodes' tokens. It declares
-no token, publishes nothing and answers no query, so the run neither waits for it nor sees it;
-its callbacks only queue the bytes (they never hold Zenoh's thread), decoding and filing
-happen on the source's own thread.
+channels, the nodes' ``ctl`` messages, the orchestrator's clock, ``fatigue/damage``, the
+recorder's coupling residual ``recorder/coupling`` and (for the damage map) ``plant/arm``,
+and a liveliness subscriber on the nodes' tokens. It declares no token, publishes nothing and
+answers no query, so the run neither waits for it nor sees it; its callbacks only queue the
+bytes (they never hold Zenoh's thread), decoding and filing happen on the source's own
+thread.
 
 :class:`JournalSource` replays a run's ``journal.msgpack`` into the same state at ``speed``
-times the recorded pace (message time against the wall clock), without any bus.
+times the recorded pace (message time against the wall clock), without any bus. The journal
+does not hold ``recorder/coupling`` (it is no record: it is computed from the table's rows);
+given the run's ``h``, coupling and exchange, the replay computes it again as the recorder
+did (:class:`ReplayResidual`: the journal's messages in the recorder's order into a table of
+rows and a :class:`cosim.coupling_stream.LiveResidual`), the same numbers as the live run's.
 """
 
 from __future__ import annotations
@@ -59,6 +64,9 @@ class _Router:
         if (node, channel) == (ch.FATIGUE, ch.DAMAGE):
             st.set_fatigue(msg.k, msg.t, msg.d)
             return
+        if (node, channel) == ch.COUPLING_CHANNEL:
+            st.set_coupling(msg.k, msg.t, msg.d)
+            return
         if (node, channel) == ch.LOAD_CHANNEL and self.damage is not None:
             self.damage.push(msg, now)
         if st.selection.wants(node, channel):
@@ -83,7 +91,7 @@ class LiveSource:
         run = self.state.run_id
         exprs = self.state.selection.keyexprs(run) + [
             f"{keys.PREFIX}/{run}/*/{keys.CTL}", keys.key(run, keys.ORCHESTRATOR, keys.CLOCK),
-            keys.key(run, ch.FATIGUE, ch.DAMAGE)]
+            keys.key(run, ch.FATIGUE, ch.DAMAGE), keys.key(run, *ch.COUPLING_CHANNEL)]
         if self.router.damage is not None:
             exprs.append(keys.key(run, *ch.LOAD_CHANNEL))
         return list(dict.fromkeys(exprs))
@@ -139,16 +147,60 @@ class LiveSource:
         self._thread.join(timeout=5)
 
 
+class ReplayResidual:
+    """``recorder/coupling`` again from a journal: its data messages, in the order the
+    recorder journaled them, into a table of rows (:class:`cosim.table_writer.TableWriter`,
+    nothing on disk) and a :class:`cosim.coupling_stream.LiveResidual`, as the recorder does
+    (``channels``: the journal's ``node/channel``; ``run``: the scenario's ``[run]``)."""
+
+    def __init__(self, channels: Any, run: dict[str, Any], state: ScopeState,
+                 period_s: float = 0.1) -> None:
+        from cosim.coupling_stream import LiveResidual
+        from cosim.table_writer import TableWriter
+
+        names = sorted(f"{n}/{c}" for n, c in channels)
+        self.table = TableWriter(names, None)
+        self.live = LiveResidual(float(run["h"]), run["coupling"], run["exchange"], names)
+        self.state, self.period_s = state, period_s
+        self._last = 0.0
+
+    def data(self, name: str, msg: Message) -> None:
+        """One journaled data message of ``name`` (``node/channel``)."""
+        rows = self.table.rows
+        if self.table.add(name, msg.k, msg.t, msg.d) is not None:
+            return  # not taken by the table: the recorder would not have journaled it
+        self.live.add(name, msg.k, msg.t, msg.d)
+        if self.table.rows > rows:
+            self.live.row(msg.k)
+        now = time.monotonic()
+        if now - self._last >= self.period_s:
+            self._last = now
+            self.flush()
+
+    def flush(self) -> None:
+        for k, t, d in self.live.take():
+            self.state.set_coupling(k, t, d)
+
+
 class JournalSource:
     """Replay ``records`` ((node, channel, raw, t) in order: a list as
     :func:`orchestrator.replay.load` gives it, or a streamed
     :class:`orchestrator.replay.Recorded`) into the state at ``speed`` x the recorded pace
-    (None: as fast as possible)."""
+    (None: as fast as possible); with ``run`` (the scenario's ``[run]``) and a
+    :class:`~orchestrator.replay.Recorded` (its ``channels``), the coupling residual too."""
 
     def __init__(self, records: Any, state: ScopeState,
-                 speed: float | None = 1.0, damage: DamageMap | None = None) -> None:
+                 speed: float | None = 1.0, damage: DamageMap | None = None,
+                 run: dict[str, Any] | None = None) -> None:
         self.records, self.state, self.speed = records, state, speed
         self.router = _Router(state, damage)
+        self.residual: ReplayResidual | None = None
+        channels = getattr(records, "channels", None)
+        if run and channels and run.get("mode") != "reference":
+            try:
+                self.residual = ReplayResidual(channels, run, state)
+            except (KeyError, ValueError, TypeError):  # an old scenario: no residual
+                self.residual = None
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="scope-replay", daemon=True)
 
@@ -179,8 +231,12 @@ class JournalSource:
                 st.count_undecodable()
                 continue
             self.router.file(node, channel, msg, time.monotonic())
+            if self.residual is not None and msg.kind == "data" and msg.k >= 0:
+                self.residual.data(f"{node}/{channel}", msg)
         if self.router.damage is not None:
             self.router.damage.flush()
+        if self.residual is not None:
+            self.residual.flush()
         for node in st.nodes_known():
             st.node_event(node, "done", st.k, st.t)
         st.run_event("done")

@@ -1,10 +1,14 @@
 """What the scope knows about a run: the plotted samples, the progress and steps/s, each
-node's state, the fatigue numbers and the damage map. Filled by a source (live bus or
-journal replay) on its thread, read by the web server's threads: every method holds one lock.
+node's state, the fatigue numbers, the damage map and the coupling residual. Filled by a
+source (live bus or journal replay) on its thread, read by the web server's threads: every
+method holds one lock.
 
 :meth:`ScopeState.snapshot` is the ``/data?since=K`` answer: the samples of step ``k > K`` of
 every line, everything else whole. Samples: step ``k``, time ``t`` [s], value in the line's SI
-unit.
+unit. The coupling residual (``recorder/coupling``: one point per message, the running
+relative residual of each bond and the total [-]) has a cursor of its own
+(``coupling_since``): its messages come a little after the rows they sum, so after the
+steps the lines have.
 """
 
 from __future__ import annotations
@@ -73,6 +77,7 @@ class ScopeState:
         self.fatigue: dict[str, Any] | None = None  # from the fatigue node's fatigue/damage
         self.damage_map: dict[str, Any] | None = None  # per-node damage (orchestrator.scope.damage)
         self.map_geometry: dict[str, Any] | None = None
+        self._coupling = _Coupling(max_samples)
 
     # ---- filled by the source ---------------------------------------------------------
     def add_data(self, node: str, channel: str, msg: Message, now: float | None = None) -> None:
@@ -139,6 +144,11 @@ class ScopeState:
         with self._lock:
             self.fatigue = {"k": k, "t": t, **{n: _finite(v) for n, v in d.items()}}
 
+    def set_coupling(self, k: int, t: float, d: dict[str, Any]) -> None:
+        """A ``recorder/coupling`` message (the residual of the steps ``d["k0"]`` .. ``k``)."""
+        with self._lock:
+            self._coupling.add(k, t, d)
+
     def set_map(self, geometry: dict[str, Any] | None, damage: dict[str, Any]) -> None:
         """The damage map: node geometry (once) and the damage per node so far."""
         with self._lock:
@@ -192,9 +202,11 @@ class ScopeState:
                     "lines": [vars(s.line) for s in self._lines.values()],
                     "map_geometry": self.map_geometry}
 
-    def snapshot(self, since: int = -1, now: float | None = None) -> dict[str, Any]:
-        """The ``/data?since=K`` answer (JSON-ready); ``now``: the clock of the steps/s
-        (default ``time.monotonic()``, as the sources use)."""
+    def snapshot(self, since: int = -1, now: float | None = None,
+                 coupling_since: int = -1) -> dict[str, Any]:
+        """The ``/data?since=K&coupling_since=C`` answer (JSON-ready): the lines' samples of
+        steps k > K, the coupling residual's points of messages k > C; ``now``: the clock of
+        the steps/s (default ``time.monotonic()``, as the sources use)."""
         now = time.monotonic() if now is None else now
         with self._lock:
             n = self.n_steps
@@ -209,6 +221,7 @@ class ScopeState:
                 "lines": {key: {**vars(s.line), **s.since(since)}
                           for key, s in self._lines.items()},
                 "fatigue": dict(self.fatigue) if self.fatigue else None,
+                "coupling": self._coupling.since(coupling_since),
             }
             dm = self.damage_map
             if dm is not None:
@@ -219,6 +232,57 @@ class ScopeState:
                 out["damage_map"] = None
             out["map_geometry"] = self.map_geometry if since < 0 else None
             return out
+
+
+class _Coupling:
+    """The ``recorder/coupling`` messages as the page plots them: per message its last step
+    ``k``, time ``t`` [s] and the running relative residual of each bond and the total [-]
+    (the last ``max_samples`` kept), and the last message's running totals [J]."""
+
+    def __init__(self, max_samples: int) -> None:
+        self.max = max_samples
+        self.k: list[int] = []
+        self.t: list[float] = []
+        self.rel: dict[str, list[float | None]] = {}
+        self.last: dict[str, Any] | None = None
+        self.steps = 0  # steps whose dE came
+        self.from_k: int | None = None
+
+    def add(self, k: int, t: float, d: dict[str, Any]) -> None:
+        if self.k and k <= self.k[-1]:
+            return  # a repeat
+        bonds = sorted(f[4:] for f in d if f.startswith("rel_"))
+        if not bonds:
+            return
+        for b in bonds:
+            if b not in self.rel:
+                self.rel[b] = [None] * len(self.k)
+        self.k.append(int(k))
+        self.t.append(float(t))
+        for b, ys in self.rel.items():
+            v = d.get(f"rel_{b}")
+            ys.append(float(v) if isinstance(v, int | float) and math.isfinite(v) else None)
+        n = next((len(v) for f, v in d.items() if f.startswith("dE_") and isinstance(v, list)),
+                 0)
+        self.steps += n
+        if self.from_k is None and isinstance(d.get("k0"), int):
+            self.from_k = d["k0"]
+        self.last = {"k": int(k), "t": float(t), **{f: _finite(v) for f, v in d.items()
+                                                     if not isinstance(v, list)}}
+        if len(self.k) > 2 * self.max:
+            del self.k[:-self.max], self.t[:-self.max]
+            for ys in self.rel.values():
+                del ys[:-self.max]
+
+    def since(self, k: int) -> dict[str, Any] | None:
+        """The points of messages k > ``k`` (None before the first message)."""
+        if self.last is None:
+            return None
+        i = max(bisect_right(self.k, k), len(self.k) - self.max)
+        return {"k": self.k[i:], "t": self.t[i:],
+                "rel": {b: ys[i:] for b, ys in self.rel.items()},
+                "threshold": self.last.get("threshold"), "last": dict(self.last),
+                "steps": self.steps, "from_k": self.from_k}
 
 
 def _finite(v: Any) -> Any:
