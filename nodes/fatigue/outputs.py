@@ -12,8 +12,9 @@
 * ``pseudo_damage.csv`` and ``pseudo_damage`` (summary): every load channel's pseudo-damage
   (:mod:`pseudo_damage`, k = 5).
 * ``sn_plot.png`` / ``sn_plot.json``: the S-N curves (both methods, median) with the
-  critical node's cycles on them (its cumulative spectrum of σar per pass, and the same
-  spectrum x the life: the cycles to failure).
+  critical node's cycles on them (its cumulative spectrum of σar per pass at
+  :data:`SN_LEVELS` levels, :class:`SnSpectrum`, and the same spectrum x the life: the
+  cycles to failure).
 * ``damage.vtu``: the assessed nodes with damage per pass, life (km) and log10 damage as
   point data (VTK vertices), for ParaView.
 """
@@ -29,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from .config import SN_METHODS, FatigueConfig
-from .counting import count_series
+from .counting import Cycles, count_series
 from .damage import sn_curve
 from .equivalent_stress import equivalent
 from .influence import short_channel
@@ -99,23 +100,66 @@ def critical_history(t: np.ndarray, loads: dict, cfg: FatigueConfig,
     return s[:, 0, :], equivalent(s, cfg.equivalent)[:, 0]
 
 
-def sn_plot(path_png: Path, cfg: FatigueConfig, eq: np.ndarray, result: FatigueResult,
+SN_LEVELS = 400
+"""Levels of the S-N plot's cycle spectrum: log-spaced σar from :data:`SN_LEVEL_SPAN` [0]
+x the curve's Se to [1] x Su (1.7 % apart for Se = 100 MPa, Su = 600 MPa)."""
+SN_LEVEL_SPAN = (0.025, 3.0)
+"""The spectrum's lowest level as a fraction of Se, its highest as a multiple of Su: the plot
+shows 0.05 Se to 1.5 Su."""
+
+
+class SnSpectrum:
+    """The critical node's cycles for the S-N plot, counted by level (#32: nothing held per
+    cycle or per sample): each cycle's corrected amplitude σar (``cfg.mean_stress``, Pa) into
+    :data:`SN_LEVELS` log-spaced bins; :meth:`cumulative` gives at each bin's lower edge the
+    cycles whose σar is at or above it (those beyond the top edge and the infinite ones of a
+    mean stress past Su counted above every level, as the sorted-cycles spectrum counted
+    them). The counts are sums of 0.5 and 1: the same whatever the order the cycles come in.
+    Before #32 the plot held every cycle (its σar sorted, the cumulative count at each):
+    memory and sn_plot.json that grew with the run; the curve drawn is the same at the
+    levels' resolution."""
+
+    def __init__(self, cfg: FatigueConfig) -> None:
+        self.cfg = cfg
+        mat = cfg.material
+        curve = sn_curve(mat)
+        self.M = (curve.meta or {}).get("mean_stress_sensitivity")
+        lo, hi = SN_LEVEL_SPAN
+        self.edges = np.geomspace(lo * curve.Se, hi * mat.Su, SN_LEVELS + 1)
+        self.counts = np.zeros(SN_LEVELS)
+        self.above = 0.0
+
+    def add(self, cyc: Cycles) -> None:
+        """Count closed cycles (range and mean in Pa; count 1 or 0.5)."""
+        if len(cyc) == 0:
+            return
+        mat = self.cfg.material
+        sar = equivalent_amplitude(0.5 * cyc.range, cyc.mean, self.cfg.mean_stress, mat.Su,
+                                   mat.sf, self.M)
+        top = ~np.isfinite(sar) | (sar > self.edges[-1])
+        self.above += float(np.sum(cyc.count[top]))
+        h, _e = np.histogram(sar[~top], bins=self.edges, weights=cyc.count[~top])
+        self.counts += h
+
+    def cumulative(self) -> tuple[np.ndarray, np.ndarray]:
+        """(σar levels [Pa], cycles at or above each) at the levels some cycle reached."""
+        cum = self.above + np.cumsum(self.counts[::-1])[::-1]
+        keep = self.counts > 0
+        return self.edges[:-1][keep], cum[keep]
+
+
+def sn_plot(path_png: Path, cfg: FatigueConfig, spectrum: SnSpectrum, result: FatigueResult,
             methods: dict | None) -> dict:
-    """The S-N plot (PNG) and its data (returned, and written as JSON beside it)."""
+    """The S-N plot (PNG) and its data (returned, and written as JSON beside it), from the
+    critical node's cycles counted by level (:class:`SnSpectrum`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    cyc = count_series(eq, cfg.residue)
     mat = cfg.material
     curve = sn_curve(mat)
-    M = (curve.meta or {}).get("mean_stress_sensitivity")
-    sar = equivalent_amplitude(0.5 * cyc.range, cyc.mean, cfg.mean_stress, mat.Su, mat.sf, M)
-    order = np.argsort(sar)[::-1]
-    s_sorted = sar[order]
-    cum = np.cumsum(cyc.count[order])
-    keep = np.isfinite(s_sorted) & (s_sorted > 0)
+    s_lev, cum_lev = spectrum.cumulative()
     N = np.logspace(0, 9, 200)
     curves = {"primary": {"name": curve.name, "N": N.tolist(),
                           "S_pa": curve.stress(2 * N).tolist()}}
@@ -127,17 +171,20 @@ def sn_plot(path_png: Path, cfg: FatigueConfig, eq: np.ndarray, result: FatigueR
     life = result.life_repeats if np.isfinite(result.life_repeats) else None
     data = {"curves": curves, "critical_node_id": result.critical_node_id,
             "mean_stress": cfg.mean_stress,
-            "spectrum": {"S_pa": s_sorted[keep].tolist(), "cumulative_cycles": cum[keep].tolist()},
+            "spectrum": {"S_pa": s_lev.tolist(), "cumulative_cycles": cum_lev.tolist(),
+                         "levels": f"{SN_LEVELS} log-spaced σar levels, "
+                                   f"{SN_LEVEL_SPAN[0]:g} Se to {SN_LEVEL_SPAN[1]:g} Su; "
+                                   "cycles at or above each level"},
             "life_repeats": life}
     fig, ax = plt.subplots(figsize=(8, 5))
     for key, cv in curves.items():
         ax.loglog(cv["N"], np.asarray(cv["S_pa"]) / 1e6, "-" if key == "primary" else "--",
                   label=f"{key}: {cv['name']}")
-    if keep.any():
-        ax.loglog(cum[keep], s_sorted[keep] / 1e6, "k.", ms=3,
+    if s_lev.size:
+        ax.loglog(cum_lev, s_lev / 1e6, "k.", ms=3,
                   label=f"node {result.critical_node_id}: cycles per pass")
         if life:
-            ax.loglog(cum[keep] * life, s_sorted[keep] / 1e6, ".", color="tab:red", ms=3,
+            ax.loglog(cum_lev * life, s_lev / 1e6, ".", color="tab:red", ms=3,
                       label=f"x life ({life:.3g} passes)")
     ax.set_ylim(bottom=0.05 * curve.Se / 1e6, top=1.5 * mat.Su / 1e6)
     ax.axhline(mat.Su / 1e6, color="grey", lw=0.8, ls=":")
@@ -219,7 +266,9 @@ def batch_outputs(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
                 w.writerows(matrix_rows(name, unit, rainflow_matrix(
                     count_series(np.asarray(v, dtype=float), cfg.residue))))
         write_pseudo_damage(folder / "pseudo_damage.csv", pd)
-        sn_plot(folder / "sn_plot.png", cfg, eq, result, methods)
+        spectrum = SnSpectrum(cfg)
+        spectrum.add(cyc)
+        sn_plot(folder / "sn_plot.png", cfg, spectrum, result, methods)
         write_vtu(folder / "damage.vtu", result)
 
     return write, extra

@@ -14,12 +14,16 @@ sample, so the damage is :func:`.worker.analyse`'s bit for bit). Three passes ov
    (each its own engine, all fed the same batches), and each load channel's range-mean
    matrix accumulated batch by batch on the axes of pass 1;
 3. **critical node**: its six stress components and equivalent stress by superposition,
-   written to ``critical_stress.csv`` row by row; its equivalent stress (8 B a row) is kept
-   for the S-N plot and its rainflow matrix (:func:`.outputs.sn_plot` counts it whole).
+   written to ``critical_stress.csv`` row by row; its equivalent stress's cycles counted
+   streamed, into the S-N plot's spectrum by level (:class:`.outputs.SnSpectrum`) and the
+   axes of its rainflow matrix (count, largest range, mean extremes);
+4. **critical node's matrix**: its equivalent stress computed again (one node: cheap) and
+   its cycles binned on those axes (as pass 2 bins the load channels').
 
 Memory: a batch of the arm's columns (~16 columns x 65 536 rows x 8 B = 8 MB), the engines'
-per-node state, the rainflow residues, and the critical node's equivalent stress (8 B a
-row: 8 MB at 10^6 steps, the one piece that grows).
+per-node state, the rainflow residues and the fixed-size spectrum and matrices: nothing
+grows with the run (until #32 the critical node's equivalent stress was kept whole, 8 B a
+row, for the S-N plot and its matrix).
 
 Bit-identity with the whole-table path (``analyse`` and ``outputs.batch_outputs``): the
 damage, lives, extremes, cycles, S-N method lives, the critical-node files and the rainflow
@@ -41,11 +45,11 @@ import numpy as np
 from cosim.errors import InputFileError
 
 from .config import SN_METHODS, FatigueConfig
-from .counting import Cycles, StreamingRainflow, count_series
+from .counting import Cycles, StreamingRainflow
 from .equivalent_stress import equivalent
 from .influence import short_channel
 from .load_file import MAX_FORCE_N, MAX_MOMENT_NM
-from .outputs import method_config, sn_plot, write_pseudo_damage, write_vtu
+from .outputs import SnSpectrum, method_config, sn_plot, write_pseudo_damage, write_vtu
 from .pseudo_damage import (
     K_REF,
     N_REF,
@@ -371,36 +375,67 @@ def outputs_streamed(batches: Batches, cfg: FatigueConfig, s: Scan, result: Fati
     cases = list(inf.case_names)
     coef = inf.coefficients[:, result.critical_node:result.critical_node + 1, :]
 
+    def eq_batches() -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(t, the six stress components, the equivalent stress) at the critical node [Pa],
+        a batch at a time."""
+        for t, loads in batches():
+            F = np.zeros((t.size, len(cases)))
+            by_short = {short_channel(k): v for k, v in loads.items()}
+            for j, c in enumerate(cases):
+                if c in by_short:
+                    F[:, j] = by_short[c]
+            st = stress_history(F, coef)
+            yield t, st[:, 0, :], equivalent(st, cfg.equivalent)[:, 0]
+
     def write(folder: Path) -> None:
         say("fatigue: critical-node history, rainflow matrices, pseudo-damage")
-        eq_parts: list[np.ndarray] = []
+        # pass 3: the history written, its cycles counted (the S-N spectrum, the matrix axes)
+        spectrum = SnSpectrum(cfg)
+        crit = _Channel()
+        rf = StreamingRainflow(1)
         with open(folder / "critical_stress.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["t_s", "sxx_pa", "syy_pa", "szz_pa", "sxy_pa", "syz_pa", "szx_pa",
                         f"eq_{cfg.equivalent}_pa"])
-            for t, loads in batches():
-                F = np.zeros((t.size, len(cases)))
-                by_short = {short_channel(k): v for k, v in loads.items()}
-                for j, c in enumerate(cases):
-                    if c in by_short:
-                        F[:, j] = by_short[c]
-                st = stress_history(F, coef)
-                s6, eq = st[:, 0, :], equivalent(st, cfg.equivalent)[:, 0]
-                eq_parts.append(eq)
+            for t, s6, eq in eq_batches():
                 for i in range(t.size):
                     w.writerow([f"{t[i]:.9g}", *(f"{v:.6e}" for v in s6[i]), f"{eq[i]:.6e}"])
-        eq_all = np.concatenate(eq_parts)
+                cyc = rf.feed(eq.reshape(-1, 1))
+                _cycles_done(crit, cyc)
+                spectrum.add(cyc)
+        cyc = rf.residue_cycles(cfg.residue)
+        _cycles_done(crit, cyc)
+        spectrum.add(cyc)
+        # pass 4: the critical node's range-mean matrix on the axes pass 3 found
+        axes = _matrix_axes(crit)
+        if axes is None:
+            node_matrix = rainflow_matrix(Cycles.empty())
+        else:
+            H: np.ndarray | None = None
+            edges: tuple[list, list] = ([], [])
+            rf = StreamingRainflow(1)
+            for _t, _s6, eq in eq_batches():
+                cyc = rf.feed(eq.reshape(-1, 1))
+                if len(cyc):
+                    H, *e = _hist_add(H, cyc, axes)
+                    edges = (e[0], e[1])
+            cyc = rf.residue_cycles(cfg.residue)
+            if len(cyc):
+                H, *e = _hist_add(H, cyc, axes)
+                edges = (e[0], e[1])
+            assert H is not None
+            node_matrix = {"range_edges": edges[0], "mean_edges": edges[1],
+                           "counts": H.tolist()}
         with open(folder / "rainflow_matrix.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["series", "unit", "range_lo", "range_hi", "mean_lo", "mean_hi",
                         "cycles"])
-            w.writerows(matrix_rows(f"node_{result.critical_node_id}", "Pa",
-                                    rainflow_matrix(count_series(eq_all, cfg.residue))))
+            w.writerows(matrix_rows(f"node_{result.critical_node_id}", "Pa", node_matrix))
             for name, mat in matrices.items():
                 unit = "N m" if short_channel(name).endswith("_mx") else "N"
                 w.writerows(matrix_rows(name, unit, mat))
         write_pseudo_damage(folder / "pseudo_damage.csv", pd)
-        sn_plot(folder / "sn_plot.png", cfg, eq_all, result, methods)
+        sn_plot(folder / "sn_plot.png", cfg, spectrum, result, methods)
         write_vtu(folder / "damage.vtu", result)
 
     return write, extra
