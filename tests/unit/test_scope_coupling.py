@@ -14,6 +14,7 @@ import json
 import time
 import urllib.error
 import urllib.request
+from typing import Any
 
 import numpy as np
 import pytest
@@ -33,7 +34,8 @@ from orchestrator.scope.state import ScopeState
 from ..cosim.test_coupling_live import CHANNELS, _messages
 from ..cosim.test_coupling_stream import _table
 
-RUN = {"h": 1e-3, "coupling": "hold", "exchange": "parallel", "mode": "distributed"}
+RUN: dict[str, Any] = {"h": 1e-3, "coupling": "hold", "exchange": "parallel",
+                       "mode": "distributed"}
 
 
 def _recorded(n: int = 2500):
