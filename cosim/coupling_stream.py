@@ -239,6 +239,11 @@ class LiveResidual:
         self._rows.append((k, self._t.pop(k, 0.0), self._held.pop(k, {})))
 
     @property
+    def held(self) -> int:
+        """Steps held whose row is not written (yet, or ever: dropped at the next take)."""
+        return len(self._held)
+
+    @property
     def pending(self) -> int:
         """Rows complete, not yet fed by :meth:`take`."""
         return len(self._rows)
