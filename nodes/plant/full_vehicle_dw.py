@@ -459,11 +459,9 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         the ``arm`` channel's fields (:func:`.arm_loads.arm_loads_at`) [N, N m]. The left
         arms' in their arm frame (x forward along the pivot axis, y outboard, z up); the
         right arms' in the **mirrored** frame (x forward, y outboard, z up: left-handed in
-        vehicle axes), where a force's components and a moment's (the torsion bar's M_x,
-        sign flipped: a moment is a pseudovector) are those of the left part under the
-        mirrored load: the left part's FE unit cases give the right arm's stresses.
-        (No channel carries them yet: the per-corner arm channels are #31's, docs/corners.md.)
-        """
+        vehicle axes), where a force's components and a moment's (M_x: the torsion bar's
+        and the anti-roll bar's, sign flipped: a moment is a pseudovector) are those of the
+        left part under the mirrored load: the left part's FE unit cases give its stresses."""
         out: dict[str, dict[str, float]] = {}
         for i, (g, lk, name) in enumerate(zip(self.geoms, self.link, CORNERS, strict=True)):
             R_arm, hub_q, u, F_d, bump = self._applied[i]
@@ -477,9 +475,8 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         return out
 
     def loads(self) -> dict[str, dict[str, float]]:
-        """Every corner's lower-arm loads on its own channel ``arm_FL`` .. ``arm_RR``
-        (:meth:`corner_arm_loads`), and ``arm`` = the front-left's (what the live fatigue
-        node reads today: docs/corners.md)."""
+        """Every corner's lower-arm loads on its channel ``arm_FL`` .. ``arm_RR``
+        (:meth:`corner_arm_loads`), and ``arm`` = the front-left's (docs/corners.md)."""
         al = self.corner_arm_loads()
         return {"arm": al["FL"], **{f"arm_{c}": al[c] for c in CORNERS}}
 
