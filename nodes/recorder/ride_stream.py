@@ -14,27 +14,29 @@ by ``tests/unit/test_ride_stream.py``; what each is, and how far it may differ:
   average. Only the bins up to the band's top are kept: ``X_k = sum over segments of
   e^{-2 pi i k n0 / nfft} DFT_segment(k)``, each segment's DFT at those bins by a Bluestein
   chirp-z whose chirp phases are reduced exactly in integers. It differs from the whole-signal
-  FFT by rounding only (tested to 1e-11 relative). Memory: the in-band bins,
+  FFT by rounding only (tested to 1e-12 relative). Memory: the in-band bins,
   ``16 B x nfft x f2 / fs`` per signal (at most 1.3 B per 500 Hz sample for 0-20 Hz): it still
-  grows with the run, at 1/12 to 1/24 of one 8-byte column at 500 Hz (0.34 MB a signal for
+  grows with the run, at 1/6 to 1/12 of one 8-byte column at 500 Hz (0.34 MB a signal for
   10^6 rows at 1 kHz), the price of keeping the thesis's number. A Welch average of band
   powers would be bounded but moves the Chapter 5 values (a Hann window's leakage and the
   DC term differ from the rectangular periodogram's).
 * **ISO 2631-1 Wk** (:class:`StreamWk`): the whole-signal way multiplies the FFT of the
   signal zero-padded to ``nfft >= 2N`` by H(f) exactly, i.e. a two-sided linear convolution
-  with the impulse response of H sampled on that grid. Streamed: H sampled on a fixed grid
-  of :data:`WK_GRID` points (262 s at 500 Hz), its impulse response cut to
-  +-:data:`WK_HALF` lags (65.5 s), applied by overlap-save. The difference is the response
-  beyond 65 s (its causal part has decayed to ~e^-100 by then; H's step at the Nyquist
-  frequency, |H(250 Hz)| ~ 0.01, leaves a ripple falling as 1/lag): tested to 1e-7 relative.
+  with the impulse response of H sampled on that grid. Streamed, by overlap-save: for a
+  record whose grid is at most :data:`WK_GRID` points (65 536 samples, 131 s at 500 Hz) that
+  very impulse response, lags +-nfft/2 (equal to rounding, tested to 1e-13); for a longer
+  one H sampled on :data:`WK_GRID` points (262 s), its response cut to +-:data:`WK_HALF`
+  lags (65.5 s). The difference is then the response beyond 65 s (its causal part has
+  decayed to ~e^-100 by then; H's step at the Nyquist frequency, |H(250 Hz)| ~ 0.01, leaves
+  a ripple falling as 1/lag): 2.5e-8 relative measured at 500 s, tested to 1e-7.
 * **Jerk**: ``np.gradient``'s differences sample by sample (bit for bit); its RMS below.
 * **Time-domain RMS** (full band, deflection, damper force): the sum of squares batch by
   batch instead of one pairwise ``np.mean``: a few ulps (tested to 1e-12). **SWS**: max - min,
   exact. **DTL**: Chan's combination of the batches' means and centred sums of squares
   (tested to 1e-12).
 
-The peak memory is a batch of the ride columns, each signal's filter state (~1.5 MB for the
-Wk filter, 2 x 240 samples for the resampler) and the in-band bins above.
+The peak memory is a batch of the ride columns, each signal's filter state (~1.5-3 MB for the
+Wk filter, a filter's length, <= 161 samples, for the resampler) and the in-band bins above.
 """
 
 from __future__ import annotations
