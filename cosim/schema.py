@@ -183,6 +183,21 @@ CHANNELS: tuple[Channel, ...] = (
         Field("t", "s", "(n,) times of the steps", nonneg=True, required=True),
     ), "a block of steps k0..k of plant/arm in step order (each plant/arm field as an (n,) "
        "list); only with a live fatigue node", stepped=False),
+    Channel("recorder", "coupling", (
+        Field("k0", "-", "first step of the dE lists (the message's k is the last)",
+              nonneg=True, required=True),
+        Field("dE_damper", "J", "(n,) coupling energy residual of each step, damper bond"),
+        Field("dE_tyre", "J", "(n,) coupling energy residual of each step, tyre bond"),
+        Field("res_damper", "J", "running sum of abs(dE) of the damper bond", nonneg=True),
+        Field("res_tyre", "J", "running sum of abs(dE) of the tyre bond", nonneg=True),
+        Field("carried_damper", "J", "running energy the damper bond carried", nonneg=True),
+        Field("carried_tyre", "J", "running energy the tyre bond carried", nonneg=True),
+        Field("rel_damper", "-", "running relative residual, damper bond", nonneg=True),
+        Field("rel_tyre", "-", "running relative residual, tyre bond", nonneg=True),
+        Field("rel_total", "-", "running relative residual, all bonds", nonneg=True),
+        Field("threshold", "-", "the warning threshold of rel_total", nonneg=True),
+    ), "the live coupling energy residual, per batch of table rows (docs/"
+       "coupling_residual.md)", limit=math.inf, stepped=False),
     Channel("fatigue", "damage", (
         Field("max_damage", "-", "largest Miner damage of any node so far", nonneg=True),
         Field("critical_node_id", "-", "the node of it"),

@@ -42,7 +42,8 @@ def test_the_run_constants_are_the_registry_s() -> None:
 def test_channel_names_of_the_registry_are_the_protocol_s() -> None:
     """The registry spells names as strings (it imports nothing): they must be the ones the
     nodes use (cosim.channels, cosim.keys)."""
-    known = {ch.STATE, ch.RESPONSE, ch.ARM, ch.FORCE, ch.LOADS, ch.DAMAGE, keys.RECORDS}
+    known = {ch.STATE, ch.RESPONSE, ch.ARM, ch.FORCE, ch.LOADS, ch.DAMAGE, ch.COUPLING,
+             keys.RECORDS}
     known |= set(ch.CORNER_ARMS)  # the four-corner vehicle's arm_FL .. arm_RR (#31)
     for k in nk.KINDS:
         keys.check_name("kind", k.name)
