@@ -243,14 +243,20 @@ class ZenohBus:
     def flush(self, timeout: float = 1.0) -> int:
         """Wait until every router this session is connected to has routed what we sent.
 
-        A Zenoh ``close`` does not drain the session's transmission queues: the last
-        messages (abort, done) were lost under load (#30 item 17). A query travels on the
-        same reliable, FIFO link and priority lane (``Priority.DATA``) as our puts, so a
-        router's admin-space reply to ``@/<router zid>/router`` arrives only after the
-        router has taken every earlier message off the link and queued it to its
-        subscribers. Routers must run with ``adminspace`` read enabled (``suscosim router``
-        and ``deploy/zenoh/router.json5`` do); one without it does not reply and the wait
-        ends at ``timeout`` [s]. Returns the number of routers that replied.
+        A query travels on the same reliable, FIFO link and priority lane (``Priority.DATA``)
+        as our puts, so a router's admin-space reply to ``@/<router zid>/router`` arrives only
+        after the router has taken every earlier message off the link and queued it to its
+        subscribers. It needs a router with ``adminspace`` read enabled (``suscosim router``
+        enables it) whose access control lets the query in and the reply out; the shipped
+        ``deploy/zenoh/router.json5`` does neither (when it let the query in, the reply was
+        held back: 0 replies, the query ended in ~1 ms). Without a reply the
+        wait ends at ``timeout`` [s] or when the query ends. Returns the number of routers
+        that replied.
+
+        :meth:`close` does not call it: Zenoh's own close already writes what the session's
+        transmission queue holds before the link goes (zenoh-transport, the link's tx task
+        drains its pipeline), and the abort the kill test's tap "missed" (#30 item 17) had
+        reached it every time: the tap lost its own line (docs/deployment.md).
         """
         answered = 0
         try:
@@ -262,7 +268,6 @@ class ZenohBus:
         return answered
 
     def close(self) -> None:
-        self.flush()
         for obj in reversed(self._keep):
             try:
                 obj.undeclare()

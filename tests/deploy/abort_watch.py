@@ -8,6 +8,12 @@ as declared may not have reached the router and the publishers yet), then ``abor
 time> <reason>`` for the first abort the orchestrator publishes on
 ``suscosim/RUN/orchestrator/clock``, and exits. A tap: it needs
 no run key (signed messages decode without it) and only a certificate that may subscribe.
+
+The process ends with ``os._exit`` once the abort's line is printed, never before: it used to
+set the exit event first and print after, and under load the main thread woke and ended the
+process in between, so the abort was heard but its line lost (the kill test's "tap heard no
+abort", #30 item 17: the container had exited 0, 1.2 s after the kill, as it does when it
+prints the abort; only an abort ends it before 600 s).
 """
 
 import os
@@ -23,7 +29,8 @@ from cosim.wire import decode
 run, endpoint, config = sys.argv[1:4]
 conf = zenoh.Config.from_file(config)
 conf.insert_json5("connect/endpoints", f'["{endpoint}"]')
-done = threading.Event()
+said = threading.Event()  # an abort was heard (set before its line is printed)
+done = threading.Event()  # its line is printed: the main thread may end the process
 
 
 def on_sample(sample) -> None:
@@ -34,9 +41,10 @@ def on_sample(sample) -> None:
         return
     if msg.kind != "abort":
         print(f"clock {msg.kind}", flush=True)
-    if msg.kind == "abort" and not done.is_set():
-        done.set()
+    if msg.kind == "abort" and not said.is_set():
+        said.set()  # the first abort only (the orchestrator says it several times)
         print(f"abort {time.time():.6f} {msg.d.get('reason', '')}", flush=True)
+        done.set()  # only once the line is out: the main thread exits without flushing
 
 
 heard = threading.Event()
@@ -63,4 +71,5 @@ session.declare_subscriber(keys.key(run, keys.ORCHESTRATOR, keys.CLOCK), on_samp
 session.declare_subscriber(keys.key(run, "plant", "state"), on_state)
 print("ready", flush=True)
 done.wait(600)
+sys.stdout.flush()
 os._exit(0)  # a Zenoh session open at exit can hang interpreter shutdown

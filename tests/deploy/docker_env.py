@@ -104,7 +104,7 @@ def sigterm_times(since: float, until: float) -> dict[str, datetime]:
                 "--filter", "type=container", "--filter", "event=kill",
                 "--format", "{{json .}}"], timeout=30)
     assert res.returncode == 0, res.stderr
-    out = {}
+    out: dict[str, datetime] = {}
     for line in res.stdout.splitlines():
         ev = json.loads(line)
         if ev.get("Actor", {}).get("Attributes", {}).get("signal") == "15":

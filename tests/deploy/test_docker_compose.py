@@ -181,25 +181,13 @@ def _start_abort_watch(project: de.Project, run_id: str) -> str:
 
 def test_killed_plant_container_ends_the_run_naming_it_and_the_journal_is_readable(
         image, tmp_path):
-    """The whole case, twice at most: in two of five full suites the tap container heard the
-    run (plant/state) but not the orchestrator's abort, while the run itself ended as it
-    should (exit 1 naming the plant, journal intact); run alone it always heard it. Until
-    that is understood, a case whose abort goes unheard is run once more: the exit code and the
-    error naming the plant must hold both times, the abort (within 5 s) and the journal checks
-    in one of them."""
-    for attempt in range(2):
-        case = tmp_path / f"attempt{attempt}"
-        case.mkdir()
-        if _killed_plant_case(case, f"kill{attempt}"):
-            return
-    pytest.fail("no abort heard on the bus in two attempts")
-
-
-def _killed_plant_case(tmp_path: Path, tag: str) -> bool:
-    """One kill case; False if the tap heard no abort (the exit and error asserted first)."""
+    """Once, no retry: a tap that "heard no abort" (2 of 5 full suites before, 4 of 15 cases
+    at load ~6) had heard it and lost its own line (``abort_watch.py``: it ended the process
+    between noting the abort and printing it); the abort itself reached every node each
+    time (#30 item 17, docs/deployment.md)."""
     # Long enough to be killed mid-run; a stall timeout far above the liveliness lease, so
     # the run must end because the plant is seen gone, not because nothing progresses.
-    project, run_id = _project(tmp_path, tag, ["--set", "run.t_end=120.0",
+    project, run_id = _project(tmp_path, "kill", ["--set", "run.t_end=120.0",
                                                "--set", "run.stall_timeout_s=60.0"])
     watch = None
     try:
@@ -223,12 +211,8 @@ def _killed_plant_case(tmp_path: Path, tag: str) -> bool:
         assert 0 <= exited < 5.0, f"the orchestrator exited {exited:.2f} s after the kill"
         heard = de._run(["docker", "logs", watch]).stdout.split("\n")
         line = next((x for x in heard if x.startswith("abort ")), None)
-        if not line:
-            time.sleep(3.0)  # late, or never? (said, for whoever looks into it)
-            later = de._run(["docker", "logs", watch]).stdout.split("\n")
-            print(f"{tag}: no abort heard on the bus (plant killed at {killed:.3f}); the tap "
-                  f"3 s later: {later[-12:]}; orchestrator: {orch_logs[-2000:]}")
-            return False
+        assert line, (f"no abort heard on the bus (plant killed at {killed:.3f}); the tap: "
+                      f"{heard[-12:]}; orchestrator: {orch_logs[-2000:]}")
         _, t_abort, reason = line.split(" ", 2)
         ended = float(t_abort) - killed
         print(f"run aborted {ended:.2f} s, orchestrator exited {exited:.2f} s after the kill")
@@ -257,7 +241,6 @@ def _killed_plant_case(tmp_path: Path, tag: str) -> bool:
             np.testing.assert_array_equal(csv[col], table[col], err_msg=col)
         assert np.all(np.diff(again["t"]) > 0)  # every recorded step, in order, no gap
         assert np.allclose(np.diff(again["t"]), 0.001)
-        return True
     finally:
         if watch:
             de._run(["docker", "rm", "-f", watch])
