@@ -222,8 +222,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go
         # Every node elsewhere, behind the router it connects to (compose, one machine per
         # node): the orchestrator is a client of that router, as the nodes and taps are,
-        # not a peer (no mixed peer/client routing through one router: a tap of the router
-        # once heard the nodes but not the orchestrator's abort, docs/deployment.md).
+        # not a peer (no mixed peer/client routing through one router).
         as_client = bool(connect) and not listen and all(n in (external or [])
                                                          for n in run["nodes"])
         listen = [] if as_client else list(listen or [free_loopback_endpoint()])
