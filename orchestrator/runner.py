@@ -22,24 +22,23 @@ import math
 import os
 import secrets
 import sys
-import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from cosim import auth as au
 from cosim import channels as ch
 from cosim import node_kinds as nk
 from cosim import run_folder
 from cosim import scenario as sc
-from cosim.bus import Bus, MemoryBus, ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.bus import free_loopback_endpoint
 from cosim.coupling_energy import WARNING_THRESHOLD
 from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
-from cosim.run_lock import RunLock, check_run_id_free
+from cosim.run_lock import RunLock
 
+from . import run_modes
 from .clock import Clock, ClockResult
 from .local_nodes import PINNED_SPIN_US, LocalNodes, local_lease_ms  # noqa: F401 (re-exported)
-from .placement import core_layout, should_pin, usable_cores
 from .progress import ProgressBar
 from .run_recovery import recover_table
 
@@ -250,115 +249,26 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         write_summary(folder, summary)
         return summary
     bar = ProgressBar(run["id"]) if not quiet else (lambda k, n: None)
-    result: ClockResult | None = None
-    local: LocalNodes | None = None
-    threads: list[threading.Thread] = []
-    bus: Bus
     if run["mode"] == "distributed":  # listen: chosen above, before run.json
-        lease = local_lease_ms(float(run["stall_timeout_s"]))
-        bus = ZenohBus(zenoh_config(connect or [], listen or None, lowlatency=lowlatency,
-                                    lease_ms=lease, config_file=zenoh_config_file,
-                                    default_mode="client" if as_client else "peer"))
-        if connect:  # the embedded mesh is this run's own: only a shared one can collide
-            try:
-                check_run_id_free(bus, run["id"], list(external or []))
-            except BaseException:
-                _close(bus)
-                raise
-        names = [n for n in run["nodes"] if n not in (external or [])]
-        cores = usable_cores()
-        layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
-        try:
-            local = LocalNodes(run["id"], names, list(connect or listen or []), lowlatency,
-                               folder / "logs", zenoh_config_file, layout, lease_ms=lease,
-                               run_key=run_key)
-        except OSError as exc:  # a node log that cannot be opened: nothing has started yet
-            _close(bus)
-            raise InputFileError(str(exc.filename or folder / "logs"),
-                                 f"cannot write the node logs: {exc.strerror or exc}") from None
-        check = local.dead
+        nodes = run_modes.distributed(run, folder, connect, external, listen or [], lowlatency,
+                                      zenoh_config_file, pin_mode, run_key, as_client)
     else:
-        from .node_main import run_node
-
-        bus = MemoryBus()
-        codes: dict[str, int] = {}
-
-        def body(name: str) -> None:
-            codes[name] = run_node(bus, run["id"], name, scenario, key=run_key,
-                                   nonce=auth.nonce)
-
-        check = lambda: next((f"node '{n}' failed (exit code {c})"  # noqa: E731
-                              for n, c in codes.items() if c), None)
+        nodes = run_modes.monolithic(scenario, run_key, auth.nonce)
     clock: Clock | None = None
     try:  # from here on every error path stops the nodes and closes the bus
-        clock = Clock(bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,
-                      check_processes=check, auth=auth)
-        if run["mode"] == "monolithic":
-            threads = [threading.Thread(target=body, args=(n,), daemon=True, name=n)
-                       for n in run["nodes"]]
-            for th in threads:
-                th.start()
+        clock = Clock(nodes.bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,
+                      check_processes=nodes.dead, auth=auth)
+        nodes.start()
         result = clock.run()
     except BaseException as exc:
-        if isinstance(exc, KeyboardInterrupt) and clock is not None:  # Ctrl-C or SIGTERM
-            try:
-                clock.announce_abort("the orchestrator was interrupted")
-            except Exception:
-                pass
-        error = ("interrupted (Ctrl-C or SIGTERM)" if isinstance(exc, KeyboardInterrupt)
-                 else str(exc) or type(exc).__name__)
-        unwritten: SummaryWriteError | None = None
-        bus_open = True
-        try:
-            if hasattr(bar, "close"):
-                bar.close()
-            def say_abort() -> None:  # to a node that joined after it was first said
-                if clock is not None:
-                    try:
-                        clock.announce_abort(error)
-                    except Exception:
-                        pass
-
-            if local:
-                local.stop(grace_s=3.0, tick=say_abort)
-            for th in threads:
-                th.join(timeout=3.0)
-            say_abort()  # once more, the nodes stopped: then the bus is closed
-            _close(bus)  # before the table: what follows is the run folder's, not the bus's
-            bus_open = False
-            elsewhere = (ch.RECORDER in (external or []) and clock is not None
-                         and ch.RECORDER in clock.status and clock.status[ch.RECORDER].alive)
-            rec = recover_table(folder, interrupted=isinstance(exc, KeyboardInterrupt),
-                                since=started, recorder_elsewhere=elsewhere)
-            summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", error)
-            summary.update(_transport(local, lowlatency))
-            write_summary(folder, summary)
-            if rec.get("note") and (not rec.get("files") or "table.recovered" in rec["note"]):
-                print(f"suscosim: {rec['note']}", file=sys.stderr)
-        except SummaryWriteError as werr:  # a full disk: say both, still end promptly
-            unwritten = werr
-        finally:
-            if bus_open:
-                _close(bus)  # else the session's threads keep the orchestrator alive
-        if unwritten is not None:
-            if isinstance(exc, KeyboardInterrupt):
-                print(f"suscosim: {unwritten}", file=sys.stderr)
-                raise
-            raise RunError(f"{error}; and {unwritten}") from exc
-        if not isinstance(exc, SuscosimError | KeyboardInterrupt):
-            raise RunError(f"internal error in the orchestrator: {type(exc).__name__}: {exc}") \
-                from exc
-        raise
+        _fail(exc, scenario, nodes, clock, bar, external, started, t0, lowlatency)
     if hasattr(bar, "close"):
         bar.close()
-    if local:
-        local.stop()
-    for th in threads:
-        th.join(timeout=5.0)
-    bus.close()
+    nodes.stop()
+    nodes.bus.close()
     rec = result.nodes[ch.RECORDER].result
     summary = _summary(scenario, result, time.monotonic() - t0, rec, "ok")
-    summary.update(_transport(local, lowlatency))
+    summary.update(_transport(nodes.local, lowlatency))
     if ch.FATIGUE in result.nodes:  # the live fatigue node's headline (files in fatigue/)
         summary["fatigue"] = {k: v for k, v in result.nodes[ch.FATIGUE].result.items()
                               if k != "rejected"}
@@ -366,11 +276,63 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     return summary
 
 
-def _close(bus: Bus) -> None:
+def _fail(exc: BaseException, scenario: dict[str, Any], nodes: run_modes.Nodes,
+          clock: Clock | None, bar: Any, external: list[str] | None, started: float,
+          t0: float, lowlatency: bool) -> NoReturn:
+    """A run that failed (or was interrupted): stop the nodes, close the bus, recover the
+    table from the journal, write the ``failed`` summary, then raise the error to report
+    (a :class:`SuscosimError`, or the KeyboardInterrupt)."""
+    folder = Path(scenario["run"]["dir"])
+    if isinstance(exc, KeyboardInterrupt) and clock is not None:  # Ctrl-C or SIGTERM
+        try:
+            clock.announce_abort("the orchestrator was interrupted")
+        except Exception:
+            pass
+    error = ("interrupted (Ctrl-C or SIGTERM)" if isinstance(exc, KeyboardInterrupt)
+             else str(exc) or type(exc).__name__)
+    unwritten: SummaryWriteError | None = None
+    bus_open = True
     try:
-        bus.close()
-    except Exception:  # closing on an error path: the first error is the one to report
-        pass
+        if hasattr(bar, "close"):
+            bar.close()
+
+        def say_abort() -> None:  # to a node that joined after it was first said
+            if clock is not None:
+                try:
+                    clock.announce_abort(error)
+                except Exception:
+                    pass
+
+        nodes.stop(grace_s=3.0, tick=say_abort)
+        say_abort()  # once more, the nodes stopped: then the bus is closed
+        _close(nodes.bus)  # before the table: what follows is the run folder's, not the bus's
+        bus_open = False
+        elsewhere = (ch.RECORDER in (external or []) and clock is not None
+                     and ch.RECORDER in clock.status and clock.status[ch.RECORDER].alive)
+        rec = recover_table(folder, interrupted=isinstance(exc, KeyboardInterrupt),
+                            since=started, recorder_elsewhere=elsewhere)
+        summary = _summary(scenario, None, time.monotonic() - t0, rec, "failed", error)
+        summary.update(_transport(nodes.local, lowlatency))
+        write_summary(folder, summary)
+        if rec.get("note") and (not rec.get("files") or "table.recovered" in rec["note"]):
+            print(f"suscosim: {rec['note']}", file=sys.stderr)
+    except SummaryWriteError as werr:  # a full disk: say both, still end promptly
+        unwritten = werr
+    finally:
+        if bus_open:
+            _close(nodes.bus)  # else the session's threads keep the orchestrator alive
+    if unwritten is not None:
+        if isinstance(exc, KeyboardInterrupt):
+            print(f"suscosim: {unwritten}", file=sys.stderr)
+            raise exc
+        raise RunError(f"{error}; and {unwritten}") from exc
+    if not isinstance(exc, SuscosimError | KeyboardInterrupt):
+        raise RunError(f"internal error in the orchestrator: {type(exc).__name__}: {exc}") \
+            from exc
+    raise exc
+
+
+_close = run_modes.close_quietly
 
 
 def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:

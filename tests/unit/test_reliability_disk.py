@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from cosim.bus import MemoryBus
-from orchestrator import runner
+from orchestrator import run_modes, runner
 from orchestrator.cli import main as cli_main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -64,7 +64,7 @@ def test_full_disk_during_a_run_ends_it_with_both_errors_and_the_bus_closed(
         if self._buf:
             raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(runner, "MemoryBus", Bus)
+    monkeypatch.setattr(run_modes, "MemoryBus", Bus)
     monkeypatch.setattr("cosim.journal.JournalWriter.flush", flush)
     monkeypatch.setattr(Path, "write_text", _full_for("summary.json", ".summary.json.tmp"))
     out = tmp_path / "run"

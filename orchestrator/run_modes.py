@@ -1,0 +1,107 @@
+"""A run's nodes, started by mode: distributed (one process per node on Zenoh) or monolithic
+(threads on an in-memory bus). The runner (:mod:`orchestrator.runner`) runs the clock on
+what this gives, the same way for both; the reference mode starts no node at all.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cosim.bus import Bus, MemoryBus, ZenohBus, zenoh_config
+from cosim.errors import InputFileError
+from cosim.run_lock import check_run_id_free
+
+from .local_nodes import LocalNodes, local_lease_ms
+from .placement import core_layout, should_pin, usable_cores
+
+
+@dataclass
+class Nodes:
+    """The bus a run's clock uses, and the nodes on it."""
+
+    bus: Bus
+    dead: Callable[[], str | None]
+    """Why a node is gone (its process exited, its thread failed), or None."""
+    local: LocalNodes | None = None
+    """The local node processes of a distributed run."""
+    threads: list[threading.Thread] = field(default_factory=list)
+    """The node threads of a monolithic run (started by :meth:`start`)."""
+    _bodies: list[tuple[str, Callable[[str], None]]] = field(default_factory=list)
+
+    def start(self) -> None:
+        """Start the monolithic run's node threads (once the clock listens)."""
+        self.threads = [threading.Thread(target=body, args=(n,), daemon=True, name=n)
+                        for n, body in self._bodies]
+        for th in self.threads:
+            th.start()
+
+    def stop(self, grace_s: float | None = None,
+             tick: Callable[[], None] | None = None) -> None:
+        """Stop the local processes (``grace_s`` before they are killed, ``tick`` called
+        while waiting) and join the threads; at the end of a run, or after a failure."""
+        if self.local:
+            if grace_s is None:
+                self.local.stop()
+            else:
+                self.local.stop(grace_s=grace_s, tick=tick)
+        for th in self.threads:
+            th.join(timeout=3.0 if grace_s is not None else 5.0)
+
+
+def close_quietly(bus: Bus) -> None:
+    """Close ``bus`` on an error path: the first error is the one to report."""
+    try:
+        bus.close()
+    except Exception:
+        pass
+
+
+def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
+                external: list[str] | None, listen: list[str], lowlatency: bool,
+                zenoh_config_file: str | None, pin_mode: str, run_key: bytes,
+                as_client: bool) -> Nodes:
+    """The orchestrator's Zenoh session and a process per node not run ``external``ly."""
+    lease = local_lease_ms(float(run["stall_timeout_s"]))
+    bus = ZenohBus(zenoh_config(connect or [], listen or None, lowlatency=lowlatency,
+                                lease_ms=lease, config_file=zenoh_config_file,
+                                default_mode="client" if as_client else "peer"))
+    if connect:  # the embedded mesh is this run's own: only a shared one can collide
+        try:
+            check_run_id_free(bus, run["id"], list(external or []))
+        except BaseException:
+            close_quietly(bus)
+            raise
+    names = [n for n in run["nodes"] if n not in (external or [])]
+    cores = usable_cores()
+    layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
+    try:
+        local = LocalNodes(run["id"], names, list(connect or listen or []), lowlatency,
+                           folder / "logs", zenoh_config_file, layout, lease_ms=lease,
+                           run_key=run_key)
+    except OSError as exc:  # a node log that cannot be opened: nothing has started yet
+        close_quietly(bus)
+        raise InputFileError(str(exc.filename or folder / "logs"),
+                             f"cannot write the node logs: {exc.strerror or exc}") from None
+    return Nodes(bus, local.dead, local=local)
+
+
+def monolithic(scenario: dict[str, Any], run_key: bytes, nonce: bytes) -> Nodes:
+    """An in-memory bus and a thread per node (started by :meth:`Nodes.start`)."""
+    from .node_main import run_node
+
+    run = scenario["run"]
+    bus = MemoryBus()
+    codes: dict[str, int] = {}
+
+    def body(name: str) -> None:
+        codes[name] = run_node(bus, run["id"], name, scenario, key=run_key, nonce=nonce)
+
+    def dead() -> str | None:
+        return next((f"node '{n}' failed (exit code {c})" for n, c in codes.items() if c),
+                    None)
+
+    return Nodes(bus, dead, _bodies=[(n, body) for n in run["nodes"]])
