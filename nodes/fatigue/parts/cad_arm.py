@@ -7,18 +7,25 @@ Shape (arm frame: x along the pivot axis, y outward to the ball joint, z up; sym
 z = 0, the forging's parting plane):
 
 * **plan**: the convex hull of circles round the two bush eyes and the ball joint, with a
-  rounded triangular lightening hole (hull of three equal circles), so two legs and a base
-  member between the eyes;
+  rounded triangular lightening hole that opens the base, so two legs; the legs end on the
+  eye tubes (everything within the eye radius of the pivot axis and behind it cut away);
 * **web**: the plan face less the hole, ``section.web`` thick (>= 6 mm: a web thinner than
   about 1/50 of the plan size does not fill in a closed die);
 * **ribs** along the outer edge and round the hole (the H's flanges), ``rib_depth_root`` deep
   at the legs' roots, tapering linearly to ``rib_depth_tip`` toward the ball joint (the
   bending moment of the wheel load falls toward the ball joint);
 * **bush eyes**: hollow tubes along x (the pivot axis), bore = the bushes' outer sleeves;
+  with ``[bush_eye] pivot_tube`` one tube from eye to eye (closing the triangle), its bore
+  ``pivot_tube_bore`` between the eyes entered by 15-degree cones;
 * **ball-joint housing**: a vertical ring with a through bore for the joint's cartridge;
 * **damper seat and bump-stop pad**: round bosses on the legs;
-* **fillets** of radius ``section.fillet`` (>= 5 mm) on every edge where a rib, an eye, the
-  housing or a pad meets the web (the re-entrant edges of the section).
+* **fillets**, in ONE OpenCASCADE pass on the solid before its bores are cut: radius
+  ``section.fillet`` (>= 5 mm) on every sharp re-entrant edge in the web's planes (where a
+  rib, an eye or the housing meets the web), ``section.junction_fillet`` (default: the same)
+  on the other sharp re-entrant edges (ribs meeting the eye tubes and the housing). OCC
+  refuses a second pass (a fillet cannot end on a fillet face), and the same pass with the
+  bores already cut returned an invalid solid (measured: docs/parts.md); the bores lie
+  inside the tubes, away from every fillet, so cutting them after changes no fillet.
 
 Lengths in metres. :func:`build` leaves the solid in the current gmsh model and returns the
 tags of the fillet faces (for mesh refinement); :func:`write_step` writes the STEP file.
@@ -63,6 +70,10 @@ def load_params(path: Path = DEFAULT_PARAMS) -> dict[str, Any]:
         raise InputFileError(str(path), f"[section] web = {s['web']}: a forging needs >= 0.006 m")
     if s["fillet"] < 0.005 - 1e-12:
         raise InputFileError(str(path), f"[section] fillet = {s['fillet']}: expected >= 0.005 m")
+    rj = s.get("junction_fillet", s["fillet"])
+    if not 0.001 <= rj <= s["fillet"] + 1e-12:
+        raise InputFileError(str(path), f"[section] junction_fillet = {rj}: expected "
+                             f"0.001 m to the fillet ({s['fillet']} m)")
     return p
 
 
@@ -179,56 +190,114 @@ def build(params: dict[str, Any], fillet: bool = True) -> dict[str, list[int]]:
     housing = [(3, occ.addCylinder(b[0], b[1], -bj["depth"] / 2, 0, 0, bj["depth"],
                                    bj["outer_radius"]))]
     solid, _ = occ.fuse(body, tubes + housing)
-    # bores: the bushes' outer sleeves, the ball joint's cartridge
-    zmax = 0.5 * max(D0, D1, 2 * ro, bj["depth"]) + 0.01
-    if eye.get("pivot_tube", False):
-        bores = [(3, occ.addCylinder(xs[0] - L / 2 - 0.01, 0.0, 0.0, xs[1] - xs[0] + L + 0.02,
-                                     0, 0, eye["bore_radius"]))]
-    else:
-        bores = [(3, occ.addCylinder(hp[n][0] - L / 2 - 0.01, hp[n][1], hp[n][2], L + 0.02,
-                                     0, 0, eye["bore_radius"])) for n in ("bush_front",
-                                                                          "bush_rear")]
-    bores.append((3, occ.addCylinder(b[0], b[1], -zmax, 0, 0, 2 * zmax, bj["bore_radius"])))
-    solid, _ = occ.cut(solid, bores)
-    pb = eye.get("pivot_tube_bore")
-    if eye.get("pivot_tube", False) and pb is not None:  # a thinner wall between the eyes
-        span = xs[1] - xs[0] - L
-        solid, _ = occ.cut(solid, [(3, occ.addCylinder(xs[0] + L / 2, 0.0, 0.0, span, 0, 0,
-                                                       float(pb)))])
     occ.synchronize()
     vols = [e[1] for e in solid if e[0] == 3]
     if len(vols) != 1:
         raise RuntimeError(f"the arm CAD gave {len(vols)} volumes, expected 1")
-    if not fillet:
-        return {"volume": vols, "fillets": [], "root_curves": []}
-    # fillets: every curve in the web's planes z = +-t/2 (where ribs and bosses meet it)
-    r = float(sec["fillet"])
-    root_curves = []
-    tol = 1e-6  # OCC bounding boxes carry a gap of ~1e-7 m
-    for dim, tag in model.getBoundary([(3, vols[0])], combined=False, oriented=False):
-        for _, c in model.getBoundary([(dim, tag)], combined=False, oriented=False):
-            bb = model.getBoundingBox(1, abs(c))
-            if abs(bb[2] - t / 2) < tol and abs(bb[5] - t / 2) < tol or \
-                    abs(bb[2] + t / 2) < tol and abs(bb[5] + t / 2) < tol:
-                root_curves.append(abs(c))
-    from .features import SHARP_SHARE, edge_share
+    root_curves: list[int] = []
+    fillets: list[int] = []
+    if fillet:
+        # One fillet pass on the solid WITHOUT its bores: OpenCASCADE refuses a second pass
+        # (a fillet cannot end on a fillet face) and, with the bores cut first, returned an
+        # invalid solid (7.19 kg and a -3.00 kg shell: the pivot tube's bore filled; measured
+        # 2026-12-02, docs/parts.md). The bores are cut after, away from every fillet.
+        vols, root_curves, sharp_pts = _fillet_all(vols[0], sec)
+    solid, _ = occ.cut([(3, vols[0])], _bores(params, hp, xs))
+    occ.synchronize()
+    vols = [e[1] for e in solid if e[0] == 3]
+    if len(vols) != 1:
+        raise RuntimeError(f"the arm CAD gave {len(vols)} volumes after its bores, expected 1")
+    if fillet:
+        fillets = _fillet_faces(vols[0], sharp_pts)
+    return {"volume": vols, "fillets": fillets, "root_curves": root_curves}
 
-    root_curves = [c for c in sorted(set(root_curves))
-                   if edge_share(c, vols[0], 0.5e-3)[0] > SHARP_SHARE]
-    out = occ.fillet(vols, root_curves, [r])
+
+def _bores(params: dict[str, Any], hp: dict[str, np.ndarray],
+           xs: list[float]) -> list[tuple[int, int]]:
+    """The tools cutting the bores: the bushes' outer sleeves, the ball joint's cartridge and
+    (pivot tube) the thinner wall between the eyes, entered by 15-degree cones (a square step
+    there would be a sharp re-entrant edge, features.py; a 165-degree one is not)."""
+    from gmsh import model  # type: ignore[import-untyped]
+
+    occ = model.occ
+    sec, eye, bj = params["section"], params["bush_eye"], params["ball_joint"]
+    L, ro = float(eye["length"]), float(eye["outer_radius"])
+    b = hp["ball_joint"]
+    zmax = 0.5 * max(sec["rib_depth_root"], sec["rib_depth_tip"], 2 * ro, bj["depth"]) + 0.01
+    rb = float(eye["bore_radius"])
+    if eye.get("pivot_tube", False):
+        bores = [(3, occ.addCylinder(xs[0] - L / 2 - 0.01, 0.0, 0.0, xs[1] - xs[0] + L + 0.02,
+                                     0, 0, rb))]
+    else:
+        bores = [(3, occ.addCylinder(hp[n][0] - L / 2 - 0.01, hp[n][1], hp[n][2], L + 0.02,
+                                     0, 0, rb)) for n in ("bush_front", "bush_rear")]
+    bores.append((3, occ.addCylinder(b[0], b[1], -zmax, 0, 0, 2 * zmax, bj["bore_radius"])))
+    pb = eye.get("pivot_tube_bore")
+    if eye.get("pivot_tube", False) and pb is not None and float(pb) > rb:
+        pb = float(pb)
+        cone = (pb - rb) / math.tan(math.radians(15.0))
+        x0, x1 = xs[0] + L / 2, xs[1] - L / 2
+        bores.append((3, occ.addCylinder(x0 + cone, 0.0, 0.0, x1 - x0 - 2 * cone, 0, 0, pb)))
+        bores.append((3, occ.addCone(x0, 0.0, 0.0, cone, 0, 0, rb, pb)))
+        bores.append((3, occ.addCone(x1, 0.0, 0.0, -cone, 0, 0, rb, pb)))
+    return bores
+
+
+def _fillet_all(vol: int, sec: dict[str, Any]) -> tuple[list[int], list[int], np.ndarray]:
+    """Fillet every sharp re-entrant edge of ``vol`` in one OCC pass: the web roots (in the
+    web's planes z = +-t/2) at ``fillet``, the rest (ribs meeting the eye tubes and the
+    housing) at ``junction_fillet`` (default ``fillet``). Returns (volumes, root curves,
+    points [m] along every edge filleted, (k, 3): to find the fillet faces after the bores)."""
+    from gmsh import model  # type: ignore[import-untyped]
+
+    from .features import sharp_reentrant_edges
+
+    occ = model.occ
+    t, r = float(sec["web"]), float(sec["fillet"])
+    rj = float(sec.get("junction_fillet", r))
+    roots: list[int] = []
+    other: list[int] = []
+    pts: list[np.ndarray] = []
+    for e in sharp_reentrant_edges(vol):
+        z = e["points_m"][:, 2]
+        (roots if np.all(np.abs(np.abs(z) - t / 2) < 1e-6) else other).append(e["curve"])
+        pts.append(_dense_points(e["curve"]))
+    curves = roots + other
+    out = occ.fillet([vol], curves, [r] * len(roots) + [rj] * len(other))
     occ.synchronize()
     vols = [e[1] for e in out if e[0] == 3]
-    fillets = []
-    for _, s in model.getBoundary([(3, vols[0])], combined=False, oriented=False):
+    if len(vols) != 1 or occ.getMass(3, vols[0]) <= 0.0:
+        raise RuntimeError(f"the arm's fillet pass gave volumes {vols}: an invalid solid")
+    return vols, roots, np.vstack(pts) if pts else np.zeros((0, 3))
+
+
+def _dense_points(curve: int, n: int = 101) -> np.ndarray:
+    from gmsh import model  # type: ignore[import-untyped]
+
+    lo, hi = model.getParametrizationBounds(1, curve)
+    us = np.linspace(lo[0], hi[0], n)
+    return np.asarray(model.getValue(1, curve, list(us))).reshape(-1, 3)
+
+
+def _fillet_faces(vol: int, sharp_pts: np.ndarray) -> list[int]:
+    """The fillet faces of the filleted solid: its non-plane faces whose parametric centre
+    lies within 0.6 mm + the largest fillet radius of an edge filleted away (a 90-degree
+    fillet's mid-surface is 0.41 r from the edge it replaced)."""
+    from gmsh import model  # type: ignore[import-untyped]
+
+    if len(sharp_pts) == 0:
+        return []
+    out = []
+    for _, s in model.getBoundary([(3, vol)], combined=False, oriented=False):
         s = abs(s)
         if model.getType(2, s) == "Plane":
             continue
-        bb = model.getBoundingBox(2, s)
-        lo, hi = bb[2], bb[5]
-        if (lo >= t / 2 - tol and hi <= t / 2 + r + tol) or \
-                (hi <= -t / 2 + tol and lo >= -t / 2 - r - tol):
-            fillets.append(s)
-    return {"volume": vols, "fillets": fillets, "root_curves": root_curves}
+        lo, hi = model.getParametrizationBounds(2, s)
+        c = np.asarray(model.getValue(2, s, [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]))
+        d = np.min(np.linalg.norm(sharp_pts - c, axis=1))
+        if d < 0.006:
+            out.append(s)
+    return out
 
 
 def write_step(path: Path, params: dict[str, Any] | None = None) -> dict[str, list[int]]:
