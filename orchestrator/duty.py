@@ -57,6 +57,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 
 DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
@@ -86,15 +87,9 @@ def load_duty(path: str | Path) -> dict[str, Any]:
     except tomllib.TOMLDecodeError as exc:
         raise InputFileError(str(path), f"not valid TOML: {exc}") from None
     base = path.resolve().parent
-    for k in data:
-        if k not in ("duty", "events", "laws"):
-            raise ScenarioError(k, "(section)", "the sections [duty], [[events]] and [[laws]]")
+    ConfigReader(data, "", ("duty", "events", "laws"))  # a typo: "did you mean"
     duty = data.get("duty", {})
-    if not isinstance(duty, dict):
-        raise ScenarioError("duty", duty, "a table")
-    for k in duty:
-        if k not in DUTY_KEYS:
-            raise ScenarioError(f"duty.{k}", duty[k], "one of " + ", ".join(DUTY_KEYS))
+    ConfigReader(duty, "duty", DUTY_KEYS)
     name = duty.get("name", path.stem)
     if not isinstance(name, str) or not name or "/" in name:
         raise ScenarioError("duty.name", name, "a name without '/'")
@@ -134,11 +129,7 @@ def load_duty(path: str | Path) -> dict[str, Any]:
     out["events"] = []
     for i, ev in enumerate(events):
         q = f"events[{i}]"
-        if not isinstance(ev, dict):
-            raise ScenarioError(q, ev, "a table")
-        for k in ev:
-            if k not in EVENT_KEYS:
-                raise ScenarioError(f"{q}.{k}", ev[k], "one of " + ", ".join(EVENT_KEYS))
+        ConfigReader(ev, q, EVENT_KEYS)
         if ("scenario" in ev) == ("run" in ev):
             raise ScenarioError(f"{q}.scenario", ev.get("scenario"),
                                 "either scenario (a TOML to run) or run (a run folder)")
@@ -187,11 +178,7 @@ def _load_laws(laws: Any, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
     for i, law in enumerate(laws):
         q = f"laws[{i}]"
-        if not isinstance(law, dict):
-            raise ScenarioError(q, law, "a table")
-        for k in law:
-            if k not in LAW_KEYS:
-                raise ScenarioError(f"{q}.{k}", law[k], "one of " + ", ".join(LAW_KEYS))
+        ConfigReader(law, q, LAW_KEYS)
         name = law.get("name")
         if not isinstance(name, str) or not name or "/" in name or \
                 name in {x["name"] for x in out}:

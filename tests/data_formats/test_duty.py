@@ -142,7 +142,11 @@ def test_report_of_a_damaged_duty_folder_is_exit_2(tmp_path: Path, capsys) -> No
     ("[duty]\nscatter_band = 0.5\n[[events]]\nrun = '.'\nrepeats = 1\n", "duty.scatter_band"),
     ("[[events]]\nrun = '.'\nrepeats = -1\n", "events[0].repeats"),
     ("[[events]]\nrun = '.'\nrepeats = 1\ndistance_km = 2\n", "events[0].repeats"),
-    ("[[events]]\nrun = '.'\nrepeat = 1\n", "events[0].repeat"),
+    ("[[events]]\nrun = '.'\nrepeat = 1\n", "did you mean 'repeats'"),
+    ("[dutty]\n[[events]]\nrun = '.'\nrepeats = 1\n", "did you mean 'duty'"),
+    (f"[[events]]\nscenario = '{Path(__file__).resolve().parents[2]}/scenarios/"
+     "ch3_step_quarter_car.toml'\nrepeats = 1\n[[laws]]\nname = 'a'\nsett = []\n",
+     "did you mean 'set'"),
     ("[duty\n", "not valid TOML"),
 ])
 def test_bad_duty_file_exit_2_naming_the_key(tmp_path: Path, body: str, key: str,
