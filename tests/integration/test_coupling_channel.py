@@ -56,13 +56,16 @@ def tapped(tmp_path_factory) -> dict:
     seen: dict = {"out": out}
     try:
         bus.subscribe(keys.key(RUN_ID, *ch.COUPLING_CHANNEL), on)
+        # the scope too, by run id at the endpoint, before the run: started on the run folder
+        # once run.json was there, it joined a loaded CI machine's 2 s run after its end and
+        # never heard a message (both tests errored in the fixture)
+        scope, url = _start_scope(RUN_ID, "--connect", endpoint)
         proc = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
                               endpoint, "--set", f"run.t_end={T_END}", "--set",
                               f'run.id="{RUN_ID}"', "--set", 'run.coupling="hold"', "--set",
                               'run.exchange="parallel"')
         assert bus.wait_linked(60), "the test's session never reached the run"
         _wait_json(out / "run.json", proc)
-        scope, url = _start_scope(str(out))
         stdout, stderr = proc.communicate(timeout=240)
         assert proc.returncode == 0, stdout + stderr
         deadline = time.monotonic() + 5
