@@ -63,3 +63,15 @@ def node_pids(run_id: str, node: str) -> list[int]:
 @pytest.fixture
 def ch3_step() -> Path:
     return CH3_STEP
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """Name the threads still alive when the suite ends: one blocked in native code (a Zenoh
+    session's callback, a server) can abort the interpreter's exit (CI once ended rc 134,
+    SIGABRT, after its summary line), and this says whose it was."""
+    import threading
+
+    left = [t for t in threading.enumerate() if t is not threading.main_thread()]
+    if left:
+        names = ", ".join(f"{t.name}{' (daemon)' if t.daemon else ''}" for t in left)
+        print(f"\nthreads alive at the end of the suite: {names}", file=sys.stderr)
