@@ -230,3 +230,28 @@ def run_key_from_env(run_id: str, environ: Mapping[str, str] | None = None) -> b
                          f"orchestrator) or set {ENV_KEY_FILE} / {ENV_KEY} to the secret "
                          "the orchestrator uses")
     return derive_run_key(secret, run_id)
+
+
+def served_scenario(key: str, raw: bytes, auth: RunKey | None
+                    ) -> tuple[dict[str, Any], bytes | None]:
+    """The resolved scenario a node fetched from the orchestrator's queryable on ``key``, and
+    the run instance's nonce it announces (None without a run key). Only a reply signed with
+    the run's key (unbound: the node does not know the nonce yet) counts. Raises
+    :class:`WireError` naming what is wrong: a bad signature, not a scenario, no nonce."""
+    from .wire import decode
+
+    msg = decode(auth.unbound().verify(key, raw) if auth else raw)
+    if msg.kind != "start" or not isinstance(msg.d.get("run"), dict):
+        raise WireError("not a scenario")
+    scenario = dict(msg.d)
+    session = scenario.pop(SESSION_FIELD, None)
+    if auth is None:
+        return scenario, None
+    try:
+        nonce = bytes.fromhex(session) if isinstance(session, str) else b""
+    except ValueError:
+        nonce = b""
+    if len(nonce) != NONCE_BYTES:
+        raise WireError(f"the scenario announces no run nonce ('{SESSION_FIELD}': "
+                        f"{session!r:.40})")
+    return scenario, nonce

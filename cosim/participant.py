@@ -40,7 +40,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from . import keys
-from .auth import NONCE_BYTES, SESSION_FIELD, RunKey
+from .auth import RunKey, served_scenario
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import InputLate, RunError, WireError
@@ -241,25 +241,11 @@ class Participant:
         while time.monotonic() < deadline:
             for raw in self.bus.query_all(key, timeout=1.0):
                 try:
-                    body = self.auth.unbound().verify(key, raw) if self.auth else raw
-                    msg = decode(body)
+                    scenario, nonce = served_scenario(key, raw, self.auth)
                 except WireError as exc:
                     self.reject(tag, str(exc))
                     continue
-                if msg.kind != "start" or not isinstance(msg.d.get("run"), dict):
-                    self.reject(tag, "not a scenario")
-                    continue
-                scenario = dict(msg.d)
-                session = scenario.pop(SESSION_FIELD, None)
-                if self.auth is not None:
-                    try:
-                        nonce = bytes.fromhex(session) if isinstance(session, str) else b""
-                        if len(nonce) != NONCE_BYTES:
-                            raise ValueError
-                    except ValueError:
-                        self.reject(tag, f"the scenario announces no run nonce "
-                                         f"('{SESSION_FIELD}': {session!r:.40})")
-                        continue
+                if nonce is not None:
                     self.bind(nonce)
                 return scenario
             time.sleep(0.1)
