@@ -31,6 +31,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .errors import SuscosimError
+
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
 MAGIC = b"SUSCKPT1"
@@ -38,15 +40,17 @@ EXIT_CODE = 2
 _STEP_DIR = re.compile(r"^k(\d{6,})$")
 
 
-class CheckpointError(RuntimeError):
-    """A checkpoint that cannot be used; ``exit_code`` is what ``suscosim run --resume`` exits."""
+class CheckpointError(SuscosimError):
+    """A checkpoint that cannot be used or made; ``exit_code`` is what ``suscosim run
+    --resume`` exits (and a node that cannot checkpoint what the scenario asks)."""
 
     exit_code = EXIT_CODE
 
 
 @dataclass(frozen=True)
 class Checkpoint:
-    """A complete checkpoint: step boundary ``k`` (after step k), time ``t`` [s], its folder."""
+    """A complete checkpoint at step boundary ``k`` (the start of step k: steps 0..k-1 done),
+    time ``t`` = k h [s], its folder."""
 
     k: int
     t: float
@@ -54,8 +58,17 @@ class Checkpoint:
     manifest: dict[str, Any]
 
 
+RESUME_KEY = "resume"
+"""``run.resume``: where a resumed or forked run starts (set by the orchestrator, never by a
+user: :mod:`cosim.run_checkpoint`); not part of what a checkpoint's scenario hash covers."""
+
+
 def scenario_sha256(scenario: dict[str, Any]) -> str:
-    """The SHA-256 of the resolved scenario's canonical JSON (sorted keys, no spaces)."""
+    """The SHA-256 of the resolved scenario's canonical JSON (sorted keys, no spaces), without
+    ``run.resume`` (a resumed run is the same scenario as the run it continues)."""
+    run = scenario.get("run")
+    if isinstance(run, dict) and RESUME_KEY in run:
+        scenario = {**scenario, "run": {k: v for k, v in run.items() if k != RESUME_KEY}}
     text = json.dumps(scenario, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -179,8 +192,19 @@ def load_for_resume(run_dir: Path, scenario: dict[str, Any],
     return ck
 
 
+def read_checkpoint(folder: Path) -> Checkpoint:
+    """The complete checkpoint in ``folder`` (its manifest read); CheckpointError if none."""
+    folder = Path(folder)
+    try:
+        doc = json.loads((folder / MANIFEST).read_text())
+        return Checkpoint(int(doc["k"]), float(doc["t"]), folder, doc)
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise CheckpointError(f"{folder}: not a complete checkpoint ({exc})") from None
+
+
 def checkpoint_steps(every_s: float, h: float, n_steps: int) -> list[int]:
-    """The step boundaries k (a checkpoint after step k, at t = k h [s]) of
+    """The step boundaries k (a checkpoint at the start of step k, t = k h [s]: steps 0..k-1
+    are done, a resumed run starts with step k) of
     ``run.checkpoint_every_s`` = ``every_s`` [s]: every round(every_s / h) steps, the last
     step excluded (the run's end is its own result). Every node computes the same list from
     the scenario alone, so the boundary needs no negotiation; the clock's checkpoint message

@@ -7,21 +7,23 @@ is a :class:`WireError` (rejected and counted) and never a crash of the orchestr
 node. :func:`check_start` also checks that a ``start`` is plausible: it must be the run the
 node fetched (same number of steps and step size), with a table of facts for every node.
 
-=========  ======================================================================  ========
-kind       fields (payload ``d``)                                                  from
-=========  ======================================================================  ========
-ready      ``info``: map (``outputs``: list of str, the rest the node's facts)     node
-waiting    ``missing``: list of str (inputs not heard yet)                         node
-progress   ``rejected``: int >= 0 (messages this node rejected so far)             node
-done       ``rejected``: int >= 0; recorder: ``rows`` int >= 0, ``files`` map      node
-           str -> str, ``stats`` map, ``torn`` bool, ``undecodable`` int >= 0;
-           fatigue: ``files`` str (its folder)
-error      ``message``: str; ``exit_code``: 1 or 2; ``late``: list of str (the    node
-           nodes whose input did not come, when that is the error)
-start      ``n_steps``: int >= 1, ``h``: number > 0 [s], ``info``: map node -> map  clock
-abort      ``reason``: str                                                         clock
-done       (nothing)                                                               clock
-=========  ======================================================================  ========
+==========  ======================================================================  ========
+kind        fields (payload ``d``)                                                  from
+==========  ======================================================================  ========
+ready       ``info``: map (``outputs``: list of str, the rest the node's facts)     node
+waiting     ``missing``: list of str (inputs not heard yet)                         node
+progress    ``rejected``: int >= 0 (messages this node rejected so far)             node
+done        ``rejected``: int >= 0; recorder: ``rows`` int >= 0, ``files`` map      node
+            str -> str, ``stats`` map, ``torn`` bool, ``undecodable`` int >= 0;
+            fatigue: ``files`` str (its folder)
+checkpoint  ``file``: str (``<node>.ckpt``), ``sha256``: 64 hex digits, ``bytes``:    node
+            int >= 0: the node wrote its state at boundary k (cosim.run_checkpoint)
+error       ``message``: str; ``exit_code``: 1 or 2; ``late``: list of str (the    node
+            nodes whose input did not come, when that is the error)
+start       ``n_steps``: int >= 1, ``h``: number > 0 [s], ``info``: map node -> map  clock
+abort       ``reason``: str                                                         clock
+done        (nothing)                                                               clock
+==========  ======================================================================  ========
 """
 
 from __future__ import annotations
@@ -81,6 +83,14 @@ def check_node_control(kind: str, d: Mapping[str, Any]) -> None:
                 raise WireError(f"{kind}: field 'files' is not a map of strings")
         if "torn" in d and type(d["torn"]) is not bool:
             raise WireError(f"{kind}: field 'torn'={d['torn']!r:.40} is not a boolean")
+    elif kind == "checkpoint":
+        if type(d.get("file")) is not str or not d["file"].endswith(".ckpt"):
+            raise WireError(f"{kind}: field 'file'={d.get('file')!r:.40} is not a .ckpt name")
+        sha = d.get("sha256")
+        if type(sha) is not str or len(sha) != 64 or any(c not in "0123456789abcdef"
+                                                          for c in sha):
+            raise WireError(f"{kind}: field 'sha256'={sha!r:.40} is not 64 hex digits")
+        _int(d, "bytes", kind, required=True)
     elif kind == "error":
         if type(d.get("message")) is not str:
             raise WireError(f"{kind}: field 'message' is not a string")

@@ -113,6 +113,11 @@ class JournalWriter:
         self._buf.clear()
         self._buf_bytes = 0
 
+    def sync(self) -> None:
+        """Flush, then fsync: what was appended is on the disk (a checkpoint's boundary)."""
+        self.flush()
+        os.fsync(self._fd)
+
     def close(self) -> None:
         if self._fd >= 0:
             self.flush()

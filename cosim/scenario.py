@@ -82,12 +82,16 @@ RUN_KEYS: dict[str, Key] = {
                            doc="a node that makes no progress this long ends the run [s]"),
     "start_timeout_s": Key(float, 60.0, positive=True, high=3600.0,
                            doc="how long to wait for every node to be ready [s]"),
+    "checkpoint_every_s": Key(float, 0.0, low=0.0, high=1e6,
+                              doc="save every node's whole state this often (simulated s; "
+                                  "a whole number of steps) for suscosim run --resume / "
+                                  "--fork; 0 = never"),
     "rtol": Key(float, 1e-10, positive=True, low=1e-14, high=1e-2,
                 doc="reference mode: solve_ivp relative tolerance"),
 }
 
 
-RESOLVED_RUN_KEYS = ("dir", "n_steps", "nodes", "t_end_source")
+RESOLVED_RUN_KEYS = ("dir", "n_steps", "nodes", "t_end_source", "resume")
 """Keys the orchestrator adds when it resolves a scenario (not for users to set)."""
 
 

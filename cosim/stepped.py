@@ -38,8 +38,10 @@ import numpy as np
 
 from . import node_kinds as nk
 from . import schema
+from .checkpoint import CheckpointError
 from .errors import RunError
 from .participant import Participant
+from .run_checkpoint import NodeCheckpoints
 from .run_settings import LAGGED, RunSettings
 from .wire import Message
 
@@ -120,20 +122,45 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
                         required=wanted.get(f"{node}/{channel}", schema.required(node, channel)))
             for node, channel in nk.inputs(name)]
     names = {tag: f"{tag[0]}/{tag[1]}" for tag in tags}
+    plan = NodeCheckpoints.of(scenario, name)
+    part.start_at(plan.start_k)
     start = part.handshake(timeout_s=settings.start_timeout_s)
     n = int(start["n_steps"])
     h = settings.h
     node = cls(scenario, start)
     try:
-        for k in range(n + 1):
+        _check_can_checkpoint(node, plan, name)
+        state = plan.restored()
+        if state is not None:
+            node.restore_state(state)
+        for k in range(plan.start_k, n + 1):
             t = k * h
             msgs = part.wait(settings.needs(tags, k))
             inputs = {names[tag]: Fields(m) for tag, m in msgs.items()}
             for channel, fields in outputs(node.step(k, t, inputs), k).items():
                 part.publish(channel, k, t, fields)
             part.progress(k, t)
+            if k + 1 in plan.due:  # the state at the start of step k + 1
+                part.flush_records()
+                plan.save(part, k + 1, node.checkpoint_state())
     finally:
         close = getattr(node, "close", None)
         if callable(close):
             close()
     part.finish(n, n * h)
+
+
+def _check_can_checkpoint(node: Any, plan: NodeCheckpoints, name: str) -> None:
+    """A run that saves or resumes checkpoints needs a node that can: CheckpointError (exit
+    2) before the first step otherwise, naming why (never a run that fails at its first
+    checkpoint, or resumes wrong)."""
+    if not plan.due and not plan.resuming:
+        return
+    if not callable(getattr(node, "checkpoint_state", None)) \
+            or not callable(getattr(node, "restore_state", None)):
+        raise CheckpointError(f"{name}: the node class {type(node).__name__} has no "
+                              "checkpoint_state/restore_state (set run.checkpoint_every_s = 0)")
+    refusal = getattr(node, "checkpoint_refusal", None)
+    why = refusal() if callable(refusal) else None
+    if why:
+        raise CheckpointError(f"{name}: {why}")

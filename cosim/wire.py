@@ -35,7 +35,9 @@ ignore ``s``; nodes and the orchestrator check it first with
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 from collections.abc import Mapping
 from typing import Annotated, Any, NamedTuple, cast
 
@@ -51,7 +53,8 @@ MAX_MESSAGE_BYTES = 48 * 1024
 """Largest message a node publishes [bytes]. Zenoh's low-latency transport (the embedded
 default) does not fragment: a message must fit one 64 KiB batch with its headers, or it is
 dropped. Data messages are far smaller; batches (records, load blocks) are cut to fit."""
-CONTROL_KINDS = ("hello", "ready", "waiting", "start", "progress", "done", "abort", "error")
+CONTROL_KINDS = ("hello", "ready", "waiting", "start", "progress", "done", "abort", "error",
+                 "checkpoint")
 KINDS = frozenset({"data", "records", *CONTROL_KINDS})
 
 
@@ -133,9 +136,8 @@ _KIND_OF.update({c: kind for c, kind in zip(_CONTROL, CONTROL_KINDS, strict=True
 
 def _decoder(data: Any) -> msgspec.msgpack.Decoder[Any]:
     _KIND_OF[data] = "data"
-    return msgspec.msgpack.Decoder(data | _Records | _CONTROL[0] | _CONTROL[1]
-                                   | _CONTROL[2] | _CONTROL[3] | _CONTROL[4] | _CONTROL[5]
-                                   | _CONTROL[6] | _CONTROL[7])
+    union = functools.reduce(operator.or_, _CONTROL, data | _Records)  # every kind's struct
+    return msgspec.msgpack.Decoder(union)
 
 
 _GENERIC = _decoder(_data_struct("_Data", _RawPayload, _Step, _Finite))

@@ -77,7 +77,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     # the nodes are told to abort and summary.json says "failed: interrupted"
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
 
-    scenario = _resolved(args)
+    if not (args.scenario or args.resume or args.fork):
+        from cosim.errors import ScenarioError
+
+        raise ScenarioError("scenario", None, "a scenario TOML file (or --resume RUN_DIR, "
+                            "--fork RUN_DIR@T)")
+    scenario = _continued(args) if args.resume or args.fork else _resolved(args)
     print(f"suscosim: run {scenario['run']['id']} -> {scenario['run']['dir']}", flush=True)
     summary = run_scenario(scenario, connect=args.connect, external=args.external,
                            quiet=args.quiet, zenoh_config_file=args.zenoh_config,
@@ -85,6 +90,41 @@ def cmd_run(args: argparse.Namespace) -> int:
     _print_summary(summary)
     print(f"  summary: {Path(scenario['run']['dir']) / 'summary.json'}")
     return 0
+
+
+def _continued(args: argparse.Namespace) -> dict:
+    """The scenario of ``run --resume RUN_DIR`` or ``run --fork RUN_DIR@T`` (issue #29,
+    :mod:`orchestrator.resume`)."""
+    from cosim.errors import ScenarioError
+
+    from . import resume as rs
+    from .runner import resolve
+
+    if args.resume and args.fork:
+        raise ScenarioError("--resume", args.resume, "either --resume or --fork, not both")
+    if args.scenario:
+        raise ScenarioError("scenario", args.scenario, "no scenario file with --resume or "
+                            "--fork: the run folder's scenario.json is the scenario")
+    if args.resume:
+        if args.set or args.mode or args.out:
+            raise ScenarioError("--set" if args.set else "--mode" if args.mode else "--out",
+                                args.set or args.mode or args.out,
+                                "nothing with --resume (it runs the same scenario in the "
+                                "same folder; --fork RUN_DIR@T --set ... changes settings)")
+        scenario, ck = rs.resume_scenario(args.resume)
+        print(f"suscosim: resuming {args.resume} from its checkpoint at step {ck.k} "
+              f"(t = {ck.t:g} s)", flush=True)
+        return scenario
+    overrides = list(args.set or [])
+    if args.mode:
+        overrides.append(f'run.mode="{args.mode}"')
+    scenario, ck, changed = rs.fork_scenario(args.fork, overrides,
+                                             getattr(args, "out", None), resolve)
+    fresh = scenario["run"]["resume"]["fresh"]
+    print(f"suscosim: fork of {args.fork} at step {ck.k} (t = {ck.t:g} s); changed: "
+          f"{', '.join(changed) or 'nothing'}"
+          + (f"; starting afresh: {', '.join(fresh)}" if fresh else ""), flush=True)
+    return scenario
 
 
 def _resolved(args: argparse.Namespace) -> dict:
@@ -194,9 +234,13 @@ def _grouped_help(helps: dict[str, str]) -> str:
     return "\n".join(out)
 
 
-def _add_scenario_arguments(p: argparse.ArgumentParser) -> None:
+def _add_scenario_arguments(p: argparse.ArgumentParser, optional: bool = False) -> None:
     """``run``'s and ``check``'s: the scenario, ``--set`` and ``--mode``."""
-    p.add_argument("scenario", help="scenario TOML file")
+    if optional:  # run --resume / --fork take the run folder's scenario
+        p.add_argument("scenario", nargs="?", help="scenario TOML file (none with --resume "
+                                                   "or --fork)")
+    else:
+        p.add_argument("scenario", help="scenario TOML file")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a scenario value (TOML), e.g. --set run.h=0.002; a whole "
                         "table: --set 'controller={law=\"skyhook\", c_sky=2500.0}'")
@@ -217,8 +261,15 @@ def build_parser() -> argparse.ArgumentParser:
         return sub.add_parser(name, description=text, **kw)  # type: ignore[arg-type]
 
     r = add("run", "run a scenario")
-    _add_scenario_arguments(r)
+    _add_scenario_arguments(r, optional=True)
     r.add_argument("--out", help="run folder (default runs/<run id>)")
+    r.add_argument("--resume", metavar="RUN_DIR",
+                   help="continue a run that was stopped from its last complete checkpoint "
+                        "(run.checkpoint_every_s): same scenario, same folder; the results "
+                        "equal the uninterrupted run's")
+    r.add_argument("--fork", metavar="RUN_DIR@T",
+                   help="a new run from the checkpoint of RUN_DIR at T [s], with --set "
+                        "applied (the control may change; vehicle, tyre, road and step not)")
     zo.add_connect_argument(r, "Zenoh router endpoint (default: embedded peer mode on loopback)",
                             metavar=None)
     zo.add_listen_argument(r, "endpoint the orchestrator listens on (default: a free loopback "

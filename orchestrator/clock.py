@@ -25,14 +25,17 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from cosim import channels as ch
 from cosim import keys
 from cosim.auth import SESSION_FIELD, RunKey
 from cosim.bus import Bus
+from cosim.checkpoint import CheckpointError, write_manifest
 from cosim.control import check_node_control
 from cosim.errors import RunError, ScenarioError, WireError
+from cosim.run_checkpoint import NodeCheckpoints
 from cosim.wire import decode, encode
 
 START_PERIOD_S = 0.05
@@ -88,6 +91,12 @@ class Clock:
         self.check_processes = check_processes or (lambda: None)
         self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
         self.rejected = 0
+        plan = NodeCheckpoints.of(scenario, keys.ORCHESTRATOR) if "dir" in scenario["run"] \
+            else None
+        self._ckpt_due = plan.due if plan is not None else frozenset()
+        self._ckpt_entries: dict[int, dict[str, dict[str, Any]]] = {}
+        self.checkpoints: list[int] = []
+        """The checkpoints this run completed (their manifests written), in order."""
         clock_key = keys.key(run, keys.ORCHESTRATOR, keys.CLOCK)
         pub = bus.publisher(clock_key)
         sign = auth.signer(clock_key) if auth else (lambda raw: raw)
@@ -168,6 +177,9 @@ class Clock:
                 check_node_control(msg.kind, msg.d)
                 if msg.k > self.n_steps or (msg.kind == "done" and msg.k != self.n_steps):
                     raise WireError(f"implausible {msg.kind} at step {msg.k} of {self.n_steps}")
+                if msg.kind == "checkpoint" and (msg.k not in self._ckpt_due
+                                                 or msg.d["file"] != f"{node}.ckpt"):
+                    raise WireError(f"implausible checkpoint {msg.d['file']!r} at step {msg.k}")
             except WireError as exc:
                 self.rejected += 1
                 if self.rejected <= 10 or self.rejected % 1000 == 0:
@@ -189,6 +201,8 @@ class Clock:
             elif msg.kind == "done":
                 st.done, st.k, st.result = True, msg.k, dict(msg.d)
                 st.done_at = st.done_at or now
+            elif msg.kind == "checkpoint":
+                self._checkpointed(node, msg.k, msg.d)
             elif msg.kind == "error":
                 code = msg.d.get("exit_code", 1)
                 late = [n for n in msg.d.get("late", []) if n in self.status and n != node]
@@ -202,6 +216,23 @@ class Clock:
                 self._tick()
             if time.monotonic() >= end:
                 return
+
+    def _checkpointed(self, node: str, k: int, entry: dict[str, Any]) -> None:
+        """A node wrote its state at boundary ``k``: once every node has, the manifest makes
+        the checkpoint complete (:mod:`cosim.run_checkpoint`). A manifest that cannot be
+        written is said, and the run goes on (the previous checkpoint stays the last)."""
+        got = self._ckpt_entries.setdefault(k, {})
+        got[node] = {f: entry[f] for f in ("file", "sha256", "bytes")}
+        if len(got) < len(self.status):
+            return
+        del self._ckpt_entries[k]
+        try:
+            run = self.scenario["run"]
+            write_manifest(Path(run["dir"]), k, k * float(run["h"]), self.scenario, got)
+        except (OSError, CheckpointError) as exc:
+            print(f"suscosim: warning: checkpoint k={k} not completed: {exc}", file=sys.stderr)
+            return
+        self.checkpoints.append(k)
 
     def _tick(self) -> None:
         now = self._last_tick = time.monotonic()

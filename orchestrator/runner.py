@@ -62,6 +62,14 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
         run["t_end"], run["t_end_source"] = float(duration), "road length / speed"
     run["n_steps"] = sc.n_steps(run["t_end"], run["h"])
     run["t_end"] = run["n_steps"] * run["h"]  # what is simulated: a whole number of steps
+    if run.get("checkpoint_every_s"):  # a whole number of steps, else ScenarioError
+        from cosim.checkpoint import checkpoint_steps
+
+        try:
+            checkpoint_steps(run["checkpoint_every_s"], run["h"], run["n_steps"])
+        except ValueError as exc:
+            raise ScenarioError("run.checkpoint_every_s", run["checkpoint_every_s"],
+                                str(exc)) from None
     run["id"] = run["id"] or new_run_id(run["name"])
     run["dir"] = str(Path(out) if out else Path("runs") / run["id"])
     run["nodes"] = nodes

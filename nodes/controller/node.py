@@ -38,12 +38,35 @@ class Controller:
         self.plant = start["info"][ch.PLANT]
         self.law = build_controller(scenario["controller"], int(self.plant["n_corners"]),
                                     scenario["run"]["h"])
+        self._restore: dict[str, Any] | None = None
+
+    # ---- checkpoints (issue #29; the shell calls these, cosim.stepped) -------------------
+    def checkpoint_refusal(self) -> str | None:
+        """Why this law's state cannot be checkpointed (an FMU without FMI state
+        serialisation), or None."""
+        plan = getattr(self.law, "plan", None)
+        refusal = getattr(plan, "checkpoint_refusal", None)
+        return refusal() if callable(refusal) else None
+
+    def checkpoint_state(self) -> dict[str, Any]:
+        """The law's whole state at a step boundary (:meth:`ControlLaw.checkpoint_state`);
+        one not yet put back (a checkpoint taken before the first step after a resume) is
+        the state still pending."""
+        return self._restore if self._restore is not None else self.law.checkpoint_state()
+
+    def restore_state(self, state: dict[str, Any]) -> None:
+        """Continue from :meth:`checkpoint_state`: put back at the next step, which gives
+        the time and the plant's state a law that must start something (an FMU) needs."""
+        self._restore = state
 
     def step(self, k: int, t: float, inputs: Mapping[str, Mapping[str, np.ndarray]]
              ) -> dict[str, Any]:
         """F_d, c_eff and the law's extras of step k from the plant's state."""
         values = inputs[STATE]
         law = self.law
+        if self._restore is not None:
+            law.restore_state(self._restore, t, values)
+            self._restore = None
         if law.velocity == "damper" and "v_damper" not in values:
             model = self.plant.get("model", "?")
             raise RunError(f"controller.velocity = 'damper' but the plant model '{model}' "

@@ -26,6 +26,7 @@ from cosim.errors import RunError, ScenarioError
 from cosim.listener import Listener, Received
 from cosim.load_blocks import StepBlocks
 from cosim.participant import Participant
+from cosim.run_checkpoint import NodeCheckpoints
 
 from .config import FatigueConfig
 from .run_dir import track_length, write_results
@@ -62,6 +63,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     live: LiveFatigue | None = None
     next_k = 0
     t_last = 0.0
+    plan = NodeCheckpoints.of(scenario, part.node)
+    saved = plan.restored()
+    if saved is not None:  # a resumed run: the engine after load step start_k - 1
+        live, steps, next_k, t_last = (saved["live"], saved["steps"], saved["next_k"],
+                                       saved["t_last"])
+        if next_k != plan.start_k:
+            raise RunError(f"fatigue: its checkpoint holds load steps < {next_k}, the run "
+                           f"resumes at {plan.start_k}")
     last_input = time.monotonic()
     last_report = 0.0
     while next_k <= n_steps:
@@ -91,6 +100,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                     last_report = now
                     # residue closed: what the life would be if the run ended here
                     _report(part, live.result(), k, t_last, L * next_k / (n_steps + 1))
+            if next_k in plan.due:  # load steps < next_k taken: the engine and its buffer
+                plan.save(part, next_k, {"live": live, "steps": steps, "next_k": next_k,
+                                         "t_last": t_last})
         if now - last_input > max(30.0, 6.0 * part.stall_timeout_s):  # orchestrator gone too
             raise RunError(f"fatigue: no load step from the plant after step {next_k - 1}")
     assert live is not None

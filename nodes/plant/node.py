@@ -21,6 +21,7 @@ from typing import Any, cast
 from cosim import channels as ch
 from cosim import node_kinds as nk
 from cosim.participant import Participant
+from cosim.run_checkpoint import NodeCheckpoints
 from cosim.run_settings import RunSettings
 
 from .coupling import StepInputs, substep_forces
@@ -41,13 +42,22 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                    for node, fields in nk.force_sources()]
         provides = dict(nk.force_sources())
         info = dict(model.info(), outputs=outputs)
+        plan = NodeCheckpoints.of(scenario, ch.PLANT)
+        part.start_at(plan.start_k)
         start = part.handshake(info=info, timeout_s=settings.start_timeout_s)
         n = int(start["n_steps"])
         dt = h / n_sub
         before: StepInputs | None = None
         later: list[tuple[str, int, float, dict]] = []
         prev = st = model.state()
-        for k in range(n + 1):
+        saved = plan.restored()
+        if saved is not None:  # a resumed run: the state at the start of step start_k
+            model.restore_state(saved["model"])
+            before, prev, st = saved["before"], saved["prev"], saved["st"]
+            if lag:  # the force nodes compute step start_k from the state of the step before
+                part.publish(ch.STATE, plan.start_k - 1, (plan.start_k - 1) * h, prev,
+                             record=False)
+        for k in range(plan.start_k, n + 1):
             t = k * h
             seen = prev if lag else st  # what the force nodes computed this step's forces from
             part.publish(ch.STATE, k, t, st)
@@ -94,6 +104,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 model.substep(dt, F_t, F_d)
                 cur = model.state()
             before, prev, st = now, st, cur  # cur: the state at t_{k+1}
+            if k + 1 in plan.due:  # checkpoint k + 1: steps <= k sent, then the state
+                for name, kk, tt, values in later:
+                    part.publish(name, kk, tt, values)
+                later.clear()
+                part.flush_records()
+                plan.save(part, k + 1, {"model": model.checkpoint_state(), "before": before,
+                                        "prev": prev, "st": st})
         part.finish(n, n * h)
     finally:
         model.close()

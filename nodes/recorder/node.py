@@ -49,6 +49,7 @@ from cosim.errors import RunError, WireError
 from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
 from cosim.participant import Participant
+from cosim.run_checkpoint import NodeCheckpoints
 from cosim.table_writer import TableWriter, table_of_journal
 from cosim.wire import Message, decode
 
@@ -88,7 +89,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     run_cfg = scenario["run"]
     folder = Path(run_cfg["dir"])
     journal_path = folder / "journal.msgpack"
+    plan = NodeCheckpoints.of(scenario, part.node)
+    if plan.resuming and (plan.journal is None or plan.journal.resolve() ==
+                          journal_path.resolve()):
+        raise RunError(f"recorder: a resumed run needs the old journal set aside "
+                       f"(run.resume.journal = {plan.journal}), not {journal_path}")
     journal = JournalWriter(journal_path, part.run)
+    ckpt_due = sorted(plan.due)
     warm = threading.Thread(target=_import_pyarrow, name="pyarrow-import", daemon=True)
     warm.start()  # the table's first row group needs it; importing takes seconds when loaded
     producers = [n for n in run_cfg["nodes"] if n in nk.producers() and n != part.node]
@@ -170,6 +177,37 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     def done_k() -> int:
         return min(got[c].count for c in expected) - 1
 
+    def replay_journal(path: Path, before_k: int) -> None:
+        """A resumed run (:mod:`cosim.run_checkpoint`): the old journal's records of the
+        steps < ``before_k``, in their order, through :func:`record` like live ones (the
+        journal, the table and the residual are functions of that sequence)."""
+        try:
+            for i, (name, raw) in enumerate(JournalReader(path)):
+                if i % 512 == 0:
+                    part.progress(-1, 0.0)  # (rate-limited) alive while it replays
+                node, _, channel = name.partition("/")
+                try:
+                    msg = decode(raw)
+                except WireError:
+                    continue  # it was journaled valid: a damaged record (counted by its reader)
+                if msg.kind == "data" and 0 <= msg.k < before_k:
+                    record(node, channel, raw, msg)
+        except OSError as exc:
+            raise RunError(f"recorder: cannot read the journal {path} the run resumes "
+                           f"from: {exc.strerror or exc}") from None
+        missing = sorted(c for c in expected if got[c].count < before_k)
+        if missing:
+            raise RunError(f"recorder: the journal {path} lacks steps < {before_k} of "
+                           f"{', '.join(missing)}: the run cannot resume from it")
+
+    def checkpoint(k: int) -> None:
+        """The checkpoints due once every step <= ``k`` is in the journal, on the disk."""
+        while ckpt_due and ckpt_due[0] - 1 <= k:
+            boundary = ckpt_due.pop(0)
+            journal.sync()
+            plan.save(part, boundary, {"journal": journal_path.name,
+                                       "records": journal.records})
+
     last_flush = last_data = last_live = time.monotonic()
     try:
         while True:
@@ -195,6 +233,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 if expected:
                     table = TableWriter(expected, folder)
                     live = _live_residual(run_cfg, expected)
+                    if plan.resuming and plan.journal is not None:
+                        replay_journal(plan.journal, plan.start_k)
                 for node, channel, raw, msg in early:
                     record(node, channel, raw, msg)
                 early.clear()
@@ -205,6 +245,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             last_data = time.monotonic()
             if n_steps is not None and expected:
                 k = done_k()
+                checkpoint(k)
                 part.progress(k, k * run_cfg["h"])
                 if k >= n_steps:
                     break

@@ -1,0 +1,117 @@
+"""What a node's shell does about checkpoints in one run (issue #29 items 4-5): when to save,
+where it starts, and the state it starts from. The storage is :mod:`cosim.checkpoint`.
+
+A checkpoint ``k`` is the state of the run at the **start of step k** (t = k h [s]): every
+step < k is done, published and recorded; a resumed (or forked) run starts with step k. The
+steps are ``run.checkpoint_every_s`` apart (:func:`cosim.checkpoint.checkpoint_steps`): every
+node computes the same list from the scenario, so nobody negotiates a boundary. At each one a
+node
+
+1. sends what it still holds for the steps < k (a producer: its records batch, the plant its
+   last response and loads, which it otherwise sends during the next step),
+2. writes its whole state to ``RUN_DIR/checkpoints/k<k>/<node>.ckpt`` (atomically),
+3. tells the clock (``checkpoint`` on its control key: the file, its SHA-256 and size), and
+   goes on without waiting: the clock writes the manifest, which makes the checkpoint
+   complete, once every node of the run has said so (:class:`orchestrator.clock.Clock`).
+
+Every node therefore needs the run folder (the recorder writes its journal there already; a
+node on another machine needs it mounted at the same path: README, design).
+
+The listening nodes save when what they hold reaches the boundary: the recorder once every
+channel has every step < k in its journal, flushed and fsynced (its state is the journal: a
+resumed recorder journals and tabulates the old journal's records of the steps < k again, in
+their order, through the same code as live ones, then takes the live steps >= k); the fatigue
+node once it has taken load step k - 1 (its whole engine, pickled).
+
+``run.resume`` (set by ``suscosim run --resume`` / ``--fork``, never by a user) says where a
+run starts: ``{"k", "t", "folder": the checkpoint's folder, "journal": the journal holding
+the steps < k, "fresh": nodes that start afresh instead (a fork's changed controller)}``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+from .checkpoint import (
+    RESUME_KEY,
+    CheckpointError,
+    checkpoint_steps,
+    read_checkpoint,
+    read_node_state,
+    write_node_state,
+)
+from .errors import ScenarioError
+
+
+class _Ctl(Protocol):
+    def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: Any) -> None: ...
+
+
+@dataclass(frozen=True)
+class NodeCheckpoints:
+    """One node's checkpoint plan in a run (from the resolved scenario)."""
+
+    node: str
+    run_dir: Path
+    h: float
+    """Communication step [s]."""
+    due: frozenset[int]
+    """The boundaries k at which this run saves (none: checkpoints off)."""
+    start_k: int = 0
+    """The step this run starts with (0, or the checkpoint's k of a resume or fork)."""
+    resume_folder: Path | None = None
+    journal: Path | None = None
+    """The journal that holds the steps < :attr:`start_k` (the recorder's, on a resume)."""
+    fresh: bool = False
+    """This node starts afresh at :attr:`start_k` (a fork changed its settings)."""
+
+    @classmethod
+    def of(cls, scenario: dict[str, Any], node: str) -> NodeCheckpoints:
+        """The plan of ``node`` in the resolved ``scenario``; ScenarioError for a
+        ``run.checkpoint_every_s`` that is not a whole number of steps."""
+        run = scenario["run"]
+        h = float(run["h"])
+        every = float(run.get("checkpoint_every_s", 0.0) or 0.0)
+        n = int(run["n_steps"])
+        due: frozenset[int] = frozenset()
+        if every > 0:
+            try:
+                due = frozenset(checkpoint_steps(every, h, n))
+            except ValueError as exc:
+                raise ScenarioError("run.checkpoint_every_s", every, str(exc)) from None
+        res = run.get(RESUME_KEY) or {}
+        if not res:
+            return cls(node, Path(run["dir"]), h, due)
+        k = int(res["k"])
+        if not 0 < k <= n:
+            raise ScenarioError("run.resume.k", k, f"a step of the run (1..{n})")
+        return cls(node, Path(run["dir"]), h, frozenset(j for j in due if j > k), k,
+                   Path(res["folder"]), Path(res["journal"]) if res.get("journal") else None,
+                   node in res.get("fresh", ()))
+
+    @property
+    def resuming(self) -> bool:
+        """This run continues from a checkpoint (a resume or a fork)."""
+        return self.resume_folder is not None
+
+    def restored(self) -> dict[str, Any] | None:
+        """This node's state at :attr:`start_k` (hash checked), or None: a fresh start (no
+        resume, or a node the fork starts afresh)."""
+        if self.resume_folder is None or self.fresh:
+            return None
+        ckpt = read_checkpoint(self.resume_folder)
+        if ckpt.k != self.start_k:
+            raise CheckpointError(f"{self.resume_folder}: checkpoint k={ckpt.k}, the run "
+                                  f"resumes at {self.start_k}")
+        return read_node_state(ckpt, self.node)
+
+    def save(self, part: _Ctl, k: int, state: dict[str, Any]) -> None:
+        """Write this node's ``state`` at boundary ``k`` and tell the clock."""
+        try:
+            entry = write_node_state(self.run_dir, k, self.node, state)
+        except OSError as exc:
+            raise CheckpointError(f"{self.node}: cannot write its checkpoint k={k} in "
+                                  f"{self.run_dir}: {exc.strerror or exc}") from None
+        part.ctl("checkpoint", k, k * self.h, **entry)

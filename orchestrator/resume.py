@@ -1,0 +1,157 @@
+"""``suscosim run --resume RUN_DIR`` and ``suscosim run --fork RUN_DIR@T --set ...``: the
+scenario of a run that continues from a checkpoint (issue #29 items 4-5; the nodes' side is
+:mod:`cosim.run_checkpoint`).
+
+* **Resume**: the same scenario (its hash must equal the checkpoint's), the same run folder
+  and id, from the last complete checkpoint. The journal the killed run wrote is set aside as
+  ``checkpoints/journal-k<k>.msgpack`` (unless an earlier resume from the same checkpoint
+  set one aside already: that one is whole up to k, the later one may not be); the resumed
+  recorder journals its steps < k again into a fresh ``journal.msgpack``. The table, the
+  lives and every file of the run end equal to the uninterrupted run's.
+* **Fork**: a new run (new folder and id) from the parent's checkpoint at T, with ``--set``
+  applied to the parent's scenario. A fork may change the control (``controller``, the
+  ``[nodes]`` choice of controller), the report and the run's bookkeeping; it keeps the
+  parent's vehicle, tyre, road, step and fatigue model, which its state at T belongs to
+  (anything else is refused, naming the key: a changed speed, say, would put the road
+  somewhere else than the wheel is). The controller starts afresh when its settings changed
+  (its state is the other law's); every other node continues from the parent's state.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+from typing import Any
+
+from cosim import scenario as sc
+from cosim.checkpoint import (
+    CHECKPOINTS_DIR,
+    RESUME_KEY,
+    Checkpoint,
+    CheckpointError,
+    load_for_resume,
+    parse_fork,
+)
+from cosim.errors import InputFileError, ScenarioError
+
+JOURNAL = "journal.msgpack"
+FORK_MAY_CHANGE = ("controller", "report", "nodes.controller", "run.id", "run.name",
+                   "run.dir", "run.mode", "run.checkpoint_every_s", "run.stall_timeout_s",
+                   "run.start_timeout_s", "run.resume")
+"""What a fork may change (dotted prefixes); the rest is the parent's state's."""
+RESTARTED_BY = {"controller": ("controller", "nodes.controller")}
+"""A node that starts afresh in a fork when one of these changed."""
+
+
+def parent_scenario(run_dir: Path) -> dict[str, Any]:
+    """The resolved scenario a run folder was run with (``scenario.json``), without the
+    ``run.resume`` of a run that was itself resumed."""
+    path = Path(run_dir) / "scenario.json"
+    try:
+        scenario = json.loads(path.read_text())
+    except OSError as exc:
+        raise InputFileError(str(path), f"cannot read the run's scenario "
+                                        f"({exc.strerror or exc}): is {run_dir} a run "
+                                        "folder?") from None
+    except ValueError as exc:
+        raise InputFileError(str(path), f"not valid JSON ({exc})") from None
+    if not isinstance(scenario, dict) or not isinstance(scenario.get("run"), dict):
+        raise InputFileError(str(path), "not a run's resolved scenario (no [run] table)")
+    scenario["run"].pop(RESUME_KEY, None)
+    return scenario
+
+
+def journal_for(run_dir: Path, k: int) -> Path:
+    """The journal of ``run_dir`` that holds every step < ``k``: a journal set aside by a
+    resume from a checkpoint >= k (that run's whole record up to there), else the run's
+    own (whole up to k, the checkpoint being complete)."""
+    root = Path(run_dir) / CHECKPOINTS_DIR
+    aside = sorted((int(p.stem.split("-k")[1]), p) for p in root.glob("journal-k*.msgpack")
+                   if p.stem.split("-k")[1].isdigit())
+    for kk, path in aside:
+        if kk >= k:
+            return path
+    path = Path(run_dir) / JOURNAL
+    if not path.is_file():
+        raise CheckpointError(f"{run_dir}: no journal ({JOURNAL}) to resume the steps < {k} "
+                              "from")
+    return path
+
+
+def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], Checkpoint]:
+    """The scenario that resumes ``run_dir`` from its last complete checkpoint (the journal
+    set aside: see the module's docstring). CheckpointError (exit 2) naming what is wrong."""
+    run_dir = Path(run_dir)
+    scenario = parent_scenario(run_dir)
+    ck = load_for_resume(run_dir, scenario)
+    if Path(scenario["run"]["dir"]).resolve() != run_dir.resolve():
+        scenario["run"]["dir"] = str(run_dir)  # a run folder moved since: it is here now
+    aside = run_dir / CHECKPOINTS_DIR / f"journal-k{ck.k:06d}.msgpack"
+    if not aside.exists():
+        current = run_dir / JOURNAL
+        if not current.is_file():
+            raise CheckpointError(f"{run_dir}: no journal ({JOURNAL}) to resume from")
+        current.replace(aside)
+    scenario["run"][RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
+                                   "journal": str(aside), "fresh": []}
+    return scenario, ck
+
+
+def fork_scenario(spec: str, overrides: list[str], out: str | None,
+                  resolve: Any) -> tuple[dict[str, Any], Checkpoint, list[str]]:
+    """The scenario of a fork ``RUN_DIR@T`` with ``overrides`` (``--set``) applied, resolved
+    with ``resolve(scenario, out)``; also the checkpoint and what changed (dotted keys).
+    ScenarioError (exit 2) names a key a fork may not change."""
+    try:
+        parent_dir, at = parse_fork(spec)
+    except ValueError as exc:
+        raise ScenarioError("--fork", spec, str(exc)) from None
+    parent = parent_scenario(parent_dir)
+    ck = load_for_resume(parent_dir, parent, at_t=at)
+    child = copy.deepcopy(parent)
+    run = child["run"]
+    for key in sc.RESOLVED_RUN_KEYS:
+        run.pop(key, None)
+    run["id"] = ""
+    for assignment in overrides:
+        sc.apply_override(child, assignment)
+    child = resolve(sc.validate_common(child), out)
+    changed = _changes(parent, child)
+    bad = [key for key in changed if not key.startswith(FORK_MAY_CHANGE)]
+    if bad:
+        raise ScenarioError(bad[0], _get(child, bad[0]),
+                            f"the parent's value ({_get(parent, bad[0])!r}): a fork continues "
+                            "the parent's vehicle, tyre, road, step and fatigue model from "
+                            f"its state at t = {ck.t:g} s and may change only "
+                            + ", ".join(FORK_MAY_CHANGE[:3]))
+    if Path(run["dir"]).resolve() == Path(parent_dir).resolve():
+        raise ScenarioError("--out", run["dir"], "a folder other than the parent run's")
+    fresh = [node for node, keys in RESTARTED_BY.items()
+             if any(c.startswith(keys) for c in changed)]
+    run[RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
+                       "journal": str(journal_for(parent_dir, ck.k)), "fresh": fresh,
+                       "parent": str(parent_dir)}
+    return child, ck, changed
+
+
+def _changes(a: Any, b: Any, key: str = "") -> list[str]:
+    """The dotted keys whose values differ between ``a`` and ``b``."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        out: list[str] = []
+        for k in sorted(set(a) | set(b)):
+            sub = f"{key}.{k}" if key else str(k)
+            if k not in a or k not in b:
+                out.append(sub)
+            else:
+                out += _changes(a[k], b[k], sub)
+        return out
+    return [] if a == b else [key]
+
+
+def _get(d: Any, dotted: str) -> Any:
+    for part in dotted.split("."):
+        if not isinstance(d, dict) or part not in d:
+            return None
+        d = d[part]
+    return d
