@@ -117,7 +117,9 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
     for assignment in overrides:
         sc.apply_override(child, assignment)
     child = resolve(sc.validate_common(child), out)
-    changed = _changes(parent, child)
+    run = child["run"]
+    changed = [c for c in _changes(parent, child)  # a fork's own id and folder aside
+               if not c.startswith(("run.id", "run.dir", "run.resume"))]
     bad = [key for key in changed if not key.startswith(FORK_MAY_CHANGE)]
     if bad:
         raise ScenarioError(bad[0], _get(child, bad[0]),
