@@ -79,3 +79,38 @@ def test_fmu_without_get_set_state_is_refused_exit_2(tmp_path, fmi):
             ctl.restore_state({"fmu": path.name, "states": []}, 0.0, {})
     finally:
         ctl.close()
+
+
+def _ch3_with(fmu: Path, out: Path, *more: str):
+    from ..conftest import suscosim
+
+    return suscosim("run", str(ROOT / "scenarios" / "ch3_step_quarter_car.toml"), "--mode",
+                    "monolithic", "--quiet", "--out", str(out), "--set", "run.t_end=1.0",
+                    "--set", f'controller={{law="fmu", fmu="{fmu}"}}', *more)
+
+
+def test_a_run_with_a_stateful_fmu_resumes_bit_for_bit(stateful_fmu, tmp_path):
+    """Through the node shell: the FMU's state saved at 0.5 s, a resume from there (the
+    controller puts it back at its first step, which starts the FMU) ends with the
+    uninterrupted run's table, byte for byte."""
+    import shutil
+
+    from ..conftest import suscosim
+
+    r = _ch3_with(stateful_fmu, tmp_path / "a", "--set", "run.checkpoint_every_s=0.5")
+    assert r.returncode == 0, r.stderr
+    shutil.copytree(tmp_path / "a", tmp_path / "b")
+    (tmp_path / "b" / "table.parquet").unlink()
+    r = suscosim("run", "--resume", str(tmp_path / "b"), "--quiet")
+    assert r.returncode == 0 and "step 500" in r.stdout, r.stdout + r.stderr
+    assert (tmp_path / "a" / "table.parquet").read_bytes() == \
+        (tmp_path / "b" / "table.parquet").read_bytes()
+
+
+def test_a_run_that_cannot_checkpoint_its_fmu_is_refused_before_it_steps(tmp_path):
+    path = tmp_path / "tss1.fmu"
+    export_fmu(sc.load(ROOT / "scenarios" / "ch5_qvm_tss1_random.toml"), path, fmi=2)
+    r = _ch3_with(path, tmp_path / "run", "--set", "run.checkpoint_every_s=0.5")
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "tss1.fmu cannot be checkpointed" in r.stderr and "Traceback" not in r.stderr
+    assert not list((tmp_path / "run").glob("checkpoints/*/manifest.json"))
