@@ -4,14 +4,17 @@ Synthetic 37 s x 500 Hz load history (the thesis's pavé track length in time) o
 built-in arm, all surface nodes: superposition, equivalent stress, rainflow, Miner.
 
     python bench/bench_fatigue.py [--equivalent signed_von_mises] [--method strain_life]
-    python bench/bench_fatigue.py --run RUN_DIR [--screen 0.01] [--engine turning]
+    python bench/bench_fatigue.py --run RUN_DIR [--screen 0.01] [--engine compiled] [--repeat 3]
 
 ``--run``: CPU time (process_time, not wall) per coupled step of the live engine fed a run's
 recorded ``plant/arm`` loads in blocks of ``fatigue.block_samples`` as the live node does
-(e.g. a Ch 6 realistic-corner run folder), unscreened and with ``--screen`` f.
-``--engine turning``: the worker's block loop as proposed for #28 (the equivalent stress
-exactly only where rainflow needs it, :mod:`nodes.fatigue.turning_eq`), patched in here until
-``worker._Engine._exact`` carries it; ``--engine both`` runs the two back to back.
+(e.g. a Ch 6 realistic-corner run folder), unscreened and with ``--screen`` f (``--screen 0``:
+unscreened only). ``--engine`` (:data:`nodes.fatigue.worker.ENGINES`): ``compiled`` (numba,
+the default where numba is installed), ``numpy`` (the same turning-point idea in numpy, the
+fallback), ``block`` (every sample's equivalent stress: the reference), ``all`` the three
+back to back; every engine's damage, extremes, ranges and cycle counts are checked
+``array_equal`` to the first's. The numba kernels are compiled (or loaded from their cache)
+when the worker is imported, before the clock starts: the import time is printed.
 """
 
 from __future__ import annotations
@@ -19,9 +22,13 @@ from __future__ import annotations
 import argparse
 import time
 
-from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.synthetic import pave_like_loads
-from nodes.fatigue.worker import analyse, load_influence
+_T_IMPORT = time.perf_counter()
+from nodes.fatigue import worker  # noqa: E402  (the numba kernels compile or load here)
+from nodes.fatigue.config import FatigueConfig  # noqa: E402
+from nodes.fatigue.synthetic import pave_like_loads  # noqa: E402
+from nodes.fatigue.worker import analyse, load_influence  # noqa: E402
+
+_T_IMPORT = time.perf_counter() - _T_IMPORT
 
 
 def main() -> None:
@@ -32,13 +39,20 @@ def main() -> None:
     p.add_argument("--nodes", default="surface")
     p.add_argument("--run", default=None, help="a run folder: live engine CPU per step")
     p.add_argument("--screen", type=float, default=0.01)
-    p.add_argument("--engine", choices=("block", "turning", "both"), default="block")
+    p.add_argument("--engine", choices=(*worker.ENGINES, "all"), default=worker.ENGINE)
+    p.add_argument("--repeat", type=int, default=1, help="repeats of each engine (--run)")
     a = p.parse_args()
     if a.run:
-        for eng in (("block", "turning") if a.engine == "both" else (a.engine,)):
-            _use_engine(eng)
-            print(f"engine {eng}:")
-            _run_cpu(a.run, a.screen)
+        from nodes.fatigue import counting, turning_eq
+
+        print(f"import of the worker {_T_IMPORT:.2f} s wall (numba kernels: turning_eq "
+              f"{turning_eq.COMPILE_S:.2f} s, counting {counting.COMPILE_S:.2f} s)")
+        first: dict = {}
+        for _ in range(a.repeat):
+            for eng in (worker.ENGINES if a.engine == "all" else (a.engine,)):
+                worker.ENGINE = eng
+                print(f"engine {eng}:")
+                _run_cpu(a.run, a.screen, first)
         return
     cfg = FatigueConfig.from_dict({"equivalent": a.equivalent, "method": a.method,
                                    "mean_stress": a.mean_stress, "nodes": a.nodes})
@@ -57,47 +71,7 @@ def main() -> None:
     print(f"min life {r.life_km:.3g} km, critical node {r.critical_node_id}")
 
 
-_BLOCK_EXACT = None
-
-
-def _use_engine(kind: str) -> None:
-    """Patch ``_Engine._exact`` with the turning-point path (the diff proposed for worker.py)
-    or restore the block path."""
-    import numpy as np
-
-    from nodes.fatigue import worker
-    from nodes.fatigue.superposition import ROWS, superpose_components
-    from nodes.fatigue.turning_eq import turning_equivalent
-
-    global _BLOCK_EXACT
-    if _BLOCK_EXACT is None:
-        _BLOCK_EXACT = worker._Engine._exact
-    if kind == "block":
-        worker._Engine._exact = _BLOCK_EXACT  # type: ignore[method-assign]
-        return
-
-    def _exact(self, F, idx, rf):  # type: ignore[no-untyped-def]
-        if idx.size == 0:
-            return
-        coef = self.per_node[idx]
-        rows = max(ROWS, (2_000_000 // (6 * idx.size)) // ROWS * ROWS)
-        hi = np.full(idx.size, -np.inf)
-        lo = np.full(idx.size, np.inf)
-        for i in range(0, F.shape[0], rows):
-            pts, last, bhi, blo = turning_equivalent(
-                superpose_components(F[i:i + rows], coef), self.cfg.equivalent, rf.last)
-            np.maximum(hi, bhi, out=hi)
-            np.minimum(lo, blo, out=lo)
-            self._add(rf.feed_points(pts, last), idx, self.damage, self.ncyc, self.rmax)
-        self.eq_max[idx] = np.maximum(self.eq_max[idx], hi)
-        self.eq_min[idx] = np.minimum(self.eq_min[idx], lo)
-        if self.scr is not None:
-            self.scr.envelope(idx, hi, lo)
-
-    worker._Engine._exact = _exact  # type: ignore[method-assign]
-
-
-def _run_cpu(run: str, screen: float) -> None:
+def _run_cpu(run: str, screen: float, first: dict) -> None:
     import json
     from pathlib import Path
 
@@ -112,15 +86,19 @@ def _run_cpu(run: str, screen: float) -> None:
     names = list(loads)
     arr = np.stack([loads[c] for c in names], axis=1)
     n = cfg.block_samples
-    for f in (None, screen):
+    for f in (None, screen) if screen else (None,):
         live = LiveFatigue(cfg, names, 1.0, screen=f, total_samples=t.size)
         c0 = time.process_time()
         for i in range(0, t.size, n):
             live.update(t[i:i + n], arr[i:i + n])
         r = live.result()
         cpu = time.process_time() - c0
+        got = [r.damage, r.eq_max, r.eq_min, r.eq_range_max, r.n_cycles]
+        ref = first.setdefault(f, got)
+        same = all(np.array_equal(x, y, equal_nan=True) for x, y in zip(ref, got, strict=True))
         print(f"screen {f}: {cpu / t.size * 1e6:.0f} us CPU per step over {t.size} steps, "
-              f"critical node {r.critical_node_id}, screened {r.screening.get('screened_nodes')}")
+              f"critical node {r.critical_node_id}, screened {r.screening.get('screened_nodes')}"
+              f", array_equal to the first engine: {same}")
 
 
 if __name__ == "__main__":

@@ -21,13 +21,36 @@ points of a block are fed (`turning_points`), which leaves the count unchanged.
 
 Because the state (the stack of unclosed turning points per history) is kept between calls,
 feeding a history in blocks of any size gives exactly the same cycles as feeding it at once.
+
+**Compiled (#28):** :meth:`StreamingRainflow.feed_packed` runs the same rule history by history
+in compiled code (:func:`_rainflow_packed`, numba): comparisons and copies only, so the same
+cycles with the same bits, each history's in the order they close (the order across histories
+differs from the lock-step loop's, which no result depends on: a node's damage sums its own
+cycles in order). Without numba it runs the lock-step loop on the packed points.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
+
+try:  # the compiled paths (#28); without numba the numpy ones, the same bits
+    import numba
+except ImportError:  # pragma: no cover - numba is a dependency; kept for a broken install
+    numba = None
+COMPILED = numba is not None
+"""Whether numba is importable (the fatigue kernels compiled)."""
+
+
+def jit(signature: str):
+    """``numba.njit(signature)``: compiled at import (an explicit signature), cached on disk
+    (``cache=True``: in ``__pycache__``, or numba's user cache where that is read-only), no
+    fastmath (IEEE operations in the order written); the identity without numba."""
+    if numba is None:  # pragma: no cover
+        return lambda f: f
+    return numba.njit(signature, cache=True, error_model="numpy", nogil=True)
 
 RESIDUE_MODES = ("half_cycles", "repeated")
 
@@ -234,6 +257,64 @@ class StreamingRainflow:
         self._last = np.array(last, dtype=float)
         return self._feed_rows(x)
 
+    def feed_packed(self, vals: np.ndarray, counts: np.ndarray, last: np.ndarray,
+                    start: int = 0) -> Cycles:
+        """Advance histories ``start .. start + len(counts)`` by a block given packed.
+
+        Args:
+            vals: (K,) history by history, the block's samples that may be turning points,
+                in order (any sample left out must lie strictly between its neighbours;
+                e.g. :func:`.turning_eq.kept_equivalent`'s); ``counts`` (k,) how many each.
+            last: (k,) those histories' last sample of the block.
+
+        Returns the full cycles closed (each history's in the order they close; histories
+        in order), the same cycles as :meth:`feed` of the whole block.
+        """
+        vals = np.ascontiguousarray(vals, dtype=float)
+        counts = np.ascontiguousarray(counts, dtype=np.int64)
+        k = counts.size
+        if start < 0 or start + k > self.n or int(counts.sum()) != vals.size \
+                or np.shape(last) != (k,):
+            raise ValueError(f"feed_packed: {vals.size} values, counts of {k} histories "
+                             f"from {start} ({self.n} in the counter), last {np.shape(last)}")
+        if self._last is None:
+            self._last = np.full(self.n, np.nan)
+        self._last[start:start + k] = last
+        if k == 0 or vals.size == 0:
+            return Cycles.empty()
+        depth = self._depth[start:start + k]
+        need = int((depth + counts).max()) + 1  # each point pushes at most one
+        while need > self._cap:
+            self._grow()
+        if not COMPILED:  # the lock-step loop on the packed points (no numba)
+            return self._feed_packed_numpy(vals, counts, start)
+        size = (int(depth.sum()) + vals.size) // 2 + 1
+        s, b, c = np.empty(size, dtype=np.int64), np.empty(size), np.empty(size)
+        nc = _rainflow_packed(vals, counts, start, self._stack, self._depth, s, b, c)
+        return Cycles(s[:nc], b[:nc], c[:nc], np.ones(nc))
+
+    def _feed_packed_numpy(self, vals: np.ndarray, counts: np.ndarray, start: int
+                           ) -> Cycles:
+        """:meth:`feed_packed` by the lock-step loop (rows padded by repeating each
+        history's last value: a no-op), its cycles put in the compiled kernel's order."""
+        live = np.nonzero(counts > 0)[0]
+        c = counts[live]
+        starts = (np.cumsum(counts) - counts)[live]
+        rows = np.empty((int(c.max()), live.size))
+        rows[:] = vals[starts + c - 1][None, :]
+        at = np.concatenate([np.arange(a, a + m) for a, m in zip(starts, c, strict=True)])
+        rows[np.arange(vals.size) - np.repeat(starts, c), np.repeat(np.arange(live.size), c)] \
+            = vals[at]
+        sub = self.take(start + live)
+        cyc = sub._feed_rows(rows)
+        while sub._cap > self._cap:
+            self._grow()
+        self._stack[start + live, :sub._cap] = sub._stack
+        self._depth[start + live] = sub._depth
+        order = np.argsort(cyc.series, kind="stable")
+        return Cycles(start + live[cyc.series[order]], cyc.s1[order], cyc.s2[order],
+                      cyc.count[order])
+
     def _feed_rows(self, rows_in: np.ndarray) -> Cycles:
         out_i: list[np.ndarray] = []
         out_b: list[np.ndarray] = []
@@ -302,6 +383,58 @@ class StreamingRainflow:
         replay = self._stack[self._rows[:, None], take].T
         # histories with an empty residue: replay nothing (pad with their own value)
         return other._feed_rows(replay)
+
+
+_T0 = time.perf_counter()
+
+
+@jit("i8(f8[::1], i8[::1], i8, f8[:, ::1], i8[::1], i8[::1], f8[::1], f8[::1])")
+def _rainflow_packed(vals, counts, start, stack, depth, out_s, out_b, out_c):  # type: ignore[no-untyped-def]  # noqa: E501
+    """:meth:`StreamingRainflow._feed_rows`' rule, history by history: histories ``start +
+    i`` fed ``counts[i]`` values of ``vals`` in order (the stack has room for them); the
+    closed cycles (history, b, c) appended to ``out_*``. Returns their number."""
+    pos = 0
+    nc = 0
+    for i in range(counts.size):
+        h = start + i
+        d = depth[h]
+        for j in range(pos, pos + counts[i]):
+            x = vals[j]
+            if d == 0:
+                stack[h, 0] = x
+                d = 1
+                continue
+            top = stack[h, d - 1]
+            dx = x - top
+            if d >= 2 and dx * (top - stack[h, d - 2]) > 0.0:  # the same direction: extend
+                stack[h, d - 1] = x
+            elif dx != 0.0:  # a reversal (or NaN): push
+                stack[h, d] = x
+                d += 1
+            else:
+                continue
+            while d >= 4:
+                a = stack[h, d - 4]
+                b = stack[h, d - 3]
+                c = stack[h, d - 2]
+                e = stack[h, d - 1]
+                r = abs(b - c)
+                if r <= abs(a - b) and r <= abs(c - e):
+                    out_s[nc] = h
+                    out_b[nc] = b
+                    out_c[nc] = c
+                    nc += 1
+                    stack[h, d - 3] = e
+                    d -= 2
+                else:
+                    break
+        depth[h] = d
+        pos += counts[i]
+    return nc
+
+
+COMPILE_S = time.perf_counter() - _T0
+"""Seconds the kernel took at import (compiled, or loaded from numba's on-disk cache)."""
 
 
 def count_series(x: np.ndarray, residue: str = "half_cycles") -> Cycles:

@@ -29,14 +29,16 @@ def node_major(coefficients: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(coefficients, dtype=float).transpose(1, 0, 2))
 
 
-def _products(loads: np.ndarray, per_node: np.ndarray) -> tuple[np.ndarray, int]:
+def _products(loads: np.ndarray, per_node: np.ndarray, scratch: np.ndarray | None = None
+              ) -> tuple[np.ndarray, int]:
     """Stresses (6, k, n_pad) [Pa] of ``loads`` (n, n_cases) [N, N m] in chunks of
     :data:`ROWS` samples (the last padded with zero loads), and n. Each chunk is one stacked
     ``matmul`` of a fixed shape, the node's (6, n_cases) coefficients by the chunk's
     (n_cases, ROWS) loads: the same bits as the (ROWS, n_cases) x (n_cases, 6) product per
     node (checked over every chunk of the Ch 6 run and by ``tests/fatigue``), written straight
     into a buffer laid out (component, node, sample), so no transposing copy follows (it
-    cost 3/4 of the time) and each component is contiguous."""
+    cost 3/4 of the time) and each component is contiguous. ``scratch``: a flat float64
+    array of at least 6 k n_pad elements to write into (a fresh one otherwise)."""
     F = np.asarray(loads, dtype=float)
     k, n_cases, n_comp = per_node.shape
     if F.ndim != 2 or F.shape[1] != n_cases:
@@ -49,11 +51,26 @@ def _products(loads: np.ndarray, per_node: np.ndarray) -> tuple[np.ndarray, int]
         if m > 0:
             FT[c, :, :m] = F[c * ROWS:c * ROWS + m].T
     coef_t = per_node.transpose(0, 2, 1)  # (k, 6, n_cases), a view
-    out = np.empty((n_comp, k, chunks, ROWS))
+    shape = (n_comp, k, chunks, ROWS)
+    size = n_comp * k * chunks * ROWS
+    out = np.empty(shape) if scratch is None else scratch[:size].reshape(shape)
     by_node = out.transpose(1, 0, 2, 3)
     for c in range(chunks):
         np.matmul(coef_t, FT[c], out=by_node[:, :, c, :])
     return out.reshape(n_comp, k, chunks * ROWS), n
+
+
+def components_buffer(loads: np.ndarray, per_node: np.ndarray,
+                      scratch: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+    """The products themselves: a C-contiguous (6, k, n_pad) buffer (component, node, sample;
+    n_pad = n rounded up to :data:`ROWS`, the padding the stresses of zero loads) and n.
+    :func:`superpose_components` is ``buf.transpose(0, 2, 1)[:, :n]``: the same bits.
+    ``scratch``: written into (a flat float64 array of >= 6 k n_pad; reused, it saves the
+    page faults of a fresh 4 MB buffer per tile)."""
+    if scratch is not None and (scratch.dtype != np.float64 or scratch.ndim != 1
+                                or not scratch.flags.c_contiguous):
+        raise ValueError("scratch must be a flat, contiguous float64 array")
+    return _products(loads, per_node, scratch)
 
 
 def superpose(loads: np.ndarray, per_node: np.ndarray) -> np.ndarray:

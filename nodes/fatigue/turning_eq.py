@@ -25,13 +25,34 @@ stress (:func:`.equivalent_stress.principal_extremes_of`) were half of the fatig
    leaves the rainflow count, and the order in which a node's cycles close, unchanged).
 
 ``signed_von_mises`` has no transcendental beyond a square root: it is computed whole.
+
+**Compiled (numba, #28):** :func:`kept_equivalent` does the bracket, the kept-sample test and
+the gathering in one pass per node (:func:`_keep_gather`, no temporaries), with a bracket that
+needs no transcendental at all (scalar ``acos``/``cos`` per node-sample would cost more than
+the whole budget): the largest root c1 of 4c³ - 3c = r (σ1 = q + 2p c1) is a smooth function
+of u = sqrt(1 + r) (the double root at r = -1 is a square-root branch point in r), fitted once
+by a degree-9 polynomial P(u) (|P - c1| <= 1.4e-9 on [0, sqrt 2]); the smallest root is
+c3(r) = -c1(-r) (u = sqrt(1 - r)). P only proposes: the bracket [P - E, P + E] (E = 1e-7) is
+*proven* at run time by the sign of g(c) = 4c³ - 3c - r at its ends, beyond a margin DELTA
+that covers the rounding of g and the difference between this r (det / (2 p p p)) and the
+exact path's (det / (2 p**3)); g is increasing on c >= 1/2 and c1 >= 1/2, so an end that fails
+its check falls back to the hard bound (1/2 below, 1 above) and the bracket stays valid.
+q, p, det are computed by the operations of :func:`.equivalent_stress.invariants_of` in their
+order (the same bits; numba without fastmath neither fuses nor reorders). The exact path's
+acos/cos then differ from the root by far less than C64_TOL (a few ulp), its rounding of
+q + 2p c by less than ROUND_TOL. The rest (sign choice, kept test, exact values only at kept
+samples through the numpy code) is the numpy path's, so both give the same rows, bit for bit,
+to :meth:`.counting.StreamingRainflow.feed_packed`. Without numba (:data:`COMPILED` False) the
+numpy path (:func:`turning_equivalent`) runs; the worker's results are the same bits.
 """
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
-from .counting import turning_points
+from .counting import COMPILED, jit, turning_points
 from .equivalent_stress import TILE_NODES, equivalent_of, invariants_of
 
 COS_TOL = 4e-6
@@ -132,3 +153,181 @@ def turning_equivalent(comp: np.ndarray, kind: str, previous: np.ndarray | None
     rows[:] = last[None, :]
     rows[np.arange(vals.size) - np.repeat(starts, counts), node] = vals
     return rows, last, hi_e, lo_e
+
+
+# -- compiled (numba) ----------------------------------------------------------------------
+ROOT_POLY = (0.5000000013442235, 0.40824818198579, -0.055553386430064314,
+             0.018881567793504486, -0.008142182128495918, 0.003791443524522732,
+             -0.0016693372451981716, 0.0005941030627756393, -0.00014092219951476883,
+             1.593410329717697e-05)
+"""P(u) ~ c1(r), u = sqrt(1 + r): least squares, |P - c1| <= 1.4e-9 (only proposes a root;
+the bracket is proven by :data:`ROOT_E` and :data:`DELTA`)."""
+ROOT_E = 1e-7
+"""Half-width of the proposed root bracket in c (>> |P - c1|; at the double root r = -1,
+g(c1 + e) >= 6 e**2 > DELTA needs e > 5.8e-8)."""
+DELTA = 2e-14
+"""Margin on g(c) = 4c³ - 3c - r: its float64 rounding (<= 4.5e-15 for |c| <= 1.0000002) plus
+|r - r_exact| (this r = det / (2 p p p) against det / (2 p**3) with the exact path's pow:
+<= 4 ulp, 9e-16)."""
+C64_TOL = 5e-14
+"""Largest distance (per unit of 2p) between the exact path's cos(acos(r) / 3 [+ 2π/3]) in
+float64 and the true root (a few ulp of acos, cos and the constant 2π/3: <= 5e-15)."""
+
+
+_P0, _P1, _P2, _P3, _P4, _P5, _P6, _P7, _P8, _P9 = ROOT_POLY
+_T0 = time.perf_counter()
+
+
+@jit("UniTuple(f8, 2)(f8)")
+def _root1(r):  # type: ignore[no-untyped-def]
+    """[lo, hi] containing the largest root of 4c³ - 3c = r' for every r' within DELTA
+    (minus g's rounding) of r, r in [-1, 1]."""
+    u = np.sqrt(1.0 + r)
+    c = _P9 * u + _P8
+    c = c * u + _P7
+    c = c * u + _P6
+    c = c * u + _P5
+    c = c * u + _P4
+    c = c * u + _P3
+    c = c * u + _P2
+    c = c * u + _P1
+    c = c * u + _P0
+    a = c - ROOT_E
+    b = c + ROOT_E
+    ga = (4.0 * a * a - 3.0) * a - r
+    gb = (4.0 * b * b - 3.0) * b - r
+    lo = a if (a >= 0.5) & (ga < -DELTA) else 0.5
+    hi = b if (b >= 0.5) & (gb > DELTA) else 1.0
+    return lo, hi
+
+
+@jit("i8(f8[:, :, ::1], i8, f8[:, ::1], i8[::1], f8[::1], f8[::1])")
+def _keep_gather(buf, n, out, counts, lo, hi):  # type: ignore[no-untyped-def]  # noqa: C901
+    """buf (6, k, >= n): components; per node the brackets of the abs-max principal
+    stress (into lo, hi: scratch of n), the kept samples' components appended to out
+    (6, cap) node by node, their number into counts (k,). Returns the total, or -1 when
+    out may be too small (a node starts with fewer than n columns left)."""
+    k = buf.shape[1]
+    pos = 0
+    for i in range(k):
+        if pos + n > out.shape[1]:
+            return -1
+        for j in range(n):
+            sx = buf[0, i, j]
+            sy = buf[1, i, j]
+            sz = buf[2, i, j]
+            txy = buf[3, i, j]
+            tyz = buf[4, i, j]
+            tzx = buf[5, i, j]
+            q = sx + sy
+            q += sz
+            q /= 3.0
+            a = sx - q
+            b = sy - q
+            c = sz - q
+            p1 = txy * txy
+            p1 += tyz * tyz
+            p1 += tzx * tzx
+            p2 = a * a
+            p2 += b * b
+            p2 += c * c
+            p1 *= 2.0
+            p2 += p1
+            p2 /= 6.0
+            p = np.sqrt(p2)
+            det = a * b
+            det *= c
+            w = txy * 2.0
+            w *= tyz
+            w *= tzx
+            det += w
+            det -= (a * tyz) * tyz
+            det -= (b * tzx) * tzx
+            det -= (c * txy) * txy
+            two_p = p * 2.0
+            aq = abs(q)
+            t = ROUND_TOL * (aq + two_p) + C64_TOL * two_p
+            if not (aq < 1e300 and det - det == 0.0 and p < 1e90):  # NaN, inf
+                lo[j] = -np.inf
+                hi[j] = np.inf
+                continue
+            if p > 1e-90:
+                r = det / (p * p * p * 2.0)
+                r = min(max(r, -1.0), 1.0)
+                l1, h1 = _root1(r)
+                l3, h3 = _root1(-r)
+                s1l = q + two_p * l1 - t
+                s1h = q + two_p * h1 + t
+                s3l = q - two_p * h3 - t
+                s3h = q - two_p * l3 + t
+            else:  # tiny p: |c| <= 1 (p == 0: exactly q)
+                s1l = q - two_p - t
+                s1h = q + two_p + t
+                s3l = s1l
+                s3h = s1h
+            m1 = max(abs(s1l), abs(s1h))
+            n1 = 0.0 if (s1l <= 0.0) & (s1h >= 0.0) else min(abs(s1l), abs(s1h))
+            m3 = max(abs(s3l), abs(s3h))
+            n3 = 0.0 if (s3l <= 0.0) & (s3h >= 0.0) else min(abs(s3l), abs(s3h))
+            if n1 > m3:  # |σ1| > |σ3| surely: σ1
+                lo[j] = s1l
+                hi[j] = s1h
+            elif m1 < n3:  # σ3
+                lo[j] = s3l
+                hi[j] = s3h
+            else:  # the sign choice open: both
+                lo[j] = min(s1l, s3l)
+                hi[j] = max(s1h, s3h)
+        m = 0
+        for j in range(n):
+            keep = True
+            if 0 < j < n - 1:
+                up0 = lo[j] > hi[j - 1]
+                up1 = lo[j + 1] > hi[j]
+                dn0 = hi[j] < lo[j - 1]
+                dn1 = hi[j + 1] < lo[j]
+                keep = not ((up0 & up1) | (dn0 & dn1))
+            if keep:
+                for cc in range(6):
+                    out[cc, pos + m] = buf[cc, i, j]
+                m += 1
+        counts[i] = m
+        pos += m
+    return pos
+
+
+COMPILE_S = time.perf_counter() - _T0
+"""Seconds the kernels took at import (compiled, or loaded from numba's on-disk cache)."""
+
+
+def kept_equivalent(buf: np.ndarray, n: int, kind: str, scratch: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """The exact equivalent stress of each node's candidate turning points, packed.
+
+    Args:
+        buf: (6, k, >= n) stress components (Pa), C-contiguous (component, node, sample):
+            :func:`.superposition.components_buffer`.
+        n: the block's samples (the rest of ``buf`` is padding).
+        kind: the equivalent stress.
+        scratch: a flat float64 array the kept components are gathered into (6 x its
+            length / 6 samples; a larger one is allocated when the kept samples do not fit).
+
+    Returns:
+        ``vals`` (K,): node by node, its kept samples' exact equivalent stress in order (a
+        superset of the turning points with the block's first and last samples: the values
+        of :func:`turning_equivalent`'s rows, bit for bit), ``counts`` (k,) per node.
+    """
+    k = buf.shape[1]
+    if not COMPILED or kind != "abs_max_principal" or n <= 2:
+        eq = equivalent_of(buf[:, :, :n].transpose(0, 2, 1), kind)  # (n, k)
+        return np.ascontiguousarray(eq.T).ravel(), np.full(k, n, dtype=np.int64)
+    counts = np.empty(k, dtype=np.int64)
+    lo, hi = np.empty(n), np.empty(n)
+    K = -1
+    if scratch is not None and scratch.size >= 6 * n:
+        out = scratch[:scratch.size // 6 * 6].reshape(6, -1)
+        K = _keep_gather(buf, n, out, counts, lo, hi)
+    if K < 0:  # no scratch, or too small for what this block keeps
+        out = np.empty((6, k * n))
+        K = _keep_gather(buf, n, out, counts, lo, hi)
+    return equivalent_of(out[:, :K], kind), counts
