@@ -12,6 +12,7 @@ from cosim.errors import SuscosimError
 from cosim.zenoh_options import add_connect_argument
 
 from .dask_exec import DaskRunner
+from .fork import fork_header, fork_report, fork_text, parent_state, write_fork_json
 from .local import Runner
 from .results import result_rows, results_table, write_results, write_sweep_json
 from .sensitivity import sensitivity, sensitivity_table, write_sensitivity
@@ -75,6 +76,11 @@ def main(argv: list[str] | None = None) -> int:
     except SuscosimError as exc:
         print(f"suscosim: error: sweep: {exc}", file=sys.stderr)
         return exc.exit_code if exc.exit_code == 2 else 2
+    if sweep.fork is not None and (args.executor == "dask" or args.serve or args.external):
+        print("suscosim: error: sweep: [sweep] fork_at works with the local executor only, "
+              "without --external and --serve (a fork needs its parent's run folder and "
+              "checkpoint where its nodes run)", file=sys.stderr)
+        return 2
     if args.serve:
         from ..node_main import NODE_MODULES
 
@@ -98,10 +104,19 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
     out.mkdir(parents=True, exist_ok=True)
     states = {p.id: point_state(p, sweep.run_dir(out, p), sweep.fatigue) for p in sweep.points}
+    if sweep.fork is not None:
+        print(fork_header(sweep.fork), flush=True)
     if args.list:
+        if sweep.fork is not None:
+            for pa in sweep.fork.parents:
+                state = parent_state(pa, sweep.fork.parent_dir(out, pa))
+                print(f"  {pa.id:<{MAX_ID}} {state:<8} {pa.point.n_steps:>8} steps  parent "
+                      f"({pa.law}) of {len(pa.members)} point(s), checkpoint k = {pa.k}")
         for p in sweep.points:
+            fork = (f"  (fork of {sweep.fork.parent_of[p.id].id})"
+                    if sweep.fork is not None else "")
             print(f"  {p.id:<{MAX_ID}} {states[p.id]:<8} {p.n_steps:>8} steps  "
-                  f"{_params_text(p.params)}")
+                  f"{_params_text(p.params)}{fork}")
         return 0
     write_sweep_json(sweep, out)
     todo = [(p, states[p.id]) for p in sweep.points if states[p.id] != "done"]
@@ -133,6 +148,10 @@ def main(argv: list[str] | None = None) -> int:
         sens = sensitivity(sweep, rows)
         write_sensitivity(out, sens)
         print(sensitivity_table(sens))
+    if sweep.fork is not None:
+        doc = fork_report(sweep, sweep.fork, out)
+        write_fork_json(out, doc)
+        print(fork_text(doc) + f"\n  in {out / 'fork.json'}")
     n_failed = sum(r["status"] != "ok" for r in rows)
     print(f"sweep {sweep.name}: {len(rows) - n_failed} ok, {n_failed} failed, "
           f"{time.monotonic() - t0:.0f} s; results in {out / 'results.csv'}")

@@ -14,9 +14,11 @@ from typing import TextIO
 from cosim.journal import last_step
 
 from .display import Display, event_line
+from .fork import Parent, keep_only_fork_checkpoint, parent_state
 from .phases import (
     fatigue_command,
     fatigue_outcome,
+    fork_command,
     point_meta,
     prepare_run_dir,
     run_command,
@@ -38,6 +40,7 @@ class Job:
     t0: float
     log: Path
     fresh: bool = True  # its run was (re)done in this session (counts in the step progress)
+    parent: Parent | None = None  # the parent run of a group ([sweep] fork_at), not a point
 
     def step(self) -> int | None:
         """The step its run has reached (from the tail of its journal), or None."""
@@ -53,6 +56,8 @@ class Runner:
         self.connect, self.external = connect, external
         self.stream = stream
         self.status: dict[str, tuple[str, str]] = {}  # id -> (status, error) of this session
+        self.plan = sweep.fork  # [sweep] fork_at: the parents and each point's fork
+        self.parents = {pa.id: pa for pa in self.plan.parents} if self.plan else {}
 
     def run_dir(self, p: Point) -> Path:
         return self.sweep.run_dir(self.out, p)
@@ -62,9 +67,22 @@ class Runner:
         prepare_run_dir(d, point_meta(self.sweep.name, p.id, p.params, str(p.base),
                                       p.overrides, p.fingerprint), this_worker("local"))
         log = d / "sweep.log"
-        cmd = run_command(str(p.base), d, p.set_args, self.sweep.jobs > 1, self.connect,
-                          self.external)
+        if self.plan is not None:  # a fork of its group's parent at fork_at
+            cmd = fork_command(self.plan.spec(self.out, p), d, self.plan.fork_args(p),
+                               self.sweep.jobs > 1, self.connect)
+        else:
+            cmd = run_command(str(p.base), d, p.set_args, self.sweep.jobs > 1, self.connect,
+                              self.external)
         return Job(p, d, "run", _start(cmd, log), time.monotonic(), log)
+
+    def _start_parent(self, parent: Parent) -> Job:
+        assert self.plan is not None
+        d, pp = self.plan.parent_dir(self.out, parent), parent.point
+        prepare_run_dir(d, point_meta(self.sweep.name, pp.id, pp.params, str(pp.base),
+                                      pp.overrides, pp.fingerprint), this_worker("local"))
+        log = d / "sweep.log"
+        cmd = run_command(str(pp.base), d, pp.set_args, self.sweep.jobs > 1, self.connect)
+        return Job(pp, d, "run", _start(cmd, log), time.monotonic(), log, parent=parent)
 
     def _start_fatigue(self, p: Point) -> Job:
         d = self.run_dir(p)
@@ -78,6 +96,14 @@ class Runner:
         if code != 0:
             _kill_group(job.proc)  # nodes orphaned by a killed run
         p = job.point
+        if job.parent is not None:  # a parent: ok when its checkpoint at k is complete
+            st, err = run_outcome(code, job.run_dir, job.log, False)
+            if st == "ok" and parent_state(job.parent, job.run_dir) != "done":
+                st, err = "failed", f"no complete checkpoint at k = {job.parent.k}"
+            if st == "ok":
+                keep_only_fork_checkpoint(job.parent, job.run_dir)
+            self.status[p.id] = (st, err)
+            return None
         if job.phase == "run":
             st, err = run_outcome(code, job.run_dir, job.log, self.sweep.fatigue)
             if st == "fatigue":
@@ -87,13 +113,34 @@ class Runner:
         self.status[p.id] = (st, err)
         return None
 
+    def _order(self, queue: list[tuple[Point, str]]) -> None:
+        """Parents first (they hold forks back), then the longest runs, then fatigue."""
+        queue.sort(key=lambda ps: (0, -ps[0].n_steps) if ps[1] == "parent" else
+                   (1, -ps[0].n_steps) if ps[1] == "todo" else (2, 0))
+
     def execute(self, todo: list[tuple[Point, str]]) -> bool:
-        """Run the given points (``todo`` or ``fatigue`` phase); False if interrupted."""
+        """Run the given points (``todo`` or ``fatigue`` phase); False if interrupted. With
+        ``fork_at``, a point's fork waits for its parent, which runs first if not done."""
+        queue = list(todo)
+        waiting: dict[str, list[tuple[Point, str]]] = {}  # parent id -> its forks to run
+        if self.plan is not None:
+            queue = [ps for ps in todo if ps[1] != "todo"]
+            for p, st in todo:
+                if st != "todo":
+                    continue
+                parent = self.plan.parent_of[p.id]
+                if parent_state(parent, self.plan.parent_dir(self.out, parent)) == "done":
+                    queue.append((p, st))
+                else:
+                    waiting.setdefault(parent.id, []).append((p, st))
+            queue += [(self.parents[pid].point, "parent") for pid in waiting]
         # longest first: the sweep ends sooner when the long runs do not start last
-        queue = sorted(todo, key=lambda ps: -ps[0].n_steps if ps[1] == "todo" else 0)
+        self._order(queue)
         todo_state = {p.id: st for p, st in todo}
-        display = Display(self.stream, len(todo),
-                          sum(p.n_steps for p, st in todo if st == "todo"))
+        n_total = len(todo) + len(waiting)
+        display = Display(self.stream, n_total,
+                          sum(p.n_steps for p, st in queue if st in ("todo", "parent")) +
+                          sum(p.n_steps for w in waiting.values() for p, _ in w))
         jobs: list[Job] = []
         interrupted = False
 
@@ -106,8 +153,11 @@ class Runner:
             while queue or jobs:
                 while queue and len(jobs) < self.sweep.jobs:
                     p, state = queue.pop(0)
-                    job = self._start_run(p) if state == "todo" else self._start_fatigue(p)
-                    job.fresh = state == "todo"
+                    if state == "parent":
+                        job = self._start_parent(self.parents[p.id])
+                    else:
+                        job = self._start_run(p) if state == "todo" else self._start_fatigue(p)
+                    job.fresh = state != "fatigue"
                     jobs.append(job)
                 still: list[Job] = []
                 for job in jobs:
@@ -119,11 +169,26 @@ class Runner:
                         still.append(nxt)
                         continue
                     finished += 1
-                    steps_done += job.point.n_steps if todo_state[job.point.id] == "todo" else 0
                     st, err = self.status[job.point.id]
                     failed += st != "ok"
-                    display.event(event_line(self.run_dir(job.point), job.point.id, st, err,
-                                             finished, len(todo)))
+                    display.event(event_line(job.run_dir, job.point.id, st, err,
+                                             finished, n_total))
+                    if job.parent is not None:
+                        steps_done += job.point.n_steps
+                        forks = waiting.pop(job.point.id, [])
+                        if st == "ok":
+                            queue += forks
+                            self._order(queue)
+                        for p, _ in forks if st != "ok" else []:
+                            self.status[p.id] = ("failed", f"its parent run {job.point.id} "
+                                                 f"failed: {err}")
+                            finished += 1
+                            failed += 1
+                            steps_done += p.n_steps
+                            display.event(event_line(self.run_dir(p), p.id, "failed",
+                                                     self.status[p.id][1], finished, n_total))
+                        continue
+                    steps_done += job.point.n_steps if todo_state[job.point.id] == "todo" else 0
                 jobs = still
                 display.update(jobs, finished, failed, len(queue), steps_done)
                 time.sleep(0.25)

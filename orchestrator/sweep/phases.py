@@ -58,6 +58,21 @@ def run_command(base: str, run_dir: Path, set_args: list[str], pin_off: bool,
     return cmd
 
 
+def fork_command(spec: str, run_dir: Path, set_args: list[str], pin_off: bool,
+                 connect: list[str] = ()) -> list[str]:  # type: ignore[assignment]
+    """``suscosim run --fork PARENT_DIR@T --out RUN_DIR --quiet --set ...`` ([sweep]
+    fork_at: the point's run continues its group's parent from its checkpoint at T)."""
+    cmd = [sys.executable, "-m", "orchestrator", "run", "--fork", spec, "--out", str(run_dir),
+           "--quiet"]
+    if pin_off:
+        cmd += ["--pin", "off"]
+    for s in set_args:
+        cmd += ["--set", s]
+    for ep in connect:
+        cmd += ["--connect", ep]
+    return cmd
+
+
 def fatigue_command(run_dir: Path) -> list[str]:
     return [sys.executable, "-m", "orchestrator", "fatigue", str(run_dir)]
 

@@ -55,6 +55,9 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
             row["critical_node"] = fat.get("critical_node_id")
         if sweep.design is not None:
             row.update(ride_columns(d) if st == "ok" else {})
+        if sweep.fork is not None:  # [sweep] fork_at: its law acts from fork_at on
+            row["fork_at"] = sweep.fork.at
+            row["parent"] = sweep.fork.parent_of[p.id].id
         meta = read_json(d / "point.json")
         worker = meta.get("worker") if isinstance(meta, dict) else None
         row["worker"] = _worker_text(worker) if isinstance(worker, dict) else None
@@ -114,6 +117,8 @@ def results_table(sweep: Sweep, rows: list[dict]) -> str:
     cols += extra
     if sweep.fatigue:
         cols += ["life_km", "life_repeats", "critical_node"]
+    if sweep.fork is not None:
+        cols.append("parent")
     if len({r.get("worker") for r in rows} - {None}) > 1:  # points ran on several workers
         cols.append("worker")
     head = [c.split("/")[-1] if "/" in c else c for c in cols]
@@ -142,6 +147,18 @@ def write_sweep_json(sweep: Sweep, out: Path) -> None:
                     "base": str(p.base), "overrides": p.overrides, "n_steps": p.n_steps,
                     "fingerprint": p.fingerprint} for p in sweep.points],
     }
+    if sweep.fork is not None:
+        from .fork import SEMANTICS
+
+        plan = sweep.fork
+        doc["fork"] = {"fork_at": plan.at, "semantics": SEMANTICS, "report": "fork.json",
+                       "parents": [{"id": pa.id, "run_dir": f"parents/{pa.id}",
+                                    "controller": pa.law, "k": pa.k, "t": pa.t,
+                                    "n_steps": pa.point.n_steps, "base": str(pa.point.base),
+                                    "overrides": pa.point.overrides,
+                                    "fingerprint": pa.point.fingerprint,
+                                    "points": [p.id for p in pa.members]}
+                                   for pa in plan.parents]}
     if sweep.design is not None:
         d = sweep.design
         doc["design"] = {"method": d.method, "n": d.n, "seed": d.seed,

@@ -23,7 +23,7 @@ from cosim.keys import check_name
 from .design import AXIS, Design, design_axis, parse_design
 
 SWEEP_KEYS = ("name", "base", "jobs", "fatigue", "grid", "set", "channels", "description",
-              "design", "runs_dir")
+              "design", "runs_dir", "fork_at")
 DEFAULT_CHANNELS = ("plant/response/a_b", "plant/response/a_w", "tyre_road/force/F_t",
                     "controller/force/F_d", "plant/arm/ball_joint_z")
 FATIGUE_COLUMNS = ("life_repeats", "life_km", "max_damage", "critical_node")
@@ -31,7 +31,7 @@ MAX_ID = 64
 INVOCATION = keys.invocation_token()
 """The random part of this invocation's run ids (one per ``suscosim sweep`` process)."""
 RESERVED = ("base", "point", "status", "error", "wall_s", "steps_per_s", "n_steps", "run_dir",
-            "worker", "sample",
+            "worker", "sample", "fork_at", "parent",
             *FATIGUE_COLUMNS)
 """Names a grid axis cannot have (result columns, the base axis)."""
 
@@ -109,6 +109,8 @@ class Sweep:
     points: list[Point] = field(default_factory=list)
     design: Design | None = None
     runs_dir: Path | None = None  # a shared folder for the run folders (else <out>/runs)
+    fork_at: float | None = None  # [sweep] fork_at: the points fork from parents at T [s]
+    fork: Any = None  # its plan (a .fork.ForkPlan), made by validate_points
 
     def run_dir(self, out: Path, p: Point) -> Path:
         """Where a point's run folder is: ``<runs_dir>/<id>`` or ``<out>/runs/<id>``."""
@@ -262,6 +264,9 @@ def load_sweep(path: str | Path, jobs: int | None = None,
         runs_dir = Path(given_runs_dir).expanduser()
         runs_dir = (runs_dir if runs_dir.is_absolute() else folder / runs_dir).resolve()
     sw.value("description")  # free text
+    from .fork import parse_fork_at
+
+    fork_at = parse_fork_at(sw.value("fork_at"))
     if len(bases) > 1:
         axes.append(Axis("base", [b.stem for b in bases], [{} for _ in bases], bases))
     for key, spec in grid.items():
@@ -294,7 +299,7 @@ def load_sweep(path: str | Path, jobs: int | None = None,
         axes.append(Axis(AXIS, list(samples), sampled, params=sampled))
     sweep = Sweep(path=path, name=name, bases=bases, axes=axes, fixed=fixed, jobs=jobs,
                   fatigue=fatigue, channels=channels, raw_grid=grid, design=design,
-                  runs_dir=runs_dir)
+                  runs_dir=runs_dir, fork_at=fork_at)
     seen: dict[str, int] = {}
     for index, combo in enumerate(itertools.product(*(range(len(a.labels)) for a in axes))):
         params: dict[str, Any] = {}
@@ -318,10 +323,12 @@ def load_sweep(path: str | Path, jobs: int | None = None,
 
 def validate_points(sweep: Sweep, out: Path) -> None:
     """Load and preflight every point's scenario (``cosim.scenario.load`` with the point's
-    overrides, then the runner's model checks); fills n_steps and the fingerprint. Raises
-    SweepError naming the point and the key; starts nothing."""
+    overrides, then the runner's model checks); fills n_steps and the fingerprint, and with
+    ``fork_at`` the plan of parents and forks (:func:`.fork.plan_forks`). Raises SweepError
+    naming the point and the key; starts nothing."""
     from ..runner import resolve
 
+    resolved_all: dict[str, dict[str, Any]] = {}
     for p in sweep.points:
         try:
             scenario = sc.load(p.base, p.fingerprint_args)
@@ -332,6 +339,11 @@ def validate_points(sweep: Sweep, out: Path) -> None:
         except SuscosimError as exc:
             raise SweepError(f"sweep point '{p.id}' ({_params_text(p.params)}): {exc}") \
                 from None
+        resolved_all[p.id] = resolved
+    if sweep.fork_at is not None:
+        from .fork import plan_forks
+
+        sweep.fork = plan_forks(sweep, out, resolved_all)
 
 
 def _params_text(params: dict[str, Any]) -> str:
