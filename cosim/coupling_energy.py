@@ -77,7 +77,7 @@ def _columns(table: Mapping[str, np.ndarray], name: str) -> np.ndarray:
 
 
 def applied_force(coupling: str, F: np.ndarray, dFdx: np.ndarray, x_seen: np.ndarray,
-                  x_now: np.ndarray, F_before: np.ndarray, r: float, clip: bool,
+                  x_now: np.ndarray, F_before: np.ndarray, r: float | np.ndarray, clip: bool,
                   sign: float) -> np.ndarray:
     """The force the plant applies within a step (as ``nodes/plant/coupling.py`` does).
 

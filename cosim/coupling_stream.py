@@ -76,16 +76,19 @@ class ResidualStream:
     """Feed blocks of a run's rows in order (:meth:`feed`); :meth:`result` gives the totals.
 
     Args:
-        h: the communication step [s]; ``coupling``: ``hold``, ``linear`` or ``jacobian``;
-        exchange: ``sequential`` (lag 0) or ``parallel`` (lag 1).
+        h: the communication step [s], or None for an adaptive one (``run.h = "auto"``: each
+            step's length from the rows' ``t``; a row's carried energy uses the step that
+            ends at it, row 0 the first step); ``coupling``: ``hold``, ``linear`` or
+            ``jacobian``; exchange: ``sequential`` (lag 0) or ``parallel`` (lag 1).
     """
 
-    def __init__(self, h: float, coupling: str, exchange: str) -> None:
-        if not h > 0:
+    def __init__(self, h: float | None, coupling: str, exchange: str) -> None:
+        if h is not None and not h > 0:
             raise ValueError(f"h = {h!r}: the communication step must be > 0 s")
         if coupling not in ("hold", "linear", "jacobian"):
             raise ValueError(f"unknown coupling {coupling!r}")
-        self.h, self.coupling = float(h), coupling
+        self.h, self.coupling = (None if h is None else float(h)), coupling
+        self._t_tail = np.zeros(0)  # adaptive: the last rows' t [s]
         self.lag = 0 if exchange == "sequential" else 1
         self.rows = 0  # rows fed so far
         self.bonds: dict[str, _BondState] | None = None
@@ -113,6 +116,8 @@ class ResidualStream:
                              default=0)
         out: dict[str, np.ndarray] = {}
         lag, h = self.lag, self.h
+        if h is None:
+            return self._feed_adaptive(block, g0, n_new)
         for name, st in self.bonds.items():
             s = st.spec
             new = {"F": _get(block, s.force), "J": _get(block, s.slope),
@@ -145,26 +150,69 @@ class ResidualStream:
         self.rows += n_new
         return out
 
+    def _feed_adaptive(self, block: Mapping[str, np.ndarray], g0: int,
+                       n_new: int) -> dict[str, np.ndarray]:
+        """:meth:`feed` for a non-uniform time base (the rows' ``t``)."""
+        assert self.bonds is not None
+        lag = self.lag
+        tt = np.concatenate([self._t_tail, np.asarray(block["t"], dtype=np.float64)])
+        n_all = self.rows + n_new
+        out: dict[str, np.ndarray] = {}
+        for name, st in self.bonds.items():
+            s = st.spec
+            new = {"F": _get(block, s.force), "J": _get(block, s.slope),
+                   "x": _get(block, s.seen), "v": _get(block, s.velocity)}
+            cur = {key: np.concatenate([st.tail[key], a]) if key in st.tail else a
+                   for key, a in new.items()}
+            F, J, x, v = cur["F"], cur["J"], cur["x"], cur["v"]
+            j = np.arange(max(self.rows, lag), n_all) - g0
+            back = np.where(j + g0 > 0, j - 1, j + 1)  # the step that ends at row j
+            hj = np.abs(tt[j] - tt[np.clip(back, 0, len(tt) - 1)])
+            st.carried += float((hj[:, None] * np.abs(F[j] * v[j - lag])).sum())
+            k_first = max(lag, self.rows - 1 - lag)
+            k = np.arange(k_first, n_all - 1 - lag) - g0
+            if k.size:
+                hk = (tt[k + 1] - tt[k])[:, None]
+                hprev = np.where(k + g0 > 0, tt[k] - tt[np.maximum(k - 1, 0)], hk[:, 0])
+                r_end = hk / np.where(hprev > 0, hprev, hk[:, 0])[:, None]
+                F_k, J_k = F[k], J[k]
+                F_prev = F[np.maximum(k - 1, -g0)]
+                seen = x[k - lag]
+                app_start = applied_force(self.coupling, F_k, J_k, seen, x[k], F_prev, 0.0,
+                                          s.clip, s.sign)
+                app_end = applied_force(self.coupling, F_k, J_k, seen, x[k + 1], F_prev,
+                                        r_end, s.clip, s.sign)
+                dE = 0.5 * hk * ((app_start - F[k + lag]) * v[k]
+                                 + (app_end - F[k + 1 + lag]) * v[k + 1])
+                st.abs_residual += float(np.abs(dE).sum())
+                out[name] = dE.sum(axis=1)
+            else:
+                out[name] = np.zeros(0)
+            st.tail = {key: a[-self._keep:] for key, a in cur.items()}
+        self._t_tail = tt[-self._keep:]
+        self.rows += n_new
+        return out
+
     def result(self) -> dict[str, BondResidual]:
         """The totals so far, per bond (``dE`` empty: the series came block by block)."""
         return {name: BondResidual(np.zeros(0), st.abs_residual, st.carried)
                 for name, st in (self.bonds or {}).items()}
 
 
-def residual_of_table_file(path: str | Path, h: float, coupling: str, exchange: str,
+def residual_of_table_file(path: str | Path, h: float | None, coupling: str, exchange: str,
                            batch_rows: int = 65_536) -> dict[str, BondResidual]:
     """Both bonds' residual totals of a ``table.parquet``, read a row group at a time
     (memory independent of the run's length; :func:`cosim.table.iter_table`)."""
     from .table import iter_table
 
     stream = ResidualStream(h, coupling, exchange)
-    for block in iter_table(path, keep=lambda c: c.split("[")[0] in COLUMNS,
+    for block in iter_table(path, keep=lambda c: c == "t" or c.split("[")[0] in COLUMNS,
                             batch_rows=batch_rows):
         stream.feed(block)
     return stream.result()
 
 
-def summary_of_table_file(path: str | Path, h: float, coupling: str, exchange: str
+def summary_of_table_file(path: str | Path, h: float | None, coupling: str, exchange: str
                           ) -> dict[str, float]:
     """``summary.json``'s ``coupling_energy_residual`` of a ``table.parquet`` read in row
     groups (:func:`cosim.coupling_energy.summary`); ``{}`` for a run without either bond."""
@@ -206,7 +254,7 @@ class LiveResidual:
             among them are read.
     """
 
-    def __init__(self, h: float, coupling: str, exchange: str,
+    def __init__(self, h: float | None, coupling: str, exchange: str,
                  channels: Iterable[str]) -> None:
         from .coupling_energy import WARNING_THRESHOLD
 
@@ -274,7 +322,7 @@ class LiveResidual:
 def _block(rows: list[tuple[int, float, dict[str, Mapping[str, Any]]]],
            channels: tuple[str, ...]) -> dict[str, np.ndarray]:
     """The rows' bond columns, named as the table names them (``v_w`` or ``v_w[i]``)."""
-    block: dict[str, np.ndarray] = {}
+    block: dict[str, np.ndarray] = {"t": np.asarray([r[1] for r in rows], dtype=np.float64)}
     for chan in channels:
         for fld in _FIELDS[chan]:
             a = np.asarray([r[2][chan][fld] for r in rows], dtype=np.float64)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .errors import ScenarioError
+from .step_size import AdaptiveStep
 
 LAGGED: frozenset[tuple[str, str]] = frozenset({("plant", "state")})
 """Inputs a node takes from the previous step in the parallel exchange."""
@@ -38,6 +39,12 @@ class RunSettings:
     substeps: int
     stall_timeout_s: float
     start_timeout_s: float
+    t_end: float = 0.0
+    """Simulated time [s] (t_N)."""
+    adaptive: AdaptiveStep | None = None
+    """``run.h = "auto"``: the step is chosen as the run goes (:mod:`cosim.step_size`); then
+    :attr:`h` is h_min and :attr:`n_steps` an upper bound, and a node knows the last step by
+    its time (:meth:`is_last`)."""
 
     @classmethod
     def of(cls, scenario: Mapping[str, Any]) -> RunSettings:
@@ -53,7 +60,9 @@ class RunSettings:
                            coupling=str(run.get("coupling", "jacobian")),
                            substeps=int(run.get("substeps", 1)),
                            stall_timeout_s=float(run.get("stall_timeout_s", 5.0)),
-                           start_timeout_s=float(run.get("start_timeout_s", 60.0)))
+                           start_timeout_s=float(run.get("start_timeout_s", 60.0)),
+                           t_end=float(run.get("t_end", 0.0)),
+                           adaptive=AdaptiveStep.of_run(dict(run)))
         except KeyError as exc:
             raise ScenarioError(f"run.{exc.args[0]}", None, "a value") from None
         except (TypeError, ValueError) as exc:
@@ -61,6 +70,13 @@ class RunSettings:
         if settings.exchange not in EXCHANGES:
             raise ScenarioError("run.exchange", settings.exchange, " or ".join(EXCHANGES))
         return settings
+
+    def is_last(self, k: int, t: float) -> bool:
+        """Whether step ``k`` at ``t`` [s] is the run's last: k = N for a fixed step, t =
+        t_end for an adaptive one."""
+        if self.adaptive is not None:
+            return self.adaptive.is_last(t, self.t_end)
+        return k == self.n_steps
 
     @property
     def lag(self) -> int:

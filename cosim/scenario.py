@@ -64,7 +64,16 @@ RUN_KEYS: dict[str, Key] = {
     "name": Key(str, "run", doc="run name; the run id is <name>-<timestamp> unless run.id"),
     "id": Key(str, "", doc="explicit run id (letters, digits, _ . -)"),
     "t_end": Key(float, 0.0, doc="simulated time [s]; 0 = from road length / speed"),
-    "h": Key(float, 0.001, positive=True, low=1e-6, high=0.1, doc="communication step [s]"),
+    "h": Key(float, 0.001, positive=True, low=1e-6, high=0.1,
+             doc="communication step [s], or \"auto\": chosen each step from the coupling's "
+                 "energy residual between h_min and h_max (cosim/step_size.py)"),
+    "h_min": Key(float, 1e-4, positive=True, low=1e-6, high=0.1,
+                 doc="run.h = \"auto\": the smallest step [s]"),
+    "h_max": Key(float, 4e-3, positive=True, low=1e-6, high=0.1,
+                 doc="run.h = \"auto\": the largest step [s]"),
+    "h_tol": Key(float, 1e-3, positive=True, low=1e-9, high=1.0,
+                 doc="run.h = \"auto\": the step's energy residual allowed, relative to "
+                     "the energy its bonds carry over the step"),
     "exchange": Key(str, "sequential", ("sequential", "parallel"),
                     doc="sequential: thesis scheme (plant, then forces at the same t_k); "
                         "parallel: Jacobi, everybody on the previous step's inputs"),
@@ -91,7 +100,7 @@ RUN_KEYS: dict[str, Key] = {
 }
 
 
-RESOLVED_RUN_KEYS = ("dir", "n_steps", "nodes", "t_end_source", "resume")
+RESOLVED_RUN_KEYS = ("dir", "n_steps", "nodes", "t_end_source", "resume", "adaptive")
 """Keys the orchestrator adds when it resolves a scenario (not for users to set)."""
 
 
@@ -185,8 +194,16 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
     run = out.setdefault("run", {})
     r = ConfigReader(run, "run")
     r.only(RUN_KEYS, unlisted=RESOLVED_RUN_KEYS)
+    if run.get("h") == "auto" or run.get("adaptive"):  # the step is chosen as the run goes
+        run["adaptive"] = True
+        run["h"] = _read_key(r, "h_min", RUN_KEYS["h_min"])  # the finest grid: N's bound
     for key, spec in RUN_KEYS.items():
         run[key] = _read_key(r, key, spec)
+    if run.get("adaptive"):
+        run["h"] = run["h_min"]
+        if not run["h_min"] < run["h_max"]:
+            raise ScenarioError("run.h_max", run["h_max"], f"more than run.h_min = "
+                                f"{run['h_min']:g} s (run.h = \"auto\")")
     if run["id"]:
         check_name("run.id", run["id"])
     check_name("run.name", run["name"])

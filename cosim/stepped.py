@@ -47,6 +47,8 @@ from .wire import Message
 
 __all__ = ["LAGGED", "Fields", "outputs_of", "run_stepped"]
 
+_STATE = ("plant", "state")
+
 
 class Fields(Mapping[str, np.ndarray]):
     """The fields of one input message as float arrays, each converted when first read
@@ -133,9 +135,14 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
         state = plan.restored()
         if state is not None:
             node.restore_state(state)
-        for k in range(plan.start_k, n + 1):
-            t = k * h
+        # run.h = "auto": the plant chooses each step; its state's t says when a step is
+        adaptive = settings.adaptive is not None  # and the last one is the one at t_end
+        if adaptive and _STATE not in tags:
+            raise RunError(f"{name}: run.h = 'auto' needs a node that reads plant/state")
+        k = plan.start_k
+        while True:
             msgs = part.wait(settings.needs(tags, k))
+            t = msgs[_STATE].t if adaptive else k * h
             inputs = {names[tag]: Fields(m) for tag, m in msgs.items()}
             for channel, fields in outputs(node.step(k, t, inputs), k).items():
                 part.publish(channel, k, t, fields)
@@ -143,11 +150,14 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
             if k + 1 in plan.due:  # the state at the start of step k + 1
                 part.flush_records()
                 plan.save(part, k + 1, node.checkpoint_state())
+            if settings.is_last(k, t) or k >= n:
+                break
+            k += 1
     finally:
         close = getattr(node, "close", None)
         if callable(close):
             close()
-    part.finish(n, n * h)
+    part.finish(k, t)
 
 
 def _check_can_checkpoint(node: Any, plan: NodeCheckpoints, name: str) -> None:

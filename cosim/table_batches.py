@@ -36,3 +36,33 @@ def parquet_batches(path: Path, columns: Sequence[str], rows: int = BATCH_ROWS
         del tab
         for i in range(0, arrs[0].size if arrs else 0, rows):
             yield {c: a[i:i + rows] for c, a in zip(cols, arrs, strict=True)}
+
+
+def uniform_grid_size(t0: float, t1: float, h: float) -> int:
+    """Samples of the uniform grid t0, t0 + h, ... that lie within [t0, t1] [s]."""
+    return int(np.floor((t1 - t0) / h * (1 + 1e-12) + 1e-9)) + 1
+
+
+def resampled(batches: Iterator[dict[str, np.ndarray]], h: float
+              ) -> Iterator[dict[str, np.ndarray]]:
+    """The batches of a table with a non-uniform ``t`` (an adaptive step, ``run.h = "auto"``)
+    on the uniform grid t0 + i h [s], each column linearly interpolated between the rows
+    around a grid point: for the methods that need a uniform time base (PSDs, the ride
+    metrics). Streamed (one row held between batches); the first grid point is the first
+    row."""
+    prev: dict[str, np.ndarray] | None = None
+    t0: float | None = None
+    i_next = 0  # the next grid point's index
+    for b in batches:
+        if t0 is None:
+            t0 = float(b["t"][0])
+        cur = b if prev is None else {c: np.concatenate([prev[c], v]) for c, v in b.items()}
+        t = cur["t"]
+        i_last = uniform_grid_size(t0, float(t[-1]), h) - 1
+        if i_last >= i_next:
+            grid = t0 + h * np.arange(i_next, i_last + 1)
+            out = {c: np.interp(grid, t, v) for c, v in cur.items() if c != "t"}
+            out["t"] = grid
+            yield out
+            i_next = i_last + 1
+        prev = {c: v[-1:] for c, v in cur.items()}

@@ -87,6 +87,8 @@ class Clock:
         self.bus, self.run_id, self.scenario, self.auth = bus, run, scenario, auth
         self.status = {n: NodeStatus() for n in nodes}
         self.n_steps = int(scenario["run"]["n_steps"])
+        """N; for an adaptive step (``run.h = "auto"``) the bound t_end / h_min."""
+        self._adaptive = bool(scenario["run"].get("adaptive"))
         self.on_progress = on_progress or (lambda k, n: None)
         self.check_processes = check_processes or (lambda: None)
         self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
@@ -175,7 +177,8 @@ class Clock:
             try:
                 msg = decode(self.auth.verify(key, payload) if self.auth else payload)
                 check_node_control(msg.kind, msg.d)
-                if msg.k > self.n_steps or (msg.kind == "done" and msg.k != self.n_steps):
+                if msg.k > self.n_steps or (msg.kind == "done" and msg.k != self.n_steps
+                                            and not self._adaptive):
                     raise WireError(f"implausible {msg.kind} at step {msg.k} of {self.n_steps}")
                 if msg.kind == "checkpoint" and (msg.k not in self._ckpt_due
                                                  or msg.d["file"] != f"{node}.ckpt"):

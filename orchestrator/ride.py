@@ -32,6 +32,8 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
+
 TABLE = "table.parquet"
 
 
@@ -68,6 +70,15 @@ def _finite_or_none(obj):
     return obj
 
 
+def _adaptive_h(d: Path) -> float | None:
+    """h_min [s] of a run whose step was adaptive (its scenario.json), else None."""
+    try:
+        run = json.loads((d / "scenario.json").read_text()).get("run", {})
+    except (OSError, ValueError, AttributeError):
+        return None
+    return float(run["h_min"]) if run.get("adaptive") and run.get("h_min") else None
+
+
 def _fail(message: str) -> int:
     print(f"suscosim ride: {message}", file=sys.stderr)
     return 2
@@ -102,6 +113,14 @@ def main(argv: list[str] | None = None) -> int:
             return _fail(f"{d / TABLE}: unreadable ({type(exc).__name__}: {exc})")
         if "t" not in table or len(table["t"]) < 2:
             return _fail(f"{d / TABLE}: no time column 't' with at least two samples")
+        h = _adaptive_h(d)
+        if h is not None:  # run.h = "auto": the metrics need a uniform time base
+            from cosim.table_batches import resampled
+
+            print(f"suscosim ride: {d}: the run's step was adaptive: resampled linearly to "
+                  f"h_min = {h:g} s", file=sys.stderr)
+            table = next(resampled(iter([{c: np.asarray(v, dtype=float)
+                                           for c, v in table.items() if c != "k"}]), h))
         runs[name] = table
     if args.baseline is not None and args.baseline not in runs:
         return _fail(f"--baseline {args.baseline!r}: not one of the runs {names}")

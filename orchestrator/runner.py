@@ -60,6 +60,14 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
             raise ScenarioError("run.t_end", 0, "a duration > 0 s (or a road with length_m "
                                 "and speed_kmh to derive it from)")
         run["t_end"], run["t_end_source"] = float(duration), "road length / speed"
+    if run.get("adaptive"):
+        if run["exchange"] != "sequential":
+            raise ScenarioError("run.exchange", run["exchange"], "\"sequential\" with run.h "
+                                "= \"auto\" (the step is chosen from the last step's "
+                                "residual, which the parallel exchange has a step late)")
+        if run.get("checkpoint_every_s"):
+            raise ScenarioError("run.checkpoint_every_s", run["checkpoint_every_s"],
+                                "0 with run.h = \"auto\" (checkpoints fall on fixed steps)")
     run["n_steps"] = sc.n_steps(run["t_end"], run["h"])
     run["t_end"] = run["n_steps"] * run["h"]  # what is simulated: a whole number of steps
     if run.get("checkpoint_every_s"):  # a whole number of steps, else ScenarioError
@@ -80,6 +88,8 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
              rec: dict[str, Any], status: str, error: str = "") -> dict[str, Any]:
     run = scenario["run"]
     n = run["n_steps"]
+    if run.get("adaptive") and rec.get("rows"):  # N is known once the run got to t_end
+        n = int(rec["rows"]) - 1
     return {
         "status": status, "error": error, "run_id": run["id"], "mode": run["mode"],
         "exchange": run["exchange"], "coupling": run["coupling"], "h": run["h"],
@@ -95,7 +105,7 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
         "rows": rec.get("rows", 0), "files": rec.get("files", {}),
         "channels": rec.get("stats", {}),
     } | ({"table_note": rec["note"]} if rec.get("note") else {}) \
-      | _coupling_summary(scenario, rec, status)
+      | _coupling_summary(scenario, rec, status) | _adaptive_summary(scenario, rec)
 
 
 RESIDUAL_WARNING = WARNING_THRESHOLD
@@ -113,10 +123,35 @@ def _coupling_summary(scenario: dict[str, Any], rec: dict[str, Any],
     from cosim.coupling_stream import summary_of_table_file
 
     try:  # by row groups (#32): the orchestrator's memory does not grow with the run
-        res = summary_of_table_file(parquet, float(run["h"]), run["coupling"], run["exchange"])
+        res = summary_of_table_file(parquet, None if run.get("adaptive") else float(run["h"]),
+                                    run["coupling"], run["exchange"])
     except (OSError, SuscosimError, KeyError, ValueError):
         return {}
     return {"coupling_energy_residual": res} if res else {}
+
+
+def _adaptive_summary(scenario: dict[str, Any], rec: dict[str, Any]) -> dict[str, Any]:
+    """``adaptive_step`` of a run with ``run.h = "auto"``: its settings and the steps it
+    took (from the table's ``t``)."""
+    run = scenario["run"]
+    parquet = (rec.get("files") or {}).get("parquet")
+    if not run.get("adaptive"):
+        return {}
+    out: dict[str, Any] = {"h_min": run["h_min"], "h_max": run["h_max"], "h_tol": run["h_tol"]}
+    if parquet:
+        import numpy as np
+        import pyarrow.parquet as pq
+
+        try:
+            t = pq.read_table(parquet, columns=["t"]).column("t").to_numpy()
+        except (OSError, KeyError, ValueError):
+            return {"adaptive_step": out}
+        if t.size > 1:
+            h = np.diff(t)
+            out.update(steps=int(h.size), h_mean=float(h.mean()), h_smallest=float(h.min()),
+                       h_largest=float(h.max()),
+                       fixed_steps_at_h_min=int(round((t[-1] - t[0]) / run["h_min"])))
+    return {"adaptive_step": out}
 
 
 def strict_json(obj: Any, key: str = "", nulled: list[str] | None = None) -> Any:

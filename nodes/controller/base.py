@@ -72,6 +72,10 @@ class Controller(ABC):
 
     #: registry name of the law (set by subclasses)
     law: str = ""
+    #: the law integrates a state with the step ``h`` it was built with (an MR damper's fluid,
+    #: a law function taking ``h`` or ``memory``, an FMU's communication step): it cannot run
+    #: with ``run.h = "auto"`` (refused by the preflight)
+    fixed_step: bool = False
     #: "relative" (v_rel = v_w - v_b) or "damper" (v_rel = the plant's v_damper); set by
     #: :func:`nodes.controller.laws.build_controller` from the ``velocity`` key.
     velocity: str = "relative"

@@ -224,6 +224,8 @@ def _map_parameters(r: ConfigReader, variables: Mapping[str, Any]) -> dict[str, 
 class FmuController(Controller):
     """Runs one FMU instance per corner, one doStep (or ``substeps``) per communication step."""
 
+    fixed_step = True  # the FMU advances by the fixed communication step h
+
     law = "fmu"
 
     def __init__(self, n_corners: int, h: float, plan: FmuPlan, substeps: int,

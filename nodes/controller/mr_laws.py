@@ -52,6 +52,8 @@ class MRController(Controller):
     """Base of the MR laws: owns an :class:`MRDamper` per corner and the interpolation of the
     inputs between calls. Subclasses give the current rule."""
 
+    fixed_step = True  # the damper's first-order current lag, integrated with h
+
     def __init__(self, n_corners: int, h: float, params: MRParams) -> None:
         super().__init__(n_corners, h)
         self.damper = MRDamper(n_corners, params)

@@ -92,6 +92,12 @@ def static_check(scenario: dict[str, Any], n_corners: int) -> None:
     """Preflight: build the law once (raises ScenarioError on a bad ``controller`` section,
     or on ``velocity = "damper"`` with a plant model that has no damper velocity)."""
     law = build_controller(scenario["controller"], n_corners, scenario["run"]["h"])
+    try:
+        if scenario["run"].get("adaptive") and law.fixed_step:
+            raise ScenarioError("run.h", "auto", f"a fixed step for controller.law = "
+                                f"{law.law!r}: it integrates a state with a fixed step")
+    finally:
+        law.close()
     model = scenario.get("vehicle", {}).get("model")
     if law.velocity == "damper" and model not in DAMPER_VELOCITY_MODELS:
         raise ScenarioError("controller.velocity", "damper",

@@ -289,6 +289,7 @@ class FunctionLaw(Controller):
         assert spec.fn is not None
         self.law, self.spec, self.settings = spec.name, spec, settings
         self.memory: dict[str, Any] = {}
+        self.fixed_step = "h" in spec.inputs or "memory" in spec.inputs
 
     def _input(self, name: str, t: float, state: Mapping[str, Any],
                velocities: tuple[np.ndarray, np.ndarray, np.ndarray]) -> Any:

@@ -27,6 +27,7 @@ from cosim.listener import Listener, Received
 from cosim.load_blocks import StepBlocks
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
+from cosim.run_settings import RunSettings
 
 from .config import FatigueConfig
 from .run_dir import track_length, write_results
@@ -55,8 +56,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     while listener.start is None:  # the handshake
         if (got := listener.poll(timeout=0.05)) is not None:
             early.append(got)
-    n_steps = int(listener.start["n_steps"])
-    h = float(run_cfg["h"])
+    n_steps = int(listener.start["n_steps"])  # run.h = "auto": a bound; t says the last
+    settings = RunSettings.of(scenario)
+    adaptive = settings.adaptive is not None
     L = cfg.track_length_m if cfg.track_length_m is not None else \
         track_length(scenario, np.array([0.0, run_cfg["t_end"]]))
     steps = StepBlocks(max(1, cfg.block_samples))
@@ -73,7 +75,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                            f"resumes at {plan.start_k}")
     last_input = time.monotonic()
     last_report = 0.0
-    while next_k <= n_steps:
+    done = False
+    while not done:
         got = early.pop(0) if early else listener.poll(timeout=0.05)  # raises on abort
         now = time.monotonic()
         if got is not None:
@@ -90,16 +93,19 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 raise RunError(f"fatigue: malformed load step {k}: {exc}") from None
             next_k, t_last = k + 1, t
             last_input = now
-            if steps.full or next_k > n_steps:
+            done = settings.is_last(k, t) or k >= n_steps
+            if steps.full or done:
                 if live is None:
                     live = LiveFatigue(cfg, [f"{ch.PLANT}/{ch.ARM}/{f}" for f in steps.fields],
-                                       L, total_samples=n_steps + 1)
+                                       L, total_samples=None if adaptive else n_steps + 1)
                 live.update(*steps.take())
-                part.progress(k, k * h)
-                if next_k <= n_steps and now - last_report >= REPORT_PERIOD_S:
+                part.progress(k, t)
+                if not done and now - last_report >= REPORT_PERIOD_S:
                     last_report = now
                     # residue closed: what the life would be if the run ended here
-                    _report(part, live.result(), k, t_last, L * next_k / (n_steps + 1))
+                    share = (t / settings.t_end if adaptive and settings.t_end > 0
+                             else next_k / (n_steps + 1))
+                    _report(part, live.result(), k, t_last, L * share)
             if next_k in plan.due:  # load steps < next_k taken: the engine and its buffer
                 plan.save(part, next_k, {"live": live, "steps": steps, "next_k": next_k,
                                          "t_last": t_last})
@@ -108,10 +114,10 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     assert live is not None
     result = live.result()
     result.source = "live"
-    _report(part, result, n_steps, t_last, L)
+    _report(part, result, next_k - 1, t_last, L)
     out = Path(run_cfg["dir"]) / "fatigue"
     write_results(result, out)
-    part.finish(n_steps, n_steps * h, min_life_km=_finite(result.life_km),
+    part.finish(next_k - 1, t_last, min_life_km=_finite(result.life_km),
                 min_life_repeats=_finite(result.life_repeats),
                 max_damage=result.max_damage, critical_node_id=result.critical_node_id,
                 files=str(out))

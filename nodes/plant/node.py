@@ -20,9 +20,11 @@ from typing import Any, cast
 
 from cosim import channels as ch
 from cosim import node_kinds as nk
+from cosim.errors import RunError
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
 from cosim.run_settings import RunSettings
+from cosim.step_size import step_residual
 
 from .coupling import StepInputs, substep_forces
 from .models import build_plant_model
@@ -46,7 +48,15 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         part.start_at(plan.start_k)
         start = part.handshake(info=info, timeout_s=settings.start_timeout_s)
         n = int(start["n_steps"])
-        dt = h / n_sub
+        ctrl = settings.adaptive  # run.h = "auto": the step is chosen as the run goes
+        if ctrl is not None and (lag or plan.due or plan.resuming):
+            raise RunError("plant: run.h = 'auto' needs the sequential exchange and no "
+                           "checkpoints (preflight should have said so)")
+        h_k = h if ctrl is None else ctrl.first  # this step's length [s]
+        h_lin = h  # the last step's length: linear extrapolation's base [s]
+        app_end: tuple[Any, Any] | None = None  # forces applied at the last step's end
+        eps_prev: float | None = None
+        t = plan.start_k * h
         before: StepInputs | None = None
         later: list[tuple[str, int, float, dict]] = []
         prev = st = model.state()
@@ -57,8 +67,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             if lag:  # the force nodes compute step start_k from the state of the step before
                 part.publish(ch.STATE, plan.start_k - 1, (plan.start_k - 1) * h, prev,
                              record=False)
-        for k in range(plan.start_k, n + 1):
-            t = k * h
+        k = plan.start_k
+        while True:
+            if ctrl is None:
+                t = k * h
+            elif k > n:
+                raise RunError(f"plant: step {k} at t = {t:.6g} s passes the bound {n} of "
+                               f"t_end / h_min")
             seen = prev if lag else st  # what the force nodes computed this step's forces from
             part.publish(ch.STATE, k, t, st)
             # last step's response and loads go out now, while the force nodes work on
@@ -77,7 +92,16 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 F_t=forces["F_t"], k_t=forces["k_t"], F_d=forces["F_d"],
                 c_eff=forces["c_eff"], z_w=seen["z_w"], v_rel=seen["v_w"] - seen["v_b"],
             )
-            F_t, F_d = substep_forces(mode, now, before, 0.0, h,
+            if ctrl is not None:  # the last step's energy residual sets this one's length
+                if app_end is not None:
+                    dE, carried = step_residual(app_end[0], now.F_t, st["v_w"], app_end[1],
+                                                now.F_d, st["v_w"] - st["v_b"], h_lin)
+                    eps = ctrl.error(dE, carried)
+                    h_k, eps_prev = ctrl.next(h_lin, eps, eps_prev), eps
+                if not settings.is_last(k, t):  # (the last step's one substep: a_b, a_w)
+                    h_k = ctrl.clamp_to_end(h_k, t, settings.t_end)
+            dt = h_k / n_sub
+            F_t, F_d = substep_forces(mode, now, before, 0.0, h_lin,
                                       st["z_w"], st["v_w"] - st["v_b"])
             F_s = model.spring_force()
             extra = model.extra_response()
@@ -93,16 +117,20 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             }))
             later.extend((name, k, t, values) for name, values in model.loads().items())
             part.progress(k, t)
-            if k == n:
+            if settings.is_last(k, t):
                 for name, kk, tt, values in later:
                     part.publish(name, kk, tt, values)
                 break
             cur = after
             for j in range(1, n_sub):
-                F_t, F_d = substep_forces(mode, now, before, j * dt, h,
+                F_t, F_d = substep_forces(mode, now, before, j * dt, h_lin,
                                           cur["z_w"], cur["v_w"] - cur["v_b"])
                 model.substep(dt, F_t, F_d)
                 cur = model.state()
+            if ctrl is not None:  # what the coupling applies at the step's end, and t_k+1
+                app_end = substep_forces(mode, now, before, h_k, h_lin,
+                                         cur["z_w"], cur["v_w"] - cur["v_b"])
+                h_lin, t = h_k, t + h_k
             before, prev, st = now, st, cur  # cur: the state at t_{k+1}
             if k + 1 in plan.due:  # checkpoint k + 1: steps <= k sent, then the state
                 for name, kk, tt, values in later:
@@ -111,7 +139,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 part.flush_records()
                 plan.save(part, k + 1, {"model": model.checkpoint_state(), "before": before,
                                         "prev": prev, "st": st})
-        part.finish(n, n * h)
+            k += 1
+        part.finish(k, t)
     finally:
         model.close()
 

@@ -50,6 +50,7 @@ from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
+from cosim.run_settings import RunSettings
 from cosim.table_writer import TableWriter, table_of_journal
 from cosim.wire import Message, decode
 
@@ -59,6 +60,8 @@ log = logging.getLogger("suscosim.node")
 FLUSH_PERIOD_S = 0.05
 EARLY_MAX = 100_000
 """Data messages held before the clock's start says which channels the run has."""
+STATE_CHANNEL = f"{ch.PLANT}/{ch.STATE}"
+"""The channel whose time says which step is the run's last (:meth:`RunSettings.is_last`)."""
 LIVE_PERIOD_S = 0.1
 """``recorder/coupling`` is published at most this often (wall time) while the run goes."""
 
@@ -110,10 +113,12 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     early: list[tuple[str, str, bytes, Message]] = []
     n_steps = None
     duplicates = 0
+    settings = RunSettings.of(scenario)
+    last: tuple[int, float] | None = None  # (k, t) of the run's last step, once known
 
     def record(node: str, channel: str, raw: bytes, msg: Message | None = None) -> None:
         """Validate, journal and tabulate one data message of ``node/channel``."""
-        nonlocal duplicates
+        nonlocal duplicates, last
         if msg is None:
             try:
                 msg = decode(raw)
@@ -147,6 +152,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             return
         steps.add(msg.k)
         journal.append(name, raw)
+        if name == STATE_CHANNEL and settings.is_last(msg.k, msg.t):
+            last = (msg.k, msg.t)
         if live is not None:
             live.add(name, msg.k, msg.t, msg.d)
             if table.rows > rows:  # this message completed the row of its step
@@ -247,7 +254,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 k = done_k()
                 checkpoint(k)
                 part.progress(k, k * run_cfg["h"])
-                if k >= n_steps:
+                if last is not None and k >= last[0]:
                     break
     except RunError:
         for batch in listener.drain():  # the other nodes' last batches, sent as they stop
@@ -277,14 +284,16 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         return {"stats": table.stats(), "files": files, "rows": table.rows, "torn": False,
                 "undecodable": 0, "duplicates": duplicates}
 
+    assert last is not None
+    n_steps, t_last = last  # N and t_N (for an adaptive step: known when the run got there)
     try:
-        result = _with_heartbeat(part, n_steps, n_steps * run_cfg["h"], finish_table,
+        result = _with_heartbeat(part, n_steps, t_last, finish_table,
                                  min(1.0, part.stall_timeout_s / 4))
     except OSError as exc:
         if table is not None:
             table.abandon()
         raise _write_error(exc, folder) from None
-    part.finish(n_steps, n_steps * run_cfg["h"], **result)
+    part.finish(n_steps, t_last, **result)
 
 
 def _live_residual(run_cfg: dict[str, Any], channels: set[str]) -> LiveResidual | None:
@@ -292,7 +301,8 @@ def _live_residual(run_cfg: dict[str, Any], channels: set[str]) -> LiveResidual 
     ``exchange``, which a resolved scenario always has, says nothing to compute it by)."""
     if "coupling" not in run_cfg or "exchange" not in run_cfg:
         return None
-    return LiveResidual(float(run_cfg["h"]), run_cfg["coupling"], run_cfg["exchange"],
+    h = None if run_cfg.get("adaptive") else float(run_cfg["h"])  # None: each step's from t
+    return LiveResidual(h, run_cfg["coupling"], run_cfg["exchange"],
                         channels)
 
 

@@ -119,6 +119,10 @@ def static_check(scenario: dict[str, Any]) -> float | None:
     """Preflight: build road and tyre (raises ScenarioError); returns the road's duration [s]."""
     if is_magic_formula(scenario["tyre"]):
         build_tyre_3d(scenario["tyre"])
+        if scenario.get("run", {}).get("adaptive"):
+            raise ScenarioError("run.h", "auto", "a fixed step with tyre.model = "
+                                "\"magic_formula\" (its relaxation lengths are integrated "
+                                "with a fixed step)")
     else:
         build_tyre(scenario["tyre"])
     return build_road(scenario["road"]).duration_s

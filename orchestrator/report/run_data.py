@@ -123,6 +123,12 @@ def load_run(d: Path) -> RunData:
                 r.table_note = "journal.msgpack holds no complete step" + extra
         except Exception as exc:
             r.problems.append(f"journal.msgpack: unreadable ({type(exc).__name__}: {exc})")
+    run_cfg = (r.scenario or {}).get("run") or {}
+    if r.source is not None and run_cfg.get("adaptive") and "t" in r.source.names:
+        h = float(run_cfg.get("h_min") or run_cfg["h"])  # an adaptive step: a uniform grid
+        r.source.set_uniform(h)
+        r.table_note += (f"; the run's step was adaptive (run.h = \"auto\"): resampled "
+                         f"linearly to h_min = {h:g} s for the plots, PSDs and ride metrics")
     if r.source is not None and ("t" not in r.source.names or r.source.n_rows < 2):
         r.problems.append(f"{r.table_note}: fewer than 2 samples")
         r.source = None

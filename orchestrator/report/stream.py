@@ -49,10 +49,38 @@ class TableSource:
             self.names = [n for n in f.schema_arrow.names if n != "k"]
             self.n_rows = int(f.metadata.num_rows)
 
+    resample_h: float | None = None
+    """A run with a non-uniform time base (``run.h = "auto"``): the batches are the table
+    linearly interpolated onto a uniform grid of this step [s] (:meth:`set_uniform`)."""
+
+    def set_uniform(self, h: float) -> None:
+        """Read the table on the uniform grid of step ``h`` [s] from now on (PSDs and ride
+        metrics need one): :attr:`n_rows` becomes the grid's size."""
+        from cosim.table_batches import uniform_grid_size
+
+        t0 = t1 = None
+        for b in self._raw_batches(["t"]):
+            t0 = float(b["t"][0]) if t0 is None else t0
+            t1 = float(b["t"][-1])
+        if t0 is None or t1 is None:
+            return
+        self.resample_h = h
+        self.n_rows = uniform_grid_size(t0, t1, h)
+
     def batches(self, columns: Sequence[str] | None = None, rows: int = BATCH_ROWS
                 ) -> Iterator[dict[str, np.ndarray]]:
         """``{column: float values}`` of ``columns`` (default all; ``t`` always), ``rows``
-        rows at a time."""
+        rows at a time (resampled: :attr:`resample_h`)."""
+        if self.resample_h is None:
+            yield from self._raw_batches(columns, rows)
+            return
+        from cosim.table_batches import resampled
+
+        yield from resampled(self._raw_batches(columns, rows), self.resample_h)
+
+    def _raw_batches(self, columns: Sequence[str] | None = None, rows: int = BATCH_ROWS
+                     ) -> Iterator[dict[str, np.ndarray]]:
+        """The table's own rows, ``rows`` at a time."""
         cols = list(dict.fromkeys(["t", *(self.names if columns is None else columns)]))
         cols = [c for c in cols if c in self.names]
         if self._table is not None:

@@ -160,7 +160,8 @@ class ReplayResidual:
 
         names = sorted(f"{n}/{c}" for n, c in channels)
         self.table = TableWriter(names, None)
-        self.live = LiveResidual(float(run["h"]), run["coupling"], run["exchange"], names)
+        self.live = LiveResidual(None if run.get("adaptive") else float(run["h"]),
+                                 run["coupling"], run["exchange"], names)
         self.state, self.period_s = state, period_s
         self._last = 0.0
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,7 +30,7 @@ from scipy.spatial import cKDTree
 from cosim.errors import InputFileError
 
 from ..influence import InfluenceSet, cache_dir
-from .mesh import TetMesh, mesh_cad, read_mesh
+from .mesh import Ball, TetMesh, mesh_cad, read_mesh
 from .schema import Joint, Part
 from .solid import PartFE
 
@@ -88,8 +89,9 @@ def support_nodes(xyz: np.ndarray) -> list[int]:
 
 
 def part_model(part: Part, mesh_size: float | None = None,
-               fillet_size: float | None = None) -> PartModel:
-    """Mesh and set up the FE of a part (sizes default to the part file's)."""
+               fillet_size: float | None = None, refine: Sequence[Ball] = ()) -> PartModel:
+    """Mesh and set up the FE of a part (sizes default to the part file's); ``refine``:
+    local refinement balls of the gmsh mesh (``mesh.mesh_cad``; CAD parts only)."""
     size = part.mesh_size if mesh_size is None else float(mesh_size)
     fsize = (part.fillet_size * size / part.mesh_size if fillet_size is None
              else float(fillet_size))
@@ -97,10 +99,12 @@ def part_model(part: Part, mesh_size: float | None = None,
     if part.kind == "builtin":
         from .cad_arm import load_params
 
-        mesh = mesh_cad(None, size, fsize, builtin_params=load_params())
+        mesh = mesh_cad(None, size, fsize, builtin_params=load_params(), refine=refine)
     elif part.kind == "cad":
-        mesh = mesh_cad(Path(part.geometry), size, fsize)  # a STEP carries its unit
+        mesh = mesh_cad(Path(part.geometry), size, fsize, refine=refine)  # STEP: its unit
     else:
+        if refine:
+            raise ValueError("local refinement needs a CAD part (a mesh file is read as is)")
         mesh = read_mesh(Path(part.geometry), scale=part.scale)
     mat = part.material
     fe = PartFE(mesh, mat.E, mat.nu, mat.rho)

@@ -9,10 +9,15 @@ sets. The FE (``solid.py``) uses quadratic tetrahedra (scikit-fem ``ElementTetP2
 gmsh meshing: a size field refines to ``fillet_size`` on the fillet faces and along the
 sharp re-entrant edges (``features.py``), growing to ``size`` over 4 fillet sizes; mesh
 algorithm HXT/Delaunay, optimised (``Mesh.Optimize``), deterministic on one thread.
+``refine`` adds local refinement (the convergence table's meshes, ``card.convergence``):
+balls (centre, radius, size) inside which the element size is ``size``, growing to the
+global size over a layer of ``RAMP`` x (global size) outside; the size at a point is the
+smallest any field asks.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,6 +27,11 @@ from cosim.errors import InputFileError
 
 MESH_SUFFIXES = {".msh": "gmsh", ".inp": "abaqus", ".bdf": "nastran", ".nas": "nastran"}
 CAD_SUFFIXES = (".step", ".stp")
+RAMP = 1.0
+"""Transition layer outside a refinement ball, in global element sizes."""
+
+Ball = tuple[float, float, float, float, float]
+"""A refinement ball: centre x, y, z [m], radius [m], element size inside [m]."""
 
 
 @dataclass
@@ -97,7 +107,8 @@ def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
 
 
 def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
-                        sharp_curves: list[int]) -> tuple[np.ndarray, np.ndarray]:
+                        sharp_curves: list[int], refine: Sequence[Ball] = ()
+                        ) -> tuple[np.ndarray, np.ndarray]:
     """Mesh the current gmsh model's volumes (first order); (p, t) with gmsh's node tags."""
     import gmsh  # type: ignore[import-untyped]
 
@@ -117,10 +128,21 @@ def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
         fld.setNumber(th, "DistMin", 0.25 * fillet_size)
         fld.setNumber(th, "DistMax", 4.0 * fillet_size + size)
         fields.append(th)
+    for x, y, z, r, h in refine:
+        b = fld.add("Ball")
+        for k, v in (("XCenter", x), ("YCenter", y), ("ZCenter", z), ("Radius", r),
+                     ("VIn", h), ("VOut", size), ("Thickness", RAMP * size)):
+            fld.setNumber(b, k, float(v))
+        fields.append(b)
+    if len(fields) > 1:
+        mn = fld.add("Min")
+        fld.setNumbers(mn, "FieldsList", fields)
+        fields = [mn]
     if fields:
         fld.setAsBackgroundMesh(fields[0])
+    hmin = min([fillet_size, size] + [float(b[4]) for b in refine])
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-    gmsh.option.setNumber("Mesh.MeshSizeMin", min(fillet_size, size) * 0.5)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", hmin * 0.5)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0 if fields else 1)
     gmsh.option.setNumber("Mesh.Algorithm3D", 1)  # Delaunay: deterministic single-threaded
@@ -140,9 +162,10 @@ def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
 
 
 def mesh_cad(step: Path | None, size: float, fillet_size: float, scale: float = 1.0,
-             builtin_params: dict | None = None) -> TetMesh:
+             builtin_params: dict | None = None, refine: Sequence[Ball] = ()) -> TetMesh:
     """Mesh a STEP file (or, with ``builtin_params``, the built-in arm's parametric CAD)
-    with gmsh; also finds the CAD's sharp re-entrant edges (``features.py``)."""
+    with gmsh; also finds the CAD's sharp re-entrant edges (``features.py``). ``refine``:
+    local refinement balls (module docstring), in the mesh's metres."""
     import gmsh  # type: ignore[import-untyped]
 
     from .features import sharp_reentrant_edges
@@ -182,7 +205,8 @@ def mesh_cad(step: Path | None, size: float, fillet_size: float, scale: float = 
         sharp = []
         for v in vols:
             sharp += sharp_reentrant_edges(v)
-        p, t = _mesh_current_model(size, fillet_size, fillets, [e["curve"] for e in sharp])
+        p, t = _mesh_current_model(size, fillet_size, fillets, [e["curve"] for e in sharp],
+                                   refine)
         mesh = _compact(p, t, np.arange(1, p.shape[0] + 1), {})
         mesh.labels = np.arange(1, mesh.p.shape[0] + 1)
         mesh.sharp_edges = (np.vstack([e["points_m"] for e in sharp]) if sharp

@@ -12,6 +12,8 @@ material = "817M40"               # a card by name, or an inline table [part.mat
 size = 0.012                      # element size [m]
 fillet_size = 0.004               # on fillet faces and sharp re-entrant edges [m]
 convergence = [0.016, 0.012, 0.009]   # sizes of the convergence table (fillet size scaled)
+convergence_local = [0.004, 0.003]    # optional: local sizes at the hot spots instead (on the
+convergence_radius = 0.02             # finest global mesh; balls of this radius), card.py
 
 [[joint]]
 name = "ball_joint"
@@ -93,6 +95,8 @@ class Part:
     fillet_size: float
     convergence: list[float]
     digest: str
+    convergence_local: list[float] = field(default_factory=list)
+    convergence_radius: float = 0.02
 
     @property
     def channels(self) -> list[str]:
@@ -272,13 +276,21 @@ def load_part(path: str | Path) -> Part:
     m = raw.get("mesh", {})
     if not isinstance(m, dict):
         raise InputFileError(src, "key mesh: expected a table")
-    _check_keys(src, "mesh.", m, ("size", "fillet_size", "convergence"))
+    _check_keys(src, "mesh.", m, ("size", "fillet_size", "convergence", "convergence_local",
+                                  "convergence_radius"))
     size = _num(src, "mesh.size", m.get("size", 0.012), 1e-4, 1.0)
     fsize = _num(src, "mesh.fillet_size", m.get("fillet_size", size / 3), 1e-5, 1.0)
     conv = m.get("convergence", [size])
     if not isinstance(conv, list) or not conv:
         raise InputFileError(src, "key mesh.convergence: expected a list of element sizes [m]")
     conv = [_num(src, "mesh.convergence", v, 1e-4, 1.0) for v in conv]
+    conv_local = m.get("convergence_local", [])
+    if not isinstance(conv_local, list):
+        raise InputFileError(src, "key mesh.convergence_local: expected a list of element "
+                                  "sizes [m]")
+    conv_local = [_num(src, "mesh.convergence_local", v, 1e-5, 1.0) for v in conv_local]
+    conv_radius = _num(src, "mesh.convergence_radius", m.get("convergence_radius", 0.02),
+                       1e-4, 1.0)
     joints_raw = raw.get("joint", [])
     if not isinstance(joints_raw, list) or not joints_raw:
         raise InputFileError(src, "missing [[joint]] tables (at least one joint)")
@@ -298,4 +310,4 @@ def load_part(path: str | Path) -> Part:
     for b in digest_parts:
         h.update(hashlib.sha256(b).digest())
     return Part(path, str(name), geo_path, kind, UNITS[unit], material, joints, size, fsize,
-                conv, h.hexdigest()[:16])
+                conv, h.hexdigest()[:16], conv_local, conv_radius)

@@ -29,8 +29,13 @@ from skfem.models.elasticity import lame_parameters
 from ..arm_fe import SolidModel
 from .mesh import TetMesh
 
-DIRECT_MAX_DOFS = 40000
-"""Below this many dofs the static cases are solved by SuperLU (faster there than AMG-CG)."""
+DIRECT_MAX_DOFS = 400000
+"""Up to this many dofs the static cases are solved by SuperLU (minimum-degree ordering) and
+the modes' LOBPCG is preconditioned by SuperLU of K + σM; above it by AMG. Measured on the
+arm's 30 mm mesh (75 936 free dofs, 2026-12-03, bench/arm_variant.py): SuperLU 40 s for the
+factor (5.0e7 nonzeros in L + U, ~0.6 GB) and 1 s for all 15 cases, where AMG-CG took 42 s
+per case (571 iterations: the 2-level aggregation hierarchy is weak on P2 tets), 650 s."""
+SHIFT_INVERT_MAX_DOFS = 40000
 LOBPCG_TOL = 1e-6
 CHUNK = 20000
 """Elements assembled at a time (bounds the memory of the vectorised element matrices)."""
@@ -159,29 +164,37 @@ class PartFE(SolidModel):
     def modes(self, n_flexible: int = 6) -> tuple[np.ndarray, np.ndarray]:
         """First free-free flexible modes: frequencies [Hz] and shapes (n_dofs, n).
 
+        Below ``SHIFT_INVERT_MAX_DOFS`` dofs shift-invert Lanczos with SuperLU; above it
         LOBPCG (residual 1e-6 of the problem scaled by K's and M's mean diagonals) in the
-        M-orthogonal complement of the six rigid-body modes, preconditioned by
-        smoothed-aggregation AMG of K + σM (σ = (2π 100 Hz)²); without
-        pyamg, shift-invert Lanczos with SuperLU (slow above ~50 000 nodes)."""
+        M-orthogonal complement of the six rigid-body modes, preconditioned by SuperLU of
+        K + σM (σ = (2π 100 Hz)²) up to ``DIRECT_MAX_DOFS`` and by smoothed-aggregation AMG
+        of it above (LOBPCG with SuperLU there without pyamg)."""
+        import importlib.util
+
         M = self.mass_matrix()
         phi = self.rigid_body_modes()
-        try:
-            import pyamg  # type: ignore[import-untyped]
-            if self.K_size < DIRECT_MAX_DOFS:
-                raise ImportError
-        except ImportError:
-            import scipy.sparse.linalg as spla
+        amg = importlib.util.find_spec("pyamg") is not None
+        if self.K_size > DIRECT_MAX_DOFS and amg:
+            return self._modes_lobpcg(M, phi, n_flexible, direct=False)
+        if self.K_size >= SHIFT_INVERT_MAX_DOFS:
+            return self._modes_lobpcg(M, phi, n_flexible, direct=True)
+        import scipy.sparse.linalg as spla
 
-            from ..arm_fe import PERMC
+        from ..arm_fe import PERMC
 
-            shift = -(2 * np.pi * 5.0) ** 2
-            lu = spla.splu((self.K - shift * M).tocsc(), permc_spec=PERMC)
-            op = spla.LinearOperator(self.K.shape, matvec=lu.solve, dtype=float)
-            vals, vecs = spla.eigsh(self.K, k=6 + n_flexible, M=M, sigma=shift, which="LM",
-                                    OPinv=op)
-            order = np.argsort(vals)
-            vals, vecs = vals[order][6:], vecs[:, order][:, 6:]
-            return np.sqrt(np.maximum(vals, 0.0)) / (2 * np.pi), vecs
+        shift = -(2 * np.pi * 5.0) ** 2
+        lu = spla.splu((self.K - shift * M).tocsc(), permc_spec=PERMC)
+        op = spla.LinearOperator(self.K.shape, matvec=lu.solve, dtype=float)
+        vals, vecs = spla.eigsh(self.K, k=6 + n_flexible, M=M, sigma=shift, which="LM",
+                                OPinv=op)
+        order = np.argsort(vals)
+        vals, vecs = vals[order][6:], vecs[:, order][:, 6:]
+        return np.sqrt(np.maximum(vals, 0.0)) / (2 * np.pi), vecs
+
+    def _modes_lobpcg(self, M: sp.csr_matrix, phi: np.ndarray, n_flexible: int,
+                      direct: bool) -> tuple[np.ndarray, np.ndarray]:
+        """LOBPCG of the scaled problem, preconditioned by SuperLU (``direct``) or AMG of
+        K + σM."""
         import scipy.sparse.linalg as spla
 
         # scaled so that the eigenvalues are O(1) and the residual tolerance is relative
@@ -189,10 +202,21 @@ class PartFE(SolidModel):
         Ks, Ms = (self.K / ks).tocsr(), (M / ms).tocsr()
         sigma = (2 * np.pi * 100.0) ** 2 * ms / ks
         A = (Ks + sigma * Ms).tocsr()
-        ml = pyamg.smoothed_aggregation_solver(A, B=phi, symmetry="symmetric", max_coarse=2000)
+        if direct:
+            from ..arm_fe import PERMC
+
+            lu = spla.splu(A.tocsc(), permc_spec=PERMC)
+            prec = spla.LinearOperator(A.shape, matvec=lu.solve, matmat=lu.solve,
+                                       dtype=float)
+        else:
+            import pyamg  # type: ignore[import-untyped]
+
+            ml = pyamg.smoothed_aggregation_solver(A, B=phi, symmetry="symmetric",
+                                                   max_coarse=2000)
+            prec = ml.aspreconditioner()
         rng = np.random.default_rng(0)
         X = rng.standard_normal((self.K_size, n_flexible + 4))
-        vals, vecs = spla.lobpcg(Ks, X, B=Ms, M=ml.aspreconditioner(), Y=phi,
+        vals, vecs = spla.lobpcg(Ks, X, B=Ms, M=prec, Y=phi,
                                  tol=LOBPCG_TOL, maxiter=300, largest=False)
         vals = vals * ks / ms
         order = np.argsort(vals)[:n_flexible]
