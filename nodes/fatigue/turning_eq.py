@@ -286,7 +286,7 @@ def _keep_gather(buf, n, out, counts, lo, hi):  # type: ignore[no-untyped-def]  
                 up1 = lo[j + 1] > hi[j]
                 dn0 = hi[j] < lo[j - 1]
                 dn1 = hi[j + 1] < lo[j]
-                keep = not ((up0 | up1) | (dn0 & dn1))
+                keep = not ((up0 & up1) | (dn0 & dn1))
             if keep:
                 for cc in range(6):
                     out[cc, pos + m] = buf[cc, i, j]
