@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -62,7 +63,7 @@ class AdaptiveStep:
             raise ValueError(f"tol = {self.tol!r}, atol = {self.atol!r}: both > 0")
 
     @classmethod
-    def of_run(cls, run: dict) -> AdaptiveStep | None:
+    def of_run(cls, run: dict[str, Any]) -> AdaptiveStep | None:
         """The controller of a resolved ``[run]`` table, None for a fixed step."""
         if not run.get("adaptive"):
             return None
