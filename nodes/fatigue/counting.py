@@ -27,30 +27,49 @@ in compiled code (:func:`_rainflow_packed`, numba): comparisons and copies only,
 cycles with the same bits, each history's in the order they close (the order across histories
 differs from the lock-step loop's, which no result depends on: a node's damage sums its own
 cycles in order). Without numba it runs the lock-step loop on the packed points.
+The kernels are compiled when first needed or ahead (:func:`nodes.fatigue.worker.warm_up`,
+which the worker's influence loading calls: the live node does it before it says ready), not
+at import (numba's import and start cost ~1 s, and every run's preflight imports this).
 """
 
 from __future__ import annotations
 
+import importlib.util
+import threading
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
-try:  # the compiled paths (#28); without numba the numpy ones, the same bits
-    import numba
-except ImportError:  # pragma: no cover - numba is a dependency; kept for a broken install
-    numba = None
-COMPILED = numba is not None
-"""Whether numba is importable (the fatigue kernels compiled)."""
+COMPILED = importlib.util.find_spec("numba") is not None
+"""Whether numba is installed: the fatigue kernels are then compiled (#28); without it the
+numpy paths run, with the same bits."""
+COMPILE_S: dict[str, float] = {}
+"""Per module, the seconds its kernels took to compile or to load from numba's disk cache."""
+_COMPILE_LOCK = threading.Lock()
 
 
-def jit(signature: str):
-    """``numba.njit(signature)``: compiled at import (an explicit signature), cached on disk
-    (``cache=True``: in ``__pycache__``, or numba's user cache where that is read-only), no
-    fastmath (IEEE operations in the order written); the identity without numba."""
-    if numba is None:  # pragma: no cover
-        return lambda f: f
-    return numba.njit(signature, cache=True, error_model="numpy", nogil=True)
+def compile_kernels(g: dict, kernels: tuple[tuple[str, str], ...]) -> None:
+    """Replace the pure-Python kernels ``kernels`` ((name, numba signature), callees first)
+    of the module whose globals are ``g`` by numba functions compiled now: explicit
+    signatures, ``cache=True`` (in ``__pycache__``, or numba's user cache where that is
+    read-only), no fastmath (IEEE operations in the order written). Once per module, any
+    thread. A numba that is installed but does not import is an error, not a fallback."""
+    name = g["__name__"]
+    if name in COMPILE_S:
+        return
+    with _COMPILE_LOCK:
+        if name in COMPILE_S:
+            return
+        t0 = time.perf_counter()
+        try:
+            import numba
+        except Exception as exc:  # a broken install: say so
+            raise RuntimeError(f"numba is installed but does not import ({exc}); the fatigue "
+                               "kernels need it (or uninstall it: the numpy path)") from exc
+        for fn, sig in kernels:
+            g[fn] = numba.njit(sig, cache=True, error_model="numpy", nogil=True)(g[fn])
+        COMPILE_S[name] = time.perf_counter() - t0
 
 RESIDUE_MODES = ("half_cycles", "repeated")
 
@@ -288,6 +307,7 @@ class StreamingRainflow:
             self._grow()
         if not COMPILED:  # the lock-step loop on the packed points (no numba)
             return self._feed_packed_numpy(vals, counts, start)
+        build()
         size = (int(depth.sum()) + vals.size) // 2 + 1
         s, b, c = np.empty(size, dtype=np.int64), np.empty(size), np.empty(size)
         nc = _rainflow_packed(vals, counts, start, self._stack, self._depth, s, b, c)
@@ -385,10 +405,6 @@ class StreamingRainflow:
         return other._feed_rows(replay)
 
 
-_T0 = time.perf_counter()
-
-
-@jit("i8(f8[::1], i8[::1], i8, f8[:, ::1], i8[::1], i8[::1], f8[::1], f8[::1])")
 def _rainflow_packed(vals, counts, start, stack, depth, out_s, out_b, out_c):  # type: ignore[no-untyped-def]  # noqa: E501
     """:meth:`StreamingRainflow._feed_rows`' rule, history by history: histories ``start +
     i`` fed ``counts[i]`` values of ``vals`` in order (the stack has room for them); the
@@ -433,8 +449,13 @@ def _rainflow_packed(vals, counts, start, stack, depth, out_s, out_b, out_c):  #
     return nc
 
 
-COMPILE_S = time.perf_counter() - _T0
-"""Seconds the kernel took at import (compiled, or loaded from numba's on-disk cache)."""
+KERNELS = (("_rainflow_packed", "i8(f8[::1], i8[::1], i8, f8[:, ::1], i8[::1], i8[::1], "
+                                 "f8[::1], f8[::1])"),)
+
+
+def build() -> None:
+    """Compile this module's kernel now (or load it from the cache; once)."""
+    compile_kernels(globals(), KERNELS)
 
 
 def count_series(x: np.ndarray, residue: str = "half_cycles") -> Cycles:

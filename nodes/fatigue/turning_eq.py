@@ -48,11 +48,9 @@ numpy path (:func:`turning_equivalent`) runs; the worker's results are the same 
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
-from .counting import COMPILED, jit, turning_points
+from .counting import COMPILED, compile_kernels, turning_points
 from .equivalent_stress import TILE_NODES, equivalent_of, invariants_of
 
 COS_TOL = 4e-6
@@ -175,10 +173,6 @@ float64 and the true root (a few ulp of acos, cos and the constant 2π/3: <= 5e-
 
 
 _P0, _P1, _P2, _P3, _P4, _P5, _P6, _P7, _P8, _P9 = ROOT_POLY
-_T0 = time.perf_counter()
-
-
-@jit("UniTuple(f8, 2)(f8)")
 def _root1(r):  # type: ignore[no-untyped-def]
     """[lo, hi] containing the largest root of 4c³ - 3c = r' for every r' within DELTA
     (minus g's rounding) of r, r in [-1, 1]."""
@@ -201,7 +195,6 @@ def _root1(r):  # type: ignore[no-untyped-def]
     return lo, hi
 
 
-@jit("i8(f8[:, :, ::1], i8, f8[:, ::1], i8[::1], f8[::1], f8[::1])")
 def _keep_gather(buf, n, out, counts, lo, hi):  # type: ignore[no-untyped-def]  # noqa: C901
     """buf (6, k, >= n): components; per node the brackets of the abs-max principal
     stress (into lo, hi: scratch of n), the kept samples' components appended to out
@@ -296,8 +289,13 @@ def _keep_gather(buf, n, out, counts, lo, hi):  # type: ignore[no-untyped-def]  
     return pos
 
 
-COMPILE_S = time.perf_counter() - _T0
-"""Seconds the kernels took at import (compiled, or loaded from numba's on-disk cache)."""
+KERNELS = (("_root1", "UniTuple(f8, 2)(f8)"),
+           ("_keep_gather", "i8(f8[:, :, ::1], i8, f8[:, ::1], i8[::1], f8[::1], f8[::1])"))
+
+
+def build() -> None:
+    """Compile this module's kernels now (or load them from the cache; once)."""
+    compile_kernels(globals(), KERNELS)
 
 
 def kept_equivalent(buf: np.ndarray, n: int, kind: str, scratch: np.ndarray | None = None
@@ -321,6 +319,7 @@ def kept_equivalent(buf: np.ndarray, n: int, kind: str, scratch: np.ndarray | No
     if not COMPILED or kind != "abs_max_principal" or n <= 2:
         eq = equivalent_of(buf[:, :, :n].transpose(0, 2, 1), kind)  # (n, k)
         return np.ascontiguousarray(eq.T).ravel(), np.full(k, n, dtype=np.int64)
+    build()
     counts = np.empty(k, dtype=np.int64)
     lo, hi = np.empty(n), np.empty(n)
     K = -1

@@ -22,6 +22,7 @@ import numpy as np
 
 from cosim.errors import ScenarioError
 
+from . import counting, turning_eq
 from .config import FatigueConfig
 from .counting import COMPILED, Cycles, StreamingRainflow
 from .damage import cycle_damage
@@ -61,9 +62,21 @@ def _scratch(name: str, size: int) -> np.ndarray:
 _INFLUENCE_MEMO: dict[tuple, InfluenceSet] = {}
 
 
+def warm_up() -> None:
+    """Compile the compiled engine's numba kernels now, or load them from numba's disk cache
+    (once per process; a no-op without numba). :func:`load_influence` calls it, so the live
+    node has them before it says ready and no compile lands in a run's step loop: cold
+    ~3 s, from the cache ~1 s (numba's own start; ``bench/bench_fatigue.py`` prints it)."""
+    if COMPILED:
+        counting.build()
+        turning_eq.build()
+
+
 def load_influence(cfg: FatigueConfig) -> InfluenceSet:
     """Influence coefficients for a config (built in, a part file ``*.toml`` meshed and solved
-    by :mod:`nodes.fatigue.parts`, or imported), node set applied."""
+    by :mod:`nodes.fatigue.parts`, or imported), node set applied; the compiled kernels
+    made ready too (:func:`warm_up`)."""
+    warm_up()
     memo_key = (cfg.influence, str(cfg.influence_path), cfg.mapping, cfg.stress_scale,
                 cfg.mesh_size_m, cfg.material, cfg.nodes)
     if memo_key in _INFLUENCE_MEMO:

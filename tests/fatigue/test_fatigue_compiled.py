@@ -33,6 +33,7 @@ def _cache(tmp_path_factory, monkeypatch):
 def _brackets(comp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(k, n) brackets of the kernel for components (6, k, n)."""
     _, k, n = comp.shape
+    turning_eq.build()
     lo, hi = np.empty((k, n)), np.empty((k, n))
     out, counts = np.empty((6, n)), np.empty(1, dtype=np.int64)
     for i in range(k):
@@ -259,9 +260,11 @@ def test_live_fatigue_pickles_and_continues_with_the_same_bits() -> None:
         assert np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True)
 
 
-def test_kernels_compiled_at_import_not_in_the_step_loop() -> None:
-    """Explicit signatures: compiled (or loaded from the cache) when the module is
-    imported; a block of the worker's types adds no specialisation (no compile later)."""
+def test_kernels_compiled_before_the_first_block_not_in_the_step_loop() -> None:
+    """Explicit signatures, compiled (or loaded from the cache) by warm_up, which loading the
+    influence does (the live node: before ready); a block of the worker's types adds no
+    specialisation (no compile later)."""
+    worker.load_influence(FatigueConfig.from_dict(COARSE))
     kernels = (turning_eq._keep_gather, turning_eq._root1, counting._rainflow_packed)
     before = [len(k.signatures) for k in kernels]
     assert before == [1, 1, 1]
