@@ -8,7 +8,10 @@
 ``--executor dask`` runs every point whole on a worker of a Dask cluster
 (:mod:`orchestrator.sweep.dask_exec`, :mod:`orchestrator.sweep.task`); ``[sweep.design]``
 samples parameter ranges (:mod:`orchestrator.sweep.design`) and adds a sensitivity table
-(:mod:`orchestrator.sweep.sensitivity`). docs/sweeps.md has all of it.
+(:mod:`orchestrator.sweep.sensitivity`); ``[sweep] fork_at = T`` runs one parent per group
+of points that differ only in what a fork may change (the controller) and every point as a
+fork of it at T (:mod:`orchestrator.sweep.fork`: each law then acts from T on). docs/sweeps.md
+has all of it.
 
 A sweep file names a base scenario and a grid; every grid point is one run::
 

@@ -150,6 +150,7 @@ def main(argv: list[str] | None = None) -> int:
         print(sensitivity_table(sens))
     if sweep.fork is not None:
         doc = fork_report(sweep, sweep.fork, out)
+        doc["elapsed_s"] = time.monotonic() - t0  # this session's, the parents' wait included
         write_fork_json(out, doc)
         print(fork_text(doc) + f"\n  in {out / 'fork.json'}")
     n_failed = sum(r["status"] != "ok" for r in rows)

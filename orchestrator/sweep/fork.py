@@ -21,8 +21,8 @@ the parent's law. The sweep says so at the start, in ``fork.json`` and in the re
 What it saves, per sweep: the prefix steps the forks did not simulate again (sum of k over the
 points), and net of the parents' runs: ``plain`` (sum of n over the points) against
 ``simulated`` (sum of n over the parents + sum of n - k over the points); the run wall time
-from the runs' ``summary.json`` against an estimate of the plain runs' (each fork's wall plus
-its prefix at its parent's speed).
+from the runs' ``summary.json`` against an estimate of the plain runs' (each as long as its
+parent's run: the same steps from t = 0).
 
 Only the local executor (a fork needs its parent's run folder where it runs), without
 ``--external`` / ``--serve``.
@@ -289,7 +289,7 @@ def _wall(run_dir: Path) -> float | None:
 
 def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
     """The ``fork`` block (``fork.json``): the semantics, the parents, and what was saved."""
-    plain = simulated = prefix = 0
+    plain = simulated = prefix = n_ok = 0
     parents_doc = []
     wall_parents = wall_forks = wall_plain = 0.0
     wall_ok = True
@@ -303,11 +303,12 @@ def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
             simulated += p.n_steps - k
             prefix += k
             fw = _wall(sweep.run_dir(out, p))
+            n_ok += fw is not None
             if pw is None or fw is None:
                 wall_ok = False
             else:
                 wall_forks += fw
-                wall_plain += fw + k * pw / max(1, n)
+                wall_plain += pw * p.n_steps / max(1, n)
         wall_parents += pw or 0.0
         parents_doc.append({"id": parent.id, "run_dir": f"parents/{parent.id}",
                             "controller": parent.law, "k": k, "t": parent.t, "n_steps": n,
@@ -315,7 +316,8 @@ def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
     saved = plain - simulated
     doc: dict[str, Any] = {
         "fork_at": plan.at, "semantics": SEMANTICS,
-        "parents": parents_doc,
+        "parents": parents_doc, "points": sum(len(pa.members) for pa in plan.parents),
+        "points_ok": n_ok,
         "steps": {"plain": plain, "simulated": simulated,
                   "prefix_not_simulated_again": prefix,
                   "prefix_share": prefix / plain if plain else 0.0,
@@ -329,8 +331,9 @@ def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
         doc["wall_s"] = {"parents": wall_parents, "forks": wall_forks, "total": actual,
                          "plain_estimate": wall_plain, "saved_estimate": wall_plain - actual,
                          "how": "the runs' summary.json wall_s (summed, not elapsed: runs "
-                                "go side by side); plain_estimate: each fork's wall_s plus "
-                                "its k prefix steps at its parent's wall_s / n_steps"}
+                                "go side by side); plain_estimate: each point's plain run "
+                                "taken as long as its parent's (the same steps from t = 0; "
+                                "the laws' own costs aside)"}
     return doc
 
 
@@ -357,7 +360,9 @@ def fork_header(plan: ForkPlan) -> str:
 def fork_text(doc: dict[str, Any]) -> str:
     """What the sweep prints at the end: what forking saved."""
     st = doc["steps"]
-    text = (f"fork at t = {doc['fork_at']:g} s ({len(doc['parents'])} parent(s)): "
+    planned = "" if doc["points_ok"] == doc["points"] else \
+        f" [as planned: {doc['points'] - doc['points_ok']} of {doc['points']} forks not ok]"
+    text = (f"fork at t = {doc['fork_at']:g} s ({len(doc['parents'])} parent(s)){planned}: "
             f"{st['prefix_not_simulated_again']} prefix steps not simulated again "
             f"({100 * st['prefix_share']:.1f} % of {st['plain']}); net of the parents: "
             f"{st['simulated']} steps simulated instead of {st['plain']}, {st['saved']} saved "

@@ -101,9 +101,13 @@ def test_the_sweep_says_what_it_saved_and_what_forking_means(swept):
         steps["plain"]
     assert [p["id"] for p in doc["parents"]] == ["fk-parent"]
     assert doc["parents"][0]["points"] == ["fk-same", "fk-soft", "fk-hard"]
-    wall = doc["wall_s"]
+    assert doc["points"] == doc["points_ok"] == n_points
+    wall = doc["wall_s"]  # from the runs' summary.json (its size is not asserted)
+    walls = [json.loads((r / "summary.json").read_text())["wall_s"] for r in runs]
+    assert wall["forks"] == pytest.approx(sum(walls))
     assert wall["total"] == pytest.approx(wall["parents"] + wall["forks"])
-    assert wall["parents"] > 0 and wall["forks"] > 0
+    assert wall["plain_estimate"] == pytest.approx(n_points * wall["parents"])
+    assert doc["elapsed_s"] > 0
     assert "acts only from t = fork_at on" in doc["semantics"]
     assert "1500 saved (33.3 %)" in text and "3000 prefix steps not simulated again" in text
     assert "its own controller acts only from there on" in text
@@ -173,3 +177,41 @@ def test_fork_at_is_refused_with_the_dask_executor(tmp_path):
     r = suscosim("sweep", str(f), "--out", str(tmp_path / "o"), "--executor", "dask",
                  "--scheduler", "tcp://127.0.0.1:1")
     assert r.returncode == 2 and "fork_at works with the local executor" in r.stderr, r.stderr
+
+
+def test_fatigue_works_on_the_forks_run_folders(tmp_path):
+    """The realistic corner with the live fatigue node (5 m of pave): the forks' fatigue
+    results are those of their own folders; the fork whose damper is the base's has the
+    parent's damage per node and lives, byte for byte (its fatigue engine continued)."""
+    ch6 = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
+    f = tmp_path / "c6.toml"
+    f.write_text(f"""
+[sweep]
+name = "c6f"
+base = "{ch6}"
+jobs = 2
+fatigue = true
+fork_at = 0.25
+[sweep.set]
+"road.length_m" = 5.0
+"run.mode" = "monolithic"
+[sweep.grid.strategy]
+passive = {{ controller = {{ law = "passive", c = 3800.0, velocity = "damper" }} }}
+firm = {{ controller = {{ law = "passive", c = 6000.0, velocity = "damper" }} }}
+""")
+    out = tmp_path / "out"
+    r = suscosim("sweep", str(f), "--out", str(out), timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    parent = out / "parents" / "c6f-parent"
+    for name in ("damage_per_node.csv", "summary.json"):
+        assert (out / "runs" / "c6f-passive" / "fatigue" / name).read_bytes() == \
+            (parent / "fatigue" / name).read_bytes(), name
+    with open(out / "results.csv") as fh:
+        rows = {r["point"]: r for r in csv.DictReader(fh)}
+    firm = json.loads((out / "runs" / "c6f-firm" / "fatigue" / "summary.json").read_text())
+    assert float(rows["c6f-firm"]["life_km"]) == pytest.approx(firm["min_life_km"], rel=1e-9)
+    assert rows["c6f-firm"]["life_km"] != rows["c6f-passive"]["life_km"]
+    doc = json.loads((out / "fork.json").read_text())
+    k, n = 500, 1059  # 0.25 s and 5 m at 34 km/h (0.529 s) of h = 0.5 ms
+    assert doc["steps"]["saved"] == 2 * k - n < 0  # one law besides the base's: no gain
+    assert "-59 saved" in r.stdout
