@@ -10,8 +10,11 @@ import json
 import numpy as np
 import pytest
 
+from cosim import scenario as sc
+from cosim.errors import ScenarioError
 from cosim.table import read_table
 from orchestrator.accuracy import peak_errors, worst
+from orchestrator.runner import resolve
 
 from ..conftest import ROOT, suscosim
 
@@ -90,15 +93,17 @@ def test_the_realistic_corner_with_live_fatigue_takes_an_adaptive_step(tmp_path)
     (('controller={law="tss3", I_soft=0.0, I_hard=0.6}',), "run.h"),
     (("run.h_max=0.00005",), "run.h_max"),
 ])
-def test_what_an_adaptive_step_cannot_do_is_refused(tmp_path, sets, key):
-    args = [str(CH3), "--mode", "monolithic", *AUTO]
-    for s in sets:
-        args += ["--set", s]
-    r = suscosim("run", *args, "--out", str(tmp_path / "x"))
-    assert r.returncode == 2 and key in r.stderr and "Traceback" not in r.stderr, r.stderr
+def test_what_an_adaptive_step_cannot_do_is_refused(sets, key):
+    """The preflight of ``run`` (:func:`orchestrator.runner.resolve`, in-process: the CLI's
+    exit 2 for a ScenarioError is tested with the other bad scenarios)."""
+    with pytest.raises(ScenarioError) as e:
+        resolve(sc.load(CH3, ['run.h="auto"', *sets]))
+    assert e.value.key == key and e.value.exit_code == 2
 
 
-def test_the_magic_formula_tyre_is_refused_with_an_adaptive_step(tmp_path):
-    r = suscosim("check", str(ROOT / "scenarios" / "events" / "braking_50kmh_0p8g.toml"),
-                 *AUTO)
-    assert r.returncode == 2 and "magic_formula" in r.stderr, r.stderr
+def test_the_magic_formula_tyre_is_refused_with_an_adaptive_step():
+    with pytest.raises(ScenarioError, match="magic_formula"):
+        resolve(sc.load(ROOT / "scenarios" / "events" / "braking_50kmh_0p8g.toml",
+                        ['run.h="auto"']))
+    r = suscosim("check", str(CH3), "--set", 'run.h="auto"', "--set", 'run.exchange="parallel"')
+    assert r.returncode == 2 and "run.exchange" in r.stderr and "Traceback" not in r.stderr
