@@ -190,7 +190,8 @@ class Runner:
                         continue
                     steps_done += job.point.n_steps if todo_state[job.point.id] == "todo" else 0
                 jobs = still
-                display.update(jobs, finished, failed, len(queue), steps_done)
+                display.update(jobs, finished, failed,
+                               len(queue) + sum(len(w) for w in waiting.values()), steps_done)
                 time.sleep(0.25)
         except KeyboardInterrupt:
             interrupted = True
