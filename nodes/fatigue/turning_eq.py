@@ -195,13 +195,12 @@ def _root1(r):  # type: ignore[no-untyped-def]
     return lo, hi
 
 
-def _keep_gather(buf, n, out, counts, lo, hi):  # type: ignore[no-untyped-def]  # noqa: C901
+def _keep_gather(buf, n, out, pos, counts, lo, hi):  # type: ignore[no-untyped-def]  # noqa: C901,E501
     """buf (6, k, >= n): components; per node the brackets of the abs-max principal
     stress (into lo, hi: scratch of n), the kept samples' components appended to out
-    (6, cap) node by node, their number into counts (k,). Returns the total, or -1 when
-    out may be too small (a node starts with fewer than n columns left)."""
+    (6, cap) node by node from column pos, their number into counts (k,). Returns the end
+    column, or -1 when out may be too small (a node starts with fewer than n columns left)."""
     k = buf.shape[1]
-    pos = 0
     for i in range(k):
         if pos + n > out.shape[1]:
             return -1
@@ -290,7 +289,8 @@ def _keep_gather(buf, n, out, counts, lo, hi):  # type: ignore[no-untyped-def]  
 
 
 KERNELS = (("_root1", "UniTuple(f8, 2)(f8)"),
-           ("_keep_gather", "i8(f8[:, :, ::1], i8, f8[:, ::1], i8[::1], f8[::1], f8[::1])"))
+           ("_keep_gather",
+            "i8(f8[:, :, ::1], i8, f8[:, ::1], i8, i8[::1], f8[::1], f8[::1])"))
 
 
 def build() -> None:
@@ -319,14 +319,24 @@ def kept_equivalent(buf: np.ndarray, n: int, kind: str, scratch: np.ndarray | No
     if not COMPILED or kind != "abs_max_principal" or n <= 2:
         eq = equivalent_of(buf[:, :, :n].transpose(0, 2, 1), kind)  # (n, k)
         return np.ascontiguousarray(eq.T).ravel(), np.full(k, n, dtype=np.int64)
-    build()
     counts = np.empty(k, dtype=np.int64)
-    lo, hi = np.empty(n), np.empty(n)
     K = -1
     if scratch is not None and scratch.size >= 6 * n:
-        out = scratch[:scratch.size // 6 * 6].reshape(6, -1)
-        K = _keep_gather(buf, n, out, counts, lo, hi)
+        K = gather_kept(buf, n, scratch[:scratch.size // 6 * 6].reshape(6, -1), 0, counts)
     if K < 0:  # no scratch, or too small for what this block keeps
         out = np.empty((6, k * n))
-        K = _keep_gather(buf, n, out, counts, lo, hi)
+        K = gather_kept(buf, n, out, 0, counts)
+    else:
+        out = scratch[:scratch.size // 6 * 6].reshape(6, -1)
     return equivalent_of(out[:, :K], kind), counts
+
+
+def gather_kept(buf: np.ndarray, n: int, out: np.ndarray, pos: int, counts: np.ndarray
+                ) -> int:
+    """The compiled pass of :func:`kept_equivalent` (abs-max principal, numba): the
+    components of each node's samples that may be turning points (and the block's ends)
+    appended to ``out`` (6, cap), C-contiguous, node by node from column ``pos``; how many
+    per node into ``counts`` (k,). Returns the end column, or -1 when ``out`` may be too
+    small (then nothing is promised about what was written from ``pos``)."""
+    build()
+    return int(_keep_gather(buf, n, out, pos, counts, np.empty(n), np.empty(n)))

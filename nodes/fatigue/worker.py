@@ -30,7 +30,7 @@ from .equivalent_stress import equivalent_of
 from .influence import InfluenceSet, builtin_influence, import_influence, short_channel
 from .screening import Screening, unsupported
 from .superposition import ROWS, components_buffer, node_major, superpose_components
-from .turning_eq import kept_equivalent, turning_equivalent
+from .turning_eq import gather_kept, kept_equivalent, turning_equivalent
 
 ENGINES = ("compiled", "numpy", "block")
 ENGINE = "compiled" if COMPILED else "numpy"
@@ -283,25 +283,45 @@ class _Engine:
     def _exact_compiled(self, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow
                         ) -> tuple[np.ndarray, np.ndarray, Cycles]:
         """The whole block per tile of nodes: the products (:func:`.superposition.
-        components_buffer`: per node of fixed shape, the same bits), the exact equivalent
-        stress where it may be a turning point (and at the block's ends), the counter fed
-        those (each node's cycles in order). Returns the block's extremes and cycles."""
+        components_buffer`: per node of fixed shape, the same bits) and the components of
+        the samples that may be turning points (and the block's ends) gathered
+        (:func:`.turning_eq.gather_kept`); then their exact equivalent stress at once and
+        the counter fed those (each node's cycles in order). Returns the block's extremes
+        and cycles."""
         n = F.shape[0]
+        kind = self.cfg.equivalent
         coef = self.per_node[idx]
         n_pad = -(-n // ROWS) * ROWS
         tile = max(1, TILE_ELEMS // (6 * n_pad))
-        hi, lo = np.empty(idx.size), np.empty(idx.size)
-        parts = []
-        for j in range(0, idx.size, tile):
-            k = min(tile, idx.size - j)
-            buf, _ = components_buffer(F, coef[j:j + tile], _scratch("comp", 6 * k * n_pad))
-            vals, counts = kept_equivalent(buf, n, self.cfg.equivalent,
-                                           _scratch("kept", 6 * max(n, k * n // 8)))
-            starts = np.cumsum(counts) - counts  # every count >= 1 (the block's ends)
-            hi[j:j + tile] = np.maximum.reduceat(vals, starts)
-            lo[j:j + tile] = np.minimum.reduceat(vals, starts)
-            parts.append(rf.feed_packed(vals, counts, vals[starts + counts - 1], j))
-        return hi, lo, Cycles.concat(parts)
+        counts = np.empty(idx.size, dtype=np.int64)
+        if kind == "abs_max_principal" and n > 2:
+            cap = max(n, idx.size * n // 8)
+            kept = _scratch("kept", 6 * cap)[:6 * cap].reshape(6, cap)
+            pos = 0
+            for j in range(0, idx.size, tile):
+                k = min(tile, idx.size - j)
+                buf, _ = components_buffer(F, coef[j:j + tile], _scratch("comp", 6 * k * n_pad))
+                end = gather_kept(buf, n, kept, pos, counts[j:j + k])
+                if end < 0:  # more kept than room: a larger buffer, this tile again
+                    cap = 2 * cap + k * n
+                    bigger = np.empty((6, cap))  # rare (noise-like loads): not kept
+                    bigger[:, :pos] = kept[:, :pos]
+                    kept = bigger
+                    end = gather_kept(buf, n, kept, pos, counts[j:j + k])
+                pos = end
+            vals = equivalent_of(kept[:, :pos], kind)
+        else:  # every sample (signed von Mises, or blocks of 1-2 samples)
+            parts = []
+            for j in range(0, idx.size, tile):
+                k = min(tile, idx.size - j)
+                buf, _ = components_buffer(F, coef[j:j + tile], _scratch("comp", 6 * k * n_pad))
+                v, counts[j:j + k] = kept_equivalent(buf, n, kind)
+                parts.append(v)
+            vals = np.concatenate(parts)
+        starts = np.cumsum(counts) - counts  # every count >= 1 (the block's ends)
+        hi = np.maximum.reduceat(vals, starts)
+        lo = np.minimum.reduceat(vals, starts)
+        return hi, lo, rf.feed_packed(vals, counts, vals[starts + counts - 1])
 
     def _exact_numpy(self, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow,
                      block: bool) -> tuple[np.ndarray, np.ndarray, Cycles]:
