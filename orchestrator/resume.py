@@ -112,7 +112,8 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
     child = copy.deepcopy(parent)
     run = child["run"]
     for key in sc.RESOLVED_RUN_KEYS:
-        run.pop(key, None)
+        if key != "t_end_source":  # t_end stays the parent's: resolve would not set it again
+            run.pop(key, None)
     run["id"] = ""
     for assignment in overrides:
         sc.apply_override(child, assignment)
@@ -138,11 +139,15 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
 
 
 def _changes(a: Any, b: Any, key: str = "") -> list[str]:
-    """The dotted keys whose values differ between ``a`` and ``b``."""
+    """The dotted keys whose values differ between ``a`` (the parent) and ``b`` (the fork);
+    a ``run`` key the parent's scenario predates, at its default in the fork, is no change."""
     if isinstance(a, dict) and isinstance(b, dict):
         out: list[str] = []
         for k in sorted(set(a) | set(b)):
             sub = f"{key}.{k}" if key else str(k)
+            if key == "run" and k not in a and k in sc.RUN_KEYS \
+                    and b[k] == sc.RUN_KEYS[k].default:
+                continue
             if k not in a or k not in b:
                 out.append(sub)
             else:

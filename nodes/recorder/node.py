@@ -54,6 +54,7 @@ from cosim.run_settings import RunSettings
 from cosim.table_writer import TableWriter, table_of_journal
 from cosim.wire import Message, decode
 
+from .fork_layout import ForkLayouts
 from .steps import StepSet
 
 log = logging.getLogger("suscosim.node")
@@ -115,6 +116,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     duplicates = 0
     settings = RunSettings.of(scenario)
     last: tuple[int, float] | None = None  # (k, t) of the run's last step, once known
+    fork = ForkLayouts((run_cfg.get("resume") or {}).get("fresh", ()), plan.start_k)
 
     def record(node: str, channel: str, raw: bytes, msg: Message | None = None) -> None:
         """Validate, journal and tabulate one data message of ``node/channel``."""
@@ -145,19 +147,36 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             duplicates += 1
             part.reject((node, channel), f"step {msg.k} again (a duplicate: not journaled)")
             return
-        rows = table.rows
-        wrong = table.add(name, msg.k, msg.t, msg.d)
-        if wrong:
-            part.reject((node, channel), wrong)
-            return
+        if fork.holds(node, msg.k):  # a fork's new law: its layout is known at step k
+            fork.hold(name, msg.k, msg.t, msg.d)
+        else:
+            if name in fork.held:
+                try:
+                    for k, t, d in fork.release(name, msg.d):
+                        tabulate(name, k, t, d)
+                except ValueError as exc:
+                    raise RunError(f"recorder: the fork's table: {exc}") from None
+            wrong = tabulate(name, msg.k, msg.t, fork.pad(name, msg.d))
+            if wrong:
+                part.reject((node, channel), wrong)
+                return
         steps.add(msg.k)
         journal.append(name, raw)
         if name == STATE_CHANNEL and settings.is_last(msg.k, msg.t):
             last = (msg.k, msg.t)
+
+    def tabulate(name: str, k: int, t: float, d: Any) -> str | None:
+        """Put one message in the table (and the live residual); why not, else None."""
+        assert table is not None
+        rows = table.rows
+        wrong = table.add(name, k, t, d)
+        if wrong:
+            return wrong
         if live is not None:
-            live.add(name, msg.k, msg.t, msg.d)
+            live.add(name, k, t, d)
             if table.rows > rows:  # this message completed the row of its step
-                live.row(msg.k)
+                live.row(k)
+        return None
 
     def publish_live() -> None:
         """The residual of the rows complete so far on ``recorder/coupling``. A residual

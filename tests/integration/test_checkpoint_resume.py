@@ -83,22 +83,27 @@ def test_fork_with_the_same_settings_continues_the_parent_bit_for_bit(ch3_parall
     _same(tmp_path / "fork", ckpt)
 
 
-def test_fork_with_another_law_starts_from_the_parents_state(ch3_parallel, tmp_path):
+@pytest.mark.parametrize("law", ['controller.c=3000.0',
+                                 'controller={law="skyhook", c_sky=2500.0}'])
+def test_fork_with_another_law_starts_from_the_parents_state(ch3_parallel, tmp_path, law):
     ckpt, _ = ch3_parallel
     out = _ok("run", "--fork", f"{ckpt}@2.0", "--out", str(tmp_path / "fork"), "--quiet",
-              "--set", "controller.c=3000.0")
-    assert "controller.c" in out and "starting afresh: controller" in out
+              "--set", law)
+    assert "starting afresh: controller" in out
     parent = pq.read_table(ckpt / "table.parquet").to_pandas()
     fork = pq.read_table(tmp_path / "fork" / "table.parquet").to_pandas()
     k = 2000
     assert len(fork) == len(parent)
     # every step before the fork is the parent's, and so is the state the fork starts from
-    assert parent.iloc[:k].equals(fork.iloc[:k])
+    assert parent.iloc[:k].equals(fork.iloc[:k][parent.columns])
     state = [c for c in parent.columns if c.startswith("plant/state/")]
     assert parent.loc[k, state].equals(fork.loc[k, state])
     # the new law acts from its first step on (parallel: on the state of step k - 1)
     assert fork.loc[k, "controller/force/F_d"] != parent.loc[k, "controller/force/F_d"]
     assert (fork["plant/state/z_b"].iloc[-1] != parent["plant/state/z_b"].iloc[-1])
+    # a field of the new law only (skyhook's c) is NaN in the parent's rows, set from k on
+    for extra in set(fork.columns) - set(parent.columns):
+        assert fork[extra].iloc[:k].isna().all() and fork[extra].iloc[k:].notna().all()
 
 
 def test_bad_resumes_and_forks_are_refused_naming_why(ch3_parallel, tmp_path):
