@@ -381,7 +381,9 @@ class StreamingRainflow:
 
         ``"half_cycles"``: each range between consecutive residue points counts 0.5 (ASTM).
         ``"repeated"``: the residue is fed again (the next pass of a repeated track) and the
-        full cycles that close are returned.
+        full cycles that close are returned (compiled: :meth:`feed_packed` on a copy, each
+        history's cycles in the order they close, histories in order; the lock-step loop's
+        order across histories differs, the cycles do not).
         """
         if mode not in RESIDUE_MODES:
             raise ValueError(f"residue mode must be one of {RESIDUE_MODES}, got {mode!r}")
@@ -395,6 +397,10 @@ class StreamingRainflow:
             return Cycles(i.astype(np.int64), s1, s2, np.full(i.size, 0.5))
         if int(d.max()) == 0:
             return Cycles.empty()
+        if COMPILED:  # the compiled counter on a copy (each history's cycles in order)
+            other = self.copy()
+            keep = np.arange(self._cap)[None, :] < d[:, None]
+            return other.feed_packed(self._stack[keep], d.copy(), np.zeros(self.n))
         other = self.copy()
         m = int(d.max())
         cols = np.arange(m)

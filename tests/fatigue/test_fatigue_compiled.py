@@ -176,6 +176,16 @@ def test_feed_packed_equals_the_lock_step_counter(seed: int, ties: bool, nans: b
             assert np.array_equal(ref.residue(i), new.residue(i), equal_nan=True)
             assert np.array_equal(npy.residue(i), new.residue(i), equal_nan=True)
         assert np.array_equal(ref.last, new.last, equal_nan=True)
+    rep = new.residue_cycles("repeated")  # compiled on a copy
+    counting.COMPILED = False
+    try:
+        lock_step = ref.residue_cycles("repeated")
+    finally:
+        counting.COMPILED = True
+    order = np.argsort(lock_step.series, kind="stable")
+    for f in ("series", "s1", "s2", "count"):
+        assert np.array_equal(getattr(lock_step, f)[order], getattr(rep, f), equal_nan=True)
+    assert np.array_equal(ref.depth, new.depth)  # residue_cycles leaves the state alone
 
 
 def test_feed_packed_part_of_the_counter_and_bad_shapes() -> None:
