@@ -192,6 +192,24 @@ def load_for_resume(run_dir: Path, scenario: dict[str, Any],
     return ck
 
 
+def prune_checkpoints(run_dir: Path, keep: int) -> list[int]:
+    """Delete every complete checkpoint of ``run_dir`` but the ``keep`` newest (``run.
+    checkpoint_keep``): the manifest first (the checkpoint is then incomplete, never half a
+    complete one), then its folder. Returns the k deleted; a folder that cannot be removed
+    is left (the next prune tries again)."""
+    import shutil
+
+    gone: list[int] = []
+    for ck in complete_checkpoints(run_dir)[:-keep] if keep > 0 else []:
+        try:
+            (ck.folder / MANIFEST).unlink()
+        except OSError:
+            continue
+        shutil.rmtree(ck.folder, ignore_errors=True)
+        gone.append(ck.k)
+    return gone
+
+
 def read_checkpoint(folder: Path) -> Checkpoint:
     """The complete checkpoint in ``folder`` (its manifest read); CheckpointError if none."""
     folder = Path(folder)

@@ -95,6 +95,9 @@ RUN_KEYS: dict[str, Key] = {
                               doc="save every node's whole state this often (simulated s; "
                                   "a whole number of steps) for suscosim run --resume / "
                                   "--fork; 0 = never"),
+    "checkpoint_keep": Key(int, 2, low=0, high=1_000_000,
+                           doc="complete checkpoints kept (the newest; older ones are deleted "
+                               "as new ones complete); 0 = keep every one (to fork at any T)"),
     "rtol": Key(float, 1e-10, positive=True, low=1e-14, high=1e-2,
                 doc="reference mode: solve_ivp relative tolerance"),
 }

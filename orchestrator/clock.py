@@ -32,7 +32,7 @@ from cosim import channels as ch
 from cosim import keys
 from cosim.auth import SESSION_FIELD, RunKey
 from cosim.bus import Bus
-from cosim.checkpoint import CheckpointError, write_manifest
+from cosim.checkpoint import CheckpointError, prune_checkpoints, write_manifest
 from cosim.control import check_node_control
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.run_checkpoint import NodeCheckpoints
@@ -236,6 +236,9 @@ class Clock:
             print(f"suscosim: warning: checkpoint k={k} not completed: {exc}", file=sys.stderr)
             return
         self.checkpoints.append(k)
+        keep = int(self.scenario["run"].get("checkpoint_keep", 0) or 0)
+        if keep:
+            prune_checkpoints(Path(run["dir"]), keep)
 
     def _tick(self) -> None:
         now = self._last_tick = time.monotonic()
