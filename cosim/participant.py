@@ -206,11 +206,9 @@ class Participant:
         return tag
 
     def start_at(self, k: int) -> None:
-        """A run that starts with step ``k`` (resumed from a checkpoint): every stepped
-        input's window starts at k - 1 (the parallel exchange's lagged state)."""
-        for mb in self.inputs.values():
-            if mb.stepped:
-                mb.floor = max(k - 1, 0)
+        """Start at step ``k`` (a resume): stepped inputs' windows at k - 1 (a lagged state)."""
+        for mb in (mb for mb in self.inputs.values() if mb.stepped):
+            mb.floor = max(k - 1, 0)
 
     @property
     def outputs(self) -> list[str]:
