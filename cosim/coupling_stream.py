@@ -71,6 +71,14 @@ class _BondState:
     abs_residual: float = 0.0
     carried: float = 0.0
 
+    def rows(self, block: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The bond's columns F, J, x, v of the rows kept from before and ``block``'s."""
+        s = self.spec
+        new = {"F": _get(block, s.force), "J": _get(block, s.slope),
+               "x": _get(block, s.seen), "v": _get(block, s.velocity)}
+        return {key: np.concatenate([self.tail[key], a]) if key in self.tail else a
+                for key, a in new.items()}
+
 
 class ResidualStream:
     """Feed blocks of a run's rows in order (:meth:`feed`); :meth:`result` gives the totals.
@@ -120,10 +128,7 @@ class ResidualStream:
             return self._feed_adaptive(block, g0, n_new)
         for name, st in self.bonds.items():
             s = st.spec
-            new = {"F": _get(block, s.force), "J": _get(block, s.slope),
-                   "x": _get(block, s.seen), "v": _get(block, s.velocity)}
-            cur = {key: np.concatenate([st.tail[key], a]) if key in st.tail else a
-                   for key, a in new.items()}
+            cur = st.rows(block)
             F, J, x, v = cur["F"], cur["J"], cur["x"], cur["v"]
             n_all = self.rows + n_new  # rows in the run so far
             # carried energy: rows j >= lag of this block, |F[j] v[j - lag]|
@@ -160,10 +165,7 @@ class ResidualStream:
         out: dict[str, np.ndarray] = {}
         for name, st in self.bonds.items():
             s = st.spec
-            new = {"F": _get(block, s.force), "J": _get(block, s.slope),
-                   "x": _get(block, s.seen), "v": _get(block, s.velocity)}
-            cur = {key: np.concatenate([st.tail[key], a]) if key in st.tail else a
-                   for key, a in new.items()}
+            cur = st.rows(block)
             F, J, x, v = cur["F"], cur["J"], cur["x"], cur["v"]
             j = np.arange(max(self.rows, lag), n_all) - g0
             back = np.where(j + g0 > 0, j - 1, j + 1)  # the step that ends at row j
