@@ -14,6 +14,7 @@ Life (Eq 2.7): D is the damage of one pass of the simulated history; life = 1/D 
 from __future__ import annotations
 
 import json
+import os
 import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -33,7 +34,7 @@ from .superposition import ROWS, components_buffer, node_major, superpose_compon
 from .turning_eq import gather_kept, kept_equivalent, turning_equivalent
 
 ENGINES = ("compiled", "numpy", "block")
-ENGINE = "compiled" if COMPILED else "numpy"
+ENGINE = os.environ.get("SUSCOSIM_FATIGUE_ENGINE") or ("compiled" if COMPILED else "numpy")
 """How :class:`_Engine` computes a block (all give the same bits, ``tests/fatigue``):
 ``"compiled"`` (numba: the stresses by node tiles, the equivalent stress exactly only at
 the samples a proven bracket cannot rule out as turning points, :func:`.turning_eq.
@@ -41,7 +42,10 @@ kept_equivalent`, and the compiled rainflow, :meth:`.counting.StreamingRainflow.
 feed_packed`); ``"numpy"`` (the same idea in numpy, :func:`.turning_eq.turning_equivalent`,
 the fallback without numba); ``"block"`` (the equivalent stress of every sample, the
 reference). A module setting, not the engine's: the engine stays plain data (pickled in
-checkpoints)."""
+checkpoints). ``SUSCOSIM_FATIGUE_ENGINE`` in the environment picks it for a whole run (a
+measurement switch: ``bench/bench_workloads.py`` A/B; an unknown name is an error)."""
+if ENGINE not in ENGINES:
+    raise ValueError(f"SUSCOSIM_FATIGUE_ENGINE={ENGINE!r}: one of {ENGINES}")
 TILE_ELEMS = 1 << 19
 """Stress components per node tile of the compiled path (6 x nodes x samples, 4 MB: 170
 nodes of a 500-sample block; the products took 15.0 us/step at 128 nodes, 16.4 at 341,
