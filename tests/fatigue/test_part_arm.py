@@ -37,7 +37,7 @@ def test_cad_parameters_enforce_forging_rules(tmp_path):
     bad.write_text(text.replace("fillet = 0.005", "fillet = 0.002", 1))
     with pytest.raises(InputFileError, match="fillet"):
         cad_arm.load_params(bad)
-    bad.write_text(text.replace("junction_fillet = 0.003", "junction_fillet = 0.0"))
+    bad.write_text(text.replace("junction_fillet = 0.005", "junction_fillet = 0.0"))
     with pytest.raises(InputFileError, match="junction_fillet"):
         cad_arm.load_params(bad)
 

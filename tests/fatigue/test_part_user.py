@@ -205,3 +205,60 @@ def test_amg_paths_match_the_direct_solver(link, monkeypatch):
     f_amg, _ = pm.fe.modes(2)
     np.testing.assert_allclose(U_amg, U_direct, atol=1e-8 * np.abs(U_direct).max())
     np.testing.assert_allclose(f_amg, f_direct, rtol=1e-6)
+    # the LOBPCG path preconditioned by SuperLU (meshes of 40 000 to DIRECT_MAX_DOFS dofs)
+    monkeypatch.setattr(solid, "DIRECT_MAX_DOFS", 10 ** 9)
+    monkeypatch.setattr(solid, "SHIFT_INVERT_MAX_DOFS", 0)
+    f_lu, _ = pm.fe.modes(2)
+    np.testing.assert_allclose(f_lu, f_direct, rtol=1e-6)
+
+
+def test_p2_interpolation_is_exact_for_quadratics_and_clamps_outside(link):
+    """The convergence table compares meshes at physical points: the P2 interpolation of a
+    nodal field reproduces any quadratic inside the mesh, a node's own value at the node, and
+    takes a point just outside at a point of the surface near it (gap reported)."""
+    from nodes.fatigue.parts.card import p2_interpolation
+
+    _, path, _ = link
+    pm = part_model(load_part(path), 0.02)
+    x = pm.fe.node_xyz
+
+    def q(x):
+        return 3.0 + 2.0 * x[:, 0] - x[:, 1] + 40.0 * x[:, 0] * x[:, 2] + 90.0 * x[:, 1] ** 2
+    f = q(x)
+    rng = np.random.default_rng(1)
+    pts = np.c_[rng.uniform(0.03, 0.17, 20), rng.uniform(-0.018, 0.018, 20),
+                rng.uniform(-0.009, 0.009, 20)]  # inside the bar
+    nodes, w, gap = p2_interpolation(pm, np.vstack([pts, x[[5, 77]]]))
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose((w * f[nodes]).sum(axis=1), q(np.vstack([pts, x[[5, 77]]])),
+                               rtol=1e-9)
+    assert np.all(gap == 0.0)
+    out = np.array([[0.1, 0.0, 0.0105]])  # 0.5 mm above the bar's top face
+    _, _, g = p2_interpolation(pm, out)
+    assert 0.0005 - 1e-9 <= g[0] < 0.001  # at least the distance to the mesh, and near it
+
+
+def test_local_refinement_balls_refine_only_inside(link):
+    """`mesh.convergence_local`'s meshes: a refinement ball makes the elements inside it
+    smaller and leaves the mesh away from it as it was."""
+    _, path, _ = link
+    part = load_part(path)
+    coarse = part_model(part, 0.02)
+    fine = part_model(part, 0.02, refine=[(0.1, 0.0, 0.0, 0.01, 0.002)])
+
+    def edge(pm, centre, r):
+        p, t = pm.mesh.p, pm.mesh.t
+        c = p[t].mean(axis=1)
+        inside = np.linalg.norm(c - centre, axis=1) < r
+        e = np.linalg.norm(p[t[:, 0]] - p[t[:, 1]], axis=1)
+        return np.median(e[inside]), int(inside.sum())
+
+    h_c, n_c = edge(coarse, np.array([0.1, 0.0, 0.0]), 0.008)
+    h_f, n_f = edge(fine, np.array([0.1, 0.0, 0.0]), 0.008)
+    assert h_f < 0.6 * h_c and n_f > 10 * n_c
+    assert h_f < 0.003
+    import dataclasses
+
+    with pytest.raises(ValueError, match="CAD"):  # a mesh file is read as it is
+        part_model(dataclasses.replace(part, kind="mesh"), 0.02,
+                   refine=[(0.1, 0.0, 0.0, 0.01, 0.002)])

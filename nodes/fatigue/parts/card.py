@@ -16,8 +16,8 @@ von Mises stress under the static load set on the finest mesh (the ten "most dam
 static + 3 g cases, which scale together; not a damage ranking from a run). On every mesh each
 unit case's stress tensor is interpolated at the spots' physical points (the P2 field of the
 nodal-averaged stresses in the tetrahedron containing the point, or, for a point just outside
-a coarser faceted surface, the nearest point of the nearest tetrahedron: the gap is
-reported), and its von Mises stress taken; the change between the two finest meshes is per
+a coarser faceted surface, at a point of the nearest tetrahedron's surface near it: the gap
+is reported), and its von Mises stress taken; the change between the two finest meshes is per
 spot the largest over the cases of |Δσ| / (the spot's largest unit-case stress).
 
 With ``mesh.convergence_local`` (local refinement, affordable where a global refinement is
@@ -153,8 +153,8 @@ def p2_interpolation(pm: PartModel, pts: np.ndarray
     """How to interpolate a nodal field of ``pm``'s P2 mesh at physical points (k, 3):
     (node indices (k, 10), weights (k, 10), gap (k,) [m] between each point and where it is
     evaluated: 0 inside the mesh; a point outside (a coarser mesh's faceted curved surface)
-    is taken at the nearest point, by clamped barycentric coordinates, of the candidate
-    tetrahedron it is most nearly inside)."""
+    is taken in the candidate tetrahedron it is most nearly inside, at its barycentric
+    coordinates clamped to >= 0: a point of that tetrahedron's surface near it)."""
     fe = pm.fe
     p, t = fe.mesh.p.T, fe.mesh.t.T  # (nv, 3), (ne, 4)
     edofs = fe.sbasis.element_dofs.T  # (ne, 10): P2 dofs (node indices of fe.node_xyz)
