@@ -105,7 +105,8 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
         "rows": rec.get("rows", 0), "files": rec.get("files", {}),
         "channels": rec.get("stats", {}),
     } | ({"table_note": rec["note"]} if rec.get("note") else {}) \
-      | _coupling_summary(scenario, rec, status) | _adaptive_summary(scenario, rec)
+      | _coupling_summary(scenario, rec, status) | _adaptive_summary(scenario, rec) \
+      | _resume_summary(run)
 
 
 RESIDUAL_WARNING = WARNING_THRESHOLD
@@ -128,6 +129,17 @@ def _coupling_summary(scenario: dict[str, Any], rec: dict[str, Any],
     except (OSError, SuscosimError, KeyError, ValueError):
         return {}
     return {"coupling_energy_residual": res} if res else {}
+
+
+def _resume_summary(run: dict[str, Any]) -> dict[str, Any]:
+    """``resumed_from`` of a resumed or forked run: the checkpoint's step and time, the run
+    folder it came from, the nodes that started afresh (a fork's changed controller)."""
+    res = run.get("resume")
+    if not res:
+        return {}
+    return {"resumed_from": {"k": res["k"], "t": res["t"],
+                             "run_dir": res.get("parent") or run["dir"],
+                             "fork": bool(res.get("parent")), "fresh": list(res.get("fresh", []))}}
 
 
 def _adaptive_summary(scenario: dict[str, Any], rec: dict[str, Any]) -> dict[str, Any]:

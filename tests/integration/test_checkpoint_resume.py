@@ -74,7 +74,10 @@ def test_resume_from_an_earlier_checkpoint_equals_the_uninterrupted_run(ch3_para
     assert "checkpoint at step 2000" in out
     _same(run, ckpt)
     assert (run / "checkpoints" / "journal-k002000.msgpack").is_file()  # the old one, aside
-    assert json.loads((run / "summary.json").read_text())["status"] == "ok"
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["status"] == "ok"
+    assert summary["resumed_from"] == {"k": 2000, "t": 2.0, "run_dir": str(run), "fork": False,
+                                       "fresh": []}
 
 
 def test_fork_with_the_same_settings_continues_the_parent_bit_for_bit(ch3_parallel, tmp_path):
