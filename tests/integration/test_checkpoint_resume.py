@@ -111,28 +111,35 @@ def test_fork_with_another_law_starts_from_the_parents_state(ch3_parallel, tmp_p
 
 
 def test_bad_resumes_and_forks_are_refused_naming_why(ch3_parallel, tmp_path):
+    """In-process where the CLI only passes the error on (its exit 2 checked twice)."""
+    from cosim import scenario as sc
+    from cosim.checkpoint import CheckpointError
+    from cosim.errors import ScenarioError
+    from orchestrator.resume import fork_scenario, resume_scenario
+    from orchestrator.runner import resolve
+
     ckpt, plain = ch3_parallel
     r = suscosim("run", "--resume", str(plain))
     assert r.returncode == 2 and "no complete checkpoint" in r.stderr, r.stderr
-    r = suscosim("run", "--fork", f"{ckpt}@2.0", "--out", str(tmp_path / "f"),
-                 "--set", "road.height=0.05")
-    assert r.returncode == 2 and "road.height" in r.stderr, r.stderr
-    r = suscosim("run", "--fork", f"{ckpt}@1.5", "--out", str(tmp_path / "g"))
-    assert r.returncode == 2 and "no checkpoint at t=1.5" in r.stderr, r.stderr
+    with pytest.raises(ScenarioError, match="road.height"):
+        fork_scenario(f"{ckpt}@2.0", ["road.height=0.05"], str(tmp_path / "f"), resolve)
+    with pytest.raises(CheckpointError, match="no checkpoint at t=1.5"):
+        fork_scenario(f"{ckpt}@1.5", [], str(tmp_path / "g"), resolve)
+    with pytest.raises(ScenarioError, match="a folder other than the parent"):
+        fork_scenario(f"{ckpt}@2.0", [], str(ckpt), resolve)
     r = suscosim("run", "--resume", str(ckpt), "--set", "controller.c=1.0")
     assert r.returncode == 2 and "--fork" in r.stderr, r.stderr
-    r = suscosim("run", str(CH3), "--set", "run.checkpoint_every_s=0.0015", "--mode",
-                 "monolithic")
-    assert r.returncode == 2 and "whole number of steps" in r.stderr, r.stderr
+    with pytest.raises(ScenarioError, match="whole number of steps"):
+        resolve(sc.load(CH3, ["run.checkpoint_every_s=0.0015"]))
     damaged = tmp_path / "damaged"
     shutil.copytree(ckpt, damaged)
     node_file = damaged / "checkpoints" / "k003000" / "plant.ckpt"
     data = bytearray(node_file.read_bytes())
     data[-10] ^= 0xFF
     node_file.write_bytes(bytes(data))
-    r = suscosim("run", "--resume", str(damaged))
-    assert r.returncode == 2 and "damaged" in r.stderr and "plant.ckpt" in r.stderr, r.stderr
-    assert "Traceback" not in r.stderr
+    with pytest.raises(CheckpointError, match="plant.ckpt is damaged") as e:
+        resume_scenario(damaged)
+    assert e.value.exit_code == 2
     assert (damaged / "journal.msgpack").is_file()  # a refused resume moves nothing
 
 
