@@ -262,3 +262,26 @@ def test_local_refinement_balls_refine_only_inside(link):
     with pytest.raises(ValueError, match="CAD"):  # a mesh file is read as it is
         part_model(dataclasses.replace(part, kind="mesh"), 0.02,
                    refine=[(0.1, 0.0, 0.0, 0.01, 0.002)])
+
+
+def test_local_convergence_table_on_the_link(link):
+    """`card.convergence` with local sizes: the global mesh, then two meshes refined round its
+    highest-stressed nodes; the ten spots of the finest mesh are read on every mesh at the
+    same physical points (on the finest: exactly its nodal values), and lie in the balls."""
+    from nodes.fatigue.parts.card import convergence
+
+    _, path, _ = link
+    part = load_part(path)
+    loads = {"a_z": 1000.0, "b_z": -1000.0, "a_my": 20.0}
+    cv = convergence(part, [0.02], loads, local_sizes=[0.004, 0.006], radius=0.01)
+    rows = cv["rows"]
+    assert [r["local_size_m"] for r in rows] == [None, 0.006, 0.004]
+    assert rows[0]["n_nodes"] < rows[1]["n_nodes"] < rows[2]["n_nodes"]
+    hot = [h["von_mises_mpa"] for h in cv["hot_spots"]]
+    np.testing.assert_allclose(rows[-1]["static_at_spots_mpa"], hot, rtol=1e-9)
+    assert rows[-1]["interpolation_gap_max_m"] == 0.0
+    rf = cv["refinement"]
+    assert rf["n_balls"] >= 1 and rf["hot_spots_inside"]
+    ch = cv["unit_change_two_finest"]
+    assert len(ch) == 10 and all(0.0 <= c < 1.0 for c in ch)
+    assert cv["max_unit_change_two_finest"] == max(ch)

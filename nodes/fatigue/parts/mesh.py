@@ -27,8 +27,10 @@ from cosim.errors import InputFileError
 
 MESH_SUFFIXES = {".msh": "gmsh", ".inp": "abaqus", ".bdf": "nastran", ".nas": "nastran"}
 CAD_SUFFIXES = (".step", ".stp")
-RAMP = 1.0
-"""Transition layer outside a refinement ball, in global element sizes."""
+RAMP = 0.3
+"""Transition layer outside a refinement ball, in global element sizes (1.0 on the arm's
+30 mm mesh: a 30 mm layer round 16 balls of 12 mm, > 6 GB and > 8 min for the first local
+mesh before it was stopped)."""
 
 Ball = tuple[float, float, float, float, float]
 """A refinement ball: centre x, y, z [m], radius [m], element size inside [m]."""
