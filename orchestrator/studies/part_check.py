@@ -88,10 +88,20 @@ def check(args: argparse.Namespace) -> int:
           f"assessed), {c['element']}; {c['supports']}")
     if "convergence" in c:
         cv = c["convergence"]
-        print("  convergence   size  nodes  mass kg  mode 1 Hz  static hot spot MPa")
+        print("  convergence   size  local   nodes  mass kg  mode 1 Hz  static hot spot MPa")
         for r in cv["rows"]:
-            print(f"             {r['size_m'] * 1e3:5.1f} {r['n_nodes']:>6} {r['mass_kg']:8.3f} "
-                  f"{r['mode_1_hz']:10.0f} {r['static_hotspot_mpa']:10.0f}")
+            loc = "-" if r.get("local_size_m") is None else f"{r['local_size_m'] * 1e3:.1f}"
+            print(f"             {r['size_m'] * 1e3:5.1f} {loc:>6} {r['n_nodes']:>7} "
+                  f"{r['mass_kg']:8.3f} {r['mode_1_hz']:10.0f} "
+                  f"{r['static_hotspot_mpa']:10.0f}")
+        rf = cv.get("refinement")
+        if rf is not None:
+            out = ("-" if rf["peak_outside_mpa"] is None
+                   else f"{rf['peak_outside_mpa']:.0f} MPa")
+            print(f"  local refinement: {rf['n_balls']} balls of {rf['radius_m'] * 1e3:.0f} mm "
+                  f"round the nodes >= {rf['fraction']:.1f} x the hot spot; ten hot spots "
+                  f"inside: {'yes' if rf['hot_spots_inside'] else 'NO'}; highest assessed "
+                  f"stress outside: {out} (tenth hot spot {rf['tenth_hot_spot_mpa']:.0f} MPa)")
         if cv["unit_change_two_finest"] is not None:
             print("  unit-load stress change, two finest meshes, at the ten hot spots: "
                   + " ".join(f"{100 * v:.1f}" for v in cv["unit_change_two_finest"]) + " %")
