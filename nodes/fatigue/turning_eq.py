@@ -327,6 +327,7 @@ def kept_equivalent(buf: np.ndarray, n: int, kind: str, scratch: np.ndarray | No
         out = np.empty((6, k * n))
         K = gather_kept(buf, n, out, 0, counts)
     else:
+        assert scratch is not None  # K >= 0: the scratch held the kept samples
         out = scratch[:scratch.size // 6 * 6].reshape(6, -1)
     return equivalent_of(out[:, :K], kind), counts
 

@@ -34,7 +34,7 @@ class ForkLayouts:
         self.held.setdefault(name, []).append((k, t, d))
 
     def release(self, name: str, first: Mapping[str, Any]
-                ) -> list[tuple[int, float, dict[str, Any]]]:
+                ) -> list[tuple[int, float, Mapping[str, Any]]]:
         """The held records of ``name`` padded to the union of their fields and those of the
         new node's ``first`` message (which :meth:`pad` pads from then on); ValueError when a
         field is a number in one and a list (or another length) in the other."""
