@@ -141,6 +141,17 @@ def at_a_glance(r: RunData) -> list[tuple[str, Any]]:
     return pairs
 
 
+def _idle_run_keys(run: dict) -> set[str]:
+    """``run`` keys that do nothing in this run (the adaptive step's without ``run.h =
+    "auto"``, the checkpoints' without checkpoints): not shown."""
+    idle = set()
+    if not run.get("adaptive"):
+        idle |= {"h_min", "h_max", "h_tol"}
+    if not run.get("checkpoint_every_s"):
+        idle |= {"checkpoint_every_s", "checkpoint_keep"}
+    return idle
+
+
 def scenario_section(r: RunData) -> str:
     if r.scenario is None:
         return section("scenario", "Scenario", note("no scenario.json in the run folder."))
@@ -152,8 +163,10 @@ def scenario_section(r: RunData) -> str:
         if v is None:
             continue
         if k == "run":
+            idle = _idle_run_keys(v)
             pairs = [(x, v[x]) for x in RUN_KEYS if x in v] + \
-                    [(x, y) for x, y in flatten(v) if x not in RUN_KEYS and x != "dir"]
+                    [(x, y) for x, y in flatten(v)
+                     if x not in RUN_KEYS and x != "dir" and x.split(".")[0] not in idle]
         else:
             pairs = flatten(v)
         parts.append(kv_table(pairs, k))
