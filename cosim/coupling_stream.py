@@ -127,9 +127,8 @@ class ResidualStream:
         if h is None:
             return self._feed_adaptive(block, g0, n_new)
         for name, st in self.bonds.items():
-            s = st.spec
             cur = st.rows(block)
-            F, J, x, v = cur["F"], cur["J"], cur["x"], cur["v"]
+            F, v = cur["F"], cur["v"]
             n_all = self.rows + n_new  # rows in the run so far
             # carried energy: rows j >= lag of this block, |F[j] v[j - lag]|
             j = np.arange(max(self.rows, lag), n_all) - g0
@@ -137,23 +136,30 @@ class ResidualStream:
             # steps k completed: lag <= k, k + 1 + lag < n_all, not done before
             k_first = max(lag, self.rows - 1 - lag)
             k = np.arange(k_first, n_all - 1 - lag) - g0
-            if k.size:
-                F_k, J_k = F[k], J[k]
-                F_prev = F[np.maximum(k - 1, -g0)]  # the run's row 0 has no previous
-                seen = x[k - lag]
-                app_start = applied_force(self.coupling, F_k, J_k, seen, x[k], F_prev, 0.0,
-                                          s.clip, s.sign)
-                app_end = applied_force(self.coupling, F_k, J_k, seen, x[k + 1], F_prev, 1.0,
-                                        s.clip, s.sign)
-                dE = 0.5 * h * ((app_start - F[k + lag]) * v[k]
-                                + (app_end - F[k + 1 + lag]) * v[k + 1])
-                st.abs_residual += float(np.abs(dE).sum())
-                out[name] = dE.sum(axis=1)
-            else:
-                out[name] = np.zeros(0)
+            out[name] = self._steps(st, cur, k, g0, h, 1.0)
             st.tail = {key: a[-self._keep:] for key, a in cur.items()}
         self.rows += n_new
         return out
+
+    def _steps(self, st: _BondState, cur: Mapping[str, np.ndarray], k: np.ndarray, g0: int,
+               h: float | np.ndarray, r_end: float | np.ndarray) -> np.ndarray:
+        """dE [J] (summed over corners) of the steps ``k`` (rows of ``cur``, the run's row 0
+        at ``-g0``), of length ``h`` [s] (one, or one per step as a column); ``r_end``: the
+        step's end in the linear extrapolation's units (1 for a fixed step)."""
+        if not k.size:
+            return np.zeros(0)
+        s, lag = st.spec, self.lag
+        F, J, x, v = cur["F"], cur["J"], cur["x"], cur["v"]
+        F_k, J_k = F[k], J[k]
+        F_prev = F[np.maximum(k - 1, -g0)]  # the run's row 0 has no previous
+        seen = x[k - lag]
+        app_start = applied_force(self.coupling, F_k, J_k, seen, x[k], F_prev, 0.0,
+                                  s.clip, s.sign)
+        app_end = applied_force(self.coupling, F_k, J_k, seen, x[k + 1], F_prev, r_end,
+                                s.clip, s.sign)
+        dE = 0.5 * h * ((app_start - F[k + lag]) * v[k] + (app_end - F[k + 1 + lag]) * v[k + 1])
+        st.abs_residual += float(np.abs(dE).sum())
+        return np.asarray(dE.sum(axis=1))
 
     def _feed_adaptive(self, block: Mapping[str, np.ndarray], g0: int,
                        n_new: int) -> dict[str, np.ndarray]:
@@ -164,9 +170,8 @@ class ResidualStream:
         n_all = self.rows + n_new
         out: dict[str, np.ndarray] = {}
         for name, st in self.bonds.items():
-            s = st.spec
             cur = st.rows(block)
-            F, J, x, v = cur["F"], cur["J"], cur["x"], cur["v"]
+            F, v = cur["F"], cur["v"]
             j = np.arange(max(self.rows, lag), n_all) - g0
             back = np.where(j + g0 > 0, j - 1, j + 1)  # the step that ends at row j
             hj = np.abs(tt[j] - tt[np.clip(back, 0, len(tt) - 1)])
@@ -177,17 +182,7 @@ class ResidualStream:
                 hk = (tt[k + 1] - tt[k])[:, None]
                 hprev = np.where(k + g0 > 0, tt[k] - tt[np.maximum(k - 1, 0)], hk[:, 0])
                 r_end = hk / np.where(hprev > 0, hprev, hk[:, 0])[:, None]
-                F_k, J_k = F[k], J[k]
-                F_prev = F[np.maximum(k - 1, -g0)]
-                seen = x[k - lag]
-                app_start = applied_force(self.coupling, F_k, J_k, seen, x[k], F_prev, 0.0,
-                                          s.clip, s.sign)
-                app_end = applied_force(self.coupling, F_k, J_k, seen, x[k + 1], F_prev,
-                                        r_end, s.clip, s.sign)
-                dE = 0.5 * hk * ((app_start - F[k + lag]) * v[k]
-                                 + (app_end - F[k + 1 + lag]) * v[k + 1])
-                st.abs_residual += float(np.abs(dE).sum())
-                out[name] = dE.sum(axis=1)
+                out[name] = self._steps(st, cur, k, g0, hk, r_end)
             else:
                 out[name] = np.zeros(0)
             st.tail = {key: a[-self._keep:] for key, a in cur.items()}
