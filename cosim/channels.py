@@ -40,6 +40,12 @@ plant/arm             <pt>_<ax>    load ON the lower arm at point pt (ball_joint
                       torsion_bar_ the torsion-bar moment on the arm about its x axis, static
                       mx           preload included [N m]; it enters the arm through its
                                    pivot, half at each bush eye (cosim/lower_arm.py)
+plant/upper_arm       upper_<pt>_  load ON the upper arm at pt (ball_joint, bush_front,
+                      <ax>         bush_rear: the corner file's upper_* points), axis of the
+                                   upper-arm frame at t_k (origin the upper bushes' midpoint,
+                                   x rear -> front bush, y toward the upper ball joint normal
+                                   to x, z = x cross y; nodes/plant/upper_arm_loads.py) [N]
+                                   (the double-wishbone quarter car)
 plant/arm_<C>         (as arm)     C = FL, FR, RL, RR: each lower arm of the four-corner
                                    vehicle (a right arm in its mirrored frame); plant/arm is
                                    then the FL arm's
@@ -110,6 +116,8 @@ def __getattr__(name: str) -> tuple[str, ...]:
     return value
 
 LOAD_CHANNEL = (PLANT, ARM)
+UPPER_ARM = "upper_arm"
+"""The upper arm's load channel ``plant/upper_arm`` (the double-wishbone quarter car)."""
 """The channel the recorder streams to the fatigue node in blocks."""
 
 CORNERS = ("FL", "FR", "RL", "RR")

@@ -82,6 +82,7 @@ class Channel:
 
 _PTS = ("loc1", "cg", "loc2")
 _ARM_POINTS = ("ball_joint", "damper_mount", "bush_front", "bush_rear")
+_UPPER_ARM_POINTS = ("upper_ball_joint", "upper_bush_front", "upper_bush_rear")
 _DW = "double wishbone"
 _FV = "7-DOF full vehicle"
 _FVDW = "full_vehicle_double_wishbone"
@@ -156,6 +157,14 @@ CHANNELS: tuple[Channel, ...] = (
     Channel("plant", "arm", _arm_fields(),
             "the component loads of step k (realistic models only; the four-corner vehicle: "
             "the front-left arm's, as arm_FL)"),
+    Channel("plant", "upper_arm", tuple(
+        Field(f"{p}_{ax}", "N", f"load ON the upper arm at {p}, upper-arm-frame {ax} axis",
+              models=_DW)
+        for p in _UPPER_ARM_POINTS for ax in "xyz"),
+            "the upper arm's loads of step k (the double-wishbone quarter car); upper-arm "
+            "frame: origin the upper bushes' midpoint, x rear -> front bush, y toward the "
+            "upper ball joint normal to x, z = x cross y, turning with the arm "
+            "(nodes/plant/upper_arm_loads.py)"),
     *(Channel("plant", f"arm_{c}", _arm_fields(),
               f"the {c} lower arm's loads of step k (four-corner vehicle; a right arm in its "
               "mirrored frame, docs/corners.md)") for c in _ARM_CORNERS),

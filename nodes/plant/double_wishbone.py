@@ -94,6 +94,7 @@ from .model import GRAVITY, PlantModel
 from .point_kinematics import point_velocity, world_point
 from .quarter_car_lumped import load_urdf_text, new_direct_client
 from .quiet_pybullet import p
+from .upper_arm_loads import upper_arm_frame, upper_arm_loads
 
 __all__ = [
     "ARM_ACCEL_POINTS", "ARM_ORIGIN", "ARM_POINTS", "ARM_ROTATION", "BODY", "BUMP_STOP_PAD",
@@ -106,7 +107,7 @@ __all__ = [
 ]
 
 _BS = BumpStopParams()
-_READ_LINKS = [HUB, BODY, LOWER_ARM]
+_READ_LINKS = [HUB, BODY, LOWER_ARM, UPPER_ARM]
 """The links whose states each substep reads (:meth:`DoubleWishboneCorner._read`)."""
 
 
@@ -215,6 +216,13 @@ class DoubleWishboneCorner(PlantModel):
                              physicsClientId=c)
             p.enableJointForceTorqueSensor(b, j, True, physicsClientId=c)
         self._arm_r_com = np.array(p.getLinkState(b, LOWER_ARM, physicsClientId=c)[2])
+        # the upper arm's loads (nodes/plant/upper_arm_loads.py): its centre of mass in its
+        # link frame, its frame's axes in the link frame (link axes = corner axes at rest),
+        # the bush spacing
+        self._ua_link = UPPER_ARM
+        self._ua_r_com = np.array(p.getLinkState(b, UPPER_ARM, physicsClientId=c)[2])
+        self._ua_frame_R = upper_arm_frame(cf)[1]
+        self._ua_spacing = float(np.linalg.norm(g.upper_bush_front - g.upper_bush_rear))
         ua_o = 0.5 * (g.upper_bush_front + g.upper_bush_rear)
         self._c_upper = p.createConstraint(
             b, UPPER_ARM, b, HUB, p.JOINT_POINT2POINT, [0, 0, 0],
@@ -248,6 +256,7 @@ class DoubleWishboneCorner(PlantModel):
         self.tau0 = self._static_torque(static_dt)
         self._read()
         self._applied_pose = (self._R_arm, self._hub_quat, self._u)
+        self._ua_quat_applied = self._ua_quat
 
     # --- helpers ---
     def _read(self) -> None:
@@ -262,8 +271,9 @@ class DoubleWishboneCorner(PlantModel):
         self._theta, self._omega = js[1][0], js[1][1]
         # one call for the three links: the forward kinematics computed once, not thrice
         # (the same states, ~8 us less a substep)
-        hub, body, arm = p.getLinkStates(b, _READ_LINKS, computeLinkVelocity=1,
-                                         computeForwardKinematics=1, physicsClientId=c)
+        hub, body, arm, ua = p.getLinkStates(b, _READ_LINKS, computeLinkVelocity=1,
+                                             computeForwardKinematics=1, physicsClientId=c)
+        self._ua_quat = ua[5]  # the upper arm's rotation: for its loads
         self._zw_abs, self._vw = hub[0][2], hub[6][2]
         self._hub_pos = list(hub[0])
         self._hub_quat = hub[5]  # its rotation only when the arm loads need it
@@ -407,12 +417,15 @@ class DoubleWishboneCorner(PlantModel):
         self._F_bs = self.bump_stop_force()
         # the pose the forces of this substep are applied (and the joint sensors evaluated) in
         self._applied_pose = (self._R_arm, self._hub_quat, self._u)
+        self._ua_quat_applied = self._ua_quat
         self._apply()
         p.stepSimulation(physicsClientId=self.client)
         self._read()
 
     def loads(self) -> dict[str, dict[str, float]]:
-        return {"arm": arm_loads(self)}
+        """``arm``: the lower arm's loads (:func:`.arm_loads.arm_loads`); ``upper_arm``: the
+        upper arm's (:func:`.upper_arm_loads.upper_arm_loads`)."""
+        return {"arm": arm_loads(self), "upper_arm": upper_arm_loads(self)}
 
     def info(self) -> dict[str, object]:
         d = super().info()

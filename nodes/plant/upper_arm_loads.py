@@ -1,0 +1,96 @@
+"""The loads ON the upper arm of the double-wishbone corner (:mod:`.double_wishbone`): the
+``upper_arm`` channel, read from PyBullet's pivot joint sensor and the upper ball joint's
+point-to-point constraint.
+
+**Upper-arm frame** (the lower arm's rule, :func:`cosim.lower_arm.arm_frame_of`, applied to
+the corner's upper points): origin at the midpoint of the two upper bush centres
+(``upper_bush_front``, ``upper_bush_rear`` of the corner file), x along the pivot axis from the
+rear bush to the front one, y from the pivot axis toward the upper ball joint
+(``upper_ball_joint``) normal to x, z = x cross y; it turns with the arm. For the built-in
+corner the arm is inclined 4.8 deg (its inner end 20 mm below its outer end), so its y and z
+are the corner's turned by that much about x. The points come from the corner file only
+(:func:`upper_arm_corner`: the corner with its lower-arm point names carrying the upper
+arm's points, read by the same functions): one definition of each hardpoint.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from cosim import lower_arm as la
+from cosim.corner import Corner
+
+from .point_kinematics import cross3
+from .quiet_pybullet import p
+
+if TYPE_CHECKING:
+    from .double_wishbone import DoubleWishboneCorner
+
+UPPER_POINTS = {"bush_front": "upper_bush_front", "bush_rear": "upper_bush_rear",
+                "ball_joint": "upper_ball_joint"}
+"""The arm-frame point names of :func:`cosim.lower_arm.hardpoints_of` -> the corner file's
+upper-arm points."""
+FIELDS = tuple(f"{UPPER_POINTS[k]}_{ax}" for k in ("ball_joint", "bush_front", "bush_rear")
+               for ax in "xyz")
+"""The ``plant/upper_arm`` fields, in order (:mod:`cosim.schema`)."""
+
+
+def upper_arm_corner(c: Corner) -> Corner:
+    """``c`` with only the lower-arm point names, each carrying the upper arm's point, so that
+    :func:`cosim.lower_arm.arm_frame_of` and :func:`~cosim.lower_arm.hardpoints_of` give the
+    upper arm's frame and points."""
+    pts = {f"lower_{k}": c.points[v] for k, v in UPPER_POINTS.items()}
+    return replace(c, points=pts)
+
+
+def upper_arm_frame(c: Corner) -> tuple[np.ndarray, np.ndarray]:
+    """(origin, R) of the upper-arm frame in the corner frame at static ride height (columns
+    of R: its x, y, z); p_frame = R.T @ (p_corner - origin) [m]."""
+    return la.arm_frame_of(upper_arm_corner(c))
+
+
+def upper_hardpoints(c: Corner) -> dict[str, np.ndarray]:
+    """The upper arm's load points in its frame, by the corner file's names
+    (``upper_ball_joint``, ``upper_bush_front``, ``upper_bush_rear``) [m]."""
+    hp = la.hardpoints_of(upper_arm_corner(c))
+    return {UPPER_POINTS[k]: v for k, v in hp.items()}
+
+
+def upper_arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
+    """Loads ON the upper arm during the latest substep, in the upper-arm frame at the start
+    of that substep, t_k [N]:
+
+    * ``upper_ball_joint_{x,y,z}``: the force from the hub at the upper ball joint: minus the
+      force the POINT2POINT constraint (parent upper arm, child hub) applies on the hub
+      (``getConstraintState``: world axes);
+    * ``upper_bush_front_{x,y,z}``, ``upper_bush_rear_{x,y,z}``: the forces from the body at
+      the two bush centres, from the pivot's joint sensor (the body's wrench on the arm, link
+      axes, about the arm's centre of mass) moved to the frame origin and split between the
+      bushes by the moments about y and z (as the lower arm's, :func:`.arm_loads.
+      arm_loads_at`); the axial force shared equally. The moment about the pivot axis is 0
+      (a free revolute joint: no spring on the upper arm).
+
+    With the arm's weight they balance its inertia: sum F + m g = m a_com and the moments
+    (tested in tests/vehicles/test_double_wishbone.py)."""
+    c, b = model.client, model.body
+    # the arm link's world rotation at the start of the substep
+    R_link = np.array(p.getMatrixFromQuaternion(model._ua_quat_applied)).reshape(3, 3)
+    R_f = model._ua_frame_R  # the frame's axes in the link frame
+    to_frame = R_f.T @ R_link.T  # world -> upper-arm frame
+    d = model._ua_spacing
+    w = p.getJointState(b, model._ua_link, physicsClientId=c)[2]
+    rxF = cross3(model._ua_r_com, w[:3])
+    M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
+    F0, F1, F2 = (R_f.T @ np.array(w[:3])).tolist()
+    _M0, M1, M2 = (R_f.T @ np.array(M_link)).tolist()
+    front = (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d)
+    rear = (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d)
+    on_hub = np.array(p.getConstraintState(model._c_upper, physicsClientId=c)[:3])
+    ball = (to_frame @ -on_hub).tolist()
+    out: dict[str, float] = {}
+    for i, f in enumerate((ball, front, rear)):
+        out[FIELDS[3 * i]], out[FIELDS[3 * i + 1]], out[FIELDS[3 * i + 2]] = f
+    return out
