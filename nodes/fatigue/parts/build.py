@@ -89,10 +89,13 @@ def support_nodes(xyz: np.ndarray) -> list[int]:
 
 
 def part_model(part: Part, mesh_size: float | None = None,
-               fillet_size: float | None = None, refine: Sequence[Ball] = ()) -> PartModel:
+               fillet_size: float | None = None, refine: Sequence[Ball] | None = None
+               ) -> PartModel:
     """Mesh and set up the FE of a part (sizes default to the part file's); ``refine``:
-    local refinement balls of the gmsh mesh (``mesh.mesh_cad``; CAD parts only)."""
+    local refinement balls of the gmsh mesh (``mesh.mesh_cad``; CAD parts only), by default
+    the part file's recipe (``mesh.refine_centres``; ``()``: none)."""
     size = part.mesh_size if mesh_size is None else float(mesh_size)
+    refine = part.refine if refine is None else refine
     fsize = (part.fillet_size * size / part.mesh_size if fillet_size is None
              else float(fillet_size))
     src = str(part.path)

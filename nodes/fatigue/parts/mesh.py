@@ -108,6 +108,30 @@ def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
     return mesh
 
 
+def floor_at(balls: np.ndarray, size: float, floor: float, x: np.ndarray) -> float:
+    """The smallest element size allowed at x: ``floor`` outside the balls (k, 5), half a
+    ball's size inside it, rising linearly to ``floor`` over the ball's ramp (``RAMP`` x
+    ``size``)."""
+    d = np.sqrt(((balls[:, :3] - x) ** 2).sum(axis=1)) - balls[:, 3]
+    s = np.clip(d / (RAMP * size), 0.0, 1.0)
+    inner = 0.5 * balls[:, 4]
+    return float(min(floor, (inner + s * (floor - inner)).min()))
+
+
+def _floor_callback(refine: Sequence[Ball], size: float, floor: float):
+    balls = np.asarray(refine, dtype=float).reshape(-1, 5)
+    lo = balls[:, :3] - balls[:, 3:4] - RAMP * size
+    hi = balls[:, :3] + balls[:, 3:4] + RAMP * size
+
+    def cb(dim: int, tag: int, x: float, y: float, z: float, lc: float) -> float:
+        xyz = np.array([x, y, z])
+        near = np.all((xyz >= lo) & (xyz <= hi), axis=1)
+        if not near.any():
+            return max(lc, floor)
+        return max(lc, floor_at(balls[near], size, floor, xyz))
+    return cb
+
+
 def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
                         sharp_curves: list[int], refine: Sequence[Ball] = ()
                         ) -> tuple[np.ndarray, np.ndarray]:
@@ -142,15 +166,29 @@ def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
         fields = [mn]
     if fields:
         fld.setAsBackgroundMesh(fields[0])
-    hmin = min([fillet_size, size] + [float(b[4]) for b in refine])
+    floor = 0.5 * min(fillet_size, size)  # the unrefined mesh's floor (curvature sizing)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-    gmsh.option.setNumber("Mesh.MeshSizeMin", hmin * 0.5)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
+    if refine:
+        # gmsh clamps every size to Mesh.MeshSizeMin, the curvature sizing included: lowered
+        # for the balls alone, it would refine every fillet of the part (the arm: 4312 ->
+        # 8866 vertices for a ball outside it). So the floor stays a field: the callback
+        # raises gmsh's size (min of curvature and fields) to floor_at(x), the unrefined
+        # floor outside the balls and half the ball's size inside, over the same ramp.
+        gmsh.option.setNumber("Mesh.MeshSizeMin",
+                              min(floor, 0.5 * min(float(b[4]) for b in refine)))
+        gmsh.model.mesh.setSizeCallback(_floor_callback(refine, size, floor))
+    else:
+        gmsh.option.setNumber("Mesh.MeshSizeMin", floor)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0 if fields else 1)
     gmsh.option.setNumber("Mesh.Algorithm3D", 1)  # Delaunay: deterministic single-threaded
     gmsh.option.setNumber("Mesh.Optimize", 1)
     gmsh.option.setNumber("General.NumThreads", 1)
-    gmsh.model.mesh.generate(3)
+    try:
+        gmsh.model.mesh.generate(3)
+    finally:
+        if refine:
+            gmsh.model.mesh.removeSizeCallback()
     tags, xyz, _ = gmsh.model.mesh.getNodes()
     p = xyz.reshape(-1, 3)
     index = np.zeros(int(tags.max()) + 1, dtype=np.int64)

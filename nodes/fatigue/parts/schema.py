@@ -97,6 +97,8 @@ class Part:
     digest: str
     convergence_local: list[float] = field(default_factory=list)
     convergence_radius: float = 0.02
+    refine: list[tuple[float, float, float, float, float]] = field(default_factory=list)
+    """The mesh recipe's local refinement: balls (x, y, z [m], radius [m], size [m])."""
 
     @property
     def channels(self) -> list[str]:
@@ -151,13 +153,13 @@ def _joint(src: str, i: int, raw: Any, scale_hp: float) -> Joint:
     where = f"joint '{name}'."
     c = raw.get("centre")
     if isinstance(c, str) and c.startswith("hardpoint:"):
-        from cosim import lower_arm
+        from .hardpoints import hardpoints  # the lower and upper arms' (one definition)
 
-        hp = c[len("hardpoint:"):]
-        if hp not in lower_arm.HARDPOINTS:
+        hp, known = c[len("hardpoint:"):], hardpoints()
+        if hp not in known:
             raise InputFileError(src, f"key {where}centre: unknown hardpoint {hp!r} (known: "
-                                      f"{', '.join(lower_arm.HARDPOINTS)})")
-        centre = np.asarray(lower_arm.HARDPOINTS[hp], dtype=float)
+                                      f"{', '.join(known)})")
+        centre = known[hp]
     elif c is None:
         raise InputFileError(src, f"key {where}centre: missing (a point [m] or "
                                   f"\"hardpoint:NAME\")")
@@ -197,6 +199,32 @@ def _joint(src: str, i: int, raw: Any, scale_hp: float) -> Joint:
         loads[kind] = {ax: short(ch) for ax, ch in t.items()}
     return Joint(name, centre, radius, axis, length, node_set, coupling, mass, zone,
                  loads["forces"], loads["moments"])
+
+
+def _refine(src: str, m: dict, scale: float) -> list[tuple[float, float, float, float, float]]:
+    """``mesh.refine_centres`` ([x, y, z] in the part's length unit) with ``refine_radius`` and
+    ``refine_size`` [m]: the recipe's refinement balls; both or neither."""
+    centres = m.get("refine_centres")
+    given = [k for k in ("refine_radius", "refine_size") if k in m]
+    if centres is None:
+        if given:
+            raise InputFileError(src, f"key mesh.{given[0]}: given without "
+                                      f"mesh.refine_centres")
+        return []
+    if not isinstance(centres, list) or not centres:
+        raise InputFileError(src, "key mesh.refine_centres: expected a list of [x, y, z] "
+                                  "points (the part's length unit)")
+    for k in ("refine_radius", "refine_size"):
+        if k not in m:
+            raise InputFileError(src, f"key mesh.{k}: missing (mesh.refine_centres needs "
+                                      f"refine_radius and refine_size, in m)")
+    r = _num(src, "mesh.refine_radius", m["refine_radius"], 1e-5, 1.0)
+    h = _num(src, "mesh.refine_size", m["refine_size"], 1e-5, 1.0)
+    out = []
+    for i, c in enumerate(centres):
+        x, y, z = (float(v) for v in _vec(src, f"mesh.refine_centres[{i}]", c) * scale)
+        out.append((x, y, z, r, h))
+    return out
 
 
 def short(ch: str) -> str:
@@ -277,7 +305,8 @@ def load_part(path: str | Path) -> Part:
     if not isinstance(m, dict):
         raise InputFileError(src, "key mesh: expected a table")
     _check_keys(src, "mesh.", m, ("size", "fillet_size", "convergence", "convergence_local",
-                                  "convergence_radius"))
+                                  "convergence_radius", "refine_centres", "refine_radius",
+                                  "refine_size"))
     size = _num(src, "mesh.size", m.get("size", 0.012), 1e-4, 1.0)
     fsize = _num(src, "mesh.fillet_size", m.get("fillet_size", size / 3), 1e-5, 1.0)
     conv = m.get("convergence", [size])
@@ -291,6 +320,10 @@ def load_part(path: str | Path) -> Part:
     conv_local = [_num(src, "mesh.convergence_local", v, 1e-5, 1.0) for v in conv_local]
     conv_radius = _num(src, "mesh.convergence_radius", m.get("convergence_radius", 0.02),
                        1e-4, 1.0)
+    refine = _refine(src, m, UNITS[unit])
+    if refine and kind == "mesh":
+        raise InputFileError(src, "key mesh.refine_centres: local refinement needs a CAD "
+                                  "geometry (a mesh file is taken as it is)")
     joints_raw = raw.get("joint", [])
     if not isinstance(joints_raw, list) or not joints_raw:
         raise InputFileError(src, "missing [[joint]] tables (at least one joint)")
@@ -310,4 +343,4 @@ def load_part(path: str | Path) -> Part:
     for b in digest_parts:
         h.update(hashlib.sha256(b).digest())
     return Part(path, str(name), geo_path, kind, UNITS[unit], material, joints, size, fsize,
-                conv, h.hexdigest()[:16], conv_local, conv_radius)
+                conv, h.hexdigest()[:16], conv_local, conv_radius, refine)
