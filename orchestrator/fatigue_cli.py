@@ -40,8 +40,9 @@ def _value(text: str):
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="suscosim fatigue",
-                                description="Fatigue life of the lower suspension arm of a run "
-                                            "or under a measured load file.")
+                                description="Fatigue life of the lower suspension arm (and the "
+                                            "scenario's [fatigue] parts) of a run, or under a "
+                                            "measured load file.")
     p.add_argument("run_dir", metavar="RUN_DIR|LOAD_FILE", type=Path)
     p.add_argument("--scenario", type=Path, metavar="RUN_DIR|SCENARIO",
                    help="load file only: take the fatigue settings and road length from this "
@@ -60,7 +61,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--residue", choices=RESIDUES)
     p.add_argument("--part", type=Path, metavar="PART.toml",
                    help="the part to assess: a part file (STEP or mesh, material, joints; "
-                        "docs/parts.md) instead of the scenario's influence (a what-if)")
+                        "docs/parts.md) instead of the scenario's influence and parts (a "
+                        "what-if); its load channel (plant/arm or plant/upper_arm) follows "
+                        "from its joints' channels")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a fatigue key, e.g. --set material.sf=1.9e9 "
                         "--set mesh_size_m=0.03 (values parsed as JSON when possible)")
@@ -89,6 +92,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                   file=sys.stderr)
             return 2
         overrides["influence"] = str(args.part.resolve())
+        overrides["parts"] = []  # that part alone (not the scenario's [fatigue] parts)
     from nodes.fatigue.load_file import parse_map
     from nodes.fatigue.run_dir import fatigue_load_file, fatigue_run_dir, results_folder
 
@@ -133,6 +137,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{v['life_km']:.4g} km at P = {p}" if isinstance(v.get("life_km"), float)
             else f"{v.get('life_km')} km at P = {p}" for p, v in by_p.items()))
     print(f"  critical node {r.critical_node_id}{where}, max damage/pass {r.max_damage:.3e}")
+    for p in (summary.get("parts") or [])[1:]:  # [fatigue] parts: each more part's headline
+        life = p.get("min_life_km")
+        print(f"  part {p.get('name')} ({p.get('load_channel')}): min life "
+              f"{life if isinstance(life, str) else f'{life:.4g}'} km, critical node "
+              f"{p.get('critical_node_id')}, results in {Path(out) / str(p.get('folder'))}")
     if r.missing_channels:
         print("  no load given for " + ", ".join(r.missing_channels) + " (zero)")
     loaded = [u["channel"] for u in summary.get("unmapped_channels") or []

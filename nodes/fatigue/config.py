@@ -41,6 +41,13 @@ live                   "auto"               run the fatigue node during the run 
 corner                 none                 the four-corner vehicle: whose lower arm ("FL",
                                             "FR", "RL", "RR": plant/arm_<corner>); none:
                                             plant/arm (a quarter car's; the vehicle's FL)
+parts                  []                   more parts assessed beside the primary one
+                                            (``influence``), each under its own load
+                                            channel, with the same settings: a shipped
+                                            part's name ("upper_arm": parts/data/
+                                            upper_arm.toml) or a part file (*.toml, relative
+                                            to the scenario's folder); results in
+                                            fatigue/<part name>/ (docs/parts.md)
 =====================  ===================  =================================================
 
 ``[fatigue.component]`` (Shigley's Marin factors, `material.ComponentSpec`; SI units):
@@ -138,6 +145,8 @@ class FatigueConfig:
     block_samples: int = 500
     live: bool | str = "auto"
     corner: str | None = None
+    parts: tuple[str, ...] = ()
+    """More parts (``parts``): their part files' absolute paths."""
     base_dir: str = field(default=".", compare=False)
 
     @property
@@ -203,6 +212,8 @@ class FatigueConfig:
             d["component"] = {"enabled": True, **comp}
         d["fatigue_properties"] = self.fatigue_properties()
         del d["material_overrides"], d["base_dir"], d["cyclic"], d["material_name"]
+        if not self.parts:  # (a run without more parts: the settings as before)
+            del d["parts"]
         return d
 
     @classmethod
@@ -251,6 +262,7 @@ class FatigueConfig:
             block_samples=r.integer("block_samples", 500, lo=1),
             live=_live(r),
             corner=r.choice("corner", CORNERS) if r.has("corner") else None,
+            parts=_parts(r, base_dir),
             base_dir=str(base_dir),
         )
         try:
@@ -270,10 +282,41 @@ class FatigueConfig:
 FATIGUE_KEYS = ("influence", "mapping", "stress_scale", "equivalent", "method", "mean_stress",
                 "residue", "endurance", "endurance_limit", "material", "component", "sn_curve",
                 "mesh_size_m", "nodes", "track_length_m", "repeats_basis_m", "block_samples",
-                "live", "corner")
+                "live", "corner", "parts")
 """The keys of ``[fatigue]`` (module docstring)."""
 CORNERS = ("FL", "FR", "RL", "RR")
 """``corner``: whose lower arm, on the four-corner vehicle (#31; its plant/arm_<corner>)."""
+
+
+SHIPPED_PARTS = Path(__file__).parent / "parts" / "data"
+"""Where ``parts = ["<name>"]`` finds a shipped part file (``<name>.toml``)."""
+
+
+def _parts(r: ConfigReader, base_dir: str | Path) -> tuple[str, ...]:
+    """``parts``: each a shipped part's name or a part file (relative: to ``base_dir``),
+    resolved to an existing file's absolute path; none twice."""
+    raw = r.value("parts", [])
+    expected = ('a list of part names (e.g. "upper_arm", shipped in nodes/fatigue/parts/'
+                'data/) or part files (*.toml)')
+    if not isinstance(raw, list) or not all(isinstance(v, str) and v for v in raw):
+        raise r.error("parts", raw, expected)
+    out: list[str] = []
+    for v in raw:
+        if not v.lower().endswith(".toml"):
+            path = SHIPPED_PARTS / f"{v}.toml"
+        else:
+            path = Path(v).expanduser()
+            path = path if path.is_absolute() else Path(base_dir) / path
+        if not path.is_file():
+            known = sorted(p.stem for p in SHIPPED_PARTS.glob("*.toml")
+                           if p.stem != "lower_arm_cad")
+            raise r.error("parts", raw, f"{expected}; {v!r}: no such part (shipped: "
+                                        f"{', '.join(known)})")
+        p = str(path.resolve())
+        if p in out:
+            raise r.error("parts", raw, f"{expected}, each once ({v!r} twice)")
+        out.append(p)
+    return tuple(out)
 
 
 def _mapping(r: ConfigReader) -> tuple[tuple[str, str, float], ...]:

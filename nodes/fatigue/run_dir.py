@@ -10,7 +10,7 @@ import math
 import os
 import shutil
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -159,16 +159,51 @@ def write_results(result: FatigueResult, out: Path, extra: dict | None = None,
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.new-", dir=out.parent))
     try:
         tmp.chmod(0o755)  # mkdtemp makes it 0700; a results folder is as readable as others
-        _write_csv(result, tmp / "damage_per_node.csv")
-        if extra_files is not None:
-            extra_files(tmp)
-        text = json.dumps(summary_dict(result, extra), indent=2, allow_nan=False)
-        (tmp / "summary.json").write_text(text)
-        plot_damage_map(result, tmp / "damage_map.png")
+        fill_folder(result, tmp, extra, extra_files)
         replace_folder(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def fill_folder(result: FatigueResult, folder: Path, extra: dict | None = None,
+                extra_files: Callable[[Path], None] | None = None) -> None:
+    """The files of :func:`write_results` written into an existing ``folder`` (no rename:
+    a part's folder inside the primary's new folder, renamed into place with it)."""
+    _write_csv(result, folder / "damage_per_node.csv")
+    if extra_files is not None:
+        extra_files(folder)
+    text = json.dumps(summary_dict(result, extra), indent=2, allow_nan=False)
+    (folder / "summary.json").write_text(text)
+    plot_damage_map(result, folder / "damage_map.png")
+
+
+def part_entry(name: str, folder: str, channel: str, result: FatigueResult,
+               source: str | None, methods: dict | None = None) -> dict:
+    """A part's line in the primary summary's ``parts`` (a run with ``[fatigue] parts``)."""
+    rng = (methods or {}).get("life_range_km")
+    return {"name": name, "folder": folder, "part_file": source,
+            "load_channel": f"plant/{channel}", "min_life_km": result.life_km,
+            "min_life_repeats": result.life_repeats, "max_damage_per_pass": result.max_damage,
+            "critical_node_id": result.critical_node_id, "life_range_km": rng}
+
+
+def with_parts(files: Callable[[Path], None] | None,
+               parts: Sequence[tuple[str, FatigueResult, dict, Callable[[Path], None] | None]]
+               ) -> Callable[[Path], None] | None:
+    """``files`` and then each more part's folder (``<name>/``, :func:`fill_folder`)."""
+    if not parts:
+        return files
+
+    def write(folder: Path) -> None:
+        if files is not None:
+            files(folder)
+        for name, res, extra, more in parts:
+            sub = folder / name
+            sub.mkdir()
+            sub.chmod(0o755)
+            fill_folder(res, sub, extra, more)
+    return write
 
 
 def settings_hash(overrides: dict) -> str:
@@ -282,23 +317,70 @@ def fatigue_load_file(path: Path, overrides: dict | None = None,
     return result
 
 
-def _stream_and_write(run_dir: Path, scenario: dict, cfg: FatigueConfig, out: Path,
-                      what_if: dict | None, progress: Callable[[str], None] | None
-                      ) -> FatigueResult:
-    """A run's table read in row batches (:mod:`.run_stream`, #32: memory that does not grow
-    with the run), analysed by the live node's block engine, the batch outputs computed as the
-    batches pass, ``out`` written whole."""
+def part_batches(src: Path, channel: str, cases: list[str],
+                 rows: int | None = None) -> Callable:
+    """Batches of ``t`` and the ``plant/<channel>/...`` columns of a run's table, each named
+    as the part's cases name it (:func:`.more_parts.column_names`); the lower arm's:
+    :func:`.run_stream.table_batches` (``plant/arm/...``), as before."""
     from . import run_stream as rs
+    from .more_parts import UPPER_ARM, column_names
+
+    rows = rs.BATCH_ROWS if rows is None else rows
+    if channel != UPPER_ARM:
+        return rs.table_batches(src, rows)
+    prefix = f"plant/{channel}/"
+    if src.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        try:
+            names = pq.ParquetFile(src).schema_arrow.names
+        except Exception as exc:  # pyarrow raises several types for a bad file
+            raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
+        cols = [n for n in names if n.startswith(prefix)]
+        keys = column_names(channel, [c[len(prefix):] for c in cols], cases)
+
+        def parquet():
+            from cosim.table_batches import parquet_batches
+
+            try:
+                for b in parquet_batches(src, ["t", *cols], rows):
+                    yield b["t"], {k: b[c] for k, c in zip(keys, cols, strict=True)}
+            except (OSError, ValueError) as exc:
+                raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
+        return parquet
+    from cosim.table import read_table as read_run_table
+
+    whole = {n: np.asarray(v, dtype=float)
+             for n, v in read_run_table(src, keep=lambda n: n.startswith(prefix)).items()}
+    whole.pop("k", None)
+    if "t" not in whole:
+        raise InputFileError(str(src), "no column 't'", 1)
+    t_all = whole.pop("t")
+    keys = column_names(channel, [c[len(prefix):] for c in whole], cases)
+    data = dict(zip(keys, whole.values(), strict=True))
+
+    def from_csv():
+        for i in range(0, t_all.size, rows):
+            yield t_all[i:i + rows], {c: v[i:i + rows] for c, v in data.items()}
+    return from_csv
+
+
+def _stream(run_dir: Path, scenario: dict, cfg: FatigueConfig, channel: str, what_if: dict | None,
+            say: Callable[[str], None]
+            ) -> tuple[FatigueResult, dict, Callable[[Path], None], dict | None]:
+    """One part's batch analysis of a run's table (:mod:`.run_stream`): (result, summary
+    keys, writer of its batch files, its ``sn_methods``)."""
+    from . import run_stream as rs
+    from .more_parts import part_channels
 
     src = rs.table_source(run_dir)
-    batches = rs.table_batches(src)
+    batches = part_batches(src, channel, part_channels(cfg))
     source = str(run_dir / "table")
     s = rs.scan(batches, str(src), cfg.residue, source)
     if not s.channels:
-        raise InputFileError(source, "no plant/arm/... load columns")
+        raise InputFileError(source, f"no plant/{channel}/... load columns")
     L = cfg.track_length_m if cfg.track_length_m is not None else \
         track_length(scenario, np.array([s.t0, s.t_last]))
-    say = progress or (lambda _msg: None)
     result, methods, matrices = rs.analyse_streamed(batches, cfg, L, s, say)
     cases = list(load_influence(cfg).case_names)
     extra: dict = {"unmapped_channels": [
@@ -308,7 +390,34 @@ def _stream_and_write(run_dir: Path, scenario: dict, cfg: FatigueConfig, out: Pa
         extra["what_if"] = {"settings": what_if, "hash": settings_hash(what_if)}
     files, more = rs.outputs_streamed(batches, cfg, s, result, methods, matrices, say)
     extra.update(more)
-    write_results(result, out, extra, files)
+    return result, extra, files, methods
+
+
+def _stream_and_write(run_dir: Path, scenario: dict, cfg: FatigueConfig, out: Path,
+                      what_if: dict | None, progress: Callable[[str], None] | None
+                      ) -> FatigueResult:
+    """A run's table read in row batches (:mod:`.run_stream`, #32: memory that does not grow
+    with the run), analysed by the live node's block engine, the batch outputs computed as the
+    batches pass, ``out`` written whole; with ``[fatigue] parts`` each more part the same way,
+    into ``out/<name>/``, and the primary summary's ``parts`` naming them all."""
+    from .more_parts import load_channel, more_parts, primary_name
+
+    say = progress or (lambda _msg: None)
+    channel = load_channel(cfg)
+    result, extra, files, methods = _stream(run_dir, scenario, cfg, channel, what_if, say)
+    parts = []
+    entries = []
+    for mp in more_parts(cfg):
+        say(f"fatigue: part {mp.name} (plant/{mp.channel})")
+        r, e, f, m = _stream(run_dir, scenario, mp.cfg, mp.channel, what_if, say)
+        r.source = "batch"
+        parts.append((mp.name, r, e, f))
+        entries.append(part_entry(mp.name, mp.name, mp.channel, r, mp.cfg.influence, m))
+    if parts:
+        extra["parts"] = [part_entry(primary_name(cfg), ".", channel, result,
+                                     None if cfg.influence.startswith("builtin")
+                                     else cfg.influence, methods), *entries]
+    write_results(result, out, extra, with_parts(files, parts))
     return result
 
 

@@ -1,6 +1,7 @@
 """The run page's fatigue section: the lower arm's life and damage from the fatigue folder's
 ``summary.json`` (results, most damaged nodes, the life under each S-N method, settings, the
-damage map and the S-N plot); :func:`fatigue_numbers` is the sweep page's too."""
+damage map and the S-N plot), and with ``[fatigue] parts`` every part's life side by side and
+each more part's damage map; :func:`fatigue_numbers` is the sweep page's too."""
 
 from __future__ import annotations
 
@@ -78,6 +79,30 @@ def sn_methods_table(fs: dict) -> str:
           "uncertainty: read the range, not one number (docs/fatigue.md).</p></div>")
 
 
+def parts_block(r: RunData, fs: dict) -> str:
+    """With ``[fatigue] parts``: every part's life side by side (the primary summary's
+    ``parts``), and each more part's damage map (``fatigue/<part>/damage_map.png``)."""
+    parts = [p for p in fs.get("parts") or [] if isinstance(p, dict)]
+    if len(parts) < 2:
+        return ""
+    rows = [(p.get("name"), p.get("load_channel"), p.get("min_life_km"),
+             p.get("life_range_km"), p.get("min_life_repeats"), p.get("max_damage_per_pass"),
+             p.get("critical_node_id"), "fatigue/" if p.get("folder") == "."
+             else f"fatigue/{p.get('folder')}/") for p in parts]
+    body = ("<div><h3>Parts</h3>" + table_html(
+        ["part", "load channel", "min life [km]", "life range over the S-N methods [km]",
+         "min life [repeats]", "max damage per pass", "critical node", "results"], rows)
+        + '<p class="meta">Each part under its own joint loads from the plant, with the '
+          "same fatigue settings (docs/parts.md).</p></div>")
+    for p in parts[1:]:
+        folder = r.path / "fatigue" / str(p.get("folder"))
+        body += f'<h3 id="damage-map-{p.get("folder")}">Damage map: {p.get("name")}</h3>'
+        uri = file_uri(folder / "damage_map.png")
+        body += img(uri, f"damage map of {p.get('name')}") if uri else note(
+            f"no damage map ({cmd(str(folder / 'damage_map.png'))})")
+    return body
+
+
 def fatigue_section(r: RunData) -> str:
     d = cmd(f"suscosim fatigue {r.path}")
     if r.fatigue is None:
@@ -98,6 +123,7 @@ def fatigue_section(r: RunData) -> str:
     if methods:
         blocks.append(methods)
     body = row(*blocks)
+    body += parts_block(r, fs)
     cfg = fs.get("config") or {}
     inf = fs.get("influence") or {}
     body += row(kv_table(flatten(cfg), "Settings") if cfg else "",
