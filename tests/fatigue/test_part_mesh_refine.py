@@ -96,3 +96,40 @@ def test_recipe_keys_are_read_and_checked(link, tmp_path):
         with pytest.raises(InputFileError, match=f"mesh.{key}"):
             load_part(bad)
     write_part(folder)  # the module's other tests read link.toml: restore it
+
+
+def test_convergence_refines_round_the_most_damaged_nodes_too(link):
+    """`card.convergence` with a damage function (a run's fatigue pass; here a stand-in
+    peaked on the bar's side face at mid-span, on the neutral plane of the static bending,
+    away from the static hot spots): the balls take in the global mesh's most damaged nodes,
+    and the table reports the finest mesh's ten most damaged nodes, inside the balls, read on
+    every mesh at the same points."""
+    from nodes.fatigue.parts.card import convergence
+
+    _, path = link
+    part = load_part(path)
+    loads = {"a_z": 1000.0, "b_z": -1000.0, "a_my": 20.0}
+    x0 = np.array([0.1, 0.02, 0.0])
+
+    def damage(inf):
+        return np.exp(-np.sum((inf.node_xyz - x0) ** 2, axis=1) / 0.003 ** 2)
+
+    static_only = convergence(part, [0.02], loads, local_sizes=[0.006], radius=0.02)
+    rf0 = static_only["refinement"]
+    assert not rf0["capped"]
+    assert np.min(np.linalg.norm(np.array(rf0["centres_m"]) - x0, axis=1)) > 0.02
+    cv = convergence(part, [0.02], loads, local_sizes=[0.006, 0.004], radius=0.02,
+                     damage=damage)
+    dm = cv["damaged"]
+    d = [x["damage"] for x in dm]
+    assert len(d) == 10 and d == sorted(d, reverse=True)
+    assert all(np.linalg.norm(np.array(d["xyz_m"]) - x0) < 0.01 for d in dm)
+    rf = cv["refinement"]
+    assert rf["damaged_inside"] and rf["hot_spots_inside"]
+    assert rf["n_balls"] > rf0["n_balls"]
+    ch = cv["unit_change_two_finest_damaged"]
+    assert len(ch) == 10 and all(0.0 <= c < 1.0 for c in ch)
+    rows = cv["rows"]
+    assert all("peak_damage" in r for r in rows)
+    np.testing.assert_allclose(rows[-1]["static_at_damaged_mpa"],
+                               [d["static_von_mises_mpa"] for d in dm], rtol=1e-9)

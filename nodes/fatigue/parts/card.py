@@ -46,6 +46,9 @@ from .schema import Part
 N_HOT = 10
 REFINE_FRACTION = 0.7
 """Nodes at or above this share of the hot spot's static stress are refined locally."""
+DAMAGE_FRACTION = 0.1
+"""With a damage function: the global mesh's nodes at or above this share of its peak damage
+are refined too (damage ~ stress^k, k ~ 5-10: about 0.7-0.8 of the stress)."""
 MAX_BALLS = 64
 ZONE_RULE = ("a surface node is assessed unless it lies within its joint's zone (distance "
              "[m], per joint below) of any node of that joint's coupling: there the stress is "
@@ -193,12 +196,18 @@ def p2_interpolation(pm: PartModel, pts: np.ndarray
 
 
 def _refine_balls(pm: PartModel, vm: np.ndarray, radius: float, size: float,
-                  fraction: float = REFINE_FRACTION) -> tuple[list[tuple], bool]:
+                  fraction: float = REFINE_FRACTION, extra: np.ndarray | None = None
+                  ) -> tuple[list[tuple], bool]:
     """Refinement balls round the assessed nodes at or above ``fraction`` of the assessed
-    peak (greedy, centres >= radius / 2 apart); (balls, capped at MAX_BALLS)."""
+    peak and round the nodes ``extra`` (indices, e.g. the most damaged, in order) (greedy,
+    centres >= radius / 2 apart; the first ``N_HOT`` of each before the rest); (balls, capped
+    at MAX_BALLS)."""
     a = np.nonzero(pm.assessed)[0]
     a = a[np.argsort(vm[a])[::-1]]
     a = a[vm[a] >= fraction * vm[a[0]]]
+    if extra is not None:  # the ten of each first: the cap must not drop the damaged
+        e = np.asarray(extra, dtype=np.int64)
+        a = np.r_[a[:N_HOT], e[:N_HOT], a[N_HOT:], e[N_HOT:]]
     centres: list[np.ndarray] = []
     for i in a:
         x = pm.fe.node_xyz[i]
@@ -209,14 +218,40 @@ def _refine_balls(pm: PartModel, vm: np.ndarray, radius: float, size: float,
     return [(*map(float, c), radius, size) for c in centres], False
 
 
+def _unit_at(pm: PartModel, coef: np.ndarray, pts: np.ndarray, f: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-case von Mises stress (cases, k) of the unit cases at points pts (k, 3), the
+    static set's (k,) there, and the interpolation gaps (k,)."""
+    nodes, w, gap = p2_interpolation(pm, pts)
+    unit = np.stack([von_mises(np.einsum("kj,kjc->kc", w, coef[k][nodes]))
+                     for k in range(coef.shape[0])])
+    static = von_mises(np.einsum("kj,kjc->kc", w, np.einsum("c,cnk->nk", f, coef)[nodes]))
+    return unit, static, gap
+
+
+def _change(per_mesh: list[np.ndarray]) -> list[float] | None:
+    """Per point: max over the cases of |change| between the two finest meshes / the
+    point's largest unit-case stress on the finest."""
+    if len(per_mesh) < 2:
+        return None
+    a_, b_ = per_mesh[-2], per_mesh[-1]
+    ref = np.maximum(b_.max(axis=0), 1e-30)
+    return (np.abs(a_ - b_).max(axis=0) / ref).tolist()
+
+
 def convergence(part: Part, sizes: Sequence[float], loads: Mapping[str, float],
                 local_sizes: Sequence[float] | None = None,
                 radius: float | None = None,
-                log: Callable[[str], None] | None = None) -> dict:
+                log: Callable[[str], None] | None = None,
+                damage: Callable[[Any], np.ndarray] | None = None,
+                damage_fraction: float = DAMAGE_FRACTION) -> dict:
     """The convergence table (module docstring), finest last. ``local_sizes`` / ``radius``
     default to the part file's ``mesh.convergence_local`` / ``convergence_radius``; without
     local sizes the meshes are the global ``sizes``. ``log``: called with a line per mesh
-    solved (size, nodes, static hot spot, wall time)."""
+    solved (size, nodes, static hot spot, wall time). ``damage``: a function of a mesh's
+    `InfluenceSet` giving each of its nodes' damage (a run's fatigue pass); with it the
+    refinement also takes in the global mesh's nodes at or above ``damage_fraction`` of its
+    peak damage, and the table the finest mesh's ten most damaged nodes (``damaged``)."""
     import time
 
     local = list(part.convergence_local if local_sizes is None else local_sizes)
@@ -236,48 +271,73 @@ def convergence(part: Part, sizes: Sequence[float], loads: Mapping[str, float],
         pm = part_model(part, s, refine=[b[:4] + (h,) for b in balls] if h else ())
         t1 = time.perf_counter()
         inf, ex = solve_part(pm, n_modes=0 if h else 1)  # local refinement: mode as global
+        t2 = time.perf_counter()
         names = list(inf.case_names)
         f = np.array([loads.get(n, 0.0) for n in names])
         vm = von_mises(np.einsum("c,cnk->nk", f, ex["coef"]))
+        dmg = None
+        if damage is not None:
+            dmg = np.zeros(pm.fe.n_nodes)
+            dmg[np.nonzero(pm.assessed)[0]] = np.asarray(damage(inf), dtype=float)
         if local and not balls:
-            balls, capped = _refine_balls(pm, vm, radius, float(local[0]))
-        runs.append((pm, inf, ex, vm, s, h))
+            extra = None
+            if dmg is not None:
+                order = np.argsort(dmg)[::-1]
+                extra = order[dmg[order] >= damage_fraction * dmg[order[0]]]
+            balls, capped = _refine_balls(pm, vm, radius, float(local[0]), extra=extra)
+        runs.append((pm, inf, ex, vm, s, h, dmg))
         if log is not None:
             f1 = (inf.meta["natural_frequencies_hz"] or [float("nan")])[0]
             log(f"mesh {s * 1e3:.1f} mm, local {'-' if h is None else f'{h * 1e3:.1f} mm'}: "
-                f"{pm.fe.n_nodes} nodes, mode 1 {f1:.0f} Hz,"
-                f" static hot spot {float(vm[pm.assessed].max()) / 1e6:.1f} MPa; mesh "
-                f"{t1 - t0:.0f} s, solve {time.perf_counter() - t1:.0f} s"
+                f"{pm.fe.n_nodes} nodes, {int(pm.assessed.sum())} assessed, mode 1 "
+                f"{f1:.0f} Hz, static hot spot {float(vm[pm.assessed].max()) / 1e6:.1f} MPa"
+                + ("" if dmg is None else f", peak damage {dmg.max():.4g}")
+                + f"; mesh {t1 - t0:.0f} s, solve {t2 - t1:.0f} s"
+                + ("" if dmg is None else f", damage {time.perf_counter() - t2:.0f} s")
                 + (f"; {len(balls)} balls" if balls else ""))
-    pm_f, inf_f, ex_f, vm_f, _, _ = runs[-1]
+    pm_f, inf_f, ex_f, vm_f, _, _, dmg_f = runs[-1]
     f = np.array([loads.get(n, 0.0) for n in names])
     hot, _ = _hot_spots(pm_f, ex_f["coef"], f, ex_f["labels"])
     spots = np.array([h["xyz_m"] for h in hot])
-    rows, per_mesh = [], []
-    for pm, inf, ex, vm, s, h in runs:
-        nodes, w, gap = p2_interpolation(pm, spots)
-        unit = np.stack([von_mises(np.einsum("kj,kjc->kc", w, ex["coef"][k][nodes]))
-                         for k in range(len(names))])
+    dspots = None
+    if dmg_f is not None:
+        di = np.argsort(np.where(pm_f.assessed, dmg_f, -1.0))[::-1][:N_HOT]
+        dspots = pm_f.fe.node_xyz[di]
+    rows, per_mesh, per_mesh_d = [], [], []
+    for pm, inf, ex, vm, s, h, dmg in runs:
+        unit, static, gap = _unit_at(pm, ex["coef"], spots, f)
         per_mesh.append(unit)
-        rows.append({"size_m": s, "local_size_m": h, "fillet_size_m": pm.fillet_size,
-                     "n_elements": int(pm.mesh.t.shape[0]),
-                     "n_nodes": int(pm.fe.n_nodes),
-                     "n_assessed": int(pm.assessed.sum()),
-                     "mass_kg": inf.meta["mass_kg"],
-                     "mode_1_hz": (inf.meta["natural_frequencies_hz"] or [float("nan")])[0],
-                     "static_hotspot_mpa": float(vm[pm.assessed].max()) / 1e6,
-                     "static_at_spots_mpa": [float(v) / 1e6 for v in von_mises(
-                         np.einsum("kj,kjc->kc", w, np.einsum(
-                             "c,cnk->nk", f, ex["coef"])[nodes]))],
-                     "interpolation_gap_max_m": float(gap.max())})
-    change = None
-    if len(per_mesh) >= 2:
-        a_, b_ = per_mesh[-2], per_mesh[-1]
-        ref = np.maximum(b_.max(axis=0), 1e-30)
-        change = (np.abs(a_ - b_).max(axis=0) / ref).tolist()
+        row = {"size_m": s, "local_size_m": h, "fillet_size_m": pm.fillet_size,
+               "n_elements": int(pm.mesh.t.shape[0]),
+               "n_nodes": int(pm.fe.n_nodes),
+               "n_assessed": int(pm.assessed.sum()),
+               "mass_kg": inf.meta["mass_kg"],
+               "mode_1_hz": (inf.meta["natural_frequencies_hz"] or [float("nan")])[0],
+               "static_hotspot_mpa": float(vm[pm.assessed].max()) / 1e6,
+               "static_at_spots_mpa": [float(v) / 1e6 for v in static],
+               "interpolation_gap_max_m": float(gap.max())}
+        if dspots is not None and dmg is not None:
+            unit_d, static_d, gap_d = _unit_at(pm, ex["coef"], dspots, f)
+            per_mesh_d.append(unit_d)
+            row.update({"peak_damage": float(dmg.max()),
+                        "peak_damage_xyz_m": [float(v) for v in
+                                              pm.fe.node_xyz[int(np.argmax(dmg))]],
+                        "static_at_damaged_mpa": [float(v) / 1e6 for v in static_d],
+                        "interpolation_gap_damaged_max_m": float(gap_d.max())})
+        rows.append(row)
+    change = _change(per_mesh)
     out: dict[str, Any] = {"rows": rows, "hot_spots": hot, "unit_change_two_finest": change,
                            "max_unit_change_two_finest": None if change is None
                            else max(change)}
+    if dspots is not None and dmg_f is not None:
+        ch_d = _change(per_mesh_d)
+        di = np.argsort(np.where(pm_f.assessed, dmg_f, -1.0))[::-1][:N_HOT]
+        out["damaged"] = [{"node": int(ex_f["labels"][i]), "index": int(i),
+                           "xyz_m": [float(v) for v in pm_f.fe.node_xyz[i]],
+                           "damage": float(dmg_f[i]),
+                           "static_von_mises_mpa": float(vm_f[i]) / 1e6} for i in di]
+        out["unit_change_two_finest_damaged"] = ch_d
+        out["max_unit_change_two_finest_damaged"] = None if ch_d is None else max(ch_d)
     if local:
         c = np.array([b[:3] for b in balls])
         d_spot = cKDTree(c).query(spots)[0]
@@ -289,4 +349,10 @@ def convergence(part: Part, sizes: Sequence[float], loads: Mapping[str, float],
             "hot_spots_inside": bool(np.all(d_spot <= radius)),
             "peak_outside_mpa": float(vm_f[outside].max()) / 1e6 if outside.any() else None,
             "tenth_hot_spot_mpa": hot[-1]["von_mises_mpa"]}
+        if dspots is not None and dmg_f is not None:
+            out["refinement"].update({
+                "damage_fraction": damage_fraction,
+                "damaged_inside": bool(np.all(cKDTree(c).query(dspots)[0] <= radius)),
+                "peak_damage_outside": float(dmg_f[outside].max()) if outside.any()
+                else None})
     return out
