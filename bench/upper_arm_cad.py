@@ -143,17 +143,10 @@ def build(out: Path = OUT) -> dict:
 
 
 def static_upper_arm_loads() -> dict[str, float]:
-    """The plant's upper-arm loads at static ride height [N] (as arm_card.static_arm_loads)."""
-    from nodes.plant.double_wishbone import DoubleWishboneCorner
+    """The plant's upper-arm loads at static ride height [N] (arm_card.static_plant_loads)."""
+    from orchestrator.studies.arm_card import static_plant_loads
 
-    corner = DoubleWishboneCorner()
-    try:
-        W = corner.static_tyre_load()
-        for _ in range(3):
-            corner.substep(0.00025, W, np.zeros(1))
-        return dict(corner.loads()["upper_arm"])
-    finally:
-        corner.close()
+    return static_plant_loads()["upper_arm"]
 
 
 def main() -> int:

@@ -125,7 +125,7 @@ KINDS: tuple[NodeKind, ...] = (
              Impl("nodes.fatigue.node:run",
                   Check("nodes.fatigue.node:preflight", takes=("load_channels",))),
              reads=(("plant", "arm"),), writes=schema.writes("fatigue"),
-             path_keys=("fatigue.influence",)),
+             path_keys=("fatigue.influence", "fatigue.parts")),
 )
 """Every node kind, in start order."""
 

@@ -357,17 +357,25 @@ PATH_KEYS = node_kinds.path_keys()
 relative ones are relative to the scenario file's folder."""
 
 
+def absolute_path(value: Any, folder: Path) -> Any:
+    """``value`` with a relative file path in it made absolute against ``folder``: a string,
+    or a list of them (``fatigue.parts``). Not a path, left as it is: anything but a string,
+    ``"builtin..."``, and inside a list a bare name without a suffix (a shipped part's,
+    ``"upper_arm"``)."""
+    if isinstance(value, list):
+        return [absolute_path(v, folder) if isinstance(v, str) and Path(v).suffix else v
+                for v in value]
+    if not isinstance(value, str) or not value or value.startswith("builtin"):
+        return value
+    p = Path(value).expanduser()
+    return value if p.is_absolute() else str(folder / p)
+
+
 def absolute_paths(scenario: dict[str, Any], folder: Path) -> None:
     """Make the relative file paths of a scenario absolute against ``folder`` (in place), so
     a node started in any working directory (or on another machine with the same mount) finds
-    them. ``fatigue.influence = "builtin"`` is not a path."""
+    them (:func:`absolute_path`)."""
     for section, key in PATH_KEYS:
         sec = scenario.get(section)
-        if not isinstance(sec, dict):
-            continue
-        value = sec.get(key)
-        if not isinstance(value, str) or not value or value == "builtin":
-            continue
-        p = Path(value).expanduser()
-        if not p.is_absolute():
-            sec[key] = str(folder / p)
+        if isinstance(sec, dict) and key in sec:
+            sec[key] = absolute_path(sec[key], folder)

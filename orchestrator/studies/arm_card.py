@@ -33,8 +33,9 @@ NOMINAL_CUT_Y = 0.12
 mid-way between the eyes' joint zones and the damper seat, where beam theory holds."""
 
 
-def static_arm_loads() -> dict[str, float]:
-    """Joint loads on the arm at static ride height [N, N m], from the plant model."""
+def static_plant_loads() -> dict[str, dict[str, float]]:
+    """Each plant load channel's fields at static ride height [N, N m] (``arm``: the lower
+    arm's, ``upper_arm``: the upper arm's), from the double-wishbone plant model."""
     from nodes.plant.double_wishbone import DoubleWishboneCorner
 
     corner = DoubleWishboneCorner()
@@ -42,9 +43,14 @@ def static_arm_loads() -> dict[str, float]:
         W = corner.static_tyre_load()
         for _ in range(3):
             corner.substep(0.00025, W, np.zeros(1))
-        return dict(corner.loads()["arm"])
+        return {ch: dict(v) for ch, v in corner.loads().items()}
     finally:
         corner.close()
+
+
+def static_arm_loads() -> dict[str, float]:
+    """Joint loads on the lower arm at static ride height [N, N m], from the plant model."""
+    return static_plant_loads()["arm"]
 
 
 def section_depths(y_cut: float, n: int = 4001) -> tuple[np.ndarray, np.ndarray]:

@@ -192,10 +192,8 @@ def _absolute_paths(overrides: dict[str, Any], folder: Path) -> dict[str, Any]:
                 if key == s:
                     candidates.append((value, k))
         for holder, k in candidates:
-            v = holder.get(k)
-            if isinstance(v, str) and v and v != "builtin" and \
-                    not Path(v).expanduser().is_absolute():
-                holder[k] = str(folder / Path(v).expanduser())
+            if k in holder:
+                holder[k] = sc.absolute_path(holder[k], folder)
     return out
 
 

@@ -30,8 +30,8 @@ def test_the_docs_table_is_the_schemas() -> None:
 def test_the_registry_takes_outputs_and_coupling_fields_from_the_schema() -> None:
     assert nk.kind("tyre_road").provides == ("F_t", "k_t")
     assert nk.kind("controller").provides == ("F_d", "c_eff")
-    assert nk.kind("plant").writes == ("state", "response", "arm", "arm_FL", "arm_FR",
-                                       "arm_RL", "arm_RR", "records")
+    assert nk.kind("plant").writes == ("state", "response", "arm", "upper_arm", "arm_FL",
+                                       "arm_FR", "arm_RL", "arm_RR", "records")
     assert schema.required("plant", "state") == ("z_b", "v_b", "z_w", "v_w")
     assert schema.columns("tyre_road", "force") == [
         "tyre_road/force/F_t", "tyre_road/force/k_t", "tyre_road/force/z_g",

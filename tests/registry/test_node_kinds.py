@@ -45,6 +45,7 @@ def test_channel_names_of_the_registry_are_the_protocol_s() -> None:
     known = {ch.STATE, ch.RESPONSE, ch.ARM, ch.FORCE, ch.LOADS, ch.DAMAGE, ch.COUPLING,
              keys.RECORDS}
     known |= set(ch.CORNER_ARMS)  # the four-corner vehicle's arm_FL .. arm_RR (#31)
+    known.add(ch.UPPER_ARM)  # the double wishbone's upper arm (#26 item 5)
     for k in nk.KINDS:
         keys.check_name("kind", k.name)
         assert set(k.writes) <= known, k.name
