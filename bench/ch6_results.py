@@ -3,7 +3,13 @@ road and strategy (km and repeats of the track), the change against passive on t
 realisation, mean and spread over the pavé seeds, the critical node and where it is, and the
 ten most damaged nodes (thesis Tables 6.3-6.6; docs/REPRODUCTION.md, Chapter 6).
 
-    python bench/ch6_results.py sweeps/ch6_fatigue [--markdown]
+    python bench/ch6_results.py sweeps/ch6_fatigue
+    python bench/ch6_results.py sweeps/ch6_fatigue --fatigue-root DIR   # DIR/<run>/summary.json
+
+``--fatigue-root``: the fatigue results of each run in ``DIR/<run folder name>/`` (e.g. the
+batch ``suscosim fatigue RUN --part ... --out DIR/<run>`` of every run on another part or mesh)
+in place of the runs' own ``fatigue/``. A third table gives the life by both component S-N
+methods (Shigley/Marin and FKM) at P = 0.5 and 0.975 (``summary.json`` ``sn_methods``).
 """
 
 from __future__ import annotations
@@ -18,12 +24,14 @@ import numpy as np
 STRATEGIES = ("passive", "tss1", "tss2", "tss3")
 
 
-def load(sweep_dir: Path) -> dict[tuple[str, str], dict]:
-    """{(road, strategy): fatigue summary} of the sweep's finished points."""
+def load(sweep_dir: Path, root: Path | None = None) -> dict[tuple[str, str], dict]:
+    """{(road, strategy): fatigue summary} of the sweep's finished points (from ``root``'s
+    per-run folders when given)."""
     doc = json.loads((sweep_dir / "sweep.json").read_text())
     out = {}
     for p in doc["points"]:
-        f = sweep_dir / p["run_dir"] / "fatigue" / "summary.json"
+        run = sweep_dir / p["run_dir"]
+        f = (root / run.name if root else run / "fatigue") / "summary.json"
         if f.is_file():
             out[(p["params"]["road"], p["params"]["strategy"])] = json.loads(f.read_text())
     return out
@@ -37,11 +45,13 @@ def _node_str(s: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("sweep_dir", type=Path)
+    ap.add_argument("--fatigue-root", type=Path, default=None,
+                    help="per-run fatigue results in DIR/<run folder name>/")
     args = ap.parse_args(argv)
     if not (args.sweep_dir / "sweep.json").is_file():
         print(f"error: {args.sweep_dir}: no sweep.json (not a sweep folder)", file=sys.stderr)
         return 2
-    res = load(args.sweep_dir)
+    res = load(args.sweep_dir, args.fatigue_root)
     roads = sorted({r for r, _ in res})
     print("| road | strategy | min life [km] | repeats | change vs passive | critical node |"
           " ten most damaged nodes |")
@@ -76,6 +86,22 @@ def main(argv: list[str] | None = None) -> int:
     if pav:
         print(f"\npassive pavé min life: {np.mean(pav):.0f} km mean over {len(pav)} seeds "
               f"({min(pav):.0f}-{max(pav):.0f}); thesis Table 6.3: 1279 km")
+    print()
+    print("| road | strategy | Shigley P50 [km] | Shigley P97.5 | FKM P50 | FKM P97.5 | "
+          "FKM / Shigley (P50) |")
+    print("|---|---|---|---|---|---|---|")
+    for road in roads:
+        for s in STRATEGIES:
+            m = (res.get((road, s)) or {}).get("sn_methods", {}).get("methods")
+            if not m:
+                continue
+            life = {(k, p): m[k][p]["life_km"] for k in ("shigley", "fkm") if k in m
+                    for p in ("0.5", "0.975") if p in m[k]}
+            cells = [f"{life[(k, p)]:.4g}" if (k, p) in life else "–"
+                     for k in ("shigley", "fkm") for p in ("0.5", "0.975")]
+            ratio = (life[("fkm", "0.5")] / life[("shigley", "0.5")]
+                     if ("fkm", "0.5") in life and ("shigley", "0.5") in life else float("nan"))
+            print(f"| {road} | {s} | " + " | ".join(cells) + f" | {ratio:.3g} |")
     return 0
 
 

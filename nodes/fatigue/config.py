@@ -5,8 +5,13 @@ Keys (all optional; SI units):
 =====================  ===================  =================================================
 key                    default              meaning
 =====================  ===================  =================================================
-influence              "builtin"            "builtin" (FE arm), a part file (*.toml, docs/
-                                            parts.md) or path to the imported CSV
+influence              "builtin"            "builtin" (the CAD lower arm's part file,
+                                            parts/data/lower_arm.toml, and its shipped
+                                            results), a part file (*.toml, docs/parts.md),
+                                            "builtin:structured" (the superseded
+                                            hand-meshed arm without fillets, kept to
+                                            reproduce earlier runs and as a small fast FE
+                                            for tests) or path to the imported CSV
                                             folder (relative to the scenario's folder)
 mapping                {}                   imported only: channel -> file or
                                             {file = "...", scale = -1.0}
@@ -31,7 +36,10 @@ sn_curve               none                 an S-N curve as data (replaces the c
                                             stress = "amplitude" | "range") or "segments"
                                             (nCode: sri1_pa (range at 1 cycle), b1, nc1,
                                             b2); name, source (text); `sn_data`
-mesh_size_m            0.02                 built-in FE element size (m)
+mesh_size_m            none                 element size (m): a part's global size in
+                                            place of its file's recipe (a new solve:
+                                            minutes); "builtin:structured": its size
+                                            (0.02 when absent)
 nodes                  "surface"            "surface" or "all" nodes analysed
 track_length_m         none                 length of one pass (m); else from the road/run
 repeats_basis_m        none                 also give life in repeats of this length (m)
@@ -111,6 +119,13 @@ from .material import (
 from .mean_stress import MEAN_STRESS_METHODS
 from .sn_data import TabulatedSN, ncode_curve, points_curve
 
+STRUCTURED_ARM = "builtin:structured"
+"""``influence`` of the superseded hand-meshed arm (``arm_mesh.py``; no fillets, a 3 mm web)."""
+STRUCTURED_MESH_SIZE = 0.02
+"""Its default element size [m]."""
+BUILTIN_PART = Path(__file__).parent / "parts" / "data" / "lower_arm.toml"
+"""``influence = "builtin"``: the CAD lower arm (docs/parts.md), results shipped beside it."""
+
 SN_METHODS = ("shigley", "fkm")
 """Named component S-N methods (``component.method``)."""
 
@@ -138,7 +153,7 @@ class FatigueConfig:
     survival_probability: float = 0.975
     fkm: FKMSpec = field(default_factory=FKMSpec)
     sn_table: TabulatedSN | None = None
-    mesh_size_m: float = 0.02
+    mesh_size_m: float | None = None
     nodes: str = "surface"
     track_length_m: float | None = None
     repeats_basis_m: float | None = None
@@ -192,6 +207,11 @@ class FatigueConfig:
                 "sn_curve": mat.sn.as_dict() if mat.sn is not None else None}
 
     @property
+    def mesh_size(self) -> float:
+        """The structured arm's element size [m] (``mesh_size_m``, 0.02 when absent)."""
+        return STRUCTURED_MESH_SIZE if self.mesh_size_m is None else self.mesh_size_m
+
+    @property
     def influence_path(self) -> Path:
         p = Path(self.influence).expanduser()
         return p if p.is_absolute() else Path(self.base_dir) / p
@@ -222,9 +242,11 @@ class FatigueConfig:
         """Validate a scenario section; a bad key or value raises ScenarioError(dotted key)."""
         r = ConfigReader(d or {}, key_prefix, FATIGUE_KEYS)
         influence = r.string("influence", "builtin",
-                             expected='"builtin", a part file (*.toml) or a path to CSV files')
+                             expected='"builtin", "builtin:structured", a part file (*.toml) '
+                                      'or a path to CSV files')
         mapping = _mapping(r.section("mapping", expected="a table channel -> case file"))
-        if influence != "builtin" and not influence.lower().endswith(".toml") and not mapping:
+        if influence not in ("builtin", STRUCTURED_ARM) \
+                and not influence.lower().endswith(".toml") and not mapping:
             raise r.error("mapping", r.table("mapping"),
                           "a mapping of load channels to case files for imported tables")
         raw_mat = r.section("material", expected="a table of material overrides")
@@ -255,7 +277,7 @@ class FatigueConfig:
             survival_probability=survival,
             fkm=fkm,
             sn_table=_sn_table(r, material_name),
-            mesh_size_m=r.number("mesh_size_m", 0.02, lo=0.002, hi=0.1, unit="m"),
+            mesh_size_m=r.optional_number("mesh_size_m", lo=0.002, hi=0.1, unit="m"),
             nodes=r.choice("nodes", NODE_SETS, "surface"),
             track_length_m=r.optional_number("track_length_m", positive=True),
             repeats_basis_m=r.optional_number("repeats_basis_m", positive=True),

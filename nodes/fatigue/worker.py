@@ -23,7 +23,7 @@ import numpy as np
 from cosim.errors import ScenarioError
 
 from . import counting, turning_eq
-from .config import FatigueConfig
+from .config import BUILTIN_PART, STRUCTURED_ARM, FatigueConfig
 from .counting import COMPILED, Cycles, StreamingRainflow
 from .damage import cycle_damage
 from .equivalent_stress import equivalent_of
@@ -85,12 +85,16 @@ def load_influence(cfg: FatigueConfig) -> InfluenceSet:
                 cfg.mesh_size_m, cfg.material, cfg.nodes)
     if memo_key in _INFLUENCE_MEMO:
         return _INFLUENCE_MEMO[memo_key]
-    if cfg.influence == "builtin":
-        inf = builtin_influence(cfg.mesh_size_m, cfg.material)
-    elif cfg.influence_path.suffix.lower() == ".toml":  # a part file (#26): its own mesh size
-        from .parts import load_part, part_influence
+    if cfg.influence == STRUCTURED_ARM:  # the superseded hand-meshed arm (docs/fatigue.md)
+        inf = builtin_influence(cfg.mesh_size, cfg.material)
+    elif cfg.influence == "builtin" or cfg.influence_path.suffix.lower() == ".toml":
+        # a part file (#26; "builtin": the CAD lower arm's): its shipped results when they
+        # are this part's, else meshed and solved; mesh_size_m overrides its global size
+        from .parts import load_part
+        from .parts.results_file import part_results
 
-        inf = part_influence(load_part(cfg.influence_path))
+        path = BUILTIN_PART if cfg.influence == "builtin" else cfg.influence_path
+        inf = part_results(load_part(path), cfg.mesh_size_m)
     else:
         mapping = {c: {"file": f, "scale": s} for c, f, s in cfg.mapping}
         inf = import_influence(cfg.influence_path, mapping, cfg.stress_scale)

@@ -22,11 +22,15 @@ from cosim.errors import InputFileError, ScenarioError
 
 
 def _static_loads(channels: list[str]) -> dict[str, float]:
-    """The plant's static joint loads on the lower arm for those of ``channels`` it
-    publishes (empty when none)."""
-    from .arm_card import static_arm_loads
+    """The plant's static joint loads for those of ``channels`` it publishes, on any of its
+    load channels (the lower arm's ``ball_joint_z``, the upper arm's ``upper_ball_joint_z``;
+    empty when none)."""
+    from .arm_card import static_plant_loads
 
-    return {k: v for k, v in static_arm_loads().items() if k in channels}
+    out: dict[str, float] = {}
+    for fields in static_plant_loads().values():
+        out.update({k: v for k, v in fields.items() if k in channels})
+    return out
 
 
 def check(args: argparse.Namespace) -> int:
@@ -111,6 +115,27 @@ def check(args: argparse.Namespace) -> int:
     return 0
 
 
+def solve(args: argparse.Namespace) -> int:
+    """``suscosim part solve``: mesh, solve every unit case, write the results file."""
+    import time
+
+    from nodes.fatigue.parts import load_part
+    from nodes.fatigue.parts.build import part_model, solve_part
+    from nodes.fatigue.parts.results_file import current_key, write_results
+
+    part = load_part(args.part)
+    t0 = time.perf_counter()
+    size = part.mesh_size if args.mesh_size is None else args.mesh_size
+    pm = part_model(part, size, part.fillet_size * size / part.mesh_size)
+    inf, _ = solve_part(pm)
+    key = current_key(part, args.mesh_size)
+    path = write_results(part, inf, key, args.out)
+    print(f"{part.name}: {pm.fe.n_nodes} P2 nodes, {inf.n_nodes} assessed, "
+          f"{len(inf.case_names)} unit cases, key {key}, {time.perf_counter() - t0:.0f} s "
+          f"-> {path}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="suscosim part", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -123,12 +148,19 @@ def main(argv: list[str] | None = None) -> int:
                     help="also solve the part file's mesh.convergence sizes (slow)")
     ck.add_argument("--calculix", action="store_true",
                     help="also solve the unit cases with CalculiX (ccx) and compare")
+    sv = sub.add_parser("solve", help="solve a part's unit cases and write its results file "
+                                      "beside it (PART.influence.npz), which runs then use")
+    sv.add_argument("part", help="part file (TOML)")
+    sv.add_argument("--mesh-size", type=float, default=None, metavar="M",
+                    help="element size [m] (default: the part file's mesh.size)")
+    sv.add_argument("--out", type=Path, default=None,
+                    help="results file (default: beside the part file)")
     args = ap.parse_args(argv)
     if args.mesh_size is not None and not 1e-4 <= args.mesh_size <= 1.0:
         print(f"error: --mesh-size {args.mesh_size}: expected 0.0001-1 m", file=sys.stderr)
         return 2
     try:
-        return check(args)
+        return solve(args) if args.cmd == "solve" else check(args)
     except (InputFileError, ScenarioError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

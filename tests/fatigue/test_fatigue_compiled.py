@@ -21,7 +21,7 @@ from nodes.fatigue.equivalent_stress import equivalent_of
 from nodes.fatigue.superposition import components_buffer, superpose_components
 from nodes.fatigue.synthetic import pave_like_loads
 
-COARSE = {"mesh_size_m": 0.03}
+COARSE = {"influence": "builtin:structured", "mesh_size_m": 0.03}
 FIELDS = ("damage", "eq_max", "eq_min", "eq_range_max", "n_cycles")
 
 

@@ -72,7 +72,7 @@ def test_first_cycle_failure_is_life_zero_and_whatif_keeps_live_results(run_dir:
     assert not [p for p in run_dir.iterdir() if p.name.startswith(".")]
     # a setting that repeats the run's own is not a what-if: it rewrites fatigue/
     capsys.readouterr()
-    assert main([str(run_dir), "--quiet", "--set", "mesh_size_m=0.02"]) == 0
+    assert main([str(run_dir), "--quiet", "--set", "influence=builtin"]) == 0
     assert f"results in {live}\n" in capsys.readouterr().out
     assert "what_if" not in strict((live / "summary.json").read_text())
 

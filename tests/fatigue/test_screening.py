@@ -16,7 +16,7 @@ from nodes.fatigue.superposition import stress_history
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import analyse, load_influence
 
-COARSE = {"mesh_size_m": 0.03}
+COARSE = {"influence": "builtin:structured", "mesh_size_m": 0.03}
 
 
 @pytest.fixture(autouse=True)

@@ -14,7 +14,7 @@ from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import LiveFatigue, analyse
 from orchestrator.fatigue_cli import main
 
-COARSE = {"mesh_size_m": 0.03}
+COARSE = {"influence": "builtin:structured", "mesh_size_m": 0.03}
 
 
 @pytest.fixture(autouse=True)

@@ -42,8 +42,10 @@ def _realistic_run(out: Path, law: str, tmp: Path) -> Path:
         scenario = tmp / f"{law}.toml"
         scenario.write_text(text)
     _ok(suscosim("run", str(scenario), "--out", str(out), "--quiet", "--set", "run.t_end=1.2",
-                 "--set", f"fatigue.mesh_size_m={MESH}", timeout=180))
-    _ok(suscosim("fatigue", str(out), "--set", f"mesh_size_m={MESH}", timeout=180))
+                 "--set", f"fatigue.mesh_size_m={MESH}",
+                 "--set", "fatigue.influence=builtin:structured", timeout=180))
+    _ok(suscosim("fatigue", str(out), "--set", f"mesh_size_m={MESH}",
+                 "--set", "influence=builtin:structured", timeout=180))
     return out
 
 

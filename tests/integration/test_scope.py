@@ -40,7 +40,8 @@ pytestmark = pytest.mark.integration
 
 T_END = "3.0"  # s: 3000 steps of the ch3 quarter car, a few seconds of wall time
 REALISTIC = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
-REALISTIC_SET = ("--set", "run.t_end=0.6", "--set", "fatigue.mesh_size_m=0.03", "--set",
+REALISTIC_SET = ("--set", "run.t_end=0.6", "--set", "fatigue.mesh_size_m=0.03",
+                 "--set", "fatigue.influence=builtin:structured", "--set",
                  "run.stall_timeout_s=60")
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 NO_CHROMIUM = "headless Chromium not installed (Debian: apt-get install -y chromium): the " \

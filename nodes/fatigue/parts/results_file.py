@@ -1,0 +1,124 @@
+"""A part's solved unit-load results, shipped beside its part file (``PART.influence.npz``).
+
+A durability group keeps the FE results of a part with the part: solving the CAD arm takes
+minutes (meshing with gmsh, the P2 solve of every unit case), a fatigue run needs them in a
+second, and a reviewer wants to know which mesh they came from. So a part file
+``lower_arm.toml`` may have ``lower_arm.influence.npz`` beside it, written by
+``suscosim part solve lower_arm.toml``; :func:`part_results` takes it when its ``key`` is the
+part's own (:func:`nodes.fatigue.parts.build.part_key`: the part file's and its geometry's
+bytes, the mesh sizes, the FE code's version) and otherwise solves (and caches) as before. A
+results file for another version of the part is never used: change the part file (its mesh
+recipe, a joint, the CAD parameters) and the old results stop matching.
+
+The file (NumPy ``.npz``, compressed, no pickles):
+
+==================  ====================================================================
+array               meaning
+==================  ====================================================================
+``format``          ``"suscosim-part-results"``
+``version``         1
+``key``             the part key the results were solved for (16 hex digits)
+``part``            the part's name
+``case_names``      JSON list of the unit cases (the load channels)
+``coefficients``    (cases, nodes, 6) float64 unit-load stresses [Pa per N or N m], Voigt
+                    order xx, yy, zz, xy, yz, zx, of the assessed surface nodes
+``node_xyz``        (nodes, 3) float64 [m]; ``node_ids`` (nodes,) FE node numbers;
+                    ``surface`` (nodes,) bool
+``meta``            JSON: mass, modes, mesh, assessment rule (as ``part_influence``'s)
+==================  ====================================================================
+
+A damaged or foreign file is an `InputFileError` naming it, never a silent re-solve.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from cosim.errors import InputFileError
+
+from ..influence import InfluenceSet
+from .build import part_influence, part_key
+from .schema import Part
+
+FORMAT = "suscosim-part-results"
+VERSION = 1
+SUFFIX = ".influence.npz"
+
+
+def results_path(part: Part) -> Path:
+    """Where a part's shipped results live: beside its part file, ``<stem>.influence.npz``."""
+    return part.path.with_name(part.path.stem + SUFFIX)
+
+
+def current_key(part: Part, mesh_size: float | None = None) -> str:
+    """The key of the part's results at ``mesh_size`` (default: the part file's recipe)."""
+    size = part.mesh_size if mesh_size is None else float(mesh_size)
+    return part_key(part, size, part.fillet_size * size / part.mesh_size)
+
+
+def write_results(part: Part, inf: InfluenceSet, key: str, path: Path | None = None) -> Path:
+    """Write ``inf`` as the part's results file (aside, then renamed into place)."""
+    path = results_path(part) if path is None else path
+    assert inf.node_xyz is not None, "a part's FE always has its node coordinates"
+    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+    with open(tmp, "wb") as fh:
+        np.savez_compressed(
+            fh, format=FORMAT, version=VERSION, key=key, part=part.name,
+            case_names=json.dumps(inf.case_names), coefficients=inf.coefficients,
+            node_xyz=inf.node_xyz, node_ids=inf.node_ids, surface=inf.surface,
+            meta=json.dumps(inf.meta))
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+    return path
+
+
+def read_results(path: Path) -> tuple[str, InfluenceSet]:
+    """A results file's key and influence set; a damaged or foreign file is an
+    `InputFileError` that names what is wrong."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "format" not in z.files or str(z["format"]) != FORMAT:
+                raise InputFileError(str(path), f"not a {FORMAT} file (no 'format' entry)")
+            if int(z["version"]) != VERSION:
+                raise InputFileError(str(path), f"{FORMAT} version {int(z['version'])}: this "
+                                           f"suscosim reads version {VERSION}")
+            key = str(z["key"])
+            inf = InfluenceSet(json.loads(str(z["case_names"])), z["coefficients"],
+                               z["node_xyz"], z["node_ids"], z["surface"],
+                               json.loads(str(z["meta"])))
+    except InputFileError:
+        raise
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputFileError(str(path), f"unreadable part results ({exc})") from None
+    n = inf.coefficients.shape
+    if (inf.coefficients.ndim != 3 or n[0] != len(inf.case_names) or n[2] != 6
+            or inf.node_xyz is None or inf.node_xyz.shape != (n[1], 3)
+            or inf.node_ids.shape != (n[1],) or inf.surface.shape != (n[1],)):
+        raise InputFileError(str(path), f"inconsistent arrays: coefficients {n}, "
+                                   f"{len(inf.case_names)} case names")
+    if not np.all(np.isfinite(inf.coefficients)):
+        raise InputFileError(str(path), "coefficients with NaN or infinite values")
+    return key, inf
+
+
+def part_results(part: Part, mesh_size: float | None = None,
+                 log: Callable[[str], None] | None = None) -> InfluenceSet:
+    """The part's influence set: its shipped results file when it is for this very part
+    (same key), else solved (and cached) by `part_influence`; ``log`` says which."""
+    path = results_path(part)
+    key = current_key(part, mesh_size)
+    if path.is_file():
+        got, inf = read_results(path)
+        if got == key:
+            return inf
+        if log is not None:
+            log(f"{path.name} is for another version of {part.name} (key {got}, the part's "
+                f"is {key}): solving the part (minutes; `suscosim part solve` ships it)")
+    return part_influence(part, mesh_size)
