@@ -14,7 +14,8 @@ from nodes.fatigue.outputs import batch_outputs
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import analyse
 
-COARSE = {"influence": "builtin:structured", "mesh_size_m": 0.03, "component": {"surface": "machined"}}
+COARSE = {"influence": "builtin:structured", "mesh_size_m": 0.03,
+          "component": {"surface": "machined"}}
 
 
 @pytest.fixture(autouse=True)
