@@ -44,12 +44,12 @@ name = "laws"
 [[events]]
 name = "braking"
 scenario = "{BRAKING}"
-set = ["run.t_end=0.1"]
+set = ["run.t_end=0.1", "fatigue.influence=builtin:structured"]
 repeats = 10
 [[events]]
 name = "kerb"
 scenario = "{KERB}"
-set = ["run.t_end=0.3", {KERB_EARLY!r}]
+set = ["run.t_end=0.3", "fatigue.influence=builtin:structured", {KERB_EARLY!r}]
 repeats = 5
 """ + laws)
     return d
@@ -84,7 +84,9 @@ set = ['controller = {law = "passive", c = 7600.0, velocity = "damper"}']
     assert laws["node_id"] == top["critical_node_id"]
     assert ref["ratio_to_reference"] == [1.0, 1.0]
     # twice the damping loads the arm harder over the kerb (the law reached the plant;
-    # measured x2.7); braking for 0.1 s hardly moves the dampers (x1.0005)
+    # measured x2.7 on the hand-meshed arm the events are pinned to; on the CAD arm the
+    # passive critical node is elsewhere and the hard law's kerb damage there is x0.27, a
+    # result of that arm, not a check of the wiring); braking for 0.1 s hardly moves the dampers
     assert hard["ratio_to_reference"][1] > 1.5
     hard_own = json.loads((out / "laws" / "hard" / "duty.json").read_text())
     assert hard["life_km"] == hard_own["life_km"]
