@@ -19,6 +19,9 @@ def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:
     rng = (fs.get("sn_methods") or {}).get("life_range_km")
     if isinstance(rng, list) and len(rng) == 2:
         pairs.append(("life range over the S-N methods and probabilities [km]", rng))
+    elif fs.get("source") == "live":  # the live node computes the primary method only
+        pairs.append(("life under both S-N methods (Shigley, FKM) at P50 / P97.5",
+                      "not computed live: `suscosim fatigue RUN_DIR` adds them"))
     pairs += [
         ("minimum life [km]", fs.get("min_life_km")),
         (f"minimum life [repeats of the {fmt(fs.get('track_length_m'))} m track]",
