@@ -378,8 +378,10 @@ def logs_section(r: RunData) -> str:
 
 
 def run_body(r: RunData) -> str:
-    """The sections of a run page (without the page frame)."""
-    parts = [scenario_section(r)]
+    """The sections of a run page (without the page frame): the results first (time
+    histories, spectra, statistics, ride, loads, fatigue), then the scenario that made them
+    (its tables are long: every key of every section) and the logs of a failed run."""
+    parts: list[str] = []
     if r.source is None:
         j = r.path / "journal.msgpack"
         if r.table_note:
@@ -395,6 +397,7 @@ def run_body(r: RunData) -> str:
         parts += [time_section(r), psd_section(r), stats_section(r), ride_section(r),
                   loads_section(r)]
     parts.append(fatigue_section(r))
+    parts.append(scenario_section(r))
     if r.status != "ok":
         parts.append(logs_section(r))
     return "".join(parts)
