@@ -84,7 +84,8 @@ class NodeKind:
     """(node, channel) inputs; node ``*``: every coupled kind that writes that channel."""
     writes: tuple[str, ...] = ()
     """Output channels (under ``suscosim/<run>/<name>/``): the kind's channels of the schema
-    (:func:`cosim.schema.writes`) and its records feed."""
+    (:func:`cosim.schema.writes`), its ``step`` (its per-step channels' messages of a step in
+    one message: the key it publishes them on) and its records feed."""
     provides: tuple[str, ...] = ()
     """The coupling fields of its ``force`` output the plant applies (F_t, k_t / F_d, c_eff):
     the schema's required fields of that channel (:func:`cosim.schema.coupling`)."""
@@ -103,16 +104,16 @@ _CONTROLLER_CHECK = Check("nodes.controller.node:static_check", takes=("n_corner
 
 KINDS: tuple[NodeKind, ...] = (
     NodeKind("plant", COUPLED, Impl("nodes.plant.node:run", Check("nodes.plant.node:preflight")),
-             reads=(("*", "force"),), writes=(*schema.writes("plant"), "records"),
+             reads=(("*", "force"),), writes=(*schema.writes("plant"), "step", "records"),
              path_keys=("vehicle.corner", "vehicle.front", "vehicle.rear"), cores=(0, 0, 0)),
     NodeKind("tyre_road", COUPLED,
              Impl("nodes.tyre_road.node:run",
                   Check("nodes.tyre_road.node:static_check", gives="duration_s")),
-             reads=(("plant", "state"),), writes=(*schema.writes("tyre_road"), "records"),
+             reads=(("plant", "state"),), writes=(*schema.writes("tyre_road"), "step", "records"),
              provides=schema.coupling("tyre_road"), path_keys=("road.path", "tyre.tir"),
              cores=(1, 1, 1)),
     NodeKind("controller", COUPLED, Impl("nodes.controller.node:run", _CONTROLLER_CHECK),
-             reads=(("plant", "state"),), writes=(*schema.writes("controller"), "records"),
+             reads=(("plant", "state"),), writes=(*schema.writes("controller"), "step", "records"),
              provides=schema.coupling("controller"),
              path_keys=("controller.curve", "controller.fmu"),
              cores=(0, 2, 2),

@@ -10,8 +10,13 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
    it then publishes ``ready`` (with facts other nodes need, e.g. static tyre loads) until the
    orchestrator's ``start`` arrives. ``start`` carries every node's facts.
 3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived (the
-   step barrier); :meth:`Participant.publish` sends outputs. Each stepped input has its own
-   FIFO (:meth:`bus.feed`) that the node's thread reads itself: the bus's receive thread
+   step barrier); :meth:`Participant.publish` adds an output to the node's step and
+   :meth:`Participant.send` (or the next :meth:`wait`) publishes the step: **one message per
+   producer per step** on ``<node>/step``, signed once (:func:`cosim.wire.encode_step`; the
+   plant's holds ``state`` of step k and ``response`` and the loads of step k - 1). Block
+   channels (the schema's ``stepped=False``: ``fatigue/damage``, ``recorder/coupling``) go
+   out on their own keys at once. Each producer a node listens to has one FIFO
+   (:meth:`bus.feed`) that the node's thread reads itself: the bus's receive thread
    hands a message straight to the waiting node, one thread wake-up per delivery (a callback
    and a queue cost a second one, and on two cores ~20 % of the coupled step rate). A
    watchdog thread wakes a node blocked on its FIFO when the stall timeout passes, a control
@@ -39,7 +44,7 @@ import time
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from . import keys
+from . import keys, schema
 from .auth import RunKey, served_scenario
 from .bus import Bus, Feed
 from .control import check_clock, check_start
@@ -53,7 +58,8 @@ from .wire import (
     codec,
     decode,
     encode,
-    plausible_records,
+    encode_step,
+    inner,
 )
 
 __all__ = ["MAILBOX_MAX", "MAILBOX_WINDOW", "Channel", "Participant"]
@@ -96,12 +102,20 @@ class Participant:
         costs most on a small VM (see docs/cosim.md). 0: block at once."""
         self.inbox: queue.SimpleQueue[tuple[Channel, bytes]] = queue.SimpleQueue()
         self.feeds: dict[Channel, Any] = {}
+        """Each stepped input's FIFO: its producer's (one per producer, :attr:`_pfeeds`)."""
+        self._pfeeds: dict[str, Any] = {}  # producer node -> the FIFO of its steps
+        self._ptag: dict[Channel, Channel] = {}  # stepped input -> (producer, "step")
         self.inputs: dict[Channel, Mailbox] = {}
         self._keyof: dict[Channel, str] = {_CLOCK_TAG: keys.key(run, *_CLOCK_TAG)}
         self.rejected = 0
         self._codecs: dict[str, ChannelCodec | bool] = {}
         self._out_codecs: dict[str, ChannelCodec] = {}
         self._outputs: dict[str, Any] = {}
+        """Output channel -> its own publisher (a block channel), or None (in the step)."""
+        self._step: list[tuple[str, bytes]] = []  # this step's data messages, not sent yet
+        self._step_kt: tuple[int, float] = (-1, 0.0)
+        self._step_bytes = 0
+        self._step_pub: Any = None
         self._records = RecordBatch()
         self._records_pub: Any = None
         self._ctl = self._publisher(keys.key(run, node, keys.CTL))
@@ -155,20 +169,16 @@ class Participant:
         """Verify (with the run's key) and decode a message received on ``key``; raises
         :class:`WireError` (an :class:`cosim.auth.AuthError` for a bad signature). A data
         channel's message is checked against its schema (:class:`cosim.wire.ChannelCodec`:
-        finite, within the channel's bounds, ``k``, ``t`` >= 0; a records batch message by
-        message)."""
+        finite, within the channel's bounds, ``k``, ``t`` >= 0). The messages inside a
+        ``records`` batch or a ``step`` are decoded by whoever takes them, each against its
+        own channel (:func:`cosim.wire.inner`)."""
         body = self.auth.verify(key, raw) if self.auth is not None else raw
         dec = self._codecs.get(key)
         if dec is None:
             dec = self._codec_of(key)
         if not isinstance(dec, ChannelCodec):
             return decode(body)
-        msg = dec.decode(body)
-        if msg.kind == "records" and dec.records:
-            msg, why = plausible_records(dec.node, msg)
-            for reason in why:
-                self.reject((dec.node, keys.RECORDS), reason)
-        return msg
+        return dec.decode(body)
 
     def _codec_of(self, key: str) -> ChannelCodec | bool:
         """The codec of the channel of ``key`` (False: a control key, decoded generically)."""
@@ -197,11 +207,15 @@ class Participant:
         """
         tag = (node, channel)
         if tag not in self.inputs:
-            self._keyof[tag] = keys.key(self.run, *tag)
             self.inputs[tag] = Mailbox(tuple(required), stepped)
-            if stepped:
-                self.feeds[tag] = self.bus.feed(keys.key(self.run, *tag), FEED_CAPACITY)
+            if stepped:  # in the producer's step message: one FIFO per producer
+                ptag = self._ptag[tag] = (node, keys.STEP)
+                if node not in self._pfeeds:
+                    self._keyof[ptag] = keys.key(self.run, *ptag)
+                    self._pfeeds[node] = self.bus.feed(self._keyof[ptag], FEED_CAPACITY)
+                self.feeds[tag] = self._pfeeds[node]
             else:
+                self._keyof[tag] = keys.key(self.run, *tag)
                 self._listen(tag)
         return tag
 
@@ -216,11 +230,23 @@ class Participant:
         return list(self._outputs)
 
     def output(self, channel: str) -> None:
-        """Declare an output channel (a publisher on ``suscosim/<run>/<node>/<channel>``)."""
-        self._outputs[channel] = self._publisher(keys.key(self.run, self.node, channel))
+        """Declare an output channel: a per-step channel goes out in the node's step
+        message (``suscosim/<run>/<node>/step``), a block channel of the schema on its own
+        key ``suscosim/<run>/<node>/<channel>``."""
+        self._outputs[channel] = self._channel_publisher(channel)
         self._out_codecs[channel] = codec(f"{self.node}/{channel}")
         if self._records_pub is None:
             self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
+
+    def _channel_publisher(self, channel: str) -> Any:
+        """A block channel's own publisher, or None for a per-step channel (whose messages
+        go in the step: the step's publisher is made here once)."""
+        spec = schema.channel(self.node, channel)
+        if spec is not None and not spec.stepped:
+            return self._publisher(keys.key(self.run, self.node, channel))
+        if self._step_pub is None:
+            self._step_pub = self._publisher(keys.key(self.run, self.node, keys.STEP))
+        return None
 
     def bind(self, nonce: bytes) -> None:
         """Bind every message this node signs or takes from now on to the run instance's
@@ -230,8 +256,9 @@ class Participant:
             return
         self.auth = self.auth.bound(nonce)
         self._ctl = self._publisher(keys.key(self.run, self.node, keys.CTL))
+        self._step_pub = None
         for channel in list(self._outputs):
-            self._outputs[channel] = self._publisher(keys.key(self.run, self.node, channel))
+            self._outputs[channel] = self._channel_publisher(channel)
         if self._records_pub is not None:
             self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
 
@@ -260,7 +287,9 @@ class Participant:
     # ---- messages -----------------------------------------------------------------------
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
                 record: bool = True) -> None:
-        """Publish one data message; keep it for the recorder unless ``record`` is false."""
+        """One data message: a per-step channel's joins this step's message (sent by
+        :meth:`send`, or by the next :meth:`wait`), a block channel's is published at once;
+        kept for the recorder unless ``record`` is false."""
         raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "
@@ -270,15 +299,32 @@ class Participant:
         except WireError as exc:
             raise RunError(f"{self.node} cannot publish {exc} (did the model diverge?)") \
                 from None
-        self._outputs[channel](raw)
+        pub = self._outputs[channel]
+        if pub is None:
+            if self._step and self._step_bytes + len(raw) > MAX_MESSAGE_BYTES - 1024:
+                self.send()  # one message must carry it: the step goes in two
+            self._step.append((channel, raw))
+            self._step_bytes += len(raw) + 8
+            self._step_kt = (k, t)
+        else:
+            pub(raw)
         if record:
             if not self._records.fits(raw):
                 self.flush_records()  # the batch must fit one message too
             if self._records.add(channel, raw, k, t):
                 self.flush_records()
 
+    def send(self) -> None:
+        """Publish this step's data messages as one ``step`` message (nothing if none)."""
+        if not self._step:
+            return
+        msgs, self._step, self._step_bytes = self._step, [], 0
+        self._step_pub(encode_step(*self._step_kt, msgs))
+
     def flush_records(self) -> None:
-        """Send the kept data messages to the recorder (at the end, and before giving up)."""
+        """Send this step and the kept data messages to the recorder (at the end, and
+        before giving up)."""
+        self.send()
         if self._records_pub is None:
             return
         raw = self._records.take()
@@ -289,8 +335,9 @@ class Participant:
         """``hello`` on every output and the records feed (the start handshake's proof that
         a data path is live)."""
         hello = encode("hello", -1, 0.0, {})
-        for pub in self._outputs.values():
-            pub(hello)
+        for pub in (*self._outputs.values(), self._step_pub):
+            if pub is not None:
+                pub(hello)
         if self._records_pub is not None:
             self._records_pub(hello)
 
@@ -326,9 +373,9 @@ class Participant:
 
     def _drain_feeds(self) -> None:
         """File whatever waits in the inputs' FIFOs (handshake: no blocking)."""
-        for tag, feed in self.feeds.items():
+        for node, feed in self._pfeeds.items():
             while (raw := feed.try_recv()) is not None:
-                self._receive(tag, raw)
+                self._receive((node, keys.STEP), raw)
 
     def _drain_inbox(self) -> None:
         """Handle every control message that came (raises on abort)."""
@@ -382,7 +429,8 @@ class Participant:
 
     def handle(self, tag: Channel, raw: bytes) -> Message | None:
         """Decode and file one received message; return it if it is a clock message."""
-        if tag != _CLOCK_TAG and tag not in self.inputs:
+        step = tag[1] == keys.STEP and tag[0] in self._pfeeds
+        if tag != _CLOCK_TAG and tag not in self.inputs and not step:
             return None  # not an input of this node (e.g. the recorder's raw feed)
         try:
             msg = self.open(self._keyof[tag], raw)
@@ -395,10 +443,39 @@ class Participant:
             if msg.kind == "abort":
                 raise RunError(f"run aborted by the orchestrator: {msg.d.get('reason', '?')}")
             return msg
+        if step:
+            self._file_step(tag[0], msg)
+            return None
         why = self.inputs[tag].file(msg)
         if why is not None:
             self.reject(tag, why)
         return None
+
+    def _file_step(self, node: str, msg: Message) -> None:
+        """File a producer's step: each inner message of a channel this node reads, decoded
+        and checked against its channel (the step's signature covered them); a ``hello``
+        proves every input from that producer live."""
+        if msg.kind == "hello":
+            for (n, _), box in self.inputs.items():
+                if n == node and box.stepped:
+                    box.file(msg)
+            return
+        if msg.kind != "step":
+            self.reject((node, keys.STEP), f"unexpected kind '{msg.kind}' on {node}/step")
+            return
+        for channel, raw in inner(msg):
+            tag = (node, channel)
+            mb = self.inputs.get(tag)
+            if mb is None or not mb.stepped:
+                continue  # a channel this node does not read
+            try:
+                one = codec(f"{node}/{channel}").decode(raw)
+            except WireError as exc:
+                self.reject(tag, str(exc))
+                continue
+            why = mb.file(one)
+            if why is not None:
+                self.reject(tag, why)
 
     def wait(self, needs: Mapping[Channel, int]) -> dict[Channel, Message]:
         """Block until every ``(input) -> step`` in ``needs`` has arrived (the step barrier).
@@ -406,13 +483,14 @@ class Participant:
         Older messages of those inputs are dropped. Raises :class:`RunError` on abort or
         when an input is late by more than the stall timeout (naming the input's node).
         """
+        self.send()  # this node's last step goes out before it waits for the next
         if self._watchdog is None:
             self._watchdog = threading.Thread(target=self._watch, daemon=True,
                                               name=f"{self.node}-watchdog")
             self._watchdog.start()
         deadline = time.monotonic() + self.stall_timeout_s
         for tag, k in needs.items():
-            box, feed = self.inputs[tag].box, self.feeds[tag]
+            box, feed, ptag = self.inputs[tag].box, self.feeds[tag], self._ptag[tag]
             if k not in box:
                 self._awaited = (tag, k, time.monotonic())
             while k not in box:
@@ -421,7 +499,7 @@ class Participant:
                     self._blocked = (feed, deadline)
                     raw = feed.recv()
                     self._blocked = None
-                self._receive(tag, raw)
+                self._receive(ptag, raw)
                 if raw:
                     continue
                 self._drain_inbox()  # raises on abort

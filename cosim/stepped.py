@@ -83,7 +83,7 @@ class _Outputs:
 
     def __init__(self, kind: nk.NodeKind) -> None:
         self.kind = kind
-        self.channels = [c for c in kind.writes if c != "records"]
+        self.channels = [c for c in kind.writes if c not in ("step", "records")]
         self.single = self.channels[0] if len(self.channels) == 1 else None
 
     def __call__(self, out: Any, k: int) -> dict[str, Mapping[str, Any]]:
@@ -146,6 +146,7 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
             inputs = {names[tag]: Fields(m) for tag, m in msgs.items()}
             for channel, fields in outputs(node.step(k, t, inputs), k).items():
                 part.publish(channel, k, t, fields)
+            part.send()  # the step's outputs in one message
             part.progress(k, t)
             if k + 1 in plan.due:  # the state at the start of step k + 1
                 part.flush_records()

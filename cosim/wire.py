@@ -4,7 +4,7 @@ Schema (version 1)::
 
     {"v": 1,            # schema version (int); a node refuses versions it does not know
      "kind": "data",    # data | hello | ready | waiting | start | progress | done | abort
-                        # | error | records
+                        # | error | records | step
      "k": 42,           # communication step index (int, -1 before the run starts)
      "t": 0.042,        # time t_k of that step [s]
      "d": {...}}        # payload
@@ -17,6 +17,15 @@ each channel are listed in :mod:`cosim.channels`. Control kinds carry a free msg
 data messages of the last few steps, exactly as published, ``d = {"records": [[channel,
 raw message bytes], ...]}`` in publication order; ``k``/``t`` are those of the last one.
 The batch is signed; the messages in it are not (the batch's signature covers them).
+
+``kind == "step"`` is a producer's step (``suscosim/<run>/<node>/step``, issue #28 item 2):
+the data messages a node publishes for one communication step, in ONE bus message signed
+once, ``d = {"msgs": [[channel, raw message bytes], ...]}`` (the plant's: ``state`` of
+step k and its ``response`` and component loads of step k - 1; a force node's: its
+``force``). ``k``/``t`` are the newest inner message's. Each inner message is the data
+message it would have been on its own (unsigned: the step's signature covers it), so the
+records batches, the journal and the tables are unchanged; a consumer decodes only the inner
+messages of the channels it listens to (:func:`inner`), each against its channel's schema.
 
 Encoding and decoding are msgspec's (compiled; the bytes are msgpack's, identical to
 ``msgpack.packb``): a message is decoded into a typed struct per kind in C, the numbers of a
@@ -55,7 +64,10 @@ default) does not fragment: a message must fit one 64 KiB batch with its headers
 dropped. Data messages are far smaller; batches (records, load blocks) are cut to fit."""
 CONTROL_KINDS = ("hello", "ready", "waiting", "start", "progress", "done", "abort", "error",
                  "checkpoint")
-KINDS = frozenset({"data", "records", *CONTROL_KINDS})
+KINDS = frozenset({"data", "records", "step", *CONTROL_KINDS})
+BUNDLE_KINDS = ("records", "step")
+"""Kinds that carry other messages: ``d[BUNDLE_FIELD[kind]]`` = [[channel, raw], ...]."""
+BUNDLE_FIELD = {"records": "records", "step": "msgs"}
 
 
 class Message(NamedTuple):
@@ -121,6 +133,10 @@ class _Records(_Envelope, tag="records"):
     d: dict[str, list[tuple[str, bytes]]]
 
 
+class _StepBundle(_Envelope, tag="step"):
+    d: dict[str, list[tuple[str, bytes]]]
+
+
 _CONTROL = tuple(msgspec.defstruct(f"_C_{kind}", [("d", dict[str, Any])], bases=(_Envelope,),
                                    tag=kind) for kind in CONTROL_KINDS)
 
@@ -130,13 +146,13 @@ def _data_struct(name: str, payload: Any, k: Any, t: Any) -> Any:
                              tag="data")
 
 
-_KIND_OF: dict[type, str] = {_Records: "records"}
+_KIND_OF: dict[type, str] = {_Records: "records", _StepBundle: "step"}
 _KIND_OF.update({c: kind for c, kind in zip(_CONTROL, CONTROL_KINDS, strict=True)})
 
 
 def _decoder(data: Any) -> msgspec.msgpack.Decoder[Any]:
     _KIND_OF[data] = "data"
-    union = functools.reduce(operator.or_, _CONTROL, data | _Records)  # every kind's struct
+    union = functools.reduce(operator.or_, _CONTROL, data | _Records | _StepBundle)
     return msgspec.msgpack.Decoder(union)
 
 
@@ -222,27 +238,18 @@ def codec(name: str) -> ChannelCodec:
     return c
 
 
-def plausible_records(node: str, msg: Message) -> tuple[Message, list[str]]:
-    """A records batch of ``node`` without its data messages that decode but are not
-    plausible for their channel (:class:`ChannelCodec`), and why each was left out. A
-    message that does not decode at all stays in: its receiver rejects it, as before."""
-    kept: list[tuple[str, bytes]] = []
-    why: list[str] = []
-    for channel, raw in msg.d["records"]:
-        try:
-            codec(f"{node}/{channel}").decode(raw)
-        except WireError as exc:
-            try:
-                decode(raw)
-            except WireError:
-                kept.append((channel, raw))  # malformed: the receiver's to reject
-                continue
-            why.append(f"records batch: {exc}")
-            continue
-        kept.append((channel, raw))
-    if not why:
-        return msg, why
-    return Message(msg.kind, msg.k, msg.t, {**msg.d, "records": kept}), why
+def inner(msg: Message) -> list[tuple[str, bytes]]:
+    """The ``[channel, raw]`` pairs a ``records`` or ``step`` message carries, in order
+    (WireError if the payload lacks them)."""
+    try:
+        return cast(list[tuple[str, bytes]], msg.d[BUNDLE_FIELD[msg.kind]])
+    except KeyError:
+        raise WireError(f"a {msg.kind} message without its messages") from None
+
+
+def encode_step(k: int, t: float, msgs: list[tuple[str, bytes]]) -> bytes:
+    """One producer's step (``kind == "step"``): its data messages ``[(channel, raw)]``."""
+    return encode("step", k, t, {"msgs": msgs})
 
 
 def decode(raw: bytes, channel: str | None = None) -> Message:
@@ -296,8 +303,8 @@ def _explain(raw: bytes, chan: ChannelCodec | None) -> str:
         return f"bad time t={t!r} (expected a finite number, s)"
     if not isinstance(d, dict) or not all(type(n) is str for n in d):
         return f"bad payload d of type {type(d).__name__} (expected a map of names)"
-    if kind == "records":
-        return "records payload is not a list of [channel, bytes] pairs"
+    if kind in BUNDLE_KINDS:
+        return f"{kind} payload is not a list of [channel, bytes] pairs"
     if kind != "data":
         return f"bad {kind} message"
     where = f"{chan.name} " if chan is not None else ""

@@ -1,8 +1,11 @@
 """The fatigue node: damage of the lower arm computed while the run goes on.
 
-It subscribes to the plant's load stream itself (``plant/arm``, :data:`cosim.channels.
-LOAD_CHANNEL`: one message per step, as the scope does; Zenoh delivers a publisher's messages
-reliably and in order, and a step missing or out of order is an error, never skipped),
+It takes the plant's load stream itself, from the plant's records batches
+(``plant/records``: the plant's data messages as published, a batch every 64 messages or
+50 ms, so one delivery and one signature check per batch instead of per step; it decodes only
+the messages of its load channel, ``plant/arm`` (:data:`cosim.channels.LOAD_CHANNEL`), each
+against its channel's schema; Zenoh delivers a publisher's messages reliably and in order,
+and a step missing or out of order is an error, never skipped),
 gathers the steps into blocks of ``fatigue.block_samples`` counted from step 0, feeds each
 block to :class:`LiveFatigue` (which screens: :mod:`.screening`), and publishes the damage so
 far on ``fatigue/damage`` (any tap can follow the arm's projected life live). After the
@@ -28,12 +31,14 @@ from typing import Any
 import numpy as np
 
 from cosim import channels as ch
-from cosim.errors import RunError, ScenarioError
+from cosim import keys
+from cosim.errors import RunError, ScenarioError, WireError
 from cosim.listener import Listener, Received
 from cosim.load_blocks import StepBlocks
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
 from cosim.run_settings import RunSettings
+from cosim.wire import codec, inner
 
 from .config import FatigueConfig
 from .more_parts import (
@@ -86,14 +91,15 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     for mp in extras:
         load_influence(mp.cfg)
     listener = Listener(part, run_cfg["start_timeout_s"])
+    listener.feed(ch.PLANT, keys.RECORDS, kinds=("records",))
     # plant/arm, or a corner's arm_<C> (or the upper arm's, for an upper-arm primary part)
     channel = load_channel(cfg)
-    tracks = [_Track(None, cfg, channel, listener.feed(ch.PLANT, channel),
-                     part_channels(cfg))]
-    tracks += [_Track(mp.name, mp.cfg, mp.channel, listener.feed(ch.PLANT, mp.channel),
-                      mp.cases) for mp in extras]
-    by_tag = {t.tag: t for t in tracks}
-    if len(by_tag) != len(tracks):
+    tracks = [_Track(None, cfg, channel, (ch.PLANT, channel), part_channels(cfg))]
+    tracks += [_Track(mp.name, mp.cfg, mp.channel, (ch.PLANT, mp.channel), mp.cases)
+               for mp in extras]
+    by_channel = {t.channel: t for t in tracks}
+    codecs = {t.channel: codec(f"{ch.PLANT}/{t.channel}") for t in tracks}
+    if len(by_channel) != len(tracks):
         raise RunError("fatigue: fatigue.parts: two parts on one load channel "
                        f"({', '.join(sorted({t.channel for t in tracks}))}) are not "
                        "supported yet")
@@ -121,41 +127,55 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                            f"run resumes at {plan.start_k}")
     last_input = time.monotonic()
     last_report = 0.0
+
+    def take(tr: _Track, k: int, t: float, d: dict[str, Any], now: float) -> None:
+        """One load step of ``tr``'s channel, in step order."""
+        nonlocal last_report
+        if k < tr.next_k:  # a step already taken (a duplicate)
+            part.reject(tr.tag, f"load step {k} again")
+            return
+        if k != tr.next_k:
+            raise RunError(f"fatigue: load step {k} of plant/{tr.channel} came where "
+                           f"step {tr.next_k} was expected (a step was lost)")
+        try:
+            tr.steps.add(t, d)
+        except ValueError as exc:
+            raise RunError(f"fatigue: malformed load step {k}: {exc}") from None
+        tr.next_k, tr.t_last = k + 1, t
+        tr.done = settings.is_last(k, t) or k >= n_steps
+        if tr.steps.full or tr.done:
+            if tr.live is None:
+                tr.live = LiveFatigue(tr.cfg, tr.columns(tr.steps.fields), L,
+                                      total_samples=None if adaptive else n_steps + 1)
+            tr.live.update(*tr.steps.take())
+            if tr is main:
+                part.progress(k, t)
+            if tr is main and not tr.done and now - last_report >= REPORT_PERIOD_S:
+                last_report = now
+                # residue closed: what the life would be if the run ended here
+                share = (t / settings.t_end if adaptive and settings.t_end > 0
+                         else tr.next_k / (n_steps + 1))
+                _report(part, tr.live.result(), k, tr.t_last, L * share)
+        if tr is main and tr.next_k in plan.due:  # load steps < next_k: engine, buffer
+            plan.save(part, tr.next_k, {"live": tr.live, "steps": tr.steps,
+                                        "next_k": tr.next_k, "t_last": tr.t_last})
+
     while not all(t.done for t in tracks):
         got = early.pop(0) if early else listener.poll(timeout=0.05)  # raises on abort
         now = time.monotonic()
         if got is not None:
-            tr = by_tag[(got.node, got.channel)]
-            k, t = got.msg.k, got.msg.t
-            if k < tr.next_k:  # a step already taken (a duplicate)
-                part.reject(tr.tag, f"load step {k} again")
-                continue
-            if k != tr.next_k:
-                raise RunError(f"fatigue: load step {k} of plant/{tr.channel} came where "
-                               f"step {tr.next_k} was expected (a step was lost)")
-            try:
-                tr.steps.add(t, got.msg.d)
-            except ValueError as exc:
-                raise RunError(f"fatigue: malformed load step {k}: {exc}") from None
-            tr.next_k, tr.t_last = k + 1, t
-            last_input = now
-            tr.done = settings.is_last(k, t) or k >= n_steps
-            if tr.steps.full or tr.done:
-                if tr.live is None:
-                    tr.live = LiveFatigue(tr.cfg, tr.columns(tr.steps.fields), L,
-                                          total_samples=None if adaptive else n_steps + 1)
-                tr.live.update(*tr.steps.take())
-                if tr is main:
-                    part.progress(k, t)
-                if tr is main and not tr.done and now - last_report >= REPORT_PERIOD_S:
-                    last_report = now
-                    # residue closed: what the life would be if the run ended here
-                    share = (t / settings.t_end if adaptive and settings.t_end > 0
-                             else tr.next_k / (n_steps + 1))
-                    _report(part, tr.live.result(), k, tr.t_last, L * share)
-            if tr is main and tr.next_k in plan.due:  # load steps < next_k: engine, buffer
-                plan.save(part, tr.next_k, {"live": tr.live, "steps": tr.steps,
-                                            "next_k": tr.next_k, "t_last": tr.t_last})
+            for name, raw in inner(got.msg):  # the plant's messages as it published them
+                tr = by_channel.get(name)
+                if tr is None:
+                    continue  # not a load channel of a part here (state, response, ...)
+                try:
+                    msg = codecs[name].decode(raw)
+                except WireError as exc:
+                    part.reject(tr.tag, str(exc))
+                    continue
+                if msg.kind == "data":
+                    take(tr, msg.k, msg.t, msg.d, now)
+                    last_input = now
         if now - last_input > max(30.0, 6.0 * part.stall_timeout_s):  # orchestrator gone too
             late = [t for t in tracks if not t.done][0]
             raise RunError(f"fatigue: no load step from the plant on plant/{late.channel} "

@@ -76,11 +76,11 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                                f"t_end / h_min")
             seen = prev if lag else st  # what the force nodes computed this step's forces from
             part.publish(ch.STATE, k, t, st)
-            # last step's response and loads go out now, while the force nodes work on
-            # this state: off the critical path of the exchange
+            # last step's response and loads go out with it (one message a step, #28)
             for name, kk, tt, values in later:
                 part.publish(name, kk, tt, values)
             later.clear()
+            part.send()  # one message: state k, and the response and loads of step k - 1
             msgs = part.wait({tag: k for tag in sources})
             forces = {f: msg.array(f) for tag, msg in msgs.items() for f in provides[tag[0]]}
             road_plane = next((m for tag, m in msgs.items() if tag[0] == ch.TYRE_ROAD

@@ -52,7 +52,7 @@ from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
 from cosim.run_settings import RunSettings
 from cosim.table_writer import TableWriter, table_of_journal
-from cosim.wire import Message, decode
+from cosim.wire import Message, codec, decode
 
 from .fork_layout import ForkLayouts
 from .steps import StepSet
@@ -121,9 +121,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     def record(node: str, channel: str, raw: bytes, msg: Message | None = None) -> None:
         """Validate, journal and tabulate one data message of ``node/channel``."""
         nonlocal duplicates, last
-        if msg is None:
+        if msg is None:  # checked against its channel's schema (cosim/schema.py)
             try:
-                msg = decode(raw)
+                msg = codec(f"{node}/{channel}").decode(raw)
             except WireError as exc:
                 part.reject((node, channel), str(exc))
                 return

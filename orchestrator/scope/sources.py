@@ -26,6 +26,7 @@ from typing import Any
 from cosim import channels as ch
 from cosim import keys
 from cosim.errors import WireError
+from cosim.step_message import expand
 from cosim.wire import Message, decode
 
 from .damage import DamageMap
@@ -87,9 +88,12 @@ class LiveSource:
         self._thread = threading.Thread(target=self._loop, name="scope-source", daemon=True)
 
     def keyexprs(self) -> list[str]:
-        """Everything the scope subscribes to (no ``**``: the records batches stay away)."""
+        """Everything the scope subscribes to (no ``**``: the records batches stay away):
+        every producer's ``step`` (its per-step channels, :mod:`cosim.step_message`), the
+        selection's own keys (a replay publishes channel by channel), control and block
+        channels."""
         run = self.state.run_id
-        exprs = self.state.selection.keyexprs(run) + [
+        exprs = [f"{keys.PREFIX}/{run}/*/{keys.STEP}"] + self.state.selection.keyexprs(run) + [
             f"{keys.PREFIX}/{run}/*/{keys.CTL}", keys.key(run, keys.ORCHESTRATOR, keys.CLOCK),
             keys.key(run, ch.FATIGUE, ch.DAMAGE), keys.key(run, *ch.COUPLING_CHANNEL)]
         if self.router.damage is not None:
@@ -129,15 +133,16 @@ class LiveSource:
                 break
             key, raw, now = item
             try:
-                _run, node, channel = keys.parse_key(key)
-                msg = decode(raw)
+                parts = expand(key, decode(raw))  # a step: its channels' messages
             except (ValueError, WireError):
                 self.state.count_undecodable()
                 continue
-            try:
-                self.router.file(node, channel, msg, now)
-            except Exception:  # a malformed field must not stop the scope
-                self.state.count_undecodable()
+            for vkey, msg in parts:
+                try:
+                    _run, node, channel = keys.parse_key(vkey)
+                    self.router.file(node, channel, msg, now)
+                except Exception:  # a malformed field must not stop the scope
+                    self.state.count_undecodable()
         if self.router.damage is not None:
             self.router.damage.flush()
 

@@ -10,6 +10,7 @@ import sys
 import time
 from typing import Any
 
+from cosim.step_message import step_keyexprs
 from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
 
 from ..cli_util import fail, parse_args
@@ -84,7 +85,8 @@ def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
     tap = Tap(target.keyexpr, sink, args.raw)
     tty = sys.stdout.isatty() and not args.raw
     try:
-        bus.subscribe(target.keyexpr, lambda key, raw: inbox.put((key, raw, clock())))
+        for kx in step_keyexprs(target.keyexpr):  # a channel's messages come in steps
+            bus.subscribe(kx, lambda key, raw: inbox.put((key, raw, clock())))
         where = ", ".join(target.endpoints) + (f" (from {target.source})" if target.source
                                                else "")
         if target.note:

@@ -9,6 +9,7 @@ from typing import TextIO
 
 from cosim import keys
 from cosim.errors import WireError
+from cosim.step_message import expand, is_step_key, matches
 from cosim.wire import Message, decode
 
 from .csv_sink import CsvSink
@@ -75,20 +76,53 @@ class Tap:
     last_problem: str = ""
 
     def handle(self, key: str, raw: bytes, now: float) -> Message | None:
-        """Take one sample: decode, count, write to CSV. Never raises on bad bytes."""
-        st = self.stats.get(key)
-        if st is None:
-            st = self.stats[key] = KeyStats.starting(now)
+        """Take one sample: decode, count, write to CSV. Never raises on bad bytes. A
+        producer's ``step`` (``<node>/step``) is taken as the data messages it carries, each
+        on its channel's key, those the tapped expression names (:mod:`cosim.step_message`);
+        the last of them is returned."""
+        if not is_step_key(key):
+            return self._take(key, raw, now)
+        msg = self._take(key, raw, now, count=False)
+        if msg is None or msg.kind != "step":  # undecodable (counted), or a hello
+            return self._seen(key, msg, now) if msg is not None and \
+                matches(self.keyexpr, key) else None
+        try:
+            parts = expand(key, msg)
+        except (WireError, ValueError) as exc:
+            self._undecodable(key, now, str(exc), raw)
+            return None
+        last = None
+        for vkey, one in parts:
+            if matches(self.keyexpr, vkey):
+                last = self._seen(vkey, one, now)
+        return last
+
+    def _take(self, key: str, raw: bytes, now: float, count: bool = True) -> Message | None:
+        """Decode ``raw`` (undecodable: counted on ``key``); ``count``: take it as seen."""
         try:
             msg = decode(raw)
         except WireError as exc:
-            st.undecodable += 1
-            self.undecodable += 1
-            st.problem = self.last_problem = str(exc)
-            if self.raw:
-                print(f"{_short_key(key)} UNDECODABLE ({exc}) {raw[:24].hex()}", file=self.out)
+            self._undecodable(key, now, str(exc), raw)
             return None
-        st.seen(now, msg)
+        return self._seen(key, msg, now) if count else msg
+
+    def _undecodable(self, key: str, now: float, problem: str, raw: bytes) -> None:
+        st = self._stats(key, now)
+        st.undecodable += 1
+        self.undecodable += 1
+        st.problem = self.last_problem = problem
+        if self.raw:
+            print(f"{_short_key(key)} UNDECODABLE ({problem}) {raw[:24].hex()}", file=self.out)
+
+    def _stats(self, key: str, now: float) -> KeyStats:
+        st = self.stats.get(key)
+        if st is None:
+            st = self.stats[key] = KeyStats.starting(now)
+        return st
+
+    def _seen(self, key: str, msg: Message, now: float) -> Message:
+        """One decoded message on ``key``: counted, shown, in the CSV if data."""
+        self._stats(key, now).seen(now, msg)
         if msg.kind == "data":
             self.data += 1
             if self.csv_sink is not None:

@@ -10,13 +10,13 @@ from pathlib import Path
 import msgpack
 import pytest
 
+from cosim import keys, schema
 from cosim import node_kinds as nk
-from cosim import schema
 from cosim.auth import RunKey
 from cosim.bus import MemoryBus
 from cosim.errors import RunError, WireError
 from cosim.participant import Participant
-from cosim.wire import decode, encode
+from cosim.wire import decode, encode, encode_step
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -31,7 +31,7 @@ def test_the_registry_takes_outputs_and_coupling_fields_from_the_schema() -> Non
     assert nk.kind("tyre_road").provides == ("F_t", "k_t")
     assert nk.kind("controller").provides == ("F_d", "c_eff")
     assert nk.kind("plant").writes == ("state", "response", "arm", "upper_arm", "arm_FL",
-                                       "arm_FR", "arm_RL", "arm_RR", "records")
+                                       "arm_FR", "arm_RL", "arm_RR", "step", "records")
     assert schema.required("plant", "state") == ("z_b", "v_b", "z_w", "v_w")
     assert schema.columns("tyre_road", "force") == [
         "tyre_road/force/F_t", "tyre_road/force/k_t", "tyre_road/force/z_g",
@@ -86,18 +86,23 @@ def test_a_producer_refuses_to_publish_what_its_consumers_would_reject() -> None
     part.close()
 
 
-def test_a_validly_signed_insider_records_batch_loses_its_implausible_messages() -> None:
-    """#30 item 14: validly signed NaN / 1e308 / negative-time data from an insider is
-    rejected and counted; the plausible messages of the same batch are kept."""
+def test_a_validly_signed_insider_step_loses_its_implausible_messages() -> None:
+    """#30 item 14 with #28 item 2's step messages: validly signed NaN / 1e308 /
+    negative-time data from an insider is rejected and counted; the plausible message of the
+    same step is taken. (The recorder's side, a records batch: tests/unit/
+    test_recorder_stream.py.)"""
     key = RunKey(b"k" * 32)
     bus = MemoryBus()
-    part = Participant(bus, "r", "recorder", auth=key)
+    bus.token(keys.key("r", keys.ORCHESTRATOR, keys.ALIVE))
+    part = Participant(bus, "r", "tyre_road", auth=key)
+    state = part.listen("plant", "state", required=("z_b",))
     good = encode("data", 0, 0.0, {"z_b": 0.1})
-    batch = [("state", good), ("state", encode("data", 1, 0.001, {"z_b": math.nan})),
+    inner = [("state", encode("data", 1, 0.001, {"z_b": math.nan})),
              ("state", encode("data", 2, 0.002, {"z_b": 1e308})),
-             ("state", encode("data", 3, -0.003, {"z_b": 0.0}))]
-    k = "suscosim/r/plant/records"
-    msg = part.open(k, key.sign(k, encode("records", 3, 0.003, {"records": batch})))
-    assert [tuple(r) for r in msg.d["records"]] == [("state", good)]
+             ("state", encode("data", 3, -0.003, {"z_b": 0.0})), ("state", good)]
+    k = keys.key("r", "plant", keys.STEP)
+    bus.put(k, key.sign(k, encode_step(3, 0.003, inner)))
+    assert part.wait({state: 0})[state].d == {"z_b": 0.1}
     assert part.rejected == 3
+    assert sorted(part.mailbox[state]) == [0]
     part.close()

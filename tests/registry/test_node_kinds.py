@@ -43,7 +43,7 @@ def test_channel_names_of_the_registry_are_the_protocol_s() -> None:
     """The registry spells names as strings (it imports nothing): they must be the ones the
     nodes use (cosim.channels, cosim.keys)."""
     known = {ch.STATE, ch.RESPONSE, ch.ARM, ch.FORCE, ch.LOADS, ch.DAMAGE, ch.COUPLING,
-             keys.RECORDS}
+             keys.RECORDS, keys.STEP}
     known |= set(ch.CORNER_ARMS)  # the four-corner vehicle's arm_FL .. arm_RR (#31)
     known.add(ch.UPPER_ARM)  # the double wishbone's upper arm (#26 item 5)
     for k in nk.KINDS:

@@ -9,11 +9,12 @@ import msgpack
 import pytest
 
 from cosim import keys
+from cosim.auth import RunKey
 from cosim.bus import MemoryBus
-from cosim.errors import RunError
+from cosim.errors import RunError, WireError
 from cosim.load_blocks import wire_pieces
 from cosim.participant import Participant
-from cosim.wire import MAX_MESSAGE_BYTES, decode, encode
+from cosim.wire import MAX_MESSAGE_BYTES, decode, encode, encode_step
 
 
 def _pair(stall_s: float = 10.0) -> tuple[MemoryBus, Participant]:
@@ -23,7 +24,18 @@ def _pair(stall_s: float = 10.0) -> tuple[MemoryBus, Participant]:
 
 
 def _put(bus: MemoryBus, node: str, channel: str, raw: bytes) -> None:
-    bus.put(keys.key("r", node, channel), raw)
+    """``raw`` as its producer sends it: a data message in the producer's step message,
+    anything else (control, garbage) as it is on the producer's step key."""
+    if node == keys.ORCHESTRATOR:
+        bus.put(keys.key("r", node, channel), raw)
+        return
+    try:
+        msg = decode(raw)
+    except WireError:
+        msg = None
+    if msg is not None and msg.kind == "data":
+        raw = encode_step(msg.k, msg.t, [(channel, raw)])
+    bus.put(keys.key("r", node, keys.STEP), raw)
 
 
 def test_wait_returns_the_step_asked_for_and_drops_older_ones() -> None:
@@ -140,3 +152,37 @@ def test_a_spinning_node_still_gets_its_input_and_still_sees_a_stall() -> None:
     with pytest.raises(RunError, match="no input from tyre_road"):
         part.wait({tyre: 2})
     part.close()
+
+
+def test_a_producer_sends_one_signed_message_a_step_that_feeds_each_input() -> None:
+    """#28 item 2: the plant's state of step k and its response of step k - 1 go out as ONE
+    message on plant/step (signed once); a consumer listening to both channels files each
+    from it, and a hello on the step proves both inputs live."""
+    key = RunKey(b"k" * 32)
+    bus = MemoryBus()
+    bus.token(keys.key("r", keys.ORCHESTRATOR, keys.ALIVE))
+    plant = Participant(bus, "r", "plant", auth=key)
+    ctrl = Participant(bus, "r", "controller", auth=key)
+    state = ctrl.listen("plant", "state", required=("z_b",))
+    resp = ctrl.listen("plant", "response")
+    sent: list[tuple[str, bytes]] = []
+    bus.subscribe("suscosim/r/plant/**", lambda k, raw: sent.append((k, raw)))
+    for channel in ("state", "response"):
+        plant.output(channel)
+    plant.publish_hello()
+    ctrl._drain_feeds()
+    assert ctrl.inputs[state].heard and ctrl.inputs[resp].heard
+    sent.clear()
+    plant.publish("state", 1, 1e-3, {"z_b": 0.5})
+    plant.publish("response", 0, 0.0, {"a_b": 2.0})
+    assert not sent  # nothing goes out before the step is sent
+    plant.send()
+    assert [k for k, _ in sent] == ["suscosim/r/plant/step"]
+    assert key.verify(sent[0][0], sent[0][1])  # signed once, for the step's key
+    got = ctrl.wait({state: 1, resp: 0})
+    assert got[state].d == {"z_b": 0.5} and got[resp].d == {"a_b": 2.0}
+    plant.flush_records()
+    (batch,) = [decode(raw) for k, raw in sent if k.endswith("/records")]
+    assert [c for c, _ in batch.d["records"]] == ["state", "response"]  # the journal's, as before
+    for p in (plant, ctrl):
+        p.close()

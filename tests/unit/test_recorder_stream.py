@@ -4,6 +4,7 @@ coupled step does not grow with the run; its table is the journal's, bit for bit
 
 from __future__ import annotations
 
+import math
 import queue
 import threading
 import time
@@ -150,3 +151,26 @@ def test_recorder_memory_per_step_is_bounded_and_its_table_is_the_journals(
         assert written[col].dtype == x.dtype and written[col].tobytes() == x.tobytes(), col
     stats = done["stats"]["plant/arm/M[2]"]
     assert stats["max"] == n and stats["mean"] == n / 2  # sum of 0..n, exact in floats
+
+
+def test_implausible_messages_of_a_signed_records_batch_are_rejected_not_journaled(
+        tmp_path: Path) -> None:
+    """#30 item 14: NaN / 1e308 / negative-time data from an insider, in a batch that
+    verifies, is rejected and counted by the recorder (each message checked against its
+    channel's schema as it is decoded, cosim/schema.py); the journal and the table hold only
+    the plausible messages of the same batch."""
+    n = 40
+    rec = Recorder(tmp_path, n)
+    good = decode(rec.batch(0, n + 1)).d["records"]
+    bad = [["state", encode("data", 5, 5 * H, {"z_b": math.nan, "v_b": 0.0, "z_w": 0.0,
+                                                "v_w": 0.0})],
+           ["state", encode("data", 6, 6 * H, {"z_b": 1e308, "v_b": 0.0, "z_w": 0.0,
+                                                "v_w": 0.0})],
+           ["state", encode("data", 7, -7 * H, {"z_b": 0.0, "v_b": 0.0, "z_w": 0.0,
+                                                 "v_w": 0.0})]]
+    rec.bus.put(rec.records, encode("records", n, n * H, {"records": bad + good}))
+    done = rec.finish()
+    journal = read_journal(tmp_path / "journal.msgpack")
+    assert len(journal.records) == 2 * (n + 1)
+    assert [raw for _, raw in journal.records] == [raw for _, raw in good]
+    assert done["rejected"] == 3 and done["rows"] == n + 1

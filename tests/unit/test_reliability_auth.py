@@ -16,7 +16,7 @@ from cosim import keys
 from cosim.bus import MemoryBus
 from cosim.errors import RunError
 from cosim.participant import Participant
-from cosim.wire import decode, encode
+from cosim.wire import decode, encode, encode_step
 
 KEY = au.derive_run_key(b"s" * 32, "r")
 OTHER = au.derive_run_key(b"s" * 32, "r2")  # same secret, another run: another key
@@ -57,13 +57,17 @@ def test_signature_binds_the_run_and_the_channel_and_taps_decode_without_the_key
 def test_unsigned_and_badly_signed_inputs_are_rejected_and_counted() -> None:
     bus, part = _node()
     tyre = part.listen("tyre_road", "force", required=("F_t",))
-    bus.put(keys.key("r", "tyre_road", "force"), encode("data", 0, 0.0, {"F_t": 666.0}))
-    bus.put(keys.key("r", "tyre_road", "force"),
-            _signed(OTHER, "tyre_road", "force", encode("data", 0, 0.0, {"F_t": 667.0})))
-    bus.put(keys.key("r", "tyre_road", "force"),
-            _signed(KEY, "tyre_road", "force", encode("data", 0, 0.0, {"F_t": 1.0})))
+    step = keys.key("r", "tyre_road", keys.STEP)
+
+    def force(F_t: float) -> bytes:
+        return encode_step(0, 0.0, [("force", encode("data", 0, 0.0, {"F_t": F_t}))])
+
+    bus.put(step, force(666.0))
+    bus.put(step, _signed(OTHER, "tyre_road", keys.STEP, force(667.0)))
+    bus.put(step, _signed(KEY, "tyre_road", "force", force(668.0)))  # signed for another key
+    bus.put(step, _signed(KEY, "tyre_road", keys.STEP, force(1.0)))
     assert part.wait({tyre: 0})[tyre].d["F_t"] == 1.0
-    assert part.rejected == 2
+    assert part.rejected == 3
     part.close()
 
 
@@ -75,8 +79,8 @@ def test_published_messages_are_signed_for_their_key() -> None:
     part.publish("state", 0, 0.0, {"z_b": 0.0})
     part.ctl("progress", 0, 0.0, rejected=0)
     part.flush_records()
-    assert {k for k, _ in got} == {"suscosim/r/plant/state", "suscosim/r/plant/ctl",
-                                   "suscosim/r/plant/records"}
+    assert {k for k, _ in got} == {"suscosim/r/plant/step", "suscosim/r/plant/ctl",
+                                   "suscosim/r/plant/records"}  # state: in the step
     for k, raw in got:
         au.RunKey(KEY).verify(k, raw)  # raises if not signed for that key
     part.close()

@@ -17,7 +17,7 @@ from cosim.errors import InputLate
 from cosim.journal import read_journal
 from cosim.participant import MAILBOX_MAX, MAILBOX_WINDOW, Participant
 from cosim.table import build_table
-from cosim.wire import encode
+from cosim.wire import encode, encode_step
 from orchestrator.clock import Clock
 
 KEY = au.derive_run_key(b"k" * 32, "r")
@@ -118,18 +118,22 @@ def test_far_ahead_steps_are_rejected_and_the_mailbox_stays_bounded() -> None:
     bus.token(keys.key("r", keys.ORCHESTRATOR, keys.ALIVE))
     part = Participant(bus, "r", "plant")
     tyre = part.listen("tyre_road", "force", required=("F_t",))
-    key = keys.key("r", "tyre_road", "force")
+    step = keys.key("r", "tyre_road", keys.STEP)
+
+    def put(k: int, t: float, F_t: float) -> None:  # as the producer sends it: in its step
+        bus.put(step, encode_step(k, t, [("force", encode("data", k, t, {"F_t": F_t}))]))
+
     flood = 20000
     for j in range(flood):
-        bus.put(key, encode("data", 1000 + j, 1.0, {"F_t": 1e6}))
+        put(1000 + j, 1.0, 1e6)
     for k in range(3):
-        bus.put(key, encode("data", k, k * 1e-3, {"F_t": float(k)}))
+        put(k, k * 1e-3, float(k))
         assert part.wait({tyre: k})[tyre].d["F_t"] == float(k)
         assert len(part.mailbox[tyre]) <= MAILBOX_WINDOW + 2
     assert part.rejected == flood
-    bus.put(key, encode("data", 1, 1e-3, {"F_t": 5.0}))  # behind the step waited for
-    bus.put(key, encode("data", 2 + MAILBOX_WINDOW + 1, 1.0, {"F_t": 5.0}))
-    bus.put(key, encode("data", 2 + MAILBOX_WINDOW, 1.0, {"F_t": 5.0}))  # the window's edge
+    put(1, 1e-3, 5.0)  # behind the step waited for
+    put(2 + MAILBOX_WINDOW + 1, 1.0, 5.0)
+    put(2 + MAILBOX_WINDOW, 1.0, 5.0)  # the window's edge
     part._drain_feeds()
     assert part.rejected == flood + 2 and 2 + MAILBOX_WINDOW in part.mailbox[tyre]
     part.close()

@@ -16,7 +16,7 @@ from cosim import keys
 from cosim.bus import MemoryBus
 from cosim.errors import RunError
 from cosim.participant import Participant
-from cosim.wire import KINDS, encode
+from cosim.wire import KINDS, encode, encode_step
 from orchestrator.clock import Clock
 
 KEY = au.RunKey(au.derive_run_key(b"fuzz" * 8, "r"))
@@ -63,9 +63,14 @@ def test_a_node_takes_or_rejects_every_frame_on_its_inputs_and_clock() -> None:
     part = Participant(bus, "r", "plant", auth=KEY)
     part.expect_start = {"n_steps": 10, "h": 0.001, "nodes": ["plant"]}
     tyre = part.listen("tyre_road", "force", required=("F_t", "k_t"))
-    for tag in (tyre, (keys.ORCHESTRATOR, keys.CLOCK)):
+    step = ("tyre_road", keys.STEP)  # the producer's step message carries its force
+    for tag in (step, (keys.ORCHESTRATOR, keys.CLOCK)):
         where = keys.key("r", *tag)
-        for raw in _frames(rng, where):
+        frames = _frames(rng, where)
+        if tag == step:  # and well-signed steps around random inner frames
+            frames = (*frames, *(KEY.sign(where, encode_step(0, 0.0, [("force", f)]))
+                                 for f in _frames(rng, keys.key("r", "tyre_road", "force"))))
+        for raw in frames:
             try:
                 part.handle(tag, raw)
             except RunError as exc:  # a signed, well-formed abort is obeyed
@@ -101,10 +106,12 @@ def test_signed_data_with_every_kind_of_bad_field_is_rejected() -> None:
     bus = MemoryBus()
     part = Participant(bus, "r", "plant", auth=KEY)
     tyre = part.listen("tyre_road", "force", required=("F_t",))
-    where = keys.key("r", "tyre_road", "force")
+    step = ("tyre_road", keys.STEP)
+    where = keys.key("r", *step)
     bad = [{"F_t": "x"}, {"F_t": None}, {"F_t": []}, {"F_t": [1.0, "a"]}, {"k_t": 1.0},
            {"F_t": {"a": 1}}, {"F_t": True}]
     for j, d in enumerate(bad):
-        part.handle(tyre, KEY.sign(where, encode("data", j, 0.0, d)))
+        part.handle(step, KEY.sign(where, encode_step(j, 0.0, [
+            ("force", encode("data", j, 0.0, d))])))
     assert part.rejected == len(bad) and not part.mailbox[tyre]
     part.close()

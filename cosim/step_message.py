@@ -1,0 +1,60 @@
+"""Reading a producer's ``step`` messages as the per-channel messages they carry.
+
+A producer publishes the data messages of one communication step as ONE message on
+``suscosim/<run>/<node>/step`` (:func:`cosim.wire.encode_step`, issue #28 item 2). A reader
+that thinks in channels (a tap of ``plant/state``, the scope) subscribes to the logical key
+expression *and* its step key (:func:`step_keyexprs`) and expands each step into
+``(suscosim/<run>/<node>/<channel>, message)`` pairs (:func:`expand`), keeping those the
+logical expression matches (:func:`matches`). Nodes do not use this: their participant files
+a step's inner messages straight into its input mailboxes (:mod:`cosim.participant`).
+"""
+
+from __future__ import annotations
+
+from . import keys
+from .errors import WireError
+from .wire import Message, decode, inner
+
+
+def step_keyexprs(keyexpr: str) -> list[str]:
+    """The key expressions to subscribe to for ``keyexpr`` (``suscosim/<run>/<node>/
+    <channel>`` with ``*``/``**`` wildcards): itself, and the step key of the nodes it names
+    (``suscosim/R/plant/state`` -> also ``suscosim/R/plant/step``)."""
+    chunks = keyexpr.split("/")
+    if chunks[-1] == "**" or len(chunks) < 2:
+        return [keyexpr]  # already takes the step keys
+    step = "/".join([*chunks[:-1], keys.STEP])
+    return list(dict.fromkeys([keyexpr, step]))
+
+
+def _match(pattern: list[str], key: list[str]) -> bool:
+    if not pattern:
+        return not key
+    head, rest = pattern[0], pattern[1:]
+    if head == "**":
+        return any(_match(rest, key[i:]) for i in range(len(key) + 1))
+    return bool(key) and (head == "*" or head == key[0]) and _match(rest, key[1:])
+
+
+def matches(keyexpr: str, key: str) -> bool:
+    """Whether the key ``key`` is in the key expression ``keyexpr`` (Zenoh's ``*``: one
+    chunk, ``**``: any number of chunks; no other wildcards)."""
+    return _match(keyexpr.split("/"), key.split("/"))
+
+
+def expand(key: str, msg: Message) -> list[tuple[str, Message]]:
+    """``msg`` received on ``key``: a ``step`` as its inner messages, each on the key its
+    channel would have (decoded and type-checked: :class:`WireError` if one is malformed);
+    anything else as it is."""
+    if msg.kind != "step":
+        return [(key, msg)]
+    run, node, _ = keys.parse_key(key)
+    return [(keys.key(run, node, channel), decode(raw)) for channel, raw in inner(msg)]
+
+
+def is_step_key(key: str) -> bool:
+    """``key`` is a producer's step key (``.../<node>/step``)."""
+    return key.rsplit("/", 1)[-1] == keys.STEP
+
+
+__all__ = ["WireError", "expand", "is_step_key", "matches", "step_keyexprs"]
