@@ -14,12 +14,13 @@ blocks, the fatigue node at ``nice +10``. This process is the orchestrator: the 
 nodes/tyre_road/node.py and nodes/controller/node.py do (the order and the sizes of the
 messages of the Chapter 6 double-wishbone corner):
 
-* the plant puts ``state`` of step k, then last step's ``response`` and ``arm``, then waits
-  for ``force`` of step k from each force node;
+* the plant puts ONE message a step (#28 item 2): ``state`` of step k with last step's
+  ``response`` and ``arm``, then waits for ``force`` of step k from each force node;
 * tyre_road and the controller wait for ``state`` of step k (``sequential``) or k - 1
   (``parallel``), then put their ``force``;
 * every producer sends what it published to the recorder in batches (64 messages or
-  50 ms); the recorder sends the fatigue node a block of 500 steps of ``arm``.
+  50 ms); the fatigue node takes the plant's batches too and decodes their ``arm``
+  messages (#28 item 4: no relay through the recorder).
 
 Two ways of sending, both with no model work at all:
 

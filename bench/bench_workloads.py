@@ -95,11 +95,17 @@ def _sample(pid: int) -> tuple[str, float, int] | None:
     return name, cpu, hwm
 
 
+SETS: list[str] = []
+"""``--set`` overrides for every run (``--set`` of this bench)."""
+
+
 def one_run(scenario: str, fatigue: bool | None, t_end: float) -> dict:
     """Run once; steps/s from summary.json and per-process CPU / peak RSS."""
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out", tmp,
                "--quiet", "--set", f"run.t_end={t_end}"]
+        for kv in SETS:
+            cmd += ["--set", kv]
         if fatigue is not None:
             cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
         proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL,
@@ -171,14 +177,19 @@ def main() -> int:
     ap.add_argument("--rows", default="null,lumped,corner_fatigue,corner,full",
                     help=f"rows of issue #28's table, of {','.join(ROWS)}")
     ap.add_argument("--null-steps", type=int, default=3000)
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a scenario override for every workload run (e.g. "
+                         "'fatigue.influence=\"builtin:structured\"': the hand-meshed arm "
+                         "#28's fatigue bar was set on)")
     args = ap.parse_args()
+    SETS[:] = args.set
     rows = [r for r in args.rows.split(",") if r]
     bad = [r for r in rows if r not in ROWS]
     if bad:
         print(f"--rows: unknown {', '.join(bad)} (of {', '.join(ROWS)})", file=sys.stderr)
         return 2
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} CPUs, "
-          f"load {_load()}\n")
+          f"load {_load()}" + (f", --set {' '.join(SETS)}" if SETS else "") + "\n")
     if "null" in rows:
         raw, proto = null_chain(args.repeats, args.null_steps)
         print(f"null chain, 5 processes, sequential: raw {raw:.0f}, protocol {proto:.0f} "

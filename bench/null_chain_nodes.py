@@ -31,8 +31,6 @@ EXCHANGES = ("sequential", "parallel")
 H = 0.0005
 """The Chapter 6 step [s] (only the start's plausibility check and t = k h use it)."""
 STALL_S = 30.0
-BLOCK_STEPS = 500
-"""Steps of ``arm`` per load block to the fatigue node (``fatigue.block_samples``)."""
 MAGIC = b"NUL0"
 _K = struct.Struct("<q")
 CPU: list[float] = []
@@ -44,7 +42,6 @@ RAW = ".raw"
 """The raw twin of a channel: ``<channel>.raw`` (its own key: the participant's handshake
 would take raw messages on its own keys as bad ones)."""
 RAW_RECORDS = "rawrecords"
-RAW_LOADS = "rawloads"
 
 # the Chapter 6 corner's fields (the run's journal at step 100): the plant's state and
 # response are 1-element arrays, as the model gives them, its arm loads floats
@@ -58,7 +55,6 @@ ARM = {f"{j}_{a}": 123.456789 for j in ("ball_joint", "damper_mount", "bush_fron
 ARM.update(bump_stop_y=-1.5, bump_stop_z=-2.5, torsion_bar_mx=-1663.2)
 FORCE = {"tyre_road": {"F_t": _ONE, "k_t": _ONE, "z_g": _ONE},
          "controller": {"F_d": _ONE, "c_eff": _ONE}}
-LOAD_BLOCK = {"k0": 0, "t": [0.1] * BLOCK_STEPS, **{f: [123.456789] * BLOCK_STEPS for f in ARM}}
 
 
 def _sizes(key_bytes: bytes) -> dict[str, int]:
@@ -69,17 +65,7 @@ def _sizes(key_bytes: bytes) -> dict[str, int]:
     auth = RunKey(key_bytes)
     one: dict[str, dict[str, Any]] = {"state": STATE, "response": RESPONSE, "arm": ARM, **FORCE}
     out = {c: len(auth.sign("k", encode("data", 100, 0.05, d))) for c, d in one.items()}
-    for i, piece in enumerate(_pieces()):
-        out[f"loads{i}"] = len(auth.sign("k", encode("data", 499, 0.25, piece)))
     return out
-
-
-def _pieces() -> list[dict[str, Any]]:
-    """A load block as the recorder sends it: cut into pieces that fit one message (Zenoh's
-    low-latency transport does not fragment)."""
-    from cosim.load_blocks import wire_pieces
-
-    return wire_pieces(LOAD_BLOCK)
 
 
 def _orchestrator_defaults() -> tuple[float, Any]:
@@ -105,8 +91,10 @@ class RawOut:
         self.batch: list[bytes] = []
         self.since = time.monotonic()
 
-    def put(self, channel: str, k: int) -> None:
-        raw = MAGIC + _K.pack(k) + self.pad[channel]
+    def put(self, channel: str, k: int, extra: int = 0) -> None:
+        """One raw message of ``channel``'s size plus ``extra`` bytes (the raw twin of a
+        step message carrying other channels' messages too)."""
+        raw = MAGIC + _K.pack(k) + self.pad[channel] + b"\0" * extra
         self.pubs[channel](raw)
         self.batch.append(raw)
         if len(self.batch) >= 64 or time.monotonic() - self.since >= 0.05:
@@ -164,10 +152,8 @@ def plant(part: Any, cmd: dict) -> None:
     later: list[tuple[str, int, float, Any]] = []
     for k in range(n + 1):
         t = k * H
-        if raw:
-            out.put("state", k)
-            for c, kk, _, _ in later:
-                out.put(c, kk)
+        if raw:  # one message a step, as the protocol's step message (#28 item 2)
+            out.put("state", k, sum(cmd["sizes"][c] for c, *_ in later))
             for feed, have in feeds:
                 raw_wait(feed, have, k, part.spin_s)
             busy(work)
@@ -180,11 +166,10 @@ def plant(part: Any, cmd: dict) -> None:
         later = [("response", k, t, RESPONSE), ("arm", k, t, ARM)]
         part.progress(k, t)
     for c, kk, tt, d in later:
-        if raw:
-            out.put(c, kk)
-        else:
+        if not raw:
             part.publish(c, kk, tt, d)
     if raw:
+        out.put("response", n, cmd["sizes"]["arm"])
         out.flush(n, final=True)
     CPU.append(time.process_time())
     part.finish(n, n * H)
@@ -229,20 +214,13 @@ def _raw_inbox(bus: Any, keyexpr: str) -> Any:
 
 def recorder(part: Any, cmd: dict) -> None:
     """Takes every producer's records batches (each message in them decoded, in the protocol
-    way); a load block to the fatigue node every ``BLOCK_STEPS`` steps of the plant and the
-    rest at the end; done once every producer's last batch has come."""
+    way); done once every producer's last batch has come."""
     from cosim.listener import Listener
     from cosim.wire import decode
 
     producers = [n for n in cmd["nodes"] if n in ("plant", *FORCE_NODES)]
-    to_fatigue = "fatigue" in cmd["nodes"]
     raw = cmd["wire"] == "raw"
-    if to_fatigue:
-        part.output("loads")
     inbox = _raw_inbox(part.bus, keys.key(part.run, "*", RAW_RECORDS))
-    loads = part.bus.publisher(keys.key(part.run, part.node, RAW_LOADS))
-    pieces = _pieces()
-    pads = [b"\0" * cmd["sizes"][f"loads{i}"] for i in range(len(pieces))]
     listener = Listener(part, STALL_S)
     for node in producers:
         listener.feed(node, "records", kinds=("records",))
@@ -250,7 +228,6 @@ def recorder(part: Any, cmd: dict) -> None:
     CPU[:] = []
     work = float(cmd["work"].get(part.node, 0.0))
     per_step = 3 + len(producers) - 1  # messages a step: the plant's 3, one per force node
-    sent = 0  # steps of arm sent to the fatigue node
     while len(ended) < len(producers):
         if listener.start is not None and not CPU:
             CPU.append(time.process_time())
@@ -265,34 +242,25 @@ def recorder(part: Any, cmd: dict) -> None:
             got = inbox.get(timeout=STALL_S)
             k, count, final, who = _BATCH.unpack_from(got, len(MAGIC))
             node = ROLES[who]
-        busy(work * count / per_step)  # journal, checks, load streaming
-        n = int(cmd["n"])  # the start's (it may come after a first batch)
-        if final or k >= n:
+        busy(work * count / per_step)  # journal, checks
+        if final or k >= int(cmd["n"]):  # the start's (it may come after a first batch)
             ended.add(node)
-        while to_fatigue and node == "plant" and (sent + BLOCK_STEPS - 1 <= k
-                                                  or (k >= n and sent <= n)):
-            k_last = min(sent + BLOCK_STEPS - 1, n)
-            for i, (piece, pad) in enumerate(zip(pieces, pads, strict=True)):
-                kp = k_last if i == len(pieces) - 1 else k_last - 1
-                if raw:
-                    loads(MAGIC + _K.pack(kp) + pad)
-                else:
-                    part.publish("loads", kp, kp * H, piece, record=False)
-            sent = k_last + 1
     n = int(cmd["n"])
     CPU.append(time.process_time())
     part.finish(n, n * H)
 
 
 def fatigue(part: Any, cmd: dict) -> None:
-    """Takes the load blocks (verified and decoded in the protocol way), nothing else; done
-    with the block of the last step."""
+    """Takes the plant's records batches (verified, its arm messages decoded, in the protocol
+    way: the live fatigue node since #28 item 4), nothing else; done with the last step."""
     from cosim.listener import Listener
+    from cosim.wire import codec
 
     raw = cmd["wire"] == "raw"
-    inbox = _raw_inbox(part.bus, keys.key(part.run, "recorder", RAW_LOADS))
+    arm = codec("plant/arm")
+    inbox = _raw_inbox(part.bus, keys.key(part.run, "plant", RAW_RECORDS))
     listener = Listener(part, STALL_S)
-    listener.feed("recorder", "loads", required=("k0", "t"))
+    listener.feed("plant", "records", kinds=("records",))
     k = -1
     CPU[:] = []
     work = float(cmd["work"].get(part.node, 0.0))
@@ -303,9 +271,11 @@ def fatigue(part: Any, cmd: dict) -> None:
         if listener.start is None or not raw:
             rec = listener.poll(timeout=0.05)
             if rec is not None:
-                k = rec.msg.k
+                for channel, one in rec.msg.d["records"]:
+                    if channel == "arm":
+                        k = arm.decode(one).k
         else:
-            k = _K.unpack_from(inbox.get(timeout=STALL_S), len(MAGIC))[0]
+            k = _BATCH.unpack_from(inbox.get(timeout=STALL_S), len(MAGIC))[0]
         busy(work * max(0, k - k_before))  # stresses, counting, damage of the block
     n = int(listener.start["n_steps"])
     CPU.append(time.process_time())

@@ -21,8 +21,8 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
    and a queue cost a second one, and on two cores ~20 % of the coupled step rate). A
    watchdog thread wakes a node blocked on its FIFO when the stall timeout passes, a control
    message (abort) comes, or the orchestrator is gone. Progress goes to the orchestrator
-   at most every 0.1 s. Every published data message is also kept, as published, for the
-   recorder, which gets them in batches on ``<node>/records`` (:mod:`cosim.record_batch`).
+   at most every 0.1 s. What a node sends (its step, its block channels, its records
+   batches for the recorder) is its :class:`cosim.outbox.Outbox`'s.
 4. **End**: ``done`` after the last step; an ``abort`` from the orchestrator, or an input that
    does not come within the stall timeout, ends the node with :class:`RunError`.
 
@@ -44,23 +44,14 @@ import time
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from . import keys, schema
+from . import keys
 from .auth import RunKey, served_scenario
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import InputLate, RunError, WireError
 from .mailbox import MAILBOX_MAX, MAILBOX_WINDOW, Mailbox
-from .record_batch import RecordBatch
-from .wire import (
-    MAX_MESSAGE_BYTES,
-    ChannelCodec,
-    Message,
-    codec,
-    decode,
-    encode,
-    encode_step,
-    inner,
-)
+from .outbox import Outbox
+from .wire import ChannelCodec, Message, codec, decode, encode, inner
 
 __all__ = ["MAILBOX_MAX", "MAILBOX_WINDOW", "Channel", "Participant"]
 
@@ -109,15 +100,8 @@ class Participant:
         self._keyof: dict[Channel, str] = {_CLOCK_TAG: keys.key(run, *_CLOCK_TAG)}
         self.rejected = 0
         self._codecs: dict[str, ChannelCodec | bool] = {}
-        self._out_codecs: dict[str, ChannelCodec] = {}
-        self._outputs: dict[str, Any] = {}
-        """Output channel -> its own publisher (a block channel), or None (in the step)."""
-        self._step: list[tuple[str, bytes]] = []  # this step's data messages, not sent yet
-        self._step_kt: tuple[int, float] = (-1, 0.0)
-        self._step_bytes = 0
-        self._step_pub: Any = None
-        self._records = RecordBatch()
-        self._records_pub: Any = None
+        self.out = Outbox(self._publisher, run, node)
+        """What this node sends (its outputs, its step, its records batches)."""
         self._ctl = self._publisher(keys.key(run, node, keys.CTL))
         self._last_progress = 0.0
         self._token = bus.token(keys.key(run, node, keys.ALIVE))
@@ -227,26 +211,13 @@ class Participant:
     @property
     def outputs(self) -> list[str]:
         """The output channels declared so far (:meth:`output`)."""
-        return list(self._outputs)
+        return self.out.outputs
 
     def output(self, channel: str) -> None:
-        """Declare an output channel: a per-step channel goes out in the node's step
-        message (``suscosim/<run>/<node>/step``), a block channel of the schema on its own
-        key ``suscosim/<run>/<node>/<channel>``."""
-        self._outputs[channel] = self._channel_publisher(channel)
-        self._out_codecs[channel] = codec(f"{self.node}/{channel}")
-        if self._records_pub is None:
-            self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
-
-    def _channel_publisher(self, channel: str) -> Any:
-        """A block channel's own publisher, or None for a per-step channel (whose messages
-        go in the step: the step's publisher is made here once)."""
-        spec = schema.channel(self.node, channel)
-        if spec is not None and not spec.stepped:
-            return self._publisher(keys.key(self.run, self.node, channel))
-        if self._step_pub is None:
-            self._step_pub = self._publisher(keys.key(self.run, self.node, keys.STEP))
-        return None
+        """Declare an output channel (:meth:`cosim.outbox.Outbox.output`: a per-step
+        channel goes out in the node's step message on ``suscosim/<run>/<node>/step``, a
+        block channel of the schema on its own key)."""
+        self.out.output(channel)
 
     def bind(self, nonce: bytes) -> None:
         """Bind every message this node signs or takes from now on to the run instance's
@@ -256,11 +227,7 @@ class Participant:
             return
         self.auth = self.auth.bound(nonce)
         self._ctl = self._publisher(keys.key(self.run, self.node, keys.CTL))
-        self._step_pub = None
-        for channel in list(self._outputs):
-            self._outputs[channel] = self._channel_publisher(channel)
-        if self._records_pub is not None:
-            self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
+        self.out.rebind(self._publisher)
 
     def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
         """The resolved scenario, from the orchestrator's queryable (retried until it answers).
@@ -289,57 +256,22 @@ class Participant:
                 record: bool = True) -> None:
         """One data message: a per-step channel's joins this step's message (sent by
         :meth:`send`, or by the next :meth:`wait`), a block channel's is published at once;
-        kept for the recorder unless ``record`` is false."""
-        raw = encode("data", k, t, data)
-        if len(raw) > MAX_MESSAGE_BYTES:
-            raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "
-                           f"(at most {MAX_MESSAGE_BYTES}: split it)")
-        try:  # what a consumer would reject is never sent: a diverged model ends here
-            self._out_codecs[channel].decode(raw)
-        except WireError as exc:
-            raise RunError(f"{self.node} cannot publish {exc} (did the model diverge?)") \
-                from None
-        pub = self._outputs[channel]
-        if pub is None:
-            if self._step and self._step_bytes + len(raw) > MAX_MESSAGE_BYTES - 1024:
-                self.send()  # one message must carry it: the step goes in two
-            self._step.append((channel, raw))
-            self._step_bytes += len(raw) + 8
-            self._step_kt = (k, t)
-        else:
-            pub(raw)
-        if record:
-            if not self._records.fits(raw):
-                self.flush_records()  # the batch must fit one message too
-            if self._records.add(channel, raw, k, t):
-                self.flush_records()
+        kept for the recorder unless ``record`` is false (:class:`cosim.outbox.Outbox`)."""
+        self.out.publish(channel, k, t, data, record)
 
     def send(self) -> None:
         """Publish this step's data messages as one ``step`` message (nothing if none)."""
-        if not self._step:
-            return
-        msgs, self._step, self._step_bytes = self._step, [], 0
-        self._step_pub(encode_step(*self._step_kt, msgs))
+        self.out.send()
 
     def flush_records(self) -> None:
         """Send this step and the kept data messages to the recorder (at the end, and
         before giving up)."""
-        self.send()
-        if self._records_pub is None:
-            return
-        raw = self._records.take()
-        if raw is not None:
-            self._records_pub(raw)
+        self.out.flush()
 
     def publish_hello(self) -> None:
         """``hello`` on every output and the records feed (the start handshake's proof that
         a data path is live)."""
-        hello = encode("hello", -1, 0.0, {})
-        for pub in (*self._outputs.values(), self._step_pub):
-            if pub is not None:
-                pub(hello)
-        if self._records_pub is not None:
-            self._records_pub(hello)
+        self.out.hello()
 
     def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: Any) -> None:
         """A control message to the orchestrator (ready, progress, done, error)."""
@@ -532,7 +464,7 @@ class Participant:
                 self.publish_hello()
                 silent = [f"{n}/{c}" for (n, c), mb in self.inputs.items() if not mb.heard]
                 if not silent:
-                    self.ctl("ready", info={"outputs": list(self._outputs), **(info or {})})
+                    self.ctl("ready", info={"outputs": self.outputs, **(info or {})})
                 elif now >= next_waiting:  # tell the orchestrator what holds this node up
                     next_waiting = now + WAITING_PERIOD_S
                     self.ctl("waiting", missing=silent)

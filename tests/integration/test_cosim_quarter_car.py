@@ -16,7 +16,7 @@ from cosim import channels as ch
 from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
 from cosim.journal import read_journal
 from cosim.table import build_table, read_table
-from cosim.wire import encode
+from cosim.wire import encode, encode_step
 from orchestrator.accuracy import peak_errors, worst
 from orchestrator.placement import core_layout, usable_cores
 from orchestrator.reference import reference_solution
@@ -157,9 +157,10 @@ def test_malformed_messages_are_rejected_and_counted(tmp_path, ch3_step):
     stop = threading.Event()
 
     def inject():
-        pub = bus.publisher("suscosim/injtest/tyre_road/force")
-        bad = [b"\x00not msgpack", encode("data", 3, 0.003, {"F_t": "x"}),
-               encode("data", 5, 0.005, {"z_g": 0.0})]  # no F_t / k_t
+        pub = bus.publisher("suscosim/injtest/tyre_road/step")  # where its force goes
+        bad = [b"\x00not msgpack", encode("data", 3, 0.003, {"F_t": 1.0}),  # not a step
+               encode_step(3, 0.003, [("force", encode("data", 3, 0.003, {"F_t": "x"}))]),
+               encode_step(5, 0.005, [("force", encode("data", 5, 0.005, {"z_g": 0.0}))])]
         while not stop.is_set():
             for raw in bad:
                 pub(raw)

@@ -1,0 +1,133 @@
+"""What a node sends: its output channels, its step message and its records batches.
+
+A node's :class:`cosim.participant.Participant` keeps one :class:`Outbox`. Every data message
+is encoded once and checked against its channel's schema before it leaves (what a consumer
+would reject is never sent: a diverged model ends the run naming the field). Then:
+
+* a **per-step channel**'s message joins the node's *step*: the data messages of one
+  communication step, published as ONE message on ``suscosim/<run>/<node>/step``, signed
+  once (:func:`cosim.wire.encode_step`, issue #28 item 2) by :meth:`Outbox.send` (the
+  participant sends before it waits for its next inputs). A step that would not fit one
+  bus message goes out in two;
+* a **block channel** of the schema (``stepped=False``: ``fatigue/damage``,
+  ``recorder/coupling``) goes out at once on its own key ``suscosim/<run>/<node>/<channel>``;
+* every data message is also kept, as encoded, for the recorder, which gets them in batches
+  on ``<node>/records`` (:mod:`cosim.record_batch`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from . import keys, schema
+from .errors import RunError, WireError
+from .record_batch import RecordBatch
+from .wire import MAX_MESSAGE_BYTES, ChannelCodec, codec, encode, encode_step
+
+Publisher = Callable[[bytes], None]
+
+_STEP_HEADROOM = 1024
+"""Bytes a step message leaves free of :data:`cosim.wire.MAX_MESSAGE_BYTES` for its envelope."""
+
+
+class Outbox:
+    """The sending side of one node (see the module's docstring). ``publisher(key)`` makes
+    a publisher that signs with the run's key (the participant's)."""
+
+    def __init__(self, publisher: Callable[[str], Publisher], run: str, node: str) -> None:
+        self._publisher, self.run, self.node = publisher, run, node
+        self._outputs: dict[str, Publisher | None] = {}
+        """Output channel -> its own publisher (a block channel), or None (in the step)."""
+        self._codecs: dict[str, ChannelCodec] = {}
+        self._step: list[tuple[str, bytes]] = []  # this step's data messages, not sent yet
+        self._step_kt: tuple[int, float] = (-1, 0.0)
+        self._step_bytes = 0
+        self._step_pub: Publisher | None = None
+        self._records = RecordBatch()
+        self._records_pub: Publisher | None = None
+
+    @property
+    def outputs(self) -> list[str]:
+        """The output channels declared so far (:meth:`output`)."""
+        return list(self._outputs)
+
+    def output(self, channel: str) -> None:
+        """Declare an output channel: a per-step channel goes out in the node's step
+        message, a block channel of the schema on its own key."""
+        self._outputs[channel] = self._channel_publisher(channel)
+        self._codecs[channel] = codec(f"{self.node}/{channel}")
+        if self._records_pub is None:
+            self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
+
+    def _channel_publisher(self, channel: str) -> Publisher | None:
+        """A block channel's own publisher, or None for a per-step channel (whose messages
+        go in the step: the step's publisher is made here once)."""
+        spec = schema.channel(self.node, channel)
+        if spec is not None and not spec.stepped:
+            return self._publisher(keys.key(self.run, self.node, channel))
+        if self._step_pub is None:
+            self._step_pub = self._publisher(keys.key(self.run, self.node, keys.STEP))
+        return None
+
+    def rebind(self, publisher: Callable[[str], Publisher]) -> None:
+        """New publishers (signing bound to the run instance's nonce) for every output."""
+        self._publisher, self._step_pub = publisher, None
+        for channel in list(self._outputs):
+            self._outputs[channel] = self._channel_publisher(channel)
+        if self._records_pub is not None:
+            self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
+
+    def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
+                record: bool = True) -> None:
+        """One data message (see the module's docstring); kept for the recorder unless
+        ``record`` is false."""
+        raw = encode("data", k, t, data)
+        if len(raw) > MAX_MESSAGE_BYTES:
+            raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "
+                           f"(at most {MAX_MESSAGE_BYTES}: split it)")
+        try:  # what a consumer would reject is never sent: a diverged model ends here
+            self._codecs[channel].decode(raw)
+        except WireError as exc:
+            raise RunError(f"{self.node} cannot publish {exc} (did the model diverge?)") \
+                from None
+        pub = self._outputs[channel]
+        if pub is None:
+            if self._step and \
+                    self._step_bytes + len(raw) > MAX_MESSAGE_BYTES - _STEP_HEADROOM:
+                self.send()  # one message must carry it: the step goes in two
+            self._step.append((channel, raw))
+            self._step_bytes += len(raw) + 8
+            self._step_kt = (k, t)
+        else:
+            pub(raw)
+        if record:
+            if not self._records.fits(raw):
+                self._send_records()  # the batch must fit one message too
+            if self._records.add(channel, raw, k, t):
+                self._send_records()
+
+    def send(self) -> None:
+        """Publish this step's data messages as one ``step`` message (nothing if none)."""
+        if not self._step or self._step_pub is None:
+            return
+        msgs, self._step, self._step_bytes = self._step, [], 0
+        self._step_pub(encode_step(*self._step_kt, msgs))
+
+    def _send_records(self) -> None:
+        raw = self._records.take()
+        if raw is not None and self._records_pub is not None:
+            self._records_pub(raw)
+
+    def flush(self) -> None:
+        """Send this step and the kept data messages to the recorder."""
+        self.send()
+        self._send_records()
+
+    def hello(self) -> None:
+        """``hello`` on every output key and the records feed (the start handshake's proof
+        that a data path is live)."""
+        raw = encode("hello", -1, 0.0, {})
+        for pub in (*self._outputs.values(), self._step_pub, self._records_pub):
+            if pub is not None:
+                pub(raw)
