@@ -3,12 +3,15 @@ joints and their load channels) -> the FE influence coefficients the fatigue wor
 
 API: ``load_part(path) -> Part`` (validated; a bad file is an `InputFileError` naming the
 key), ``part_influence(part, mesh_size=None) -> InfluenceSet`` (the assessed surface nodes,
-cached on disk), ``frd_influence(frd, case_names)`` (unit cases solved by CalculiX).
-Schema and the built-in arm's design: docs/parts.md.
+cached on disk), ``frd_influence(frd, case_names)`` (unit cases solved by CalculiX),
+``rst_influence(rst, case_names)`` (unit cases solved by ANSYS MAPDL; needs
+ansys-mapdl-reader, imported only when a file is read). Schema and the built-in arm's
+design: docs/parts.md; the importers: docs/importers.md.
 """
 
+from .ansys_rst import rst_influence
 from .build import part_influence
 from .calculix import frd_influence
 from .schema import Part, load_part
 
-__all__ = ["Part", "frd_influence", "load_part", "part_influence"]
+__all__ = ["Part", "frd_influence", "load_part", "part_influence", "rst_influence"]
