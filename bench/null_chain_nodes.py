@@ -89,6 +89,7 @@ class RawOut:
         self.pad = {c: b"\0" * max(0, n - len(MAGIC) - _K.size) for c, n in channels.items()}
         self.rec = bus.publisher(keys.key(run, node, RAW_RECORDS))
         self.batch: list[bytes] = []
+        self.k_last = -1
         self.since = time.monotonic()
 
     def put(self, channel: str, k: int, extra: int = 0) -> None:
@@ -96,7 +97,10 @@ class RawOut:
         step message carrying other channels' messages too)."""
         raw = MAGIC + _K.pack(k) + self.pad[channel] + b"\0" * extra
         self.pubs[channel](raw)
-        self.batch.append(raw)
+        if sum(map(len, self.batch)) + len(raw) > 47 * 1024:  # as RecordBatch: one Zenoh
+            self.flush(self.k_last)  # batch (64 KiB) carries it, or the low-latency link
+        self.batch.append(raw)  # drops it
+        self.k_last = k
         if len(self.batch) >= 64 or time.monotonic() - self.since >= 0.05:
             self.flush(k)
 
