@@ -4,6 +4,8 @@ check nodes/fatigue/parts/data/lower_arm.toml`)."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -39,6 +41,10 @@ def test_cad_parameters_enforce_forging_rules(tmp_path):
         cad_arm.load_params(bad)
     bad.write_text(text.replace("junction_fillet = 0.005", "junction_fillet = 0.0"))
     with pytest.raises(InputFileError, match="junction_fillet"):
+        cad_arm.load_params(bad)
+    # the hole rib: one width or one per hole corner, never another count
+    bad.write_text(re.sub(r"(?m)^hole_rib_width = \S+", "hole_rib_width = [0.008, 0.008]", text))
+    with pytest.raises(InputFileError, match="hole_rib_width"):
         cad_arm.load_params(bad)
 
 

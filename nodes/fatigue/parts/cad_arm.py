@@ -13,7 +13,15 @@ z = 0, the forging's parting plane):
   about 1/50 of the plan size does not fill in a closed die);
 * **ribs** along the outer edge and round the hole (the H's flanges), ``rib_depth_root`` deep
   at the legs' roots, tapering linearly to ``rib_depth_tip`` toward the ball joint (the
-  bending moment of the wheel load falls toward the ball joint);
+  bending moment of the wheel load falls toward the ball joint). ``hole_rib_width`` [m] is
+  one plan width or three, one per ``hole_corners`` entry (the hole's outline offset by each
+  corner's own width: the rib's width then varies linearly along each side of the hole, so
+  [w_eye, w_eye, w_tip] makes the legs' inner flanges wider at their roots on the eyes,
+  where the bending moment is largest, and narrower toward the ball joint; one number: the
+  same solid as before the per-corner form). Optional eye haunch: ``rib_depth_eye`` [m]
+  (default ``rib_depth_root``: no haunch) is the ribs' depth up to ``haunch_y[0]`` [m from
+  the pivot axis], tapering linearly to ``rib_depth_root`` at ``haunch_y[1]`` (measured
+  2026-12-03: OCC's fillet pass fails on most haunched variants, docs/parts.md);
 * **bush eyes**: hollow tubes along x (the pivot axis), bore = the bushes' outer sleeves;
   with ``[bush_eye] pivot_tube`` one tube from eye to eye (closing the triangle), its bore
   ``pivot_tube_bore`` between the eyes entered by 15-degree cones;
@@ -70,6 +78,12 @@ def load_params(path: Path = DEFAULT_PARAMS) -> dict[str, Any]:
         raise InputFileError(str(path), f"[section] web = {s['web']}: a forging needs >= 0.006 m")
     if s["fillet"] < 0.005 - 1e-12:
         raise InputFileError(str(path), f"[section] fillet = {s['fillet']}: expected >= 0.005 m")
+    w = np.atleast_1d(np.asarray(s["hole_rib_width"], dtype=float))
+    if w.ndim != 1 or len(w) not in (1, len(p["plan"]["hole_corners"])) or np.any(w <= 0.0):
+        raise InputFileError(str(path), f"[section] hole_rib_width = {s['hole_rib_width']}: "
+                             "expected one positive width or one per hole corner [m]")
+    if "rib_depth_eye" in s and "haunch_y" not in s:
+        raise InputFileError(str(path), "[section] rib_depth_eye needs haunch_y = [y_a, y_b]")
     rj = s.get("junction_fillet", s["fillet"])
     if not 0.001 <= rj <= s["fillet"] + 1e-12:
         raise InputFileError(str(path), f"[section] junction_fillet = {rj}: expected "
@@ -142,9 +156,11 @@ def build(params: dict[str, Any], fillet: bool = True) -> dict[str, list[int]]:
     rh = np.asarray(pl["hole_corner_radii"], dtype=float)
     k = _ccw(hole)
     hole, rh = hole[k], rh[k]
-    w_out, w_hole = float(sec["outer_rib_width"]), float(sec["hole_rib_width"])
+    w_out = float(sec["outer_rib_width"])
+    w_hole = np.broadcast_to(np.asarray(sec["hole_rib_width"], dtype=float), (len(hole),))[k]
     t = float(sec["web"])
     D0, D1 = float(sec["rib_depth_root"]), float(sec["rib_depth_tip"])
+    De = float(sec.get("rib_depth_eye", D0))
 
     L, ro = float(eye["length"]), float(eye["outer_radius"])
     b = hp["ball_joint"]
@@ -163,13 +179,18 @@ def build(params: dict[str, Any], fillet: bool = True) -> dict[str, list[int]]:
     band_hole, _ = occ.cut([(2, hole_o)], [(2, hole_i)])
     band_hole, _ = occ.intersect(band_hole, [(2, _hull_face(centres, radii))])
     ribs = []
+    Dmax = max(D0, De)
     for f in band_out + band_hole:
-        ribs += _slab(f[1], -D0 / 2, D0 / 2)
+        ribs += _slab(f[1], -Dmax / 2, Dmax / 2)
     # taper envelope: a prism along x whose (y, z) section follows the rib depth
     y0, y1 = (float(v) for v in sec["taper_y"])
     ylo, yhi = -0.2, 0.6
-    prof = [(ylo, -D0 / 2), (y0, -D0 / 2), (y1, -D1 / 2), (yhi, -D1 / 2),
-            (yhi, D1 / 2), (y1, D1 / 2), (y0, D0 / 2), (ylo, D0 / 2)]
+    half = [(ylo, D0 / 2), (y0, D0 / 2), (y1, D1 / 2), (yhi, D1 / 2)]
+    if De != D0:  # the eye haunch: De up to haunch_y[0], linear to D0 at haunch_y[1]
+        ya, yb = (float(v) for v in sec["haunch_y"])
+        half = [(ylo, De / 2), (ya, De / 2), (yb, D0 / 2)] + half[1:]
+        half = [q for i, q in enumerate(half) if i == 0 or abs(q[0] - half[i - 1][0]) > 1e-9]
+    prof = [(y, -z) for y, z in half] + [(y, z) for y, z in reversed(half)]
     pts = [occ.addPoint(-0.4, y, z) for y, z in prof]
     lines = [occ.addLine(pts[i], pts[(i + 1) % len(pts)]) for i in range(len(pts))]
     env_face = occ.addPlaneSurface([occ.addCurveLoop(lines)])
@@ -223,7 +244,8 @@ def _bores(params: dict[str, Any], hp: dict[str, np.ndarray],
     sec, eye, bj = params["section"], params["bush_eye"], params["ball_joint"]
     L, ro = float(eye["length"]), float(eye["outer_radius"])
     b = hp["ball_joint"]
-    zmax = 0.5 * max(sec["rib_depth_root"], sec["rib_depth_tip"], 2 * ro, bj["depth"]) + 0.01
+    zmax = 0.5 * max(sec["rib_depth_root"], sec.get("rib_depth_eye", 0.0), sec["rib_depth_tip"],
+                     2 * ro, bj["depth"]) + 0.01
     rb = float(eye["bore_radius"])
     if eye.get("pivot_tube", False):
         bores = [(3, occ.addCylinder(xs[0] - L / 2 - 0.01, 0.0, 0.0, xs[1] - xs[0] + L + 0.02,
