@@ -1,6 +1,7 @@
 """The built-in arm's mesh-convergence table (#26 item 2), logged mesh by mesh.
 
-    python bench/arm_convergence.py [OUT.json] [--run RUN_DIR] [--local 0.005 0.0035]
+    python bench/arm_convergence.py [OUT.json] [--run RUN_DIR] [--local 0.005 0.0035] \
+        [--set section.hole_rib_width=[0.011,0.011,0.005]]
 
 The same computation as ``suscosim part check nodes/fatigue/parts/data/lower_arm.toml
 --convergence`` (``card.convergence`` with the part file's ``mesh.convergence``,
@@ -67,7 +68,19 @@ def main() -> None:
     ap.add_argument("--local", type=float, nargs="+", help="local sizes [m] (the part file's "
                                                           "convergence_local by default)")
     ap.add_argument("--radius", type=float)
+    ap.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=JSON",
+                    help="override a CAD parameter of data/lower_arm_cad.toml (as "
+                         "bench/arm_variant.py): the table of a variant before adopting it")
     args = ap.parse_args()
+    if args.set:
+        from nodes.fatigue.parts import cad_arm
+
+        params = cad_arm.load_params()
+        for s in args.set:
+            key, val = s.split("=", 1)
+            table, k = key.split(".")
+            params[table][k] = json.loads(val)
+        cad_arm.load_params = lambda path=None: params  # type: ignore[assignment]
     path = Path(_data).parent / "lower_arm.toml"
     part = load_part(path)
     loads = {k: v for k, v in static_arm_loads().items() if k in part.channels}

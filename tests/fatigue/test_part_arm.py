@@ -43,7 +43,8 @@ def test_cad_parameters_enforce_forging_rules(tmp_path):
     with pytest.raises(InputFileError, match="junction_fillet"):
         cad_arm.load_params(bad)
     # the hole rib: one width or one per hole corner, never another count
-    bad.write_text(re.sub(r"(?m)^hole_rib_width = \S+", "hole_rib_width = [0.008, 0.008]", text))
+    bad.write_text(re.sub(r"(?m)^hole_rib_width = (\[[^\]]*\]|\S+)",
+                        "hole_rib_width = [0.008, 0.008]", text))
     with pytest.raises(InputFileError, match="hole_rib_width"):
         cad_arm.load_params(bad)
 
