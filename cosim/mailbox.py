@@ -12,13 +12,17 @@ bounded whatever a producer sends:
 
 ``hello`` (the start handshake's, step -1) is kept once; a second message for a step already
 filed, a kind other than ``data`` or a message lacking a field the node needs is rejected.
+A producer's ``step`` message (:func:`cosim.wire.encode_step`) is filed by
+:func:`file_step`: each inner message into the mailbox of its channel.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .wire import Message
+from . import keys
+from .errors import WireError
+from .wire import Message, codec, inner
 
 MAILBOX_WINDOW = 64
 """Steps ahead of the one a node waits for that a stepped input's mailbox accepts."""
@@ -73,3 +77,34 @@ class Mailbox:
             for old in [j for j in self.box if j < k]:
                 del self.box[old]
         return msg
+
+
+def file_step(inputs: dict[tuple[str, str], Mailbox], node: str, msg: Message
+              ) -> list[tuple[tuple[str, str], str]]:
+    """File producer ``node``'s step message (verified) into ``inputs`` (``(node,
+    channel)`` -> mailbox): each inner message of a stepped input decoded and checked against
+    its channel's schema (the step's signature covered them; channels not read are skipped
+    unread); a ``hello`` proves every stepped input from ``node`` live. Returns the
+    rejections, ``(input, why)``."""
+    rejected: list[tuple[tuple[str, str], str]] = []
+    if msg.kind == "hello":
+        for (n, _), each in inputs.items():
+            if n == node and each.stepped:
+                each.file(msg)
+        return rejected
+    if msg.kind != "step":
+        return [((node, keys.STEP), f"unexpected kind '{msg.kind}' on {node}/step")]
+    for channel, raw in inner(msg):
+        tag = (node, channel)
+        box = inputs.get(tag)
+        if box is None or not box.stepped:
+            continue  # a channel this node does not read
+        try:
+            one = codec(f"{node}/{channel}").decode(raw)
+        except WireError as exc:
+            rejected.append((tag, str(exc)))
+            continue
+        why = box.file(one)
+        if why is not None:
+            rejected.append((tag, why))
+    return rejected

@@ -49,9 +49,9 @@ from .auth import RunKey, served_scenario
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import InputLate, RunError, WireError
-from .mailbox import MAILBOX_MAX, MAILBOX_WINDOW, Mailbox
+from .mailbox import MAILBOX_MAX, MAILBOX_WINDOW, Mailbox, file_step
 from .outbox import Outbox
-from .wire import ChannelCodec, Message, codec, decode, encode, inner
+from .wire import ChannelCodec, Message, codec, decode, encode
 
 __all__ = ["MAILBOX_MAX", "MAILBOX_WINDOW", "Channel", "Participant"]
 
@@ -375,39 +375,14 @@ class Participant:
             if msg.kind == "abort":
                 raise RunError(f"run aborted by the orchestrator: {msg.d.get('reason', '?')}")
             return msg
-        if step:
-            self._file_step(tag[0], msg)
+        if step:  # each inner message of a channel it reads, filed in its mailbox
+            for where, reason in file_step(self.inputs, tag[0], msg):
+                self.reject(where, reason)
             return None
         why = self.inputs[tag].file(msg)
         if why is not None:
             self.reject(tag, why)
         return None
-
-    def _file_step(self, node: str, msg: Message) -> None:
-        """File a producer's step: each inner message of a channel this node reads, decoded
-        and checked against its channel (the step's signature covered them); a ``hello``
-        proves every input from that producer live."""
-        if msg.kind == "hello":
-            for (n, _), box in self.inputs.items():
-                if n == node and box.stepped:
-                    box.file(msg)
-            return
-        if msg.kind != "step":
-            self.reject((node, keys.STEP), f"unexpected kind '{msg.kind}' on {node}/step")
-            return
-        for channel, raw in inner(msg):
-            tag = (node, channel)
-            mb = self.inputs.get(tag)
-            if mb is None or not mb.stepped:
-                continue  # a channel this node does not read
-            try:
-                one = codec(f"{node}/{channel}").decode(raw)
-            except WireError as exc:
-                self.reject(tag, str(exc))
-                continue
-            why = mb.file(one)
-            if why is not None:
-                self.reject(tag, why)
 
     def wait(self, needs: Mapping[Channel, int]) -> dict[Channel, Message]:
         """Block until every ``(input) -> step`` in ``needs`` has arrived (the step barrier).
