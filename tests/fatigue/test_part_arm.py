@@ -53,7 +53,7 @@ def test_cad_fillets_every_web_root_and_leaves_sharp_edges_only_in_joint_zones()
     """One OCC fillet pass before the bores: the solid must be valid (the same pass with the
     bores cut first gave 7.19 kg for a 4.85 kg part, its pivot bore filled), every web root and
     rib-eye/housing junction filleted, and what stays sharp lies within a joint zone."""
-    import gmsh
+    import gmsh  # type: ignore[import-untyped]
 
     from nodes.fatigue.parts.features import sharp_reentrant_edges
 
