@@ -106,3 +106,31 @@ def test_a_block_is_read_back_as_written_and_a_bad_one_is_named():
     with pytest.raises(ValueError, match="2 rows for 1 times"):
         block_loads({"k0": 0, "t": [0.0], "ball_joint_z": [1.0, 2.0], "spring_m": [0, 0]},
                     fields)
+
+
+def test_a_node_computing_a_long_block_keeps_telling_the_orchestrator() -> None:
+    """A block of the CAD arm at rest can take seconds (every sample kept): the fatigue node
+    sends progress while it computes, so the clock does not blame a working node; after the
+    block nothing more is sent (a node stuck elsewhere is still seen)."""
+    import threading
+    import time
+
+    from nodes.fatigue.node import alive_while_busy
+
+    sent: list[tuple[str, int]] = []
+
+    class Part:
+        rejected = 0
+
+        def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: object) -> None:
+            sent.append((kind, k))
+
+    release = threading.Event()
+    with alive_while_busy(Part(), 7, 0.0035, period_s=0.02):  # type: ignore[arg-type]
+        deadline = time.monotonic() + 30.0
+        while len(sent) < 3 and time.monotonic() < deadline:
+            release.wait(0.01)  # "computing"
+    assert len(sent) >= 3 and set(sent) == {("progress", 7)}
+    n = len(sent)
+    release.wait(0.2)  # ten periods after the block: silent
+    assert len(sent) == n
