@@ -2,9 +2,10 @@
 
     python3 abort_watch.py RUN ENDPOINT CLIENT_CONFIG
 
-Prints ``ready`` once subscribed, ``hearing`` at the first ``plant/state`` message of the run
-that reaches it (the route from the run to this session is up: a subscription only printed
-as declared may not have reached the router and the publishers yet), then ``abort <unix
+Prints ``ready`` once subscribed, ``hearing`` at the first ``plant/step`` message of the run
+that reaches it (the plant's one message a step since #28, its state inside; the route from
+the run to this session is up: a subscription only printed as declared may not have reached
+the router and the publishers yet), then ``abort <unix
 time> <reason>`` for the first abort the orchestrator publishes on
 ``suscosim/RUN/orchestrator/clock``, and exits. A tap: it needs
 no run key (signed messages decode without it) and only a certificate that may subscribe.
@@ -58,7 +59,7 @@ def on_state(_sample) -> None:
         print("hearing", flush=True)
 
 
-def count() -> None:  # how many plant/state it has heard, each second (for a missed abort)
+def count() -> None:  # how many plant/step it has heard, each second (for a missed abort)
     while not done.wait(1.0):
         print(f"states {states[0]} {time.time():.3f}", flush=True)
 
@@ -68,7 +69,7 @@ threading.Thread(target=count, daemon=True).start()
 
 session = zenoh.open(conf)
 session.declare_subscriber(keys.key(run, keys.ORCHESTRATOR, keys.CLOCK), on_sample)
-session.declare_subscriber(keys.key(run, "plant", "state"), on_state)
+session.declare_subscriber(keys.key(run, "plant", keys.STEP), on_state)
 print("ready", flush=True)
 done.wait(600)
 sys.stdout.flush()
