@@ -5,23 +5,31 @@ For every node and component c ∈ {σx, σy, σz, τxy, τyz, τzx}:
 with c_i the stress influence coefficient of load case i (Pa/N for a unit force, Pa/(N m)
 for a unit moment) and F_i(t) the load history of channel i (N or N m).
 
-**The same bits for a node whatever is computed with it.** One BLAS product of all samples
-by all nodes picks its kernel (its fused multiply-adds, its summation order) by the matrices'
-shapes: the same node came out up to 1.2e-7 Pa apart (1 ulp of ~4e8 Pa) computed among 113
-nodes or among all 2925 (measured on the Ch 6 arm). Screening (:mod:`.screening`) computes a
-changing subset of nodes that must give the unscreened result exactly, so the product is
-taken per node, always of the same shape: :data:`ROWS` samples (the last chunk padded with
-zero loads) by the node's (cases, 6) coefficients, a stacked ``matmul`` over the nodes. The
-samples of a chunk are counted from the start of the block given: blocks must start at the
-same samples for the same bits (the live node and the batch cut at the same steps).
+**The same bits for a node whatever is computed with it, on every engine.** One BLAS product
+of all samples by all nodes picks its kernel (its fused multiply-adds, its summation order) by
+the matrices' shapes: the same node came out up to 1.2e-7 Pa apart (1 ulp of ~4e8 Pa) computed
+among 113 nodes or among all 2925 (measured on the Ch 6 arm). Screening (:mod:`.screening`)
+computes a changing subset of nodes that must give the unscreened result exactly, so each
+component is *defined* as the plain sum in case order, every product rounded, no fused
+multiply-add: ``c = ((c_0 F_0 + c_1 F_1) + c_2 F_2) + ...`` per sample and node. The
+compiled kernel (numba, :func:`.turning_eq.products_compiled`: the loads of four cases at a
+time in registers, each sample's six components summed in that order; ~3.4 ns per
+node-sample on the 15-case CAD arm against 8-11 ns for the BLAS product per node of fixed
+shape it replaced, #28; the live engine fuses it per node with the turning-point gather,
+:func:`.turning_eq.superpose_gather`) and the numpy path
+(:func:`_products_numpy`, elementwise, the fallback without numba) give the same bits
+(``tests/fatigue/test_superposition_fast.py``), for any subset of nodes and any cut of the
+history (each sample is computed alone).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .counting import COMPILED
+
 ROWS = 64
-"""Samples per product (the fixed shape; a block's last chunk is padded with zeros)."""
+"""The buffers' sample axis is padded to a multiple of this (zero loads: zero stresses)."""
 
 
 def node_major(coefficients: np.ndarray) -> np.ndarray:
@@ -29,35 +37,53 @@ def node_major(coefficients: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(coefficients, dtype=float).transpose(1, 0, 2))
 
 
+def build() -> None:
+    """Compile the product kernel now (or load it from numba's cache; once; no-op without
+    numba): :func:`.turning_eq.build`, where it lives beside the kernels it is fused with."""
+    if COMPILED:
+        from . import turning_eq
+
+        turning_eq.build()
+
+
+def _products_numpy(FT: np.ndarray, coef: np.ndarray, out: np.ndarray) -> None:
+    """:func:`.turning_eq.products_compiled` elementwise in numpy (the same operations in
+    the same order: the same bits)."""
+    for cc in range(out.shape[0]):
+        o = out[cc]
+        np.multiply(coef[:, 0, cc][:, None], FT[0][None, :], out=o)
+        for c in range(1, FT.shape[0]):
+            o += coef[:, c, cc][:, None] * FT[c][None, :]
+
+
 def _products(loads: np.ndarray, per_node: np.ndarray, scratch: np.ndarray | None = None
               ) -> tuple[np.ndarray, int]:
-    """Stresses (6, k, n_pad) [Pa] of ``loads`` (n, n_cases) [N, N m] in chunks of
-    :data:`ROWS` samples (the last padded with zero loads), and n. Each chunk is one stacked
-    ``matmul`` of a fixed shape, the node's (6, n_cases) coefficients by the chunk's
-    (n_cases, ROWS) loads: the same bits as the (ROWS, n_cases) x (n_cases, 6) product per
-    node (checked over every chunk of the Ch 6 run and by ``tests/fatigue``), written straight
-    into a buffer laid out (component, node, sample), so no transposing copy follows (it
-    cost 3/4 of the time) and each component is contiguous. ``scratch``: a flat float64
-    array of at least 6 k n_pad elements to write into (a fresh one otherwise)."""
+    """Stresses (6, k, n_pad) [Pa] of ``loads`` (n, n_cases) [N, N m] for the nodes
+    ``per_node`` (k, n_cases, 6): per sample the sum in case order (module docstring),
+    laid out (component, node, sample) so each component is contiguous; the padding up to
+    a multiple of :data:`ROWS` samples is the stresses of zero loads. Returns it and n.
+    ``scratch``: a flat float64 array of at least 6 k n_pad elements to write into (a fresh
+    one otherwise)."""
     F = np.asarray(loads, dtype=float)
     k, n_cases, n_comp = per_node.shape
     if F.ndim != 2 or F.shape[1] != n_cases:
         raise ValueError(f"loads {F.shape} and coefficients {per_node.shape} do not match")
     n = F.shape[0]
-    chunks = max(1, -(-n // ROWS))
-    FT = np.zeros((chunks, n_cases, ROWS))
-    for c in range(chunks):
-        m = min(ROWS, n - c * ROWS)
-        if m > 0:
-            FT[c, :, :m] = F[c * ROWS:c * ROWS + m].T
-    coef_t = per_node.transpose(0, 2, 1)  # (k, 6, n_cases), a view
-    shape = (n_comp, k, chunks, ROWS)
-    size = n_comp * k * chunks * ROWS
+    n_pad = max(1, -(-n // ROWS)) * ROWS
+    FT = np.zeros((n_cases, n_pad))
+    FT[:, :n] = F.T
+    shape = (n_comp, k, n_pad)
+    size = n_comp * k * n_pad
     out = np.empty(shape) if scratch is None else scratch[:size].reshape(shape)
-    by_node = out.transpose(1, 0, 2, 3)
-    for c in range(chunks):
-        np.matmul(coef_t, FT[c], out=by_node[:, :, c, :])
-    return out.reshape(n_comp, k, chunks * ROWS), n
+    coef = np.ascontiguousarray(per_node, dtype=float)
+    if COMPILED and n_comp == 6:
+        from .turning_eq import products_compiled
+
+        products_compiled(FT, coef, out)
+    else:
+        with np.errstate(invalid="ignore", over="ignore"):
+            _products_numpy(FT, coef, out)
+    return out, n
 
 
 def components_buffer(loads: np.ndarray, per_node: np.ndarray,

@@ -22,7 +22,7 @@ import numpy as np
 
 from cosim.errors import ScenarioError
 
-from . import counting, turning_eq
+from . import counting, superposition, turning_eq
 from .config import BUILTIN_PART, STRUCTURED_ARM, FatigueConfig
 from .counting import COMPILED, Cycles, StreamingRainflow
 from .damage import cycle_damage
@@ -31,12 +31,13 @@ from .influence import InfluenceSet, builtin_influence, import_influence, short_
 from .result import FatigueResult
 from .screening import Screening, unsupported
 from .superposition import ROWS, components_buffer, node_major, superpose_components
-from .turning_eq import gather_kept, kept_equivalent, turning_equivalent
+from .turning_eq import kept_equivalent, superpose_gather, turning_equivalent
 
 ENGINES = ("compiled", "numpy", "block")
 ENGINE = os.environ.get("SUSCOSIM_FATIGUE_ENGINE") or ("compiled" if COMPILED else "numpy")
 """How :class:`_Engine` computes a block (all give the same bits, ``tests/fatigue``):
-``"compiled"`` (numba: the stresses by node tiles, the equivalent stress exactly only at
+``"compiled"`` (numba: the stresses node by node fused with the bracket and gather of
+:func:`.turning_eq.superpose_gather`, the equivalent stress exactly only at
 the samples a proven bracket cannot rule out as turning points, :func:`.turning_eq.
 kept_equivalent`, and the compiled rainflow, :meth:`.counting.StreamingRainflow.
 feed_packed`); ``"numpy"`` (the same idea in numpy, :func:`.turning_eq.turning_equivalent`,
@@ -47,9 +48,9 @@ measurement switch: ``bench/bench_workloads.py`` A/B; an unknown name is an erro
 if ENGINE not in ENGINES:
     raise ValueError(f"SUSCOSIM_FATIGUE_ENGINE={ENGINE!r}: one of {ENGINES}")
 TILE_ELEMS = 1 << 19
-"""Stress components per node tile of the compiled path (6 x nodes x samples, 4 MB: 170
-nodes of a 500-sample block; the products took 15.0 us/step at 128 nodes, 16.4 at 341,
-50 at all 2925 on the Ch 6 arm)."""
+"""Stress components per node tile of the compiled path's signed von Mises (every sample:
+6 x nodes x samples, 4 MB: 170 nodes of a 500-sample block); abs-max principal is fused
+node by node (:func:`.turning_eq.superpose_gather`)."""
 _SCRATCH = threading.local()  # per thread (a monolithic run's nodes are threads)
 
 
@@ -73,6 +74,7 @@ def warm_up() -> None:
     ~3 s, from the cache ~1 s (numba's own start; ``bench/bench_fatigue.py`` prints it)."""
     if COMPILED:
         counting.build()
+        superposition.build()
         turning_eq.build()
 
 
@@ -188,33 +190,28 @@ class _Engine:
 
     def _exact_compiled(self, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow
                         ) -> tuple[np.ndarray, np.ndarray, Cycles]:
-        """The whole block per tile of nodes: the products (:func:`.superposition.
-        components_buffer`: per node of fixed shape, the same bits) and the components of
-        the samples that may be turning points (and the block's ends) gathered
-        (:func:`.turning_eq.gather_kept`); then their exact equivalent stress at once and
-        the counter fed those (each node's cycles in order). Returns the block's extremes
-        and cycles."""
+        """The whole block node by node: the products (:mod:`.superposition`'s sum in case
+        order) and the components of the samples that may be turning points (and the
+        block's ends) gathered, fused per node so its stresses stay in cache
+        (:func:`.turning_eq.superpose_gather`); then their exact equivalent stress at once
+        and the counter fed those (each node's cycles in order). Returns the block's
+        extremes and cycles. Signed von Mises (every sample) goes by tiles of nodes."""
         n = F.shape[0]
         kind = self.cfg.equivalent
-        coef = self.per_node[idx]
+        whole = idx.size == self.per_node.shape[0] and bool(
+            np.array_equal(idx, np.arange(idx.size)))
+        coef = self.per_node if whole else self.per_node[idx]  # (a copy: 10 MB on the CAD arm)
         n_pad = -(-n // ROWS) * ROWS
         tile = max(1, TILE_ELEMS // (6 * n_pad))
         counts = np.empty(idx.size, dtype=np.int64)
         if kind == "abs_max_principal" and n > 2:
             cap = max(n, idx.size * n // 8)
             kept = _scratch("kept", 6 * cap)[:6 * cap].reshape(6, cap)
-            pos = 0
-            for j in range(0, idx.size, tile):
-                k = min(tile, idx.size - j)
-                buf, _ = components_buffer(F, coef[j:j + tile], _scratch("comp", 6 * k * n_pad))
-                end = gather_kept(buf, n, kept, pos, counts[j:j + k])
-                if end < 0:  # more kept than room: a larger buffer, this tile again
-                    cap = 2 * cap + k * n
-                    bigger = np.empty((6, cap))  # rare (noise-like loads): not kept
-                    bigger[:, :pos] = kept[:, :pos]
-                    kept = bigger
-                    end = gather_kept(buf, n, kept, pos, counts[j:j + k])
-                pos = end
+            pos = superpose_gather(F, coef, kept, counts)
+            while pos < 0:  # more kept than room (rare, noise-like loads): larger, again
+                cap = 2 * cap + idx.size * n // 4
+                kept = np.empty((6, cap))
+                pos = superpose_gather(F, coef, kept, counts)
             vals = equivalent_of(kept[:, :pos], kind)
         else:  # every sample (signed von Mises, or blocks of 1-2 samples)
             parts = []

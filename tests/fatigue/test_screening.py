@@ -76,3 +76,48 @@ def test_screening_is_off_where_the_bound_is_not_proven():
     t, loads = pave_like_loads(0.5, seed=1)
     r = analyse(t, loads, cfg, 5.0, screen=0.01)
     assert not r.screened.any() and "strain_life" in r.screening["note"]
+
+
+@pytest.mark.integration
+def test_screened_equals_unscreened_on_a_ch6_pave_run_of_the_cad_arm(tmp_path):
+    """Issue #28: on a realistic-corner run of Chapter 6 (the pave, seed 1, TSS2; 6 m, the
+    built-in CAD arm, 13 778 assessed nodes), the screened engine leaves nodes out and gives
+    the unscreened lives, critical node and ten most damaged nodes, bit for bit, batch and
+    live (blocks of block_samples)."""
+    from nodes.fatigue.run_dir import read_table, track_length
+    from nodes.fatigue.worker import LiveFatigue
+    from tests.conftest import ROOT, suscosim
+
+    run = tmp_path / "pave"
+    res = suscosim("run", str(ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"),
+                   "--mode", "monolithic", "--quiet", "--out", str(run),
+                   "--set", "road.seed=1", "--set", "road.length_m=6",
+                   "--set", 'controller={law="tss2", preset="realistic", B=0.8, G=0.001, '
+                            'velocity="damper"}', "--set", "fatigue.live=false", timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    import json
+
+    scenario = json.loads((run / "scenario.json").read_text())
+    cfg = FatigueConfig.from_dict({**scenario.get("fatigue", {}), "block_samples": 97})
+    t, loads = read_table(run)
+    L = track_length(scenario, t)
+    ref = analyse(t, loads, cfg, L, screen=None)
+    assert ref.node_ids.size > 10_000  # the CAD arm
+    names = list(loads)
+    arr = np.stack([loads[c] for c in names], axis=1)
+    live = LiveFatigue(cfg, names, L, screen=0.01, total_samples=t.size)
+    for i in range(0, t.size, cfg.block_samples):
+        live.update(t[i:i + cfg.block_samples], arr[i:i + cfg.block_samples])
+    for res_s in (analyse(t, loads, cfg, L, screen=0.01), live.result()):
+        out = res_s.screened
+        assert out is not None and out.sum() > 0.2 * out.size  # the screen drops nodes
+        assert res_s.critical_node_id == ref.critical_node_id
+        assert res_s.life_km == ref.life_km and res_s.max_damage == ref.max_damage
+        top_ref = np.argsort(ref.damage)[::-1][:10]
+        top = np.argsort(res_s.damage)[::-1][:10]
+        np.testing.assert_array_equal(top, top_ref)
+        np.testing.assert_array_equal(res_s.damage[top], ref.damage[top_ref])
+        assert res_s.summary()["top_nodes"] == ref.summary()["top_nodes"]
+        np.testing.assert_array_equal(res_s.damage[~out], ref.damage[~out])
+        assert np.all(res_s.damage[out] >= ref.damage[out])
+        assert np.all(ref.damage[out] < 0.01 * ref.max_damage)

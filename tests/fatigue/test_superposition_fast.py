@@ -1,36 +1,64 @@
-"""The fast superposition layout gives the bits of the per-node fixed-shape product."""
+"""The superposition is the plain sum in case order (no fused multiply-add): the compiled
+kernel and the numpy path give its bits, for any subset of nodes and any length."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from nodes.fatigue import superposition
 from nodes.fatigue.equivalent_stress import equivalent_of
-from nodes.fatigue.superposition import ROWS, superpose, superpose_components
+from nodes.fatigue.superposition import superpose, superpose_components
 
 
 def _reference(F: np.ndarray, per_node: np.ndarray) -> np.ndarray:
-    """(n, k, 6): the (ROWS, cases) x (cases, 6) product per node, last chunk zero-padded."""
-    out = []
-    for r in range(0, F.shape[0], ROWS):
-        m = min(ROWS, F.shape[0] - r)
-        buf = np.zeros((1, ROWS, F.shape[1]))
-        buf[0, :m] = F[r:r + m]
-        out.append(np.matmul(buf, per_node)[:, :m].transpose(1, 0, 2))
-    return np.concatenate(out, axis=0)
+    """(n, k, 6): per sample and node, sum_c (coefficient_c x load_c) in case order, each
+    product rounded then added (Python floats: IEEE double, no fused multiply-add)."""
+    n, k = F.shape[0], per_node.shape[0]
+    out = np.empty((n, k, 6))
+    for s in range(n):
+        for i in range(k):
+            for m in range(6):
+                acc = float(per_node[i, 0, m]) * float(F[s, 0])
+                for c in range(1, F.shape[1]):
+                    acc = acc + float(per_node[i, c, m]) * float(F[s, c])
+                out[s, i, m] = acc
+    return out
 
 
-def test_same_bits_as_per_node_product_any_subset_any_length() -> None:
-    rng = np.random.default_rng(7)
-    per_node = rng.normal(size=(300, 15, 6)) * 1e4
-    for n in (1, 37, 64, 65, 500):
-        F = rng.normal(size=(n, 15)) * 1e3
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("cases", [1, 3, 4, 7, 15])
+def test_the_sum_in_case_order_any_subset_any_length(monkeypatch, compiled, cases) -> None:
+    if compiled and not superposition.COMPILED:
+        pytest.skip("numba not installed")
+    monkeypatch.setattr(superposition, "COMPILED", compiled)
+    rng = np.random.default_rng(7 + cases)
+    per_node = rng.normal(size=(40, cases, 6)) * 1e4
+    per_node[0, 0] = -0.0  # a signed zero stays signed
+    for n in (1, 37, 64, 65, 130):
+        F = rng.normal(size=(n, cases)) * 1e3
         ref = _reference(F, per_node)
-        assert np.array_equal(superpose(F, per_node), ref)
+        got = superpose(F, per_node)
+        assert np.array_equal(got.view(np.int64), ref.view(np.int64))
         comp = superpose_components(F, per_node)
-        assert comp.shape == (6, n, 300)
+        assert comp.shape == (6, n, 40)
         assert np.array_equal(comp, ref.transpose(2, 0, 1))
-        sub = np.sort(rng.choice(300, 17, replace=False))
+        sub = np.sort(rng.choice(40, 17, replace=False))
         assert np.array_equal(superpose_components(F, per_node[sub]), comp[:, :, sub])
+
+
+def test_compiled_and_numpy_paths_same_bits_with_nan_and_inf(monkeypatch) -> None:
+    rng = np.random.default_rng(11)
+    per_node = rng.normal(size=(170, 15, 6)) * 1e4
+    F = rng.normal(size=(500, 15)) * 1e3
+    F[3, 0], F[4, 14], F[5, 2] = np.inf, np.nan, 0.0
+    got = {}
+    for compiled in (True, False) if superposition.COMPILED else (False,):
+        monkeypatch.setattr(superposition, "COMPILED", compiled)
+        got[compiled] = superpose(F, per_node)
+    first = next(iter(got.values()))
+    for v in got.values():
+        assert np.array_equal(v, first, equal_nan=True)
 
 
 def test_equivalent_of_a_view_equals_contiguous() -> None:
