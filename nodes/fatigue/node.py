@@ -150,6 +150,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         if tr.steps.full or tr.done:
             if tr.live is None:
                 tr.live = LiveFatigue(tr.cfg, tr.columns(tr.steps.fields), L,
+                                      screen=tr.cfg.screen or None,
                                       total_samples=None if adaptive else n_steps + 1)
             with alive_while_busy(part, k, t):
                 tr.live.update(*tr.steps.take())

@@ -37,20 +37,26 @@ Per block of loads (the previous block's last sample included):
    [LO, HI] has σm <= HI - a, so on a grid a_j = j A / K (A = (HI - LO) / 2) every cycle has
    d <= Δ · max_j d(a_(j+1), HI - a_j) / (2 a_(j+1)) =: Δ · g, and D <= g (TV + (HI - LO)/2).
 
-The bound is rigorous for every history (the tests check it against exact counts); it is not
-tight (it takes every cycle as large as the largest one can be), which only costs how many
-nodes are screened out, never a wrong result. Rounding: the bound is raised by
-:data:`ROUNDING_MARGIN` (relative), far above the float error of its few sums.
+:meth:`StressScreen.block` computes it in numpy; :meth:`StressScreen.block_compiled` the same
+inequalities in numba (:mod:`.screen_bound`, without the Cauchy-Schwarz sum: ~1.8 ns per
+node-sample for 25-sample sub-blocks against 11-14 for the exact path), which the engine
+uses where numba is installed. The bound is rigorous for every history (the tests check it
+against exact counts); it is not tight (it takes every cycle as large as the largest one
+can be), which only costs how many nodes are screened out, never a wrong result. Rounding:
+the bound is raised by :data:`ROUNDING_MARGIN` (relative), far above the float error of its
+few sums.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .counting import COMPILED
 from .damage import cycle_reversals, sn_curve
 from .equivalent_stress import principal_extremes, von_mises
 from .life_models import SNCurve
 from .material import Material
+from .screen_bound import NodeTables, load_stats
 
 SCREEN_FRACTION = 1e-2
 """Suggested screening fraction f (screening is off unless asked for: ``screen=`` of
@@ -137,14 +143,52 @@ class StressScreen:
         self.kind = equivalent
         self.Q = np.diag(_FROB) if equivalent == "abs_max_principal" else _VM
         self.NA = self._norms(C)  # N(A_c) per case and node
-        self.G = np.einsum("cni,ij,dnj->ncd", C, self.Q, C).reshape(self.n, -1)
-        """N(Σ_c A_c x_c)² = xᵀ G x per node (n, cases²)."""
+        self._G: np.ndarray | None = None
         self.V: np.ndarray | None = None
         self.CV = self.NAV = np.zeros(0)
+        self._tables: NodeTables | None = self._new_tables() if COMPILED else None
+
+    @property
+    def G(self) -> np.ndarray:
+        """N(Σ_c A_c x_c)² = xᵀ G x per node (n, cases²) (the numpy bound's Cauchy-Schwarz
+        sum; computed when first needed)."""
+        if self._G is None:
+            self._G = np.einsum("cni,ij,dnj->ncd", self.C, self.Q, self.C).reshape(self.n, -1)
+        return self._G
+
+    def _new_tables(self) -> NodeTables:
+        """The compiled bound's node table (its principal-axes part once they are set)."""
+        t = NodeTables(self.C, self.NA, self.abs_tr3)
+        if self.V is not None:
+            t.set_axes(self.CV, self.NAV)
+        return t
+    def __getstate__(self) -> dict:
+        """Pickled without the compiled bound's tables (rebuilt when next needed)."""
+        return {**self.__dict__, "_tables": None}
+
+    def block_compiled(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int,
+                       probe: np.ndarray | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`block` (the same inequalities, not the same bits) by the numba kernel of
+        :mod:`.screen_bound` (per node ~22 floating-point operations per sample), the
+        nodes ``idx`` kept in its slots between calls (the left-out set); ``probe``: more
+        nodes (gathered for this call), their results after idx's."""
+        if self.V is None:
+            self.set_axes(Fe)
+        if self._tables is None:
+            self._tables = self._new_tables()
+        assert self.V is not None
+        stats = load_stats(np.asarray(Fe, dtype=float), self.V, sub_samples)
+        vm = self.kind != "abs_max_principal"
+        out = self._tables.bounds_kept(stats, idx, vm)
+        if probe is None or probe.size == 0:
+            return out
+        more = self._tables.bounds(stats, probe, vm)
+        return tuple(np.concatenate([a, b]) for a, b in zip(out, more, strict=True))
 
     def _norms(self, C: np.ndarray) -> np.ndarray:
         """N of each case's stress tensor per node: (cases, n)."""
-        return np.sqrt(np.maximum(np.einsum("mni,ij,mnj->mn", C, self.Q, C), 0.0))
+        return np.sqrt(np.maximum(((C @ self.Q) * C).sum(axis=2), 0.0))
 
     def set_axes(self, F: np.ndarray) -> None:
         """Principal axes of a block of loads (the first): correlated loads (joint loads in
@@ -153,8 +197,10 @@ class StressScreen:
         X = X - X.mean(axis=0)
         _, V = np.linalg.eigh(X.T @ X)
         self.V = V
-        self.CV = np.einsum("cm,cnj->mnj", V, self.C)
+        self.CV = np.tensordot(V, self.C, axes=(0, 0))  # (axes, n, 6)
         self.NAV = self._norms(self.CV)
+        if self._tables is not None:
+            self._tables.set_axes(self.CV, self.NAV)
 
     def block(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -219,17 +265,20 @@ class StressScreen:
 
 
 def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, method: str,
-                 mean_stress: str, endurance: str | bool | None) -> np.ndarray:
+                 mean_stress: str, endurance: str | bool | None,
+                 g: np.ndarray | None = None) -> np.ndarray:
     """Upper bound of each node's damage (residue closed, either mode) from its envelope
     [lo, hi] and total variation tv over the history: g (TV + (HI - LO)/2), raised by the
-    rounding margin; inf where the envelope is not finite."""
+    rounding margin; inf where the envelope is not finite. ``g``: :func:`damage_per_range`
+    of this envelope when already known (1/Pa, per node)."""
     hi = np.asarray(hi, dtype=float)
     lo = np.asarray(lo, dtype=float)
     out = np.full(hi.shape, np.inf)
     seen = np.isfinite(hi) & np.isfinite(lo)
     if not seen.any():
         return out
-    g = damage_per_range(hi[seen], lo[seen], mat, method, mean_stress, endurance)
+    g = damage_per_range(hi[seen], lo[seen], mat, method, mean_stress, endurance) \
+        if g is None else np.asarray(g)[seen]
     with np.errstate(invalid="ignore"):
         U = g * (tv[seen] + 0.5 * (hi[seen] - lo[seen]))
     out[seen] = np.where(np.isnan(U), np.inf, U) * (1.0 + ROUNDING_MARGIN) + 1e-300
@@ -242,6 +291,13 @@ FINE_SAMPLES = 25
 """Sub-block length of the second bound, for the left-out nodes the first one cannot keep
 out (the tighter envelope costs ~20 times the first bound per node)."""
 DROP_MARGIN = 0.5
+PROJECTED_MARGIN = 0.3
+PROBE_SAMPLES = 2000
+"""A candidate computed node's bound is measured (:attr:`Screening.rate`) until it has
+seen this many samples; then its rate is taken as known."""
+"""A candidate to leave out is left out only when its bound projected to the end of the run
+(its bound's variation per sample, :attr:`Screening.rate`, times the samples left) stays
+below this share of the threshold projected alike (grown in proportion to the samples)."""
 """A computed node is left out only when its bound is below this share of the threshold: its
 bound grows faster once it is no longer computed exactly (hysteresis: fewer catch-ups)."""
 
@@ -280,16 +336,40 @@ class Screening:
         self.history: list[np.ndarray] = []
         self._prev: np.ndarray | None = None
         self.caught_up = 0
+        self.g = np.zeros(n)
+        self.g_at = np.full((2, n), np.nan)
+        """The envelopes (hi, lo) at which :attr:`g` was computed (NaN: not yet)."""
+        self.rate_tv = np.zeros(n)
+        self.rate_n = np.zeros(n)
+        self.probe = np.arange(n)
+        """Computed nodes whose :attr:`rate` the next block measures (the candidates)."""
         """Nodes brought back so far (each recomputed from where it was left out)."""
 
     def _u(self, idx: np.ndarray | slice, hi: np.ndarray, lo: np.ndarray,
            tv: np.ndarray) -> np.ndarray:
         return self.d0[idx] + damage_bound(hi, lo, tv, *self.law)
 
-    def bound(self, idx: np.ndarray | None = None) -> np.ndarray:
-        """U of nodes ``idx`` (all when None)."""
-        s = slice(None) if idx is None else idx
-        return self._u(s, self.hi[s], self.lo[s], self.tv_r[s])
+    def bound(self, idx: np.ndarray | None = None, tv: np.ndarray | None = None
+              ) -> np.ndarray:
+        """U of nodes ``idx`` (all when None), or with variation ``tv`` instead of theirs;
+        g of their envelope from :meth:`_g`."""
+        s = np.arange(self.hi.size) if idx is None else idx
+        return self.d0[s] + damage_bound(self.hi[s], self.lo[s],
+                                         self.tv_r[s] if tv is None else tv, *self.law,
+                                         g=self._g(s))
+
+    def _g(self, idx: np.ndarray) -> np.ndarray:
+        """:func:`damage_per_range` of nodes ``idx``'s envelopes, recomputed only where an
+        envelope changed since (most left-out nodes' envelopes stop growing early)."""
+        stale = idx[(self.hi[idx] != self.g_at[0, idx]) | (self.lo[idx] != self.g_at[1, idx])]
+        if stale.size:
+            h, lo = self.hi[stale], self.lo[stale]
+            ok = np.isfinite(h) & np.isfinite(lo)
+            g = np.full(stale.size, np.inf)
+            g[ok] = damage_per_range(h[ok], lo[ok], *self.law)
+            self.g[stale] = g
+            self.g_at[:, stale] = h, lo
+        return self.g[idx]
 
     def envelope(self, idx: np.ndarray, hi: np.ndarray, lo: np.ndarray) -> None:
         """A block's exact extremes of the equivalent stress of computed nodes ``idx``."""
@@ -302,26 +382,57 @@ class Screening:
         self.tv_r[idx] = residue_tv
 
     def add_block(self, F: np.ndarray, left_out: np.ndarray) -> None:
-        """Keep the block; bound it for the nodes ``left_out``: coarsely, then finely where
-        the coarse bound would reach the threshold."""
+        """Keep the block; bound it for the nodes ``left_out`` (compiled: the fine bound at
+        once, :mod:`.screen_bound`; numpy: coarsely, then finely where the coarse bound
+        would reach the threshold), and for the computed nodes to probe (:meth:`decide`)
+        their bound's variation per sample over this block (:attr:`rate`)."""
         F = np.asarray(F, dtype=float)
         Fe = F if self._prev is None else np.vstack([self._prev, F])
         self._prev = F[-1].copy()
         self.history.append(F.copy())
         self.samples += F.shape[0]
-        if left_out.size == 0:
+        probe, self.probe = self.probe, np.zeros(0, dtype=np.int64)
+        if left_out.size + probe.size == 0:
             return
-        hi, lo, tv = self.bounds.block(Fe, left_out, COARSE_SAMPLES)
-        U = self._u(left_out, np.maximum(self.hi[left_out], hi),
-                    np.minimum(self.lo[left_out], lo), self.tv_r[left_out] + tv)
+        if COMPILED:
+            hi, lo, tv = self.bounds.block_compiled(Fe, left_out, SUB_SAMPLES, probe)
+            k = left_out.size
+            self._rate(probe, tv[k:], F.shape[0])
+            hi, lo, tv = hi[:k], lo[:k], tv[:k]
+        else:
+            if probe.size:
+                self._rate(probe, self.bounds.block(Fe, probe, FINE_SAMPLES)[2], F.shape[0])
+            hi, lo, tv = self._numpy_bound(Fe, left_out)
+        self._rate(left_out, tv, F.shape[0])
+        self.envelope(left_out, hi, lo)
+        self.tv_r[left_out] += tv
+
+    def _rate(self, idx: np.ndarray, tv: np.ndarray, samples: int) -> None:
+        """Add a block's variation bounds ``tv`` (Pa) of nodes ``idx`` to their rate."""
+        self.rate_tv[idx] += tv
+        self.rate_n[idx] += samples
+
+    @property
+    def rate(self) -> np.ndarray:
+        """Per node: its bound's variation per sample (Pa) over the blocks it was bounded
+        in (left out, or a candidate to be); NaN: never bounded yet."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(self.rate_n > 0, self.rate_tv / self.rate_n, np.nan)
+
+    def _numpy_bound(self, Fe: np.ndarray, idx: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(hi, lo, tv) of nodes ``idx`` in numpy: coarse, then fine where the coarse bound
+        would reach the threshold."""
+        hi, lo, tv = self.bounds.block(Fe, idx, COARSE_SAMPLES)
+        U = self._u(idx, np.maximum(self.hi[idx], hi), np.minimum(self.lo[idx], lo),
+                    self.tv_r[idx] + tv)
         near = np.nonzero(U >= self.threshold)[0]
         if near.size:
-            hf, lf, tf = self.bounds.block(Fe, left_out[near], FINE_SAMPLES)
+            hf, lf, tf = self.bounds.block(Fe, idx[near], FINE_SAMPLES)
             hi[near] = np.minimum(hi[near], hf)
             lo[near] = np.maximum(lo[near], lf)
             tv[near] = np.minimum(tv[near], tf)
-        self.envelope(left_out, hi, lo)
-        self.tv_r[left_out] += tv
+        return hi, lo, tv
 
     def decide(self, active: np.ndarray, eq_max: np.ndarray, eq_min: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
@@ -334,18 +445,36 @@ class Screening:
         computed nodes' extremes of the equivalent stress: then it is not the critical node,
         not among the ten most damaged and below f of the largest damage, and the reported
         extremes are computed ones. A computed node is left out when it qualifies with
-        U < DROP_MARGIN T (hysteresis: its bound grows faster once it is left out)."""
+        U < DROP_MARGIN T (hysteresis: its bound grows faster once it is left out) and,
+        projected to the end of the run with its measured :attr:`rate` (probed while it
+        is a candidate), stays below PROJECTED_MARGIN times T grown in proportion to the
+        samples: a node brought back costs the replay of every block since (efficiency
+        only; what keeps a node out is the first rule)."""
         n = self.hi.size
         Da = self.d0[active]
         if Da.size >= TOP_NODES:
             d10 = float(np.partition(Da, Da.size - TOP_NODES)[Da.size - TOP_NODES])
             self.threshold = max(self.threshold, min(self.fraction * float(Da.max()), d10))
         T = self.threshold
-        U = self.bound()
         top, bottom = float(eq_max[active].max()), float(eq_min[active].min())
-        inside = (self.hi < top) & (self.lo > bottom)
         is_active = np.zeros(n, dtype=bool)
         is_active[active] = True
-        drop = np.nonzero(is_active & inside & (U < DROP_MARGIN * T))[0]
+        inside = (self.hi < top) & (self.lo > bottom)
+        # U only where it decides (U >= D0: a computed node above the margin stays)
+        need = np.nonzero(~is_active | (inside & (self.d0 < DROP_MARGIN * T)))[0]
+        U = np.full(n, np.inf)
+        U[need] = self.bound(need)
         back = np.nonzero(~is_active & ~(inside & (U < T)))[0]
+        cand = np.nonzero(is_active & inside & (U < DROP_MARGIN * T))[0]
+        # projected to the end of the run: left out only if it would likely stay out
+        # (a node brought back costs its replay: efficiency, never correctness)
+        left = (self.total - self.samples) if self.total else self.samples
+        rate = self.rate[cand]
+        drop = cand[~np.isnan(rate)]
+        if left > 0 and drop.size:
+            u_end = self.bound(drop, self.tv_r[drop] + rate[~np.isnan(rate)] * left)
+            t_end = T * (self.samples + left) / max(self.samples, 1)
+            drop = drop[u_end < PROJECTED_MARGIN * t_end]
+        probe = np.setdiff1d(cand, drop, assume_unique=True)
+        self.probe = probe[self.rate_n[probe] < PROBE_SAMPLES]
         return drop, back

@@ -22,7 +22,7 @@ import numpy as np
 
 from cosim.errors import ScenarioError
 
-from . import counting, superposition, turning_eq
+from . import counting, screen_bound, superposition, turning_eq
 from .config import BUILTIN_PART, STRUCTURED_ARM, FatigueConfig
 from .counting import COMPILED, Cycles, StreamingRainflow
 from .damage import cycle_damage
@@ -76,6 +76,7 @@ def warm_up() -> None:
         counting.build()
         superposition.build()
         turning_eq.build()
+        screen_bound.build()
 
 
 def load_influence(cfg: FatigueConfig) -> InfluenceSet:
@@ -262,30 +263,49 @@ class _Engine:
 
     def _catch_up(self, nodes: np.ndarray) -> None:
         """Bring left-out nodes back: from their state when they were left out, through
-        the blocks since (kept loads), exactly as if they had never been left out."""
+        the blocks since (kept loads), exactly as if they had never been left out. All of
+        them together, one engine call per kept block: a group joins the replay at the
+        block after the one it was left out at (a node's blocks in order, its cycles in the
+        order they close: the same bits as node by node)."""
         assert self.scr is not None
         want = np.zeros(self.inf.n_nodes, dtype=bool)
         want[nodes] = True
-        parts, cols, still = [self.rf], [self.cols], []
+        back: list[tuple[int, np.ndarray, StreamingRainflow]] = []
+        still = []
         for g in self.parked:
             m = want[g.nodes]
             if not m.any():
                 still.append(g)
                 continue
             pos, rest = np.nonzero(m)[0], np.nonzero(~m)[0]
-            ids, rf = g.nodes[pos], g.rf.take(pos)
+            ids = g.nodes[pos]
             self.scr.hi[ids], self.scr.lo[ids] = g.hi[pos], g.lo[pos]  # exact until then
-            for F in self.scr.history[g.block + 1:]:
-                self._exact(F, ids, rf)
-            self.scr.caught_up += ids.size
-            parts.append(rf)
-            cols.append(ids)
+            back.append((g.block, ids, g.rf.take(pos)))
             if rest.size:
                 still.append(_Parked(g.block, g.nodes[rest], g.rf.take(rest), g.hi[rest],
                                      g.lo[rest]))
         self.parked = still
-        self.rf = StreamingRainflow.join(parts)
-        self.cols = np.concatenate(cols)
+        back.sort(key=lambda b: b[0])
+        hist = self.scr.history
+        ids = np.zeros(0, dtype=np.int64)
+        rf: StreamingRainflow | None = None
+        i = 0
+        for blk in range(back[0][0] + 1, len(hist) + 1):
+            new = []
+            while i < len(back) and back[i][0] < blk:
+                new.append(back[i])
+                i += 1
+            if new:
+                rf = StreamingRainflow.join(([rf] if rf is not None else [])
+                                            + [b[2] for b in new])
+                ids = np.concatenate([ids] + [b[1] for b in new])
+            if blk < len(hist):
+                assert rf is not None
+                self._exact(hist[blk], ids, rf)
+        assert rf is not None
+        self.scr.caught_up += ids.size
+        self.rf = StreamingRainflow.join([self.rf, rf])
+        self.cols = np.concatenate([self.cols, ids])
 
     def _add(self, cyc: Cycles, idx: np.ndarray, damage: np.ndarray, ncyc: np.ndarray,
              rmax: np.ndarray) -> None:

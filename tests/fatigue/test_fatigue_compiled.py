@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nodes.fatigue import counting, turning_eq, worker
+from nodes.fatigue import counting, screen_bound, turning_eq, worker
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.counting import StreamingRainflow, turning_points
 from nodes.fatigue.equivalent_stress import equivalent_of
@@ -265,13 +265,15 @@ def test_without_numba_the_numpy_path_and_the_same_bits(monkeypatch) -> None:
         assert np.array_equal(getattr(compiled, f), getattr(fallback, f), equal_nan=True)
 
 
-def test_live_fatigue_pickles_and_continues_with_the_same_bits() -> None:
-    """The lead's checkpoints pickle LiveFatigue: plain data (no compiled objects)."""
+@pytest.mark.parametrize("screen", [None, 0.1])
+def test_live_fatigue_pickles_and_continues_with_the_same_bits(screen) -> None:
+    """The lead's checkpoints pickle LiveFatigue: plain data (no compiled objects; screened:
+    the compiled bound's tables are rebuilt after loading)."""
     cfg = FatigueConfig.from_dict({**COARSE, "block_samples": 200})
     t, loads = pave_like_loads(2.0, seed=7, static_n=6000, rms_n=4000)
     names = list(loads)
     arr = np.stack([loads[c] for c in names], axis=1)
-    live = worker.LiveFatigue(cfg, names, 40.0)
+    live = worker.LiveFatigue(cfg, names, 40.0, screen=screen, total_samples=t.size)
     half = 600
     for i in range(0, half, 200):
         live.update(t[i:i + 200], arr[i:i + 200])
@@ -291,12 +293,19 @@ def test_kernels_compiled_before_the_first_block_not_in_the_step_loop() -> None:
     influence does (the live node: before ready); a block of the worker's types adds no
     specialisation (no compile later)."""
     worker.load_influence(FatigueConfig.from_dict(COARSE))
-    kernels = (turning_eq._keep_gather, turning_eq._root1, counting._rainflow_packed)
+    kernels = (turning_eq._keep_gather, turning_eq._root1, counting._rainflow_packed,
+               screen_bound._bound_slots, screen_bound._bound_nodes)
     before = [len(k.signatures) for k in kernels]
-    assert before == [1, 1, 1]
+    assert before == [1, 1, 1, 1, 1]
     comp = _random_tensors(np.random.default_rng(1), 8, 100)
     vals, counts = turning_eq.kept_equivalent(comp, 100, "abs_max_principal")
     StreamingRainflow(8).feed_packed(vals, counts, vals[np.cumsum(counts) - 1])
+    from nodes.fatigue.screening import StressScreen
+
+    inf = worker.load_influence(FatigueConfig.from_dict(COARSE))
+    scr = StressScreen(inf.coefficients, "abs_max_principal")
+    F = np.random.default_rng(2).normal(size=(120, len(inf.case_names)))
+    scr.block_compiled(F, np.arange(40), 25, probe=np.arange(40, 50))
     assert [len(k.signatures) for k in kernels] == before
     assert turning_eq.COMPILED and counting.COMPILED and worker.ENGINE == "compiled"
 

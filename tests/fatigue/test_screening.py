@@ -24,9 +24,11 @@ def _cache(tmp_path_factory, monkeypatch):
     monkeypatch.setenv("SUSCOSIM_CACHE", str(tmp_path_factory.getbasetemp() / "cache"))
 
 
+@pytest.mark.parametrize("how", ["block", "block_compiled"])
 @pytest.mark.parametrize("kw", [{}, {"equivalent": "signed_von_mises", "mean_stress": "swt",
                                      "residue": "half_cycles"}])
-def test_the_bound_is_above_the_exact_envelope_variation_and_damage(kw):
+def test_the_bound_is_above_the_exact_envelope_variation_and_damage(kw, how):
+    """In numpy and compiled (screen_bound: the same inequalities, other bits)."""
     cfg = FatigueConfig.from_dict({**COARSE, **kw})
     inf = load_influence(cfg)
     t, loads = pave_like_loads(1.5, seed=4, static_n=6000, rms_n=4000)
@@ -38,7 +40,7 @@ def test_the_bound_is_above_the_exact_envelope_variation_and_damage(kw):
     prev = None
     for i in range(0, t.size, 200):  # blocks with the previous sample first
         Fe = F[i:i + 200] if prev is None else np.vstack([prev, F[i:i + 200]])
-        h, lo_b, v = scr.block(Fe, idx, 25)
+        h, lo_b, v = getattr(scr, how)(Fe, idx, 25)
         hi, lo, tv, prev = np.maximum(hi, h), np.minimum(lo, lo_b), tv + v, F[i:i + 200][-1]
     assert np.all(hi >= e.max(0)) and np.all(lo <= e.min(0))
     assert np.all(tv >= np.abs(np.diff(e, axis=0)).sum(0))
@@ -121,3 +123,32 @@ def test_screened_equals_unscreened_on_a_ch6_pave_run_of_the_cad_arm(tmp_path):
         np.testing.assert_array_equal(res_s.damage[~out], ref.damage[~out])
         assert np.all(res_s.damage[out] >= ref.damage[out])
         assert np.all(ref.damage[out] < 0.01 * ref.max_damage)
+
+
+def test_compiled_bound_of_kept_slots_equals_the_gathered_one_as_the_set_changes():
+    """screen_bound.NodeTables.bounds_kept (the left-out nodes' columns kept in slots between
+    blocks, nodes leaving and joining) gives each node the bound bounds() gathers for it, bit
+    for bit (a node's lanes never mix with another's)."""
+    pytest.importorskip("numba")
+    from nodes.fatigue.screen_bound import load_stats
+
+    cfg = FatigueConfig.from_dict(COARSE)
+    inf = load_influence(cfg)
+    t, loads = pave_like_loads(0.6, seed=3, static_n=6000, rms_n=4000)
+    F = np.stack([loads.get(f"plant/arm/{c}", np.zeros(t.size)) for c in inf.case_names], 1)
+    scr = StressScreen(inf.coefficients, cfg.equivalent)
+    scr.block_compiled(F[:100], np.arange(5), 25)  # axes set, tables built
+    tables = scr._tables
+    assert tables is not None and scr.V is not None
+    rng = np.random.default_rng(7)
+    idx = np.sort(rng.choice(inf.n_nodes, inf.n_nodes // 2, replace=False))
+    for i in range(0, 300, 60):
+        stats = load_stats(F[i:i + 61], scr.V, 25)
+        got = tables.bounds_kept(stats, idx, False)
+        ref = tables.bounds(stats, idx, False)
+        for a, b in zip(got, ref, strict=True):
+            np.testing.assert_array_equal(a, b)
+        assert sorted(tables.slot_node.tolist()) == sorted(idx.tolist())
+        keep = rng.random(idx.size) > 0.2  # some leave, others join (in any order)
+        idx = np.union1d(idx[keep], rng.choice(inf.n_nodes, 40, replace=False))
+        idx = rng.permutation(idx)

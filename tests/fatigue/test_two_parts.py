@@ -79,8 +79,9 @@ def test_two_parts_live_equal_batch_and_a_users_upper_arm_part(tmp_path, monkeyp
     run = tmp_path / "run"
     res = suscosim("run", str(SCENARIO), "--mode", "distributed", "--quiet", "--out", str(run),
                    "--set", "road.length_m=3", "--set", "fatigue.block_samples=97",
-                   "--set", f'fatigue.influence="{link}"',
-                   "--set", f'fatigue.parts=["{upper}"]', timeout=300)
+                   "--set", f'fatigue.influence="{link}"', "--set", "fatigue.screen=0",
+                   "--set", f'fatigue.parts=["{upper}"]', timeout=300)  # unscreened:
+    # every node live == batch, byte for byte (screened: tests/fatigue/test_live_node.py)
     assert res.returncode == 0, res.stdout + res.stderr
     run_summary = json.loads((run / "summary.json").read_text())
     assert run_summary["fatigue"]["parts"]["upper_arm"]["files"] == str(run / "fatigue"
