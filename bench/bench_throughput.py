@@ -7,7 +7,7 @@ Wall-clock throughput depends on what else the 2 cores are doing; CPU per step (
 processes, user + system, startup subtracted) is the steadier number.
 
     python bench/bench_throughput.py [--repeats 3] [--t-end 8] [--pin auto|on|off]
-                                     [--no-lowlatency] [--exchange sequential|parallel]
+                                     [--lowlatency] [--exchange sequential|parallel]
 """
 
 from __future__ import annotations
@@ -46,14 +46,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--t-end", type=float, default=8.0)
-    ap.add_argument("--no-lowlatency", action="store_true",
-                    help="Zenoh's universal transport instead of the low-latency default")
+    ap.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
+                    help="Zenoh's low-latency transport (suscosim run --lowlatency; default: "
+                         "the run's default, universal since it could wedge a start)")
     ap.add_argument("--pin", choices=["auto", "on", "off"], default="auto",
                     help="CPU placement of the node processes (suscosim run --pin)")
     ap.add_argument("--exchange", choices=["sequential", "parallel"], action="append",
                     help="exchange order(s) to measure (default both)")
     args = ap.parse_args()
-    extra = (["--no-lowlatency"] if args.no_lowlatency else []) + ["--pin", args.pin]
+    extra = ([] if args.lowlatency is None else
+             ["--lowlatency" if args.lowlatency else "--no-lowlatency"]) + ["--pin", args.pin]
     _, _, cpu0 = one_run(0.001, "sequential", extra)  # startup cost: imports, sessions, barrier
     n = round(args.t_end / 0.001)
     load = os.getloadavg()[0]

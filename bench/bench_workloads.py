@@ -98,6 +98,9 @@ def _sample(pid: int) -> tuple[str, float, int] | None:
 SETS: list[str] = []
 """``--set`` overrides for every run (``--set`` of this bench)."""
 
+RUN_ARGS: list[str] = []
+"""Options of ``suscosim run`` for every run (``--lowlatency`` of this bench)."""
+
 
 def one_run(scenario: str, fatigue: bool | None, t_end: float) -> dict:
     """Run once; steps/s from summary.json and per-process CPU / peak RSS."""
@@ -106,6 +109,7 @@ def one_run(scenario: str, fatigue: bool | None, t_end: float) -> dict:
                "--quiet", "--set", f"run.t_end={t_end}"]
         for kv in SETS:
             cmd += ["--set", kv]
+        cmd += RUN_ARGS
         if fatigue is not None:
             cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
         proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL,
@@ -181,15 +185,20 @@ def main() -> int:
                     help="a scenario override for every workload run (e.g. "
                          "'fatigue.influence=\"builtin:structured\"': the hand-meshed arm "
                          "#28's fatigue bar was set on)")
+    ap.add_argument("--lowlatency", action="store_true",
+                    help="the runs on Zenoh's low-latency transport (suscosim run "
+                         "--lowlatency; off by default since it could wedge a start)")
     args = ap.parse_args()
     SETS[:] = args.set
+    RUN_ARGS[:] = ["--lowlatency"] if args.lowlatency else []
     rows = [r for r in args.rows.split(",") if r]
     bad = [r for r in rows if r not in ROWS]
     if bad:
         print(f"--rows: unknown {', '.join(bad)} (of {', '.join(ROWS)})", file=sys.stderr)
         return 2
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} CPUs, "
-          f"load {_load()}" + (f", --set {' '.join(SETS)}" if SETS else "") + "\n")
+          f"load {_load()}" + (f", --set {' '.join(SETS)}" if SETS else "")
+          + (" --lowlatency" if RUN_ARGS else "") + "\n")
     if "null" in rows:
         raw, proto = null_chain(args.repeats, args.null_steps)
         print(f"null chain, 5 processes, sequential: raw {raw:.0f}, protocol {proto:.0f} "

@@ -275,9 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
     zo.add_listen_argument(r, "endpoint the orchestrator listens on (default: a free loopback "
                               "port)", metavar=None)
     zo.add_lowlatency_argument(r, "Zenoh's low-latency transport for the run's sessions "
-                                  "(default: on for the embedded loopback mesh, off with "
-                                  "--connect or --zenoh-config; peers without it still "
-                                  "connect)", negatable=True)
+                                  "(default: off; ~15 %% faster, but a start can wedge: "
+                                  "docs/cosim.md; peers without it still connect)",
+                                  negatable=True)
     r.add_argument("--pin", choices=PIN_MODES, default="auto",
                    help="pin the local node processes to cores (auto: on machines of 2-4 "
                         "cores; see orchestrator/placement.py)")

@@ -235,6 +235,17 @@ def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes
     return au.derive_run_key(secret, run["id"])
 
 
+LOWLATENCY_DEFAULT = False
+"""Whether a run's sessions use Zenoh's low-latency transport when the command does not say
+(``suscosim run --lowlatency``). Off: with it, the embedded mesh's start wedged a session
+about once in 700 starts of five peers (``python bench/zenoh_join_stress.py``: 3 of ~2 000
+rounds; universal transport 0 of 3 000), a Zenoh deadlock under peer churn: a receive thread
+holding the routing lock forwards gossip link states with a blocking low-latency send that
+never completes (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim.md). In a run it was
+a node "not ready within 60 s" (twice in a few hundred runs of the test suite and the Ch 6
+sweep), ~1 CI run in 3. The price: ~15 % fewer coupled steps/s (docs/cosim.md)."""
+
+
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                  external: list[str] | None = None, quiet: bool = False,
                  zenoh_config_file: str | None = None, listen: list[str] | None = None,
@@ -242,8 +253,9 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     """Run a resolved scenario; write and return the summary. Raises SuscosimError on failure
     (after writing a ``failed`` summary).
 
-    ``lowlatency`` (Zenoh's low-latency transport; None: on for the embedded loopback mesh,
-    off through a router or with a user's Zenoh config file) cuts ~15 % off a coupled step.
+    ``lowlatency`` (Zenoh's low-latency transport; None: off) cut ~15 % off a coupled step,
+    but a run's peers joining at once over it wedged a session now and then (a node "not
+    ready within 60 s"): :data:`LOWLATENCY_DEFAULT`.
     ``pin_mode`` (``auto``, ``on``, ``off``) places the local node processes on cores (see
     :mod:`orchestrator.placement`).
 
@@ -270,7 +282,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
                 pin_mode: str) -> dict[str, Any]:
     """:func:`run_scenario` once the run folder is locked."""
     if lowlatency is None:
-        lowlatency = not connect and not zenoh_config_file
+        lowlatency = LOWLATENCY_DEFAULT
     run = scenario["run"]
     folder = Path(run["dir"])
     if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go

@@ -117,7 +117,8 @@ def test_a_plain_zenoh_session_taps_a_default_run(tmp_path) -> None:
     conf.insert_json5("scouting/multicast/enabled", "false")
     got: list[int] = []
     run = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
-                         endpoint, "--set", f"run.t_end={T_END}", "--set", 'run.id="plaintap"')
+                         endpoint, "--lowlatency", "--set", f"run.t_end={T_END}",
+                         "--set", 'run.id="plaintap"')
     try:
         _wait_for(out / "run.json", run)
         assert json.loads((out / "run.json").read_text())["lowlatency"] is True
