@@ -184,7 +184,8 @@ class StressScreen:
         if probe is None or probe.size == 0:
             return out
         more = self._tables.bounds(stats, probe, vm)
-        return tuple(np.concatenate([a, b]) for a, b in zip(out, more, strict=True))
+        return (np.concatenate([out[0], more[0]]), np.concatenate([out[1], more[1]]),
+                np.concatenate([out[2], more[2]]))
 
     def _norms(self, C: np.ndarray) -> np.ndarray:
         """N of each case's stress tensor per node: (cases, n)."""
