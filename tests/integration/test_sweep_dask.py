@@ -277,7 +277,12 @@ def test_dask_fatigue_in_a_shared_runs_dir_and_a_fatigue_only_rerun(tmp_path, cl
     again = json.loads((run_dir / "fatigue" / "summary.json").read_text())
     assert again.pop("source") == "batch" and fat.pop("source") == "live"  # node, then worker
     # the batch adds what only it computes (both S-N methods, pseudo-damage, the extra
-    # output files); everything the live node wrote is the same
+    # output files); everything the live node wrote is the same but its screening: the live
+    # node screens by default (fatigue.screen, docs/live_fatigue.md), the batch never, and
+    # the lives, critical node and ten most damaged nodes are the same either way
+    live_screen, batch_screen = fat.pop("screening"), again.pop("screening")
+    assert live_screen["fraction"] == 0.1 and live_screen["screened_nodes"] > 0
+    assert batch_screen["note"] == "off" and batch_screen["screened_nodes"] == 0
     assert set(fat) <= set(again)
     assert {k: again[k] for k in fat} == fat
     meta = json.loads((run_dir / "point.json").read_text())
