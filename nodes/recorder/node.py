@@ -29,7 +29,9 @@ same fields, each a number or a list of one length, as in the channel's first me
 Anything else is rejected and counted, never journaled: one ragged batch cannot make a
 complete journal unexportable. A second message for a step a channel already gave (a
 duplicate: a records batch replayed into the run, #30 item 12) is counted (``duplicates``,
-and as rejected), not journaled: a replay cannot fill the disk.
+and as rejected), not journaled: a replay cannot fill the disk. A hole in a channel's steps
+(a batch lost on the bus, or rejected, with later ones come) ends the run at once naming the
+steps and the producer (:func:`lost_steps`), not at the stall timeout.
 """
 
 from __future__ import annotations
@@ -116,11 +118,12 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     duplicates = 0
     settings = RunSettings.of(scenario)
     last: tuple[int, float] | None = None  # (k, t) of the run's last step, once known
+    gap: str | None = None  # why the run cannot complete: a records batch that never came
     fork = ForkLayouts((run_cfg.get("resume") or {}).get("fresh", ()), plan.start_k)
 
     def record(node: str, channel: str, raw: bytes, msg: Message | None = None) -> None:
         """Validate, journal and tabulate one data message of ``node/channel``."""
-        nonlocal duplicates, last
+        nonlocal duplicates, last, gap
         if msg is None:  # checked against its channel's schema (cosim/schema.py)
             try:
                 msg = codec(f"{node}/{channel}").decode(raw)
@@ -161,6 +164,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 part.reject((node, channel), wrong)
                 return
         steps.add(msg.k)
+        if gap is None and len(steps.lo) > 1:  # a producer sends in order: a hole is a loss
+            gap = lost_steps(node, name, steps)
         journal.append(name, raw)
         if name == STATE_CHANNEL and settings.is_last(msg.k, msg.t):
             last = (msg.k, msg.t)
@@ -268,6 +273,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             if batch is None:
                 continue
             feed(batch)
+            if gap is not None:
+                raise RunError(gap)
             last_data = time.monotonic()
             if n_steps is not None and expected:
                 k = done_k()
@@ -313,6 +320,20 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             table.abandon()
         raise _write_error(exc, folder) from None
     part.finish(n_steps, t_last, **result)
+
+
+def lost_steps(node: str, name: str, steps: StepSet) -> str:
+    """The run's error for the first hole in the steps channel ``name`` delivered.
+
+    A producer sends its records batches in step order on one publisher and Zenoh delivers
+    them reliably and in order, so steps missing below one that came were lost on the bus (a
+    whole batch: issue #28's dask sweep once lost plant steps 65-96) or rejected here (a
+    batch or message that did not verify or decode). Nothing sends them again; waiting for
+    the stall timeout would only hide which steps and whose batch."""
+    lo, hi = steps.hi[0], steps.lo[1] - 1
+    return (f"recorder: {name} steps {lo}-{hi} never arrived (a records batch of {node!r} "
+            f"was lost on the bus or rejected; its step {steps.lo[1]} came): the journal "
+            f"holds the steps before")
 
 
 def _live_residual(run_cfg: dict[str, Any], channels: set[str]) -> LiveResidual | None:

@@ -174,3 +174,24 @@ def test_implausible_messages_of_a_signed_records_batch_are_rejected_not_journal
     assert len(journal.records) == 2 * (n + 1)
     assert [raw for _, raw in journal.records] == [raw for _, raw in good]
     assert done["rejected"] == 3 and done["rows"] == n + 1
+
+
+def test_a_lost_records_batch_ends_the_run_naming_its_steps_and_the_journal_stays_readable(
+        tmp_path: Path) -> None:
+    """#28 follow-up: a sweep's recorder once never got plant steps 65-96 (one records batch
+    lost between the plant and the recorder) and waited for the 30 s stall timeout, saying
+    only "incomplete". Here the batch of steps 20-39 never comes: the recorder ends with an
+    error naming the channels' missing steps and the producer, as soon as the next batch
+    shows the hole, and what it journaled (steps 0-19 and the batch after the hole) reads."""
+    n = 100
+    rec = Recorder(tmp_path, n)
+    for k0 in (0, 40, 60):  # 20..39 lost
+        rec.bus.put(rec.records, rec.batch(k0, k0 + 20))
+    rec.thread.join(timeout=25)  # without the check: "no data for 10.0 s; incomplete: ..."
+    assert not rec.thread.is_alive(), "the recorder waited on instead of naming the hole"
+    err = rec.errors.get_nowait()
+    assert "plant/state steps 20-39 never arrived" in str(err) and "'plant'" in str(err)
+    journal = read_journal(tmp_path / "journal.msgpack")
+    steps = sorted({decode(raw).k for name, raw in journal.records if name == "plant/state"})
+    assert steps[:20] == list(range(20)) and 20 not in steps
+    rec.part.close()
