@@ -36,9 +36,10 @@ def _brackets(comp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     turning_eq.build()
     lo, hi = np.empty((k, n)), np.empty((k, n))
     out, counts = np.empty((6, n)), np.empty(1, dtype=np.int64)
+    w = np.empty((6, n))
     for i in range(k):
         one = np.ascontiguousarray(comp[:, i:i + 1, :])
-        turning_eq._keep_gather(one, n, out, 0, counts, lo[i], hi[i])
+        turning_eq._keep_gather(one, n, out, 0, counts, lo[i], hi[i], w)
     return lo, hi
 
 
