@@ -7,7 +7,8 @@ The nodes are the run's (plant, tyre_road, controller, recorder, fatigue: the fi
 or 5), each its own process started as the orchestrator starts them: a Zenoh peer session
 with the nodes' options (``cosim.bus.zenoh_config``: loopback, low-latency transport, link
 lease of a 30 s stall timeout), pinned to the core the run's placement gives it
-(``orchestrator.placement``) and then polling its input for ``PINNED_SPIN_US`` before it
+(``orchestrator.placement``; the recorder and the fatigue node in ``SCHED_IDLE``, as in a
+run) and then polling its input for ``PINNED_SPIN_US`` before it
 blocks, the fatigue node at ``nice +10``. This process is the orchestrator: the run's own
 :class:`orchestrator.clock.Clock` (start barrier, progress, done; steps/s is
 ``n_steps / step_wall_s``, as in summary.json). Per step, as nodes/plant/node.py,
@@ -94,8 +95,7 @@ class Chain:
     pinned and connected to this process's Zenoh session as the orchestrator does it."""
 
     def __init__(self, bus: Any, endpoint: str, count: int, pin: bool) -> None:
-        from orchestrator.placement import core_layout, usable_cores
-        from orchestrator.placement import pin as pin_to
+        from orchestrator.placement import core_layout, place, usable_cores
 
         spin_us, _ = _orchestrator_defaults()
 
@@ -109,8 +109,8 @@ class Chain:
                 [sys.executable, str(NODE_SCRIPT), name, "--connect", endpoint,
                  "--spin-us", str(spin)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                 text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
-            if name in cores and pin_to(p.pid, cores[name]):
-                self.cores[name] = cores[name]
+            if name in cores and place(p.pid, name, cores[name])[0]:
+                self.cores[name] = cores[name]  # the recorder and fatigue: SCHED_IDLE too
         for name, p in self.procs.items():
             line = _line(p)
             if line != "up":

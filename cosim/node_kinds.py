@@ -190,6 +190,12 @@ def core_index(name: str, n_cores: int) -> int:
     return cores[min(n_cores, 4) - 2]
 
 
+def off_critical_path(name: str) -> bool:
+    """Whether node ``name`` is off the coupled chain's critical path: every kind but the
+    coupled ones (and a name that is no kind); see :mod:`orchestrator.placement`."""
+    return name not in BY_NAME or BY_NAME[name].role != COUPLED
+
+
 # ---- implementations ----------------------------------------------------------------------
 def _importable_here() -> None:
     """A user's module is found as by ``python -m``: the working directory is on the path."""

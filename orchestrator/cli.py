@@ -34,7 +34,9 @@ def _print_summary(summary: dict) -> None:
           f"steps={summary['n_steps']}")
     print(f"  wall {summary['wall_s']:.2f} s, {summary['steps_per_s']:.0f} coupled steps/s")
     if summary.get("cores"):
-        print("  cores: " + ", ".join(f"{n} {c}" for n, c in summary["cores"].items()))
+        print("  cores: " + ", ".join(f"{n} {c}" for n, c in summary["cores"].items())
+              + (f" (in the background, SCHED_IDLE: {', '.join(summary['background'])})"
+                 if summary.get("background") else ""))
     chans = summary.get("channels", {})
     if chans:
         from cosim.formats import si_unit  # the units of the channel schema

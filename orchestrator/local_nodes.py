@@ -12,7 +12,7 @@ from pathlib import Path
 
 from cosim import auth as au
 
-from .placement import pin
+from .placement import place
 
 PINNED_SPIN_US = 200
 """How long a pinned node polls its input before blocking [us] (Participant.spin_s): +15 %
@@ -40,6 +40,7 @@ class LocalNodes:
                  run_key: bytes | None = None) -> None:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
+        self.background: list[str] = []  # the nodes put in SCHED_IDLE (placement.place)
         log_dir.mkdir(parents=True, exist_ok=True)
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         if run_key is not None:  # the run key, in the environment (readable by this user only)
@@ -61,9 +62,14 @@ class LocalNodes:
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)
             log.close()
-            # before its interpreter has started any thread: they all inherit the core
-            if core is not None and pin(self.procs[name].pid, core):
-                self.cores[name] = core
+            # before its interpreter has started any thread: they all inherit the core (and
+            # the scheduling class of a node off the critical path)
+            if core is not None:
+                pinned, idle = place(self.procs[name].pid, name, core)
+                if pinned:
+                    self.cores[name] = core
+                if idle:
+                    self.background.append(name)
 
     def dead(self) -> str | None:
         """A message naming a node process that exited with an error, if any."""

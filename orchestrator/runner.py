@@ -406,7 +406,8 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
     """How a distributed run's local processes talked and where they ran (for summary.json)."""
     if local is None:
         return {}
-    return {"lowlatency": bool(lowlatency), "cores": dict(local.cores)}
+    return {"lowlatency": bool(lowlatency), "cores": dict(local.cores),
+            "background": list(local.background)}
 
 
 __all__ = ["resolve", "run_scenario", "RunError"]

@@ -253,6 +253,12 @@ def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
     assert table is None or len(table["t"]) > 0
 
 
+def _policies_of_every_thread(pid: int) -> set[int]:
+    """The scheduling policy of each thread of a process (os.SCHED_*)."""
+    return {os.sched_getscheduler(int(task.name))
+            for task in Path(f"/proc/{pid}/task").iterdir()}
+
+
 def _cores_of_every_thread(pid: int) -> set[str]:
     """The Cpus_allowed_list of each thread of a process (Zenoh's threads included)."""
     out = set()
@@ -279,10 +285,18 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
             assert _cores_of_every_thread(pid) == {str(want[node])}, node
             argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
             assert "--spin-us" in argv, argv  # a pinned node polls before it blocks
+            # the recorder, off the coupled chain's critical path, in SCHED_IDLE (every
+            # thread); the coupled nodes in the normal class. Zenoh's two shared-memory
+            # watchdog threads put themselves in SCHED_FIFO where they may (as root)
+            want_policy = os.SCHED_IDLE if node == "recorder" else os.SCHED_OTHER
+            policies = _policies_of_every_thread(pid)
+            assert os.sched_getscheduler(pid) == want_policy, node
+            assert policies - {os.SCHED_FIFO} == {want_policy}, (node, policies)
     finally:
         proc.send_signal(signal.SIGTERM)
         proc.wait(timeout=30)
-    assert json.loads((out / "summary.json").read_text())["cores"] == want
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["cores"] == want and summary["background"] == ["recorder"]
 
 
 def test_sigterm_to_the_orchestrator_ends_the_run_with_a_failed_summary(tmp_path, ch3_step):

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import pytest
 
 from cosim import channels as ch
-from orchestrator.placement import AUTO_MAX_CORES, core_layout, should_pin
+from orchestrator.placement import AUTO_MAX_CORES, core_layout, place, should_pin
 
 NODES = [*ch.NODES, ch.FATIGUE]
 
@@ -36,3 +40,22 @@ def test_auto_pins_only_small_machines() -> None:
     assert not should_pin("off", [0, 1])
     with pytest.raises(ValueError, match="auto, on, off"):
         should_pin("sometimes", [0, 1])
+
+
+@pytest.mark.parametrize(("name", "idle"), [("plant", False), ("tyre_road", False),
+                                            ("controller", False), ("recorder", True),
+                                            ("fatigue", True), ("probe", True)])
+def test_place_pins_and_puts_only_nodes_off_the_critical_path_in_sched_idle(
+        name: str, idle: bool) -> None:
+    """A real child process: pinned to the core, and in SCHED_IDLE exactly when the node is
+    no coupled kind (the recorder, the fatigue node, a name that is no kind)."""
+    core = sorted(os.sched_getaffinity(0))[-1]
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        assert place(child.pid, name, core) == (True, idle)
+        assert os.sched_getaffinity(child.pid) == {core}
+        want = os.SCHED_IDLE if idle else os.SCHED_OTHER
+        assert os.sched_getscheduler(child.pid) == want
+    finally:
+        child.kill()
+        child.wait()
