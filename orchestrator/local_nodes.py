@@ -12,7 +12,7 @@ from pathlib import Path
 
 from cosim import auth as au
 
-from .placement import place
+from .placement import BackgroundGuard, place
 
 PINNED_SPIN_US = 200
 """How long a pinned node polls its input before blocking [us] (Participant.spin_s): +15 %
@@ -41,6 +41,7 @@ class LocalNodes:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
         self.background: list[str] = []  # the nodes put in SCHED_IDLE (placement.place)
+        self.guard = BackgroundGuard()
         log_dir.mkdir(parents=True, exist_ok=True)
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         if run_key is not None:  # the run key, in the environment (readable by this user only)
@@ -70,6 +71,19 @@ class LocalNodes:
                     self.cores[name] = core
                 if idle:
                     self.background.append(name)
+
+    def check(self) -> str | None:
+        """On every tick of the clock: move a starved background node back to the normal
+        class (:class:`~orchestrator.placement.BackgroundGuard`, said on stderr), then
+        :meth:`dead`."""
+        if self.background:
+            alive = {n: self.procs[n].pid for n in self.background
+                     if self.procs[n].poll() is None}
+            for name in self.guard.check(alive):
+                print(f"suscosim: node '{name}' was starved of CPU in SCHED_IDLE (other "
+                      f"programs keep its core busy): back in the normal class",
+                      file=sys.stderr, flush=True)
+        return self.dead()
 
     def dead(self) -> str | None:
         """A message naming a node process that exited with an error, if any."""

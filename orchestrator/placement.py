@@ -33,9 +33,11 @@ arrears, so their results do not depend on when they run. Interleaved runs on th
 (docs/cosim.md, "Background listeners"): the corner with live fatigue 1 494 -> 1 824 and the
 lumped car 2 351 -> 2 904 coupled steps/s (medians of three), and the runs ended sooner too
 (the listeners kept up). The price: on a machine where other programs keep every core busy a
-``SCHED_IDLE`` listener gets almost nothing and can fall behind until the run stalls; such a
-machine is what ``--pin off`` is for (nothing pinned, nothing in ``SCHED_IDLE``; the fatigue
-node's own ``nice +10`` stays).
+``SCHED_IDLE`` listener gets almost nothing and could fall behind until the run stalls. So
+the orchestrator moves a starved listener back to the normal class for the rest of
+the run (:class:`BackgroundGuard`: its main thread waited, runnable, for more than half of
+two seconds; summary.json ``background_starved``), and ``--pin off`` keeps everything in the
+normal class from the start (the fatigue node's own ``nice +10`` stays).
 
 ``auto`` pins on machines of 2 to ``AUTO_MAX_CORES`` usable cores, where the processes must
 share cores anyway; on a bigger machine the scheduler keeps each process on a core of its own
@@ -46,6 +48,7 @@ several jobs starts its runs with ``--pin off``).
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Iterable
 
 from cosim import node_kinds as nk
@@ -98,6 +101,70 @@ def place(pid: int, name: str, core: int) -> tuple[bool, bool]:
     if not pin(pid, core):
         return False, False
     return True, nk.off_critical_path(name) and background(pid)
+
+
+STARVED_WINDOW_S = 2.0
+"""How long [s] a background node's waiting is measured over (:class:`BackgroundGuard`)."""
+STARVED_FRACTION = 0.5
+"""A background node whose main thread waited on its core's run queue for more than this
+fraction of :data:`STARVED_WINDOW_S` is starved: it had work and did not get the core."""
+
+
+def run_queue_wait_s(pid: int) -> float | None:
+    """How long [s] the main thread of process ``pid`` has waited on a run queue, runnable
+    but not running (``/proc/PID/schedstat``, second field); None where it cannot be read."""
+    try:
+        with open(f"/proc/{pid}/schedstat") as f:
+            return int(f.read().split()[1]) * 1e-9
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def starved(waited_s: float, over_s: float, fraction: float = STARVED_FRACTION) -> bool:
+    """Whether a process that waited ``waited_s`` on a run queue during ``over_s`` of wall
+    time is starved (it waited more than ``fraction`` of it)."""
+    return over_s > 0 and waited_s > fraction * over_s
+
+
+def foreground(pid: int) -> bool:
+    """Move every ``SCHED_IDLE`` thread of process ``pid`` back to the normal class (its
+    nice value is kept); False if the process is gone or the OS refuses."""
+    try:
+        tids = [int(t) for t in os.listdir(f"/proc/{pid}/task")]
+        for tid in tids:
+            if os.sched_getscheduler(tid) == os.SCHED_IDLE:
+                os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        return True
+    except (AttributeError, OSError, ValueError):
+        return False
+
+
+class BackgroundGuard:
+    """Watches the ``SCHED_IDLE`` nodes of a run (:func:`place`) and moves one that is
+    starved (:func:`starved` over :data:`STARVED_WINDOW_S`: other programs keep its core
+    busy) back to the normal class for the rest of the run, so it cannot fall behind until
+    the run stalls. :meth:`check` on every tick of the clock."""
+
+    def __init__(self, window_s: float = STARVED_WINDOW_S) -> None:
+        self.window_s = window_s
+        self._since: dict[int, tuple[float, float]] = {}  # pid -> (t [s], run-queue wait [s])
+        self.moved: list[str] = []
+        """The nodes moved back to the normal class, in order."""
+
+    def check(self, pids: dict[str, int]) -> list[str]:
+        """Measure the background nodes ``{name: pid}``; the names moved back this call."""
+        now, moved = time.monotonic(), []
+        for name, pid in pids.items():
+            if name in self.moved or (wait := run_queue_wait_s(pid)) is None:
+                continue
+            t0, w0 = self._since.setdefault(pid, (now, wait))
+            if now - t0 < self.window_s:
+                continue
+            self._since[pid] = (now, wait)
+            if starved(wait - w0, now - t0) and foreground(pid):
+                self.moved.append(name)
+                moved.append(name)
+        return moved
 
 
 def pin(pid: int, core: int) -> bool:

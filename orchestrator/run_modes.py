@@ -25,7 +25,9 @@ class Nodes:
 
     bus: Bus
     dead: Callable[[], str | None]
-    """Why a node is gone (its process exited, its thread failed), or None."""
+    """Why a node is gone (its process exited, its thread failed), or None; called on every
+    tick of the clock (for local processes it also looks after the background nodes:
+    :meth:`LocalNodes.check`)."""
     local: LocalNodes | None = None
     """The local node processes of a distributed run."""
     threads: list[threading.Thread] = field(default_factory=list)
@@ -86,7 +88,7 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
         close_quietly(bus)
         raise InputFileError(str(exc.filename or folder / "logs"),
                              f"cannot write the node logs: {exc.strerror or exc}") from None
-    return Nodes(bus, local.dead, local=local)
+    return Nodes(bus, local.check, local=local)
 
 
 def monolithic(scenario: dict[str, Any], run_key: bytes, nonce: bytes) -> Nodes:

@@ -407,7 +407,8 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
     if local is None:
         return {}
     return {"lowlatency": bool(lowlatency), "cores": dict(local.cores),
-            "background": list(local.background)}
+            "background": list(local.background),
+            "background_starved": list(local.guard.moved)}
 
 
 __all__ = ["resolve", "run_scenario", "RunError"]

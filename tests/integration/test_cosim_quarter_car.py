@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -297,6 +299,33 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
         proc.wait(timeout=30)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["cores"] == want and summary["background"] == ["recorder"]
+
+
+def test_on_a_machine_kept_busy_the_starved_recorder_leaves_sched_idle_and_the_run_ends_ok(
+        tmp_path, ch3_step):
+    """A busy loop in the normal class on every usable core: the pinned recorder, in
+    SCHED_IDLE, would get almost no CPU and fall behind until the stall timeout. The
+    orchestrator's guard moves it back to the normal class (summary.json
+    ``background_starved``, a line on stderr) and the run ends ok with every row."""
+    cores = usable_cores()
+    if len(cores) < 2:
+        pytest.skip(f"pinning needs 2 usable cores, this machine has {len(cores)}")
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in cores]
+    try:
+        for hog, core in zip(hogs, cores, strict=True):
+            os.sched_setaffinity(hog.pid, {core})
+        out = tmp_path / "busy"
+        r = suscosim("run", str(ch3_step), "--out", str(out), "--quiet", "--pin", "on",
+                     "--set", "run.t_end=2.0", "--set", "run.stall_timeout_s=30.0")
+    finally:
+        for hog in hogs:
+            hog.kill()
+            hog.wait()
+    assert r.returncode == 0, r.stdout + r.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "ok" and summary["rows"] == 2001
+    assert summary["background"] == ["recorder"] == summary["background_starved"]
+    assert "node 'recorder' was starved of CPU in SCHED_IDLE" in r.stderr
 
 
 def test_sigterm_to_the_orchestrator_ends_the_run_with_a_failed_summary(tmp_path, ch3_step):

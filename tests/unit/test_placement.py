@@ -5,11 +5,20 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import pytest
 
 from cosim import channels as ch
-from orchestrator.placement import AUTO_MAX_CORES, core_layout, place, should_pin
+from orchestrator.placement import (
+    AUTO_MAX_CORES,
+    BackgroundGuard,
+    core_layout,
+    place,
+    should_pin,
+    starved,
+)
 
 NODES = [*ch.NODES, ch.FATIGUE]
 
@@ -59,3 +68,43 @@ def test_place_pins_and_puts_only_nodes_off_the_critical_path_in_sched_idle(
     finally:
         child.kill()
         child.wait()
+
+
+def test_starved_is_waiting_on_the_run_queue_for_more_than_half_the_window() -> None:
+    assert starved(1.1, 2.0) and not starved(0.9, 2.0) and not starved(0.0, 0.0)
+    assert starved(0.3, 1.0, fraction=0.2)
+
+
+def _busy(core: int) -> subprocess.Popen:
+    child = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    os.sched_setaffinity(child.pid, {core})
+    return child
+
+
+def test_a_starved_background_node_goes_back_to_the_normal_class_and_a_fed_one_stays() -> None:
+    """Real processes on one core: a busy loop in SCHED_IDLE next to a busy loop in the
+    normal class waits on the run queue nearly all the time: the guard moves it back to the
+    normal class (every thread). A SCHED_IDLE process that sleeps, on the same core, stays."""
+    core = sorted(os.sched_getaffinity(0))[-1]
+    hog, idle_busy = _busy(core), _busy(core)
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; print('up', flush=True); "
+                                "time.sleep(60)"], stdout=subprocess.PIPE, text=True)
+    try:
+        assert sleeper.stdout is not None and sleeper.stdout.readline() == "up\n"
+        while Path(f"/proc/{sleeper.pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "S":
+            time.sleep(0.01)  # in its sleep before it shares the busy core: it needs no CPU
+        assert place(idle_busy.pid, "recorder", core) == (True, True)
+        assert place(sleeper.pid, "fatigue", core) == (True, True)
+        guard = BackgroundGuard(window_s=0.5)
+        pids = {"recorder": idle_busy.pid, "fatigue": sleeper.pid}
+        deadline = time.monotonic() + 30  # a bound on a hang, not a timing assertion
+        while not guard.moved and time.monotonic() < deadline:
+            guard.check(pids)
+            time.sleep(0.1)
+        assert guard.moved == ["recorder"]
+        assert os.sched_getscheduler(idle_busy.pid) == os.SCHED_OTHER
+        assert os.sched_getscheduler(sleeper.pid) == os.SCHED_IDLE
+    finally:
+        for p in (hog, idle_busy, sleeper):
+            p.kill()
+            p.wait()
