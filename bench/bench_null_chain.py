@@ -95,7 +95,8 @@ class Chain:
     pinned and connected to this process's Zenoh session as the orchestrator does it."""
 
     def __init__(self, bus: Any, endpoint: str, count: int, pin: bool) -> None:
-        from orchestrator.placement import core_layout, place, usable_cores
+        from orchestrator.placement import background, core_layout, usable_cores
+        from orchestrator.placement import pin as pin_to
 
         spin_us, _ = _orchestrator_defaults()
 
@@ -109,12 +110,16 @@ class Chain:
                 [sys.executable, str(NODE_SCRIPT), name, "--connect", endpoint,
                  "--spin-us", str(spin)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                 text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
-            if name in cores and place(p.pid, name, cores[name])[0]:
-                self.cores[name] = cores[name]  # the recorder and fatigue: SCHED_IDLE too
+            if name in cores and pin_to(p.pid, cores[name]):
+                self.cores[name] = cores[name]
         for name, p in self.procs.items():
             line = _line(p)
             if line != "up":
                 raise RuntimeError(f"null node {name} did not start ({line!r})")
+        from cosim import node_kinds as nk
+        for name in self.cores:  # as a run does once it has started
+            if nk.off_critical_path(name):
+                background(self.procs[name].pid)
         self.bus = bus
 
     def trial(self, i: int, n: int, exchange: str, wire: str,

@@ -83,7 +83,8 @@ class Clock:
     def __init__(self, bus: Bus, run: str, nodes: list[str], scenario: dict[str, Any],
                  on_progress: Callable[[int, int], None] | None = None,
                  check_processes: Callable[[], str | None] | None = None,
-                 auth: RunKey | None = None) -> None:
+                 auth: RunKey | None = None,
+                 on_started: Callable[[], None] | None = None) -> None:
         self.bus, self.run_id, self.scenario, self.auth = bus, run, scenario, auth
         self.status = {n: NodeStatus() for n in nodes}
         self.n_steps = int(scenario["run"]["n_steps"])
@@ -91,6 +92,8 @@ class Clock:
         self._adaptive = bool(scenario["run"].get("adaptive"))
         self.on_progress = on_progress or (lambda k, n: None)
         self.check_processes = check_processes or (lambda: None)
+        self.on_started = on_started or (lambda: None)
+        """Called once every node has the start (the run steps from then on)."""
         self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
         self.rejected = 0
         plan = NodeCheckpoints.of(scenario, keys.ORCHESTRATOR) if "dir" in scenario["run"] \
@@ -333,6 +336,7 @@ class Clock:
             if time.monotonic() - t_run > cfg["start_timeout_s"]:
                 self.abort("nodes did not start: " + ", ".join(
                     n for n, st in self.status.items() if not st.started))
+        self.on_started()
         stall = cfg["stall_timeout_s"]
         while not all(st.done for st in self.status.values()):
             self._pump(0.1)

@@ -11,8 +11,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from cosim import auth as au
+from cosim import node_kinds as nk
 
-from .placement import BackgroundGuard, place
+from .placement import BackgroundGuard, background, pin
 
 PINNED_SPIN_US = 200
 """How long a pinned node polls its input before blocking [us] (Participant.spin_s): +15 %
@@ -40,7 +41,7 @@ class LocalNodes:
                  run_key: bytes | None = None) -> None:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
-        self.background: list[str] = []  # the nodes put in SCHED_IDLE (placement.place)
+        self.background: list[str] = []  # the nodes put in SCHED_IDLE (go_background)
         self.guard = BackgroundGuard()
         log_dir.mkdir(parents=True, exist_ok=True)
         env = dict(os.environ, PYTHONUNBUFFERED="1")
@@ -63,14 +64,18 @@ class LocalNodes:
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)
             log.close()
-            # before its interpreter has started any thread: they all inherit the core (and
-            # the scheduling class of a node off the critical path)
-            if core is not None:
-                pinned, idle = place(self.procs[name].pid, name, core)
-                if pinned:
-                    self.cores[name] = core
-                if idle:
-                    self.background.append(name)
+            # before its interpreter has started any thread: they all inherit the core
+            if core is not None and pin(self.procs[name].pid, core):
+                self.cores[name] = core
+
+    def go_background(self) -> None:
+        """Once the run has started: put the pinned nodes off the coupled chain's critical
+        path (the recorder, the live fatigue node) in ``SCHED_IDLE``
+        (:mod:`orchestrator.placement`)."""
+        for name in self.cores:
+            if nk.off_critical_path(name) and self.procs[name].poll() is None \
+                    and background(self.procs[name].pid):
+                self.background.append(name)
 
     def check(self) -> str | None:
         """On every tick of the clock: move a starved background node back to the normal

@@ -26,18 +26,19 @@ A pinned node also polls its input for a short while before it blocks (``--spin-
 
 A pinned node off the coupled chain's critical path (the recorder, the live fatigue node:
 every kind but the coupled ones, :func:`cosim.node_kinds.off_critical_path`) runs in Linux's
-``SCHED_IDLE`` class (:func:`place`): it gets the cores when the coupled nodes wait for each
-other, and a coupled node that wakes takes its core back at once instead of waiting for the
-recorder's or the fatigue node's work to yield. Both take their inputs as they come, in
-arrears, so their results do not depend on when they run. Interleaved runs on the 2-core VM
-(docs/cosim.md, "Background listeners"): the corner with live fatigue 1 494 -> 1 824 and the
-lumped car 2 351 -> 2 904 coupled steps/s (medians of three), and the runs ended sooner too
-(the listeners kept up). The price: on a machine where other programs keep every core busy a
-``SCHED_IDLE`` listener gets almost nothing and could fall behind until the run stalls. So
-the orchestrator moves a starved listener back to the normal class for the rest of
-the run (:class:`BackgroundGuard`: its main thread waited, runnable, for more than half of
-two seconds; summary.json ``background_starved``), and ``--pin off`` keeps everything in the
-normal class from the start (the fatigue node's own ``nice +10`` stays).
+``SCHED_IDLE`` class from the run's start on (:func:`background`): it gets the cores when
+the coupled nodes wait for each other, and a coupled node that wakes takes its core back at
+once instead of waiting for the recorder's or the fatigue node's work to yield. Both take
+their inputs as they come, in arrears, so their results do not depend on when they run.
+Interleaved runs on the 2-core VM (docs/cosim.md, "Background listeners"): the corner with
+live fatigue 1 494 -> 1 824 and the lumped car 2 351 -> 2 904 coupled steps/s (medians of
+three), and the runs ended sooner too (the listeners kept up). The price: on a machine where
+other programs keep every core busy a ``SCHED_IDLE`` listener gets almost nothing and could
+fall behind until the run stalls. So the orchestrator moves a starved listener back to the
+normal class for the rest of the run (:class:`BackgroundGuard`: one of its threads waited,
+runnable, for more than half of two seconds; summary.json ``background_starved``), and
+``--pin off`` keeps everything in the normal class from the start (the fatigue node's own
+``nice +10`` stays).
 
 ``auto`` pins on machines of 2 to ``AUTO_MAX_CORES`` usable cores, where the processes must
 share cores anyway; on a bigger machine the scheduler keeps each process on a core of its own
@@ -84,70 +85,85 @@ def should_pin(mode: str, cores: list[int]) -> bool:
     return mode == "on" or len(cores) <= AUTO_MAX_CORES
 
 
-def background(pid: int) -> bool:
-    """Put process ``pid`` in the ``SCHED_IDLE`` scheduling class (its threads started later
-    inherit it); False where the OS has no such class or refuses."""
+def _threads(pid: int) -> list[int]:
+    """The thread ids of process ``pid`` (OSError if it is gone)."""
+    return [int(t) for t in os.listdir(f"/proc/{pid}/task")]
+
+
+def _set_class(pid: int, from_policy: int | None, to_policy: int) -> bool:
+    """Every thread of ``pid`` (in ``from_policy``; None: any but real-time) to ``to_policy``;
+    False if the process is gone, the OS refuses or has no such class."""
     try:
-        os.sched_setscheduler(pid, os.SCHED_IDLE, os.sched_param(0))
-        return True
-    except (AttributeError, OSError):
-        return False
-
-
-def place(pid: int, name: str, core: int) -> tuple[bool, bool]:
-    """Pin node process ``pid`` (node ``name``) to ``core`` and, if it is off the coupled
-    chain's critical path, put it in ``SCHED_IDLE`` (see the module's docstring): (pinned,
-    in the background). Call it before the process starts any thread."""
-    if not pin(pid, core):
-        return False, False
-    return True, nk.off_critical_path(name) and background(pid)
-
-
-STARVED_WINDOW_S = 2.0
-"""How long [s] a background node's waiting is measured over (:class:`BackgroundGuard`)."""
-STARVED_FRACTION = 0.5
-"""A background node whose main thread waited on its core's run queue for more than this
-fraction of :data:`STARVED_WINDOW_S` is starved: it had work and did not get the core."""
-
-
-def run_queue_wait_s(pid: int) -> float | None:
-    """How long [s] the main thread of process ``pid`` has waited on a run queue, runnable
-    but not running (``/proc/PID/schedstat``, second field); None where it cannot be read."""
-    try:
-        with open(f"/proc/{pid}/schedstat") as f:
-            return int(f.read().split()[1]) * 1e-9
-    except (OSError, IndexError, ValueError):
-        return None
-
-
-def starved(waited_s: float, over_s: float, fraction: float = STARVED_FRACTION) -> bool:
-    """Whether a process that waited ``waited_s`` on a run queue during ``over_s`` of wall
-    time is starved (it waited more than ``fraction`` of it)."""
-    return over_s > 0 and waited_s > fraction * over_s
-
-
-def foreground(pid: int) -> bool:
-    """Move every ``SCHED_IDLE`` thread of process ``pid`` back to the normal class (its
-    nice value is kept); False if the process is gone or the OS refuses."""
-    try:
-        tids = [int(t) for t in os.listdir(f"/proc/{pid}/task")]
-        for tid in tids:
-            if os.sched_getscheduler(tid) == os.SCHED_IDLE:
-                os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        for tid in _threads(pid):
+            try:
+                now = os.sched_getscheduler(tid)
+                if now == to_policy or (from_policy is not None and now != from_policy) \
+                        or now in (os.SCHED_FIFO, os.SCHED_RR):  # Zenoh's shm watchdogs
+                    continue
+                os.sched_setscheduler(tid, to_policy, os.sched_param(0))
+            except ProcessLookupError:  # a thread that ended meanwhile
+                continue
         return True
     except (AttributeError, OSError, ValueError):
         return False
 
 
+def background(pid: int) -> bool:
+    """Put every thread of process ``pid`` in the ``SCHED_IDLE`` class (threads it starts
+    later inherit it); False where the OS has no such class or refuses. The orchestrator does
+    it once the run has started (:meth:`LocalNodes.go_background`): at start-up every process
+    of a run wants the cores at once, and a node in ``SCHED_IDLE`` then could wait for its
+    core longer than the start timeout."""
+    return _set_class(pid, None, os.SCHED_IDLE) if hasattr(os, "SCHED_IDLE") else False
+
+
+def foreground(pid: int) -> bool:
+    """Move every ``SCHED_IDLE`` thread of process ``pid`` back to the normal class (its
+    nice value is kept); False if the process is gone or the OS refuses."""
+    if not hasattr(os, "SCHED_IDLE"):
+        return False
+    return _set_class(pid, os.SCHED_IDLE, os.SCHED_OTHER)
+
+
+STARVED_WINDOW_S = 2.0
+"""How long [s] a background node's waiting is measured over (:class:`BackgroundGuard`)."""
+STARVED_FRACTION = 0.5
+"""A background node one of whose threads waited on its core's run queue for more than this
+fraction of :data:`STARVED_WINDOW_S` is starved: it had work and did not get the core."""
+
+
+def run_queue_waits_s(pid: int) -> dict[int, float]:
+    """How long [s] each thread of process ``pid`` has waited on a run queue, runnable but
+    not running (``/proc/PID/task/TID/schedstat``, second field); empty if it is gone."""
+    out: dict[int, float] = {}
+    try:
+        tids = _threads(pid)
+    except OSError:
+        return out
+    for tid in tids:
+        try:
+            with open(f"/proc/{pid}/task/{tid}/schedstat") as f:
+                out[tid] = int(f.read().split()[1]) * 1e-9
+        except (OSError, IndexError, ValueError):
+            continue
+    return out
+
+
+def starved(waited_s: float, over_s: float, fraction: float = STARVED_FRACTION) -> bool:
+    """Whether a thread that waited ``waited_s`` on a run queue during ``over_s`` of wall
+    time is starved (it waited more than ``fraction`` of it)."""
+    return over_s > 0 and waited_s > fraction * over_s
+
+
 class BackgroundGuard:
-    """Watches the ``SCHED_IDLE`` nodes of a run (:func:`place`) and moves one that is
-    starved (:func:`starved` over :data:`STARVED_WINDOW_S`: other programs keep its core
-    busy) back to the normal class for the rest of the run, so it cannot fall behind until
-    the run stalls. :meth:`check` on every tick of the clock."""
+    """Watches the ``SCHED_IDLE`` nodes of a run (:func:`background`) and moves one that is
+    starved (one of its threads :func:`starved` over :data:`STARVED_WINDOW_S`: other programs
+    keep its core busy) back to the normal class for the rest of the run, so it cannot fall
+    behind until the run stalls. :meth:`check` on every tick of the clock."""
 
     def __init__(self, window_s: float = STARVED_WINDOW_S) -> None:
         self.window_s = window_s
-        self._since: dict[int, tuple[float, float]] = {}  # pid -> (t [s], run-queue wait [s])
+        self._since: dict[int, tuple[float, dict[int, float]]] = {}  # pid -> (t, waits)
         self.moved: list[str] = []
         """The nodes moved back to the normal class, in order."""
 
@@ -155,13 +171,14 @@ class BackgroundGuard:
         """Measure the background nodes ``{name: pid}``; the names moved back this call."""
         now, moved = time.monotonic(), []
         for name, pid in pids.items():
-            if name in self.moved or (wait := run_queue_wait_s(pid)) is None:
+            if name in self.moved or not (waits := run_queue_waits_s(pid)):
                 continue
-            t0, w0 = self._since.setdefault(pid, (now, wait))
+            t0, w0 = self._since.setdefault(pid, (now, waits))
             if now - t0 < self.window_s:
                 continue
-            self._since[pid] = (now, wait)
-            if starved(wait - w0, now - t0) and foreground(pid):
+            self._since[pid] = (now, waits)
+            worst = max((w - w0[tid] for tid, w in waits.items() if tid in w0), default=0.0)
+            if starved(worst, now - t0) and foreground(pid):
                 self.moved.append(name)
                 moved.append(name)
         return moved

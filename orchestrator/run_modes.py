@@ -34,6 +34,12 @@ class Nodes:
     """The node threads of a monolithic run (started by :meth:`start`)."""
     _bodies: list[tuple[str, Callable[[str], None]]] = field(default_factory=list)
 
+    def started(self) -> None:
+        """Every node has the clock's start: local nodes off the critical path go to the
+        background (:meth:`LocalNodes.go_background`)."""
+        if self.local is not None:
+            self.local.go_background()
+
     def start(self) -> None:
         """Start the monolithic run's node threads (once the clock listens)."""
         self.threads = [threading.Thread(target=body, args=(n,), daemon=True, name=n)

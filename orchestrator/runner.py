@@ -324,7 +324,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     clock: Clock | None = None
     try:  # from here on every error path stops the nodes and closes the bus
         clock = Clock(nodes.bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,
-                      check_processes=nodes.dead, auth=auth)
+                      check_processes=nodes.dead, auth=auth, on_started=nodes.started)
         nodes.start()
         result = clock.run()
     except BaseException as exc:

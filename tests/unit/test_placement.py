@@ -11,11 +11,13 @@ from pathlib import Path
 import pytest
 
 from cosim import channels as ch
+from cosim.node_kinds import off_critical_path
 from orchestrator.placement import (
     AUTO_MAX_CORES,
     BackgroundGuard,
+    background,
     core_layout,
-    place,
+    foreground,
     should_pin,
     starved,
 )
@@ -51,23 +53,29 @@ def test_auto_pins_only_small_machines() -> None:
         should_pin("sometimes", [0, 1])
 
 
-@pytest.mark.parametrize(("name", "idle"), [("plant", False), ("tyre_road", False),
-                                            ("controller", False), ("recorder", True),
-                                            ("fatigue", True), ("probe", True)])
-def test_place_pins_and_puts_only_nodes_off_the_critical_path_in_sched_idle(
-        name: str, idle: bool) -> None:
-    """A real child process: pinned to the core, and in SCHED_IDLE exactly when the node is
-    no coupled kind (the recorder, the fatigue node, a name that is no kind)."""
-    core = sorted(os.sched_getaffinity(0))[-1]
-    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+def test_background_puts_every_thread_in_sched_idle_and_foreground_takes_it_back() -> None:
+    """A real child process with threads: :func:`background` puts every one of them in
+    SCHED_IDLE, :func:`foreground` every one back in the normal class."""
+    child = subprocess.Popen([sys.executable, "-c", (
+        "import threading, time\n"
+        "for _ in range(3): threading.Thread(target=time.sleep, args=(30,), daemon=True).start()\n"
+        "print('up', flush=True); time.sleep(30)")], stdout=subprocess.PIPE, text=True)
     try:
-        assert place(child.pid, name, core) == (True, idle)
-        assert os.sched_getaffinity(child.pid) == {core}
-        want = os.SCHED_IDLE if idle else os.SCHED_OTHER
-        assert os.sched_getscheduler(child.pid) == want
+        assert child.stdout is not None and child.stdout.readline() == "up\n"
+        tids = [int(t) for t in os.listdir(f"/proc/{child.pid}/task")]
+        assert len(tids) == 4
+        assert background(child.pid)
+        assert {os.sched_getscheduler(t) for t in tids} == {os.SCHED_IDLE}
+        assert foreground(child.pid)
+        assert {os.sched_getscheduler(t) for t in tids} == {os.SCHED_OTHER}
     finally:
         child.kill()
         child.wait()
+
+
+def test_only_nodes_that_are_no_coupled_kind_are_off_the_critical_path() -> None:
+    assert [n for n in (*NODES, "probe") if off_critical_path(n)] == \
+        ["recorder", "fatigue", "probe"]
 
 
 def test_starved_is_waiting_on_the_run_queue_for_more_than_half_the_window() -> None:
@@ -93,8 +101,8 @@ def test_a_starved_background_node_goes_back_to_the_normal_class_and_a_fed_one_s
         assert sleeper.stdout is not None and sleeper.stdout.readline() == "up\n"
         while Path(f"/proc/{sleeper.pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "S":
             time.sleep(0.01)  # in its sleep before it shares the busy core: it needs no CPU
-        assert place(idle_busy.pid, "recorder", core) == (True, True)
-        assert place(sleeper.pid, "fatigue", core) == (True, True)
+        assert background(idle_busy.pid) and background(sleeper.pid)
+        os.sched_setaffinity(sleeper.pid, {core})
         guard = BackgroundGuard(window_s=0.5)
         pids = {"recorder": idle_busy.pid, "fatigue": sleeper.pid}
         deadline = time.monotonic() + 30  # a bound on a hang, not a timing assertion
