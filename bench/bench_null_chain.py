@@ -15,8 +15,9 @@ blocks, the fatigue node at ``nice +10``. This process is the orchestrator: the 
 nodes/tyre_road/node.py and nodes/controller/node.py do (the order and the sizes of the
 messages of the Chapter 6 double-wishbone corner):
 
-* the plant puts ONE message a step (#28 item 2): ``state`` of step k with last step's
-  ``response`` and ``arm``, then waits for ``force`` of step k from each force node;
+* the plant puts ONE message a step (#28 item 2): ``state`` of step k with the ``response``
+  and ``arm`` of step k - 2 (encoded after the send of step k - 1, while it waited), then
+  encodes last step's and waits for ``force`` of step k from each force node;
 * tyre_road and the controller wait for ``state`` of step k (``sequential``) or k - 1
   (``parallel``), then put their ``force``;
 * every producer sends what it published to the recorder in batches (64 messages or

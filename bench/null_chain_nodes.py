@@ -161,10 +161,11 @@ def plant(part: Any, cmd: dict) -> None:
             for feed, have in feeds:
                 raw_wait(feed, have, k, part.spin_s)
             busy(work)
-        else:
-            part.publish("state", k, t, STATE)
+        else:  # as the plant: last step's response and loads encoded while it waits,
+            part.publish("state", k, t, STATE)  # in the next step's message
+            part.send()
             for c, kk, tt, d in later:
-                part.publish(c, kk, tt, d)
+                part.publish(c, kk, tt, d, hold=True)
             part.wait({tag: k for tag in tags})
             busy(work)  # the model's substeps, before the next state
         later = [("response", k, t, RESPONSE), ("arm", k, t, ARM)]

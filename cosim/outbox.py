@@ -12,7 +12,14 @@ would reject is never sent: a diverged model ends the run naming the field). The
 * a **block channel** of the schema (``stepped=False``: ``fatigue/damage``,
   ``recorder/coupling``) goes out at once on its own key ``suscosim/<run>/<node>/<channel>``;
 * every data message is also kept, as encoded, for the recorder, which gets them in batches
-  on ``<node>/records`` (:mod:`cosim.record_batch`).
+  on ``<node>/records`` (:mod:`cosim.record_batch`). A batch that falls due with a per-step
+  message goes out right after the step (:meth:`Outbox.send`): never between a step's last
+  input and its output, which the coupled chain waits for.
+
+A message published with ``hold=True`` (the plant's response and component loads of the step
+before, encoded while it waits for this step's forces instead of between the forces and the
+next state, issue #28) joins the *next* step message, ahead of that step's own messages
+(chronological order); :meth:`Outbox.flush` sends it at once.
 """
 
 from __future__ import annotations
@@ -41,8 +48,10 @@ class Outbox:
         """Output channel -> its own publisher (a block channel), or None (in the step)."""
         self._codecs: dict[str, ChannelCodec] = {}
         self._step: list[tuple[str, bytes]] = []  # this step's data messages, not sent yet
-        self._step_kt: tuple[int, float] = (-1, 0.0)
-        self._step_bytes = 0
+        self._held: list[tuple[str, bytes]] = []  # for the next step message (``hold``)
+        self._step_kt: tuple[int, float] = (-1, 0.0)  # the newest message's of the two
+        self._step_bytes = 0  # of both lists
+        self._records_due = False  # a batch to send after the step (:meth:`send`)
         self._step_pub: Publisher | None = None
         self._records = RecordBatch()
         self._records_pub: Publisher | None = None
@@ -79,9 +88,9 @@ class Outbox:
             self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
 
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
-                record: bool = True) -> None:
+                record: bool = True, hold: bool = False) -> None:
         """One data message (see the module's docstring); kept for the recorder unless
-        ``record`` is false."""
+        ``record`` is false; a per-step channel's in the next step message with ``hold``."""
         raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "
@@ -93,26 +102,36 @@ class Outbox:
                 from None
         pub = self._outputs[channel]
         if pub is None:
-            if self._step and \
+            if (self._step or self._held) and \
                     self._step_bytes + len(raw) > MAX_MESSAGE_BYTES - _STEP_HEADROOM:
-                self.send()  # one message must carry it: the step goes in two
-            self._step.append((channel, raw))
+                self.send(held=True)  # one message must carry it: the step goes in two
+            (self._held if hold else self._step).append((channel, raw))
             self._step_bytes += len(raw) + 8
-            self._step_kt = (k, t)
+            if k >= self._step_kt[0]:
+                self._step_kt = (k, t)
         else:
             pub(raw)
         if record:
             if not self._records.fits(raw):
                 self._send_records()  # the batch must fit one message too
             if self._records.add(channel, raw, k, t):
-                self._send_records()
+                if pub is None:  # after the step it goes with
+                    self._records_due = True
+                else:
+                    self._send_records()
 
-    def send(self) -> None:
-        """Publish this step's data messages as one ``step`` message (nothing if none)."""
-        if not self._step or self._step_pub is None:
-            return
-        msgs, self._step, self._step_bytes = self._step, [], 0
-        self._step_pub(encode_step(*self._step_kt, msgs))
+    def send(self, held: bool = False) -> None:
+        """Publish this step's data messages as one ``step`` message, the held ones of the
+        step before first (nothing if there are none of this step, unless ``held``); then a
+        records batch that fell due."""
+        if (self._step or (held and self._held)) and self._step_pub is not None:
+            msgs = self._held + self._step if self._held else self._step
+            kt, self._step, self._held, self._step_bytes = self._step_kt, [], [], 0
+            self._step_kt = (-1, 0.0)
+            self._step_pub(encode_step(*kt, msgs))
+        if self._records_due:
+            self._records_due = False
+            self._send_records()
 
     def _send_records(self) -> None:
         raw = self._records.take()
@@ -120,8 +139,9 @@ class Outbox:
             self._records_pub(raw)
 
     def flush(self) -> None:
-        """Send this step and the kept data messages to the recorder."""
-        self.send()
+        """Send this step (and what is held for the next) and the kept data messages to
+        the recorder."""
+        self.send(held=True)
         self._send_records()
 
     def hello(self) -> None:

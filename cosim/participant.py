@@ -253,11 +253,12 @@ class Participant:
 
     # ---- messages -----------------------------------------------------------------------
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
-                record: bool = True) -> None:
+                record: bool = True, hold: bool = False) -> None:
         """One data message: a per-step channel's joins this step's message (sent by
-        :meth:`send`, or by the next :meth:`wait`), a block channel's is published at once;
-        kept for the recorder unless ``record`` is false (:class:`cosim.outbox.Outbox`)."""
-        self.out.publish(channel, k, t, data, record)
+        :meth:`send`, or by the next :meth:`wait`), or with ``hold`` the next step's; a block
+        channel's is published at once; kept for the recorder unless ``record`` is false
+        (:class:`cosim.outbox.Outbox`)."""
+        self.out.publish(channel, k, t, data, record, hold)
 
     def send(self) -> None:
         """Publish this step's data messages as one ``step`` message (nothing if none)."""

@@ -76,11 +76,12 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                                f"t_end / h_min")
             seen = prev if lag else st  # what the force nodes computed this step's forces from
             part.publish(ch.STATE, k, t, st)
-            # last step's response and loads go out with it (one message a step, #28)
+            part.send()  # one message a step (#28): state k, the response and loads of k - 2
+            # last step's response and loads: encoded while the force nodes compute, off the
+            # coupled chain's critical path; they go out with state k + 1
             for name, kk, tt, values in later:
-                part.publish(name, kk, tt, values)
+                part.publish(name, kk, tt, values, hold=True)
             later.clear()
-            part.send()  # one message: state k, and the response and loads of step k - 1
             msgs = part.wait({tag: k for tag in sources})
             forces = {f: msg.array(f) for tag, msg in msgs.items() for f in provides[tag[0]]}
             road_plane = next((m for tag, m in msgs.items() if tag[0] == ch.TYRE_ROAD
