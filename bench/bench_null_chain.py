@@ -6,7 +6,8 @@ model work, in the same processes over real Zenoh, against the bare round trip (
 The nodes are the run's (plant, tyre_road, controller, recorder, fatigue: the first 2, 3, 4
 or 5), each its own process started as the orchestrator starts them: a Zenoh peer session
 with the nodes' options (``cosim.bus.zenoh_config``: loopback, low-latency transport, link
-lease of a 30 s stall timeout), pinned to the core the run's placement gives it
+lease of a 30 s stall timeout; this process's session, the orchestrator's, universal as in a
+run), pinned to the core the run's placement gives it
 (``orchestrator.placement``; the recorder and the fatigue node in ``SCHED_IDLE``, as in a
 run) and then polling its input for ``PINNED_SPIN_US`` before it
 blocks, the fatigue node at ``nice +10``. This process is the orchestrator: the run's own
@@ -229,7 +230,7 @@ def main() -> int:
           f"{args.work or 'none'}", flush=True)
     pp0 = pingpongs(max(1, args.repeats // 2 + 1), args.pingpong_n)
     endpoint = free_loopback_endpoint()
-    bus = ZenohBus(zenoh_config(listen=[endpoint], lowlatency=True,
+    bus = ZenohBus(zenoh_config(listen=[endpoint], lowlatency=False,  # as a run's orchestrator
                                 lease_ms=local_lease_ms(STALL_S)))
     rows = []
     try:

@@ -99,7 +99,7 @@ SETS: list[str] = []
 """``--set`` overrides for every run (``--set`` of this bench)."""
 
 RUN_ARGS: list[str] = []
-"""Options of ``suscosim run`` for every run (``--lowlatency`` of this bench)."""
+"""Options of ``suscosim run`` for every run (``--[no-]lowlatency`` of this bench)."""
 
 
 def one_run(scenario: str, fatigue: bool | None, t_end: float) -> dict:
@@ -185,12 +185,13 @@ def main() -> int:
                     help="a scenario override for every workload run (e.g. "
                          "'fatigue.influence=\"builtin:structured\"': the hand-meshed arm "
                          "#28's fatigue bar was set on)")
-    ap.add_argument("--lowlatency", action="store_true",
-                    help="the runs on Zenoh's low-latency transport (suscosim run "
-                         "--lowlatency; off by default since it could wedge a start)")
+    ap.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
+                    help="the nodes' transport (suscosim run --lowlatency/--no-lowlatency; "
+                         "default: the run's own, low-latency nodes)")
     args = ap.parse_args()
     SETS[:] = args.set
-    RUN_ARGS[:] = ["--lowlatency"] if args.lowlatency else []
+    RUN_ARGS[:] = [] if args.lowlatency is None else \
+        ["--lowlatency" if args.lowlatency else "--no-lowlatency"]
     rows = [r for r in args.rows.split(",") if r]
     bad = [r for r in rows if r not in ROWS]
     if bad:
@@ -198,7 +199,7 @@ def main() -> int:
         return 2
     print(f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} CPUs, "
           f"load {_load()}" + (f", --set {' '.join(SETS)}" if SETS else "")
-          + (" --lowlatency" if RUN_ARGS else "") + "\n")
+          + "".join(f" {a}" for a in RUN_ARGS) + "\n")
     if "null" in rows:
         raw, proto = null_chain(args.repeats, args.null_steps)
         print(f"null chain, 5 processes, sequential: raw {raw:.0f}, protocol {proto:.0f} "

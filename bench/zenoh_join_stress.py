@@ -13,6 +13,11 @@ under peer churn (eclipse-zenoh/zenoh#2581, fixed upstream by #2779 after 1.10.2
 thread holding the routing ``ctrl_lock`` waits on the single Net runtime worker, which
 waits for that lock).
 
+``--mesh``: ``gossip`` (every session as a run's node: each peer connects to the server and
+finds the others by gossip), ``explicit`` (gossip off, a full mesh of given endpoints) or
+``server-universal`` (as ``gossip``, but the listening peer, the orchestrator's role, on
+Zenoh's universal transport: what ``suscosim run`` does since 2026-12-04 afternoon).
+
 ``--net-workers`` sets ``ZENOH_RUNTIME``'s Net worker count in every process (Zenoh's
 default is one; :data:`cosim.bus.ZENOH_RUNTIME` is what suscosim sets).
 """
@@ -33,7 +38,8 @@ sys.path.insert(0, str(ROOT))
 SERVER = r"""
 import sys, time, zenoh
 from cosim.bus import zenoh_config
-conf = zenoh_config([], [sys.argv[1]], lowlatency=sys.argv[2] == "1")
+conf = zenoh_config([], [sys.argv[1]], lowlatency=sys.argv[2] == "1"
+                    and sys.argv[3] != "server-universal")
 if sys.argv[3] == "explicit":
     conf.insert_json5("scouting/gossip/enabled", "false")
 s = zenoh.open(conf)
@@ -129,7 +135,8 @@ def main() -> int:
     ap.add_argument("--net-workers", type=int, default=1)
     ap.add_argument("--no-lowlatency", action="store_true",
                     help="Zenoh's universal transport instead of the low-latency one")
-    ap.add_argument("--mesh", choices=("gossip", "explicit"), default="gossip")
+    ap.add_argument("--mesh", choices=("gossip", "explicit", "server-universal"),
+                    default="gossip")
     ap.add_argument("--dump", type=Path, default=None,
                     help="a folder: the native and Python stacks of each wedged process")
     args = ap.parse_args()

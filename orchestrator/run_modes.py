@@ -72,9 +72,13 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
                 external: list[str] | None, listen: list[str], lowlatency: bool,
                 zenoh_config_file: str | None, pin_mode: str, run_key: bytes,
                 as_client: bool) -> Nodes:
-    """The orchestrator's Zenoh session and a process per node not run ``external``ly."""
+    """The orchestrator's Zenoh session and a process per node not run ``external``ly.
+
+    ``lowlatency`` is the local nodes' transport; the orchestrator's own session is always
+    Zenoh's universal one (:data:`orchestrator.runner.LOWLATENCY_DEFAULT`: the listening peer
+    whose gossip the joining nodes wait for must not write it with a blocking send)."""
     lease = local_lease_ms(float(run["stall_timeout_s"]))
-    bus = ZenohBus(zenoh_config(connect or [], listen or None, lowlatency=lowlatency,
+    bus = ZenohBus(zenoh_config(connect or [], listen or None, lowlatency=False,
                                 lease_ms=lease, config_file=zenoh_config_file,
                                 default_mode="client" if as_client else "peer"))
     if connect:  # the embedded mesh is this run's own: only a shared one can collide

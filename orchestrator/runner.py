@@ -235,15 +235,22 @@ def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes
     return au.derive_run_key(secret, run["id"])
 
 
-LOWLATENCY_DEFAULT = False
-"""Whether a run's sessions use Zenoh's low-latency transport when the command does not say
-(``suscosim run --lowlatency``). Off: with it, the embedded mesh's start wedged a session
-about once in 700 starts of five peers (``python bench/zenoh_join_stress.py``: 3 of ~2 000
-rounds; universal transport 0 of 3 000), a Zenoh deadlock under peer churn: a receive thread
-holding the routing lock forwards gossip link states with a blocking low-latency send that
-never completes (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim.md). In a run it was
-a node "not ready within 60 s" (twice in a few hundred runs of the test suite and the Ch 6
-sweep), ~1 CI run in 3. The price: ~15 % fewer coupled steps/s (docs/cosim.md)."""
+LOWLATENCY_DEFAULT = True
+"""Whether the local nodes' sessions use Zenoh's low-latency transport when the command does
+not say (``suscosim run --lowlatency/--no-lowlatency``). The orchestrator's own session uses
+the universal transport in every case (:func:`orchestrator.run_modes.distributed`).
+
+History. With the low-latency transport on *every* session, including the orchestrator's,
+the embedded mesh's start wedged a session about once in 700 starts of five peers (``python
+bench/zenoh_join_stress.py``: 3 of ~2 000 rounds), a Zenoh deadlock under peer churn: the
+*listening* peer's receive thread, holding the routing lock, forwarded gossip link states
+with a blocking low-latency send that never completed (eclipse-zenoh/zenoh#2581 family;
+stacks in docs/cosim.md). So runs went universal on 2026-12-04, at ~15 % of the lumped car's
+coupled steps/s. The listening peer is the orchestrator: with its session universal (it
+queues gossip in its transmit pipeline instead of writing the socket under the lock) and the
+nodes' links low-latency, ``bench/zenoh_join_stress.py --mesh server-universal`` wedged 0 of
+3 000 rounds (docs/cosim.md "A wedged start"), and the coupled chain keeps the faster
+transport: the orchestrator only takes control messages (ready, progress, done)."""
 
 
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
@@ -253,9 +260,9 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     """Run a resolved scenario; write and return the summary. Raises SuscosimError on failure
     (after writing a ``failed`` summary).
 
-    ``lowlatency`` (Zenoh's low-latency transport; None: off) cut ~15 % off a coupled step,
-    but a run's peers joining at once over it wedged a session now and then (a node "not
-    ready within 60 s"): :data:`LOWLATENCY_DEFAULT`.
+    ``lowlatency``: Zenoh's low-latency transport for the local nodes (None:
+    :data:`LOWLATENCY_DEFAULT`, on; ~15 % off a lumped car's coupled step). The
+    orchestrator's own session is universal in every case.
     ``pin_mode`` (``auto``, ``on``, ``off``) places the local node processes on cores (see
     :mod:`orchestrator.placement`).
 
