@@ -49,9 +49,11 @@ class Mailbox:
             return None
         if msg.kind != "data":
             return f"unexpected kind '{msg.kind}' on a data channel"
-        missing = [f for f in self.required if f not in msg.d]
-        if missing:
-            return f"step {msg.k}: missing field(s) {', '.join(missing)}"
+        d = msg.d
+        for name in self.required:
+            if name not in d:
+                missing = ", ".join(f for f in self.required if f not in d)
+                return f"step {msg.k}: missing field(s) {missing}"
         if msg.k in self.box and msg.k >= 0:
             return f"duplicate message for step {msg.k}"
         if self.stepped:

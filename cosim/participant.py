@@ -360,6 +360,18 @@ class Participant:
         except Exception:  # the session is closing: the main thread will say why
             pass
 
+    def _file_step(self, ptag: Channel, raw: bytes) -> None:
+        """Verify and decode a producer's step message (``ptag``: ``(producer, "step")``)
+        and file its inner messages into the inputs' mailboxes (what :meth:`handle` does
+        with one, without its other cases)."""
+        try:
+            msg = self.open(self._keyof[ptag], raw)
+        except WireError as exc:
+            self.reject(ptag, str(exc))
+            return
+        for where, reason in file_step(self.inputs, ptag[0], msg):
+            self.reject(where, reason)
+
     def handle(self, tag: Channel, raw: bytes) -> Message | None:
         """Decode and file one received message; return it if it is a clock message."""
         step = tag[1] == keys.STEP and tag[0] in self._pfeeds
@@ -396,20 +408,25 @@ class Participant:
             self._watchdog = threading.Thread(target=self._watch, daemon=True,
                                               name=f"{self.node}-watchdog")
             self._watchdog.start()
-        deadline = time.monotonic() + self.stall_timeout_s
+        deadline = 0.0  # the stall deadline, from the first input that is not there yet
         for tag, k in needs.items():
-            box, feed, ptag = self.inputs[tag].box, self.feeds[tag], self._ptag[tag]
-            if k not in box:
-                self._awaited = (tag, k, time.monotonic())
+            box = self.inputs[tag].box
+            if k in box:
+                continue
+            feed, ptag = self.feeds[tag], self._ptag[tag]
+            now = time.monotonic()
+            deadline = deadline or now + self.stall_timeout_s
+            self._awaited = (tag, k, now)
             while k not in box:
                 raw = self._poll(feed) if self.spin_s else None
                 if raw is None:
                     self._blocked = (feed, deadline)
                     raw = feed.recv()
                     self._blocked = None
-                self._receive(ptag, raw)
-                if raw:
+                if raw:  # a producer's step (the hot path: no other checks)
+                    self._file_step(ptag, raw)
                     continue
+                self._receive(ptag, raw)  # empty: the watchdog's wake-up
                 self._drain_inbox()  # raises on abort
                 self.check_orchestrator()
                 if time.monotonic() >= deadline:

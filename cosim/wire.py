@@ -20,9 +20,10 @@ The batch is signed; the messages in it are not (the batch's signature covers th
 
 ``kind == "step"`` is a producer's step (``suscosim/<run>/<node>/step``, issue #28 item 2):
 the data messages a node publishes for one communication step, in ONE bus message signed
-once, ``d = {"msgs": [[channel, raw message bytes], ...]}`` (the plant's: ``state`` of
-step k and its ``response`` and component loads of step k - 1; a force node's: its
-``force``). ``k``/``t`` are the newest inner message's. Each inner message is the data
+once, ``d = {"msgs": [[channel, raw message bytes], ...]}`` (the plant's: its ``response``
+and component loads of step k - 2, encoded while it waited for the forces of step k - 1,
+then ``state`` of step k; a force node's: its ``force``). ``k``/``t`` are the newest inner
+message's. Each inner message is the data
 message it would have been on its own (unsigned: the step's signature covers it), so the
 records batches, the journal and the tables are unchanged; a consumer decodes only the inner
 messages of the channels it listens to (:func:`inner`), each against its channel's schema.
