@@ -31,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -162,14 +163,20 @@ def null_chain(repeats: int, steps: int) -> tuple[float, float]:
 
 
 def sweep_wall_s() -> float:
-    """Wall time of the Chapter 6 sweep (16 runs, live fatigue) [s]."""
-    with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.monotonic()
-        subprocess.run([sys.executable, "-m", "orchestrator", "sweep",
-                        str(ROOT / "scenarios/thesis/ch6_fatigue.toml"), "--out", tmp],
-                       cwd=ROOT, check=True, stdout=subprocess.DEVNULL,
-                       env=dict(os.environ, PYTHONPATH=str(ROOT)))
-        return time.monotonic() - t0
+    """Wall time of the Chapter 6 sweep (16 runs, live fatigue) [s]. A failed sweep's folder
+    is kept (its failed points' logs say why) and named on stderr."""
+    tmp = tempfile.mkdtemp(prefix="bench-sweep-")
+    t0 = time.monotonic()
+    code = subprocess.run([sys.executable, "-m", "orchestrator", "sweep",
+                           str(ROOT / "scenarios/thesis/ch6_fatigue.toml"), "--out", tmp],
+                          cwd=ROOT, stdout=subprocess.DEVNULL,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT))).returncode
+    wall = time.monotonic() - t0
+    if code != 0:
+        raise SystemExit(f"the sweep failed (exit {code}) after {wall:.0f} s: its folder, "
+                         f"with the failed points' run folders and logs, is kept in {tmp}")
+    shutil.rmtree(tmp, ignore_errors=True)
+    return wall
 
 
 def main() -> int:
