@@ -194,7 +194,7 @@ def main() -> int:
                          "#28's fatigue bar was set on)")
     ap.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
                     help="the nodes' transport (suscosim run --lowlatency/--no-lowlatency; "
-                         "default: the run's own, low-latency nodes)")
+                         "default: the run's own, universal nodes)")
     args = ap.parse_args()
     SETS[:] = args.set
     RUN_ARGS[:] = [] if args.lowlatency is None else \

@@ -277,9 +277,10 @@ def build_parser() -> argparse.ArgumentParser:
     zo.add_listen_argument(r, "endpoint the orchestrator listens on (default: a free loopback "
                               "port)", metavar=None)
     zo.add_lowlatency_argument(r, "Zenoh's low-latency transport for the local nodes' "
-                                  "sessions (default: on, ~15 %% faster; the orchestrator's "
-                                  "own session is universal: docs/cosim.md 'A wedged start'; "
-                                  "peers without it still connect)",
+                                  "sessions (default: off; ~15-30 %% faster, but a node's "
+                                  "start can wedge: docs/cosim.md 'A wedged start'; the "
+                                  "orchestrator's own session is universal; peers without it "
+                                  "still connect)",
                                   negatable=True)
     r.add_argument("--pin", choices=PIN_MODES, default="auto",
                    help="pin the local node processes to cores (auto: on machines of 2-4 "

@@ -76,7 +76,7 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
 
     ``lowlatency`` is the local nodes' transport; the orchestrator's own session is always
     Zenoh's universal one (:data:`orchestrator.runner.LOWLATENCY_DEFAULT`: the listening peer
-    whose gossip the joining nodes wait for must not write it with a blocking send)."""
+    whose gossip the joining nodes wait for should not write it with a blocking send)."""
     lease = local_lease_ms(float(run["stall_timeout_s"]))
     bus = ZenohBus(zenoh_config(connect or [], listen or None, lowlatency=False,
                                 lease_ms=lease, config_file=zenoh_config_file,

@@ -235,22 +235,23 @@ def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes
     return au.derive_run_key(secret, run["id"])
 
 
-LOWLATENCY_DEFAULT = True
+LOWLATENCY_DEFAULT = False
 """Whether the local nodes' sessions use Zenoh's low-latency transport when the command does
 not say (``suscosim run --lowlatency/--no-lowlatency``). The orchestrator's own session uses
 the universal transport in every case (:func:`orchestrator.run_modes.distributed`).
 
-History. With the low-latency transport on *every* session, including the orchestrator's,
-the embedded mesh's start wedged a session about once in 700 starts of five peers (``python
-bench/zenoh_join_stress.py``: 3 of ~2 000 rounds), a Zenoh deadlock under peer churn: the
-*listening* peer's receive thread, holding the routing lock, forwarded gossip link states
-with a blocking low-latency send that never completed (eclipse-zenoh/zenoh#2581 family;
-stacks in docs/cosim.md). So runs went universal on 2026-12-04, at ~15 % of the lumped car's
-coupled steps/s. The listening peer is the orchestrator: with its session universal (it
-queues gossip in its transmit pipeline instead of writing the socket under the lock) and the
-nodes' links low-latency, ``bench/zenoh_join_stress.py --mesh server-universal`` wedged 0 of
-3 000 rounds (docs/cosim.md "A wedged start"), and the coupled chain keeps the faster
-transport: the orchestrator only takes control messages (ready, progress, done)."""
+Off. With the low-latency transport on *every* session the embedded mesh's start wedged a
+session about once in 700 starts of five peers (``python bench/zenoh_join_stress.py``: 3 of
+~2 000 rounds; universal 0 of 3 000), a Zenoh deadlock under peer churn: a receive thread
+holding the routing lock forwards gossip link states with a blocking low-latency send that
+never completes (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim.md). In the stress
+bench the stuck peer was always the listening one (the orchestrator's role), and with its
+session universal the bench wedged 0 of 6 000 rounds (``--mesh server-universal``); but two
+Ch 6 sweeps of 16 runs with low-latency nodes and the universal orchestrator still lost a
+run each to a node whose session wedged at its scenario query ("not ready within 60 s:
+'fatigue'", 2026-12-04 15:43 and 16:14; two runs start at once there, unpinned). So the
+nodes stay universal by default, at ~15-30 % of the lumped car's coupled steps/s
+(docs/cosim.md "A wedged start")."""
 
 
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
@@ -261,8 +262,8 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     (after writing a ``failed`` summary).
 
     ``lowlatency``: Zenoh's low-latency transport for the local nodes (None:
-    :data:`LOWLATENCY_DEFAULT`, on; ~15 % off a lumped car's coupled step). The
-    orchestrator's own session is universal in every case.
+    :data:`LOWLATENCY_DEFAULT`, off; on, ~15-30 % off a lumped car's coupled step, but a
+    node's start can wedge). The orchestrator's own session is universal in every case.
     ``pin_mode`` (``auto``, ``on``, ``off``) places the local node processes on cores (see
     :mod:`orchestrator.placement`).
 

@@ -1,6 +1,7 @@
 """Which Zenoh transport a distributed run's sessions get (orchestrator.run_modes): the local
-nodes low-latency by default, the orchestrator's own session universal in every case (its
-gossip must not be written with a blocking send: docs/cosim.md "A wedged start")."""
+nodes the run's (universal by default, low-latency with --lowlatency), the orchestrator's own
+session universal in every case (its gossip is not written with a blocking send:
+docs/cosim.md "A wedged start")."""
 
 from __future__ import annotations
 
@@ -51,5 +52,5 @@ def test_the_orchestrator_is_universal_and_its_nodes_take_the_runs_transport(
     assert args[3] is lowlatency  # LocalNodes(run_id, names, connect, lowlatency, ...)
 
 
-def test_low_latency_nodes_are_the_default() -> None:
-    assert runner.LOWLATENCY_DEFAULT is True
+def test_universal_nodes_are_the_default() -> None:
+    assert runner.LOWLATENCY_DEFAULT is False  # low-latency nodes still wedged a start
