@@ -12,10 +12,9 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
 3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived (the
    step barrier); :meth:`Participant.publish` adds an output to the node's step and
    :meth:`Participant.send` (or the next :meth:`wait`) publishes the step: **one message per
-   producer per step** on ``<node>/step``, signed once (:func:`cosim.wire.encode_step`; the
-   plant's holds ``state`` of step k and ``response`` and the loads of step k - 1). Block
-   channels (the schema's ``stepped=False``: ``fatigue/damage``, ``recorder/coupling``) go
-   out on their own keys at once. Each producer a node listens to has one FIFO
+   producer per step** on ``<node>/step``, signed once (what it holds, and the block
+   channels that go out on their own keys: :mod:`cosim.outbox`). Each producer a node
+   listens to has one FIFO
    (:meth:`bus.feed`) that the node's thread reads itself: the bus's receive thread
    hands a message straight to the waiting node, one thread wake-up per delivery (a callback
    and a queue cost a second one, and on two cores ~20 % of the coupled step rate). A
@@ -362,8 +361,7 @@ class Participant:
 
     def _file_step(self, ptag: Channel, raw: bytes) -> None:
         """Verify and decode a producer's step message (``ptag``: ``(producer, "step")``)
-        and file its inner messages into the inputs' mailboxes (what :meth:`handle` does
-        with one, without its other cases)."""
+        and file each inner message of a channel this node reads in its mailbox."""
         try:
             msg = self.open(self._keyof[ptag], raw)
         except WireError as exc:
@@ -374,8 +372,10 @@ class Participant:
 
     def handle(self, tag: Channel, raw: bytes) -> Message | None:
         """Decode and file one received message; return it if it is a clock message."""
-        step = tag[1] == keys.STEP and tag[0] in self._pfeeds
-        if tag != _CLOCK_TAG and tag not in self.inputs and not step:
+        if tag[1] == keys.STEP and tag[0] in self._pfeeds:
+            self._file_step(tag, raw)
+            return None
+        if tag != _CLOCK_TAG and tag not in self.inputs:
             return None  # not an input of this node (e.g. the recorder's raw feed)
         try:
             msg = self.open(self._keyof[tag], raw)
@@ -388,10 +388,6 @@ class Participant:
             if msg.kind == "abort":
                 raise RunError(f"run aborted by the orchestrator: {msg.d.get('reason', '?')}")
             return msg
-        if step:  # each inner message of a channel it reads, filed in its mailbox
-            for where, reason in file_step(self.inputs, tag[0], msg):
-                self.reject(where, reason)
-            return None
         why = self.inputs[tag].file(msg)
         if why is not None:
             self.reject(tag, why)
