@@ -14,9 +14,12 @@ thread holding the routing ``ctrl_lock`` waits on the single Net runtime worker,
 waits for that lock).
 
 ``--mesh``: ``gossip`` (every session as a run's node: each peer connects to the server and
-finds the others by gossip), ``explicit`` (gossip off, a full mesh of given endpoints) or
+finds the others by gossip), ``explicit`` (gossip off, a full mesh of given TCP endpoints),
 ``server-universal`` (as ``gossip``, but the listening peer, the orchestrator's role, on
-Zenoh's universal transport: what ``suscosim run`` does since 2026-12-04 afternoon).
+Zenoh's universal transport: what ``suscosim run`` did on the afternoon of 2026-12-04) or
+``run`` (what ``suscosim run`` does since the evening of 2026-12-04: the run's explicit mesh,
+:class:`orchestrator.local_mesh.LocalMesh`, over Unix sockets, gossip off, the server
+universal and the peers low-latency).
 
 ``--net-workers`` sets ``ZENOH_RUNTIME``'s Net worker count in every process (Zenoh's
 default is one; :data:`cosim.bus.ZENOH_RUNTIME` is what suscosim sets).
@@ -38,9 +41,9 @@ sys.path.insert(0, str(ROOT))
 SERVER = r"""
 import sys, time, zenoh
 from cosim.bus import zenoh_config
-conf = zenoh_config([], [sys.argv[1]], lowlatency=sys.argv[2] == "1"
-                    and sys.argv[3] != "server-universal")
-if sys.argv[3] == "explicit":
+conf = zenoh_config([], [sys.argv[1], *sys.argv[4:]], lowlatency=sys.argv[2] == "1"
+                    and sys.argv[3] not in ("server-universal", "run"))
+if sys.argv[3] in ("explicit", "run"):
     conf.insert_json5("scouting/gossip/enabled", "false")
 s = zenoh.open(conf)
 tok = s.liveliness().declare_token("stress/server/alive")
@@ -55,7 +58,7 @@ import json, os, sys, zenoh
 from cosim.bus import zenoh_config
 connect, listen = json.loads(sys.argv[1]), json.loads(sys.argv[4])
 conf = zenoh_config(connect, listen or None, lowlatency=sys.argv[2] == "1")
-if sys.argv[3] == "explicit":
+if sys.argv[3] in ("explicit", "run"):
     conf.insert_json5("scouting/gossip/enabled", "false")
 s = zenoh.open(conf)
 tok = s.liveliness().declare_token(f"stress/{os.getpid()}/alive")
@@ -94,8 +97,14 @@ def one_round(port: int, peers: int, env: dict[str, str], dump: Path | None = No
     of the peers before it: a full mesh with no link-state messages)."""
     endpoint = f"tcp/127.0.0.1:{port}"
     ll = str(int(lowlatency))
-    server = subprocess.Popen([sys.executable, "-c", SERVER, endpoint, ll, mesh], cwd=ROOT,
-                              env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    from orchestrator.local_mesh import ORCHESTRATOR, LocalMesh
+
+    names = [f"peer{i}" for i in range(peers)]
+    run_mesh = LocalMesh.create(names) if mesh == "run" else None
+    extra = [run_mesh.listen(ORCHESTRATOR)] if run_mesh else []
+    server = subprocess.Popen([sys.executable, "-c", SERVER, endpoint, ll, mesh, *extra],
+                              cwd=ROOT, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                              text=True)
     try:
         assert server.stdout is not None and server.stdout.readline().strip() == "up"
         from cosim.bus import free_loopback_endpoint
@@ -103,8 +112,10 @@ def one_round(port: int, peers: int, env: dict[str, str], dump: Path | None = No
         own = [free_loopback_endpoint() for _ in range(peers)] if mesh == "explicit" else []
         procs = []
         for i in range(peers):
-            connect = [endpoint, *own[:i]]
-            listen = own[i:i + 1]
+            if run_mesh is not None:
+                connect, listen = run_mesh.connect(names[i]), [run_mesh.listen(names[i])]
+            else:
+                connect, listen = [endpoint, *own[:i]], own[i:i + 1]
             procs.append(subprocess.Popen(
                 [sys.executable, "-c", PEER, json.dumps(connect), ll, mesh, json.dumps(listen)],
                 cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
@@ -126,6 +137,8 @@ def one_round(port: int, peers: int, env: dict[str, str], dump: Path | None = No
     finally:
         server.kill()
         server.wait()
+        if run_mesh is not None:
+            run_mesh.remove()
 
 
 def main() -> int:
@@ -135,7 +148,7 @@ def main() -> int:
     ap.add_argument("--net-workers", type=int, default=1)
     ap.add_argument("--no-lowlatency", action="store_true",
                     help="Zenoh's universal transport instead of the low-latency one")
-    ap.add_argument("--mesh", choices=("gossip", "explicit", "server-universal"),
+    ap.add_argument("--mesh", choices=("gossip", "explicit", "server-universal", "run"),
                     default="gossip")
     ap.add_argument("--dump", type=Path, default=None,
                     help="a folder: the native and Python stacks of each wedged process")

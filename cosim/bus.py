@@ -13,7 +13,8 @@ directly, without a Python callback thread in between; ``feed.wake()`` (from any
 makes a blocked ``recv()`` return an empty payload.
 
 Default transport is embedded: Zenoh in peer mode, listening on loopback only, multicast
-scouting off. Peers find each other through the endpoint they connect to (gossip).
+scouting off. Peers find each other through the endpoint they connect to (gossip), or, a
+run's local nodes, link as an explicit mesh with gossip off (``gossip=False``).
 """
 
 from __future__ import annotations
@@ -97,6 +98,7 @@ def zenoh_config(
     config_file: str | None = None,
     mode: str | None = None,
     default_mode: str = "peer",
+    gossip: bool = True,
 ) -> Any:
     """A Zenoh configuration for a suscosim participant.
 
@@ -120,6 +122,9 @@ def zenoh_config(
             node on another machine uses, since Zenoh >= 1.9 routers do not relay between two
             peers). Default: the config file's mode, else ``default_mode``.
         default_mode: the mode when neither ``mode`` nor the config file gives one.
+        gossip: False for a session of a run's explicit mesh
+            (:class:`orchestrator.local_mesh.LocalMesh`): it links to the endpoints it is
+            given and to those that connect to it, and sends and forwards no link states.
     """
     import zenoh
 
@@ -139,6 +144,8 @@ def zenoh_config(
     if mode == "client" and _unset(conf, "connect/timeout_ms"):
         conf.insert_json5("connect/timeout_ms", str(CLIENT_CONNECT_TIMEOUT_MS))
     conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+    if not gossip:
+        conf.insert_json5("scouting/gossip/enabled", "false")
     if lowlatency:
         conf.insert_json5("scouting/gossip/autoconnect_strategy",
                           '{peer: {to_router: "always", to_peer: "greater-zid"}}')
@@ -217,9 +224,15 @@ class ZenohBus:
 
     def query_all(self, key: str, timeout: float = 1.0) -> list[bytes]:
         """Every reply to a query on ``key`` (a rogue queryable may answer too: the caller
-        picks the one it can verify)."""
-        return [r.ok.payload.to_bytes() for r in self.session.get(key, timeout=timeout)
-                if r.ok is not None]
+        picks the one it can verify). Every matching queryable is asked and no reply is
+        consolidated away: by default Zenoh asks the best-matching one and keeps one reply
+        per key, so a rogue queryable behind the orchestrator (one of its clients) could
+        shadow the orchestrator's own reply on the same key."""
+        import zenoh
+
+        return [r.ok.payload.to_bytes() for r in self.session.get(
+            key, timeout=timeout, target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE) if r.ok is not None]
 
     def alive(self, keyexpr: str, timeout: float = 1.0) -> list[str]:
         """The liveliness tokens matching ``keyexpr`` declared on the bus right now."""

@@ -7,14 +7,15 @@ parser with :func:`add_zenoh_arguments` and opens its session with :func:`open_s
     --connect EP (repeatable)   endpoints to connect to (a run's, a router's)
     --listen EP (repeatable)    endpoints to listen on
     --lowlatency                Zenoh's low-latency transport (negotiated per link)
-    --mode auto|peer|client     auto: a peer when every endpoint is on loopback (or the
-                                session listens), a client otherwise
+    --mode auto|peer|client     auto: a peer when the session listens, a client otherwise
     --zenoh-config FILE         a Zenoh JSON5 configuration file (TLS, access control)
 
-A *peer* joins the run's mesh on this machine and gets the data straight from the nodes; a
-*client* gets everything through the one router or peer it connects to: what works from
-another machine (a peer there is not relayed by a router, and the run's peers, listening on
-their loopback, cannot connect back to it).
+A *client* gets everything through the one router or peer it connects to: a run's
+orchestrator routes for its clients, and what a run's nodes send reaches a client connected to
+it whether it is on this machine or another. A *peer* only gets what is sent to it directly:
+a run's local nodes form an explicit mesh with gossip off (:mod:`orchestrator.local_mesh`), so
+a peer connected to the orchestrator would hear nothing of them (and a peer on another machine
+is not relayed by a router). A session that listens (a replay others connect to) is a peer.
 
 :func:`add_zenoh_arguments` (all five, with the session policy above) is used by ``suscosim
 tap``, ``replay`` and ``scope``, the commands that join a run from outside. A command with
@@ -48,8 +49,9 @@ class SessionOpenError(Exception):
         return f"cannot open a Zenoh {self.mode} session ({where}): {self.reason}"
 
 
-MODE_HELP = ("Zenoh session mode; auto: peer when listening or every endpoint is on loopback, "
-             "client otherwise (through a router, from another machine)")
+MODE_HELP = ("Zenoh session mode; auto: peer when listening, client otherwise (through the "
+             "run's orchestrator or a router: a run's nodes are an explicit mesh that a peer "
+             "connecting to the orchestrator does not join)")
 """The help of ``--mode`` for the commands that follow :func:`session_mode`."""
 LISTEN_HELP = "endpoint to listen on (default: a free loopback port)"
 CONFIG_HELP = "Zenoh JSON5 config file (TLS, access control)"
@@ -113,13 +115,15 @@ def is_loopback(ep: str) -> bool:
 
 
 def session_mode(mode: str, connect: list[str], listen: list[str] | None) -> str:
-    """``auto``: a peer (joins the run's mesh directly) when every endpoint is on loopback
-    or the session listens; a client (everything through the one endpoint) otherwise: a peer
-    on another machine is not relayed by a router, and the run's peers, listening on their
-    loopback, cannot connect back to it."""
+    """``auto``: a peer when the session listens (others connect to it: a replay), else a
+    client (everything through the one endpoint it connects to, the run's orchestrator or a
+    router). Not a peer on loopback: a run's local nodes link as an explicit mesh with gossip
+    off (:mod:`orchestrator.local_mesh`), so a peer connected to the orchestrator would hear
+    none of them; the orchestrator routes for its clients. The endpoints in ``connect`` do not
+    decide (loopback or not, the way is the same)."""
     if mode != "auto":
         return mode
-    return "peer" if listen or all(is_loopback(e) for e in connect) else "client"
+    return "peer" if listen else "client"
 
 
 def resolve_mode(mode: str, config_file: str | None, connect: list[str],
@@ -150,8 +154,10 @@ def apply_mode(conf: Any, mode: str, connect_timeout_ms: int = CLIENT_CONNECT_TI
 
 
 def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
-             lowlatency: bool = False, config_file: str | None = None) -> Any:
-    """A :class:`cosim.bus.ZenohBus` in ``mode`` (from :func:`resolve_mode`).
+             lowlatency: bool = False, config_file: str | None = None,
+             connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS) -> Any:
+    """A :class:`cosim.bus.ZenohBus` in ``mode`` (from :func:`resolve_mode`); a client tries
+    to reach its endpoint for ``connect_timeout_ms``.
 
     Raises :class:`SessionOpenError` with Zenoh's reason in one line (bad endpoint, port in
     use, unreachable router) instead of its exception.
@@ -161,7 +167,7 @@ def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
     try:
         conf = zenoh_config(connect, listen if mode != "client" else None,
                             lowlatency=lowlatency, config_file=config_file)
-        return ZenohBus(apply_mode(conf, mode))
+        return ZenohBus(apply_mode(conf, mode, connect_timeout_ms))
     except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, unreachable router
         reason = " ".join(str(exc).split(" at /")[0].split())
         raise SessionOpenError(reason, 1 if "Unable to connect" in reason else 2,
@@ -169,14 +175,31 @@ def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
 
 
 def open_session(args: argparse.Namespace, connect: list[str], listen: list[str] | None, *,
-                 lowlatency: bool = False) -> tuple[Any, str]:
+                 lowlatency: bool = False, wait: bool = False) -> tuple[Any, str]:
     """The bus the options of :func:`add_zenoh_arguments` (``args``) ask for, and its mode:
     :func:`resolve_mode` of ``args.mode``, then :func:`open_bus` on ``connect`` and ``listen``
     (the command's endpoints: its options with its own defaults), low-latency when
     ``args.lowlatency`` or ``lowlatency`` (e.g. the run uses it).
 
+    ``wait`` (a tap, a scope: started before the run they watch, as often as after): a client
+    chosen by ``--mode auto`` is a :class:`cosim.late_bus.LateBus`, opened as soon as its
+    endpoint answers; an explicit ``--mode client`` still gives up after
+    :data:`CLIENT_CONNECT_TIMEOUT_MS`.
+
     Raises :class:`SessionOpenError` (its :meth:`~SessionOpenError.message` is the error line).
     """
     mode = resolve_mode(args.mode, args.zenoh_config, connect, listen)
-    return open_bus(connect, listen, mode, lowlatency=args.lowlatency or lowlatency,
+    ll = args.lowlatency or lowlatency
+    if wait and mode == "client" and args.mode == "auto":
+        from cosim.bus import zenoh_config
+        from cosim.late_bus import LateBus
+
+        try:  # a malformed endpoint is bad input now, not a wait forever
+            zenoh_config(connect, None, mode="client")
+        except Exception as exc:
+            raise SessionOpenError(" ".join(str(exc).split(" at /")[0].split()), 2,
+                                   mode) from None
+        return LateBus(lambda timeout_ms: open_bus(connect, None, "client", lowlatency=ll,
+                                                   connect_timeout_ms=timeout_ms)), mode
+    return open_bus(connect, listen, mode, lowlatency=ll,
                     config_file=args.zenoh_config), mode

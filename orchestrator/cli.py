@@ -277,8 +277,8 @@ def build_parser() -> argparse.ArgumentParser:
     zo.add_listen_argument(r, "endpoint the orchestrator listens on (default: a free loopback "
                               "port)", metavar=None)
     zo.add_lowlatency_argument(r, "Zenoh's low-latency transport for the local nodes' "
-                                  "sessions (default: off; ~15-30 %% faster, but a node's "
-                                  "start can wedge: docs/cosim.md 'A wedged start'; the "
+                                  "sessions, linked as an explicit mesh with gossip off "
+                                  "(default: on; ~15-30 %% faster than --no-lowlatency; the "
                                   "orchestrator's own session is universal; peers without it "
                                   "still connect)",
                                   negatable=True)

@@ -13,6 +13,7 @@ from pathlib import Path
 from cosim import auth as au
 from cosim import node_kinds as nk
 
+from .local_mesh import LocalMesh
 from .placement import BackgroundGuard, background, pin
 
 PINNED_SPIN_US = 200
@@ -38,7 +39,12 @@ class LocalNodes:
     def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
                  log_dir: Path, zenoh_config_file: str | None = None,
                  cores: dict[str, int] | None = None, lease_ms: int = 2000,
-                 run_key: bytes | None = None) -> None:
+                 run_key: bytes | None = None, mesh: LocalMesh | None = None) -> None:
+        """Start ``names`` (each a ``suscosim node`` process, its output in
+        ``log_dir/NAME.log``), connecting to ``connect``; with ``mesh``, each also listens on
+        its socket of the run's explicit mesh and links to the members before it, gossip off
+        (:mod:`orchestrator.local_mesh`; the folder is removed by :meth:`stop`)."""
+        self.mesh = mesh
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
         self.background: list[str] = []  # the nodes put in SCHED_IDLE (go_background)
@@ -50,8 +56,10 @@ class LocalNodes:
         for name in names:
             cmd = [sys.executable, "-m", "orchestrator", "node", name, "--run", run_id,
                    "--mode", "peer"]  # the local mesh; nodes elsewhere are clients
-            for ep in connect:
+            for ep in [*(mesh.connect(name) if mesh else []), *connect]:
                 cmd += ["--connect", ep]
+            if mesh is not None:
+                cmd += ["--listen", mesh.listen(name), "--no-gossip"]
             if lowlatency:
                 cmd.append("--lowlatency")
             if zenoh_config_file:
@@ -103,7 +111,8 @@ class LocalNodes:
         """Wait up to ``grace_s`` for the nodes to end on their own, calling ``tick`` every
         ``tick_period_s`` meanwhile (the abort, said again for a node that subscribed after
         it was first said: one killed at start-up leaves the others in their handshake),
-        then SIGTERM what is left, and SIGKILL what is left 2 s later."""
+        then SIGTERM what is left, and SIGKILL what is left 2 s later; then remove the
+        mesh's socket folder."""
         deadline = time.monotonic() + grace_s
         for p in self.procs.values():
             while True:
@@ -123,3 +132,5 @@ class LocalNodes:
             except subprocess.TimeoutExpired:
                 p.kill()
                 p.wait()
+        if self.mesh is not None:
+            self.mesh.remove()

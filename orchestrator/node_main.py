@@ -103,6 +103,10 @@ def main(argv: list[str] | None = None) -> int:
                                    "without it still connect; the orchestrator sets it for "
                                    "its local nodes)")
     zo.add_config_argument(ap)
+    ap.add_argument("--gossip", action=argparse.BooleanOptionalAction, default=True,
+                    help="find the run's other peers through the endpoints connected to "
+                         "(default); --no-gossip: link only to --connect and to who connects "
+                         "to --listen (the orchestrator's explicit mesh of its local nodes)")
     ap.add_argument("--key-file",
                     help="file holding the secret the run key is derived from (mode 0600; "
                          "e.g. RUN_DIR/run.key written by the orchestrator; default "
@@ -134,7 +138,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         bus = ZenohBus(zenoh_config(args.connect, args.listen, args.lowlatency,
                                     lease_ms=args.lease_ms, config_file=args.zenoh_config,
-                                    mode=args.mode, default_mode="client"))
+                                    mode=args.mode, default_mode="client",
+                                    gossip=args.gossip))
     except Exception as exc:  # unreachable router, bad config file or certificate
         text = " ".join(str(exc).split())
         print(f"suscosim node {args.name}: cannot open the Zenoh session "

@@ -11,10 +11,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cosim.bus import Bus, MemoryBus, ZenohBus, zenoh_config
+from cosim.bus import LOOPBACK_LISTEN, Bus, MemoryBus, ZenohBus, zenoh_config
 from cosim.errors import InputFileError
 from cosim.run_lock import check_run_id_free
 
+from .local_mesh import ORCHESTRATOR, LocalMesh
 from .local_nodes import LocalNodes, local_lease_ms
 from .placement import core_layout, should_pin, usable_cores
 
@@ -74,30 +75,49 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
                 as_client: bool) -> Nodes:
     """The orchestrator's Zenoh session and a process per node not run ``external``ly.
 
+    The local nodes and the orchestrator link as an explicit mesh, the nodes' gossip off
+    (:mod:`orchestrator.local_mesh`), unless a Zenoh configuration file is given (TLS, access
+    control: its endpoints decide, and peers find each other by gossip as before). The
+    orchestrator's gossip is off too, unless it connects to a shared mesh (``connect``: a
+    router, through which the peers of other runs find it: a second run of the same id is
+    refused by what it sees there, :func:`check_run_id_free`).
     ``lowlatency`` is the local nodes' transport; the orchestrator's own session is always
-    Zenoh's universal one (:data:`orchestrator.runner.LOWLATENCY_DEFAULT`: the listening peer
-    whose gossip the joining nodes wait for should not write it with a blocking send)."""
+    Zenoh's universal one (:data:`orchestrator.runner.LOWLATENCY_DEFAULT`)."""
     lease = local_lease_ms(float(run["stall_timeout_s"]))
-    bus = ZenohBus(zenoh_config(connect or [], listen or None, lowlatency=False,
-                                lease_ms=lease, config_file=zenoh_config_file,
-                                default_mode="client" if as_client else "peer"))
-    if connect:  # the embedded mesh is this run's own: only a shared one can collide
-        try:
-            check_run_id_free(bus, run["id"], list(external or []))
-        except BaseException:
-            close_quietly(bus)
-            raise
     names = [n for n in run["nodes"] if n not in (external or [])]
-    cores = usable_cores()
-    layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
+    mesh = LocalMesh.create(names) if names and not zenoh_config_file else None
+    own_listen = list(listen or []) or None
+    if mesh is not None:
+        own_listen = [*(own_listen or [LOOPBACK_LISTEN]), mesh.listen(ORCHESTRATOR)]
     try:
-        local = LocalNodes(run["id"], names, list(connect or listen or []), lowlatency,
-                           folder / "logs", zenoh_config_file, layout, lease_ms=lease,
-                           run_key=run_key)
-    except OSError as exc:  # a node log that cannot be opened: nothing has started yet
+        bus = ZenohBus(zenoh_config(connect or [], own_listen, lowlatency=False,
+                                    lease_ms=lease, config_file=zenoh_config_file,
+                                    default_mode="client" if as_client else "peer",
+                                    gossip=mesh is None or bool(connect)))
+    except BaseException:
+        if mesh is not None:
+            mesh.remove()
+        raise
+    try:
+        if connect:  # the embedded mesh is this run's own: only a shared one can collide
+            check_run_id_free(bus, run["id"], list(external or []))
+        cores = usable_cores()
+        layout = core_layout(run["nodes"], cores) if should_pin(pin_mode, cores) else {}
+        # with the mesh, the nodes reach the orchestrator on its socket (and a router given
+        # by --connect); without, through its endpoints, and each other by gossip
+        reach = list(connect or []) if mesh is not None else list(connect or listen or [])
+        try:
+            local = LocalNodes(run["id"], names, reach, lowlatency, folder / "logs",
+                               zenoh_config_file, layout, lease_ms=lease, run_key=run_key,
+                               mesh=mesh)
+        except OSError as exc:  # a node log that cannot be opened: nothing has started yet
+            raise InputFileError(str(exc.filename or folder / "logs"),
+                                 f"cannot write the node logs: {exc.strerror or exc}") from None
+    except BaseException:
         close_quietly(bus)
-        raise InputFileError(str(exc.filename or folder / "logs"),
-                             f"cannot write the node logs: {exc.strerror or exc}") from None
+        if mesh is not None:
+            mesh.remove()
+        raise
     return Nodes(bus, local.check, local=local)
 
 

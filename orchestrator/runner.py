@@ -235,23 +235,21 @@ def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes
     return au.derive_run_key(secret, run["id"])
 
 
-LOWLATENCY_DEFAULT = False
+LOWLATENCY_DEFAULT = True
 """Whether the local nodes' sessions use Zenoh's low-latency transport when the command does
 not say (``suscosim run --lowlatency/--no-lowlatency``). The orchestrator's own session uses
 the universal transport in every case (:func:`orchestrator.run_modes.distributed`).
 
-Off. With the low-latency transport on *every* session the embedded mesh's start wedged a
-session about once in 700 starts of five peers (``python bench/zenoh_join_stress.py``: 3 of
-~2 000 rounds; universal 0 of 3 000), a Zenoh deadlock under peer churn: a receive thread
-holding the routing lock forwards gossip link states with a blocking low-latency send that
-never completes (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim.md). In the stress
-bench the stuck peer was always the listening one (the orchestrator's role), and with its
-session universal the bench wedged 0 of 6 000 rounds (``--mesh server-universal``); but two
-Ch 6 sweeps of 16 runs with low-latency nodes and the universal orchestrator still lost a
-run each to a node whose session wedged at its scenario query ("not ready within 60 s:
-'fatigue'", 2026-12-04 15:43 and 16:14; two runs start at once there, unpinned). So the
-nodes stay universal by default, at ~15-30 % of the lumped car's coupled steps/s
-(docs/cosim.md "A wedged start")."""
+On, since the local nodes link as an explicit mesh with gossip off
+(:mod:`orchestrator.local_mesh`). With gossip, the low-latency transport wedged the start of
+five peers about once in 700 (``python bench/zenoh_join_stress.py``), a Zenoh deadlock under
+peer churn: a receive thread holding the routing lock forwards gossip link states with a
+blocking low-latency send (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim.md "A wedged
+start"), and two Ch 6 sweeps lost a run to it on 2026-12-04 even with the orchestrator
+universal. Without gossip there are no link states to forward. Low-latency nodes give
+12-38 % more coupled steps per second than universal ones (interleaved pairs). With a Zenoh
+configuration file (``--zenoh-config``) the mesh is the file's, found by gossip: give
+``--no-lowlatency`` there if its start wedges."""
 
 
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
@@ -262,10 +260,9 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
     (after writing a ``failed`` summary).
 
     ``lowlatency``: Zenoh's low-latency transport for the local nodes (None:
-    :data:`LOWLATENCY_DEFAULT`, off; on, ~15-30 % off a lumped car's coupled step, but a
-    node's start can wedge). The orchestrator's own session is universal in every case.
-    ``pin_mode`` (``auto``, ``on``, ``off``) places the local node processes on cores (see
-    :mod:`orchestrator.placement`).
+    :data:`LOWLATENCY_DEFAULT`, on; ~15-30 % off a lumped car's coupled step). The
+    orchestrator's own session is universal in every case. ``pin_mode`` (``auto``, ``on``,
+    ``off``) places the local node processes on cores (see :mod:`orchestrator.placement`).
 
     The run folder is locked for the run (:class:`cosim.run_lock.RunLock`: a second run on
     it is refused, exit 2); with ``connect``, a run id already live on the bus is refused too

@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -42,6 +43,16 @@ def popen_suscosim(*args: str) -> subprocess.Popen:
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     return subprocess.Popen([sys.executable, "-m", "orchestrator", *args], cwd=ROOT, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def run_client(endpoint: str) -> Any:
+    """A session that joins a run from outside as a tap does: a Zenoh client of the run's
+    orchestrator (its local nodes are an explicit mesh, gossip off: a peer connected to the
+    orchestrator would hear none of them; the orchestrator routes for its clients). It opens
+    once the run listens (up to 30 s: start the run first)."""
+    from cosim.bus import ZenohBus, zenoh_config
+
+    return ZenohBus(zenoh_config(connect=[endpoint], mode="client"))
 
 
 def node_pids(run_id: str, node: str) -> list[int]:

@@ -124,7 +124,7 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
             raise ScopeInputError(f"{args.run!r}: not a run id or a run folder") from None
         try:
             bus, mode = open_session(args, target.endpoints, args.listen,
-                                     lowlatency=target.lowlatency)
+                                     lowlatency=target.lowlatency, wait=True)
         except SessionOpenError as exc:
             return _fail(exc.message(", ".join(target.endpoints)), exc.code)
         if target.note:

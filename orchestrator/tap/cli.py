@@ -68,10 +68,18 @@ def main(argv: list[str] | None = None) -> int:
             sink.close()
 
 
+def _linked(bus: Any) -> bool:
+    """Whether the tap's session reaches a peer or a router (a waiting client: opened yet)."""
+    if hasattr(bus, "linked"):  # a LateBus
+        return bool(bus.linked())
+    info = bus.session.info
+    return bool(info.peers_zid() or info.routers_zid())
+
+
 def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
     try:
         bus, mode = open_session(args, target.endpoints, args.listen,
-                                 lowlatency=target.lowlatency)
+                                 lowlatency=target.lowlatency, wait=True)
     except SessionOpenError as exc:
         return _fail(exc.message(", ".join(target.endpoints)), exc.code)
     inbox: queue.SimpleQueue[tuple[str, bytes, float]] = queue.SimpleQueue()
@@ -119,7 +127,7 @@ def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
                     sink.flush()
                 if not warned and not tap.stats and now - t0 > 2.0:
                     warned = True
-                    if not bus.session.info.peers_zid():
+                    if not _linked(bus):
                         print(f"suscosim tap: no peer reachable at {', '.join(target.endpoints)}"
                               " yet (is a run listening there? see 'suscosim runs')",
                               file=sys.stderr, flush=True)

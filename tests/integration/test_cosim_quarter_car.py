@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from cosim import channels as ch
-from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.bus import free_loopback_endpoint
 from cosim.journal import read_journal
 from cosim.table import build_table, read_table
 from cosim.wire import encode, encode_step
@@ -23,7 +23,7 @@ from orchestrator.accuracy import peak_errors, worst
 from orchestrator.placement import core_layout, usable_cores
 from orchestrator.reference import reference_solution
 
-from ..conftest import node_pids, popen_suscosim, suscosim
+from ..conftest import node_pids, popen_suscosim, run_client, suscosim
 
 pytestmark = pytest.mark.integration
 
@@ -155,7 +155,7 @@ def test_malformed_messages_are_rejected_and_counted(tmp_path, ch3_step):
     out = tmp_path / "inj"
     proc = popen_suscosim("run", str(ch3_step), "--out", str(out), "--quiet",
                           "--listen", endpoint, "--set", 'run.id="injtest"')
-    bus = ZenohBus(zenoh_config(connect=[endpoint]))
+    bus = run_client(endpoint)
     stop = threading.Event()
 
     def inject():

@@ -21,11 +21,11 @@ import pytest
 from cosim import channels as ch
 from cosim import coupling_energy as ce
 from cosim import keys
-from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.bus import free_loopback_endpoint
 from cosim.table import read_table
 from cosim.wire import decode
 
-from ..conftest import CH3_STEP, popen_suscosim
+from ..conftest import CH3_STEP, popen_suscosim, run_client
 from .test_scope import _start_scope, _stop, _until, _wait_json
 
 pytestmark = pytest.mark.integration
@@ -49,21 +49,21 @@ def tapped(tmp_path_factory) -> dict:
         with lock:
             heard.append(raw)
 
-    # the tap's session first (it retries the endpoint until the run listens), so that it
-    # has subscribed before the recorder's first message
-    bus = ZenohBus(zenoh_config(connect=[endpoint]))
-    proc = scope = None
+    # the scope first, by run id at the endpoint, before the run (it waits for the run to
+    # listen): started on the run folder once run.json was there, it joined a loaded CI
+    # machine's 2 s run after its end and never heard a message (both tests errored in the
+    # fixture). The test's own session is a client of the run's orchestrator (a tap's way in),
+    # which can only open once the run listens: it subscribes then, while the nodes start.
+    bus = proc = scope = None
     seen: dict = {"out": out}
     try:
-        bus.subscribe(keys.key(RUN_ID, *ch.COUPLING_CHANNEL), on)
-        # the scope too, by run id at the endpoint, before the run: started on the run folder
-        # once run.json was there, it joined a loaded CI machine's 2 s run after its end and
-        # never heard a message (both tests errored in the fixture)
         scope, url = _start_scope(RUN_ID, "--connect", endpoint)
         proc = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
                               endpoint, "--set", f"run.t_end={T_END}", "--set",
                               f'run.id="{RUN_ID}"', "--set", 'run.coupling="hold"', "--set",
                               'run.exchange="parallel"')
+        bus = run_client(endpoint)
+        bus.subscribe(keys.key(RUN_ID, *ch.COUPLING_CHANNEL), on)
         assert bus.wait_linked(60), "the test's session never reached the run"
         _wait_json(out / "run.json", proc)
         stdout, stderr = proc.communicate(timeout=240)
@@ -82,7 +82,8 @@ def tapped(tmp_path_factory) -> dict:
             d["coupling"] or {}).get("last", {}).get("k") == N_LAST, timeout=120)
         _stop(replay)
     finally:
-        bus.close()
+        if bus is not None:
+            bus.close()
         for p in (proc, scope):
             if p is not None and p.poll() is None:
                 p.kill()

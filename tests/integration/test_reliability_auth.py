@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 from cosim import keys
-from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.bus import free_loopback_endpoint
 from cosim.journal import read_journal
 from cosim.step_message import expand, step_keyexprs
 from cosim.table import build_table
 from cosim.wire import decode, encode, encode_step
-from tests.conftest import CH3_STEP, popen_suscosim, suscosim
+from tests.conftest import CH3_STEP, popen_suscosim, run_client, suscosim
 
 pytestmark = pytest.mark.integration
 SHORT = ("--set", "run.t_end=1.0", "--set", "run.stall_timeout_s=30.0")
@@ -42,7 +42,7 @@ def test_forged_messages_on_the_bus_change_nothing_and_a_tap_still_reads(tmp_pat
     out, evil = tmp_path / "run", tmp_path / "evil"
     proc = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet",
                           "--listen", endpoint, "--set", f'run.id="{run_id}"', *SHORT)
-    bus = ZenohBus(zenoh_config(connect=[endpoint]))
+    bus = run_client(endpoint)
     k = lambda node, channel: keys.key(run_id, node, channel)  # noqa: E731
     rogue = encode("start", -1, 0.0, {"run": {"dir": str(evil), "n_steps": 5}})
     bus.serve(k(keys.ORCHESTRATOR, keys.SCENARIO), lambda: rogue)

@@ -14,9 +14,9 @@ import pytest
 
 from cosim import auth as au
 from cosim import keys
-from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
+from cosim.bus import free_loopback_endpoint
 from cosim.wire import decode, encode
-from tests.conftest import CH3_STEP, node_pids, popen_suscosim
+from tests.conftest import CH3_STEP, node_pids, popen_suscosim, run_client
 
 pytestmark = pytest.mark.integration
 
@@ -68,7 +68,7 @@ def test_an_abort_an_insider_signs_is_said_to_be_foreign(tmp_path, monkeypatch) 
     proc = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet",
                           "--listen", endpoint, "--set", "run.t_end=30.0",
                           "--set", f'run.id="{run_id}"', "--set", "run.stall_timeout_s=30.0")
-    bus = ZenohBus(zenoh_config(connect=[endpoint]))
+    bus = run_client(endpoint)
     try:
         _under_way(out, proc)
         # the insider: the run's secret, the nonce read from the served scenario

@@ -14,8 +14,8 @@ import time
 import pytest
 
 from cosim import keys
-from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
-from tests.conftest import CH3_STEP, popen_suscosim
+from cosim.bus import free_loopback_endpoint
+from tests.conftest import CH3_STEP, popen_suscosim, run_client
 
 pytestmark = pytest.mark.integration
 SHORT = ("--set", "run.t_end=0.5", "--set", "run.stall_timeout_s=30.0")
@@ -36,7 +36,7 @@ def test_control_messages_of_run_1_replayed_into_run_2_are_rejected(tmp_path,
     out1 = tmp_path / "run1"
     p1 = popen_suscosim("run", str(CH3_STEP), "--out", str(out1), "--quiet", "--listen", ep1,
                         "--set", f'run.id="{run_id}"', *SHORT)
-    tap = ZenohBus(zenoh_config(connect=[ep1]))
+    tap = run_client(ep1)
     tap.subscribe(keys.key(run_id, "*", keys.CTL), tape)
     try:
         stdout, stderr = p1.communicate(timeout=150)
@@ -54,7 +54,7 @@ def test_control_messages_of_run_1_replayed_into_run_2_are_rejected(tmp_path,
     out2 = tmp_path / "run2"
     p2 = popen_suscosim("run", str(CH3_STEP), "--out", str(out2), "--quiet", "--listen", ep2,
                         "--set", f'run.id="{run_id}"', "--set", "road.height=0.01", *SHORT)
-    evil = ZenohBus(zenoh_config(connect=[ep2]))
+    evil = run_client(ep2)
     stop = threading.Event()
 
     def replay() -> None:

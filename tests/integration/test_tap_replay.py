@@ -106,18 +106,21 @@ def test_tap_sees_a_live_run_without_changing_it(tmp_path, untapped) -> None:
 
 
 def test_a_plain_zenoh_session_taps_a_default_run(tmp_path) -> None:
-    """The README's "tap with plain Zenoh": a session with Zenoh's own defaults (QoS lanes
-    on, universal transport) joins a run whose own links are low-latency without QoS."""
+    """The README's "tap with plain Zenoh": a client session with Zenoh's own defaults
+    otherwise (QoS lanes on, universal transport) gets a run's messages through its
+    orchestrator, whose nodes' own links are low-latency without QoS (the default run)."""
     import zenoh
 
     out = tmp_path / "plain"
     endpoint = free_loopback_endpoint()
     conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
     conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    conf.insert_json5("connect/timeout_ms", "30000")  # run.json is written before it listens
     conf.insert_json5("scouting/multicast/enabled", "false")
     got: list[int] = []
     run = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
-                         endpoint, "--lowlatency", "--set", f"run.t_end={T_END}",
+                         endpoint, "--set", f"run.t_end={T_END}",
                          "--set", 'run.id="plaintap"')
     try:
         _wait_for(out / "run.json", run)

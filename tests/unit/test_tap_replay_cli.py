@@ -191,11 +191,13 @@ def test_raw_mode_prints_one_line_per_message() -> None:
     assert lines[1].startswith("r/plant/state UNDECODABLE (not msgpack")
 
 
-def test_session_mode_peer_on_loopback_client_elsewhere() -> None:
+def test_session_mode_client_unless_listening() -> None:
     assert tap.is_loopback("tcp/127.0.0.1:7447") and tap.is_loopback("tcp/localhost:1")
     assert tap.is_loopback("tcp/[::1]:7447") and not tap.is_loopback("tcp/10.0.0.1:7447")
     assert not tap.is_loopback("tls/router.example.org:7447")
-    assert tap.session_mode("auto", ["tcp/127.0.0.1:7447"], None) == "peer"
+    # a run's local nodes are an explicit mesh: on loopback too, a tap is the orchestrator's
+    # client (a peer connected to it would hear none of them)
+    assert tap.session_mode("auto", ["tcp/127.0.0.1:7447"], None) == "client"
     assert tap.session_mode("auto", ["tcp/10.0.0.1:7447"], None) == "client"
     assert tap.session_mode("auto", ["tcp/10.0.0.1:7447"], ["tcp/0.0.0.0:7000"]) == "peer"
     assert tap.session_mode("peer", ["tcp/10.0.0.1:7447"], None) == "peer"

@@ -1,0 +1,122 @@
+"""The explicit Zenoh mesh of a run's local nodes: who listens where and who connects to whom.
+
+A run's node processes on this machine and the orchestrator link to each other directly, a
+full mesh over Unix sockets in a private folder, with Zenoh's gossip off in every one of
+these sessions:
+
+* the orchestrator listens on ``orchestrator.sock`` (besides its TCP endpoint, which taps,
+  nodes elsewhere and routers use);
+* node *i* (in the scenario's order) listens on ``NAME.sock`` and connects to the
+  orchestrator's socket and to the sockets of the nodes before it: each pair is linked once,
+  by one side, so no two sessions open a link to each other at once.
+
+Why (docs/cosim.md "A wedged start"): with gossip, each joining peer learns the others
+through link-state messages that the receiving peers forward to their neighbours while
+holding Zenoh's routing lock. With the low-latency transport that forward is a blocking
+socket write from the receive thread, and the start of five peers wedged a session about
+once in 700 starts (``bench/zenoh_join_stress.py --mesh gossip``; a Ch 6 sweep lost a run to
+it twice on 2026-12-04 even with the orchestrator universal). With every link given and no
+link states the start wedged in none of the rounds of ``--mesh explicit``, so the local nodes
+can take the low-latency transport (12-38 % more coupled steps/s than universal).
+
+Unix sockets rather than TCP ports chosen in advance: a path in a folder of the run's own
+cannot be taken by another program between the choice and the node's listen (a free port
+can, by any outgoing connection), and the folder (mode 0700) keeps other users of the
+machine off the run's links. The socket paths stay short (``/tmp/suscosim-mesh-XXXXXXXX/NAME.sock``)
+under the 107 bytes a Unix socket path may have. An orchestrator killed outright (SIGKILL)
+leaves its folder behind: the next run removes the folders whose owner process is gone
+(:func:`remove_stale`).
+
+Who is not in the mesh joins through the orchestrator, which routes for its clients: taps,
+scopes and replays on this machine open client sessions by default
+(:func:`cosim.zenoh_options.session_mode`), as nodes elsewhere always did.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ORCHESTRATOR = "orchestrator"
+PREFIX = "suscosim-mesh-"
+"""The name of a mesh folder starts so, in the system's temporary folder."""
+OWNER_FILE = "owner.pid"
+"""The file in a mesh folder holding the process id of the orchestrator that made it."""
+SOCKET_PATH_MAX = 107
+"""The longest path a Unix socket may have on Linux (``sun_path`` is 108 bytes) [bytes]."""
+
+
+def unix_endpoint(path: Path) -> str:
+    """The Zenoh endpoint of a Unix stream socket at ``path``."""
+    return f"unixsock-stream/{path}"
+
+
+@dataclass
+class LocalMesh:
+    """The socket folder of one run's explicit mesh (:func:`create`), and each member's
+    endpoints: ``names`` are the local nodes in the order they are started."""
+
+    folder: Path
+    names: list[str] = field(default_factory=list)
+
+    @classmethod
+    def create(cls, names: list[str]) -> LocalMesh:
+        """A new private folder (mode 0700, under the system's temporary folder) for the
+        sockets of ``names`` and the orchestrator. Raises ValueError for a name that is not
+        a plain file name or a path too long for a Unix socket (a TMPDIR too deep)."""
+        remove_stale()
+        folder = Path(tempfile.mkdtemp(prefix=PREFIX))
+        (folder / OWNER_FILE).write_text(str(os.getpid()))
+        mesh = cls(folder, list(names))
+        try:
+            for name in [ORCHESTRATOR, *mesh.names]:
+                mesh.socket(name)
+        except ValueError:
+            mesh.remove()
+            raise
+        return mesh
+
+    def socket(self, name: str) -> Path:
+        """The socket path of member ``name`` (a node or :data:`ORCHESTRATOR`)."""
+        if not name or "/" in name or name in (".", ".."):
+            raise ValueError(f"mesh member name {name!r} is not a plain file name")
+        path = self.folder / f"{name}.sock"
+        if len(str(path).encode()) > SOCKET_PATH_MAX:
+            raise ValueError(f"socket path {path} is longer than {SOCKET_PATH_MAX} bytes "
+                             f"(set TMPDIR to a shorter folder)")
+        return path
+
+    def listen(self, name: str) -> str:
+        """The endpoint member ``name`` listens on."""
+        return unix_endpoint(self.socket(name))
+
+    def connect(self, name: str) -> list[str]:
+        """The endpoints node ``name`` connects to: the orchestrator's, then those of the nodes
+        started before it (each pair of the mesh is linked by exactly one side)."""
+        before = self.names[:self.names.index(name)]
+        return [self.listen(ORCHESTRATOR), *(self.listen(n) for n in before)]
+
+    def remove(self) -> None:
+        """Remove the socket folder (once every member has closed; idempotent)."""
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def remove_stale() -> list[Path]:
+    """Remove the mesh folders of this user in the temporary folder whose orchestrator
+    process is gone (killed before it could remove its own); return them. A folder without
+    a readable owner file is left alone (it may be one being made right now)."""
+    removed = []
+    for folder in Path(tempfile.gettempdir()).glob(f"{PREFIX}*"):
+        try:
+            if folder.stat().st_uid != os.getuid():
+                continue
+            pid = int((folder / OWNER_FILE).read_text())
+        except (OSError, ValueError):
+            continue
+        if not Path(f"/proc/{pid}").exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
