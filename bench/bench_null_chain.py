@@ -96,7 +96,7 @@ class Chain:
     """The node processes of one configuration (the first ``count`` of :data:`ROLES`), started,
     pinned and connected to this process's Zenoh session as the orchestrator does it."""
 
-    def __init__(self, bus: Any, endpoint: str, count: int, pin: bool) -> None:
+    def __init__(self, bus: Any, mesh: Any, count: int, pin: bool) -> None:
         from orchestrator.placement import background, core_layout, usable_cores
         from orchestrator.placement import pin as pin_to
 
@@ -108,8 +108,9 @@ class Chain:
         self.cores: dict[str, int] = {}
         for name in self.names:
             spin = spin_us if name in cores else 0
+            links = [a for ep in mesh.connect(name) for a in ("--connect", ep)]
             self.procs[name] = p = subprocess.Popen(
-                [sys.executable, str(NODE_SCRIPT), name, "--connect", endpoint,
+                [sys.executable, str(NODE_SCRIPT), name, *links, "--listen", mesh.listen(name),
                  "--spin-us", str(spin)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                 text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
             if name in cores and pin_to(p.pid, cores[name]):
@@ -229,13 +230,17 @@ def main() -> int:
           f"load {_load()}, {args.steps} steps a run, pinned: {pin}, model work per step: "
           f"{args.work or 'none'}", flush=True)
     pp0 = pingpongs(max(1, args.repeats // 2 + 1), args.pingpong_n)
+    from orchestrator.local_mesh import ORCHESTRATOR, LocalMesh
+
     endpoint = free_loopback_endpoint()
-    bus = ZenohBus(zenoh_config(listen=[endpoint], lowlatency=False,  # as a run's orchestrator
-                                lease_ms=local_lease_ms(STALL_S)))
+    mesh = LocalMesh.create(list(ROLES))  # as a run's: explicit, over Unix sockets, no gossip
+    bus = ZenohBus(zenoh_config(listen=[endpoint, mesh.listen(ORCHESTRATOR)],
+                                lowlatency=False,  # as a run's orchestrator
+                                lease_ms=local_lease_ms(STALL_S), gossip=False))
     rows = []
     try:
         for count in counts:
-            chain = Chain(bus, endpoint, count, pin)
+            chain = Chain(bus, mesh, count, pin)
             try:
                 time.sleep(0.5)  # the peers' links settle
                 got: dict[tuple[str, str], list[dict]] = {}
@@ -255,6 +260,7 @@ def main() -> int:
                       f"(load {min(loads)}-{max(loads)})", flush=True)
     finally:
         bus.close()
+        mesh.remove()
     pp1 = pingpongs(max(1, args.repeats // 2 + 1), args.pingpong_n)
     pp = {c: pp0[c] + pp1[c] for c in pp0}
     rate = statistics.median(pp["callback"])

@@ -287,7 +287,8 @@ def fatigue(part: Any, cmd: dict) -> None:
     part.finish(n, n * H)
 
 
-def node_main(name: str, connect: str, spin_us: float) -> int:
+def node_main(name: str, connect: list[str], spin_us: float, listen: str | None = None
+              ) -> int:
     """A node process: one trial per command line on stdin, its result on stdout."""
     from cosim.auth import RunKey
     from cosim.bus import ZenohBus, zenoh_config
@@ -297,8 +298,10 @@ def node_main(name: str, connect: str, spin_us: float) -> int:
 
     if name == "fatigue":
         os.nice(10)
-    bus = ZenohBus(zenoh_config([connect], lowlatency=True, lease_ms=local_lease_ms(STALL_S),
-                                mode="peer"))
+    # as a run's local node: in the explicit mesh (listen on its socket, gossip off)
+    bus = ZenohBus(zenoh_config(connect, [listen] if listen else None, lowlatency=True,
+                                lease_ms=local_lease_ms(STALL_S), mode="peer",
+                                gossip=listen is None))
     role = {"plant": plant, "tyre_road": force_node, "controller": force_node,
             "recorder": recorder, "fatigue": fatigue}[name]
     print("up", flush=True)
@@ -322,7 +325,8 @@ def node_main(name: str, connect: str, spin_us: float) -> int:
 if __name__ == "__main__":
     _ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     _ap.add_argument("name", choices=ROLES)
-    _ap.add_argument("--connect", required=True)
+    _ap.add_argument("--connect", action="append", required=True)
+    _ap.add_argument("--listen", default=None, help="its socket in the run's explicit mesh")
     _ap.add_argument("--spin-us", type=float, default=0.0)
     _args = _ap.parse_args()
-    raise SystemExit(node_main(_args.name, _args.connect, _args.spin_us))
+    raise SystemExit(node_main(_args.name, _args.connect, _args.spin_us, _args.listen))
