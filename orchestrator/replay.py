@@ -16,8 +16,7 @@ Endpoints: with neither ``--connect`` nor ``--listen`` the replay listens on
 ``tcp/127.0.0.1:7447`` (where a bare ``suscosim tap`` connects). Before the first message it
 waits up to ``--wait`` s (default 5) for a subscriber to appear, so a tap started just before
 or after does not miss the beginning; it publishes anyway after that. ``--mode auto``: a
-Zenoh peer when it listens or every endpoint is on loopback, a client otherwise (through a
-router, from another machine).
+Zenoh peer when it listens, a client otherwise (through the router or peer it connects to).
 
 Exit codes: 0 replayed, 1 the endpoint cannot be reached (client mode), 2 bad input (no such
 file, not a journal, bad run id, bad endpoint, port in use), 130 interrupted.

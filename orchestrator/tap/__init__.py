@@ -19,9 +19,10 @@ decoding and display happen in the main thread.
   one, else the orchestrator's listen endpoint), else ``tcp/127.0.0.1:7447`` -- so a run
   started with ``--listen tcp/127.0.0.1:7447`` is tapped by a bare ``suscosim tap``.
   ``suscosim runs`` shows where each running run listens.
-* Session mode (``--mode auto``): a Zenoh peer when every endpoint is on loopback (it joins
-  the run's mesh, data come straight from the nodes), a client otherwise (everything comes
-  through the one router or peer it connects to: what works from another machine).
+* Session mode (``--mode auto``): a Zenoh client (everything comes through the one
+  orchestrator or router it connects to, on this machine as from another: a run's local
+  nodes are an explicit mesh with gossip off that a peer would not join), opened as soon as
+  the endpoint answers (a tap started before its run waits for it); a peer when it listens.
 
 Display: per key, the message count and rate [msg/s], the last step ``k``, its time ``t``
 [s] and the last values (arrays shortened), redrawn every ``--interval`` s (on a terminal;
