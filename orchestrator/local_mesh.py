@@ -64,20 +64,25 @@ class LocalMesh:
 
     @classmethod
     def create(cls, names: list[str]) -> LocalMesh:
-        """A new private folder (mode 0700, under the system's temporary folder) for the
-        sockets of ``names`` and the orchestrator. Raises ValueError for a name that is not
-        a plain file name or a path too long for a Unix socket (a TMPDIR too deep)."""
-        remove_stale()
-        folder = Path(tempfile.mkdtemp(prefix=PREFIX))
-        (folder / OWNER_FILE).write_text(str(os.getpid()))
-        mesh = cls(folder, list(names))
-        try:
-            for name in [ORCHESTRATOR, *mesh.names]:
-                mesh.socket(name)
-        except ValueError:
-            mesh.remove()
-            raise
-        return mesh
+        """A new private folder (mode 0700) for the sockets of ``names`` and the orchestrator,
+        under the system's temporary folder, or under ``/tmp`` when a socket path there would
+        be too long (a deep ``TMPDIR``). Raises ValueError for a name that is not a plain
+        file name or when no folder gives short enough paths, OSError when none can be made."""
+        error: ValueError | None = None
+        for base in dict.fromkeys([tempfile.gettempdir(), "/tmp"]):
+            remove_stale(Path(base))
+            folder = Path(tempfile.mkdtemp(prefix=PREFIX, dir=base))
+            (folder / OWNER_FILE).write_text(str(os.getpid()))
+            mesh = cls(folder, list(names))
+            try:
+                for name in [ORCHESTRATOR, *mesh.names]:
+                    mesh.socket(name)
+                return mesh
+            except ValueError as exc:
+                mesh.remove()
+                error = exc
+        assert error is not None
+        raise error
 
     def socket(self, name: str) -> Path:
         """The socket path of member ``name`` (a node or :data:`ORCHESTRATOR`)."""
@@ -104,12 +109,12 @@ class LocalMesh:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
-def remove_stale() -> list[Path]:
-    """Remove the mesh folders of this user in the temporary folder whose orchestrator
-    process is gone (killed before it could remove its own); return them. A folder without
-    a readable owner file is left alone (it may be one being made right now)."""
+def remove_stale(base: Path | None = None) -> list[Path]:
+    """Remove the mesh folders of this user in ``base`` (default: the temporary folder)
+    whose orchestrator process is gone (killed before it could remove its own); return them.
+    A folder without a readable owner file is left alone (it may be one being made now)."""
     removed = []
-    for folder in Path(tempfile.gettempdir()).glob(f"{PREFIX}*"):
+    for folder in (base or Path(tempfile.gettempdir())).glob(f"{PREFIX}*"):
         try:
             if folder.stat().st_uid != os.getuid():
                 continue

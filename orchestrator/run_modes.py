@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from cosim.bus import LOOPBACK_LISTEN, Bus, MemoryBus, ZenohBus, zenoh_config
-from cosim.errors import InputFileError
+from cosim.errors import InputFileError, RunError
 from cosim.run_lock import check_run_id_free
 
 from .local_mesh import ORCHESTRATOR, LocalMesh
@@ -85,7 +85,10 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
     Zenoh's universal one (:data:`orchestrator.runner.LOWLATENCY_DEFAULT`)."""
     lease = local_lease_ms(float(run["stall_timeout_s"]))
     names = [n for n in run["nodes"] if n not in (external or [])]
-    mesh = LocalMesh.create(names) if names and not zenoh_config_file else None
+    try:
+        mesh = LocalMesh.create(names) if names and not zenoh_config_file else None
+    except (OSError, ValueError) as exc:
+        raise RunError(f"cannot make the folder of the run's node sockets: {exc}") from None
     own_listen = list(listen or []) or None
     if mesh is not None:
         own_listen = [*(own_listen or [LOOPBACK_LISTEN]), mesh.listen(ORCHESTRATOR)]

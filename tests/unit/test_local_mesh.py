@@ -43,16 +43,26 @@ def test_the_folder_is_private_and_removed() -> None:
     mesh.remove()  # idempotent
 
 
-def test_a_socket_path_too_long_is_refused_and_leaves_nothing(monkeypatch, tmp_path) -> None:
+def test_a_deep_tmpdir_falls_back_to_tmp_and_leaves_nothing_there(monkeypatch,
+                                                                    tmp_path) -> None:
     deep = tmp_path / ("d" * 90)
     deep.mkdir()
     monkeypatch.setenv("TMPDIR", str(deep))
     import tempfile
 
     monkeypatch.setattr(tempfile, "tempdir", None)  # read TMPDIR again
+    mesh = LocalMesh.create(NAMES)
+    try:
+        assert mesh.folder.parent == Path("/tmp")
+        assert all(len(str(mesh.socket(n)).encode()) <= SOCKET_PATH_MAX for n in NAMES)
+        assert os.listdir(deep) == []
+    finally:
+        mesh.remove()
+
+
+def test_a_socket_path_too_long_everywhere_is_refused(monkeypatch) -> None:
     with pytest.raises(ValueError, match=f"longer than {SOCKET_PATH_MAX} bytes"):
-        LocalMesh.create(NAMES)
-    assert os.listdir(deep) == []
+        LocalMesh.create(["x" * 120])
 
 
 def test_a_member_name_must_be_a_plain_file_name() -> None:
