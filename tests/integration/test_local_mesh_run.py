@@ -1,11 +1,13 @@
 """A real run's local nodes are linked by the explicit mesh (orchestrator.local_mesh): each
 node listens on its socket in the run's mesh folder and has no TCP socket at all (it reaches
-the orchestrator and the other nodes over the folder's Unix sockets only); the folder is
-gone when the run ends, and a tap still hears the run through the orchestrator."""
+the orchestrator and the other nodes over the folder's Unix sockets only); a tap still hears
+the run through the orchestrator; the folder is gone when the run ends, also when it is
+interrupted, and one left by an orchestrator killed outright is removed by the next run."""
 
 from __future__ import annotations
 
 import json
+import signal
 import tempfile
 import time
 from pathlib import Path
@@ -56,22 +58,28 @@ def _mesh_of(pid: int) -> Path | None:
     return None
 
 
+def _under_way(proc, run_id: str, out: Path) -> Path:
+    """The run's mesh folder, once every node is past its handshake and the run records."""
+    deadline = time.monotonic() + 60
+    while True:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "the run never got under way"
+        folder = _mesh_of(proc.pid)
+        if folder and (out / "journal.msgpack").exists() and \
+                all(len(node_pids(run_id, n)) == 1 for n in NODES):
+            return folder
+        time.sleep(0.2)
+
+
 def test_the_nodes_talk_over_the_mesh_only(tmp_path) -> None:
     run_id = "meshrun"
     out = tmp_path / "run"
     endpoint = free_loopback_endpoint()
+    # long enough to be checked while it runs on any machine; ended by SIGTERM (as Ctrl-C)
     proc = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
-                          endpoint, "--set", "run.t_end=20", "--set", f'run.id="{run_id}"')
+                          endpoint, "--set", "run.t_end=600", "--set", f'run.id="{run_id}"')
     try:
-        deadline = time.monotonic() + 60
-        while True:  # under way: every node past its handshake, stepping
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline, "the run never got under way"
-            folder = _mesh_of(proc.pid)
-            if folder and (out / "journal.msgpack").exists() and \
-                    all(len(node_pids(run_id, n)) == 1 for n in NODES):
-                break
-            time.sleep(0.2)
+        folder = _under_way(proc, run_id, out)
         tap = suscosim("tap", run_id, "plant/state", "--connect", endpoint, "--count", "50",
                        "--duration", "30", timeout=60)
         assert tap.returncode == 0 and "50 data" in tap.stdout, tap.stdout + tap.stderr
@@ -83,10 +91,35 @@ def test_the_nodes_talk_over_the_mesh_only(tmp_path) -> None:
             assert not mine & set(tcp), f"{name} has a TCP socket"
             assert str(folder / f"{name}.sock") in {unix.get(i) for i in mine}, name
         assert (folder / "orchestrator.sock").exists()
-        stdout, stderr = proc.communicate(timeout=120)
+        proc.send_signal(signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
-    assert proc.returncode == 0, stdout + stderr
-    assert json.loads((out / "summary.json").read_text())["status"] == "ok"
-    assert not folder.exists()  # removed at the end of the run
+    assert proc.returncode == 130, stdout + stderr
+    assert json.loads((out / "summary.json").read_text())["status"] == "failed"
+    assert not folder.exists()  # removed at the end of the run, an interrupted one too
+
+
+def test_a_killed_orchestrators_mesh_folder_goes_with_the_next_run(tmp_path) -> None:
+    run_id = "meshkill"
+    out = tmp_path / "killed"
+    proc = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet",
+                          "--set", "run.t_end=600", "--set", f'run.id="{run_id}"',
+                          "--set", "run.stall_timeout_s=2.0")
+    try:
+        folder = _under_way(proc, run_id, out)
+        proc.kill()  # no chance to clean up
+        proc.wait(timeout=30)
+        assert folder.exists()
+        deadline = time.monotonic() + 60  # its nodes see it gone and end
+        while any(node_pids(run_id, n) for n in NODES):
+            assert time.monotonic() < deadline, "the nodes outlived their orchestrator"
+            time.sleep(0.2)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    res = suscosim("run", str(CH3_STEP), "--out", str(tmp_path / "next"), "--quiet",
+                   "--set", "run.t_end=0.2", timeout=120)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert not folder.exists()
