@@ -248,8 +248,8 @@ blocking low-latency send (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim
 start"), and two Ch 6 sweeps lost a run to it on 2026-12-04 even with the orchestrator
 universal. Without gossip there are no link states to forward. Low-latency nodes give
 12-38 % more coupled steps per second than universal ones (interleaved pairs). With a Zenoh
-configuration file (``--zenoh-config``) the mesh is the file's, found by gossip: give
-``--no-lowlatency`` there if its start wedges."""
+configuration file (``--zenoh-config``) the mesh is the file's, found by gossip, so the
+nodes are universal there unless ``--lowlatency`` is given."""
 
 
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
@@ -286,8 +286,8 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
                 listen: list[str] | None, lowlatency: bool | None,
                 pin_mode: str) -> dict[str, Any]:
     """:func:`run_scenario` once the run folder is locked."""
-    if lowlatency is None:
-        lowlatency = LOWLATENCY_DEFAULT
+    if lowlatency is None:  # a config file's run gossips: low-latency there only if asked
+        lowlatency = LOWLATENCY_DEFAULT and not zenoh_config_file
     run = scenario["run"]
     folder = Path(run["dir"])
     if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go

@@ -105,3 +105,38 @@ def test_through_a_router_the_orchestrator_keeps_gossip_its_nodes_a_mesh(
         assert recorded.nodes[0][2] == ["tcp/127.0.0.1:7000"]
     finally:
         mesh.remove()
+
+
+@pytest.mark.parametrize(("config_file", "asked", "expected"), [
+    (False, None, True), (True, None, False), (True, True, True), (False, False, False)])
+def test_a_config_files_run_has_universal_nodes_unless_asked(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path, config_file: bool,
+        asked: bool | None, expected: bool) -> None:
+    """With --zenoh-config the peers find each other by gossip, where low-latency nodes can
+    wedge a start: universal there unless --lowlatency is given (run.json says which)."""
+    import json
+
+    from cosim import scenario as sc
+    from orchestrator.runner import resolve
+
+    class Stop(Exception):
+        pass
+
+    got: list[bool] = []
+
+    def distributed(run: Any, folder: Any, connect: Any, external: Any, listen: Any,
+                    lowlatency: bool, *rest: Any) -> None:
+        got.append(lowlatency)
+        raise Stop
+
+    monkeypatch.setattr(run_modes, "distributed", distributed)
+    root = Path(__file__).resolve().parents[2]
+    resolved = resolve(sc.load(root / "scenarios" / "ch3_step_quarter_car.toml",
+                               ["run.t_end=0.1"]), tmp_path / "run")
+    cfg = tmp_path / "z.json5"
+    cfg.write_text("{}")
+    with pytest.raises(Stop):
+        runner.run_scenario(resolved, quiet=True, lowlatency=asked,
+                            zenoh_config_file=str(cfg) if config_file else None)
+    assert got == [expected]
+    assert json.loads((tmp_path / "run" / "run.json").read_text())["lowlatency"] is expected
