@@ -278,7 +278,8 @@ def build_parser() -> argparse.ArgumentParser:
                               "port)", metavar=None)
     zo.add_lowlatency_argument(r, "Zenoh's low-latency transport for the local nodes' "
                                   "sessions, linked as an explicit mesh with gossip off "
-                                  "(default: on; ~15-30 %% faster than --no-lowlatency; the "
+                                  "(default: on, off with --zenoh-config; ~15-30 %% faster than "
+                                  "--no-lowlatency; the "
                                   "orchestrator's own session is universal; peers without it "
                                   "still connect)",
                                   negatable=True)
