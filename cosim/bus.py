@@ -239,6 +239,11 @@ class ZenohBus:
         return [str(r.ok.key_expr) for r in
                 self.session.liveliness().get(keyexpr, timeout=timeout) if r.ok is not None]
 
+    def linked(self) -> bool:
+        """Whether this session has a link to a peer or a router now."""
+        info = self.session.info
+        return bool(info.peers_zid() or info.routers_zid())
+
     def wait_linked(self, timeout: float = 10.0) -> bool:
         """Wait until this session has a link to a peer or a router [timeout in s]: a put,
         subscription or query before then meets nobody. True when linked."""
@@ -246,8 +251,7 @@ class ZenohBus:
 
         deadline = time.monotonic() + timeout
         while True:
-            info = self.session.info
-            if info.peers_zid() or info.routers_zid():
+            if self.linked():
                 return True
             if time.monotonic() >= deadline:
                 return False

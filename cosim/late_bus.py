@@ -84,10 +84,7 @@ class LateBus:
     def linked(self) -> bool:
         """Whether the session is open and linked to a peer or a router."""
         bus = self._bus
-        if bus is None:
-            return False
-        info = bus.session.info
-        return bool(info.peers_zid() or info.routers_zid())
+        return bus is not None and bool(bus.linked())
 
     def close(self) -> None:
         """Stop trying (within one attempt's timeout) and close the session if it opened."""

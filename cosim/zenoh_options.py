@@ -153,6 +153,11 @@ def apply_mode(conf: Any, mode: str, connect_timeout_ms: int = CLIENT_CONNECT_TI
     return conf
 
 
+def _reason(exc: Exception) -> str:
+    """Zenoh's error in one line, without the Rust source location it ends with."""
+    return " ".join(str(exc).split(" at /")[0].split())
+
+
 def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
              lowlatency: bool = False, config_file: str | None = None,
              connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS) -> Any:
@@ -169,7 +174,7 @@ def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
                             lowlatency=lowlatency, config_file=config_file)
         return ZenohBus(apply_mode(conf, mode, connect_timeout_ms))
     except Exception as exc:  # zenoh.ZError: bad endpoint, port in use, unreachable router
-        reason = " ".join(str(exc).split(" at /")[0].split())
+        reason = _reason(exc)
         raise SessionOpenError(reason, 1 if "Unable to connect" in reason else 2,
                                mode) from None
 
@@ -197,8 +202,7 @@ def open_session(args: argparse.Namespace, connect: list[str], listen: list[str]
         try:  # a malformed endpoint is bad input now, not a wait forever
             zenoh_config(connect, None, mode="client")
         except Exception as exc:
-            raise SessionOpenError(" ".join(str(exc).split(" at /")[0].split()), 2,
-                                   mode) from None
+            raise SessionOpenError(_reason(exc), 2, mode) from None
         return LateBus(lambda timeout_ms: open_bus(connect, None, "client", lowlatency=ll,
                                                    connect_timeout_ms=timeout_ms)), mode
     return open_bus(connect, listen, mode, lowlatency=ll,

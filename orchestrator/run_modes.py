@@ -91,17 +91,13 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
         raise RunError(f"cannot make the folder of the run's node sockets: {exc}") from None
     own_listen = list(listen or []) or None
     if mesh is not None:
-        own_listen = [*(own_listen or [LOOPBACK_LISTEN]), mesh.listen(ORCHESTRATOR)]
+        own_listen = [*(listen or [LOOPBACK_LISTEN]), mesh.listen(ORCHESTRATOR)]
+    bus: ZenohBus | None = None
     try:
         bus = ZenohBus(zenoh_config(connect or [], own_listen, lowlatency=False,
                                     lease_ms=lease, config_file=zenoh_config_file,
                                     default_mode="client" if as_client else "peer",
                                     gossip=mesh is None or bool(connect)))
-    except BaseException:
-        if mesh is not None:
-            mesh.remove()
-        raise
-    try:
         if connect:  # the embedded mesh is this run's own: only a shared one can collide
             check_run_id_free(bus, run["id"], list(external or []))
         cores = usable_cores()
@@ -116,8 +112,9 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
         except OSError as exc:  # a node log that cannot be opened: nothing has started yet
             raise InputFileError(str(exc.filename or folder / "logs"),
                                  f"cannot write the node logs: {exc.strerror or exc}") from None
-    except BaseException:
-        close_quietly(bus)
+    except BaseException:  # nothing of the run is left behind
+        if bus is not None:
+            close_quietly(bus)
         if mesh is not None:
             mesh.remove()
         raise

@@ -68,14 +68,6 @@ def main(argv: list[str] | None = None) -> int:
             sink.close()
 
 
-def _linked(bus: Any) -> bool:
-    """Whether the tap's session reaches a peer or a router (a waiting client: opened yet)."""
-    if hasattr(bus, "linked"):  # a LateBus
-        return bool(bus.linked())
-    info = bus.session.info
-    return bool(info.peers_zid() or info.routers_zid())
-
-
 def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
     try:
         bus, mode = open_session(args, target.endpoints, args.listen,
@@ -127,7 +119,7 @@ def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
                     sink.flush()
                 if not warned and not tap.stats and now - t0 > 2.0:
                     warned = True
-                    if not _linked(bus):
+                    if not bus.linked():  # a ZenohBus or a LateBus
                         print(f"suscosim tap: no peer reachable at {', '.join(target.endpoints)}"
                               " yet (is a run listening there? see 'suscosim runs')",
                               file=sys.stderr, flush=True)
