@@ -52,7 +52,7 @@ from .arm_loads import arm_loads_at
 from .bump_stop import BumpStopParams, bump_stop_force
 from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
 from .driver import Driver
-from .full_vehicle_dw_wheels import WheelsAndDriver, steer_lever
+from .full_vehicle_dw_wheels import WheelsAndDriver, steer_lever, wheel_inertia, wheel_mass
 from .model import GRAVITY, PlantModel
 from .quarter_car_lumped import load_urdf_text, new_direct_client
 from .quiet_pybullet import p
@@ -84,23 +84,6 @@ class FullVehicleDWParams:
 RACK_MASS = 2.0
 """The steering rack's mass [kg], taken from ``sprung_mass`` (the rack is body) and placed at
 the CG, so the vehicle's mass and CG do not move (ours: a small car's rack and pinion)."""
-
-WHEEL_SHARE = 0.62
-"""The spinning share of a corner's hub mass when its file gives no ``masses.wheel`` [-]: of
-the MPV's 38.75 kg (Table 4.2), a 15-16 in steel wheel (8-9 kg), its tyre (8-9 kg), the brake
-disc (5 kg) and the bearing's inner ring spin, about 24 kg (ours; the upright, calliper and
-bearing housing the rest)."""
-WHEEL_GYRATION = 0.205
-"""Radius of gyration of the spinning wheel about its axis [m]: the tyre's mass at ~0.28 m,
-the rim's at ~0.18 m, the disc's at ~0.1 m give I_spin ~ 1.0 kg m^2 for 24 kg (ours); its
-diametral inertia is taken as 0.6 I_spin (a thin ring would have 0.5, a tyre's width adds)."""
-
-
-def wheel_mass(c: Corner) -> float:
-    """The spinning part of the corner's hub mass [kg] (``masses.wheel`` or
-    :data:`WHEEL_SHARE` of ``masses.hub``)."""
-    return c.masses.get("wheel", WHEEL_SHARE * c.masses["hub"])
-
 
 def _rot(quat) -> np.ndarray:
     return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
@@ -215,8 +198,7 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                        g.lower_arm_inertia(m["lower_arm"]))
             m_w = wheel_mass(c)
             s += _link(f"hub_{n}", m["hub"] - m_w, wc - bj, (0.15, 0.15, 0.15))
-            i_spin = m_w * WHEEL_GYRATION ** 2
-            s += _link(f"wheel_{n}", m_w, [0, 0, 0], (0.6 * i_spin, i_spin, 0.6 * i_spin))
+            s += _link(f"wheel_{n}", m_w, [0, 0, 0], wheel_inertia(m_w))
             s += _link(f"upper_arm_{n}", m["upper_arm"], ua_com - ua_o, (0.012, 0.01, 0.02))
             s += _link(f"tie_rod_{n}", m["tie_rod"], tr_com - tri,
                        (i_perp, m["tie_rod"] * 1e-4 / 2.0, i_perp))

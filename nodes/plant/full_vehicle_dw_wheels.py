@@ -1,7 +1,8 @@
-"""The four-corner vehicle's wheels on a 3-D tyre and its driver's inputs (#31 items 2-3): the
-contact frame and wheel kinematics the tyre/road node takes, the road-plane tyre forces and
-the wheel torques and rack travel the plant applies (a mixin of
-:class:`.full_vehicle_dw.FullVehicleDoubleWishbone`, which owns the PyBullet world)."""
+"""The four-corner vehicle's wheels on a 3-D tyre and its driver's inputs (#31 items 2-3):
+the spinning wheel's mass and inertia, the contact frame and wheel kinematics the tyre/road
+node takes, the road-plane tyre forces and the wheel torques and rack travel the plant
+applies (a mixin of :class:`.full_vehicle_dw.FullVehicleDoubleWishbone`, which owns the
+PyBullet world)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,33 @@ from typing import Any
 
 import numpy as np
 
+from cosim.corner import Corner
+
 from .double_wishbone_geometry import CornerGeometry
 from .quiet_pybullet import p
+
+WHEEL_SHARE = 0.62
+"""The spinning share of a corner's hub mass when its file gives no ``masses.wheel`` [-]: of
+the MPV's 38.75 kg (Table 4.2), a 15-16 in steel wheel (8-9 kg), its tyre (8-9 kg), the brake
+disc (5 kg) and the bearing's inner ring spin, about 24 kg (ours; the upright, calliper and
+bearing housing the rest)."""
+WHEEL_GYRATION = 0.205
+"""Radius of gyration of the spinning wheel about its axis [m]: the tyre's mass at ~0.28 m,
+the rim's at ~0.18 m, the disc's at ~0.1 m give I_spin ~ 1.0 kg m^2 for 24 kg (ours); its
+diametral inertia is taken as 0.6 I_spin (a thin ring would have 0.5, a tyre's width adds)."""
+
+
+def wheel_mass(c: Corner) -> float:
+    """The spinning part of the corner's hub mass [kg] (``masses.wheel`` or
+    :data:`WHEEL_SHARE` of ``masses.hub``)."""
+    return c.masses.get("wheel", WHEEL_SHARE * c.masses["hub"])
+
+
+def wheel_inertia(mass: float) -> tuple[float, float, float]:
+    """The spinning wheel's principal inertias about its centre (diametral, spin, diametral)
+    [kg m^2] for its ``mass`` [kg] (:data:`WHEEL_GYRATION`; diametral 0.6 of spin)."""
+    i_spin = mass * WHEEL_GYRATION ** 2
+    return (0.6 * i_spin, i_spin, 0.6 * i_spin)
 
 
 def steer_lever(g: CornerGeometry) -> float:
