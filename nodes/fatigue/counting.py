@@ -261,7 +261,7 @@ class StreamingRainflow:
         Args:
             rows: (m, n_series) each history's samples of the block that may be turning
                 points, in order, padded by repeating its last one (a superset of
-                :func:`turning_points`' rows, e.g. :func:`.turning_eq.turning_equivalent`'s;
+                :func:`turning_points`' rows, e.g. :func:`.turning_eq_numpy.turning_equivalent`'s;
                 any sample left out must lie strictly between its neighbours).
             last: (n_series,) the block's last sample (it must be the last of ``rows``).
 

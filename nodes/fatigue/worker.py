@@ -31,7 +31,8 @@ from .influence import InfluenceSet, builtin_influence, import_influence, short_
 from .result import FatigueResult
 from .screening import Screening, unsupported
 from .superposition import ROWS, components_buffer, node_major, superpose_components
-from .turning_eq import kept_equivalent, superpose_gather, turning_equivalent
+from .turning_eq import kept_equivalent, superpose_gather
+from .turning_eq_numpy import turning_equivalent
 
 ENGINES = ("compiled", "numpy", "block")
 ENGINE = os.environ.get("SUSCOSIM_FATIGUE_ENGINE") or ("compiled" if COMPILED else "numpy")
@@ -40,7 +41,7 @@ ENGINE = os.environ.get("SUSCOSIM_FATIGUE_ENGINE") or ("compiled" if COMPILED el
 :func:`.turning_eq.superpose_gather`, the equivalent stress exactly only at
 the samples a proven bracket cannot rule out as turning points, :func:`.turning_eq.
 kept_equivalent`, and the compiled rainflow, :meth:`.counting.StreamingRainflow.
-feed_packed`); ``"numpy"`` (the same idea in numpy, :func:`.turning_eq.turning_equivalent`,
+feed_packed`); ``"numpy"`` (the same idea in numpy, :func:`.turning_eq_numpy.turning_equivalent`,
 the fallback without numba); ``"block"`` (the equivalent stress of every sample, the
 reference). A module setting, not the engine's: the engine stays plain data (pickled in
 checkpoints). ``SUSCOSIM_FATIGUE_ENGINE`` in the environment picks it for a whole run (a

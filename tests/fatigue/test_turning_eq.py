@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from nodes.fatigue.counting import Cycles, StreamingRainflow, turning_points
 from nodes.fatigue.equivalent_stress import equivalent_of
 from nodes.fatigue.superposition import superpose_components
-from nodes.fatigue.turning_eq import turning_equivalent
+from nodes.fatigue.turning_eq_numpy import turning_equivalent
 
 
 def _both(comp_blocks: list[np.ndarray], kind: str = "abs_max_principal"
