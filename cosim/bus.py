@@ -23,6 +23,7 @@ import json
 import logging
 import queue
 import threading
+import time
 from collections.abc import Callable, Iterable
 from typing import Any, Protocol
 
@@ -73,6 +74,10 @@ def free_loopback_endpoint() -> str:
         s.bind(("127.0.0.1", 0))
         return f"tcp/127.0.0.1:{s.getsockname()[1]}"
 
+
+CALLBACK_DRAIN_TIMEOUT = 5.0
+"""How long :meth:`ZenohBus.close` waits, at most, for its callbacks' threads to deliver what
+they had received [s] (a tap's callback queues a sample in microseconds)."""
 
 CLIENT_CONNECT_TIMEOUT_MS = 30000
 """How long a client session keeps trying to reach its router before giving up [ms]."""
@@ -168,6 +173,20 @@ class ZenohBus:
         self._z = zenoh
         self.session = zenoh.open(config)
         self._keep: list[Any] = []
+        self._drained: list[threading.Event] = []
+
+    def _handler(self, fn: Callable[[Any], None]) -> Any:
+        """``fn`` as a Zenoh callback that says when it is done: Zenoh runs a Python callback
+        in a Python thread of its own, which may still be delivering what it had received
+        when its subscriber is undeclared; ``drop`` is called once it has delivered the
+        last. :meth:`close` waits for it: a process that exited while that thread still
+        waited for the GIL in Zenoh's frames aborted at interpreter exit ("FATAL: exception
+        not rethrown": Python ends such a thread with a forced unwind, which the frames'
+        ``catch_unwind`` stops). Seen as a tap that printed its result, then died of SIGABRT
+        (CI, and 7 of ~20 taps of a live run)."""
+        drained = threading.Event()
+        self._drained.append(drained)
+        return self._z.handlers.Callback(fn, drop=drained.set)
 
     def publisher(self, key: str) -> Callable[[bytes], None]:
         pub = self.session.declare_publisher(
@@ -186,7 +205,7 @@ class ZenohBus:
         def on_sample(sample: Any) -> None:
             callback(str(sample.key_expr), sample.payload.to_bytes())
 
-        sub = self.session.declare_subscriber(keyexpr, on_sample)
+        sub = self.session.declare_subscriber(keyexpr, self._handler(on_sample))
         self._keep.append(sub)
         return sub
 
@@ -204,7 +223,8 @@ class ZenohBus:
         def on_sample(sample: Any) -> None:
             callback(str(sample.key_expr), sample.kind == self._z.SampleKind.PUT)
 
-        sub = self.session.liveliness().declare_subscriber(keyexpr, on_sample, history=True)
+        sub = self.session.liveliness().declare_subscriber(keyexpr, self._handler(on_sample),
+                                                           history=True)
         self._keep.append(sub)
         return sub
 
@@ -212,7 +232,7 @@ class ZenohBus:
         def on_query(query: Any) -> None:
             query.reply(key, reply())
 
-        q = self.session.declare_queryable(key, on_query)
+        q = self.session.declare_queryable(key, self._handler(on_query))
         self._keep.append(q)
         return q
 
@@ -292,6 +312,10 @@ class ZenohBus:
                 pass
         self._keep.clear()
         self.session.close()  # type: ignore[no-untyped-call]  # zenoh's stub lacks a return type
+        deadline = time.monotonic() + CALLBACK_DRAIN_TIMEOUT
+        for drained in self._drained:  # the callbacks' threads have delivered their last
+            drained.wait(max(0.0, deadline - time.monotonic()))
+        self._drained.clear()
 
 
 class _ZenohFeed:
