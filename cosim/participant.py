@@ -12,16 +12,14 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
 3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived (the
    step barrier); :meth:`Participant.publish` adds an output to the node's step and
    :meth:`Participant.send` (or the next :meth:`wait`) publishes the step: **one message per
-   producer per step** on ``<node>/step``, signed once (what it holds, and the block
-   channels that go out on their own keys: :mod:`cosim.outbox`). Each producer a node
-   listens to has one FIFO
-   (:meth:`bus.feed`) that the node's thread reads itself: the bus's receive thread
-   hands a message straight to the waiting node, one thread wake-up per delivery (a callback
-   and a queue cost a second one, and on two cores ~20 % of the coupled step rate). A
-   watchdog thread wakes a node blocked on its FIFO when the stall timeout passes, a control
-   message (abort) comes, or the orchestrator is gone. Progress goes to the orchestrator
-   at most every 0.1 s. What a node sends (its step, its block channels, its records
-   batches for the recorder) is its :class:`cosim.outbox.Outbox`'s.
+   producer per step** on ``<node>/step``, signed once (:mod:`cosim.outbox`: the step, the
+   block channels on their own keys, the records batches). Each producer a node listens to
+   has one FIFO (:meth:`bus.feed`) that the node's thread reads itself: one thread wake-up
+   per delivery (a callback and a queue cost a second one, ~20 % of the coupled step rate
+   on two cores). A watchdog thread wakes a node blocked on its FIFO when the stall timeout
+   passes, a control message (abort) comes, or the orchestrator is gone (its liveliness
+   token, or the process that started the node: :mod:`cosim.local_parent`). Progress goes
+   to the orchestrator at most every 0.1 s.
 4. **End**: ``done`` after the last step; an ``abort`` from the orchestrator, or an input that
    does not come within the stall timeout, ends the node with :class:`RunError`.
 
@@ -48,6 +46,7 @@ from .auth import RunKey, served_scenario
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import InputLate, RunError, WireError
+from .local_parent import parent_from_env, parent_gone
 from .mailbox import MAILBOX_MAX, MAILBOX_WINDOW, Mailbox, file_step
 from .outbox import Outbox
 from .wire import ChannelCodec, Message, codec, decode, encode
@@ -87,9 +86,8 @@ class Participant:
         self.stall_timeout_s = stall_timeout_s
         self.spin_s = spin_s
         """How long :meth:`wait` polls an input (yielding the core between polls) before it
-        blocks [s]. For a node pinned to a core of its own or shared with one other node: the
-        core never idles between two steps, and waking an idle virtual CPU is what a hop
-        costs most on a small VM (see docs/cosim.md). 0: block at once."""
+        blocks [s] (0: at once). For a pinned node: waking an idle virtual CPU is what a hop
+        costs most on a small VM (docs/cosim.md)."""
         self.inbox: queue.SimpleQueue[tuple[Channel, bytes]] = queue.SimpleQueue()
         self.feeds: dict[Channel, Any] = {}
         """Each stepped input's FIFO: its producer's (one per producer, :attr:`_pfeeds`)."""
@@ -107,6 +105,7 @@ class Participant:
         self._listen(_CLOCK_TAG)
         self._orchestrator_seen = False
         self._orchestrator_gone: float | None = None
+        self._parent = parent_from_env()  # the local orchestrator's process (or None)
         bus.watch(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE), self._on_orchestrator)
         self._blocked: tuple[Any, float] | None = None  # (feed, stall deadline) while waiting
         self._awaited: tuple[Channel, int, float] | None = None
@@ -134,6 +133,9 @@ class Participant:
     def check_orchestrator(self) -> None:
         """Raise RunError if the orchestrator is gone (killed, or the network to it failed):
         without it nobody would end the run, and the nodes would step on for nothing."""
+        if parent_gone(self._parent):
+            raise RunError(f"{self.node}: the orchestrator of run '{self.run}' is gone (its "
+                           f"process {self._parent}, which started this node, ended)")
         gone = self._orchestrator_gone
         if gone is not None and time.monotonic() - gone > _ORCHESTRATOR_GONE_S:
             raise RunError(f"{self.node}: the orchestrator of run '{self.run}' is gone "
@@ -246,6 +248,7 @@ class Participant:
                 if nonce is not None:
                     self.bind(nonce)
                 return scenario
+            self.check_orchestrator()
             time.sleep(0.1)
         raise RunError(f"{self.node}: no orchestrator answered for run '{self.run}' "
                        f"within {timeout_s:.0f} s (is it running, and is --connect right?)")
@@ -339,7 +342,7 @@ class Participant:
             gone = self._orchestrator_gone
             now = time.monotonic()
             self._say_waiting(now)
-            if (not self.inbox.empty() or now >= deadline
+            if (not self.inbox.empty() or now >= deadline or parent_gone(self._parent)
                     or (gone is not None and now - gone > _ORCHESTRATOR_GONE_S)):
                 with self._wake_lock:
                     self._wakes += 1

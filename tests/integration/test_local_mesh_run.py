@@ -119,6 +119,11 @@ def test_a_killed_orchestrators_mesh_folder_goes_with_the_next_run(tmp_path) -> 
     finally:
         if proc.poll() is None:
             proc.kill()
+    # Each node says why it ended: the process that started it is gone (cosim.local_parent;
+    # it is checked before the liveliness token, whose drop takes 2 s to count).
+    for name in NODES:
+        log = (out / "logs" / f"{name}.log").read_text()
+        assert f"its process {proc.pid}, which started this node, ended" in log, (name, log)
     res = suscosim("run", str(CH3_STEP), "--out", str(tmp_path / "next"), "--quiet",
                    "--set", "run.t_end=0.2", timeout=120)
     assert res.returncode == 0, res.stdout + res.stderr
