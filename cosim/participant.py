@@ -18,7 +18,7 @@ Life of a node (see DESIGN.md, "Lock-step co-simulation"):
    per delivery (a callback and a queue cost a second one, ~20 % of the coupled step rate
    on two cores). A watchdog thread wakes a node blocked on its FIFO when the stall timeout
    passes, a control message (abort) comes, or the orchestrator is gone (its liveliness
-   token, or the process that started the node: :mod:`cosim.local_parent`). Progress goes
+   token, or the process that started the node: :mod:`cosim.orchestrator_presence`). Progress goes
    to the orchestrator at most every 0.1 s.
 4. **End**: ``done`` after the last step; an ``abort`` from the orchestrator, or an input that
    does not come within the stall timeout, ends the node with :class:`RunError`.
@@ -46,8 +46,8 @@ from .auth import RunKey, served_scenario
 from .bus import Bus, Feed
 from .control import check_clock, check_start
 from .errors import InputLate, RunError, WireError
-from .local_parent import parent_from_env, parent_gone
 from .mailbox import MAILBOX_MAX, MAILBOX_WINDOW, Mailbox, file_step
+from .orchestrator_presence import OrchestratorPresence, parent_from_env
 from .outbox import Outbox
 from .wire import ChannelCodec, Message, codec, decode, encode
 
@@ -59,9 +59,6 @@ Channel = tuple[str, str]
 """(node, channel) of an input."""
 
 _CLOCK_TAG: Channel = (keys.ORCHESTRATOR, keys.CLOCK)
-_ORCHESTRATOR_GONE_S = 2.0
-"""The orchestrator's liveliness token must stay dropped this long before a node gives up
-(Zenoh can drop and re-declare a token while links reorganise under heavy CPU load)."""
 HELLO_PERIOD_S = 0.05
 PROGRESS_PERIOD_S = 0.1
 WAITING_PERIOD_S = 1.0
@@ -103,10 +100,8 @@ class Participant:
         self._last_progress = 0.0
         self._token = bus.token(keys.key(run, node, keys.ALIVE))
         self._listen(_CLOCK_TAG)
-        self._orchestrator_seen = False
-        self._orchestrator_gone: float | None = None
-        self._parent = parent_from_env()  # the local orchestrator's process (or None)
-        bus.watch(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE), self._on_orchestrator)
+        self.orchestrator = OrchestratorPresence(self.run, node, parent_from_env())
+        bus.watch(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE), self.orchestrator.on_token)
         self._blocked: tuple[Any, float] | None = None  # (feed, stall deadline) while waiting
         self._awaited: tuple[Channel, int, float] | None = None
         """(input, step, since when [monotonic s]) while :meth:`wait` is blocked on it: the
@@ -123,23 +118,11 @@ class Participant:
         """Each input's filed messages by step (a view for inspection)."""
         return {tag: mb.box for tag, mb in self.inputs.items()}
 
-    def _on_orchestrator(self, _key: str, alive: bool) -> None:
-        """Liveliness of the run's orchestrator (called on the bus's thread)."""
-        if alive:
-            self._orchestrator_seen, self._orchestrator_gone = True, None
-        elif self._orchestrator_seen and self._orchestrator_gone is None:
-            self._orchestrator_gone = time.monotonic()
-
     def check_orchestrator(self) -> None:
-        """Raise RunError if the orchestrator is gone (killed, or the network to it failed):
-        without it nobody would end the run, and the nodes would step on for nothing."""
-        if parent_gone(self._parent):
-            raise RunError(f"{self.node}: the orchestrator of run '{self.run}' is gone (its "
-                           f"process {self._parent}, which started this node, ended)")
-        gone = self._orchestrator_gone
-        if gone is not None and time.monotonic() - gone > _ORCHESTRATOR_GONE_S:
-            raise RunError(f"{self.node}: the orchestrator of run '{self.run}' is gone "
-                           "(its liveliness token dropped)")
+        """Raise RunError if the orchestrator is gone (:mod:`cosim.orchestrator_presence`)."""
+        why = self.orchestrator.why_gone()
+        if why is not None:
+            raise RunError(why)
 
     # ---- wiring -------------------------------------------------------------------------
     def _publisher(self, key: str) -> Any:
@@ -339,11 +322,10 @@ class Participant:
             if blocked is None:
                 continue
             feed, deadline = blocked
-            gone = self._orchestrator_gone
             now = time.monotonic()
             self._say_waiting(now)
-            if (not self.inbox.empty() or now >= deadline or parent_gone(self._parent)
-                    or (gone is not None and now - gone > _ORCHESTRATOR_GONE_S)):
+            if not self.inbox.empty() or now >= deadline or \
+                    self.orchestrator.why_gone() is not None:
                 with self._wake_lock:
                     self._wakes += 1
                 feed.wake()

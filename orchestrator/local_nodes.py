@@ -12,7 +12,7 @@ from pathlib import Path
 
 from cosim import auth as au
 from cosim import node_kinds as nk
-from cosim.local_parent import ENV_PARENT_PID
+from cosim.orchestrator_presence import ENV_PARENT_PID
 
 from .local_mesh import LocalMesh
 from .placement import BackgroundGuard, background, pin
@@ -51,7 +51,8 @@ class LocalNodes:
         self.background: list[str] = []  # the nodes put in SCHED_IDLE (go_background)
         self.guard = BackgroundGuard()
         log_dir.mkdir(parents=True, exist_ok=True)
-        # their parent's PID: a node ends at once if this process is gone (cosim.local_parent)
+        # their parent's PID: a node ends at once when this process is gone
+        # (cosim.orchestrator_presence)
         env = dict(os.environ, PYTHONUNBUFFERED="1", **{ENV_PARENT_PID: str(os.getpid())})
         if run_key is not None:  # the run key, in the environment (readable by this user only)
             env[au.ENV_RUN_KEY] = run_key.hex()

@@ -119,7 +119,7 @@ def test_a_killed_orchestrators_mesh_folder_goes_with_the_next_run(tmp_path) -> 
     finally:
         if proc.poll() is None:
             proc.kill()
-    # Each node says why it ended: the process that started it is gone (cosim.local_parent;
+    # Each node says why it ended: the process that started it is gone (cosim.orchestrator_presence;
     # it is checked before the liveliness token, whose drop takes 2 s to count).
     for name in NODES:
         log = (out / "logs" / f"{name}.log").read_text()

@@ -1,4 +1,5 @@
-"""A local node knows its orchestrator's process is gone (cosim.local_parent)."""
+"""A node knows its orchestrator is gone: its liveliness token dropped, or its parent process
+ended (cosim.orchestrator_presence)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,14 @@ import subprocess
 import sys
 import textwrap
 
-from cosim.local_parent import ENV_PARENT_PID, parent_from_env, parent_gone
+from cosim import orchestrator_presence as op
+from cosim.orchestrator_presence import (
+    ENV_PARENT_PID,
+    ORCHESTRATOR_GONE_S,
+    OrchestratorPresence,
+    parent_from_env,
+    parent_gone,
+)
 
 
 def test_the_parent_pid_is_read_from_the_environment_and_nonsense_is_none() -> None:
@@ -29,7 +37,7 @@ def test_a_child_sees_its_killed_parent_gone() -> None:
     process lived)."""
     grandchild = textwrap.dedent("""
         import sys, time
-        from cosim.local_parent import parent_from_env, parent_gone
+        from cosim.orchestrator_presence import parent_from_env, parent_gone
         pid = parent_from_env()
         print("alive", parent_gone(pid), flush=True)
         deadline = time.monotonic() + 30
@@ -52,3 +60,31 @@ def test_a_child_sees_its_killed_parent_gone() -> None:
         assert proc.stdout.readline().split() == ["gone", "True"]
     finally:
         proc.kill()
+
+
+def test_the_token_counts_once_seen_and_dropped_for_long_enough(monkeypatch) -> None:
+    now = [100.0]
+    monkeypatch.setattr(op.time, "monotonic", lambda: now[0])
+    seen = OrchestratorPresence("r1", "plant", None)
+    seen.on_token("k", False)  # a drop before the token was ever seen says nothing
+    now[0] += 10 * ORCHESTRATOR_GONE_S
+    assert seen.why_gone() is None
+    seen.on_token("k", True)
+    seen.on_token("k", False)
+    now[0] += ORCHESTRATOR_GONE_S / 2
+    assert seen.why_gone() is None  # a token re-declared while links reorganise
+    seen.on_token("k", True)
+    now[0] += 10 * ORCHESTRATOR_GONE_S
+    assert seen.why_gone() is None  # back
+    seen.on_token("k", False)
+    now[0] += ORCHESTRATOR_GONE_S * 1.01
+    assert seen.why_gone() == ("plant: the orchestrator of run 'r1' is gone (its liveliness "
+                               "token dropped)")
+
+
+def test_the_parent_process_counts_first() -> None:
+    other = os.getppid() + 100000
+    presence = OrchestratorPresence("r2", "tyre_road", other)
+    assert presence.why_gone() == (f"tyre_road: the orchestrator of run 'r2' is gone (its "
+                                   f"process {other}, which started this node, ended)")
+    assert OrchestratorPresence("r2", "tyre_road", os.getppid()).why_gone() is None

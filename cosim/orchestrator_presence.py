@@ -1,0 +1,77 @@
+"""Whether a run's orchestrator is still there, as one node sees it.
+
+Without its orchestrator nobody would end the run, and the nodes would step on for nothing.
+A node knows it is gone in two ways, whichever comes first (:class:`OrchestratorPresence`):
+
+* **its liveliness token dropped** (any node, here or elsewhere) and stayed dropped for
+  :data:`ORCHESTRATOR_GONE_S`: the orchestrator was killed, or the network to it failed;
+* **the process that started the node ended** (a local node only). The orchestrator of
+  ``suscosim run`` starts its local nodes as child processes and puts its PID in their
+  environment (:data:`ENV_PARENT_PID`); a child whose parent died is adopted by init or a
+  subreaper, so ``os.getppid()`` changes at once. Without it a node whose orchestrator was
+  killed outright (SIGKILL, the OOM killer) before the node had fetched its scenario waited
+  the fetch's 30 s (the token had never been seen, so its drop said nothing); later in a
+  run the nodes went after the token's 2 s. Nodes started elsewhere (another machine, a
+  container) have no such parent and go by the token alone.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Mapping
+
+ENV_PARENT_PID = "SUSCOSIM_PARENT_PID"
+"""The PID of the orchestrator that started this node as its child (decimal)."""
+ORCHESTRATOR_GONE_S = 2.0
+"""The orchestrator's liveliness token must stay dropped this long before a node gives up
+(Zenoh can drop and re-declare a token while links reorganise under heavy CPU load) [s]."""
+
+
+def parent_from_env(environ: Mapping[str, str] | None = None) -> int | None:
+    """The orchestrator's PID if this process is a local node that it started, else None
+    (unset or not a PID). Not checked against ``os.getppid()`` here: an orchestrator killed
+    before its last node's interpreter got this far is already gone, and
+    :func:`parent_gone` says so at once."""
+    raw = (os.environ if environ is None else environ).get(ENV_PARENT_PID, "")
+    try:
+        pid = int(raw)
+    except ValueError:
+        return None
+    return pid if pid > 1 else None
+
+
+def parent_gone(pid: int | None) -> bool:
+    """True when ``pid`` (from :func:`parent_from_env`) is no longer this process's parent."""
+    return pid is not None and os.getppid() != pid
+
+
+class OrchestratorPresence:
+    """The orchestrator of run ``run`` as node ``node`` sees it: :meth:`on_token` is the
+    watch of its liveliness token (called on the bus's thread), ``parent`` the PID of the
+    process that started this node (:func:`parent_from_env`; None for a node started
+    elsewhere)."""
+
+    def __init__(self, run: str, node: str, parent: int | None) -> None:
+        self.run, self.node, self.parent = run, node, parent
+        self._seen = False
+        self._gone: float | None = None  # when the token dropped [monotonic s]
+
+    def on_token(self, _key: str, alive: bool) -> None:
+        """The token was declared (``alive``) or dropped."""
+        if alive:
+            self._seen, self._gone = True, None
+        elif self._seen and self._gone is None:
+            self._gone = time.monotonic()
+
+    def why_gone(self) -> str | None:
+        """Why the orchestrator counts as gone (the error a node ends with), or None while
+        it is there."""
+        if parent_gone(self.parent):
+            return (f"{self.node}: the orchestrator of run '{self.run}' is gone (its process "
+                    f"{self.parent}, which started this node, ended)")
+        gone = self._gone
+        if gone is not None and time.monotonic() - gone > ORCHESTRATOR_GONE_S:
+            return (f"{self.node}: the orchestrator of run '{self.run}' is gone (its liveliness "
+                    "token dropped)")
+        return None
