@@ -58,26 +58,18 @@ ZSTD_LEVEL = 3
 _CHUNK = 1 << 20  # bytes read at a time
 
 
-def record_crc(channel: str, payload: bytes, version: int = 2) -> int:
-    """The CRC a record of a version 1/2 journal carries."""
-    return journal_v2.record_crc(channel, payload, version)
-
-
 class JournalWriter:
-    """Append records to ``path``; call :meth:`flush` often and :meth:`close` at the end.
+    """Append records to ``path`` (version 3, segments); call :meth:`flush` often and
+    :meth:`close` at the end. The one journal writer: versions 1 and 2 are only read."""
 
-    ``version`` 2 writes the old format (one CRC-framed record at a time), for tests of the
-    reader; the default is version 3 (segments)."""
-
-    def __init__(self, path: str | Path, run_id: str, version: int = VERSION) -> None:
+    def __init__(self, path: str | Path, run_id: str) -> None:
         import zstandard
 
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_APPEND, 0o644)
         self._packer = msgpack.Packer(use_bin_type=True)
-        os.write(self._fd, self._packer.pack([MAGIC, version, run_id]))
-        self._v2 = journal_v2.V2Writer(self._fd, self._packer) if version == 2 else None
+        os.write(self._fd, self._packer.pack([MAGIC, VERSION, run_id]))
         self._zstd = zstandard.ZstdCompressor(level=ZSTD_LEVEL, write_checksum=True)
         self._buf: list[bytes] = []
         self._buf_bytes = 0
@@ -87,9 +79,6 @@ class JournalWriter:
 
     def append(self, channel: str, payload: bytes) -> None:
         self.records += 1
-        if self._v2 is not None:
-            self._v2.append(channel, payload)
-            return
         rec = self._packer.pack([channel, payload])
         self._buf.append(rec)
         self._buf_bytes += len(rec)
@@ -98,9 +87,6 @@ class JournalWriter:
 
     def flush(self) -> None:
         """Write what was appended since the last flush as one segment (one ``write``)."""
-        if self._v2 is not None:
-            self._v2.flush()
-            return
         if not self._buf:
             return
         raw = b"".join(self._buf)

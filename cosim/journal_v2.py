@@ -1,4 +1,4 @@
-"""Journal versions 1 and 2 (still read; version 2 is also written on request, for tests):
+"""Journal versions 1 and 2 (read only; suscosim writes version 3, :mod:`cosim.journal`):
 one msgpack array ``[channel, payload, crc32]`` per record after the header.
 
 ``crc32`` covers the channel's UTF-8 bytes followed by the payload (version 2; version 1
@@ -11,11 +11,8 @@ length and the mean length of the intact records, and said to be an estimate.
 
 from __future__ import annotations
 
-import os
 import struct
 import zlib
-
-import msgpack
 
 
 def record_crc(channel: str, payload: bytes, version: int = 2) -> int:
@@ -23,22 +20,6 @@ def record_crc(channel: str, payload: bytes, version: int = 2) -> int:
     if version == 1:
         return zlib.crc32(payload)
     return zlib.crc32(payload, zlib.crc32(channel.encode()))
-
-
-class V2Writer:
-    """The version-2 writer (one framed record at a time), kept to test the reader."""
-
-    def __init__(self, fd: int, packer: msgpack.Packer) -> None:
-        self._fd, self._packer = fd, packer
-        self._buf: list[bytes] = []
-
-    def append(self, channel: str, payload: bytes) -> None:
-        self._buf.append(self._packer.pack([channel, payload, record_crc(channel, payload)]))
-
-    def flush(self) -> None:
-        if self._buf:
-            os.write(self._fd, b"".join(self._buf))
-            self._buf.clear()
 
 
 class _Short(Exception):

@@ -1,13 +1,14 @@
 import os
 
-from cosim.journal import JournalWriter, read_journal
+from cosim.journal import read_journal
 from cosim.table import build_table, channel_stats
 from cosim.wire import encode
+from tests.journal_oracle import journal_writer
 
 
 def _write(path, n, version=2, every=1):
     """``n`` steps of two channels; version 3: a segment every ``every`` steps."""
-    w = JournalWriter(path, "run1", version=version)
+    w = journal_writer(path, "run1", version)
     for k in range(n):
         w.append("plant/state", encode("data", k, k * 0.001, {"z_b": 0.001 * k}))
         w.append("tyre_road/force", encode("data", k, k * 0.001, {"F_t": [1.0 * k, 2.0 * k]}))

@@ -10,9 +10,10 @@ from pathlib import Path
 import msgpack
 
 from cosim import run_folder
-from cosim.journal import JournalWriter, last_step, read_journal
+from cosim.journal import last_step, read_journal
 from cosim.wire import encode
 from orchestrator.export import main as export_main
+from tests.journal_oracle import journal_writer
 
 CHANNELS = ("plant/state", "tyre_road/force")
 
@@ -20,7 +21,7 @@ CHANNELS = ("plant/state", "tyre_road/force")
 def _write(path: Path, n: int, version: int = 2, every: int = 2
            ) -> list[tuple[str, bytes]]:
     """``n`` steps of two channels; version 3: a segment every ``every`` steps."""
-    w = JournalWriter(path, "rel", version=version)
+    w = journal_writer(path, "rel", version)
     records = []
     for k in range(n):
         for ch in CHANNELS:
