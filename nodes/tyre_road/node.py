@@ -9,7 +9,9 @@ publishes ``force``: F_t [N] (absolute, compressive-positive, >= 0), k_t = dF_t/
 With ``[tyre] model = "magic_formula"`` (the four-corner vehicle, #31): F_t from the point
 contact as above, and the Magic Formula's road-plane Fx, Fy [N], Mz [N m] and the slips
 kappa, alpha from the wheel kinematics the plant publishes (:mod:`.tyre_3d`); the road is
-read where the wheels are (s = x_wc - x_wc,FL(0): the vehicle moves itself).
+read where the wheels are: the vehicle moves itself, the profile is laid along the path its
+driver follows (straight, or the ``vehicle.driver.radius`` circle) and each wheel centre's
+world (x, y) is read at its station along it (:class:`.wheel_paths.RoadPath`).
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from cosim.stepped import run_stepped
 from .config import build_road, build_tyre
 from .tyre_3d import KIN_FIELDS, build_tyre_3d, is_magic_formula
 from .tyres import Tyre
-from .wheel_paths import road_heights, road_heights_at
+from .wheel_paths import RoadPath, driver_radius, road_heights, road_heights_at
 
 STATE = f"{ch.PLANT}/{ch.STATE}"
 
@@ -60,14 +62,17 @@ class TyreRoad:
             self.tyre, self.mf = build_tyre_3d(scenario["tyre"])
         else:
             self.tyre = build_tyre(scenario["tyre"])
-        self._s0: float | None = None
+        self._radius = driver_radius(scenario.get("vehicle", {}))
+        self._path: RoadPath | None = None
+        self._u: np.ndarray | None = None
         self._h = RunSettings.of(scenario).h
         self.geo = wheel_geometry(start["info"][ch.PLANT])
         self.offsets = np.asarray(self.tyre.contact_offsets, dtype=float)
         self.centre = int(np.argmin(np.abs(self.offsets)))
 
-    STATE_ATTRS = ("_s0", "tyre", "mf")
-    """What changes as the run goes (the Magic Formula's relaxation states, the path origin);
+    STATE_ATTRS = ("_path", "_u", "tyre", "mf")
+    """What changes as the run goes (the Magic Formula's relaxation states, the road's path
+    and the wheels' last stations);
     the road, the wheel geometry and the step are rebuilt the same from the scenario."""
 
     def checkpoint_state(self) -> dict[str, Any]:
@@ -99,11 +104,14 @@ class TyreRoad:
             raise ScenarioError("tyre.model", "magic_formula",
                                 f"a vehicle whose plant/state carries the wheel kinematics "
                                 f"({exc} is missing): full_vehicle_double_wishbone") from None
-        if self._s0 is None:
-            self._s0 = float(kin["x_wc"][0])
+        if self._path is None:  # the front axle's centre at the first step (FL, FR first)
+            front = slice(0, min(2, kin["x_wc"].size))
+            self._path = RoadPath((float(np.mean(kin["x_wc"][front])),
+                                   float(np.mean(kin["y_wc"][front]))), self._radius)
+        self._u = self._path.station(kin["x_wc"], kin["y_wc"], self._u)
         geo = self.geo
-        z_g = road_heights_at(self.road, kin["x_wc"] - self._s0, geo["wheel_track"],
-                              self.offsets, geo["corner_names"])
+        z_g = road_heights_at(self.road, self._u, geo["wheel_track"], self.offsets,
+                              geo["corner_names"])
         F_t, k_eff = self.tyre.force(st["z_w"], z_g, geo["W"])
         f = self.mf.forces(kin, F_t, self._h)
         return {"F_t": F_t, "k_t": k_eff, "z_g": z_g[:, self.centre],

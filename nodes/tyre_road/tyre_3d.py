@@ -95,8 +95,9 @@ class Tyre3D:
 
 
 MF_KEYS = ("model", "stiffness", "tir", "transient")
-KIN_FIELDS = ("vx_wc", "vy_wc", "omega_w", "gamma", "x_wc", "r_l")
-"""What the 3-D tyre reads of ``plant/state`` (the four-corner vehicle publishes them)."""
+KIN_FIELDS = ("vx_wc", "vy_wc", "omega_w", "gamma", "x_wc", "y_wc", "r_l")
+"""What the 3-D tyre and the road's path read of ``plant/state`` (the four-corner vehicle
+publishes them)."""
 
 
 def is_magic_formula(cfg: Mapping[str, Any]) -> bool:

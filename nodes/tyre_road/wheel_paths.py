@@ -15,11 +15,23 @@ offset dx_j, from :attr:`Tyre.contact_offsets`) is at distance
 on track ``wheel_track[i]``. A rear wheel therefore sees what the front wheel on its track saw
 a time wheelbase / v earlier (thesis Eq. 4.11, t_d = d_wb / v), and sees a flat road while
 s < 0. If the road names ``corners``, the corners not named see a flat road.
+
+A vehicle that moves itself (the four-corner vehicle) gives its wheel centres' world (x, y);
+the road is then laid along the path its driver is told to follow (:class:`RoadPath`: the
+line from the front axle's centre at t = 0, heading +x, straight or the ``vehicle.driver``
+circle of radius R), and a point is read at its station u, the arc length along that line of
+the point's foot on it (a curved road's u, as OpenCRG's reference line). A wheel on the circle
+therefore meets the profile at its arc length, not at its world x. The wheels keep their
+tracks (0 left, 1 right): the track profiles are laid at v = +-t/2 beside the line, so a track
+off the line meets the same profile over (R -+ t/2) / R of the line's distance, as on a real
+curved road whose cross sections stand square to its centreline.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -53,8 +65,8 @@ def road_heights_at(road: Road, s: np.ndarray, wheel_track: Sequence[int],
                     contact_offsets: np.ndarray | None = None,
                     corner_names: Sequence[str] | None = None) -> np.ndarray:
     """Road heights z_g [m] of shape (n_corners, n_points) for wheels whose contact centres
-    are at distances ``s`` [m] along the road (a vehicle that moves itself, the four-corner
-    vehicle: s from its wheel centres' world x, not v t)."""
+    are at stations ``s`` [m] along the road (a vehicle that moves itself, the four-corner
+    vehicle: s from :meth:`RoadPath.station` of its wheel centres, not v t)."""
     offs = np.zeros(1) if contact_offsets is None else np.asarray(contact_offsets, dtype=float)
     d = np.asarray(s, dtype=float)[:, None] + offs[None, :]
     z = np.zeros(d.shape)
@@ -64,3 +76,44 @@ def road_heights_at(road: Road, s: np.ndarray, wheel_track: Sequence[int],
             continue
         z[i] = road.height(d[i], int(track))
     return z
+
+
+@dataclass(frozen=True)
+class RoadPath:
+    """The line a road's profile is laid along, in the world's x-y plane (module docstring).
+
+    ``origin`` (x_0, y_0) [m]: where the line starts (the front axle's centre at t = 0), heading
+    +x; ``radius`` R [m]: a circle, + left (centre at (x_0, y_0 + R)), - right, or None: the
+    straight line y = y_0.
+    """
+
+    origin: tuple[float, float]
+    radius: float | None = None
+
+    def station(self, x: np.ndarray, y: np.ndarray, near: np.ndarray | None = None
+                ) -> np.ndarray:
+        """Station u [m] (arc length along the line of the foot of each point (x, y) [m]).
+
+        Straight: u = x - x_0. Circle: u = R (a - a_0), a the point's polar angle about the
+        centre and a_0 = -sign(R) pi / 2 the origin's; of the values u + 2 pi |R| n the one
+        nearest ``near`` (the previous stations; None: x - x_0) is taken, so that u grows
+        past a lap and a point behind the origin gets u < 0.
+        """
+        x = np.asarray(x, dtype=float)
+        u_straight = x - self.origin[0]
+        if self.radius is None:
+            return u_straight
+        R = self.radius
+        a = np.arctan2(np.asarray(y, dtype=float) - (self.origin[1] + R), u_straight)
+        u = R * (a + np.sign(R) * np.pi / 2)
+        lap = 2 * np.pi * abs(R)
+        ref = u_straight if near is None else np.asarray(near, dtype=float)
+        return u + lap * np.round((ref - u) / lap)
+
+
+def driver_radius(vehicle: Mapping[str, Any]) -> float | None:
+    """The circle's radius R [m] the scenario's driver follows (``vehicle.driver.radius``),
+    or None (no driver, or an open-loop steer: the road is laid straight along +x)."""
+    driver = vehicle.get("driver") or {}
+    r = driver.get("radius")
+    return None if r is None else float(r)
