@@ -1,21 +1,28 @@
-"""Memory and disk of long runs (#32): peak RSS per process, journal and table bytes per
-coupled step, wall time; then ``suscosim export`` of the journal (its own peak RSS) and
-whether the table it rebuilds equals the recorder's ``table.parquet`` bit for bit.
+"""Memory and disk of long runs (#32): peak RSS per process, journal and table bytes per coupled
+step, and the commands that read a finished run folder.
 
-    python bench/bench_memory.py [--steps 10000 100000 1000000] [--corner-steps 100000]
-                                 [--keep DIR] [--report]
-    python bench/bench_memory.py --post RUN_DIR ... [--scope-s 120]
+    python -m bench memory [--steps 10000 100000 1000000] [--corner-steps 100000] [--keep DIR]
+                           [--report]
+    python -m bench memory --post RUN_DIR ... [--scope-s 120] [--only CMD ...]
+    python -m bench tile-table RUN_DIR OUT_DIR TIMES
 
-Cases: the Chapter 3 lumped quarter car (distributed, h = 1 ms: ``run.t_end`` = steps x h)
-at each ``--steps``; the Chapter 6 realistic corner with live fatigue (h = 0.5 ms; the road
-made long enough for ``--corner-steps``: ``road.length_m``, 4235 steps per 20 m) once.
-Peak RSS is each process's VmHWM (``/proc/PID/status``) as last sampled (every 0.1 s, and
-it only grows). ``values`` is the table's columns less ``k`` and ``t``: the 8-byte values a
-step carries; the journal's bar is 1.5x that. ``--report`` also builds ``suscosim report`` of
-each run and gives its wall time and peak RSS. ``--post`` measures, on finished run folders
-(those ``--keep`` kept, or longer ones made by ``bench/tile_table.py``), every command that
-reads one: ``report``, batch ``fatigue``, ``export``, ``replay``, ``scope``. Markdown table
-on stdout; docs/memory.md holds the measured one.
+``memory``: the Chapter 3 lumped quarter car (distributed, h = 1 ms: ``run.t_end`` = steps x
+h) at each ``--steps`` and the Chapter 6 realistic corner with live fatigue (h = 0.5 ms, the
+road made long enough for ``--corner-steps``: 4235 steps per 20 m) once: wall time, peak RSS
+of each process (VmHWM as last sampled every 0.1 s), bytes per step of the journal (its bar:
+1.5x the 8-byte ``values`` a step carries, the table's columns less ``k`` and ``t``), CSV and
+Parquet, then ``suscosim export`` of the journal (time, peak RSS) and whether the table it
+rebuilds equals the recorder's ``table.parquet`` bit for bit; ``--report`` also times
+``suscosim report``. ``--post``: on finished run folders (those ``--keep`` kept, or longer ones
+made by ``tile-table``), the wall time and peak RSS of every command that reads one:
+``report``, batch ``fatigue``, ``export``, ``replay``, ``scope``. Markdown table on stdout;
+docs/memory.md holds the measured one.
+
+``tile-table``: a longer run folder from a shorter one: ``table.parquet`` repeated TIMES times
+end to end (time shifted by the run's duration each repeat, ``k`` renumbered) in row groups as
+the recorder writes them; the scenario and summary copied (``rows``, ``run.t_end`` and
+``road.length_m`` scaled). For the post-processing commands at 10^6 rows without a 10^6-step
+run; the loads repeat, so it is a memory and time probe, not a result. Prints the rows written.
 """
 
 from __future__ import annotations
@@ -29,6 +36,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 CH3 = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
@@ -223,24 +232,8 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--steps", type=int, nargs="*", default=[10_000, 100_000, 1_000_000],
-                    help="coupled steps of the lumped quarter car runs")
-    ap.add_argument("--corner-steps", type=int, default=100_000,
-                    help="coupled steps of the realistic corner with live fatigue (0: none)")
-    ap.add_argument("--keep", help="keep the run folders here (default: a temporary folder)")
-    ap.add_argument("--report", action="store_true", help="also time suscosim report")
-    ap.add_argument("--post", nargs="*", default=None, metavar="RUN_DIR",
-                    help="measure only the commands that read these finished run folders "
-                         "(report, fatigue, export, replay, scope: `post`), no runs")
-    ap.add_argument("--scope-s", type=float, default=120.0,
-                    help="longest scope replay measured [s] (--post)")
-    ap.add_argument("--only", nargs="*", help="--post: only these commands")
-    ap.add_argument("--fatigue-set", action="append", default=[], metavar="KEY=VALUE",
-                    help="--post: a --set of the batch fatigue measured (e.g. a coarser "
-                         "mesh, to measure 10^6 rows in minutes)")
-    args = ap.parse_args(argv)
+def memory(args: argparse.Namespace) -> int:
+    """``memory``: long runs' memory and disk, or (``--post``) the commands reading a run."""
     if args.post is not None:
         work = Path(tempfile.mkdtemp(prefix="bench_memory-post-"))
         rows = [post(Path(d).name, Path(d), work, args.scope_s, args.only, args.fatigue_set)
@@ -269,5 +262,79 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+# ---- tile-table -----------------------------------------------------------------------------
+def tile(src: Path, out: Path, times: int) -> int:
+    """Write ``out`` (a run folder); the rows written."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    out.mkdir(parents=True, exist_ok=True)
+    f = pq.ParquetFile(src / "table.parquet")
+    rg = f.metadata.row_group(0)
+    comp = rg.column(0).compression.lower()
+    t_all = f.read(columns=["t"]).column(0).to_numpy()
+    n = t_all.size
+    span = float(t_all[-1] - t_all[0] + (t_all[1] - t_all[0]))
+    w = pq.ParquetWriter(out / "table.parquet", f.schema_arrow, compression=comp)
+    for r in range(times):
+        for i in range(f.metadata.num_row_groups):
+            b = f.read_row_group(i)
+            cols = []
+            for name, col in zip(b.column_names, b.columns, strict=True):
+                a = col.to_numpy()
+                if name == "t":
+                    a = a + r * span
+                elif name == "k":
+                    a = a + r * n
+                cols.append(pa.array(a, type=col.type))
+            w.write_table(pa.Table.from_arrays(cols, schema=f.schema_arrow))
+    w.close()
+    for name in ("scenario.json", "summary.json"):
+        if (src / name).is_file():
+            d = json.loads((src / name).read_text())
+            if name == "summary.json":
+                d["rows"] = n * times
+            else:
+                run, road = d.get("run", {}), d.get("road", {})
+                if "t_end" in run:
+                    run["t_end"] = float(np.float64(run["t_end"]) * times)
+                if "length_m" in road:
+                    road["length_m"] = float(road["length_m"]) * times
+            (out / name).write_text(json.dumps(d, indent=1))
+    for extra in ("fatigue",):
+        if (src / extra).is_dir() and not (out / extra).exists():
+            shutil.copytree(src / extra, out / extra)
+    return n * times
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("memory", help="peak RSS, bytes per step, export of long runs")
+    p.add_argument("--steps", type=int, nargs="*", default=[10_000, 100_000, 1_000_000],
+                   help="coupled steps of the lumped quarter car runs")
+    p.add_argument("--corner-steps", type=int, default=100_000,
+                   help="coupled steps of the realistic corner with live fatigue (0: none)")
+    p.add_argument("--keep", help="keep the run folders here (default: a temporary folder)")
+    p.add_argument("--report", action="store_true", help="also time suscosim report")
+    p.add_argument("--post", nargs="*", default=None, metavar="RUN_DIR",
+                   help="measure only the commands that read these finished run folders "
+                        "(report, fatigue, export, replay, scope: `post`), no runs")
+    p.add_argument("--scope-s", type=float, default=120.0,
+                   help="longest scope replay measured [s] (--post)")
+    p.add_argument("--only", nargs="*", help="--post: only these commands")
+    p.add_argument("--fatigue-set", action="append", default=[], metavar="KEY=VALUE",
+                   help="--post: a --set of the batch fatigue measured (e.g. a coarser "
+                        "mesh, to measure 10^6 rows in minutes)")
+    p.set_defaults(fn=memory)
+    p = sub.add_parser("tile-table", help="a longer run folder from a shorter one")
+    p.add_argument("run_dir", type=Path)
+    p.add_argument("out_dir", type=Path)
+    p.add_argument("times", type=int)
+    p.set_defaults(fn=lambda a: print(tile(a.run_dir, a.out_dir, a.times)))
+    args = ap.parse_args(argv)
+    return int(args.fn(args) or 0)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(main())
