@@ -26,6 +26,7 @@ from pathlib import Path
 
 from cosim.errors import SuscosimError
 from nodes.fatigue.config import RESIDUES
+from nodes.fatigue.critical_plane import CRITICAL_PLANES
 from nodes.fatigue.damage import METHODS
 from nodes.fatigue.equivalent_stress import EQUIVALENTS
 from nodes.fatigue.mean_stress import MEAN_STRESS_METHODS
@@ -55,7 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
                                             "RUN_DIR/fatigue/, or RUN_DIR/fatigue-<hash>/ "
                                             "for a what-if with settings)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    p.add_argument("--equivalent", choices=EQUIVALENTS)
+    p.add_argument("--equivalent", choices=(*EQUIVALENTS, *CRITICAL_PLANES),
+                   help="findley: critical planes at the abs_max_principal pass's hot spots")
     p.add_argument("--method", choices=METHODS)
     p.add_argument("--mean-stress", choices=MEAN_STRESS_METHODS)
     p.add_argument("--residue", choices=RESIDUES)
@@ -131,6 +133,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"  min life {r.life_km:.4g} km = {r.life_repeats:.4g} repeats of the track"
               + ("" if r.life_repeats_basis is None
                  else f" = {r.life_repeats_basis:.4g} repeats of {r.repeats_basis_m:g} m"))
+    cp = summary.get("critical_plane") or {}
+    if cp.get("hot_spots"):  # equivalent = "findley": its life is summary.json's headline
+        h = cp["hot_spots"][0]
+        life = h["life_km"] if isinstance(h["life_km"], str) else f"{h['life_km']:.4g}"
+        print(f"  critical plane ({cp['method']}, {cp['hot_spots_assessed']} hot spots of "
+              f"the line above): min life {life} km at node {h['node_id']}, normal ("
+              + ", ".join(f"{v:.3f}" for v in h["normal"])
+              + f"), rotation factor {h['rotation_factor']:.2f}")
     sm = summary.get("sn_methods") or {}
     for m, by_p in (sm.get("methods") or {}).items():
         print(f"  S-N {m}: " + ", ".join(

@@ -16,7 +16,9 @@ influence              "builtin"            "builtin" (the CAD lower arm's part 
 mapping                {}                   imported only: channel -> file or
                                             {file = "...", scale = -1.0}
 stress_scale           1.0                  imported only: multiplies table stresses (1e6 if MPa)
-equivalent             "abs_max_principal"  or "signed_von_mises"
+equivalent             "abs_max_principal"  or "signed_von_mises"; or "findley": critical
+                                            planes at the abs-max principal pass's hot
+                                            spots (`critical_plane`, docs/fatigue.md)
 method                 "stress_life"        or "strain_life" (Coffin-Manson-Basquin + Neuber)
 mean_stress            "goodman"            "none", "goodman", "gerber", "morrow", "swt"
 residue                "repeated"           "repeated" (track driven again and again) or
@@ -99,6 +101,7 @@ from typing import Any
 
 from cosim.config import ConfigReader
 
+from .critical_plane import CRITICAL_PLANES, RANKING
 from .damage import METHODS
 from .equivalent_stress import EQUIVALENTS
 from .fkm import FKMSpec, fkm_sn_curve
@@ -168,6 +171,9 @@ class FatigueConfig:
     corner: str | None = None
     parts: tuple[str, ...] = ()
     """More parts (``parts``): their part files' absolute paths."""
+    critical_plane: str | None = None
+    """``equivalent = "findley"``: the critical-plane method run on the hot spots of the
+    ``equivalent`` (then :data:`.critical_plane.RANKING`) pass; None: none."""
     base_dir: str = field(default=".", compare=False)
 
     @property
@@ -240,6 +246,8 @@ class FatigueConfig:
         del d["material_overrides"], d["base_dir"], d["cyclic"], d["material_name"]
         if not self.parts:  # (a run without more parts: the settings as before)
             del d["parts"]
+        if self.critical_plane is None:
+            del d["critical_plane"]
         return d
 
     @classmethod
@@ -266,11 +274,13 @@ class FatigueConfig:
         survival = raw_comp.number("survival_probability", 0.975, lo=0.5, hi=0.999999,
                                    expected="a survival probability between 0.5 and 0.999999")
         fkm = read_fkm(raw_comp.section("fkm", expected="a table of FKM guideline inputs"))
+        eq = r.choice("equivalent", (*EQUIVALENTS, *CRITICAL_PLANES), "abs_max_principal")
         cfg = cls(
             influence=influence,
             mapping=mapping,
             stress_scale=r.number("stress_scale", 1.0, positive=True),
-            equivalent=r.choice("equivalent", EQUIVALENTS, "abs_max_principal"),
+            equivalent=RANKING if eq in CRITICAL_PLANES else eq,
+            critical_plane=eq if eq in CRITICAL_PLANES else None,
             method=r.choice("method", METHODS, "stress_life"),
             mean_stress=r.choice("mean_stress", MEAN_STRESS_METHODS, "goodman"),
             residue=r.choice("residue", RESIDUES, "repeated"),
