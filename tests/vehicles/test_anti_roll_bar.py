@@ -65,7 +65,8 @@ def pave_cornering():
     try:
         x0 = float(car.state()["x_wc"][0])
 
-        def z_road(x: float, track: int) -> float:  # as the tyre/road node: s = x - x_FL(0)
+        def z_road(x: float, track: int) -> float:  # at the wheel's world x (the node reads
+            # the arc along the driver's circle: tests/roads/test_road_path.py)
             return float(road.height(np.array([x - x0]), track)[0])
 
         m = float(car.static_tyre_load().sum()) / GRAVITY

@@ -133,12 +133,11 @@ def test_steady_cornering_at_0_5_g_roll_and_lateral_load_transfer(cornering):
     phi = M_B * a_y * arm / (K_f + K_r - M_B * GRAVITY * arm)
     assert phi / a_y * GRAVITY == pytest.approx(np.radians(5.13), rel=0.01)  # 5.1 deg/g
     roll = float(np.mean(np.abs(hist.roll[win])))
-    # measured 0.0490 against 0.0446, +9.9 %: close to the 10 % (docs/corners.md, "Anti-roll
-    # bars"). The hand leaves out the roll centre's migration (the linkage's scrub dy/dz at
-    # the contact patch is 0.042 static, 0.001 at the outer wheel's 14 mm of jounce, 0.083 at
-    # the inner's rebound: the outer wheel's larger F_y jacks less, ~3 % more roll), the
-    # spinning wheels' gyroscopic moment in yaw (4 I_spin omega r = 65 N m, ~1.3 %) and the
-    # cambered wheels' contact points; which makes the rest is not verified
+    # measured 0.0490 against 0.0446, +9.9 %, accounted for in docs/vehicles_roads.md ("Roll
+    # in the 0.5 g corner", bench/roll_budget.py): +3.1 % the tyres carrying each axle's whole
+    # load transfer (the series formula passes only the springs' moment through them), +6.8 %
+    # the springs carrying more (the roll centre at the real +-25 mm travels, the cambered
+    # wheels' contact points)
     assert roll == pytest.approx(phi, rel=0.10)
     # each axle's lateral load transfer by hand (moments about the axle's ground centre):
     # the elastic part K_axle phi (the roll moment shared by the axles' roll stiffnesses),
