@@ -141,22 +141,31 @@ def read_rst(path: Path, timeout: float = 600.0) -> dict[str, np.ndarray]:
     if not found:
         raise ModuleNotFoundError(f"reading ANSYS .rst files needs ansys-mapdl-reader: "
                                   f"{PIP_HINT}")
+    return read_in_child(_CHILD, Path(path), timeout, "MAPDL result file", "the MAPDL reader")
+
+
+def read_in_child(code: str, path: Path, timeout: float, kind: str, reader: str
+                  ) -> dict[str, np.ndarray]:
+    """The arrays the Python ``code`` saves (``np.savez(sys.argv[2], ...)``) from the file
+    ``path`` (``sys.argv[1]``), run in a child process; its exit code 3 with a one-line
+    message on stderr, its death or its timeout is an `InputFileError` naming the file
+    ("not a readable ``kind`` (...)")."""
     src = str(path)
-    with tempfile.TemporaryDirectory(prefix="suscosim-rst-") as tmp:
-        out = Path(tmp) / "rst.npz"
+    with tempfile.TemporaryDirectory(prefix="suscosim-read-") as tmp:
+        out = Path(tmp) / "out.npz"
         try:
-            r = subprocess.run([sys.executable, "-c", _CHILD, str(Path(path).resolve()),
+            r = subprocess.run([sys.executable, "-c", code, str(Path(path).resolve()),
                                 str(out)], capture_output=True, text=True, timeout=timeout)
         except subprocess.TimeoutExpired:
-            raise InputFileError(src, f"the MAPDL reader took over {timeout:.0f} s") from None
+            raise InputFileError(src, f"{reader} took over {timeout:.0f} s") from None
         if r.returncode != 0 or not out.is_file():
             msg = r.stderr.strip().splitlines()
             how = (f"killed by signal {-r.returncode}" if r.returncode < 0
                    else f"exit code {r.returncode}")
             why = (msg[-1] if msg else "no message") if r.returncode == 3 else (
-                f"the MAPDL reader died, {how}{': ' + msg[-1].strip() if msg else ''}; "
+                f"{reader} died, {how}{': ' + msg[-1].strip() if msg else ''}; "
                 f"a damaged file?")
-            raise InputFileError(src, f"not a readable MAPDL result file ({why})")
+            raise InputFileError(src, f"not a readable {kind} ({why})")
         with np.load(out, allow_pickle=False) as z:
             return {k: z[k] for k in z.files}
 
