@@ -84,9 +84,18 @@ RUN_KEYS: dict[str, Key] = {
                         "the force nodes)"),
     "substeps": Key(int, 4, positive=True, high=10000,
                     doc="plant integration substeps per step"),
+    "coupling_h": Key(float, 0.0, low=0.0, high=0.1,
+                      doc="coupling (communication) step [s]: a whole multiple of run.h; the "
+                          "nodes exchange once per coupling step, the plant takes its run.h "
+                          "steps between on the coupling's extrapolated inputs; 0 = run.h"),
     "mode": Key(str, "distributed", ("distributed", "monolithic", "reference"),
-                doc="distributed: one process per node over Zenoh; monolithic: one process, "
-                    "in-memory bus; reference: SciPy solve_ivp of the lumped model"),
+                doc="distributed: the node models co-simulated (run.transport says how; "
+                    "monolithic: the same as run.transport = \"inprocess\"); reference: "
+                    "SciPy solve_ivp of the lumped model"),
+    "transport": Key(str, "zenoh", ("zenoh", "inprocess"),
+                     doc="zenoh: one process per node over Zenoh; inprocess: the same node "
+                         "models stepped in one process, no bus (orchestrator/inprocess.py; "
+                         "bit-identical tables)"),
     "stall_timeout_s": Key(float, 5.0, positive=True, high=3600.0,
                            doc="a node that makes no progress this long ends the run [s]"),
     "start_timeout_s": Key(float, 60.0, positive=True, high=3600.0,
@@ -207,6 +216,10 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
         if not run["h_min"] < run["h_max"]:
             raise ScenarioError("run.h_max", run["h_max"], f"more than run.h_min = "
                                 f"{run['h_min']:g} s (run.h = \"auto\")")
+    if run["mode"] == "monolithic" or run["transport"] == "inprocess":
+        if run["mode"] != "reference":  # one engine, two names (docs/cosim.md)
+            run["mode"], run["transport"] = "monolithic", "inprocess"
+    _coupling_step(run)
     if run["id"]:
         check_name("run.id", run["id"])
     check_name("run.name", run["name"])
@@ -215,6 +228,24 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
     for section in ("vehicle", "tyre", "road", "controller"):
         out.setdefault(section, {})
     return out
+
+
+def _coupling_step(run: dict[str, Any]) -> None:
+    """``run.coupling_h`` (multi-rate, DESIGN.md): the nodes exchange every coupling step, the
+    plant takes its run.h steps between. Resolved in place: run.h becomes the coupling
+    (communication) step and run.substeps the plant's substeps in it (run.substeps x
+    coupling_h / h: the plant's own step, h / substeps, is unchanged); then coupling_h = h,
+    so resolving again changes nothing."""
+    every = run["coupling_h"]
+    if not every:
+        return
+    if run.get("adaptive"):
+        raise ScenarioError("run.coupling_h", every, "0 with run.h = \"auto\"")
+    h = run["h"]
+    m = round(every / h)
+    if m < 1 or abs(m * h - every) > 1e-9 * every:
+        raise ScenarioError("run.coupling_h", every, f"a whole multiple of run.h = {h:g} s")
+    run["h"], run["substeps"], run["coupling_h"] = every, run["substeps"] * m, every
 
 
 MAX_STEPS = 100_000_000

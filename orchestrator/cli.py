@@ -108,7 +108,7 @@ def _continued(args: argparse.Namespace) -> dict:
         raise ScenarioError("scenario", args.scenario, "no scenario file with --resume or "
                             "--fork: the run folder's scenario.json is the scenario")
     if args.resume:
-        if args.set or args.mode or args.out:
+        if args.set or args.mode or args.out or args.inprocess:
             raise ScenarioError("--set" if args.set else "--mode" if args.mode else "--out",
                                 args.set or args.mode or args.out,
                                 "nothing with --resume (it runs the same scenario in the "
@@ -117,9 +117,7 @@ def _continued(args: argparse.Namespace) -> dict:
         print(f"suscosim: resuming {args.resume} from its checkpoint at step {ck.k} "
               f"(t = {ck.t:g} s)", flush=True)
         return scenario
-    overrides = list(args.set or [])
-    if args.mode:
-        overrides.append(f'run.mode="{args.mode}"')
+    overrides = list(args.set or []) + _mode_overrides(args)
     scenario, ck, changed = rs.fork_scenario(args.fork, overrides,
                                              getattr(args, "out", None), resolve)
     fresh = scenario["run"]["resume"]["fresh"]
@@ -137,9 +135,7 @@ def _resolved(args: argparse.Namespace) -> dict:
 
     from .runner import resolve
 
-    overrides = list(args.set or [])
-    if args.mode:
-        overrides.append(f'run.mode="{args.mode}"')
+    overrides = list(args.set or []) + _mode_overrides(args)
     try:
         return resolve(sc.load(args.scenario, overrides), getattr(args, "out", None))
     except ScenarioError as exc:
@@ -246,7 +242,22 @@ def _add_scenario_arguments(p: argparse.ArgumentParser, optional: bool = False) 
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a scenario value (TOML), e.g. --set run.h=0.002; a whole "
                         "table: --set 'controller={law=\"skyhook\", c_sky=2500.0}'")
-    p.add_argument("--mode", choices=["distributed", "monolithic", "reference"])
+    p.add_argument("--mode", choices=["distributed", "monolithic", "reference"],
+                   help="distributed: one process per node over Zenoh; monolithic: the same "
+                        "as --inprocess; reference: SciPy solve_ivp of the lumped model")
+    p.add_argument("--inprocess", action="store_true",
+                   help="run.transport = \"inprocess\": the node models stepped in this "
+                        "process, no bus (tables bit-identical to the distributed run's)")
+
+
+def _mode_overrides(args: argparse.Namespace) -> list[str]:
+    """The ``--set`` equivalents of ``--mode`` and ``--inprocess``."""
+    out = [f'run.mode="{args.mode}"'] if args.mode else []
+    if args.mode == "distributed":
+        out.append('run.transport="zenoh"')
+    if getattr(args, "inprocess", False):
+        out.append('run.transport="inprocess"')
+    return out
 
 
 def build_parser() -> argparse.ArgumentParser:

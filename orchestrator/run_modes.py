@@ -1,17 +1,16 @@
-"""A run's nodes, started by mode: distributed (one process per node on Zenoh) or monolithic
-(threads on an in-memory bus). The runner (:mod:`orchestrator.runner`) runs the clock on
-what this gives, the same way for both; the reference mode starts no node at all.
+"""A distributed run's nodes: one process per node on Zenoh. The runner
+(:mod:`orchestrator.runner`) runs the clock on what this gives; the one-process engine
+(:mod:`orchestrator.inprocess`) and the reference mode start no node process at all.
 """
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from cosim.bus import LOOPBACK_LISTEN, Bus, MemoryBus, ZenohBus, zenoh_config
+from cosim.bus import LOOPBACK_LISTEN, Bus, ZenohBus, zenoh_config
 from cosim.errors import InputFileError, RunError
 from cosim.run_lock import check_run_id_free
 
@@ -26,14 +25,10 @@ class Nodes:
 
     bus: Bus
     dead: Callable[[], str | None]
-    """Why a node is gone (its process exited, its thread failed), or None; called on every
-    tick of the clock (for local processes it also looks after the background nodes:
-    :meth:`LocalNodes.check`)."""
+    """Why a node is gone (its process exited), or None; called on every tick of the clock
+    (it also looks after the background nodes: :meth:`LocalNodes.check`)."""
     local: LocalNodes | None = None
-    """The local node processes of a distributed run."""
-    threads: list[threading.Thread] = field(default_factory=list)
-    """The node threads of a monolithic run (started by :meth:`start`)."""
-    _bodies: list[tuple[str, Callable[[str], None]]] = field(default_factory=list)
+    """The local node processes."""
 
     def started(self) -> None:
         """Every node has the clock's start: local nodes off the critical path go to the
@@ -41,24 +36,15 @@ class Nodes:
         if self.local is not None:
             self.local.go_background()
 
-    def start(self) -> None:
-        """Start the monolithic run's node threads (once the clock listens)."""
-        self.threads = [threading.Thread(target=body, args=(n,), daemon=True, name=n)
-                        for n, body in self._bodies]
-        for th in self.threads:
-            th.start()
-
     def stop(self, grace_s: float | None = None,
              tick: Callable[[], None] | None = None) -> None:
         """Stop the local processes (``grace_s`` before they are killed, ``tick`` called
-        while waiting) and join the threads; at the end of a run, or after a failure."""
+        while waiting); at the end of a run, or after a failure."""
         if self.local:
             if grace_s is None:
                 self.local.stop()
             else:
                 self.local.stop(grace_s=grace_s, tick=tick)
-        for th in self.threads:
-            th.join(timeout=3.0 if grace_s is not None else 5.0)
 
 
 def close_quietly(bus: Bus) -> None:
@@ -119,21 +105,3 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
             mesh.remove()
         raise
     return Nodes(bus, local.check, local=local)
-
-
-def monolithic(scenario: dict[str, Any], run_key: bytes, nonce: bytes) -> Nodes:
-    """An in-memory bus and a thread per node (started by :meth:`Nodes.start`)."""
-    from .node_main import run_node
-
-    run = scenario["run"]
-    bus = MemoryBus()
-    codes: dict[str, int] = {}
-
-    def body(name: str) -> None:
-        codes[name] = run_node(bus, run["id"], name, scenario, key=run_key, nonce=nonce)
-
-    def dead() -> str | None:
-        return next((f"node '{n}' failed (exit code {c})" for n, c in codes.items() if c),
-                    None)
-
-    return Nodes(bus, dead, _bodies=[(n, body) for n in run["nodes"]])

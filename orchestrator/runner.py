@@ -4,8 +4,9 @@ Modes (``run.mode``):
 
 * ``distributed``: one process per node, real Zenoh sessions (embedded peer mode on
   loopback, or through a router given with ``--connect``);
-* ``monolithic``: the same node code in one process, threads on an in-memory bus ("purely
-  multi-body" in the thesis);
+* ``monolithic`` (= ``run.transport = "inprocess"``): the same node models stepped in one
+  process, one thread, no bus (:mod:`orchestrator.inprocess`; "purely multi-body" in the
+  thesis), its tables bit-identical to the distributed run's;
 * ``reference``: the lumped model solved by SciPy ``solve_ivp`` at tight tolerance ("purely
   mathematical").
 
@@ -37,7 +38,7 @@ from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 from cosim.run_lock import RunLock
 
 from . import run_modes
-from .clock import Clock, ClockResult
+from .clock import Clock, ClockResult, NodeStatus
 from .local_nodes import PINNED_SPIN_US, LocalNodes, local_lease_ms  # noqa: F401 (re-exported)
 from .progress import ProgressBar
 from .run_recovery import recover_table
@@ -81,6 +82,10 @@ def resolve(scenario: dict[str, Any], out: str | Path | None = None) -> dict[str
     run["id"] = run["id"] or new_run_id(run["name"])
     run["dir"] = str(Path(out) if out else Path("runs") / run["id"])
     run["nodes"] = nodes
+    if run["mode"] == "monolithic":  # what the one-process engine cannot run: said here
+        from .inprocess import refusal
+
+        refusal(scenario)
     return scenario
 
 
@@ -223,10 +228,16 @@ def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes
     """The run's key (:mod:`cosim.auth`): derived from the secret of ``SUSCOSIM_KEY_FILE`` /
     ``SUSCOSIM_KEY`` when one is set (nodes started elsewhere derive the same), else from a
     fresh random secret; with nodes started elsewhere that secret is written to
-    ``RUN_DIR/run.key`` (mode 0600) for their ``--key-file``."""
+    ``RUN_DIR/run.key`` (mode 0600) for their ``--key-file``, and with checkpoints (their
+    MACs, :mod:`cosim.checkpoint`) for the resume; a run folder that has one (a resume) keeps
+    it."""
     secret = au.secret_from_env()
-    if secret is None:
+    if secret is None and (folder / au.KEY_FILE_NAME).is_file():
+        secret = au.read_secret_file(folder / au.KEY_FILE_NAME)
+    elif secret is None:
         secret = au.new_secret()
+        if run.get("checkpoint_every_s") and not external:
+            au.write_secret_file(folder / au.KEY_FILE_NAME, secret)
         if external:
             path = au.write_secret_file(folder / au.KEY_FILE_NAME, secret)
             print(f"suscosim: the run key of '{run['id']}' is in {path}: start the nodes "
@@ -321,16 +332,14 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         write_summary(folder, summary)
         return summary
     bar = ProgressBar(run["id"]) if not quiet else (lambda k, n: None)
-    if run["mode"] == "distributed":  # listen: chosen above, before run.json
-        nodes = run_modes.distributed(run, folder, connect, external, listen or [], lowlatency,
-                                      zenoh_config_file, pin_mode, run_key, as_client)
-    else:
-        nodes = run_modes.monolithic(scenario, run_key, auth.nonce)
+    if run["mode"] == "monolithic":
+        return _run_inprocess(scenario, bar, started, t0)
+    nodes = run_modes.distributed(run, folder, connect, external, listen or [], lowlatency,
+                                  zenoh_config_file, pin_mode, run_key, as_client)
     clock: Clock | None = None
     try:  # from here on every error path stops the nodes and closes the bus
         clock = Clock(nodes.bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,
                       check_processes=nodes.dead, auth=auth, on_started=nodes.started)
-        nodes.start()
         result = clock.run()
     except BaseException as exc:
         _fail(exc, scenario, nodes, clock, bar, external, started, t0, lowlatency)
@@ -344,6 +353,48 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     if ch.FATIGUE in result.nodes:  # the live fatigue node's headline (files in fatigue/)
         summary["fatigue"] = {k: v for k, v in result.nodes[ch.FATIGUE].result.items()
                               if k != "rejected"}
+    write_summary(folder, summary)
+    return summary
+
+
+def _run_inprocess(scenario: dict[str, Any], bar: Any, started: float,
+                   t0: float) -> dict[str, Any]:
+    """The one-process engine's run (:mod:`orchestrator.inprocess`); its summary as a
+    distributed run's (``transport``: ``inprocess``)."""
+    from .inprocess import Engine
+
+    folder = Path(scenario["run"]["dir"])
+    try:
+        res = Engine(scenario, on_progress=bar).execute()
+    except BaseException as exc:
+        if hasattr(bar, "close"):
+            bar.close()
+        error = ("interrupted (Ctrl-C or SIGTERM)" if isinstance(exc, KeyboardInterrupt)
+                 else str(exc) or type(exc).__name__)
+        try:
+            rec = recover_table(folder, interrupted=isinstance(exc, KeyboardInterrupt),
+                                since=started)
+            write_summary(folder, _summary(scenario, None, time.monotonic() - t0, rec,
+                                           "failed", error) | {"transport": "inprocess"})
+        except SummaryWriteError as werr:  # a full disk: say both
+            if isinstance(exc, KeyboardInterrupt):
+                print(f"suscosim: {werr}", file=sys.stderr)
+                raise exc from None
+            raise RunError(f"{error}; and {werr}") from exc
+        if not isinstance(exc, SuscosimError | KeyboardInterrupt):
+            raise RunError(f"internal error in the in-process engine: {type(exc).__name__}: "
+                           f"{exc}") from exc
+        raise
+    if hasattr(bar, "close"):
+        bar.close()
+    nodes = {ch.RECORDER: NodeStatus(done=True, result=res.recorder)}
+    if res.fatigue is not None:
+        nodes[ch.FATIGUE] = NodeStatus(done=True, result=res.fatigue)
+    wall = time.monotonic() - t0
+    summary = _summary(scenario, ClockResult(nodes, wall, res.run_wall_s, res.step_wall_s),
+                       wall, res.recorder, "ok") | {"transport": "inprocess"}
+    if res.fatigue is not None:
+        summary["fatigue"] = res.fatigue
     write_summary(folder, summary)
     return summary
 

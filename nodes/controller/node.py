@@ -20,8 +20,6 @@ import numpy as np
 
 from cosim import channels as ch
 from cosim.errors import RunError, ScenarioError
-from cosim.participant import Participant
-from cosim.stepped import run_stepped
 
 from .laws import build_controller
 
@@ -78,10 +76,6 @@ class Controller:
     def close(self) -> None:
         self.law.close()  # an FMU law terminates and frees its instances
 
-
-def run(part: Participant, scenario: dict[str, Any]) -> None:
-    """Run the controller node until the last step (or until the run is aborted)."""
-    run_stepped(Controller, part, scenario, ch.CONTROLLER)
 
 
 #: Plant models whose state carries ``v_damper`` (for ``controller.velocity = "damper"``).

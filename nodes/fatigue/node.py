@@ -27,32 +27,20 @@ import os
 import threading
 import time
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from cosim import channels as ch
 from cosim import keys
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.listener import Listener, Received
-from cosim.load_blocks import StepBlocks
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
-from cosim.run_settings import RunSettings
 from cosim.wire import codec, inner
 
 from .config import FatigueConfig
-from .more_parts import (
-    UPPER_ARM,
-    column_names,
-    load_channel,
-    more_parts,
-    part_channels,
-    primary_name,
-)
-from .run_dir import part_entry, track_length, with_parts, write_results
-from .worker import FatigueResult, LiveFatigue, load_influence
+from .live_sink import LiveLoads, Track
+from .more_parts import more_parts
+from .worker import FatigueResult
 
 REPORT_PERIOD_S = 0.5
 """At most this often (wall time) the damage so far is published on ``fatigue/damage``."""
@@ -65,61 +53,24 @@ machine the plant, tyre/road and controller take the cores first and the fatigue
 idle time; its numbers do not depend on when it runs."""
 
 
-class _Track:
-    """One part's load stream: its channel's steps in order, blocks, engine."""
-
-    def __init__(self, name: str | None, cfg: FatigueConfig, channel: str, tag: Any,
-                 cases: list[str]) -> None:
-        self.name, self.cfg, self.channel, self.tag, self.cases = name, cfg, channel, tag, cases
-        self.steps = StepBlocks(max(1, cfg.block_samples))
-        self.live: LiveFatigue | None = None
-        self.next_k = 0
-        self.t_last = 0.0
-        self.done = False
-
-    def columns(self, fields: list[str]) -> list[str]:
-        """The load columns' names (the primary's as before: ``plant/arm/<field>``)."""
-        if self.channel != UPPER_ARM:
-            return [f"{ch.PLANT}/{ch.ARM}/{f}" for f in fields]
-        return column_names(self.channel, fields, self.cases)
-
-
 def run(part: Participant, scenario: dict[str, Any]) -> None:
     """Consume the plant's load steps until the last one, then write the run's results."""
     run_cfg = scenario["run"]
-    cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
-    extras = more_parts(cfg)
     with contextlib.suppress(OSError):
         os.nice(NICE)
-    load_influence(cfg)  # FE solve or cache read: before ready, not inside the run
-    for mp in extras:
-        load_influence(mp.cfg)
+    sink = LiveLoads(scenario)  # loads the influence coefficients: before ready
+    tracks, main = sink.tracks, sink.main
     listener = Listener(part, run_cfg["start_timeout_s"])
     listener.feed(ch.PLANT, keys.RECORDS, kinds=("records",))
-    # plant/arm, or a corner's arm_<C> (or the upper arm's, for an upper-arm primary part)
-    channel = load_channel(cfg)
-    tracks = [_Track(None, cfg, channel, (ch.PLANT, channel), part_channels(cfg))]
-    tracks += [_Track(mp.name, mp.cfg, mp.channel, (ch.PLANT, mp.channel), mp.cases)
-               for mp in extras]
-    by_channel = {t.channel: t for t in tracks}
     codecs = {t.channel: codec(f"{ch.PLANT}/{t.channel}") for t in tracks}
-    if len(by_channel) != len(tracks):
-        raise RunError("fatigue: fatigue.parts: two parts on one load channel "
-                       f"({', '.join(sorted({t.channel for t in tracks}))}) are not "
-                       "supported yet")
     part.output(ch.DAMAGE)
     early: list[Received] = []  # steps that overtook the start (another sender)
     while listener.start is None:  # the handshake
         if (got := listener.poll(timeout=0.05)) is not None:
             early.append(got)
-    n_steps = int(listener.start["n_steps"])  # run.h = "auto": a bound; t says the last
-    settings = RunSettings.of(scenario)
-    adaptive = settings.adaptive is not None
-    L = cfg.track_length_m if cfg.track_length_m is not None else \
-        track_length(scenario, np.array([0.0, run_cfg["t_end"]]))
-    main = tracks[0]
+    sink.begin(int(listener.start["n_steps"]))  # run.h = "auto": a bound; t says the last
     plan = NodeCheckpoints.of(scenario, part.node)
-    if extras and (plan.due or plan.resuming):
+    if len(tracks) > 1 and (plan.due or plan.resuming):
         raise RunError("fatigue: fatigue.parts with checkpoints (run.checkpoint_every_s, "
                        "resume) is not supported yet")
     saved = plan.restored()
@@ -132,46 +83,33 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     last_input = time.monotonic()
     last_report = 0.0
 
-    def take(tr: _Track, k: int, t: float, d: dict[str, Any], now: float) -> None:
+    def busy(k: int, t: float) -> contextlib.AbstractContextManager[None]:
+        return alive_while_busy(part, k, t)
+
+    def take(tr: Track, k: int, t: float, d: dict[str, Any], now: float) -> None:
         """One load step of ``tr``'s channel, in step order."""
         nonlocal last_report
-        if k < tr.next_k:  # a step already taken (a duplicate)
-            part.reject(tr.tag, f"load step {k} again")
-            return
-        if k != tr.next_k:
-            raise RunError(f"fatigue: load step {k} of plant/{tr.channel} came where "
-                           f"step {tr.next_k} was expected (a step was lost)")
         try:
-            tr.steps.add(t, d)
-        except ValueError as exc:
-            raise RunError(f"fatigue: malformed load step {k}: {exc}") from None
-        tr.next_k, tr.t_last = k + 1, t
-        tr.done = settings.is_last(k, t) or k >= n_steps
-        if tr.steps.full or tr.done:
-            if tr.live is None:
-                tr.live = LiveFatigue(tr.cfg, tr.columns(tr.steps.fields), L,
-                                      screen=tr.cfg.screen or None,
-                                      total_samples=None if adaptive else n_steps + 1)
-            with alive_while_busy(part, k, t):
-                tr.live.update(*tr.steps.take())
-            if tr is main:
-                part.progress(k, t)
-            if tr is main and not tr.done and now - last_report >= REPORT_PERIOD_S:
-                last_report = now
-                # residue closed: what the life would be if the run ended here
-                share = (t / settings.t_end if adaptive and settings.t_end > 0
-                         else tr.next_k / (n_steps + 1))
-                _report(part, tr.live.result(), k, tr.t_last, L * share)
+            computed = sink.take(tr, k, t, d, busy)
+        except ValueError as exc:  # a step already taken (a duplicate)
+            part.reject(tr.tag, str(exc))
+            return
+        if computed and tr is main:
+            assert tr.live is not None
+            part.progress(k, t)
+            if not tr.done and now - last_report >= REPORT_PERIOD_S:
+                last_report = now  # residue closed: the life if the run ended here
+                _report(part, tr.live.result(), k, tr.t_last, sink.length_m * sink.share())
         if tr is main and tr.next_k in plan.due:  # load steps < next_k: engine, buffer
             plan.save(part, tr.next_k, {"live": tr.live, "steps": tr.steps,
                                         "next_k": tr.next_k, "t_last": tr.t_last})
 
-    while not all(t.done for t in tracks):
+    while not sink.done:
         got = early.pop(0) if early else listener.poll(timeout=0.05)  # raises on abort
         now = time.monotonic()
         if got is not None:
             for name, raw in inner(got.msg):  # the plant's messages as it published them
-                tr = by_channel.get(name)
+                tr = sink.by_channel.get(name)
                 if tr is None:
                     continue  # not a load channel of a part here (state, response, ...)
                 try:
@@ -186,34 +124,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             late = [t for t in tracks if not t.done][0]
             raise RunError(f"fatigue: no load step from the plant on plant/{late.channel} "
                            f"after step {late.next_k - 1}")
-    assert main.live is not None
-    result = main.live.result()
-    result.source = "live"
-    _report(part, result, main.next_k - 1, main.t_last, L)
-    out = Path(run_cfg["dir"]) / "fatigue"
-    more: list[tuple[str, FatigueResult, dict, Any]] = []
-    entries = []
-    for tr in tracks[1:]:
-        assert tr.live is not None and tr.name is not None
-        r = tr.live.result()
-        r.source = "live"
-        more.append((tr.name, r, {}, None))
-        entries.append(part_entry(tr.name, tr.name, tr.channel, r, tr.cfg.influence))
-    extra = None
-    if more:
-        extra = {"parts": [part_entry(primary_name(cfg), ".", main.channel, result,
-                                      None if cfg.influence.startswith("builtin")
-                                      else cfg.influence), *entries]}
-    write_results(result, out, extra, with_parts(None, more))
-    info: dict[str, Any] = {}
-    if more:
-        info["parts"] = {name: {"min_life_km": _finite(r.life_km),
-                                "critical_node_id": r.critical_node_id,
-                                "files": str(out / name)} for name, r, _, _ in more}
-    part.finish(main.next_k - 1, main.t_last, min_life_km=_finite(result.life_km),
-                min_life_repeats=_finite(result.life_repeats),
-                max_damage=result.max_damage, critical_node_id=result.critical_node_id,
-                files=str(out), **info)
+    result, facts = sink.finish()
+    _report(part, result, main.next_k - 1, main.t_last, sink.length_m)
+    part.finish(main.next_k - 1, main.t_last, **facts)
 
 
 @contextlib.contextmanager
@@ -252,10 +165,6 @@ def _report(part: Participant, res: FatigueResult, k: int, t: float, distance_m:
         "life_km": distance_m / res.max_damage / 1000.0 if res.max_damage > 0
         else float("inf"),
     }, record=False)
-
-
-def _finite(x: float) -> float | str:
-    return x if np.isfinite(x) else "inf"
 
 
 def preflight(scenario: dict[str, Any], load_channels: list[str] | None) -> bool:

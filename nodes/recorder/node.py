@@ -36,7 +36,6 @@ steps and the producer (:func:`lost_steps`), not at the stall timeout.
 
 from __future__ import annotations
 
-import errno
 import logging
 import threading
 import time
@@ -46,25 +45,20 @@ from typing import Any
 from cosim import channels as ch
 from cosim import keys
 from cosim import node_kinds as nk
-from cosim.coupling_stream import LiveResidual
 from cosim.errors import RunError, WireError
 from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
-from cosim.run_settings import RunSettings
-from cosim.table_writer import TableWriter, table_of_journal
-from cosim.wire import Message, codec, decode
+from cosim.table_writer import table_of_journal
+from cosim.wire import decode
 
-from .fork_layout import ForkLayouts
-from .steps import StepSet
+from .recording import Recording, lost_steps, write_error
+
+__all__ = ["finalize", "lost_steps", "run"]
 
 log = logging.getLogger("suscosim.node")
 FLUSH_PERIOD_S = 0.05
-EARLY_MAX = 100_000
-"""Data messages held before the clock's start says which channels the run has."""
-STATE_CHANNEL = f"{ch.PLANT}/{ch.STATE}"
-"""The channel whose time says which step is the run's last (:meth:`RunSettings.is_last`)."""
 LIVE_PERIOD_S = 0.1
 """``recorder/coupling`` is published at most this often (wall time) while the run goes."""
 
@@ -90,7 +84,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
 
     Producers (the coupled kinds of the registry, :func:`cosim.node_kinds.producers`) send
     their data messages, exactly as they published them, in batches on ``<node>/records``
-    (see cosim.participant); each one is validated, journaled and put in the table.
+    (see cosim.participant); each one is validated, journaled and put in the table
+    (:class:`.recording.Recording`).
     """
     run_cfg = scenario["run"]
     folder = Path(run_cfg["dir"])
@@ -109,85 +104,13 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     listener = Listener(part, run_cfg["start_timeout_s"])
     for node in producers:
         listener.feed(node, keys.RECORDS, kinds=("records",))
-    expected: set[str] = set()
-    got: dict[str, StepSet] = {}
-    table: TableWriter | None = None
-    live: LiveResidual | None = None
-    early: list[tuple[str, str, bytes, Message]] = []
-    n_steps = None
-    duplicates = 0
-    settings = RunSettings.of(scenario)
-    last: tuple[int, float] | None = None  # (k, t) of the run's last step, once known
-    gap: str | None = None  # why the run cannot complete: a records batch that never came
-    fork = ForkLayouts((run_cfg.get("resume") or {}).get("fresh", ()), plan.start_k)
-
-    def record(node: str, channel: str, raw: bytes, msg: Message | None = None) -> None:
-        """Validate, journal and tabulate one data message of ``node/channel``."""
-        nonlocal duplicates, last, gap
-        if msg is None:  # checked against its channel's schema (cosim/schema.py)
-            try:
-                msg = codec(f"{node}/{channel}").decode(raw)
-            except WireError as exc:
-                part.reject((node, channel), str(exc))
-                return
-        if msg.kind != "data" or msg.k < 0:
-            return
-        if table is None:  # before the start: which channels the run has is not known yet
-            if len(early) < EARLY_MAX:
-                early.append((node, channel, raw, msg))
-            else:
-                part.reject((node, channel), "data before the run's start")
-            return
-        name = f"{node}/{channel}"
-        if n_steps is not None and msg.k > n_steps:
-            part.reject((node, channel), f"step {msg.k} after the last step {n_steps}")
-            return
-        steps = got.get(name)
-        if steps is None:
-            part.reject((node, channel), f"{name} is not an output {node} declared")
-            return
-        if msg.k in steps:
-            duplicates += 1
-            part.reject((node, channel), f"step {msg.k} again (a duplicate: not journaled)")
-            return
-        if fork.holds(node, msg.k):  # a fork's new law: its layout is known at step k
-            fork.hold(name, msg.k, msg.t, msg.d)
-        else:
-            if name in fork.held:
-                try:
-                    for k, t, d in fork.release(name, msg.d):
-                        tabulate(name, k, t, d)
-                except ValueError as exc:
-                    raise RunError(f"recorder: the fork's table: {exc}") from None
-            wrong = tabulate(name, msg.k, msg.t, fork.pad(name, msg.d))
-            if wrong:
-                part.reject((node, channel), wrong)
-                return
-        steps.add(msg.k)
-        if gap is None and len(steps.lo) > 1:  # a producer sends in order: a hole is a loss
-            gap = lost_steps(node, name, steps)
-        journal.append(name, raw)
-        if name == STATE_CHANNEL and settings.is_last(msg.k, msg.t):
-            last = (msg.k, msg.t)
-
-    def tabulate(name: str, k: int, t: float, d: Any) -> str | None:
-        """Put one message in the table (and the live residual); why not, else None."""
-        assert table is not None
-        rows = table.rows
-        wrong = table.add(name, k, t, d)
-        if wrong:
-            return wrong
-        if live is not None:
-            live.add(name, k, t, d)
-            if table.rows > rows:  # this message completed the row of its step
-                live.row(k)
-        return None
+    rec = Recording(scenario, journal, part.reject, plan.start_k)
 
     def publish_live() -> None:
         """The residual of the rows complete so far on ``recorder/coupling``. A residual
         that cannot be sent (a number beyond the channel's bound) ends the channel with a
         warning, never the recording."""
-        nonlocal live
+        live = rec.live
         if live is None or not live.pending:
             return
         try:
@@ -195,7 +118,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 part.publish(ch.COUPLING, k, t, d, record=False)
         except (RunError, KeyError, ValueError) as exc:
             log.warning("recorder: the live coupling residual stops: %s", exc)
-            live = None
+            rec.live = None
 
     def feed(batch: Received) -> None:
         """One ``records`` batch (verified by the listener): its data messages."""
@@ -203,15 +126,12 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             if not keys.NAME.match(channel):
                 part.reject((batch.node, keys.RECORDS), f"bad channel name {channel!r:.40}")
                 continue
-            record(batch.node, channel, one)
-
-    def done_k() -> int:
-        return min(got[c].count for c in expected) - 1
+            rec.record(batch.node, channel, one)
 
     def replay_journal(path: Path, before_k: int) -> None:
         """A resumed run (:mod:`cosim.run_checkpoint`): the old journal's records of the
-        steps < ``before_k``, in their order, through :func:`record` like live ones (the
-        journal, the table and the residual are functions of that sequence)."""
+        steps < ``before_k``, in their order, through :meth:`Recording.record` like live
+        ones (the journal, the table and the residual are functions of that sequence)."""
         try:
             for i, (name, raw) in enumerate(JournalReader(path)):
                 if i % 512 == 0:
@@ -222,11 +142,11 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 except WireError:
                     continue  # it was journaled valid: a damaged record (counted by its reader)
                 if msg.kind == "data" and 0 <= msg.k < before_k:
-                    record(node, channel, raw, msg)
+                    rec.record(node, channel, raw, msg)
         except OSError as exc:
             raise RunError(f"recorder: cannot read the journal {path} the run resumes "
                            f"from: {exc.strerror or exc}") from None
-        missing = sorted(c for c in expected if got[c].count < before_k)
+        missing = sorted(c for c in rec.expected if rec.got[c].count < before_k)
         if missing:
             raise RunError(f"recorder: the journal {path} lacks steps < {before_k} of "
                            f"{', '.join(missing)}: the run cannot resume from it")
@@ -243,8 +163,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     try:
         while True:
             now = time.monotonic()
-            if n_steps is not None and now - last_data > part.stall_timeout_s:
-                missing = sorted(c for c in expected if got[c].count <= n_steps)
+            if rec.n_steps is not None and now - last_data > part.stall_timeout_s:
+                missing = sorted(c for c in rec.expected if rec.got[c].count <= rec.n_steps)
                 raise RunError(f"recorder: no data for {part.stall_timeout_s:.1f} s; "
                                f"incomplete: {', '.join(missing)}")
             if now - last_flush >= FLUSH_PERIOD_S:
@@ -254,103 +174,58 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 publish_live()
                 last_live = now
             batch = listener.poll(timeout=0.05)  # the clock: raises RunError on abort
-            if n_steps is None and listener.start is not None:
-                n_steps = int(listener.start["n_steps"])
-                for node, info in listener.start["info"].items():
-                    if node not in producers:
-                        continue  # e.g. the fatigue node: not a per-step channel
-                    expected.update(f"{node}/{c}" for c in info.get("outputs", []))
-                got.update((c, StepSet()) for c in expected)
-                if expected:
-                    table = TableWriter(expected, folder)
-                    live = _live_residual(run_cfg, expected)
-                    if plan.resuming and plan.journal is not None:
-                        replay_journal(plan.journal, plan.start_k)
-                for node, channel, raw, msg in early:
-                    record(node, channel, raw, msg)
-                early.clear()
+            if rec.n_steps is None and listener.start is not None:
+                rec.begin(int(listener.start["n_steps"]),
+                          (f"{node}/{c}" for node, info in listener.start["info"].items()
+                           if node in producers  # e.g. not the fatigue node's
+                           for c in info.get("outputs", [])))
+                if rec.table is not None and plan.resuming and plan.journal is not None:
+                    replay_journal(plan.journal, plan.start_k)
+                rec.release_early()
                 last_data = time.monotonic()
             if batch is None:
                 continue
             feed(batch)
-            if gap is not None:
-                raise RunError(gap)
+            if rec.gap is not None:
+                raise RunError(rec.gap)
             last_data = time.monotonic()
-            if n_steps is not None and expected:
-                k = done_k()
+            if rec.n_steps is not None and rec.expected:
+                k = rec.done_k()
                 checkpoint(k)
                 part.progress(k, k * run_cfg["h"])
-                if last is not None and k >= last[0]:
+                if rec.complete:
                     break
     except RunError:
         for batch in listener.drain():  # the other nodes' last batches, sent as they stop
             feed(batch)
         journal.close()
-        if table is not None:
+        if rec.table is not None:
             try:
-                table.close()  # the rows that are complete, in place
+                rec.table.close()  # the rows that are complete, in place
             except OSError as exc:  # a full disk: the journal is the record
-                table.abandon()
+                rec.table.abandon()
                 log.warning("recorder: table not written: %s", exc)
         raise
     except OSError as exc:  # the journal or the table could not be written (a full disk)
-        if table is not None:
-            table.abandon()
+        if rec.table is not None:
+            rec.table.abandon()
         try:
             journal.close()
         except OSError:
             pass
-        raise _write_error(exc, folder) from None
+        raise write_error(exc, folder) from None
     journal.close()
     publish_live()  # the last rows' residual, before done (the orchestrator then closes)
-
-    def finish_table() -> dict[str, Any]:
-        assert table is not None
-        files = table.close()
-        return {"stats": table.stats(), "files": files, "rows": table.rows, "torn": False,
-                "undecodable": 0, "duplicates": duplicates}
-
-    assert last is not None
-    n_steps, t_last = last  # N and t_N (for an adaptive step: known when the run got there)
+    assert rec.last is not None
+    n_steps, t_last = rec.last  # N and t_N (for an adaptive step: known when it got there)
     try:
-        result = _with_heartbeat(part, n_steps, t_last, finish_table,
+        result = _with_heartbeat(part, n_steps, t_last, rec.finish_table,
                                  min(1.0, part.stall_timeout_s / 4))
     except OSError as exc:
-        if table is not None:
-            table.abandon()
-        raise _write_error(exc, folder) from None
+        if rec.table is not None:
+            rec.table.abandon()
+        raise write_error(exc, folder) from None
     part.finish(n_steps, t_last, **result)
-
-
-def lost_steps(node: str, name: str, steps: StepSet) -> str:
-    """The run's error for the first hole in the steps channel ``name`` delivered.
-
-    A producer sends its records batches in step order on one publisher and Zenoh delivers
-    them reliably and in order, so steps missing below one that came were lost on the bus (a
-    whole batch: issue #28's dask sweep once lost plant steps 65-96) or rejected here (a
-    batch or message that did not verify or decode). Nothing sends them again; waiting for
-    the stall timeout would only hide which steps and whose batch."""
-    lo, hi = steps.hi[0], steps.lo[1] - 1
-    return (f"recorder: {name} steps {lo}-{hi} never arrived (a records batch of {node!r} "
-            f"was lost on the bus or rejected; its step {steps.lo[1]} came): the journal "
-            f"holds the steps before")
-
-
-def _live_residual(run_cfg: dict[str, Any], channels: set[str]) -> LiveResidual | None:
-    """The live residual of the run's table (None: a scenario without its ``coupling`` and
-    ``exchange``, which a resolved scenario always has, says nothing to compute it by)."""
-    if "coupling" not in run_cfg or "exchange" not in run_cfg:
-        return None
-    h = None if run_cfg.get("adaptive") else float(run_cfg["h"])  # None: each step's from t
-    return LiveResidual(h, run_cfg["coupling"], run_cfg["exchange"],
-                        channels)
-
-
-def _write_error(exc: OSError, folder: Any) -> RunError:
-    """The run's error for a journal or table that could not be written (a full disk)."""
-    full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
-    return RunError(f"recorder: cannot write the run's journal or table in {folder}: "
-                    f"{exc.strerror or exc}{full}")
 
 
 def _import_pyarrow() -> None:

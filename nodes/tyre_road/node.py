@@ -24,9 +24,7 @@ import numpy as np
 
 from cosim import channels as ch
 from cosim.errors import ScenarioError
-from cosim.participant import Participant
 from cosim.run_settings import RunSettings
-from cosim.stepped import run_stepped
 
 from .config import build_road, build_tyre
 from .tyre_3d import KIN_FIELDS, build_tyre_3d, is_magic_formula
@@ -117,10 +115,6 @@ class TyreRoad:
         return {"F_t": F_t, "k_t": k_eff, "z_g": z_g[:, self.centre],
                 **{k: f[k] for k in ("Fx", "Fy", "Mz", "kappa", "alpha")}}
 
-
-def run(part: Participant, scenario: dict[str, Any]) -> None:
-    """Run the tyre/road node until the last step (or until the run is aborted)."""
-    run_stepped(TyreRoad, part, scenario, ch.TYRE_ROAD)
 
 
 def static_check(scenario: dict[str, Any]) -> float | None:

@@ -85,7 +85,7 @@ def _ch3_with(fmu: Path, out: Path, *more: str):
     from ..conftest import suscosim
 
     return suscosim("run", str(ROOT / "scenarios" / "ch3_step_quarter_car.toml"), "--mode",
-                    "monolithic", "--quiet", "--out", str(out), "--set", "run.t_end=1.0",
+                    "distributed", "--quiet", "--out", str(out), "--set", "run.t_end=1.0",
                     "--set", f'controller={{law="fmu", fmu="{fmu}"}}', *more)
 
 

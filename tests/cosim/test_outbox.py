@@ -4,10 +4,10 @@ next step, and records batches sent after the step they fell due with (issue #28
 from __future__ import annotations
 
 from cosim import keys, record_batch
-from cosim.bus import MemoryBus
 from cosim.outbox import Outbox
 from cosim.record_batch import RECORD_BATCH
 from cosim.wire import decode, inner
+from tests.memory_bus import MemoryBus
 
 STATE = {"z_b": 0.1, "v_b": 0.0, "z_w": 0.05, "v_w": 0.0}
 RESPONSE = {"a_b": 1.0, "a_w": 2.0, "F_t": 3000.0, "F_d": 10.0, "F_s": 2500.0}

@@ -13,10 +13,10 @@ import pytest
 from cosim import keys, schema
 from cosim import node_kinds as nk
 from cosim.auth import RunKey
-from cosim.bus import MemoryBus
 from cosim.errors import RunError, WireError
 from cosim.participant import Participant
 from cosim.wire import decode, encode, encode_step
+from tests.memory_bus import MemoryBus
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -1,5 +1,5 @@
 """Checkpoints, resume and fork of whole runs (issue #29 items 4-5), with real node processes
-on real Zenoh sessions (the kill test) and monolithic runs (the rest, same node code).
+on real Zenoh sessions (the one-process engine, orchestrator/inprocess.py, has no checkpoints).
 
 Bit for bit means ``cmp``: the resumed run's ``table.parquet``, ``table.csv`` and the live
 fatigue node's files are the uninterrupted run's bytes.
@@ -46,7 +46,7 @@ def ch3_parallel(tmp_path_factory) -> tuple[Path, Path]:
     """A Ch 3 run (parallel exchange: the lagged state crosses the boundary) with
     checkpoints every 1 s, and the same run without checkpoints."""
     root = tmp_path_factory.mktemp("ckpt")
-    common = ("--mode", "monolithic", "--quiet", "--set", 'run.exchange="parallel"')
+    common = ("--mode", "distributed", "--quiet", "--set", 'run.exchange="parallel"')
     _ok("run", str(CH3), "--out", str(root / "plain"), *common)
     _ok("run", str(CH3), "--out", str(root / "ckpt"), *common,
         "--set", "run.checkpoint_every_s=1.0")

@@ -1,6 +1,6 @@
 """``[sweep] fork_at = T`` (issue #29 item 5): the points of a group share one parent run and
-fork from its checkpoint at T. Real monolithic runs (the same node code as distributed ones)
-of the Ch 3 quarter car.
+fork from its checkpoint at T. Real distributed runs (checkpoints need them) of the Ch 3
+quarter car.
 
 Byte for byte means the files' bytes: a point whose controller is the parent's (the base's)
 has the parent's ``table.parquet`` and ``table.csv``; the other points' rows before T are the
@@ -30,7 +30,7 @@ jobs = 2
 fork_at = {T}
 [sweep.set]
 "run.t_end" = {T_END}
-"run.mode" = "monolithic"
+"run.mode" = "distributed"
 "run.stall_timeout_s" = 30.0
 [sweep.grid.damper]
 same = {{ "controller.c" = 1500.0 }}                          # the base's own damper
@@ -194,7 +194,7 @@ fatigue = true
 fork_at = 0.25
 [sweep.set]
 "road.length_m" = 5.0
-"run.mode" = "monolithic"
+"run.mode" = "distributed"
 [sweep.grid.strategy]
 passive = {{ controller = {{ law = "passive", c = 3800.0, velocity = "damper" }} }}
 firm = {{ controller = {{ law = "passive", c = 6000.0, velocity = "damper" }} }}

@@ -10,11 +10,11 @@ import pytest
 
 from cosim import auth as au
 from cosim import keys
-from cosim.bus import MemoryBus
 from cosim.errors import RunError
 from cosim.listener import Listener
 from cosim.participant import Participant
 from cosim.wire import decode, encode
+from tests.memory_bus import MemoryBus
 
 KEY = au.RunKey(au.derive_run_key(b"s" * 32, "r"))
 LOADS = keys.key("r", "recorder", "loads")

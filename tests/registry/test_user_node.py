@@ -16,6 +16,7 @@ import pytest
 
 from cosim import node_kinds as nk
 from cosim import scenario as sc
+from cosim.errors import ScenarioError
 from cosim.table import read_table
 from orchestrator.runner import resolve, run_scenario
 
@@ -111,5 +112,14 @@ def test_a_user_controller_class_runs_distributed(tmp_path: Path, user_module: s
     _assert_user_forces(read_table(tmp_path / "run" / "table.parquet"))
 
 
-def test_a_user_controller_function_runs_monolithic(tmp_path: Path, user_module: str) -> None:
-    _assert_user_forces(_run(tmp_path, f"{user_module}:linear_damper", "monolithic"))
+def test_a_user_controller_class_runs_in_process(tmp_path: Path, user_module: str) -> None:
+    """The one-process engine steps a user's class as it steps the kind's own (#41)."""
+    _assert_user_forces(_run(tmp_path, f"{user_module}:LinearDamper", "monolithic"))
+
+
+def test_a_user_controller_function_runs_distributed_and_is_refused_in_process(
+        tmp_path: Path, user_module: str) -> None:
+    """A function node is written against the bus: the in-process engine says so (exit 2)."""
+    _assert_user_forces(_run(tmp_path, f"{user_module}:linear_damper", "distributed"))
+    with pytest.raises(ScenarioError, match="stepped class with run.transport"):
+        _run(tmp_path / "in", f"{user_module}:linear_damper", "monolithic")

@@ -10,11 +10,11 @@ import pytest
 
 from cosim import keys
 from cosim.auth import RunKey
-from cosim.bus import MemoryBus
 from cosim.errors import RunError, WireError
 from cosim.load_blocks import wire_pieces
 from cosim.participant import Participant
 from cosim.wire import MAX_MESSAGE_BYTES, decode, encode, encode_step
+from tests.memory_bus import MemoryBus
 
 
 def _pair(stall_s: float = 10.0) -> tuple[MemoryBus, Participant]:

@@ -15,11 +15,11 @@ from typing import Any
 import numpy as np
 
 from cosim import keys
-from cosim.bus import MemoryBus
 from cosim.journal import last_step, read_journal
 from cosim.participant import Participant
 from cosim.table import build_table, read_table
 from cosim.wire import decode, encode
+from tests.memory_bus import MemoryBus
 
 H = 1e-3
 

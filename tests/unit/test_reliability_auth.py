@@ -13,10 +13,10 @@ import pytest
 
 from cosim import auth as au
 from cosim import keys
-from cosim.bus import MemoryBus
 from cosim.errors import RunError
 from cosim.participant import Participant
 from cosim.wire import decode, encode, encode_step
+from tests.memory_bus import MemoryBus
 
 KEY = au.derive_run_key(b"s" * 32, "r")
 OTHER = au.derive_run_key(b"s" * 32, "r2")  # same secret, another run: another key

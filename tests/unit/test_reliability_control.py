@@ -12,13 +12,13 @@ import pytest
 
 from cosim import auth as au
 from cosim import keys
-from cosim.bus import MemoryBus
 from cosim.errors import InputLate
 from cosim.journal import read_journal
 from cosim.participant import MAILBOX_MAX, MAILBOX_WINDOW, Participant
 from cosim.table import build_table
 from cosim.wire import encode, encode_step
 from orchestrator.clock import Clock
+from tests.memory_bus import MemoryBus
 
 KEY = au.derive_run_key(b"k" * 32, "r")
 N = 10

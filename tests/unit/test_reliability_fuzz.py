@@ -13,11 +13,11 @@ import msgpack
 
 from cosim import auth as au
 from cosim import keys
-from cosim.bus import MemoryBus
 from cosim.errors import RunError
 from cosim.participant import Participant
 from cosim.wire import KINDS, encode, encode_step
 from orchestrator.clock import Clock
+from tests.memory_bus import MemoryBus
 
 KEY = au.RunKey(au.derive_run_key(b"fuzz" * 8, "r"))
 CASES = 3000

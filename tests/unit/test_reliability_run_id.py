@@ -12,11 +12,11 @@ import pytest
 
 from cosim import keys
 from cosim import scenario as sc
-from cosim.bus import MemoryBus
 from cosim.errors import InputFileError, ScenarioError
 from cosim.run_lock import FolderInUseError, RunIdInUseError, RunLock, check_run_id_free
 from nodes.tyre_road import profile_csv
 from tests.conftest import CH3_STEP, ROOT, node_pids, suscosim
+from tests.memory_bus import MemoryBus
 
 
 def _holder(folder) -> subprocess.Popen:

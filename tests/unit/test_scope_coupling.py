@@ -22,7 +22,6 @@ import pytest
 from cosim import channels as ch
 from cosim import coupling_energy as ce
 from cosim import keys
-from cosim.bus import MemoryBus
 from cosim.coupling_stream import LiveResidual
 from cosim.table_writer import TableWriter
 from cosim.wire import encode
@@ -30,6 +29,7 @@ from orchestrator.scope.selection import Selection
 from orchestrator.scope.server import ScopeServer
 from orchestrator.scope.sources import JournalSource, LiveSource
 from orchestrator.scope.state import ScopeState
+from tests.memory_bus import MemoryBus
 
 from ..cosim.test_coupling_live import CHANNELS, _messages
 from ..cosim.test_coupling_stream import _table
