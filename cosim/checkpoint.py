@@ -8,14 +8,27 @@ Layout inside a run folder::
                                         file is in place: {"k", "t", "scenario_sha256",
                                         "nodes": {node: {"file", "sha256", "bytes"}}}
 
-A node file is ``MAGIC`` + 32-byte SHA-256 of the payload + the payload (a pickle of the node's
-state dict). Every file is written aside (``.tmp`` in the same folder), flushed, fsynced and
-renamed into place, so a reader sees either no file or a whole one. A checkpoint without a
-manifest is incomplete (a kill between the nodes' writes and the manifest) and is ignored.
+A node file is ``MAGIC`` + the 32-byte SHA-256 of the payload + a 32-byte MAC (zeros when the
+run has no key) + the payload: the node's state dict as plain data (:mod:`cosim.plaindata`:
+numbers, strings, arrays by dtype and bytes, whitelisted classes by their fields; never a
+pickle, nothing that runs code when read). Every file is written aside (``.tmp`` in the same
+folder), flushed, fsynced and renamed into place, so a reader sees either no file or a whole
+one. A checkpoint without a manifest is incomplete (a kill between the nodes' writes and the
+manifest) and is ignored.
 
-:func:`load_for_resume` refuses, with :class:`CheckpointError` (exit code 2, the reason named):
-a folder with no complete checkpoint, a scenario that differs from the checkpoint's (other than
-the keys a fork is allowed to change), a node file missing, truncated or whose hash differs.
+**Signed checkpoints** (issue #43). The SHA-256 guards against damage, not against a person:
+with the run's key (:mod:`cosim.auth`) each node file carries an HMAC-SHA256 of its step,
+node name and payload, and the manifest one of its canonical JSON (field ``mac``), both with
+a key derived from the run key (:func:`checkpoint_key`). :func:`load_for_resume` given the
+key refuses a file or manifest whose MAC differs or that is unsigned; without one it refuses a
+signed checkpoint (it cannot check it).
+
+:func:`load_for_resume` refuses, with :class:`CheckpointError` (exit code 2, the reason named:
+the node, the file, what is wrong): a folder with no complete checkpoint, a manifest that is
+not one (wrong types, a node file outside its folder), a scenario that differs from the
+checkpoint's (other than the keys a fork is allowed to change), a node file missing,
+truncated, of an older format (a pickle: never loaded), whose hash or MAC differs, or whose
+payload is not plain data.
 
 Pure file I/O with no bus: the clock's checkpoint message and the nodes' shells call this.
 """
@@ -23,19 +36,26 @@ Pure file I/O with no bus: the clock's checkpoint message and the nodes' shells 
 from __future__ import annotations
 
 import hashlib
+import hmac
 import json
+import math
 import os
-import pickle
 import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from . import plaindata
 from .errors import SuscosimError
 
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
-MAGIC = b"SUSCKPT1"
+MAGIC = b"SUSCKPT2"
+"""The header of a node file: version 2, plain data (version 1, ``SUSCKPT1``, was a pickle:
+refused, never loaded)."""
+MAC_BYTES = 32
+_HEAD = len(MAGIC) + 32 + MAC_BYTES
+_NODE = re.compile(r"^[A-Za-z0-9_.-]+$")
 EXIT_CODE = 2
 _STEP_DIR = re.compile(r"^k(\d{6,})$")
 
@@ -94,20 +114,49 @@ def _write_atomic(path: Path, data: bytes) -> None:
         os.close(fd)
 
 
-def write_node_state(run_dir: Path, k: int, node: str, state: dict[str, Any]) -> dict[str, Any]:
-    """Save ``node``'s whole ``state`` at step boundary ``k``; return its manifest entry."""
-    if not re.fullmatch(r"[A-Za-z0-9_.-]+", node):
+def checkpoint_key(run_key: bytes | None) -> bytes | None:
+    """The key of a run's checkpoint MACs, derived from its run key (:mod:`cosim.auth`; a use
+    of its own, so a checkpoint MAC is never a valid message signature); None without one."""
+    if not run_key:
+        return None
+    return hmac.new(run_key, b"suscosim-checkpoint-v2", hashlib.sha256).digest()
+
+
+def _node_mac(key: bytes, k: int, node: str, payload: bytes) -> bytes:
+    """A node file's MAC: its step, node name and payload (a file cannot stand in for another
+    node's or step's)."""
+    return hmac.new(key, f"{k}\0{node}\0".encode() + payload, hashlib.sha256).digest()
+
+
+def _manifest_mac(key: bytes, doc: dict[str, Any]) -> str:
+    body = json.dumps({f: v for f, v in doc.items() if f != "mac"}, sort_keys=True,
+                      separators=(",", ":"))
+    return hmac.new(key, body.encode(), hashlib.sha256).hexdigest()
+
+
+def write_node_state(run_dir: Path, k: int, node: str, state: dict[str, Any],
+                     key: bytes | None = None) -> dict[str, Any]:
+    """Save ``node``'s whole ``state`` at step boundary ``k`` as plain data, with the MAC of
+    ``key`` (:func:`checkpoint_key`) if given; return its manifest entry. CheckpointError
+    when the state is not plain data (naming what is not)."""
+    if not _NODE.match(node):
         raise ValueError(f"checkpoint node name {node!r}: letters, digits, _ . - only")
-    payload = pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+    try:
+        payload = plaindata.encode(state)
+    except plaindata.PlainDataError as exc:
+        raise CheckpointError(f"{node}: its state at k={k} cannot be checkpointed: {exc}") \
+            from None
     digest = hashlib.sha256(payload).digest()
+    mac = _node_mac(key, k, node, payload) if key else bytes(MAC_BYTES)
     name = f"{node}.ckpt"
-    _write_atomic(step_folder(run_dir, k) / name, MAGIC + digest + payload)
+    _write_atomic(step_folder(run_dir, k) / name, MAGIC + digest + mac + payload)
     return {"file": name, "sha256": digest.hex(), "bytes": len(payload)}
 
 
 def write_manifest(run_dir: Path, k: int, t: float, scenario: dict[str, Any],
-                   entries: dict[str, dict[str, Any]]) -> Path:
-    """Write the manifest LAST, once every node's file is in place: the checkpoint is complete.
+                   entries: dict[str, dict[str, Any]], key: bytes | None = None) -> Path:
+    """Write the manifest LAST, once every node's file is in place: the checkpoint is complete
+    (with its MAC, field ``mac``, when ``key`` is given: :func:`checkpoint_key`).
 
     Raises :class:`CheckpointError` when a listed node file is not there (never a manifest for
     an incomplete checkpoint)."""
@@ -115,15 +164,53 @@ def write_manifest(run_dir: Path, k: int, t: float, scenario: dict[str, Any],
     for node, entry in entries.items():
         if not (folder / entry["file"]).is_file():
             raise CheckpointError(f"checkpoint k={k}: node {node!r} file {entry['file']} missing")
-    doc = {"k": int(k), "t": float(t), "scenario_sha256": scenario_sha256(scenario),
-           "nodes": dict(sorted(entries.items()))}
+    doc: dict[str, Any] = {"k": int(k), "t": float(t), "scenario_sha256": scenario_sha256(scenario),
+                           "nodes": dict(sorted(entries.items()))}
+    if key:
+        doc["mac"] = _manifest_mac(key, doc)
     path = folder / MANIFEST
     _write_atomic(path, json.dumps(doc, indent=1, sort_keys=True).encode())
     return path
 
 
+def _hex(v: Any, n: int) -> bool:
+    return type(v) is str and len(v) == n and all(c in "0123456789abcdef" for c in v)
+
+
+def _checked(doc: dict[str, Any], path: Path) -> Checkpoint:
+    """The checkpoint a parsed manifest describes; CheckpointError naming the manifest and
+    the field when it is not one (wrong types, a node file other than ``<node>.ckpt``)."""
+    def bad(what: str) -> CheckpointError:
+        return CheckpointError(f"{path}: not a checkpoint manifest: {what}")
+
+    if type(doc.get("k")) is not int or doc["k"] < 0:
+        raise bad(f"'k' = {doc.get('k')!r:.40} is not a step number")
+    t: Any = doc.get("t")
+    if type(t) not in (int, float) or not math.isfinite(t) or t < 0:
+        raise bad(f"'t' = {t!r:.40} is not a time in seconds")
+    if not _hex(doc.get("scenario_sha256"), 64):
+        raise bad("'scenario_sha256' is not 64 hex digits")
+    if "mac" in doc and not _hex(doc["mac"], 64):
+        raise bad("'mac' is not 64 hex digits")
+    nodes = doc.get("nodes")
+    if not isinstance(nodes, dict) or not nodes:
+        raise bad(f"'nodes' = {nodes!r:.40} is not a table of the nodes' files")
+    for node, entry in nodes.items():
+        if not _NODE.match(node):
+            raise bad(f"node name {node!r:.40}: letters, digits, _ . - only")
+        if not isinstance(entry, dict) or entry.get("file") != f"{node}.ckpt":
+            got = entry.get("file") if isinstance(entry, dict) else entry
+            raise bad(f"nodes.{node}.file = {got!r:.60}: must be {node}.ckpt in the "
+                      "checkpoint's folder")
+        if not _hex(entry.get("sha256"), 64) or type(entry.get("bytes")) is not int:
+            raise bad(f"nodes.{node}: 'sha256' (64 hex digits) and 'bytes' (an integer) needed")
+    return Checkpoint(doc["k"], float(t), path.parent, doc)
+
+
 def complete_checkpoints(run_dir: Path) -> list[Checkpoint]:
-    """The complete checkpoints of ``run_dir`` (a readable manifest), oldest first."""
+    """The complete checkpoints of ``run_dir`` (a readable manifest), oldest first. A
+    manifest that is not JSON is an incomplete checkpoint (skipped); one whose fields are
+    wrong is refused (CheckpointError naming it)."""
     root = Path(run_dir) / CHECKPOINTS_DIR
     found: list[Checkpoint] = []
     if not root.is_dir():
@@ -138,39 +225,58 @@ def complete_checkpoints(run_dir: Path) -> list[Checkpoint]:
             continue
         if not isinstance(doc, dict) or doc.get("k") != int(m.group(1)):
             continue
-        found.append(Checkpoint(int(doc["k"]), float(doc["t"]), sub, doc))
+        found.append(_checked(doc, sub / MANIFEST))
     return sorted(found, key=lambda c: c.k)
 
 
-def read_node_state(ckpt: Checkpoint, node: str) -> dict[str, Any]:
-    """``node``'s state from ``ckpt``, its hash checked against the file and the manifest."""
+def read_node_state(ckpt: Checkpoint, node: str, key: bytes | None = None,
+                    sha256: str | None = None, lenient: bool = False) -> dict[str, Any]:
+    """``node``'s state from ``ckpt``, its hash checked against the file and the manifest
+    (and ``sha256``, the hash the orchestrator checked, when given), its MAC with ``key`` when
+    given (``lenient``: :func:`cosim.plaindata.decode`). CheckpointError naming the node, the
+    file and what is wrong."""
     entry = ckpt.manifest.get("nodes", {}).get(node)
     if entry is None:
         raise CheckpointError(f"checkpoint k={ckpt.k} has no state for node {node!r}")
-    path = ckpt.folder / entry["file"]
+    path = ckpt.folder / f"{node}.ckpt"
+
+    def bad(what: str) -> CheckpointError:
+        return CheckpointError(f"checkpoint k={ckpt.k}: node {node!r}: {path} {what}")
+
     try:
         data = path.read_bytes()
     except OSError as exc:
-        raise CheckpointError(f"checkpoint k={ckpt.k}: cannot read {path}: {exc}") from exc
-    head = len(MAGIC) + 32
-    if len(data) < head or not data.startswith(MAGIC):
-        raise CheckpointError(f"checkpoint k={ckpt.k}: {path} is damaged (bad header)")
-    digest, payload = data[len(MAGIC):head], data[head:]
-    if hashlib.sha256(payload).digest() != digest or digest.hex() != entry["sha256"]:
-        raise CheckpointError(f"checkpoint k={ckpt.k}: {path} is damaged (SHA-256 differs)")
-    state = pickle.loads(payload)
+        raise bad(f"cannot be read ({exc.strerror or exc})") from None
+    if data.startswith(b"SUSCKPT1"):
+        raise bad("is of the old format (version 1, a Python pickle): refused, never loaded "
+                  "(a pickle can run code); rerun the run to make new checkpoints")
+    if len(data) < _HEAD or not data.startswith(MAGIC):
+        raise bad("is damaged or not a checkpoint (bad header)")
+    digest, mac, payload = data[len(MAGIC):len(MAGIC) + 32], data[_HEAD - MAC_BYTES:_HEAD], \
+        data[_HEAD:]
+    if hashlib.sha256(payload).digest() != digest or digest.hex() != entry["sha256"] \
+            or (sha256 is not None and digest.hex() != sha256):
+        raise bad("is damaged (SHA-256 differs)")
+    if key is not None and not hmac.compare_digest(mac, _node_mac(key, ckpt.k, node, payload)):
+        raise bad("is not signed with the run's key (MAC differs)")
+    try:
+        state = plaindata.decode(payload, lenient)
+    except plaindata.PlainDataError as exc:
+        raise bad(f"does not hold plain data: {exc}") from None
     if not isinstance(state, dict):
-        raise CheckpointError(f"checkpoint k={ckpt.k}: {path} does not hold a state dict")
+        raise bad("does not hold a state dict")
     return state
 
 
-def load_for_resume(run_dir: Path, scenario: dict[str, Any],
-                    at_t: float | None = None) -> Checkpoint:
+def load_for_resume(run_dir: Path, scenario: dict[str, Any], at_t: float | None = None,
+                    key: bytes | None = None) -> Checkpoint:
     """The checkpoint to resume (the last complete one) or fork (the one at ``at_t`` [s]).
 
     ``scenario`` is the parent's resolved scenario for a fork (its ``--set`` keys applied after)
     or the scenario to run now for a resume: it must hash equal to the checkpoint's. Every node
-    file is checked. Raises :class:`CheckpointError` naming what is wrong."""
+    file is checked, and with ``key`` (:func:`checkpoint_key`) the manifest's and every file's
+    MAC; without one a signed checkpoint is refused. Raises :class:`CheckpointError` naming
+    what is wrong."""
     cks = complete_checkpoints(run_dir)
     if not cks:
         raise CheckpointError(f"{run_dir}: no complete checkpoint (no {CHECKPOINTS_DIR}/k*/"
@@ -187,8 +293,17 @@ def load_for_resume(run_dir: Path, scenario: dict[str, Any],
         raise CheckpointError(f"{run_dir}: the scenario differs from the one checkpoint k={ck.k} "
                               "was taken with (resume runs the same scenario; use --fork to "
                               "change settings)")
-    for node in ck.manifest.get("nodes", {}):
-        read_node_state(ck, node)
+    for node in ck.manifest["nodes"]:
+        read_node_state(ck, node, key, lenient=True)
+    where = ck.folder / MANIFEST
+    if key is None and "mac" in ck.manifest:
+        raise CheckpointError(f"{where} is signed with the run's key and no key is given to "
+                              f"check it (the run folder's run.key, or SUSCOSIM_KEY_FILE / "
+                              "SUSCOSIM_KEY as the run had)")
+    if key is not None and not hmac.compare_digest(str(ck.manifest.get("mac", "")),
+                                                   _manifest_mac(key, ck.manifest)):
+        raise CheckpointError(f"{where} is not signed with the run's key ("
+                              + ("MAC differs)" if "mac" in ck.manifest else "no MAC)"))
     return ck
 
 
@@ -215,9 +330,11 @@ def read_checkpoint(folder: Path) -> Checkpoint:
     folder = Path(folder)
     try:
         doc = json.loads((folder / MANIFEST).read_text())
-        return Checkpoint(int(doc["k"]), float(doc["t"]), folder, doc)
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+    except (OSError, ValueError) as exc:
         raise CheckpointError(f"{folder}: not a complete checkpoint ({exc})") from None
+    if not isinstance(doc, dict):
+        raise CheckpointError(f"{folder / MANIFEST}: not a checkpoint manifest (not a table)")
+    return _checked(doc, folder / MANIFEST)
 
 
 def checkpoint_steps(every_s: float, h: float, n_steps: int) -> list[int]:

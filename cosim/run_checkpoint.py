@@ -21,15 +21,19 @@ The listening nodes save when what they hold reaches the boundary: the recorder 
 channel has every step < k in its journal, flushed and fsynced (its state is the journal: a
 resumed recorder journals and tabulates the old journal's records of the steps < k again, in
 their order, through the same code as live ones, then takes the live steps >= k); the fatigue
-node once it has taken load step k - 1 (its whole engine, pickled).
+node once it has taken load step k - 1 (its whole engine, as plain data: :mod:`cosim.plaindata`).
 
 ``run.resume`` (set by ``suscosim run --resume`` / ``--fork``, never by a user) says where a
 run starts: ``{"k", "t", "folder": the checkpoint's folder, "journal": the journal holding
-the steps < k, "fresh": nodes that start afresh instead (a fork's changed controller)}``.
+the steps < k, "fresh": nodes that start afresh instead (a fork's changed controller),
+"sha256": {node: the SHA-256 of its file, as the orchestrator checked it (MAC included)}}``:
+a node reads its file only if it is still the one checked.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -37,6 +41,7 @@ from typing import Any, Protocol
 from .checkpoint import (
     RESUME_KEY,
     CheckpointError,
+    checkpoint_key,
     checkpoint_steps,
     read_checkpoint,
     read_node_state,
@@ -66,6 +71,8 @@ class NodeCheckpoints:
     """The journal that holds the steps < :attr:`start_k` (the recorder's, on a resume)."""
     fresh: bool = False
     """This node starts afresh at :attr:`start_k` (a fork changed its settings)."""
+    sha256: str | None = None
+    """The SHA-256 of this node's file the orchestrator checked (``run.resume.sha256``)."""
 
     @classmethod
     def of(cls, scenario: dict[str, Any], node: str) -> NodeCheckpoints:
@@ -87,9 +94,10 @@ class NodeCheckpoints:
         k = int(res["k"])
         if not 0 < k <= n:
             raise ScenarioError("run.resume.k", k, f"a step of the run (1..{n})")
+        sha = (res.get("sha256") or {}).get(node)
         return cls(node, Path(run["dir"]), h, frozenset(j for j in due if j > k), k,
                    Path(res["folder"]), Path(res["journal"]) if res.get("journal") else None,
-                   node in res.get("fresh", ()))
+                   node in res.get("fresh", ()), sha if isinstance(sha, str) else None)
 
     @property
     def resuming(self) -> bool:
@@ -105,12 +113,29 @@ class NodeCheckpoints:
         if ckpt.k != self.start_k:
             raise CheckpointError(f"{self.resume_folder}: checkpoint k={ckpt.k}, the run "
                                   f"resumes at {self.start_k}")
-        return read_node_state(ckpt, self.node)
+        return read_node_state(ckpt, self.node, sha256=self.sha256)
+
+    @contextmanager
+    def restoring(self) -> Iterator[None]:
+        """Around putting the restored state into the node: a state that does not fit it
+        (a wrong key or type in an unsigned file) is a CheckpointError (exit 2) naming the
+        node and the checkpoint, never an internal error."""
+        try:
+            yield
+        except CheckpointError:
+            raise
+        except (ValueError, KeyError, TypeError, AttributeError, IndexError) as exc:
+            raise CheckpointError(f"{self.node}: its state in the checkpoint "
+                                  f"{self.resume_folder} does not fit it: "
+                                  f"{type(exc).__name__}: {exc}") from None
 
     def save(self, part: _Ctl, k: int, state: dict[str, Any]) -> None:
-        """Write this node's ``state`` at boundary ``k`` and tell the clock."""
+        """Write this node's ``state`` at boundary ``k`` (signed with the run's key, when
+        ``part`` has one: :func:`cosim.checkpoint.checkpoint_key`) and tell the clock."""
+        auth = getattr(part, "auth", None)
         try:
-            entry = write_node_state(self.run_dir, k, self.node, state)
+            entry = write_node_state(self.run_dir, k, self.node, state,
+                                     checkpoint_key(getattr(auth, "key", None)))
         except OSError as exc:
             raise CheckpointError(f"{self.node}: cannot write its checkpoint k={k} in "
                                   f"{self.run_dir}: {exc.strerror or exc}") from None

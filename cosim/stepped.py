@@ -134,7 +134,8 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
         _check_can_checkpoint(node, plan, name)
         state = plan.restored()
         if state is not None:
-            node.restore_state(state)
+            with plan.restoring():
+                node.restore_state(state)
         # run.h = "auto": the plant chooses each step; its state's t says when a step is
         adaptive = settings.adaptive is not None  # and the last one is the one at t_end
         if adaptive and _STATE not in tags:

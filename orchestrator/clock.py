@@ -32,7 +32,7 @@ from cosim import channels as ch
 from cosim import keys
 from cosim.auth import SESSION_FIELD, RunKey
 from cosim.bus import Bus
-from cosim.checkpoint import CheckpointError, prune_checkpoints, write_manifest
+from cosim.checkpoint import CheckpointError, checkpoint_key, prune_checkpoints, write_manifest
 from cosim.control import check_node_control
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.run_checkpoint import NodeCheckpoints
@@ -234,7 +234,8 @@ class Clock:
         del self._ckpt_entries[k]
         try:
             run = self.scenario["run"]
-            write_manifest(Path(run["dir"]), k, k * float(run["h"]), self.scenario, got)
+            write_manifest(Path(run["dir"]), k, k * float(run["h"]), self.scenario, got,
+                           checkpoint_key(self.auth.key if self.auth else None))
         except (OSError, CheckpointError) as exc:
             print(f"suscosim: warning: checkpoint k={k} not completed: {exc}", file=sys.stderr)
             return

@@ -24,12 +24,14 @@ import json
 from pathlib import Path
 from typing import Any
 
+from cosim import auth as au
 from cosim import scenario as sc
 from cosim.checkpoint import (
     CHECKPOINTS_DIR,
     RESUME_KEY,
     Checkpoint,
     CheckpointError,
+    checkpoint_key,
     load_for_resume,
     parse_fork,
 )
@@ -62,6 +64,26 @@ def parent_scenario(run_dir: Path) -> dict[str, Any]:
     return scenario
 
 
+def key_of(run_dir: Path, scenario: dict[str, Any]) -> bytes | None:
+    """The key of the checkpoint MACs of the run in ``run_dir`` (:func:`cosim.checkpoint.
+    checkpoint_key`): from ``SUSCOSIM_KEY_FILE`` / ``SUSCOSIM_KEY``, else the folder's
+    ``run.key`` (mode 0600), else None (an unsigned run). A run.key handed over with the folder
+    is only as trusted as the folder: a deployment secret outside it authenticates."""
+    secret = au.secret_from_env()
+    path = Path(run_dir) / au.KEY_FILE_NAME
+    if secret is None and path.is_file():
+        secret = au.read_secret_file(path)
+    run_id = scenario["run"].get("id")
+    if secret is None or not isinstance(run_id, str):
+        return None
+    return checkpoint_key(au.derive_run_key(secret, run_id))
+
+
+def checked_files(ck: Checkpoint) -> dict[str, str]:
+    """``run.resume.sha256``: each node file's SHA-256 as checked (a node reads only that)."""
+    return {node: str(e["sha256"]) for node, e in ck.manifest["nodes"].items()}
+
+
 def journal_for(run_dir: Path, k: int) -> Path:
     """The journal of ``run_dir`` that holds every step < ``k``: a journal set aside by a
     resume from a checkpoint >= k (that run's whole record up to there), else the run's
@@ -84,7 +106,7 @@ def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], Checkpoint]:
     set aside: see the module's docstring). CheckpointError (exit 2) naming what is wrong."""
     run_dir = Path(run_dir)
     scenario = parent_scenario(run_dir)
-    ck = load_for_resume(run_dir, scenario)
+    ck = load_for_resume(run_dir, scenario, key=key_of(run_dir, scenario))
     if Path(scenario["run"]["dir"]).resolve() != run_dir.resolve():
         scenario["run"]["dir"] = str(run_dir)  # a run folder moved since: it is here now
     aside = run_dir / CHECKPOINTS_DIR / f"journal-k{ck.k:06d}.msgpack"
@@ -94,7 +116,8 @@ def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], Checkpoint]:
             raise CheckpointError(f"{run_dir}: no journal ({JOURNAL}) to resume from")
         current.replace(aside)
     scenario["run"][RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
-                                   "journal": str(aside), "fresh": []}
+                                   "journal": str(aside), "fresh": [],
+                                   "sha256": checked_files(ck)}
     return scenario, ck
 
 
@@ -108,7 +131,7 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
     except ValueError as exc:
         raise ScenarioError("--fork", spec, str(exc)) from None
     parent = parent_scenario(parent_dir)
-    ck = load_for_resume(parent_dir, parent, at_t=at)
+    ck = load_for_resume(parent_dir, parent, at_t=at, key=key_of(parent_dir, parent))
     child = copy.deepcopy(parent)
     run = child["run"]
     for key in sc.RESOLVED_RUN_KEYS:
@@ -134,7 +157,7 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
              if any(c.startswith(keys) for c in changed)]
     run[RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
                        "journal": str(journal_for(parent_dir, ck.k)), "fresh": fresh,
-                       "parent": str(parent_dir)}
+                       "parent": str(parent_dir), "sha256": checked_files(ck)}
     return child, ck, changed
 
 

@@ -25,7 +25,6 @@ docstring gives the thesis form and its translation into the convention above.
 from __future__ import annotations
 
 import copy
-import pickle
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -33,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from cosim import plaindata
 from cosim.config import ConfigReader as ConfigReader  # re-exported (fmu.py imports it here)
 
 #: Keys every ``state`` mapping passed to :meth:`Controller.step` carries (per corner).
@@ -96,17 +96,18 @@ class Controller(ABC):
     def checkpoint_state(self) -> dict[str, Any]:
         """The law's whole internal state (filters, switching memory, an MR damper's fluid
         state) for a checkpoint (issue #29 item 4): a deep copy of the instance's attributes
-        that are data (they pickle). The others (a law's functions and its registry spec,
-        fixed by the scenario when the law is built) are rebuilt by the fresh instance and
-        listed under ``rebuilt``; tests/controller/test_controller_checkpoint.py checks, law
-        by law, that nothing with state is among them. A law holding state outside Python or
+        that are plain data (:mod:`cosim.plaindata`: they encode). The others (a law's
+        functions and its registry spec, fixed by the scenario when the law is built) are
+        rebuilt by the fresh instance and listed under ``rebuilt``;
+        tests/controller/test_controller_checkpoint.py checks, law by law, that nothing with
+        state is among them. A law holding state outside Python or
         inside a closure overrides this (the FMU law)."""
         attrs: dict[str, Any] = {}
         rebuilt: list[str] = []
         for key, value in self.__dict__.items():
             try:
-                pickle.dumps(value)
-            except (pickle.PicklingError, AttributeError, TypeError):
+                plaindata.encode(value)
+            except plaindata.PlainDataError:
                 rebuilt.append(key)
                 continue
             attrs[key] = copy.deepcopy(value)

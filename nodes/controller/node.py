@@ -63,7 +63,13 @@ class Controller:
         values = inputs[STATE]
         law = self.law
         if self._restore is not None:
-            law.restore_state(self._restore, t, values)
+            try:
+                law.restore_state(self._restore, t, values)
+            except (ValueError, KeyError, TypeError, AttributeError) as exc:
+                from cosim.checkpoint import CheckpointError  # exit 2, never internal
+
+                raise CheckpointError(f"controller: the law's state in the checkpoint does "
+                                      f"not fit it: {exc}") from None
             self._restore = None
         if law.velocity == "damper" and "v_damper" not in values:
             model = self.plant.get("model", "?")

@@ -1,13 +1,12 @@
-"""Native controllers in checkpoints (#29 item 4): Controller.checkpoint_state, pickled as a
+"""Native controllers in checkpoints (#29 item 4): Controller.checkpoint_state, as plain data as a
 checkpoint file holds it, restored into a freshly built law, continues bit for bit."""
 
 from __future__ import annotations
 
-import pickle
-
 import numpy as np
 import pytest
 
+from cosim import plaindata
 from nodes.controller.base import BODY_KEYS
 from nodes.controller.laws import build_controller
 
@@ -48,7 +47,7 @@ def test_restored_law_continues_bit_for_bit(name):
     first = list(states(200, 1))
     for k, s in enumerate(first):
         parent.step(k * H, s)
-    saved = pickle.loads(pickle.dumps(parent.checkpoint_state()))
+    saved = plaindata.decode(plaindata.encode(parent.checkpoint_state()))
     after = list(states(200, 2))
     ref = [parent.step((200 + k) * H, s) for k, s in enumerate(after)]
     child = build_controller(CONFIGS[name], N, H)

@@ -9,11 +9,11 @@ was not restored must give other ones.
 
 from __future__ import annotations
 
-import pickle
 from pathlib import Path
 
 import numpy as np
 
+from cosim import plaindata
 from cosim import scenario as sc
 from nodes.plant.models import build_plant_model
 from nodes.tyre_road.node import TyreRoad
@@ -46,7 +46,7 @@ def test_the_magic_formula_tyre_road_node_resumes_bit_for_bit() -> None:
     plant_c, tyre_c = _pair(scenario)
     try:
         _run(plant_a, tyre_a, 0, 100)
-        saved = pickle.loads(pickle.dumps((plant_a.checkpoint_state(),
+        saved = plaindata.decode(plaindata.encode((plant_a.checkpoint_state(),
                                            tyre_a.checkpoint_state())))
         plant_b.restore_state(saved[0])
         tyre_b.restore_state(saved[1])

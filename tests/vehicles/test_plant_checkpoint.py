@@ -1,8 +1,8 @@
 """Every plant model checkpoints and restores bit for bit (issue #29 item 4, the plant's part).
 
 A model driven with random tyre and damper forces is checkpointed
-(:meth:`nodes.plant.model.PlantModel.checkpoint_state`, pickled as the checkpoint store
-does), restored into a model built afresh from the same configuration, and both are driven
+(:meth:`nodes.plant.model.PlantModel.checkpoint_state`, as plain data as the checkpoint
+store holds it), restored into a model built afresh from the same configuration, and both are driven
 on with the same forces: their states and loads must be equal to the last bit. A fresh model
 that is not restored must differ (else the test would prove nothing). One case restores in
 another process, as ``--resume`` will.
@@ -10,7 +10,6 @@ another process, as ``--resume`` will.
 
 from __future__ import annotations
 
-import pickle
 import subprocess
 import sys
 import textwrap
@@ -18,6 +17,7 @@ import textwrap
 import numpy as np
 import pytest
 
+from cosim import plaindata
 from nodes.plant.models import build_plant_model
 
 from ..conftest import ROOT
@@ -54,7 +54,7 @@ def test_a_restored_model_continues_bit_for_bit(name: str) -> None:
     fresh = build_plant_model(cfg)
     try:
         drive(a, 300, seed=1)
-        b.restore_state(pickle.loads(pickle.dumps(a.checkpoint_state())))
+        b.restore_state(plaindata.decode(plaindata.encode(a.checkpoint_state())))
         xa, la = drive(a, 300, seed=2)
         xb, lb = drive(b, 300, seed=2)
         xf, _ = drive(fresh, 300, seed=2)
@@ -77,19 +77,20 @@ def test_a_checkpoint_of_another_model_is_refused() -> None:
 
 
 _CHILD = textwrap.dedent("""
-    import pickle, sys
+    import sys
     import numpy as np
     sys.path.insert(0, {root!r})
+    from cosim import plaindata
     from nodes.plant.models import build_plant_model
     from tests.vehicles.test_plant_checkpoint import drive
     model = build_plant_model({{"model": "quarter_car_double_wishbone"}})
     if sys.argv[1] == "save":
         drive(model, 300, seed=1)
         with open(sys.argv[2], "wb") as f:
-            pickle.dump(model.checkpoint_state(), f)
+            f.write(plaindata.encode(model.checkpoint_state()))
     else:
         with open(sys.argv[2], "rb") as f:
-            model.restore_state(pickle.load(f))
+            model.restore_state(plaindata.decode(f.read()))
     x, _ = drive(model, 300, seed=2)
     np.save(sys.argv[3], x)
 """)
