@@ -1,4 +1,4 @@
-"""The upper wishbone as a part (#26 item 5): a STEP file made by bench/upper_arm_cad.py, its
+"""The upper wishbone as a part (#26 item 5): a STEP file made by bench/arm_studies.py, its
 joints at the corner file's upper hardpoints (one definition, the plant's upper-arm frame),
 its loads the plant's plant/upper_arm channel; its model card under the plant's static loads."""
 
@@ -52,8 +52,8 @@ def test_upper_arm_card_meets_the_bars(tmp_path, monkeypatch):
     below 0.8 x yield, no hot spot on a sharp re-entrant edge; and the shipped STEP is what
     the generator makes (the same volume)."""
     monkeypatch.setenv("SUSCOSIM_CACHE", str(tmp_path))
-    spec = importlib.util.spec_from_file_location("upper_arm_cad",
-                                                  ROOT / "bench" / "upper_arm_cad.py")
+    spec = importlib.util.spec_from_file_location("arm_studies",
+                                                  ROOT / "bench" / "arm_studies.py")
     assert spec is not None and spec.loader is not None
     cad = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(cad)
