@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -84,6 +85,35 @@ def checked_files(ck: Checkpoint) -> dict[str, str]:
     return {node: str(e["sha256"]) for node, e in ck.manifest["nodes"].items()}
 
 
+TRUST_CODE_ENV = "SUSCOSIM_TRUST_RUN_CODE"
+"""Set to 1 to resume or fork a run folder whose scenario names code (:func:`code_named`)."""
+
+
+def code_named(scenario: dict[str, Any], run_dir: Path) -> list[str]:
+    """What a run folder's scenario names to run as code (issue #43): a user's node entry or
+    law (``package.module:attr``: imported, the working directory on the path) and an FMU
+    inside the run folder (a shared library handed over with it)."""
+    found = [f"nodes.{kind} = {v!r}" for kind, v in (scenario.get("nodes") or {}).items()
+             if isinstance(v, str) and ":" in v]
+    got = scenario.get("controller")
+    ctl: dict[str, Any] = got if isinstance(got, dict) else {}
+    if isinstance(ctl.get("law"), str) and ":" in ctl["law"]:
+        found.append(f"controller.law = {ctl['law']!r}")
+    fmu = ctl.get("fmu")
+    if isinstance(fmu, str) and Path(run_dir).resolve() in Path(fmu).resolve().parents:
+        found.append(f"controller.fmu = {fmu!r} (inside the run folder)")
+    return found
+
+
+def _refuse_code(scenario: dict[str, Any], run_dir: Path) -> None:
+    named = code_named(scenario, run_dir)
+    if named and os.environ.get(TRUST_CODE_ENV) != "1":
+        raise CheckpointError(f"{Path(run_dir) / 'scenario.json'} names code to run ("
+                              + "; ".join(named) + "): a run folder is data, and resuming or "
+                              f"forking it would run that code; set {TRUST_CODE_ENV}=1 if "
+                              "you trust whoever made the folder")
+
+
 def journal_for(run_dir: Path, k: int) -> Path:
     """The journal of ``run_dir`` that holds every step < ``k``: a journal set aside by a
     resume from a checkpoint >= k (that run's whole record up to there), else the run's
@@ -106,6 +136,7 @@ def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], Checkpoint]:
     set aside: see the module's docstring). CheckpointError (exit 2) naming what is wrong."""
     run_dir = Path(run_dir)
     scenario = parent_scenario(run_dir)
+    _refuse_code(scenario, run_dir)
     ck = load_for_resume(run_dir, scenario, key=key_of(run_dir, scenario))
     if Path(scenario["run"]["dir"]).resolve() != run_dir.resolve():
         scenario["run"]["dir"] = str(run_dir)  # a run folder moved since: it is here now
@@ -131,6 +162,7 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
     except ValueError as exc:
         raise ScenarioError("--fork", spec, str(exc)) from None
     parent = parent_scenario(parent_dir)
+    _refuse_code(parent, parent_dir)
     ck = load_for_resume(parent_dir, parent, at_t=at, key=key_of(parent_dir, parent))
     child = copy.deepcopy(parent)
     run = child["run"]
