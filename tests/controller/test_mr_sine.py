@@ -1,6 +1,6 @@
 """Issue #27 item 2: the MR damper and the laws against the numbers the thesis prints for
 Sec 5.5.1 (tests/controller/data/thesis_ch5_sine.csv: Table 5.1, the text's 3800 / 6000 N s/m,
-axis ranges of Figs 5.11-5.17). The full table: python bench/ch5_sine_study.py."""
+axis ranges of Figs 5.11-5.17). The full table: python -m bench ch5-sine-study."""
 
 import csv
 from pathlib import Path

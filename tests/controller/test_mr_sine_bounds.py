@@ -1,4 +1,4 @@
-"""bench/ch5_sine_bounds.py: the closed-form 2-DOF amplitudes against the time-domain sine
+"""python -m bench ch5-sine-bounds: the closed-form 2-DOF amplitudes against the time-domain sine
 study, and the bound that puts Fig 5.13(c)'s 5 Hz force out of reach of the scaled MR damper."""
 
 import importlib.util
@@ -14,8 +14,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _bench():
-    spec = importlib.util.spec_from_file_location("ch5_sine_bounds",
-                                                  ROOT / "bench" / "ch5_sine_bounds.py")
+    spec = importlib.util.spec_from_file_location("thesis",
+                                                  ROOT / "bench" / "thesis.py")
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

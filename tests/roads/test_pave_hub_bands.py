@@ -1,7 +1,7 @@
 """The calibrated pavé's hub spectrum up to 50 Hz (issue #27 item 4), on a short road.
 
 The passive realistic corner of scenarios/thesis/ch6_realistic_qvm.toml runs in-process
-(bench/calibrate_pave.py's corner_rms: monolithic, live fatigue off) over 30 m of the default
+(bench/thesis.py calibrate-pave: corner_rms, monolithic, live fatigue off) over 30 m of the default
 pavé (seed 1). Its hub vertical acceleration, reduced by the thesis's metric (500 Hz, boxcar
 periodogram, sqrt(trapz), Eq. 4.8/4.9) in the bands of HUB_BANDS, must lie within 25 % of the
 seed-mean (seeds 1-3) of the 100 m calibration runs written in docs/vehicles_roads.md
@@ -27,8 +27,8 @@ TOLERANCE = 0.25
 
 
 def _bench():
-    spec = importlib.util.spec_from_file_location("calibrate_pave",
-                                                  ROOT / "bench" / "calibrate_pave.py")
+    spec = importlib.util.spec_from_file_location("thesis",
+                                                  ROOT / "bench" / "thesis.py")
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
