@@ -37,6 +37,14 @@ def _print_summary(summary: dict) -> None:
         print("  cores: " + ", ".join(f"{n} {c}" for n, c in summary["cores"].items())
               + (f" (in the background, SCHED_IDLE: {', '.join(summary['background'])})"
                  if summary.get("background") else ""))
+    if summary.get("sinks"):  # buffered, never waited for: how far behind they fell
+        print("  sinks (buffered): " + ", ".join(
+            f"{n} lagged <= {v['max_lag_steps']} steps, {v['drain_s']:.2f} s after the chain"
+            for n, v in summary["sinks"].items()))
+    if summary.get("inprocess"):
+        print(f"  in-process: the sinks took {summary['inprocess']['sink_s']:.2f} s of the "
+              f"steps; the chain alone {summary['inprocess']['chain_steps_per_s']:.0f} "
+              "steps/s")
     chans = summary.get("channels", {})
     if chans:
         from cosim.formats import si_unit  # the units of the channel schema

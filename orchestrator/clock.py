@@ -61,6 +61,9 @@ class NodeStatus:
     result: dict[str, Any] = field(default_factory=dict)
     gone_since: float | None = None
     waiting_for: list[str] = field(default_factory=list)  # inputs not heard yet (start barrier)
+    max_lag: int = 0
+    """A sink's (a node off the coupled chain: recorder, fatigue) largest lag behind the
+    coupled chain seen [steps] (its input is buffered, never waited for: docs/cosim.md)."""
 
 
 @dataclass
@@ -259,6 +262,10 @@ class Clock:
                 self.abort(f"node '{node}' is gone (its liveliness token dropped: the "
                            f"process died or the network to it failed) at step {st.k}")
         ks = [st.k for st in self.status.values()]
+        chain = max((st.k for n, st in self.status.items() if n in ch.COUPLED), default=-1)
+        for node, st in self.status.items():
+            if node not in ch.COUPLED and st.started and not st.done:
+                st.max_lag = max(st.max_lag, chain - st.k)
         self.on_progress(min(ks), self.n_steps)
 
     def abort(self, reason: str, err: Exception | None = None) -> None:

@@ -57,6 +57,9 @@ class EngineResult:
     """From the first step to the last step's outputs (sinks included: one thread)."""
     run_wall_s: float
     """From the first step until the table and the fatigue files are written."""
+    sink_s: float = 0.0
+    """Of :attr:`step_wall_s`, the time the sinks (recorder, live fatigue) took: what the
+    distributed run does on other cores, off the coupled chain."""
 
 
 def refusal(scenario: dict[str, Any]) -> None:
@@ -116,6 +119,8 @@ class Engine:
         """Each channel's last two messages by step (the parallel exchange reads k - 1)."""
         self.rec: Recording | None = None
         self.fatigue: LiveLoads | None = None
+        self.sink_s = 0.0
+        """Time the sinks (recorder, live fatigue) took within the steps [s]."""
 
     def emit(self, node: str, channel: str, k: int, t: float, data: Any) -> Message:
         """One data message of ``node/channel``, encoded and checked as a node's outbox does
@@ -132,6 +137,7 @@ class Engine:
         box = self.latest.setdefault((node, channel), {})
         box[k] = msg
         box.pop(k - 2, None)
+        t0 = time.perf_counter()
         if self.rec is not None:
             self.rec.record(node, channel, raw, msg)
         sink = self.fatigue
@@ -140,6 +146,7 @@ class Engine:
                 sink.take(sink.by_channel[channel], k, t, msg.d)
             except ValueError as exc:
                 raise RunError(f"fatigue: {exc}") from None
+        self.sink_s += time.perf_counter() - t0
         return msg
 
     def _inputs(self, node: _Stepped, k: int) -> tuple[float, dict[str, Fields]]:
@@ -224,7 +231,7 @@ class Engine:
                     raise RunError(f"fatigue: the last load step did not come (step "
                                    f"{fatigue.main.next_k - 1})")
                 facts = fatigue.finish()[1]
-            return EngineResult(result, facts, step_wall, time.monotonic() - t0)
+            return EngineResult(result, facts, step_wall, time.monotonic() - t0, self.sink_s)
         except BaseException as exc:
             table = self.rec.table if self.rec is not None else None
             if journal is not None:

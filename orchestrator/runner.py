@@ -350,11 +350,24 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     rec = result.nodes[ch.RECORDER].result
     summary = _summary(scenario, result, time.monotonic() - t0, rec, "ok")
     summary.update(_transport(nodes.local, lowlatency))
+    summary["sinks"] = _sink_lags(result)
     if ch.FATIGUE in result.nodes:  # the live fatigue node's headline (files in fatigue/)
         summary["fatigue"] = {k: v for k, v in result.nodes[ch.FATIGUE].result.items()
                               if k != "rejected"}
     write_summary(folder, summary)
     return summary
+
+
+def _sink_lags(result: ClockResult) -> dict[str, dict[str, float]]:
+    """Each sink's (recorder, fatigue) largest lag behind the coupled chain [steps] and how
+    long it worked on after the chain's last step [s]: its input is buffered, the chain never
+    waits for it (docs/cosim.md, "Sinks")."""
+    ends = [st.done_at for n, st in result.nodes.items()
+            if n in ch.COUPLED and st.done_at is not None]
+    end = max(ends) if ends else None
+    return {n: {"max_lag_steps": st.max_lag,
+                "drain_s": max(0.0, st.done_at - end) if end and st.done_at else 0.0}
+            for n, st in result.nodes.items() if n not in ch.COUPLED}
 
 
 def _run_inprocess(scenario: dict[str, Any], bar: Any, started: float,
@@ -393,6 +406,9 @@ def _run_inprocess(scenario: dict[str, Any], bar: Any, started: float,
     wall = time.monotonic() - t0
     summary = _summary(scenario, ClockResult(nodes, wall, res.run_wall_s, res.step_wall_s),
                        wall, res.recorder, "ok") | {"transport": "inprocess"}
+    chain = res.step_wall_s - res.sink_s  # the coupled chain alone: the sinks taken out
+    summary["inprocess"] = {"sink_s": res.sink_s, "chain_steps_per_s":
+                            summary["n_steps"] / chain if chain > 0 else 0.0}
     if res.fatigue is not None:
         summary["fatigue"] = res.fatigue
     write_summary(folder, summary)
