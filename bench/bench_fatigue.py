@@ -3,8 +3,8 @@
 Synthetic 37 s x 500 Hz load history (the thesis's pavé track length in time) on the default
 built-in arm, all surface nodes: superposition, equivalent stress, rainflow, Miner.
 
-    python bench/bench_fatigue.py [--equivalent signed_von_mises] [--method strain_life]
-    python bench/bench_fatigue.py --run RUN_DIR [--screen 0.01] [--engine compiled] [--repeat 3]
+    python -m bench fatigue [--equivalent signed_von_mises] [--method strain_life]
+    python -m bench fatigue --run RUN_DIR [--screen 0.01] [--engine compiled] [--repeat 3]
 
 ``--run``: CPU time (process_time, not wall) per coupled step of the live engine fed a run's
 recorded ``plant/arm`` loads in blocks of ``fatigue.block_samples`` as the live node does
