@@ -34,15 +34,15 @@ reversed torsion τa that of σ_eq = τa sqrt(1 + k²) / U = τa r (by (3)).
 least traction: the eigenvector of the smallest eigenvalue λ₁ of Σ_t σ(t)² (a stress
 that is uniaxial all along leaves two such directions: either serves). Where sqrt(λ₁/λ₃) <=
 :data:`TRACTION_MAX` the node is a surface node and the planes searched are those normal to
-the surface (their normal n in the surface plane, every STEP_DEG over 180°); the shear on
-such a plane has one component, along m = n_s × n (n·σ·n_s = 0): a scalar path, counted as
-it is. Elsewhere (interior nodes, or no traction-free direction) the planes' normals cover
-the hemisphere (polar angle every STEP_DEG, azimuth every STEP_DEG / sin θ) and the shear on
-each plane is resolved along directions every STEP_DEG over 180° in the plane, each a scalar
-path (the shear path's projections: cheap, vectorised, and the projection of largest damage
-bounds the chord of the path from below by at most cos(STEP_DEG/2), 0.4 % at 10°; the
-minimum circumscribed circle would need the path's cycles, which rainflow of a 2-D path
-does not define).
+the surface (their normal n in the surface plane, every STEP_DEG over 180°, the best refined
+every REFINE_DEG within ± STEP_DEG); the shear on such a plane has one component, along
+m = n_s × n (n·σ·n_s = 0): a scalar path, counted as it is. Elsewhere (interior nodes, or no
+traction-free direction) the normals cover the hemisphere (polar angle every STEP_DEG,
+azimuth every STEP_DEG / sin θ) and the 2-D shear path on each plane is projected on
+directions every STEP_DEG over 180°, each projection a scalar path counted alone (cheap and
+vectorised; one direction lies within STEP_DEG/2 of the path's longest chord, so its range is
+at least cos(STEP_DEG/2) of it, 99.6 % at 10°; the minimum circumscribed circle gives one
+amplitude for the whole path, not the cycles rainflow counts of a variable history).
 
 **Counting with the normal stress** (Bannantine & Socie 1991 take σn,max during each
 shear cycle): each shear path is rainflow counted (the four-point rule of
