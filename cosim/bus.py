@@ -158,7 +158,7 @@ def zenoh_config(
         conf.insert_json5("transport/unicast/qos/enabled", "false")
     elif not config_file:  # a user's config file decides for itself
         # No priority lanes: suscosim sends one priority only, and one lane instead of
-        # eight saves ~10-15 % CPU per coupled step (bench/bench_throughput.py). Peers with
+        # eight saves ~10-15 % CPU per coupled step (python -m bench throughput). Peers with
         # QoS on (a plain tap, a default router) still connect: QoS is negotiated per link.
         conf.insert_json5("transport/unicast/qos/enabled", "false")
     return conf

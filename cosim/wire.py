@@ -33,7 +33,7 @@ Encoding and decoding are msgspec's (compiled; the bytes are msgpack's, identica
 data payload type-checked there; with ``channel`` (``node/channel``) the numbers are
 bounded by that channel's limit of :mod:`cosim.schema` (NaN, +-inf, 1e308 refused), its
 non-negative fields checked, ``k >= 0`` and ``t >= 0``. A message that fails is explained
-field by field (the slow path, on errors only). bench/bench_wire.py measures this against
+field by field (the slow path, on errors only). python -m bench wire measures this against
 msgpack with the checks in Python.
 
 Every message a run publishes is signed with the run's key: the map gets a sixth field, last,

@@ -14,7 +14,7 @@ Why (docs/cosim.md "A wedged start"): with gossip, each joining peer learns the 
 through link-state messages that the receiving peers forward to their neighbours while
 holding Zenoh's routing lock. With the low-latency transport that forward is a blocking
 socket write from the receive thread, and the start of five peers wedged a session about
-once in 700 starts (``bench/zenoh_join_stress.py --mesh gossip``; a Ch 6 sweep lost a run to
+once in 700 starts (``python -m bench join-stress --mesh gossip``; a Ch 6 sweep lost a run to
 it twice on 2026-12-04 even with the orchestrator universal). With every link given and no
 link states the start wedged in none of the rounds of ``--mesh explicit``, so the local nodes
 can take the low-latency transport (12-38 % more coupled steps/s than universal).

@@ -5,7 +5,7 @@ share few cores. Left to the scheduler they migrate between cores at every wake-
 lock-step exchange; pinning each process to one core, with the two force nodes on different
 cores (they compute at the same time, on the plant's state) and the plant on the
 controller's core (the plant waits while they compute), gave about +40 % coupled steps/s in
-the sequential exchange on the 2-core machine of docs/cosim.md (``bench/bench_throughput.py
+the sequential exchange on the 2-core machine of docs/cosim.md (``python -m bench throughput
 --pin off`` against the default).
 
 Layout by the number of usable cores n (``os.sched_getaffinity``), c0 < c1 < ... :

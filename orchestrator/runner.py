@@ -253,7 +253,7 @@ the universal transport in every case (:func:`orchestrator.run_modes.distributed
 
 On, since the local nodes link as an explicit mesh with gossip off
 (:mod:`orchestrator.local_mesh`). With gossip, the low-latency transport wedged the start of
-five peers about once in 700 (``python bench/zenoh_join_stress.py``), a Zenoh deadlock under
+five peers about once in 700 (``python -m bench join-stress``), a Zenoh deadlock under
 peer churn: a receive thread holding the routing lock forwards gossip link states with a
 blocking low-latency send (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim.md "A wedged
 start"), and two Ch 6 sweeps lost a run to it on 2026-12-04 even with the orchestrator

@@ -17,9 +17,10 @@ so for a given mass, length and moment, **the softer the arm (lower ω), the hig
 and with κ ≤ 1 no section shape beats σ_floor = M (βL)² sqrt(ρ E) / (ω m L). For the uniform
 beam this is exact (Euler-Bernoulli); a tapered arm or one with heavy joint bosses has another
 βL (of the same order), so for the arm it is an estimate, checked against the FE design family in
-``bench/arm_design_space.py``. Issue #12 asks for a 5 kg arm whose first mode is within 15 % of
-Table 6.1's 362 Hz and whose static hot spot is below 250 MPa, with the torsion spring's 1.58 kN m
-at the pivot (Table 4.2's K_θ): this floor says why both cannot hold at once (docs/fatigue.md).
+``python -m bench arm-design-space``. Issue #12 asks for a 5 kg arm whose first mode is
+within 15 % of Table 6.1's 362 Hz and whose static hot spot is below 250 MPa, with the torsion
+spring's 1.58 kN m at the pivot (Table 4.2's K_θ): this floor says why both cannot hold at once
+(docs/fatigue.md).
 """
 
 from __future__ import annotations

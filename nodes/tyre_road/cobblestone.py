@@ -27,7 +27,7 @@ act through their random heights, a piecewise-constant process whose one-sided P
 about 2 s_h^2 E[P^2] / E[P], P = L + w the pitch (flat, "white" displacement: 8.5e-6 m^3 for
 s_h = 5 mm; it drives the wheel hop; tests/roads/test_cobblestone.py), while the long
 waves drive the body. So the two parameters calibrated against Table 4.5 (hub and body 0-20 Hz
-RMS on the passive realistic corner, ``bench/calibrate_pave.py``, ``docs/vehicles_roads.md``)
+RMS on the passive realistic corner, ``python -m bench calibrate-pave``, ``docs/vehicles_roads.md``)
 are s_h and G; the others are fixed beforehand from the geometry of Belgian block (defaults
 :data:`DEFAULTS`, each with its reasoning in :class:`PaveParameters`).
 
@@ -111,7 +111,7 @@ class PaveParameters:
 
 
 DEFAULTS = PaveParameters()
-"""The calibrated pavé. Calibrated once (2026-12-01, ``python bench/calibrate_pave.py --search
+"""The calibrated pavé. Calibrated once (2026-12-01, ``python -m bench calibrate-pave --search
 --G 1e-5 --stone-height-std 0.008``, plant at commit 31e82c4 with the bump stop and the
 cosim.lower_arm hardpoints): the passive realistic corner of
 ``scenarios/thesis/ch6_realistic_qvm.toml`` over 100 m, seeds 1-3, gives 0-20 Hz RMS (thesis

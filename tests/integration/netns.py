@@ -8,7 +8,7 @@ Namespace A holds the Zenoh router; B the plant node; C the orchestrator and the
 A does not forward IP packets (a fresh namespace has ``ip_forward = 0``), so B and C reach each
 other only through the router, as two machines on two networks would. Every name carries a
 random tag, so several topologies (or test runs) never collide. Used by
-``tests/integration/test_netns.py`` and ``bench/bench_transport.py``.
+``tests/integration/test_netns.py`` and ``python -m bench transport``.
 """
 
 from __future__ import annotations

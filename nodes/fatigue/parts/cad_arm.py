@@ -140,7 +140,7 @@ def build(params: dict[str, Any], fillet: bool = True) -> dict[str, list[int]]:
     """Build the arm as one OCC volume in the current gmsh model (gmsh initialised by the
     caller). Returns {"volume": [tag], "fillets": [face tags]}; with ``fillet=False`` the
     unfilleted solid ({"volume": [tag], "fillets": [], "root_curves": []}: for the fillet
-    experiments of bench/arm_fillet_order.py)."""
+    experiments of python -m bench arm-fillet-order)."""
     from gmsh import model  # type: ignore[import-untyped]
 
     occ = model.occ

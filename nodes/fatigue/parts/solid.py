@@ -32,7 +32,7 @@ from .mesh import TetMesh
 DIRECT_MAX_DOFS = 400000
 """Up to this many dofs the static cases are solved by SuperLU (minimum-degree ordering) and
 the modes' LOBPCG is preconditioned by SuperLU of K + σM; above it by AMG. Measured on the
-arm's 30 mm mesh (75 936 free dofs, 2026-12-03, bench/arm_variant.py): SuperLU 40 s for the
+arm's 30 mm mesh (75 936 free dofs, 2026-12-03, python -m bench arm-variant): SuperLU 40 s for the
 factor (5.0e7 nonzeros in L + U, ~0.6 GB) and 1 s for all 15 cases, where AMG-CG took 42 s
 per case (571 iterations: the 2-level aggregation hierarchy is weak on P2 tets), 650 s."""
 SHIFT_INVERT_MAX_DOFS = 40000
