@@ -45,7 +45,7 @@ feed_packed`); ``"numpy"`` (the same idea in numpy, :func:`.turning_eq_numpy.tur
 the fallback without numba); ``"block"`` (the equivalent stress of every sample, the
 reference). A module setting, not the engine's: the engine stays plain data (pickled in
 checkpoints). ``SUSCOSIM_FATIGUE_ENGINE`` in the environment picks it for a whole run (a
-measurement switch: ``bench/bench_workloads.py`` A/B; an unknown name is an error)."""
+measurement switch: ``python -m bench workloads`` A/B; an unknown name is an error)."""
 if ENGINE not in ENGINES:
     raise ValueError(f"SUSCOSIM_FATIGUE_ENGINE={ENGINE!r}: one of {ENGINES}")
 TILE_ELEMS = 1 << 19
