@@ -93,7 +93,7 @@ def laws_section(duty: dict[str, Any]) -> str:
                  *(_ratio(law, laws["laws"][0]) for law in laws["laws"][1:])])
     body = note(f"Every event run under each law; the damages at one node, the "
                 f"{esc(str(laws.get('reference')))} schedule's critical node "
-                f"{laws.get('node_id')}, so that a ratio compares the same place.")
+                f"{esc(str(laws.get('node_id')))}, so that a ratio compares the same place.")
     body += table_html(header, rows)
     body += table_html(["law", "life [schedules]", "life [km]", "its critical node",
                         "dominant event"],

@@ -13,6 +13,9 @@ const S = {lines: {}, groups: {}, plots: {}, paused: false, windowS: 5, geometry
            coupling: {k: [], t: [], rel: {}, last: null, plot: null, bonds: []}};
 
 const $ = (id) => document.getElementById(id);
+// names come from the run (node, channel, unit, a node's message): text, never markup (#43)
+const ESC = {"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;"};
+const esc = (s) => String(s).replace(/[&<>"']/g, (c) => ESC[c]);
 const fmt = (x, n = 4) => (x === null || x === undefined) ? "-" :
   (typeof x === "number" ? (Math.abs(x) >= 1e5 || (x !== 0 && Math.abs(x) < 1e-3) ?
    x.toExponential(n - 1) : +x.toPrecision(n)).toString() : String(x));
@@ -170,7 +173,7 @@ function plotFor(group) {
   div.className = "card plot";
   div.dataset.group = group;
   div.dataset.rank = first.rank;
-  div.innerHTML = `<h2>${group} <span class="meta">[${first.unit || "-"}]</span></h2>`;
+  div.innerHTML = `<h2>${esc(group)} <span class="meta">[${esc(first.unit || "-")}]</span></h2>`;
   // in the order of the --channels patterns (then of arrival)
   const after = [...$("plots").children].find((c) => +c.dataset.rank > first.rank);
   $("plots").insertBefore(div, after || null);
@@ -234,8 +237,9 @@ function drawStatus(d) {
   for (const [name, n] of Object.entries(d.nodes)) {
     const tr = document.createElement("tr");
     tr.dataset.node = name; tr.dataset.state = n.state;
-    tr.innerHTML = `<td class="mono">${name}</td><td><span class="badge state-${n.state}">` +
-      `${n.state}</span>${n.info ? " " + n.info : ""}</td><td>${n.k >= 0 ? n.k : "-"}</td>`;
+    tr.innerHTML = `<td class="mono">${esc(name)}</td><td><span class="badge ` +
+      `state-${esc(n.state)}">${esc(n.state)}</span>${n.info ? " " + esc(n.info) : ""}</td>` +
+      `<td>${n.k >= 0 ? esc(n.k) : "-"}</td>`;
     tb.appendChild(tr);
   }
 }
