@@ -5,9 +5,10 @@ each more part's damage map; :func:`fatigue_numbers` is the sweep page's too."""
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
-from .markup import cmd, flatten, fmt, is_num, kv_table, note, row, section, table_html
+from .markup import cmd, esc, flatten, fmt, is_num, kv_table, note, row, section, table_html
 from .plots import file_uri, img
 from .run_data import RunData
 
@@ -98,8 +99,10 @@ def parts_block(r: RunData, fs: dict) -> str:
         + '<p class="meta">Each part under its own joint loads from the plant, with the '
           "same fatigue settings (docs/parts.md).</p></div>")
     for p in parts[1:]:
-        folder = r.path / "fatigue" / str(p.get("folder"))
-        body += f'<h3 id="damage-map-{p.get("folder")}">Damage map: {p.get("name")}</h3>'
+        name = str(p.get("folder"))  # a folder of fatigue/, never a path out of it (#43)
+        folder = r.path / "fatigue" / (name if re.fullmatch(r"\w[\w.-]*", name) else "?")
+        body += (f'<h3 id="damage-map-{esc(p.get("folder"))}">Damage map: '
+                 f'{esc(p.get("name"))}</h3>')
         uri = file_uri(folder / "damage_map.png")
         body += img(uri, f"damage map of {p.get('name')}") if uri else note(
             f"no damage map ({cmd(str(folder / 'damage_map.png'))})")
