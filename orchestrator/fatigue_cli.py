@@ -123,7 +123,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     xyz = r.critical_xyz
     where = "" if xyz is None else " at (" + ", ".join(f"{v * 1e3:.0f}" for v in xyz) + ") mm"
     print(f"fatigue: {s['n_nodes']} nodes, {r.n_samples} samples, track {r.track_length_m:.1f} m")
-    print(f"  method {r.config['method']}, mean stress {r.config['mean_stress']}, "
+    print(f"  method {r.config['method']}, mean stress {r.config['mean_stress_applied']}, "
           f"equivalent {r.config['equivalent']}")
     summary = _read_summary(out)
     if summary.get("fails_first_cycle"):
@@ -132,7 +132,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     else:
         print(f"  min life {r.life_km:.4g} km = {r.life_repeats:.4g} repeats of the track"
               + ("" if r.life_repeats_basis is None
-                 else f" = {r.life_repeats_basis:.4g} repeats of {r.repeats_basis_m:g} m"))
+                 else f" = {r.life_repeats_basis:.4g} repeats of {r.repeats_basis_m:g} m")
+              + _life_from(r.config))
     cp = summary.get("critical_plane") or {}
     if cp.get("hot_spots"):  # equivalent = "findley": its life is summary.json's headline
         h = cp["hot_spots"][0]
@@ -143,9 +144,12 @@ def main(argv: Sequence[str] | None = None) -> int:
               + f"), rotation factor {h['rotation_factor']:.2f}")
     sm = summary.get("sn_methods") or {}
     for m, by_p in (sm.get("methods") or {}).items():
-        print(f"  S-N {m}: " + ", ".join(
-            f"{v['life_km']:.4g} km at P = {p}" if isinstance(v.get("life_km"), float)
-            else f"{v.get('life_km')} km at P = {p}" for p, v in by_p.items()))
+        print(f"  S-N {m} (mean stress {next(iter(by_p.values())).get('mean_stress')}): "
+              + ", ".join(f"{v['life_km']:.4g} km at P = {p}"
+                          if isinstance(v.get("life_km"), float)
+                          else f"{v.get('life_km')} km at P = {p}" for p, v in by_p.items()))
+    for m, why in (sm.get("left_out") or {}).items():
+        print(f"  S-N {m}: not computed ({why})")
     print(f"  critical node {r.critical_node_id}{where}, max damage/pass {r.max_damage:.3e}")
     for p in (summary.get("parts") or [])[1:]:  # [fatigue] parts: each more part's headline
         life = p.get("min_life_km")
@@ -161,6 +165,16 @@ def main(argv: Sequence[str] | None = None) -> int:
               + " (their loads are not in the stresses)")
     print(f"  results in {out}")
     return 0
+
+
+def _life_from(config: dict) -> str:
+    """Which curve the headline life is from: ``" (S-N fkm at P = 0.5, mean stress fkm)"``
+    (the ``sn_methods`` entry it equals), or "" for a data curve or the material line."""
+    comp = config.get("component") or {}
+    if not comp.get("enabled") or config.get("sn_curve"):
+        return ""
+    return (f" (S-N {config.get('sn_method')} at P = {comp.get('reliability')!r}, "
+            f"mean stress {config.get('mean_stress_applied')})")
 
 
 def _read_summary(out: Path) -> dict:

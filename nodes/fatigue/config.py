@@ -20,7 +20,10 @@ equivalent             "abs_max_principal"  or "signed_von_mises"; or "findley":
                                             planes at the abs-max principal pass's hot
                                             spots (`critical_plane`, docs/fatigue.md)
 method                 "stress_life"        or "strain_life" (Coffin-Manson-Basquin + Neuber)
-mean_stress            "goodman"            "none", "goodman", "gerber", "morrow", "swt"
+mean_stress            "goodman"            "none", "goodman", "gerber", "morrow", "swt",
+                                            "fkm": the Shigley method's (and a data
+                                            curve's) rule; the FKM method always uses
+                                            "fkm", its Haigh diagram (`mean_stress_rule`)
 residue                "repeated"           "repeated" (track driven again and again) or
                                             "half_cycles" (ASTM E1049)
 endurance              "haibach"            below the S-N curve's Se: "haibach" (modified
@@ -77,7 +80,8 @@ section_b_m            0.022                ... and width b: d_e = 0.808 sqrt(h 
 equivalent_diameter_m  none                 d_e (m) given directly (then h, b are not used)
 loading                "bending"            or "axial" (kc = 0.85, kb = 1)
 reliability            0.5                  R of the curve: ke = 1 - 0.08 z_a (0.5 -> 1)
-temperature_c          20.0                 operating temperature (°C) for kd
+temperature_c          20.0                 operating temperature (°C): Shigley's kd,
+                                            FKM's K_T,D (FKM: steel, -40 to 500 °C)
 kf                     1.0                  miscellaneous-effects factor (peening, ...)
 knee_cycles            1e6                  cycles Ne at the knee (Se)
 method                 "shigley"            the primary curve: "shigley" (Marin chain) or
@@ -104,7 +108,7 @@ from cosim.config import ConfigReader
 from .critical_plane import CRITICAL_PLANES, RANKING
 from .damage import METHODS
 from .equivalent_stress import EQUIVALENTS
-from .fkm import FKMSpec, fkm_sn_curve
+from .fkm import T_RANGE_C, FKMSpec, fkm_sn_curve
 from .life_models import ENDURANCE_MODES
 from .material import (
     ALIASES,
@@ -199,10 +203,33 @@ class FatigueConfig:
             sn = material_sn_curve(mat, self.endurance)
         elif self.sn_method == "fkm":
             sn = fkm_sn_curve(mat.Su, replace(self.fkm, knee_cycles=self.component.knee_cycles),
-                              self.endurance, self.component.reliability)
+                              self.endurance, self.component.reliability,
+                              self.component.temperature_c)
         else:
             sn = component_sn_curve(mat, self.component, self.endurance)
         return replace(mat, sn=sn)
+
+    @property
+    def curve_method(self) -> str | None:
+        """The named component S-N method whose curve is in use ("shigley" or "fkm"); None
+        for a data curve (``sn_curve``) or the material's line (component disabled)."""
+        return None if self.component is None or self.sn_table is not None \
+            else self.sn_method
+
+    @property
+    def mean_stress_rule(self) -> str:
+        """The mean-stress rule every life of this config is computed with: FKM's Haigh
+        diagram ("fkm", M_σ of `fkm`) for the FKM curve (the guideline's own rule, FKM 6th
+        ed. Sec 4.4), else the scenario's ``mean_stress``."""
+        return "fkm" if self.curve_method == "fkm" else self.mean_stress
+
+    def at(self, method: str, P: float) -> FatigueConfig:
+        """This config with the component curve of ``method`` at survival probability P:
+        what each entry of ``sn_methods`` is computed with (its mean-stress rule follows:
+        `mean_stress_rule`). The config itself is ``cfg.at(cfg.sn_method,
+        cfg.component.reliability)``."""
+        assert self.component is not None, "a component curve (component.enabled)"
+        return replace(self, sn_method=method, component=replace(self.component, reliability=P))
 
     def _base_material(self) -> Material:
         """The named material with overridden E, ν, ρ, σu, σy applied before the estimated
@@ -243,6 +270,7 @@ class FatigueConfig:
             comp["equivalent_diameter_m"] = comp.pop("d_e_m")
             d["component"] = {"enabled": True, **comp}
         d["fatigue_properties"] = self.fatigue_properties()
+        d["mean_stress_applied"] = self.mean_stress_rule
         del d["material_overrides"], d["base_dir"], d["cyclic"], d["material_name"]
         if not self.parts:  # (a run without more parts: the settings as before)
             del d["parts"]
@@ -274,6 +302,13 @@ class FatigueConfig:
         survival = raw_comp.number("survival_probability", 0.975, lo=0.5, hi=0.999999,
                                    expected="a survival probability between 0.5 and 0.999999")
         fkm = read_fkm(raw_comp.section("fkm", expected="a table of FKM guideline inputs"))
+        if sn_method == "fkm" and raw_comp.has("temperature_c"):
+            T = raw_comp.number("temperature_c")
+            if not T_RANGE_C[0] <= T <= T_RANGE_C[1]:
+                raise raw_comp.error("temperature_c", T,
+                                     f"a temperature the FKM guideline covers for steel "
+                                     f"({T_RANGE_C[0]:g} to {T_RANGE_C[1]:g} °C) with "
+                                     'method = "fkm"')
         eq = r.choice("equivalent", (*EQUIVALENTS, *CRITICAL_PLANES), "abs_max_principal")
         cfg = cls(
             influence=influence,

@@ -25,6 +25,11 @@ Ch 4 (fatigue assessment with local stresses), for steel (not stainless, not cas
   Haibach's slope 2k - 1 = 9).
 * Mean-stress sensitivity: M_σ = a_M · 10⁻³ Rm / MPa + b_M, steel a_M = 0.35, b_M = -0.1
   (1277 MPa -> 0.347), applied by the FKM Haigh diagram (:func:`mean_stress.fkm_amplitude`).
+* Temperature factor (FKM 6th ed. Ch 4, K_T,D, for steel other than fine-grained and
+  stainless, so for the quenched and tempered 817M40): K_T,D = 1 for -40 °C <= T <= 100 °C,
+  K_T,D = 1 - 1.4e-3 (T/°C - 100) above (150 °C: 0.93; 500 °C: 0.44); it multiplies σ_WK.
+  FKM covers steel from -40 to 500 °C: a temperature outside is refused
+  (:func:`temperature_factor` raises), not extrapolated. M_σ stays the room-temperature one.
 * Survival probability: FKM's strengths are for P_ü = 97.5 %. Here the curve is built at any
   probability P with the normal strength scatter of Shigley's Eq 6-29 (8 % coefficient of
   variation: factor 1 - 0.08 z_P), anchored at FKM's 97.5 %: σ_WK(P) = σ_WK(97.5 %)
@@ -43,6 +48,18 @@ from .life_models import ENDURANCE_MODES, SNCurve
 MPa = 1.0e6
 P_FKM = 0.975
 """The survival probability of FKM's strength values."""
+
+
+T_RANGE_C = (-40.0, 500.0)
+"""The temperatures FKM covers for steel (°C)."""
+
+
+def temperature_factor(T_c: float) -> float:
+    """K_T,D at T_c (°C), module docstring; ValueError outside :data:`T_RANGE_C`."""
+    lo, hi = T_RANGE_C
+    if not lo <= T_c <= hi:
+        raise ValueError(f"FKM covers steel from {lo:g} to {hi:g} °C, got {T_c!r} °C")
+    return 1.0 if T_c <= 100.0 else 1.0 - 1.4e-3 * (T_c - 100.0)
 
 
 def strength_scatter_factor(P: float) -> float:
@@ -109,31 +126,36 @@ def mean_stress_sensitivity(Rm: float, a_m: float = 0.35, b_m: float = -0.1) -> 
     return max(0.0, a_m * 1e-3 * Rm / MPa + b_m)
 
 
-def fkm_factors(Su: float, spec: FKMSpec, P: float = P_FKM) -> dict[str, float]:
-    """Every FKM factor and the component fatigue limit σ_WK at survival probability P (Pa)."""
+def fkm_factors(Su: float, spec: FKMSpec, P: float = P_FKM,
+                temperature_c: float = 20.0) -> dict[str, float]:
+    """Every FKM factor and the component fatigue limit σ_WK at survival probability P and
+    temperature T (°C) (Pa)."""
     kdm = size_factor_rm(spec)
     Rm = kdm * spec.k_a * Su
     sw = spec.f_w_sigma * Rm
     kr = roughness_factor(Rm, spec.rz_um, spec.a_r_sigma, spec.rm_n_min_pa)
-    swk_975 = sw * kr * spec.k_v * spec.k_s * spec.support_factor
+    ktd = temperature_factor(temperature_c)
+    swk_975 = sw * kr * spec.k_v * spec.k_s * spec.support_factor * ktd
     p_factor = strength_scatter_factor(P) / strength_scatter_factor(P_FKM)
     return {"K_dm": kdm, "K_A": spec.k_a, "Rm_pa": Rm, "f_W_sigma": spec.f_w_sigma,
             "sigma_W_zd_pa": sw, "K_R_sigma": kr, "K_V": spec.k_v, "K_S": spec.k_s,
-            "n_sigma": spec.support_factor, "sigma_WK_975_pa": swk_975,
+            "n_sigma": spec.support_factor, "temperature_c": temperature_c, "K_T_D": ktd,
+            "sigma_WK_975_pa": swk_975,
             "survival_probability": P, "probability_factor": p_factor,
             "sigma_WK_pa": swk_975 * p_factor,
             "M_sigma": mean_stress_sensitivity(Rm, spec.a_m, spec.b_m)}
 
 
 def fkm_sn_curve(Su: float, spec: FKMSpec | None = None, endurance: str = "haibach",
-                 P: float = 0.5) -> SNCurve:
-    """FKM component S-N curve at survival probability P: σar = σ_WK (N / N_D)^(-1/k), in
+                 P: float = 0.5, temperature_c: float = 20.0) -> SNCurve:
+    """FKM component S-N curve at survival probability P and temperature T (°C, K_T,D):
+    σar = σ_WK (N / N_D)^(-1/k), in
     Basquin form σ'f,c (2N)^b with b = -1/k, σ'f,c = σ_WK (2 N_D)^(1/k); no low-cycle
     segment (FKM's curve is for N >= ~10³; a cycle at σar >= Rm fails at once)."""
     spec = spec or FKMSpec()
     if endurance not in ENDURANCE_MODES:
         raise ValueError(f"endurance must be one of {ENDURANCE_MODES}, got {endurance!r}")
-    f = fkm_factors(Su, spec, P)
+    f = fkm_factors(Su, spec, P, temperature_c)
     b = -1.0 / spec.k_slope
     knee_rev = 2.0 * spec.knee_cycles
     swk = f["sigma_WK_pa"]

@@ -4,7 +4,10 @@
   Shigley/Marin (with the scenario's mean-stress correction) and FKM (its own Haigh diagram,
   M_σ), each at the scenario's reliability (``component.reliability``, median by default)
   and at ``component.survival_probability``; ``life_range_km`` their range. Each is a full
-  re-analysis of the same loads with that curve (the critical node may move).
+  re-analysis of the same loads with that curve (the critical node may move), by the one
+  config :meth:`.config.FatigueConfig.at` makes; the headline (``min_life_km``) is the entry
+  of ``component.method`` at the reliability (the same config: the same numbers). FKM at a
+  temperature it does not cover is left out (``left_out``, why).
 * ``critical_stress.csv``: t, the six stress components and the equivalent stress at the
   critical node (Pa), by superposition of the recorded loads.
 * ``rainflow_matrix.csv``: the range-mean rainflow matrix (long form, non-empty bins) of the
@@ -24,7 +27,6 @@ from __future__ import annotations
 import csv
 import json
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +35,7 @@ from .config import SN_METHODS, FatigueConfig
 from .counting import Cycles, count_series
 from .damage import sn_curve
 from .equivalent_stress import equivalent
+from .fkm import T_RANGE_C
 from .influence import short_channel
 from .mean_stress import equivalent_amplitude
 from .pseudo_damage import K_REF, channel_pseudo_damage, matrix_rows, rainflow_matrix
@@ -40,45 +43,57 @@ from .superposition import stress_history
 from .worker import FatigueResult, analyse, load_influence
 
 
-def method_config(cfg: FatigueConfig, method: str, P: float) -> FatigueConfig | None:
-    """``cfg`` with the component curve of ``method`` at survival probability P (FKM with
-    its own mean-stress rule); None without a component curve (a data curve or none)."""
-    if cfg.component is None or cfg.sn_table is not None:
-        return None
-    ms = "fkm" if method == "fkm" else (cfg.mean_stress if cfg.mean_stress != "fkm"
-                                        else "goodman")
-    return replace(cfg, sn_method=method, mean_stress=ms,
-                   component=replace(cfg.component, reliability=P))
+def method_table(cfg: FatigueConfig) -> tuple[list[tuple[str, float, FatigueConfig]],
+                                               dict[str, str]]:
+    """The entries of ``sn_methods``: (method, P, its config) for each named S-N method at
+    the scenario's reliability and at ``survival_probability`` (none without a component
+    curve), and the methods left out with why (FKM at a temperature it does not cover)."""
+    if cfg.component is None or cfg.curve_method is None:
+        return [], {}
+    T = cfg.component.temperature_c
+    rows: list[tuple[str, float, FatigueConfig]] = []
+    left: dict[str, str] = {}
+    for m in SN_METHODS:
+        if m == "fkm" and not T_RANGE_C[0] <= T <= T_RANGE_C[1]:
+            left[m] = (f"temperature_c = {T:g} °C: the FKM guideline covers steel from "
+                       f"{T_RANGE_C[0]:g} to {T_RANGE_C[1]:g} °C")
+            continue
+        for P in dict.fromkeys((cfg.component.reliability, cfg.survival_probability)):
+            rows.append((m, P, cfg.at(m, P)))
+    return rows, left
+
+
+def methods_summary(rows: list[tuple[str, float, FatigueConfig, FatigueResult]],
+                    left: dict[str, str]) -> dict:
+    """``sn_methods``: {"methods": {method: {repr(P): {life_km, mean_stress, ...}}},
+    "life_range_km", and "left_out" when a method was}."""
+    out: dict = {}
+    for m, P, c, r in rows:
+        sn = c.material.sn
+        assert sn is not None  # a FatigueConfig's material always has its curve
+        out.setdefault(m, {})[repr(float(P))] = {
+            "survival_probability": P, "mean_stress": c.mean_stress_rule,
+            "life_km": r.life_km, "life_repeats": r.life_repeats,
+            "critical_node_id": r.critical_node_id, "max_damage_per_pass": r.max_damage,
+            "Se_pa": sn.Se, "k": sn.k, "curve": sn.as_dict()}
+    lives = [r.life_km for *_, r in rows]
+    return {"methods": out, "life_range_km": [min(lives), max(lives)],
+            **({"left_out": left} if left else {})}
 
 
 def method_lives(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
                  primary: FatigueResult, say: Callable[[str], None]) -> dict | None:
-    """``sn_methods``: {method: {"P=...": {life_km, critical_node_id, ...}}} and the range."""
-    if cfg.component is None or cfg.sn_table is not None:
+    """``sn_methods`` (:func:`methods_summary`) of a whole history; the primary's own entry
+    is ``primary``."""
+    table, left = method_table(cfg)
+    if not table:
         return None
-    out: dict = {}
-    lives = []
-    for m in SN_METHODS:
-        out[m] = {}
-        for P in dict.fromkeys((cfg.component.reliability, cfg.survival_probability)):
-            c = method_config(cfg, m, P)
-            assert c is not None
-            same = (m == cfg.sn_method and c.mean_stress == cfg.mean_stress
-                    and P == cfg.component.reliability)
-            if same:
-                r = primary
-            else:
-                say(f"fatigue: S-N method {m} at P = {P:g}")
-                r = analyse(t, loads, c, L)
-            sn = c.material.sn
-            assert sn is not None  # a FatigueConfig's material always has its curve
-            out[m][f"{P:g}"] = {
-                "survival_probability": P, "mean_stress": c.mean_stress,
-                "life_km": r.life_km, "life_repeats": r.life_repeats,
-                "critical_node_id": r.critical_node_id, "max_damage_per_pass": r.max_damage,
-                "Se_pa": sn.Se, "k": sn.k, "curve": sn.as_dict()}
-            lives.append(r.life_km)
-    return {"methods": out, "life_range_km": [min(lives), max(lives)]}
+    rows = []
+    for m, P, c in table:
+        if c != cfg:
+            say(f"fatigue: S-N method {m} at P = {P:g}")
+        rows.append((m, P, c, primary if c == cfg else analyse(t, loads, c, L)))
+    return methods_summary(rows, left)
 
 
 def _case_matrix(loads: dict, cases: list[str], n: int) -> np.ndarray:
@@ -110,7 +125,7 @@ shows 0.05 Se to 1.5 Su."""
 
 class SnSpectrum:
     """The critical node's cycles for the S-N plot, counted by level (#32: nothing held per
-    cycle or per sample): each cycle's corrected amplitude σar (``cfg.mean_stress``, Pa) into
+    cycle or per sample): each cycle's corrected amplitude σar (``cfg.mean_stress_rule``, Pa) into
     :data:`SN_LEVELS` log-spaced bins; :meth:`cumulative` gives at each bin's lower edge the
     cycles whose σar is at or above it (those beyond the top edge and the infinite ones of a
     mean stress past Su counted above every level, as the sorted-cycles spectrum counted
@@ -134,7 +149,7 @@ class SnSpectrum:
         if len(cyc) == 0:
             return
         mat = self.cfg.material
-        sar = equivalent_amplitude(0.5 * cyc.range, cyc.mean, self.cfg.mean_stress, mat.Su,
+        sar = equivalent_amplitude(0.5 * cyc.range, cyc.mean, self.cfg.mean_stress_rule, mat.Su,
                                    mat.sf, self.M)
         top = ~np.isfinite(sar) | (sar > self.edges[-1])
         self.above += float(np.sum(cyc.count[top]))
@@ -163,14 +178,13 @@ def sn_plot(path_png: Path, cfg: FatigueConfig, spectrum: SnSpectrum, result: Fa
     N = np.logspace(0, 9, 200)
     curves = {"primary": {"name": curve.name, "N": N.tolist(),
                           "S_pa": curve.stress(2 * N).tolist()}}
-    for m in SN_METHODS:
-        c = method_config(cfg, m, cfg.component.reliability) if cfg.component else None
-        sn = c.material.sn if c is not None else None
-        if sn is not None:
+    for m, P, c in method_table(cfg)[0]:
+        sn = c.material.sn
+        if sn is not None and cfg.component is not None and P == cfg.component.reliability:
             curves[m] = {"name": sn.name, "N": N.tolist(), "S_pa": sn.stress(2 * N).tolist()}
     life = result.life_repeats if np.isfinite(result.life_repeats) else None
     data = {"curves": curves, "critical_node_id": result.critical_node_id,
-            "mean_stress": cfg.mean_stress,
+            "mean_stress": cfg.mean_stress_rule,
             "spectrum": {"S_pa": s_lev.tolist(), "cumulative_cycles": cum_lev.tolist(),
                          "levels": f"{SN_LEVELS} log-spaced σar levels, "
                                    f"{SN_LEVEL_SPAN[0]:g} Se to {SN_LEVEL_SPAN[1]:g} Su; "
@@ -190,7 +204,7 @@ def sn_plot(path_png: Path, cfg: FatigueConfig, spectrum: SnSpectrum, result: Fa
     ax.axhline(mat.Su / 1e6, color="grey", lw=0.8, ls=":")
     ax.annotate("Su", (1.5, mat.Su / 1e6), fontsize=7, color="grey")
     ax.set_xlabel("cycles N")
-    ax.set_ylabel(f"σar (MPa, {cfg.mean_stress} corrected amplitude)")
+    ax.set_ylabel(f"σar (MPa, {cfg.mean_stress_rule} corrected amplitude)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(f"S-N curves and the cycles of the critical node {result.critical_node_id}")

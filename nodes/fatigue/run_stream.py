@@ -44,12 +44,19 @@ import numpy as np
 
 from cosim.errors import InputFileError
 
-from .config import SN_METHODS, FatigueConfig
+from .config import FatigueConfig
 from .counting import Cycles, StreamingRainflow
 from .equivalent_stress import equivalent
 from .influence import short_channel
 from .load_file import MAX_FORCE_N, MAX_MOMENT_NM
-from .outputs import SnSpectrum, method_config, sn_plot, write_pseudo_damage, write_vtu
+from .outputs import (
+    SnSpectrum,
+    method_table,
+    methods_summary,
+    sn_plot,
+    write_pseudo_damage,
+    write_vtu,
+)
 from .pseudo_damage import (
     K_REF,
     N_REF,
@@ -245,22 +252,6 @@ def _rechunk(batches: Batches, block: int
         yield tt, {c: np.concatenate([h[c] for h in held]) for c in held[0]}
 
 
-def method_configs(cfg: FatigueConfig) -> list[tuple[str, float, FatigueConfig, bool]]:
-    """(method, P, config, same as the primary) for :func:`.outputs.method_lives`'s table
-    (empty without a component curve)."""
-    if cfg.component is None or cfg.sn_table is not None:
-        return []
-    out = []
-    for m in SN_METHODS:
-        for P in dict.fromkeys((cfg.component.reliability, cfg.survival_probability)):
-            c = method_config(cfg, m, P)
-            assert c is not None
-            same = (m == cfg.sn_method and c.mean_stress == cfg.mean_stress
-                    and P == cfg.component.reliability)
-            out.append((m, P, c, same))
-    return out
-
-
 def _matrix_axes(ch: _Channel) -> tuple[float, float, float] | None:
     """(r_hi, m_lo, m_hi) of a channel's matrix as :func:`rainflow_matrix` sets them."""
     if ch.n_cyc == 0:
@@ -287,8 +278,8 @@ def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
     channel's :func:`rainflow_matrix` dict)."""
     names = list(s.channels)
     primary = LiveFatigue(cfg, names, L)
-    others = [(m, P, c, LiveFatigue(c, names, L)) for m, P, c, same in method_configs(cfg)
-              if not same]
+    table, left = method_table(cfg)
+    others = {(m, P): LiveFatigue(c, names, L) for m, P, c in table if c != cfg}
     axes = {c: _matrix_axes(ch) for c, ch in s.channels.items()}
     rfs = {c: StreamingRainflow(1) for c in names}
     H: dict[str, np.ndarray | None] = dict.fromkeys(names)
@@ -297,7 +288,7 @@ def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
         + (f" and {len(others)} more" if others else "") + " (streamed)")
     for t, loads in _rechunk(batches, max(1, cfg.block_samples)):
         primary.update(t, loads)
-        for *_, lf in others:
+        for lf in others.values():
             lf.update(t, loads)
         for c, v in loads.items():
             ax = axes[c]
@@ -322,22 +313,9 @@ def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
                        "counts": h.tolist()}
     result = _finish(primary, s)
     methods = None
-    table = method_configs(cfg)
-    if table:
-        done = {(m, P): _finish(lf, s) for m, P, _c, lf in others}
-        out: dict = {}
-        lives = []
-        for m, P, mc, same in table:
-            r = result if same else done[(m, P)]
-            sn = mc.material.sn
-            assert sn is not None
-            out.setdefault(m, {})[f"{P:g}"] = {
-                "survival_probability": P, "mean_stress": mc.mean_stress,
-                "life_km": r.life_km, "life_repeats": r.life_repeats,
-                "critical_node_id": r.critical_node_id, "max_damage_per_pass": r.max_damage,
-                "Se_pa": sn.Se, "k": sn.k, "curve": sn.as_dict()}
-            lives.append(r.life_km)
-        methods = {"methods": out, "life_range_km": [min(lives), max(lives)]}
+    if table:  # the primary's own entry is the primary (the same config: the same result)
+        methods = methods_summary([(m, P, c, result if c == cfg else _finish(others[(m, P)], s))
+                                   for m, P, c in table], left)
     return result, methods, matrices
 
 

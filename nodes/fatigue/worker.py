@@ -144,13 +144,13 @@ class _Engine:
         self.eq_min = np.full(n, np.inf)
         self.n_samples = 0
         self.block = max(1, int(cfg.block_samples))
-        why = None if not screen else unsupported(self.mat, cfg.method, cfg.mean_stress)
+        why = None if not screen else unsupported(self.mat, cfg.method, cfg.mean_stress_rule)
         self.screen_note = "off" if not screen else (why or "")
         self.scr: Screening | None = None
         self.parked: list[_Parked] = []
         if screen and why is None:
             self.scr = Screening(inf.coefficients, cfg.equivalent, self.mat, cfg.method,
-                                 cfg.mean_stress, cfg.endurance_limit, float(screen))
+                                 cfg.mean_stress_rule, cfg.endurance_limit, float(screen))
             self.scr.total = total
 
     def push(self, F: np.ndarray) -> None:
@@ -314,7 +314,7 @@ class _Engine:
             return
         node = idx[cyc.series]
         np.add.at(damage, node, cycle_damage(cyc, self.mat, self.cfg.method,
-                                             self.cfg.mean_stress, self.cfg.endurance_limit))
+                                             self.cfg.mean_stress_rule, self.cfg.endurance_limit))
         np.add.at(ncyc, node, cyc.count)
         np.maximum.at(rmax, node, cyc.range)
 

@@ -25,6 +25,7 @@ def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:
                       "not computed live: `suscosim fatigue RUN_DIR` adds them"))
     pairs += [
         ("minimum life [km]", fs.get("min_life_km")),
+        ("minimum life from", life_from(fs.get("config") or {})),
         (f"minimum life [repeats of the {fmt(fs.get('track_length_m'))} m track]",
          fs.get("min_life_repeats")),
     ]
@@ -61,6 +62,24 @@ def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:
     return pairs
 
 
+MEAN_STRESS_NAMES = {"fkm": "FKM Haigh diagram", "goodman": "Goodman", "gerber": "Gerber",
+                     "morrow": "Morrow", "swt": "SWT", "none": "none"}
+"""How the report names a mean-stress rule (``mean_stress`` values, docs/fatigue.md)."""
+
+
+def life_from(cfg: dict) -> str | None:
+    """Which S-N curve, survival probability and mean-stress rule the headline life is from
+    (the ``sn_methods`` entry it equals); None for a summary without them."""
+    rule = cfg.get("mean_stress_applied")
+    if rule is None:
+        return None
+    comp = cfg.get("component") or {}
+    curve = "data curve (sn_curve)" if cfg.get("sn_curve") else \
+        f"S-N {cfg.get('sn_method')} at P = {comp.get('reliability')}" if comp.get("enabled") \
+        else "the material's line"
+    return f"{curve}, mean stress {MEAN_STRESS_NAMES.get(rule, rule)}"
+
+
 def sn_methods_table(fs: dict) -> str:
     """The life under each named S-N method at each survival probability (#26 item 4)."""
     methods = (fs.get("sn_methods") or {}).get("methods") or {}
@@ -71,16 +90,21 @@ def sn_methods_table(fs: dict) -> str:
         for p, v in by_p.items():
             if isinstance(v, dict):
                 se = v.get("Se_pa")
-                rows.append((m, p, v.get("mean_stress"), se / 1e6 if is_num(se) else se,
-                             v.get("k"), v.get("life_km"), v.get("critical_node_id")))
+                ms = v.get("mean_stress")
+                rows.append((m, p, se / 1e6 if is_num(se) else se, v.get("k"),
+                             v.get("life_km"), MEAN_STRESS_NAMES.get(str(ms), ms),
+                             v.get("critical_node_id")))
     if not rows:
         return ""
-    return ("<div><h3>Life by S-N method</h3>" + table_html(
-        ["method", "survival probability", "mean stress", "Se at the knee [MPa]",
-         "slope k", "min life [km]", "critical node"], rows)
+    left = (fs.get("sn_methods") or {}).get("left_out") or {}
+    return ("<div><h3>Life by S-N method</h3>" + "".join(
+        note(f"{esc(m)}: not computed ({esc(why)})") for m, why in left.items()) + table_html(
+        ["method", "survival probability", "Se at the knee [MPa]", "slope k",
+         "min life [km]", "mean stress (of that life)", "critical node"], rows)
         + '<p class="meta">Shigley: the Marin chain (Shigley 9th ed.); FKM: the FKM '
-          "guideline, non-welded, with its Haigh diagram. The spread is the S-N model's "
-          "uncertainty: read the range, not one number (docs/fatigue.md).</p></div>")
+          "guideline, non-welded, always with its Haigh diagram; the minimum life above is "
+          "this table's entry of the run's method at its reliability. The spread is the S-N "
+          "model's uncertainty: read the range, not one number (docs/fatigue.md).</p></div>")
 
 
 def parts_block(r: RunData, fs: dict) -> str:

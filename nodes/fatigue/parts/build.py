@@ -153,8 +153,8 @@ def solve_part(pm: PartModel, n_modes: int = 6) -> tuple[InfluenceSet, dict[str,
     labels = np.r_[pm.mesh.labels, pm.mesh.labels.max() + 1 + np.arange(fe.n_nodes - nv)]
     a = pm.assessed
     meta = {
-        "source": "part", "part": str(pm.part.path), "part_name": pm.part.name,
-        "geometry": pm.part.geometry, "mesh_size_m": pm.mesh_size,
+        "source": "part", **part_names(pm.part), "part_name": pm.part.name,
+        "mesh_size_m": pm.mesh_size,
         "fillet_size_m": pm.fillet_size, "n_elements": int(pm.mesh.t.shape[0]),
         "element": "10-node quadratic tetrahedron (scikit-fem ElementTetP2)",
         "n_nodes": int(fe.n_nodes), "n_surface_nodes_analysed": int(a.sum()),
@@ -172,6 +172,18 @@ def solve_part(pm: PartModel, n_modes: int = 6) -> tuple[InfluenceSet, dict[str,
     inf = InfluenceSet(names, np.ascontiguousarray(coef[:, a]), fe.node_xyz[a], labels[a],
                        np.ones(int(a.sum()), dtype=bool), meta)
     return inf, {"coef": coef, "U": U, "B": B, "shapes": shapes, "labels": labels}
+
+
+def part_names(part: Part) -> dict[str, str]:
+    """How results name their part, portable (no folder of the machine that solved it):
+    ``part`` the part file's name, ``part_sha256`` the SHA-256 of its bytes (to recognise
+    it), ``geometry`` its STEP or mesh file relative to the part file's folder (or
+    ``"builtin:lower_arm"``)."""
+    geo = part.geometry if part.kind == "builtin" else \
+        Path(os.path.relpath(part.geometry, part.path.parent)).as_posix()
+    return {"part": part.path.name,
+            "part_sha256": hashlib.sha256(part.path.read_bytes()).hexdigest(),
+            "geometry": geo}
 
 
 def part_key(part: Part, mesh_size: float, fillet_size: float) -> str:

@@ -5,10 +5,11 @@ minutes (meshing with gmsh, the P2 solve of every unit case), a fatigue run need
 second, and a reviewer wants to know which mesh they came from. So a part file
 ``lower_arm.toml`` may have ``lower_arm.influence.npz`` beside it, written by
 ``suscosim part solve lower_arm.toml``; :func:`part_results` takes it when its ``key`` is the
-part's own (:func:`nodes.fatigue.parts.build.part_key`: the part file's and its geometry's
-bytes, the mesh sizes, the FE code's version) and otherwise solves (and caches) as before. A
-results file for another version of the part is never used: change the part file (its mesh
-recipe, a joint, the CAD parameters) and the old results stop matching.
+part's own (:func:`nodes.fatigue.parts.build.part_key`: the part file's parsed content and
+its geometry's bytes, the mesh sizes, the FE code's version) and otherwise solves (and
+caches) as before. A results file for another version of the part is never used: change the
+part file (its mesh recipe, a joint, the CAD parameters; not a comment) and the old results
+stop matching.
 
 The file (NumPy ``.npz``, compressed, no pickles):
 
@@ -24,7 +25,9 @@ array               meaning
                     order xx, yy, zz, xy, yz, zx, of the assessed surface nodes
 ``node_xyz``        (nodes, 3) float64 [m]; ``node_ids`` (nodes,) FE node numbers;
                     ``surface`` (nodes,) bool
-``meta``            JSON: mass, modes, mesh, assessment rule (as ``part_influence``'s)
+``meta``            JSON: mass, modes, mesh, assessment rule (as ``part_influence``'s);
+                    the part as :func:`.build.part_names` names it: its file's name
+                    (beside this file), SHA-256 and geometry, no absolute path
 ==================  ====================================================================
 
 A damaged or foreign file is an `InputFileError` naming it, never a silent re-solve.
@@ -43,7 +46,7 @@ import numpy as np
 from cosim.errors import InputFileError
 
 from ..influence import InfluenceSet
-from .build import part_influence, part_key
+from .build import part_influence, part_key, part_names
 from .schema import Part
 
 FORMAT = "suscosim-part-results"
@@ -66,13 +69,15 @@ def write_results(part: Part, inf: InfluenceSet, key: str, path: Path | None = N
     """Write ``inf`` as the part's results file (aside, then renamed into place)."""
     path = results_path(part) if path is None else path
     assert inf.node_xyz is not None, "a part's FE always has its node coordinates"
+    meta = {**inf.meta, **part_names(part),  # the part file relative to this file
+            "part": Path(os.path.relpath(part.path.resolve(), path.resolve().parent)).as_posix()}
     tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
     with open(tmp, "wb") as fh:
         np.savez_compressed(
             fh, format=FORMAT, version=VERSION, key=key, part=part.name,
             case_names=json.dumps(inf.case_names), coefficients=inf.coefficients,
             node_xyz=inf.node_xyz, node_ids=inf.node_ids, surface=inf.surface,
-            meta=json.dumps(inf.meta))
+            meta=json.dumps(meta))
         fh.flush()
         os.fsync(fh.fileno())
     os.replace(tmp, path)
@@ -114,11 +119,18 @@ def part_results(part: Part, mesh_size: float | None = None,
     (same key), else solved (and cached) by `part_influence`; ``log`` says which."""
     path = results_path(part)
     key = current_key(part, mesh_size)
+    inf = None
     if path.is_file():
         got, inf = read_results(path)
-        if got == key:
-            return inf
-        if log is not None:
-            log(f"{path.name} is for another version of {part.name} (key {got}, the part's "
-                f"is {key}): solving the part (minutes; `suscosim part solve` ships it)")
-    return part_influence(part, mesh_size)
+        if got != key:
+            inf = None
+            if log is not None:
+                log(f"{path.name} is for another version of {part.name} (key {got}, the "
+                    f"part's is {key}): solving the part (minutes; `suscosim part solve` "
+                    "ships it)")
+    if inf is None:
+        inf = part_influence(part, mesh_size)
+    # a file or cache from before the portable names: the part named as now (same key:
+    # the same part file content and geometry)
+    inf.meta = {**inf.meta, **part_names(part)}
+    return inf

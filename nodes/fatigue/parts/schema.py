@@ -36,6 +36,7 @@ moment, half at each bush eye). Every error is an `InputFileError` naming the fi
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -232,6 +233,13 @@ def short(ch: str) -> str:
     return ch[len("plant/arm/"):] if ch.startswith("plant/arm/") else ch
 
 
+def _content(raw: dict) -> bytes:
+    """A TOML file's parsed content as canonical JSON: the part key's input, so that a
+    comment or a reflowed line does not orphan a part's shipped results (#47: a comment
+    edit in lower_arm.toml had turned its 1 s load into a minutes-long solve)."""
+    return json.dumps(raw, sort_keys=True, default=str).encode()
+
+
 def load_part(path: str | Path) -> Part:
     """Read and validate a part file; an `InputFileError` names the file and the key."""
     path = Path(path).expanduser().resolve()
@@ -256,7 +264,7 @@ def load_part(path: str | Path) -> Part:
     unit = p.get("length_unit", "m")
     if unit not in UNITS:
         raise InputFileError(src, f"key part.length_unit: got {unit!r}, expected m or mm")
-    digest_parts = [raw_bytes]
+    digest_parts = [_content(raw)]  # what the file says, not its comments or layout
     if geometry.startswith(BUILTIN_PREFIX):
         if geometry != "builtin:lower_arm":
             raise InputFileError(src, f"key part.geometry: unknown built-in {geometry!r} "
@@ -264,7 +272,7 @@ def load_part(path: str | Path) -> Part:
         from .cad_arm import DEFAULT_PARAMS
 
         kind, geo_path = "builtin", geometry
-        digest_parts.append(DEFAULT_PARAMS.read_bytes())
+        digest_parts.append(_content(tomllib.loads(DEFAULT_PARAMS.read_text())))
     else:
         gp = (path.parent / geometry).resolve()
         suffix = gp.suffix.lower()
