@@ -43,6 +43,7 @@ from typing import IO, Any
 import msgpack
 
 from . import journal_v2
+from .errors import InputFileError
 
 MAGIC = "#suscosim-journal"
 VERSION = 3
@@ -154,12 +155,12 @@ def _header(data: bytes, path: str | Path) -> tuple[str, int, int]:
     try:
         header = next(unpacker)
     except (StopIteration, ValueError, msgpack.UnpackException) as exc:
-        raise ValueError(f"{path}: not a suscosim journal (no header: {exc})") from None
+        raise InputFileError(str(path), f"not a suscosim journal (no header: {exc})") from None
     if not (isinstance(header, list) and len(header) == 3 and header[0] == MAGIC):
-        raise ValueError(f"{path}: not a suscosim journal (bad header)")
+        raise InputFileError(str(path), "not a suscosim journal (bad header)")
     if header[1] not in VERSIONS:
-        raise ValueError(f"{path}: journal version {header[1]} not supported "
-                         f"(this reader takes {', '.join(map(str, VERSIONS))})")
+        raise InputFileError(str(path), f"journal version {header[1]!r:.20} not supported "
+                             f"(this reader takes {', '.join(map(str, VERSIONS))})")
     return str(header[2]), int(header[1]), unpacker.tell()
 
 

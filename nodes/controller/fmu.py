@@ -88,6 +88,24 @@ class FmuPlan:
                 "internal state wrong, so it is refused)")
 
 
+MAX_FMU_BYTES = 2 << 30
+"""The most an FMU may unpack to [bytes] (its members' sizes; more is a zip bomb, #43)."""
+
+
+def _check_members(path: Path, zf: zipfile.ZipFile) -> None:
+    """Every member inside the FMU's folder, the whole within :data:`MAX_FMU_BYTES`."""
+    total = 0
+    for info in zf.infolist():
+        name = info.filename
+        if name.startswith("/") or "\\" in name or ":" in name or ".." in name.split("/"):
+            raise InputFileError(str(path), f"not an FMU: member {name!r:.80} points outside "
+                                            "the FMU's folder")
+        total += info.file_size
+    if total > MAX_FMU_BYTES:
+        raise InputFileError(str(path), f"unpacks to {total / 2**20:.0f} MiB, more than "
+                                        f"{MAX_FMU_BYTES / 2**20:.0f} MiB (a zip bomb?)")
+
+
 def _read_description(path: Path) -> Any:
     """The model description of ``path``; every way it can fail is an InputFileError."""
     from fmpy import read_model_description
@@ -100,6 +118,7 @@ def _read_description(path: Path) -> Any:
         with zipfile.ZipFile(path) as zf:
             if "modelDescription.xml" not in zf.namelist():
                 raise InputFileError(str(path), "not an FMU: no modelDescription.xml in the zip")
+            _check_members(path, zf)
             bad = zf.testzip()
         if bad is not None:
             raise InputFileError(str(path), f"corrupt FMU: member {bad} fails its CRC check")

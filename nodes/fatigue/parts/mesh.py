@@ -88,8 +88,8 @@ def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
         raise InputFileError(str(path), "file not found")
     try:
         m = meshio.read(str(path), file_format=fmt)
-    except Exception as exc:  # meshio raises many types for a malformed file
-        raise InputFileError(str(path), f"meshio could not read it: {exc}") from None
+    except (Exception, SystemExit) as exc:  # meshio raises many types, or exits (#43)
+        raise InputFileError(str(path), f"meshio could not read it: {exc or 'exit'}") from None
     tets = [c.data[:, :4] for c in m.cells if c.type in ("tetra", "tetra10")]
     if not tets:
         raise InputFileError(str(path), f"no tetrahedra (cells: {[c.type for c in m.cells]})")
