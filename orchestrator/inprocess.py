@@ -38,7 +38,6 @@ from cosim.journal import JournalWriter
 from cosim.run_settings import RunSettings
 from cosim.stepped import Fields, outputs_of
 from cosim.wire import MAX_MESSAGE_BYTES, Message, codec, decode, encode
-from nodes.fatigue.live_sink import LiveLoads
 from nodes.plant.models import build_plant_model
 from nodes.plant.stepper import PlantStepper
 from nodes.recorder.recording import Recording, write_error
@@ -118,7 +117,8 @@ class Engine:
         self.latest: dict[tuple[str, str], dict[int, Message]] = {}
         """Each channel's last two messages by step (the parallel exchange reads k - 1)."""
         self.rec: Recording | None = None
-        self.fatigue: LiveLoads | None = None
+        self.fatigue: Any = None
+        """The live fatigue node's :class:`nodes.fatigue.live_sink.LiveLoads`, if any."""
         self.sink_s = 0.0
         """Time the sinks (recorder, live fatigue) took within the steps [s]."""
 
@@ -171,7 +171,11 @@ class Engine:
         run, settings, scenario = self.run, self.settings, self.scenario
         folder = Path(run["dir"])
         names = list(run["nodes"])
-        fatigue = LiveLoads(scenario) if ch.FATIGUE in names else None
+        fatigue = None
+        if ch.FATIGUE in names:  # (its imports are heavy: only when the run has it)
+            from nodes.fatigue.live_sink import LiveLoads
+
+            fatigue = LiveLoads(scenario)
         model = build_plant_model(scenario["vehicle"])
         stepped = [_Stepped(n, scenario) for n in names
                    if nk.kind(n).role == nk.COUPLED and n != ch.PLANT]

@@ -23,6 +23,7 @@ from __future__ import annotations
 import copy
 import tempfile
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -70,7 +71,7 @@ class PlantModel(ABC):
         ``F_bs`` [N]. Empty by default."""
         return {}
 
-    def response_velocities(self) -> dict[str, np.ndarray]:
+    def response_velocities(self) -> Mapping[str, np.ndarray | float]:
         """Velocities in the current state whose rate of change ``plant/response`` carries,
         keyed by the acceleration field's name, per corner or length 1: the plant node
         publishes ``(after - before) / dt`` over the step's first substep, as it does a_b and

@@ -31,7 +31,7 @@ def _accels(m, F_t, F_d):
     v1 = m.response_velocities()
     j1 = p.getJointState(m.body, dw.LOWER_ARM, physicsClientId=m.client)[:2]
     vb1 = m.state()["v_b"][0]
-    acc = {k: float((v1[k] - v0[k])[0]) / DT for k in v0}
+    acc = {k: float(v1[k] - v0[k]) / DT for k in v0}
     return acc, (vb1 - vb0) / DT, j0, j1
 
 
