@@ -28,6 +28,7 @@ import numpy as np
 
 from .config import ConfigReader
 from .errors import InputFileError, ScenarioError
+from .safe_open import read_user_text
 
 FORMAT = "suscosim-corner"
 VERSION = 1
@@ -101,15 +102,10 @@ def _err(path: str, exc: ScenarioError) -> InputFileError:
     return InputFileError(path, f"key '{exc.key}': got {exc.value!r}, expected {exc.expected}")
 
 
-def load(path: str | Path) -> Corner:
-    """Read and check a corner file."""
+def load(path: str | Path, key: str = "vehicle.corner") -> Corner:
+    """Read and check a corner file (``key``: the scenario key that names it)."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputFileError(str(p), f"cannot read corner file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise InputFileError(str(p), "not a text (UTF-8) corner file") from None
+    text = read_user_text(p, "corner", key)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

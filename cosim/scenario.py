@@ -41,6 +41,7 @@ from . import node_kinds
 from .config import ConfigReader
 from .errors import InputFileError, ScenarioError, UnknownKeyError
 from .keys import check_name
+from .safe_open import read_user_text
 
 SECTIONS = ("run", "vehicle", "tyre", "road", "controller", "fatigue", "sweep", "report",
             "nodes")
@@ -365,13 +366,7 @@ def to_toml(scenario: dict[str, Any]) -> str:
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[str, Any]:
     """Read a scenario TOML file, apply ``--set`` overrides, validate the common sections."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputFileError(str(path), f"cannot read scenario ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise InputFileError(str(path), f"not a text (UTF-8) scenario file: byte "
-                                        f"{exc.start} is 0x{exc.object[exc.start]:02x}") from None
+    text = read_user_text(path, "scenario", "scenario file")
     try:
         scenario = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -59,6 +59,7 @@ from typing import Any
 
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
+from cosim.safe_open import read_user_text
 
 DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
 EVENT_KEYS = ("name", "scenario", "run", "set", "repeats", "distance_km")
@@ -79,11 +80,7 @@ def load_duty(path: str | Path) -> dict[str, Any]:
     """Read and validate a duty file; paths made absolute (relative to its folder)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputFileError(str(path), f"cannot read duty file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise InputFileError(str(path), "not a text (UTF-8) file") from None
+        data = tomllib.loads(read_user_text(path, "scenario", "duty file"))
     except tomllib.TOMLDecodeError as exc:
         raise InputFileError(str(path), f"not valid TOML: {exc}") from None
     base = path.resolve().parent

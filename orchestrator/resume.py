@@ -37,6 +37,7 @@ from cosim.checkpoint import (
     parse_fork,
 )
 from cosim.errors import InputFileError, ScenarioError
+from cosim.safe_open import read_user_text
 
 JOURNAL = "journal.msgpack"
 FORK_MAY_CHANGE = ("controller", "report", "nodes.controller", "run.id", "run.name",
@@ -52,11 +53,8 @@ def parent_scenario(run_dir: Path) -> dict[str, Any]:
     ``run.resume`` of a run that was itself resumed."""
     path = Path(run_dir) / "scenario.json"
     try:
-        scenario = json.loads(path.read_text())
-    except OSError as exc:
-        raise InputFileError(str(path), f"cannot read the run's scenario "
-                                        f"({exc.strerror or exc}): is {run_dir} a run "
-                                        "folder?") from None
+        scenario = json.loads(read_user_text(path, "scenario", "the run's scenario.json",
+                                             inside=run_dir))
     except ValueError as exc:
         raise InputFileError(str(path), f"not valid JSON ({exc})") from None
     if not isinstance(scenario, dict) or not isinstance(scenario.get("run"), dict):

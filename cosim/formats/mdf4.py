@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import check_user_file
 
 from .channel_set import ChannelSet
 
@@ -58,10 +59,12 @@ def _collect_half_built() -> None:
 
 
 def read_mdf4(path: str | Path) -> ChannelSet:
-    """Every channel of an MDF 3/4 file on its (common) time master."""
+    """Every channel of an MDF 3/4 file on its (common) time master (the file checked by
+    :func:`cosim.safe_open.check_user_file` before asammdf opens it)."""
     from asammdf import MDF
 
     path = str(path)
+    check_user_file(path, "mdf")
     failure = ""
     try:
         mdf = MDF(path)

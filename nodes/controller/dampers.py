@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import read_user_text
 from nodes.controller.registry import Param, control_law
 
 
@@ -163,12 +164,7 @@ def load_curve_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         InputFileError: naming the file and the 1-based line of the problem.
     """
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputFileError(str(p), f"cannot read damper curve: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise InputFileError(str(p), "not a UTF-8 text file") from None
+    text = read_user_text(p, "curve", "controller.curve")
     v: list[float] = []
     F: list[float] = []
     lines: list[int] = []

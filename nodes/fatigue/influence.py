@@ -30,6 +30,7 @@ import numpy as np
 
 from cosim import lower_arm as geo
 from cosim.errors import InputFileError, ScenarioError
+from cosim.safe_open import open_user_text
 
 from .material import Material
 from .prnsol import looks_like_prnsol, read_prnsol
@@ -210,11 +211,9 @@ def read_case_csv(path: Path) -> tuple[np.ndarray, np.ndarray | None, np.ndarray
     Returns (node_ids, xyz or None, stresses (n, 6)).
     """
     p = str(path)
-    if not Path(path).is_file():
-        raise InputFileError(p, "file not found")
     rows: list[list[float]] = []
     ncol = None
-    with open(path, newline="") as fh:
+    with open_user_text(path, "influence", "fatigue.mapping") as fh:
         for lineno, row in enumerate(csv.reader(fh), start=1):
             cells = [c.strip() for c in row if c.strip() != ""]
             if not cells:

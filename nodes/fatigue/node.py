@@ -35,6 +35,7 @@ from cosim.errors import RunError, ScenarioError, WireError
 from cosim.listener import Listener, Received
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
+from cosim.safe_open import check_user_file
 from cosim.wire import codec, inner
 
 from .config import FatigueConfig
@@ -167,12 +168,30 @@ def _report(part: Participant, res: FatigueResult, k: int, t: float, distance_m:
     }, record=False)
 
 
+def check_files(cfg: FatigueConfig) -> None:
+    """Every file ``[fatigue]`` names is a regular file within its limit
+    (:mod:`cosim.safe_open`), checked before the run: ``influence`` (a part file, a case
+    table or a folder of them) and each ``mapping`` file, inside the influence folder."""
+    if cfg.influence == "builtin":
+        return
+    path = cfg.influence_path
+    if path.suffix.lower() == ".toml":
+        check_user_file(path, "scenario", "fatigue.influence")
+        return
+    if not path.is_dir():
+        check_user_file(path, "influence", "fatigue.influence")
+    folder = path if path.is_dir() else path.parent
+    for _, name, _ in cfg.mapping:
+        check_user_file(folder / name, "influence", "fatigue.mapping", inside=folder)
+
+
 def preflight(scenario: dict[str, Any], load_channels: list[str] | None) -> bool:
     """Preflight (:mod:`cosim.node_kinds`): validate ``[fatigue]``; whether the live fatigue
     node joins the run: ``fatigue.live = true``, or ``"auto"`` with a plant that publishes
     the lower-arm loads (``load_channels`` from the plant's check); never in reference
     mode. ``live = true`` without those loads is a ScenarioError."""
     cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
+    check_files(cfg)
     has_loads = cfg.load_channel in (load_channels or ())
     if cfg.live is True and not has_loads:
         raise ScenarioError("fatigue.live", True, "false or \"auto\": this vehicle model "

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import open_user_file
 
 COLUMNS = ("NODE", "SX", "SY", "SZ", "SXY", "SYZ", "SXZ")
 EXPECTED = ("an ANSYS PRNSOL,S,COMP listing: a column line 'NODE SX SY SZ SXY SYZ SXZ' and "
@@ -29,12 +30,10 @@ _NUM = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([EeDd][-+]?\d+)?$")
 
 
 def looks_like_prnsol(path: Path) -> bool:
-    """Whether the first 60 lines of ``path`` have a PRNSOL header or column line."""
-    try:
-        with open(path, errors="replace") as fh:
-            head = [next(fh, "") for _ in range(60)]
-    except OSError:
-        return False
+    """Whether the first 60 lines (64 kB at most) of ``path`` have a PRNSOL header or column
+    line; an InputFileError when ``path`` is not a regular file (:mod:`cosim.safe_open`)."""
+    with open_user_file(path, "influence", "fatigue.mapping") as fh:
+        head = fh.read(1 << 16).decode("utf-8", errors="replace").splitlines()[:60]
     text = " ".join(head).upper()
     return ("NODAL SOLUTION PER NODE" in text or "POST1 NODAL STRESS LISTING" in text
             or bool(re.search(r"\bNODE\s+SX\s+SY\s+SZ\b", text)))
@@ -44,13 +43,12 @@ def read_prnsol(path: Path) -> tuple[np.ndarray, None, np.ndarray]:
     """(node ids, None, stresses (n, 6)) of a PRNSOL,S,COMP listing; InputFileError naming
     the file, the line and `EXPECTED` otherwise."""
     p = str(path)
-    if not Path(path).is_file():
-        raise InputFileError(p, "file not found")
     ids: list[int] = []
     rows: list[list[float]] = []
     in_data = False
     seen_cols = False
-    with open(path, errors="replace") as fh:
+    with open_user_file(path, "influence", "fatigue.mapping") as raw:
+        fh = (b.decode("utf-8", errors="replace") for b in raw)
         for lineno, line in enumerate(fh, start=1):
             cells = line.split()
             if not cells:

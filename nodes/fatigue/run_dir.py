@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError, ScenarioError
+from cosim.safe_open import read_user_text
 
 from .config import FatigueConfig
 from .damage_map import plot_damage_map
@@ -231,11 +232,10 @@ def unmapped_channels(loads: dict[str, np.ndarray], cases: list[str]) -> list[di
 
 def _scenario_json(sc_path: Path) -> dict:
     try:
-        scenario = json.loads(sc_path.read_text())
+        scenario = json.loads(read_user_text(sc_path, "scenario", "the run's scenario.json",
+                                             inside=sc_path.parent))
     except json.JSONDecodeError as exc:
         raise InputFileError(str(sc_path), f"invalid JSON ({exc.msg})", exc.lineno) from None
-    except OSError as exc:
-        raise InputFileError(str(sc_path), f"cannot read: {exc.strerror}") from None
     if not isinstance(scenario, dict):
         raise InputFileError(str(sc_path), "top level is not an object")
     return scenario

@@ -100,7 +100,7 @@ def read_corner(r: ConfigReader, key: str = "corner") -> Corner:
     path = r.string(key, "builtin")
     if path == "builtin":
         return corner_file.builtin()
-    return corner_file.load(path)
+    return corner_file.load(path, r.key(key))
 
 
 def read_driver(r: ConfigReader) -> dict[str, Any]:

@@ -29,12 +29,39 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import check_user_file, open_user_file
 
 from .roads import SampledRoad
 
 VEHICLE_TRACK_M = 1.411
 """Default track width [m]: the vehicle's (nodes/plant: FullVehicleParams.track, and the
 double-wishbone corner's half track 0.7055 m)."""
+
+
+def _check_data_reference(path: str) -> None:
+    """A ``$ROAD_CRG_FILE`` block (the data in another file) must name a regular file inside
+    the CRG file's folder, as written: pyopencrg expands ``$VARIABLES`` in it (an environment
+    variable would leak into the error) and reads any absolute path, so both are refused
+    here, before pyopencrg sees the file (issue #46)."""
+    from pyopencrg.io import cut_block  # type: ignore[import-untyped]
+
+    lines: list[str] = []
+    with open_user_file(path, "crg", "road.path") as fh:
+        for raw in fh:  # the header, up to its $$$$ separator (the data is not read)
+            line = raw.decode("latin-1").rstrip("\r\n")
+            if line.startswith("$$$$") or len(lines) > 100_000:
+                break
+            lines.append(line)
+    block, _ = cut_block(lines, "ROAD_CRG_FILE")
+    if block is None:
+        return
+    ref = "".join(ln.split("!", 1)[0].strip() for ln in block if not ln.startswith("*"))
+    if "$" in ref or ref.startswith("~") or Path(ref).is_absolute():
+        raise InputFileError(path, f"road.path: $ROAD_CRG_FILE names {ref!r}: a data file is "
+                                   "taken only as a plain path relative to the CRG file's "
+                                   "folder (no $VARIABLE, no ~, not absolute)")
+    folder = Path(path).parent
+    check_user_file(folder / ref, "crg", "road.path ($ROAD_CRG_FILE)", inside=folder)
 
 
 def read_crg(path: str | Path):
@@ -44,8 +71,8 @@ def read_crg(path: str | Path):
     import pyopencrg
 
     path = str(path)
-    if not Path(path).is_file():
-        raise InputFileError(path, "file not found")
+    check_user_file(path, "crg", "road.path")
+    _check_data_reference(path)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # pyopencrg warns of legal-but-odd files

@@ -16,13 +16,13 @@ Every problem raises :class:`cosim.errors.InputFileError` naming the file and th
 from __future__ import annotations
 
 import math
-import os
 from array import array
 from pathlib import Path
 
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import check_user_file, open_user_text
 
 from .roads import SampledRoad
 
@@ -35,26 +35,15 @@ def _number(text: str) -> float | None:
     return v
 
 
-MAX_PROFILE_BYTES = 256 * 1024 * 1024
-"""Largest profile file read [bytes] (~10 million samples: 1 cm steps over 100 km)."""
-
-
 def read_profile_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Read (x, z_left, z_right) [m] from ``path``; raise InputFileError when malformed.
 
     The file is read line by line into typed arrays (24 bytes a sample, not the ~200 of a
-    list of tuples of the lines), and refused above :data:`MAX_PROFILE_BYTES`."""
+    list of tuples of the lines), and refused above the ``profile`` limit of
+    :mod:`cosim.safe_open` (256 MiB, ~1e7 samples; ``SUSCOSIM_MAX_PROFILE_MB``)."""
     path = str(path)
-    try:
-        size = os.stat(path).st_size
-        if size > MAX_PROFILE_BYTES:
-            raise InputFileError(path, f"profile file of {size / 2**20:.0f} MiB: at most "
-                                       f"{MAX_PROFILE_BYTES // 2**20} MiB (resample it coarser)")
-        f = open(path, encoding="utf-8")
-    except FileNotFoundError:
-        raise InputFileError(path, "file not found") from None
-    except OSError as e:
-        raise InputFileError(path, f"cannot read: {e.strerror}") from None
+    check_user_file(path, "profile", "road.path")  # refused by its size before any read
+    f = open_user_text(path, "profile", "road.path")
 
     cols: list[array] = []
     n_cols: int | None = None

@@ -19,6 +19,7 @@ import numpy as np
 from cosim.errors import InputFileError
 from cosim.formats.mdf4 import read_mdf4
 from cosim.formats.units import to_si_factor
+from cosim.safe_open import check_user_file
 
 from .roads import KMH, SampledRoad
 
@@ -28,8 +29,7 @@ def read_profile_mdf(path: str | Path, left: str, right: str | None = None,
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(x, z_left, z_right) [m] from an MDF 4 file (see the module docstring)."""
     path = str(path)
-    if not Path(path).is_file():
-        raise InputFileError(path, "file not found")
+    check_user_file(path, "mdf", "road.path")
     cs = read_mdf4(path)
 
     def channel(name: str, quantity: str = "length") -> np.ndarray:

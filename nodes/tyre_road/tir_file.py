@@ -16,9 +16,7 @@ import re
 from pathlib import Path
 
 from cosim.errors import InputFileError
-
-MAX_TIR_BYTES = 4 * 1024 * 1024
-"""Largest .tir file read (real ones are ~20-60 kB)."""
+from cosim.safe_open import read_user_file
 
 _LINE = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*=\s*(.*?)\s*$")
 
@@ -77,16 +75,9 @@ def parse_tir(text: str, source: str = "<tir>") -> dict[str, float | str]:
 def read_tir(path: str | Path) -> dict[str, float | str]:
     """:func:`parse_tir` of the file ``path``."""
     p = Path(path)
+    data = read_user_file(p, "tir", "tyre.tir")
     try:
-        size = p.stat().st_size
-        if size > MAX_TIR_BYTES:
-            raise InputFileError(str(p), f"{size} bytes: at most {MAX_TIR_BYTES} for a .tir")
-        text = p.read_text(encoding="utf-8", errors="strict")
-    except OSError as exc:
-        raise InputFileError(str(p), f"cannot read the tyre file ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        try:  # many .tir files are Latin-1 (a degree sign in a comment)
-            text = p.read_text(encoding="latin-1")
-        except OSError:
-            raise InputFileError(str(p), f"not a text file: {exc}") from None
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:  # many .tir files are Latin-1 (a degree sign in a comment)
+        text = data.decode("latin-1")
     return parse_tir(text, str(p))

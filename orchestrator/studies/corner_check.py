@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         corner = (corner_file.builtin() if args.file == "builtin"
-                  else corner_file.load(args.file))
+                  else corner_file.load(args.file, "corner file"))
         if args.points < 2:
             raise InputFileError("--points", "at least 2 points")
         if not args.tyre_stiffness > 0:

@@ -19,6 +19,7 @@ from cosim import scenario as sc
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
+from cosim.safe_open import read_user_text
 
 from .design import AXIS, Design, design_axis, parse_design
 
@@ -204,9 +205,7 @@ def load_sweep(path: str | Path, jobs: int | None = None,
 
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text())
-    except OSError as exc:
-        raise InputFileError(str(path), f"cannot read sweep file ({exc.strerror})") from None
+        data = tomllib.loads(read_user_text(path, "scenario", "sweep file"))
     except tomllib.TOMLDecodeError as exc:
         raise InputFileError(str(path), f"not valid TOML: {exc}") from None
     if not isinstance(data.get("sweep"), dict):

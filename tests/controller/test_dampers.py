@@ -67,7 +67,7 @@ def test_curve_csv_errors_name_the_line(tmp_path, text, line, words):
 
 
 def test_curve_csv_missing_file(tmp_path):
-    with pytest.raises(InputFileError, match="cannot read"):
+    with pytest.raises(InputFileError, match="controller.curve: file not found"):
         load_curve_csv(tmp_path / "nope.csv")
 
 

@@ -10,12 +10,12 @@ from tests.conftest import suscosim
 
 @pytest.mark.parametrize("args, command, words", [
     (["sweep", "/nonexist.toml", "--jobs", "0"], "sweep", "--jobs must be >= 1"),
-    (["sweep", "/nonexist.toml"], "sweep", "cannot read sweep file"),
-    (["duty", "/nonexist.toml"], "duty", "cannot read duty file"),
+    (["sweep", "/nonexist.toml"], "sweep", "sweep file: file not found"),
+    (["duty", "/nonexist.toml"], "duty", "duty file: file not found"),
     (["cluster", "--workers", "0"], "cluster", "--workers must be >= 1"),
     (["pseudo-damage", "--k", "0", "/tmp"], "pseudo-damage", "--k and --n-ref must be > 0"),
     (["pseudo-damage", "/nonexist"], "pseudo-damage", "no such run folder or load file"),
-    (["corner", "check", "/nonexist.toml"], "corner", "cannot read corner file"),
+    (["corner", "check", "/nonexist.toml"], "corner", "corner file: file not found"),
 ])
 def test_a_bad_input_gets_the_common_prefix_and_exit_2(args, command, words) -> None:
     res = suscosim(*args, timeout=60)

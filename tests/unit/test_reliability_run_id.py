@@ -10,7 +10,7 @@ import tomllib
 
 import pytest
 
-from cosim import keys
+from cosim import keys, safe_open
 from cosim import scenario as sc
 from cosim.errors import InputFileError, ScenarioError
 from cosim.run_lock import FolderInUseError, RunIdInUseError, RunLock, check_run_id_free
@@ -129,8 +129,8 @@ def test_a_huge_road_csv_is_refused_with_a_clear_message_without_reading_it(tmp_
     (a sparse file: nothing is read); below, it is read line by line into typed arrays."""
     big = tmp_path / "road.csv"
     with open(big, "wb") as f:
-        f.truncate(profile_csv.MAX_PROFILE_BYTES + 1)
-    with pytest.raises(InputFileError, match="MiB: at most 256 MiB"):
+        f.truncate(safe_open.limit("profile") + 1)
+    with pytest.raises(InputFileError, match="larger than the 256 MiB"):
         profile_csv.read_profile_csv(big)
     ok = tmp_path / "ok.csv"
     ok.write_text("s,z\n" + "".join(f"{i * 0.01},{(i % 7) * 1e-3}\n" for i in range(20000)))
