@@ -1,8 +1,9 @@
 """Every reader of a file a user can hand the program, fuzzed with hypothesis (issue #43
 item 4): a valid file of each kind, mutated (bytes flipped, cut, spliced, repeated) or
 replaced by random bytes, goes into the reader. The only outcomes are a result or the
-reader's named error (:class:`cosim.errors.SuscosimError`, mostly InputFileError naming the
-file); never another exception, never a hang (each case bounded by an alarm), never a file
+reader's named error (:class:`cosim.errors.SuscosimError`: an InputFileError naming the
+file, or one it names, or a ScenarioError naming the key of the one file the command was
+given); never another exception, never a hang (each case bounded by an alarm), never a file
 written outside the case's folder.
 
 Bounded: ``SUSCOSIM_FUZZ_EXAMPLES`` examples per reader (20 by default; a nightly run may
@@ -27,7 +28,7 @@ from hypothesis import strategies as st
 
 from cosim import checkpoint as ck
 from cosim import plaindata
-from cosim.errors import SuscosimError
+from cosim.errors import InputFileError, ScenarioError, SuscosimError
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = int(os.environ.get("SUSCOSIM_FUZZ_EXAMPLES", "20"))
@@ -95,6 +96,10 @@ def _try(read: Callable[[Path], Any], path: Path, named: tuple[type, ...] = (Sus
     try:
         with _bounded():
             read(path)
+    except ScenarioError as exc:  # a key of the file the command was given: names the key
+        assert str(exc).startswith("scenario key '"), exc
+    except InputFileError as exc:  # this file, or one it names (a duty's event scenario)
+        assert exc.path and str(exc).startswith(exc.path), exc
     except named as exc:
         assert path.name in str(exc) or str(path) in str(exc), f"not named: {exc}"
     assert set(os.listdir(".")) == before
@@ -155,6 +160,20 @@ def test_fuzz_road_csv(tmp_path, monkeypatch):
         f"{0.05 * i:.3f},{0.001 * (i % 7):.4f},{-0.001 * (i % 5):.4f}\n".encode()
         for i in range(40))
     _fuzz_file(tmp_path, "road.csv", sample, read_profile_csv)()
+
+
+@pytest.mark.parametrize("kind", ["tir", "duty", "sweep"])
+def test_fuzz_tyre_duty_and_sweep_files(tmp_path, monkeypatch, kind):
+    from nodes.tyre_road.tir_file import read_tir
+    from orchestrator.duty import load_duty
+    from orchestrator.sweep.spec import load_sweep
+
+    monkeypatch.chdir(tmp_path)
+    sample, read = {
+        "tir": (ROOT / "nodes" / "tyre_road" / "tyres" / "mpv_215_65r16.tir", read_tir),
+        "duty": (ROOT / "scenarios" / "duty" / "ch6_proving_ground.toml", load_duty),
+        "sweep": (min((ROOT / "scenarios" / "doe").glob("*.toml")), load_sweep)}[kind]
+    _fuzz_file(tmp_path, sample.name, sample.read_bytes(), read)()
 
 
 def test_fuzz_frd(tmp_path, monkeypatch):
