@@ -224,11 +224,27 @@ def _next_head(win: _Window, pos: int) -> int:
 
 
 def _body_records(body: bytes, rawlen: int, nrec: int, dctx: Any) -> list[tuple[str, bytes]]:
-    """The records of a segment body whose CRC matched; ValueError if it does not decode."""
+    """The records of a segment body whose CRC matched; ValueError if it does not decode.
+
+    Decompressed by a stream reader that stops one byte past the header's ``rawlen``, itself
+    at most :data:`MAX_SEGMENT_BYTES` (python-zstandard's ``decompress`` ignores
+    ``max_output_size`` when the frame states its size: a 65 kB body declaring 2 GiB was
+    inflated in full, #46)."""
+    if rawlen > MAX_SEGMENT_BYTES:
+        raise ValueError(f"declares {rawlen} raw bytes, more than {MAX_SEGMENT_BYTES}")
+    parts: list[bytes] = []
+    got = 0
     try:
-        raw = dctx.decompress(body, max_output_size=rawlen)
+        with dctx.stream_reader(body) as reader:
+            while got <= rawlen and (chunk := reader.read(min(rawlen + 1 - got, _CHUNK))):
+                parts.append(chunk)
+                got += len(chunk)
     except Exception as exc:  # zstandard.ZstdError
         raise ValueError(f"does not decompress: {exc}") from None
+    if got != rawlen:
+        raise ValueError(f"decompresses to {'more than ' if got > rawlen else ''}{got} bytes, "
+                         f"the header says {rawlen}")
+    raw = b"".join(parts)
     out: list[tuple[str, bytes]] = []
     try:
         u = msgpack.Unpacker(raw=False, max_buffer_size=max(len(raw), 1))
