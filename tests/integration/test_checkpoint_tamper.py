@@ -125,3 +125,24 @@ def test_a_manifest_with_wrong_fields_is_refused(parent, tmp_path, field, value,
     where[last] = value
     path.write_text(json.dumps(doc))
     _refused(suscosim("run", "--resume", str(run), timeout=120), "manifest.json", named)
+
+
+@pytest.mark.parametrize("node,state", [
+    ("controller", {"law": None, "attrs": {}, "rebuilt": []}),  # the issue's "law None"
+    ("plant", {"model": {"model": "another"}, "before": None, "prev": {}, "st": {}}),
+    ("tyre_road", {"_s0": 1.0}),
+])
+def test_plain_data_that_does_not_fit_its_node_is_exit_2_named(parent, tmp_path, node,
+                                                                state):
+    """An unsigned folder (run.key gone) with well-formed plain data of the wrong shape: the
+    node refuses it with a CheckpointError, exit 2, never an internal error."""
+    run = _copy(parent, tmp_path)
+    (run / "run.key").unlink()
+    folder = _last(run)
+    entry = ck.write_node_state(run, int(folder.name[1:]), node, state)
+    doc = json.loads((folder / "manifest.json").read_text())
+    doc["nodes"][node] = entry
+    doc.pop("mac")
+    (folder / "manifest.json").write_text(json.dumps(doc))
+    r = suscosim("run", "--resume", str(run), timeout=120)
+    _refused(r, node, "checkpoint")
