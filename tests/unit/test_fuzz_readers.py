@@ -341,3 +341,36 @@ def test_fuzz_fmu_zip(tmp_path_factory, names, data):
     path = d / "law.fmu"
     path.write_bytes(data.draw(mutated(sample)))
     _try(_read_description, path)
+
+
+# ---- through the CLI: exit 2 named, never 1 ---------------------------------------------------
+@pytest.mark.parametrize("command", ["check", "export"])
+def test_fuzz_cli_exit_codes(tmp_path, command):
+    """A few mutated files through ``suscosim check`` (a scenario) and ``suscosim export``
+    (a journal): exit 0 or 2, never an internal error (a subprocess each, so few cases)."""
+    from cosim.journal import JournalWriter
+
+    from ..conftest import suscosim
+
+    if command == "check":
+        sample, name = (ROOT / "scenarios" / "ch3_step_quarter_car.toml").read_bytes(), "s.toml"
+    else:
+        path = tmp_path / "sample.msgpack"
+        w = JournalWriter(path, "fuzzrun")
+        w.append("plant/state", b"\x85")
+        w.close()
+        sample, name = path.read_bytes(), "journal.msgpack"
+
+    @settings(FUZZ, max_examples=max(3, EXAMPLES // 6))
+    @given(data=mutated(sample))
+    def run(data: bytes) -> None:
+        d = _case_dir(tmp_path)
+        (d / name).write_bytes(data)
+        args = [str(d / name)] + (["--out", str(d / "out")] if command == "export" else [])
+        r = suscosim(command, *args, timeout=120)
+        assert r.returncode in (0, 2), r.stdout + r.stderr
+        assert "internal error" not in r.stderr and "Traceback" not in r.stderr, r.stderr
+        if r.returncode == 2:
+            assert name in r.stderr or "scenario key" in r.stderr, r.stderr
+
+    run()
