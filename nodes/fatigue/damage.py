@@ -34,7 +34,11 @@ from .material import Material, material_sn_curve
 from .mean_stress import equivalent_amplitude
 from .sn_data import TabulatedSN
 
-METHODS = ("stress_life", "strain_life")
+TIME_METHODS = ("stress_life", "strain_life")
+"""The rainflow methods (this module); the spectral ones (:mod:`.spectral`: the PSD of the
+whole history, after a run: ``suscosim fatigue RUN``) take the stress-life curve."""
+SPECTRAL_METHODS = ("dirlik", "tovo_benasciutti")
+METHODS = TIME_METHODS + SPECTRAL_METHODS
 
 
 def _endurance(curve: SNCurve | TabulatedSN, endurance_limit: bool | str | None) -> str:
@@ -91,7 +95,7 @@ def cycle_reversals(
         sar = equivalent_amplitude(sa_e, sm_e, mean_stress, mat.Su, mat.sf, M)
         return curve.with_endurance(mode).reversals(sar)
     if method != "strain_life":
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise ValueError(f"method must be one of {TIME_METHODS}, got {method!r}")
     sa = neuber(sa_e, mat)
     with np.errstate(divide="ignore", invalid="ignore"):
         ea = np.where(sa > 0, sa_e * sa_e / (mat.E * sa), 0.0)  # Neuber: σa εa = σea²/E

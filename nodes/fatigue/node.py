@@ -39,6 +39,7 @@ from cosim.safe_open import check_user_file
 from cosim.wire import codec, inner
 
 from .config import FatigueConfig
+from .damage import SPECTRAL_METHODS
 from .live_sink import LiveLoads, Track
 from .more_parts import more_parts
 from .worker import FatigueResult
@@ -192,6 +193,12 @@ def preflight(scenario: dict[str, Any], load_channels: list[str] | None) -> bool
     mode. ``live = true`` without those loads is a ScenarioError."""
     cfg = FatigueConfig.from_dict(scenario.get("fatigue"))
     check_files(cfg)
+    if cfg.method in SPECTRAL_METHODS:  # the PSD of the whole history: after the run
+        if cfg.live is True:
+            raise ScenarioError("fatigue.live", True, f"false or \"auto\" with method "
+                                f"{cfg.method!r}: its PSD is of the whole history, computed "
+                                "after the run by `suscosim fatigue RUN` (a sweep runs it)")
+        return False
     has_loads = cfg.load_channel in (load_channels or ())
     if cfg.live is True and not has_loads:
         raise ScenarioError("fatigue.live", True, "false or \"auto\": this vehicle model "

@@ -19,6 +19,7 @@ from cosim.errors import InputFileError, ScenarioError
 from cosim.safe_open import read_user_text
 
 from .config import FatigueConfig
+from .damage import SPECTRAL_METHODS
 from .damage_map import plot_damage_map
 from .influence import short_channel
 from .worker import FatigueResult, analyse, load_influence
@@ -271,11 +272,19 @@ def _analyse_and_write(t: np.ndarray, loads: dict[str, np.ndarray], cfg: Fatigue
     check_loads(loads, t, source)
     say = progress or (lambda _msg: None)
     say(f"fatigue: {len(t)} samples x {len(loads)} channels, primary S-N curve")
-    result = analyse(t, loads, cfg, L)
+    spectral = cfg.method in SPECTRAL_METHODS
+    if spectral:  # the PSD of the whole history (:mod:`.spectral_life`): no rainflow outputs
+        from .spectral_life import spectral_analyse
+        result, more = spectral_analyse(t, loads, cfg, L)
+    else:
+        result = analyse(t, loads, cfg, L)
     extra: dict = {"unmapped_channels": unmapped_channels(loads,
                                                           list(load_influence(cfg).case_names))}
     if what_if:
         extra["what_if"] = {"settings": what_if, "hash": settings_hash(what_if)}
+    if spectral:
+        write_results(result, out, {**extra, **more})
+        return result
     files, more = batch_outputs(t, loads, cfg, L, result, say)
     extra.update(more)
     files = _with_critical_planes([loads], cfg, result, extra, files, say)
@@ -485,6 +494,17 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None, out: Path | No
     if overrides and cfg == FatigueConfig.from_dict(section, "fatigue", base_dir=run_dir):
         overrides = {}  # settings that only repeat the run's own: not a what-if
     folder = results_folder(run_dir, overrides, out)
-    result = _stream_and_write(run_dir, scenario, cfg, folder, overrides or None, progress)
+    if cfg.method in SPECTRAL_METHODS:  # the whole table at once: its PSD needs it
+        if cfg.parts:
+            raise ScenarioError("fatigue.parts", list(cfg.parts), f"none with method "
+                                f"{cfg.method!r} (the lower arm only; method = \"stress_life\""
+                                " assesses the parts)")
+        t, loads = read_table(run_dir)
+        L = cfg.track_length_m if cfg.track_length_m is not None else \
+            track_length(scenario, t)
+        result = _analyse_and_write(t, loads, cfg, L, folder, str(run_dir / "table"),
+                                    overrides or None, progress)
+    else:
+        result = _stream_and_write(run_dir, scenario, cfg, folder, overrides or None, progress)
     result.results_dir = folder  # type: ignore[attr-defined]  # where it went, for the CLI
     return result
