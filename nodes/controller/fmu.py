@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import atexit
 import shutil
+import tempfile
 import zipfile
 from collections import deque
 from collections.abc import Callable, Mapping
@@ -49,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from cosim.errors import InputFileError, RunError, ScenarioError
+from cosim.safe_open import check_user_file
 from nodes.controller.base import BODY_KEYS, ConfigReader, Controller, ControlOutput, corner_array
 from nodes.controller.registry import law_builder
 
@@ -88,18 +90,33 @@ class FmuPlan:
                 "internal state wrong, so it is refused)")
 
 
-MAX_FMU_BYTES = 2 << 30
+MAX_FMU_BYTES = 1 << 30
 """The most an FMU may unpack to [bytes] (its members' sizes; more is a zip bomb, #43)."""
+MAX_FMU_MEMBERS = 10_000
+"""The most members an FMU may hold (a real one: a description, binaries, resources)."""
+MAX_MEMBER_RATIO = 200
+"""The largest inflation of a member over 1 MiB: binaries and XML deflate 2-20 times, zeros
+about 1000 times (#46: 2.3 MB holding 2 GiB of zeros)."""
 
 
 def _check_members(path: Path, zf: zipfile.ZipFile) -> None:
-    """Every member inside the FMU's folder, the whole within :data:`MAX_FMU_BYTES`."""
+    """From the zip directory, before any byte is inflated: every member inside the FMU's
+    folder, at most :data:`MAX_FMU_MEMBERS` of them, none inflating more than
+    :data:`MAX_MEMBER_RATIO` times, the whole within :data:`MAX_FMU_BYTES`."""
     total = 0
-    for info in zf.infolist():
+    infos = zf.infolist()
+    if len(infos) > MAX_FMU_MEMBERS:
+        raise InputFileError(str(path), f"{len(infos)} members, more than {MAX_FMU_MEMBERS}")
+    for info in infos:
         name = info.filename
         if name.startswith("/") or "\\" in name or ":" in name or ".." in name.split("/"):
             raise InputFileError(str(path), f"not an FMU: member {name!r:.80} points outside "
                                             "the FMU's folder")
+        if info.file_size > 1 << 20 and info.file_size > MAX_MEMBER_RATIO * max(
+                info.compress_size, 1):
+            raise InputFileError(str(path), f"member {name!r:.80} inflates {info.compress_size}"
+                                            f" bytes to {info.file_size} (more than "
+                                            f"{MAX_MEMBER_RATIO} times: a zip bomb?)")
         total += info.file_size
     if total > MAX_FMU_BYTES:
         raise InputFileError(str(path), f"unpacks to {total / 2**20:.0f} MiB, more than "
@@ -110,8 +127,9 @@ def _read_description(path: Path) -> Any:
     """The model description of ``path``; every way it can fail is an InputFileError."""
     from fmpy import read_model_description
 
-    if not path.is_file():
-        raise InputFileError(str(path), "no such FMU file" if not path.exists() else "not a file")
+    if not path.exists():
+        raise InputFileError(str(path), "no such FMU file")
+    check_user_file(path, "fmu", "controller.fmu")
     if not zipfile.is_zipfile(path):
         raise InputFileError(str(path), "not an FMU: not a zip archive (corrupt or truncated?)")
     try:
@@ -299,8 +317,11 @@ class FmuController(Controller):
     def _start(self, t: float, inputs: list[list[float]]) -> None:
         from fmpy import extract, instantiate_fmu
 
-        self._unzipdir = extract(str(self.plan.path))
+        # the folder is ours before a byte is extracted: close() removes it however the run
+        # ends, an extraction that failed half way included
+        self._unzipdir = tempfile.mkdtemp(prefix="suscosim_fmu_")
         atexit.register(self.close)
+        extract(str(self.plan.path), self._unzipdir)
         for i in range(self.n):
             # logging on: what an FMU says when it fails goes into the error (costs no
             # measurable time per step with a PythonFMU FMU, which says nothing otherwise)

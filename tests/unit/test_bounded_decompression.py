@@ -1,5 +1,7 @@
 """#46 item 2: a compressed input is inflated within bounds: a journal segment whose zstd
-frame declares 2 GiB is refused by `suscosim export` (exit 2) in well under 300 MB."""
+frame declares 2 GiB is refused by `suscosim export`, an FMU holding 2 GiB of zeros by
+`suscosim check` and `run` from its zip directory (exit 2, under 300 MB, nothing left in
+$TMPDIR)."""
 
 from __future__ import annotations
 
@@ -34,14 +36,15 @@ def _segment(body: bytes, rawlen: int, nrec: int = 1, first: int = 0) -> bytes:
                      struct.pack("<I", zlib.crc32(body))))
 
 
-def _peak_child_rss_mb(cmd: list[str]) -> tuple[int, float, str]:
+def _peak_child_rss_mb(cmd: list[str], env: dict[str, str] | None = None
+                       ) -> tuple[int, float, str]:
     """(exit code, peak RSS [MB], stderr) of ``cmd`` run from a fresh Python process, so
     RUSAGE_CHILDREN holds that one child only."""
     probe = ("import json, resource, subprocess, sys\n"
              "r = subprocess.run(sys.argv[1:], capture_output=True, text=True, timeout=120)\n"
              "rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss\n"
              "print(json.dumps([r.returncode, rss / 1024, r.stderr]))\n")
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = env or dict(os.environ, PYTHONPATH=str(ROOT))
     out = subprocess.run([sys.executable, "-c", probe, *cmd], capture_output=True, text=True,
                          timeout=180, env=env, cwd=ROOT)
     rc, mb, err = json.loads(out.stdout)
@@ -78,3 +81,37 @@ def test_export_of_a_journal_bomb_exits_2_in_bounded_memory(tmp_path: Path,
     assert rc == 2, err
     assert str(journal) in err.strip().splitlines()[-1], err
     assert peak_mb < 300, f"peak RSS {peak_mb:.0f} MB"
+
+
+def _fmu_bomb(path: Path) -> None:
+    """A zip with a model description and 2 GiB of zeros (9 MB deflated at level 1), written in
+    1 MiB pieces."""
+    import zipfile
+
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as zf:
+        zf.writestr("modelDescription.xml", b'<?xml version="1.0"?>\n<fmiModelDescription '
+                    b'fmiVersion="2.0" modelName="m" guid="{0}"/>\n')
+        zero = bytes(1 << 20)
+        with zf.open("resources/zeros.bin", "w", force_zip64=True) as fh:
+            for _ in range(BOMB_RAW >> 20):
+                fh.write(zero)
+
+
+def test_an_fmu_of_2_gib_of_zeros_is_refused_from_its_directory(tmp_path: Path) -> None:
+    bomb = tmp_path / "bomb.fmu"
+    _fmu_bomb(bomb)
+    assert bomb.stat().st_size < 10 << 20
+    tmpdir = tmp_path / "tmpdir"
+    tmpdir.mkdir()
+    scenario = ROOT / "scenarios" / "ch5_qvm_tss1_random.toml"
+    for command in ("check", "run"):
+        cmd = [sys.executable, "-m", "orchestrator", command, str(scenario),
+               "--set", f'controller={{ law = "fmu", fmu = "{bomb}" }}']
+        if command == "run":
+            cmd += ["--mode", "monolithic", "--quiet", "--out", str(tmp_path / "run")]
+        env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(tmpdir))
+        rc, peak_mb, err = _peak_child_rss_mb(cmd, env)
+        last = err.strip().splitlines()[-1]
+        assert rc == 2 and "bomb.fmu" in last and "zip bomb" in last, err
+        assert peak_mb < 300, f"{command}: peak RSS {peak_mb:.0f} MB"
+        assert os.listdir(tmpdir) == [], f"{command} left {os.listdir(tmpdir)} in $TMPDIR"
