@@ -393,7 +393,7 @@ def absolute_path(value: Any, folder: Path) -> Any:
                 for v in value]
     if not isinstance(value, str) or not value or value.startswith("builtin"):
         return value
-    p = Path(value).expanduser()
+    p = Path(value)  # as written: no ~ or $VARIABLE expansion (#46)
     return value if p.is_absolute() else str(folder / p)
 
 

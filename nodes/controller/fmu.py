@@ -161,7 +161,7 @@ def check_fmu(r: ConfigReader, n_corners: int) -> FmuPlan:
     from fmpy import platform, supported_platforms
 
     raw = r.string("fmu")
-    path = Path(raw).expanduser()
+    path = Path(raw)
     md = _read_description(path)
     if md.fmiVersion not in ("2.0",) and not str(md.fmiVersion).startswith("3."):
         raise InputFileError(str(path), f"FMI {md.fmiVersion} FMU: suscosim runs FMI 2.0 and "

@@ -252,7 +252,7 @@ class FatigueConfig:
 
     @property
     def influence_path(self) -> Path:
-        p = Path(self.influence).expanduser()
+        p = Path(self.influence)
         return p if p.is_absolute() else Path(self.base_dir) / p
 
     def as_dict(self) -> dict:
@@ -379,7 +379,7 @@ def _parts(r: ConfigReader, base_dir: str | Path) -> tuple[str, ...]:
         if not v.lower().endswith(".toml"):
             path = SHIPPED_PARTS / f"{v}.toml"
         else:
-            path = Path(v).expanduser()
+            path = Path(v)
             path = path if path.is_absolute() else Path(base_dir) / path
         if not path.is_file():
             known = sorted(p.stem for p in SHIPPED_PARTS.glob("*.toml")

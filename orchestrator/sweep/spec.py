@@ -228,7 +228,7 @@ def load_sweep(path: str | Path, jobs: int | None = None,
             raise sw.error("base", raw_base, "a scenario file or a list of them")
         bases = []
         for b in items:
-            p = Path(b).expanduser()
+            p = Path(b)  # as written: no ~ or $VARIABLE expansion (#46)
             p = p if p.is_absolute() else folder / p
             if not p.is_file():
                 raise InputFileError(str(p), "base scenario not found (sweep.base is "
@@ -258,7 +258,7 @@ def load_sweep(path: str | Path, jobs: int | None = None,
     runs_dir = None
     given_runs_dir = sw.optional_string("runs_dir")
     if given_runs_dir is not None:
-        runs_dir = Path(given_runs_dir).expanduser()
+        runs_dir = Path(given_runs_dir)
         runs_dir = (runs_dir if runs_dir.is_absolute() else folder / runs_dir).resolve()
     sw.value("description")  # free text
     from .fork import parse_fork_at

@@ -242,7 +242,7 @@ def _content(raw: dict) -> bytes:
 
 def load_part(path: str | Path) -> Part:
     """Read and validate a part file; an `InputFileError` names the file and the key."""
-    path = Path(path).expanduser().resolve()
+    path = Path(path).resolve()
     src = str(path)
     try:
         raw_bytes = path.read_bytes()
