@@ -102,3 +102,40 @@ def test_checkpoint_schedule_and_fork_spec() -> None:
     for bad in ("runs/a", "@1", "runs/a@x", "runs/a@-1"):
         with pytest.raises(ValueError, match="--fork"):
             ck.parse_fork(bad)
+
+
+def test_plain_data_round_trips_and_refuses_what_is_not_data() -> None:
+    """cosim.plaindata (#43): numbers, arrays, tuples, sets, big ints, generators and
+    whitelisted classes round-trip exactly; an object array, a class outside the whitelist, a
+    name that would need an import, or a dunder field is refused, in both directions."""
+    import msgpack
+
+    from cosim import plaindata as pd
+    from nodes.tyre_road.wheel_paths import RoadPath
+
+    rng = np.random.default_rng(5)
+    state = {"a": np.arange(6, dtype="<i4").reshape(2, 3), "f": np.float32(1.5),
+             "t": (1, "x", None), "s": frozenset({1, 2}), "big": -(2**80), "rng": rng,
+             "path": RoadPath((1.0, 2.0), 10.0), 3: b"\0"}
+    back = pd.decode(pd.encode(state))
+    assert back["a"].dtype == np.dtype("<i4") and back["a"].tobytes() == state["a"].tobytes()
+    assert type(back["f"]) is np.float32 and back["t"] == (1, "x", None)
+    assert back["s"] == frozenset({1, 2}) and back["big"] == -(2**80) and back[3] == b"\0"
+    assert back["rng"].random() == rng.random()
+    assert type(back["path"]) is RoadPath and vars(back["path"]).keys() == \
+        vars(state["path"]).keys()
+    for bad in (np.array([object()]), object(), {"x": lambda: 0}, np.array(["s"])):
+        with pytest.raises(pd.PlainDataError):
+            pd.encode(bad)
+
+    def obj(name: str, fields: dict) -> bytes:
+        inner = msgpack.packb([name, fields], use_bin_type=True)
+        return msgpack.packb(msgpack.ExtType(7, inner), use_bin_type=True)
+
+    for name, fields in (("os.system", {}), ("subprocess.Popen", {"args": "id"}),
+                         ("nodes.tyre_road.wheel_paths.RoadPath", {"__class__": 1})):
+        with pytest.raises(pd.PlainDataError):
+            pd.decode(obj(name, fields))
+    arr = msgpack.packb(msgpack.ExtType(1, msgpack.packb(["|O", [1], b"\0" * 8])))
+    with pytest.raises(pd.PlainDataError, match="not a number type"):
+        pd.decode(arr)
