@@ -59,7 +59,8 @@ from typing import Any
 
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
-from cosim.safe_open import read_user_text
+from cosim.keys import check_name
+from cosim.safe_open import open_user_text, read_user_text
 
 DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
 EVENT_KEYS = ("name", "scenario", "run", "set", "repeats", "distance_km")
@@ -87,9 +88,7 @@ def load_duty(path: str | Path) -> dict[str, Any]:
     ConfigReader(data, "", ("duty", "events", "laws"))  # a typo: "did you mean"
     duty = data.get("duty", {})
     ConfigReader(duty, "duty", DUTY_KEYS)
-    name = duty.get("name", path.stem)
-    if not isinstance(name, str) or not name or "/" in name:
-        raise ScenarioError("duty.name", name, "a name without '/'")
+    name = check_name("duty.name", duty.get("name", path.stem))  # names become folders
     out: dict[str, Any] = {"name": name, "file": str(path)}
     if "out" in duty:
         if not isinstance(duty["out"], str) or not duty["out"]:
@@ -140,8 +139,9 @@ def load_duty(path: str | Path) -> dict[str, Any]:
         if src_key == "run" and not src_path.is_dir():
             raise InputFileError(str(src_path), f"{q}.run: run folder not found")
         name_e = ev.get("name", src_path.resolve().stem or f"event{i}")
-        if not isinstance(name_e, str) or not name_e or "/" in name_e or name_e in seen:
-            raise ScenarioError(f"{q}.name", name_e, "a unique event name without '/'")
+        check_name(f"{q}.name", name_e)
+        if name_e in seen:
+            raise ScenarioError(f"{q}.name", name_e, "a unique event name")
         seen.add(name_e)
         sets = ev.get("set", [])
         if not isinstance(sets, list) or not all(isinstance(s, str) for s in sets):
@@ -177,9 +177,8 @@ def _load_laws(laws: Any, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
         q = f"laws[{i}]"
         ConfigReader(law, q, LAW_KEYS)
         name = law.get("name")
-        if not isinstance(name, str) or not name or "/" in name or \
-                name in {x["name"] for x in out}:
-            raise ScenarioError(f"{q}.name", name, "a unique law name without '/'")
+        if check_name(f"{q}.name", name) in {x["name"] for x in out}:
+            raise ScenarioError(f"{q}.name", name, "a unique law name")
         sets = law.get("set", [])
         if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
             raise ScenarioError(f"{q}.set", sets, "a list of 'KEY=VALUE' strings")
@@ -211,16 +210,19 @@ def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
     return folder
 
 
-def _event_fatigue(run_dir: Path) -> dict[str, Any]:
-    """The fatigue result of a run folder: its ``fatigue/`` files (batch when absent)."""
+def _event_fatigue(run_dir: Path, batch_into: Path) -> dict[str, Any]:
+    """The fatigue result of a run folder: its ``fatigue/`` files, read inside it; when
+    absent, computed by the batch into ``batch_into`` (a run folder a duty file points at is
+    read, never written: its batch goes under the duty's ``out``)."""
     fat = run_dir / "fatigue"
     if not (fat / "damage_per_node.csv").is_file() or not (fat / "summary.json").is_file():
         from nodes.fatigue.run_dir import fatigue_run_dir
 
-        fatigue_run_dir(run_dir)
+        fatigue_run_dir(run_dir, out=batch_into)
+        run_dir = fat = batch_into
     try:
-        summary = json.loads((fat / "summary.json").read_text())
-        with open(fat / "damage_per_node.csv", newline="") as fh:
+        summary = json.loads(read_user_text(fat / "summary.json", "scenario", inside=run_dir))
+        with open_user_text(fat / "damage_per_node.csv", "influence", inside=run_dir) as fh:
             rows = list(csv.DictReader(fh))
         ids = [int(r["node_id"]) for r in rows]
         damage = [float(r["damage_per_pass"]) for r in rows]
@@ -309,7 +311,7 @@ def _schedule(duty: dict[str, Any], out: Path, runs: Path, mode: str | None, rer
     for ev in duty["events"]:
         run_dir = Path(ev["run"]) if "run" in ev else \
             _run_event(ev, runs / ev["name"], mode, rerun, sets, law_sets)
-        fat = _event_fatigue(run_dir)
+        fat = _event_fatigue(run_dir, runs / ev["name"] / "fatigue")
         length = float(fat["summary"]["track_length_m"])
         if not (length > 0 and math.isfinite(length)):
             raise InputFileError(str(run_dir / "fatigue" / "summary.json"),

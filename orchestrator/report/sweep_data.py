@@ -7,12 +7,16 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from cosim.errors import SuscosimError
+from cosim.safe_open import read_user_text
 
 from .markup import fmt, is_num
 from .run_data import BadInput, RunData, is_run_dir, load_run
@@ -74,8 +78,8 @@ def load_sweep(d: Path) -> tuple[dict, list[Point]]:
     """sweep.json and its points (raises BadInput for an unreadable sweep.json)."""
     p = d / "sweep.json"
     try:
-        spec = json.loads(p.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        spec = json.loads(read_user_text(p, "scenario", inside=d))
+    except (SuscosimError, OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise BadInput(f"{p}: unreadable ({exc})") from None
     if not isinstance(spec, dict) or not isinstance(spec.get("points", []), list):
         raise BadInput(f"{p}: expected an object with a 'points' list")
@@ -88,6 +92,10 @@ def load_sweep(d: Path) -> tuple[dict, list[Point]]:
         if not isinstance(params, dict):
             raise BadInput(f"{p}: points[{i}].params is not an object")
         rd = d / str(pt.get("run_dir") or f"runs/{pid}")
+        if os.path.commonpath([os.path.realpath(rd), os.path.realpath(d)]) != \
+                os.path.realpath(d):  # a handed folder's references stay inside it (#46)
+            raise BadInput(f"{p}: points[{i}].run_dir {str(pt.get('run_dir'))!r:.200} leaves "
+                           f"the sweep folder (only run folders inside it are read)")
         run = load_run(rd) if rd.is_dir() and is_run_dir(rd) else None
         ov = pt.get("overrides")
         points.append(Point(pid, params, rd, run, ov if isinstance(ov, dict) else {}))

@@ -70,6 +70,10 @@ def main(argv: list[str] | None = None) -> int:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
                            fatigue=False if args.no_fatigue else None)
         out = Path(args.out) if args.out else Path("sweeps") / sweep.name
+        if args.out and sweep.runs_dir is not None:  # --out wins: everything under it (#46)
+            print(f"suscosim sweep: runs under {out / 'runs'} (--out), not the sweep file's "
+                  f"runs_dir {sweep.runs_dir}", flush=True)
+            sweep.runs_dir = None
         print(f"suscosim sweep {sweep.name}: {len(sweep.points)} points, validating ...",
               flush=True)
         validate_points(sweep, out)

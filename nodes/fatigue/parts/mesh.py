@@ -17,6 +17,7 @@ smallest any field asks.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import check_user_file, open_user_file
 
 MESH_SUFFIXES = {".msh": "gmsh", ".inp": "abaqus", ".bdf": "nastran", ".nas": "nastran"}
 CAD_SUFFIXES = (".step", ".stp")
@@ -73,6 +75,29 @@ def _compact(p: np.ndarray, t: np.ndarray, labels: np.ndarray,
     return TetMesh(p[used], _orient(p[used], new[t]), labels[used], out_sets)
 
 
+def _inp_includes(path: Path, folder: Path, depth: int = 0) -> list[Path]:
+    """The files an Abaqus ``.inp`` pulls in by ``*INCLUDE, INPUT=...`` (meshio reads them
+    itself), checked first: each a plain relative path inside the mesh's ``folder``, a
+    regular file within the mesh limit (:mod:`cosim.safe_open`), at most 8 levels deep."""
+    found: list[Path] = []
+    with open_user_file(path, "mesh", "part mesh", inside=folder) as fh:
+        for raw in fh:  # the keyword and the path as meshio's Abaqus reader takes them
+            line = raw.decode("utf-8", "replace")
+            if line.startswith("**") or \
+                    line.partition(",")[0].strip().replace("*", "").upper() != "INCLUDE":
+                continue
+            ref = line.split("=")[-1].strip()
+            inc = path.parent / ref
+            # meshio tries the path from the working directory first: it must be the same
+            if not ref or Path(ref).is_absolute() or depth >= 8 or (Path(ref).exists() and (
+                    os.path.realpath(ref) != os.path.realpath(inc))):
+                raise InputFileError(str(path), f"*INCLUDE {ref!r:.200}: a file inside the "
+                                                f"mesh's folder, by a relative path")
+            check_user_file(inc, "mesh", "part mesh *INCLUDE", inside=folder)
+            found += [inc, *_inp_includes(inc, folder, depth + 1)]
+    return found
+
+
 def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
     """A tetrahedral mesh file through meshio (tetra or tetra10 cells; other cells are
     ignored; no tetrahedra is an `InputFileError`). ``scale`` converts its lengths to m.
@@ -84,12 +109,14 @@ def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
     if fmt is None:
         raise InputFileError(str(path), f"unknown mesh type {path.suffix!r}: expected one of "
                                         f"{sorted(MESH_SUFFIXES)}")
-    if not path.is_file():
-        raise InputFileError(str(path), "file not found")
+    check_user_file(path, "mesh", "part mesh")
+    includes = _inp_includes(path, path.parent) if fmt == "abaqus" else []
     try:
         m = meshio.read(str(path), file_format=fmt)
     except (Exception, SystemExit) as exc:  # meshio raises many types, or exits (#43)
-        raise InputFileError(str(path), f"meshio could not read it: {exc or 'exit'}") from None
+        said = f": {exc or 'exit'}" if not includes else (  # never another file's content
+            f" or one of the {len(includes)} files it includes ({type(exc).__name__})")
+        raise InputFileError(str(path), f"meshio could not read it{said}") from None
     tets = [c.data[:, :4] for c in m.cells if c.type in ("tetra", "tetra10")]
     if not tets:
         raise InputFileError(str(path), f"no tetrahedra (cells: {[c.type for c in m.cells]})")
