@@ -59,6 +59,9 @@ class EngineResult:
     sink_s: float = 0.0
     """Of :attr:`step_wall_s`, the time the sinks (recorder, live fatigue) took: what the
     distributed run does on other cores, off the coupled chain."""
+    step_cpu_s: float = 0.0
+    """This process's CPU time over the steps [s] (one thread: the work, whatever else the
+    machine runs; wall time on a shared machine is not)."""
 
 
 def refusal(scenario: dict[str, Any]) -> None:
@@ -201,6 +204,7 @@ class Engine:
                 s.node = s.cls(scenario, start)
             plant = PlantStepper(model, settings, self.n)
             t0 = last_progress = time.monotonic()
+            cpu0 = time.process_time()
             while True:
                 k, t, st = plant.begin()
                 self.emit(ch.PLANT, ch.STATE, k, t, st)
@@ -223,6 +227,7 @@ class Engine:
                     break
                 plant.advance()
             step_wall = time.monotonic() - t0
+            step_cpu = time.process_time() - cpu0
             self.on_progress(k, self.n)
             if not rec.complete:
                 raise RunError(f"the table is incomplete after step {k}: "
@@ -235,7 +240,8 @@ class Engine:
                     raise RunError(f"fatigue: the last load step did not come (step "
                                    f"{fatigue.main.next_k - 1})")
                 facts = fatigue.finish()[1]
-            return EngineResult(result, facts, step_wall, time.monotonic() - t0, self.sink_s)
+            return EngineResult(result, facts, step_wall, time.monotonic() - t0, self.sink_s,
+                                step_cpu)
         except BaseException as exc:
             table = self.rec.table if self.rec is not None else None
             if journal is not None:

@@ -407,8 +407,9 @@ def _run_inprocess(scenario: dict[str, Any], bar: Any, started: float,
     summary = _summary(scenario, ClockResult(nodes, wall, res.run_wall_s, res.step_wall_s),
                        wall, res.recorder, "ok") | {"transport": "inprocess"}
     chain = res.step_wall_s - res.sink_s  # the coupled chain alone: the sinks taken out
-    summary["inprocess"] = {"sink_s": res.sink_s, "chain_steps_per_s":
-                            summary["n_steps"] / chain if chain > 0 else 0.0}
+    summary["inprocess"] = {"sink_s": res.sink_s, "step_cpu_s": res.step_cpu_s,
+                            "chain_steps_per_s": summary["n_steps"] / chain if chain > 0
+                            else 0.0}
     if res.fatigue is not None:
         summary["fatigue"] = res.fatigue
     write_summary(folder, summary)
