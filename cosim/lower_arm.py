@@ -37,27 +37,12 @@ torsional stiffness K_θ = 46.74 N m/deg):
   it; :mod:`nodes.plant.bump_stop` gives its clearance and rate): both on a leg, so the
   lightening hole can reach toward the ball joint.
 
-**Shape**: a forged H-section wishbone in 817M40, the thesis's Table 6.2 steel, quenched and
-tempered (why forged and not a pressed HSLA shell: the torsion spring's static moment, 1.56 kN m
-at the static wheel load, passes through the legs' roots; a 3 mm S420 double shell of 5 kg
-would reach its yield strength under a 3 g bump, the 1166 MPa Q&T steel does not). In plan: a
-triangle (convex hull of round bosses at the three joints) with a rounded triangular lightening
-hole, so two legs and a base member between the eyes. In section (z, symmetric about z = 0): a
-thin horizontal **web**, deep vertical **ribs** along the outer edge and round the hole (the H's
-flanges; forged control arms have this pocketed section), deepest at the legs' roots by the eyes
-and tapering toward the ball joint with the bending moment, shallower on the base member, and
-deep **hubs** at the bush eyes (their axis is x in reality; here a solid hub of the hollow
-eye's mass), the ball joint, the damper seat and the bump-stop pad. :func:`rib_depth` and
-:func:`boss_depth` are the depth field the FE mesh follows. Web 3 mm; ribs 5-6 mm wide, 54 mm
-deep at the roots, 30 mm by the ball joint, 30 mm on the base; eyes 60 mm deep. The FE gives
-5.33-5.45 kg (Table 4.2: 5 kg; 20 and 15 mm meshes) and a first free-free mode of 594 Hz
-(Table 6.1: 362 Hz; the stiff sections are what carrying the torsion spring's moment takes,
-docs/fatigue.md) (``suscosim arm``).
+**Shape**: the part file ``nodes/fatigue/parts/data/lower_arm.toml`` (the parametric CAD of
+``lower_arm_cad.toml``, docs/parts.md), whose joint centres are these hardpoints.
 """
 
 from __future__ import annotations
 
-import math
 from typing import TypedDict
 
 import numpy as np
@@ -130,66 +115,6 @@ MASS_KG = 5.0
 """Table 4.2's lower-arm mass [kg] (the plant's lower-arm mass; the FE arm's is within 10 %,
 tested)."""
 
-# ------------------------------------------------------------------ shape (FE), arm frame [m]
-BUSH_BOSS_RADIUS = 0.030
-"""Radius of the bush eyes (in plan) [m]."""
-BALL_JOINT_BOSS_RADIUS = 0.032
-"""Radius of the ball-joint boss (in plan) [m]."""
-HOLE_CORNERS = np.array([[0.079, 0.030], [-0.073, 0.030], [0.016, 0.192]])
-"""Lightening hole: centres of its three rounded corners (x, y) [m]."""
-HOLE_FILLET_RADIUS = 0.026
-"""Corner radius of the lightening hole [m]."""
-
-WEB_DEPTH = 0.003
-"""Web thickness [m]."""
-RIB_DEPTH = 0.054
-"""Depth (z extent) of the legs' ribs at their root by the bush eyes [m]; they taper to
-``RIB_DEPTH_TIP`` toward the ball joint, following the bending moment, which is largest at
-the eyes where the torsion spring's moment enters."""
-RIB_DEPTH_TIP = 0.030
-"""Depth of the legs' ribs by the ball joint [m]."""
-RIB_TAPER_Y = (0.05, 0.28)
-"""The legs' rib depth tapers linearly between these distances y from the pivot axis [m]."""
-BASE_RIB_DEPTH = 0.030
-"""Depth of the ribs of the base member between the bush eyes [m]: it is a tie that carries
-the bushes' axial and fore-aft forces, not the torsion-bar moment, so it is kept shallow."""
-BASE_BLEND_Y = (0.03, 0.06)
-"""The rib depth blends from the base's to the legs' between these distances y from the pivot
-axis [m] ...)"""
-BASE_BLEND_X = (0.05, 0.09)
-"""... and between these distances |x| from the arm's middle [m] (the legs' roots at the eyes
-keep their depth)."""
-OUTER_RIB_WIDTH = 0.006
-"""Width (in plan) of the rib along the outer edge [m]."""
-HOLE_RIB_WIDTH = 0.005
-"""Width (in plan) of the rib round the lightening hole [m]."""
-BUSH_EYE_DEPTH = 0.060
-"""Depth (z extent) of the bush eyes [m]."""
-BALL_JOINT_BOSS_DEPTH = 0.036
-"""Depth of the ball-joint boss [m]."""
-SEAT_RADIUS = 0.012
-"""Radius (in plan) of the flat pads at the damper seat and the bump-stop pad [m]."""
-SEAT_DEPTH = 0.024
-"""Depth of those pads [m] (the damper's clevis bolt and the bumper's strike plate)."""
-EYE_CORE_RADIUS = 0.004
-"""Radius out to which a bush eye / the ball-joint boss has its full depth [m]. The eyes are
-modelled solid (the bush's steel sleeve and the joint's housing are stiff and carry the load
-spider); the core radius is chosen so that the solid eye has the mass of the real hollow one
-(outer diameter 60 mm, bore 44 mm for the bush): pi (0.030^2 - 0.022^2) = pi 0.0204^2."""
-EYE_BLEND = 0.026
-"""Radial blend of the bush eyes' hubs down to the web [m]: the torsion spring's moment enters
-the arm through the eyes, and a thin web round an eye would carry it in plate bending."""
-BOSS_BLEND = 0.008
-"""Radial blend from a boss's depth down to the rib/web depth [m] (a forging draft/fillet)."""
-
-LOAD_PATCH_RADIUS = 0.020
-"""Radius (in plan) of the node patch over which a joint's load is spread [m]."""
-JOINT_ZONE_MARGIN = 0.010
-"""The joints' hubs plus this margin [m] are not assessed for fatigue (:func:`joint_zone_radius`):
-there the FE stress is that of an idealised load introduction (a spider on a solid hub), not of
-the real splined eye, ball-joint housing or bolted seat, which are assessed with their own
-detailed models in practice (as the thesis's spider beams were not assessed)."""
-
 class MassProperties(TypedDict):
     """The arm's mass [kg], centre of mass (arm frame) [m] and inertia tensor [kg m^2]."""
 
@@ -203,21 +128,12 @@ MASS_PROPERTIES: MassProperties = {
     "centre_of_mass_m": (0.0068, 0.0850, 0.0),
     "inertia_kg_m2": ((0.0547, -0.0034, 0.0), (-0.0034, 0.0516, 0.0), (0.0, 0.0, 0.1050)),
 }
-"""The FE arm's mass, centre of mass (arm frame) and inertia tensor about it (arm axes), from
-the 15 mm mesh (the 20 mm default gives 5.33 kg); the plant's rigid lower arm takes the
-centre of mass and the inertia scaled to its Table 4.2 mass. Checked against the FE mesh in
-tests/fatigue/test_arm_fe.py."""
-
-
-def joint_zone_radius(name: str) -> float:
-    """Radius in plan [m] round a hardpoint inside which nodes are not assessed."""
-    if name.startswith("bush"):
-        r = EYE_CORE_RADIUS + EYE_BLEND
-    elif name == "ball_joint":
-        r = EYE_CORE_RADIUS + BOSS_BLEND
-    else:
-        r = SEAT_RADIUS + BOSS_BLEND
-    return max(r, LOAD_PATCH_RADIUS) + JOINT_ZONE_MARGIN
+"""The lower arm's mass, centre of mass (arm frame) and inertia tensor about it (arm axes),
+as the plant's rigid lower arm takes them (the centre of mass, and the inertia scaled to its
+Table 4.2 mass). Their source is the hand-meshed forged arm this project had before the CAD
+arm (its 15 mm mesh; removed from the product on 2026-12-06, kept as the test oracle
+tests/fatigue/oracle_hex_arm.py, which recomputes these numbers); the CAD arm's own
+(nodes/fatigue/parts/data/lower_arm.influence.npz) differ: CHANGELOG.md 2026-12-06."""
 
 
 def to_corner(point_arm: np.ndarray) -> np.ndarray:
@@ -235,52 +151,3 @@ def lever_ball_joint() -> float:
 def motion_ratio_damper() -> float:
     """Damper seat lever / ball-joint lever (before the damper's lean) [-]."""
     return float(DAMPER_MOUNT[1] / BALL_JOINT[1])
-
-
-def boss_depth(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Depth of the bosses (bush eyes, ball joint, damper seat, bump-stop pad) at plan points
-    (x, y) [m]; 0 away from them."""
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    out = np.zeros(np.broadcast(x, y).shape)
-    for c, r, h, blend in ((BUSH_FRONT, EYE_CORE_RADIUS, BUSH_EYE_DEPTH, EYE_BLEND),
-                           (BUSH_REAR, EYE_CORE_RADIUS, BUSH_EYE_DEPTH, EYE_BLEND),
-                           (BALL_JOINT, EYE_CORE_RADIUS, BALL_JOINT_BOSS_DEPTH, BOSS_BLEND),
-                           (DAMPER_MOUNT, SEAT_RADIUS, SEAT_DEPTH, BOSS_BLEND),
-                           (BUMP_STOP_PAD, SEAT_RADIUS, SEAT_DEPTH, BOSS_BLEND)):
-        d = np.hypot(x - c[0], y - c[1])
-        # full depth out to r, then a smooth (cosine) blend
-        u = np.clip((d - r) / blend, 0.0, 1.0)
-        out = np.maximum(out, h * 0.5 * (1.0 + np.cos(math.pi * u)))
-    return out
-
-
-def _smoothstep(v: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    u = np.clip((v - lo) / (hi - lo), 0.0, 1.0)
-    step: np.ndarray = 0.5 * (1.0 - np.cos(math.pi * u))
-    return step
-
-
-def rib_depth(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Depth of the ribs at plan points (x, y) [m]: the legs' depth (deep at the eyes,
-    tapering toward the ball joint), shallower on the base member between the eyes."""
-    x = np.asarray(x, dtype=float)
-    y = np.asarray(y, dtype=float)
-    w = np.maximum(_smoothstep(y, *BASE_BLEND_Y), _smoothstep(np.abs(x), *BASE_BLEND_X))
-    v = np.clip((y - RIB_TAPER_Y[0]) / (RIB_TAPER_Y[1] - RIB_TAPER_Y[0]), 0.0, 1.0)
-    leg = RIB_DEPTH + (RIB_DEPTH_TIP - RIB_DEPTH) * v
-    depth: np.ndarray = BASE_RIB_DEPTH + (leg - BASE_RIB_DEPTH) * w
-    return depth
-
-
-def geometry_key() -> dict[str, object]:
-    """Every number that defines the arm (FE cache key)."""
-    names = ("BUSH_BOSS_RADIUS", "BALL_JOINT_BOSS_RADIUS", "HOLE_FILLET_RADIUS", "WEB_DEPTH",
-             "RIB_DEPTH", "RIB_DEPTH_TIP", "RIB_TAPER_Y", "BASE_RIB_DEPTH", "BASE_BLEND_Y",
-             "BASE_BLEND_X", "OUTER_RIB_WIDTH", "HOLE_RIB_WIDTH", "BUSH_EYE_DEPTH",
-             "BALL_JOINT_BOSS_DEPTH", "SEAT_RADIUS", "SEAT_DEPTH", "EYE_CORE_RADIUS",
-             "EYE_BLEND", "BOSS_BLEND", "LOAD_PATCH_RADIUS")
-    key: dict[str, object] = {n: np.asarray(globals()[n]).tolist() for n in names}
-    key["hardpoints"] = {k: v.tolist() for k, v in HARDPOINTS.items()}
-    key["hole"] = HOLE_CORNERS.tolist()
-    return key

@@ -12,6 +12,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 CH3_STEP = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
+COARSE_ARM = ROOT / "tests" / "data" / "coarse_arm" / "coarse_arm.toml"
+"""A cheap lower arm (~2 100 assessed nodes, its results shipped beside it): the fatigue
+tests' ``influence`` where the arm's own numbers do not matter."""
 
 
 SHARED_SECRET = "suscosim-tests-shared-secret"

@@ -7,12 +7,9 @@ key                    default              meaning
 =====================  ===================  =================================================
 influence              "builtin"            "builtin" (the CAD lower arm's part file,
                                             parts/data/lower_arm.toml, and its shipped
-                                            results), a part file (*.toml, docs/parts.md),
-                                            "builtin:structured" (the superseded
-                                            hand-meshed arm without fillets, kept to
-                                            reproduce earlier runs and as a small fast FE
-                                            for tests) or path to the imported CSV
-                                            folder (relative to the scenario's folder)
+                                            results), a part file (*.toml, docs/parts.md)
+                                            or path to the imported CSV folder (relative
+                                            to the scenario's folder)
 mapping                {}                   imported only: channel -> file or
                                             {file = "...", scale = -1.0}
 stress_scale           1.0                  imported only: multiplies table stresses (1e6 if MPa)
@@ -43,8 +40,7 @@ sn_curve               none                 an S-N curve as data (replaces the c
                                             b2); name, source (text); `sn_data`
 mesh_size_m            none                 element size (m): a part's global size in
                                             place of its file's recipe (a new solve:
-                                            minutes); "builtin:structured": its size
-                                            (0.02 when absent)
+                                            minutes)
 nodes                  "surface"            "surface" or "all" nodes analysed
 track_length_m         none                 length of one pass (m); else from the road/run
 repeats_basis_m        none                 also give life in repeats of this length (m)
@@ -127,9 +123,8 @@ from .sn_data import TabulatedSN
 from .strength_sections import read_component, read_fkm, read_sn_table
 
 STRUCTURED_ARM = "builtin:structured"
-"""``influence`` of the superseded hand-meshed arm (``arm_mesh.py``; no fillets, a 3 mm web)."""
-STRUCTURED_MESH_SIZE = 0.02
-"""Its default element size [m]."""
+"""``influence`` of the hand-meshed arm removed on 2026-12-06 (issue #42): refused, naming
+what to use instead."""
 BUILTIN_PART = Path(__file__).parent / "parts" / "data" / "lower_arm.toml"
 """``influence = "builtin"``: the CAD lower arm (docs/parts.md), results shipped beside it."""
 
@@ -246,11 +241,6 @@ class FatigueConfig:
                 "sn_curve": mat.sn.as_dict() if mat.sn is not None else None}
 
     @property
-    def mesh_size(self) -> float:
-        """The structured arm's element size [m] (``mesh_size_m``, 0.02 when absent)."""
-        return STRUCTURED_MESH_SIZE if self.mesh_size_m is None else self.mesh_size_m
-
-    @property
     def influence_path(self) -> Path:
         p = Path(self.influence)
         return p if p.is_absolute() else Path(self.base_dir) / p
@@ -284,11 +274,14 @@ class FatigueConfig:
         """Validate a scenario section; a bad key or value raises ScenarioError(dotted key)."""
         r = ConfigReader(d or {}, key_prefix, FATIGUE_KEYS)
         influence = r.string("influence", "builtin",
-                             expected='"builtin", "builtin:structured", a part file (*.toml) '
-                                      'or a path to CSV files')
+                             expected='"builtin", a part file (*.toml) or a path to CSV files')
+        if influence == STRUCTURED_ARM:
+            raise r.error("influence", influence,
+                          '"builtin" (the CAD lower arm, parts/data/lower_arm.toml) or a part '
+                          'file (*.toml); the hand-meshed arm "builtin:structured" was removed '
+                          'on 2026-12-06 (CHANGELOG.md)')
         mapping = _mapping(r.section("mapping", expected="a table channel -> case file"))
-        if influence not in ("builtin", STRUCTURED_ARM) \
-                and not influence.lower().endswith(".toml") and not mapping:
+        if influence != "builtin" and not influence.lower().endswith(".toml") and not mapping:
             raise r.error("mapping", r.table("mapping"),
                           "a mapping of load channels to case files for imported tables")
         raw_mat = r.section("material", expected="a table of material overrides")

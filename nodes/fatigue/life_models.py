@@ -184,15 +184,15 @@ def solve_two_power(
         y2 = np.where(a2 > 0, (lt - np.log(a2)) / p2, 0.0)
     y = np.maximum(np.maximum(y1, y2), 0.0)
     y = np.minimum(y, np.log(MAX_REVERSALS))
-    for _ in range(60):
-        e1 = a1 * np.exp(p1 * y)
-        e2 = a2 * np.exp(p2 * y)
+    act = np.arange(y.size)  # each root iterated until its own step is small: its value
+    for _ in range(60):      # does not depend on which other cycles share the call
+        e1 = a1[act] * np.exp(p1 * y[act])
+        e2 = a2[act] * np.exp(p2 * y[act])
         s = e1 + e2
-        f = np.log(s) - lt
-        df = (p1 * e1 + p2 * e2) / s
-        step = -f / df
-        y = y + step
-        if np.all(np.abs(step) < 1e-12):
+        step = -(np.log(s) - lt[act]) / ((p1 * e1 + p2 * e2) / s)
+        y[act] += step
+        act = act[np.abs(step) >= 1e-12]
+        if act.size == 0:
             break
     rev = np.exp(y)
     rev = np.where(y <= 0.0, 1.0, rev)
@@ -223,17 +223,20 @@ def neuber(se: np.ndarray, mat: Material) -> np.ndarray:
     lt = np.log(s * s / mat.E)
     x = np.log(s)
     lK = np.log(mat.K)
+    act = np.arange(x.size)  # each value iterated until its own step is small (as above)
     for _ in range(200):
         # terms in log form to avoid overflow for large (σ/K')^(1/n')
-        t1 = 2.0 * x - np.log(mat.E)
-        t2 = x + m * (x - lK)
+        xa = x[act]
+        t1 = 2.0 * xa - np.log(mat.E)
+        t2 = xa + m * (xa - lK)
         big = np.maximum(t1, t2)
         lse = big + np.log(np.exp(t1 - big) + np.exp(t2 - big))
         w1 = np.exp(t1 - lse)
         df = 2.0 * w1 + (1.0 + m) * (1.0 - w1)
-        step = -(lse - lt) / df
-        x = x + step
-        if np.all(np.abs(step) < 1e-13):
+        step = -(lse - lt[act]) / df
+        x[act] = xa + step
+        act = act[np.abs(step) >= 1e-13]
+        if act.size == 0:
             break
     out[pos] = np.exp(x)
     return out

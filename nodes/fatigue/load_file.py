@@ -1,7 +1,7 @@
 """A measured (or exported) load file mapped onto the lower arm's load channels.
 
 The arm's load channels are the ``plant/arm`` fields the influence coefficients answer to
-(built in: :data:`influence.BUILTIN_CASES`, e.g. ``ball_joint_z`` [N], ``torsion_bar_mx``
+(a part file's channels, e.g. the built-in arm's ``ball_joint_z`` [N], ``torsion_bar_mx``
 [N m]; imported: the keys of ``fatigue.mapping``). A file channel is taken for one of them
 
 * by name: ``plant/arm/ball_joint_z`` or ``ball_joint_z`` (what ``suscosim export`` writes), or

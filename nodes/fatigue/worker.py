@@ -23,11 +23,11 @@ import numpy as np
 from cosim.errors import ScenarioError
 
 from . import counting, screen_bound, superposition, turning_eq
-from .config import BUILTIN_PART, STRUCTURED_ARM, FatigueConfig
+from .config import BUILTIN_PART, FatigueConfig
 from .counting import COMPILED, Cycles, StreamingRainflow
 from .damage import cycle_damage
 from .equivalent_stress import equivalent_of
-from .influence import InfluenceSet, builtin_influence, import_influence, short_channel
+from .influence import InfluenceSet, import_influence, short_channel
 from .result import FatigueResult
 from .screening import Screening, unsupported
 from .superposition import ROWS, components_buffer, node_major, superpose_components
@@ -89,9 +89,7 @@ def load_influence(cfg: FatigueConfig) -> InfluenceSet:
                 cfg.mesh_size_m, cfg.material, cfg.nodes)
     if memo_key in _INFLUENCE_MEMO:
         return _INFLUENCE_MEMO[memo_key]
-    if cfg.influence == STRUCTURED_ARM:  # the superseded hand-meshed arm (docs/fatigue.md)
-        inf = builtin_influence(cfg.mesh_size, cfg.material)
-    elif cfg.influence == "builtin" or cfg.influence_path.suffix.lower() == ".toml":
+    if cfg.influence == "builtin" or cfg.influence_path.suffix.lower() == ".toml":
         # a part file (#26; "builtin": the CAD lower arm's): its shipped results when they
         # are this part's, else meshed and solved; mesh_size_m overrides its global size
         from .parts import load_part

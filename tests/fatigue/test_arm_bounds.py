@@ -1,25 +1,30 @@
-"""The mode-stress closed form (nodes/fatigue/arm_bounds.py) against a real FE bar, and what it
-says about issue #12's bars."""
+"""The mode-stress closed form (nodes/fatigue/arm_bounds.py) against the part FE's bar
+(P2 tetrahedra, nodes/fatigue/parts/solid.py), and what it says about issue #12's bars."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
+from skfem import MeshTet
 
 from nodes.fatigue import arm_bounds as ab
-from nodes.fatigue.arm_fe import SolidModel, box_hex_mesh
+from nodes.fatigue.parts.mesh import TetMesh
+from nodes.fatigue.parts.solid import PartFE
 
 E, NU, RHO = 200e9, 0.3, 7800.0
 
 
 @pytest.fixture(scope="module")
 def bar():
-    """A slender steel bar (L/h = 20), free-free, 27-node bricks: its first flexible mode is
-    bending about the weak axis."""
+    """A slender steel bar (L/h = 20), free-free, 16 x 2 x 2 cubes of P2 tetrahedra: its first
+    flexible mode is bending about the weak axis."""
     L, b, h = 0.4, 0.04, 0.02
-    fe = SolidModel(box_hex_mesh(L, b, h, 16, 2, 2), E, NU, RHO)
-    return L, b, h, fe, float(fe.natural_frequencies(1)[0])
+    m = MeshTet.init_tensor(np.linspace(0, L, 17), np.linspace(-b / 2, b / 2, 3),
+                            np.linspace(-h / 2, h / 2, 3))
+    fe = PartFE(TetMesh(m.p.T.copy(), m.t.T.copy(), np.arange(m.p.shape[1])), E, NU, RHO)
+    return L, b, h, fe, float(fe.modes(1)[0][0])
 
 
 def test_bending_frequency_matches_fe_bar(bar):

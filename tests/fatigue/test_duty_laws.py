@@ -15,7 +15,7 @@ import pytest
 
 from nodes.fatigue.duty_cycle import Event, law_matrix, schedule_damage
 
-from ..conftest import ROOT, suscosim
+from ..conftest import COARSE_ARM, ROOT, suscosim
 
 BRAKING = ROOT / "scenarios" / "events" / "braking_50kmh_0p8g.toml"
 KERB = ROOT / "scenarios" / "events" / "kerb_strike_20kmh.toml"
@@ -44,12 +44,12 @@ name = "laws"
 [[events]]
 name = "braking"
 scenario = "{BRAKING}"
-set = ["run.t_end=0.1", "fatigue.influence=builtin:structured"]
+set = ["run.t_end=0.1", "fatigue.influence={COARSE_ARM}"]
 repeats = 10
 [[events]]
 name = "kerb"
 scenario = "{KERB}"
-set = ["run.t_end=0.3", "fatigue.influence=builtin:structured", {KERB_EARLY!r}]
+set = ["run.t_end=0.3", "fatigue.influence={COARSE_ARM}", {KERB_EARLY!r}]
 repeats = 5
 """ + laws)
     return d

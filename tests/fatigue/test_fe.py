@@ -1,81 +1,93 @@
-"""FE arm: closed-form beam, superposition vs direct solve, mesh convergence, modes."""
+"""The part FE (nodes/fatigue/parts/solid.py, P2 tetrahedra) on a bar: closed-form cantilever,
+coupling resultant, superposition against a direct solve, inertia relief's supports."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse.linalg as spla
+from skfem import MeshTet
 
-from cosim import lower_arm as geo
-from nodes.fatigue.arm_fe import LoadCase, SolidModel, box_hex_mesh
-from nodes.fatigue.arm_mesh import arm_mesh
-from nodes.fatigue.influence import support_nodes
+from nodes.fatigue.parts.mesh import TetMesh
+from nodes.fatigue.parts.solid import PERMC, PartFE
 from nodes.fatigue.superposition import stress_history
 
 E, NU, RHO = 200e9, 0.3, 7800.0
+L, B, H = 0.4, 0.04, 0.02
 
 
-def _arm(ms):
-    """The arm on its mesh with a 3-2-1 support (for the checks that need one)."""
-    fe = SolidModel(arm_mesh(ms), E, NU, RHO)
-    return fe, support_nodes(fe)
+@pytest.fixture(scope="module")
+def bar() -> PartFE:
+    """A steel bar [0, L] x [-B/2, B/2] x [-H/2, H/2] on 10 x 2 x 4 cubes of P2 tets."""
+    m = MeshTet.init_tensor(np.linspace(0, L, 11), np.linspace(-B / 2, B / 2, 3),
+                            np.linspace(-H / 2, H / 2, 5))
+    return PartFE(TetMesh(m.p.T.copy(), m.t.T.copy(), np.arange(m.p.shape[1])), E, NU, RHO)
 
 
-def test_cantilever_bending_stress_closed_form():
-    L, b, h = 0.4, 0.04, 0.02
-    fe = SolidModel(box_hex_mesh(L, b, h, 10, 2, 2), E, NU, RHO)
-    fix = np.nonzero(np.isclose(fe.node_xyz[:, 0], 0.0))[0]
-    U = fe.solve([LoadCase("tip", np.array([L, 0, 0]), 0.021, np.array([0, 0, 1.0]),
-                           np.zeros(3))], fix)
+def _end(fe: PartFE, x: float) -> np.ndarray:
+    return np.nonzero(np.isclose(fe.node_xyz[:, 0], x))[0]
+
+
+def test_cantilever_bending_stress_closed_form(bar):
+    fe = bar
+    fixed = fe.node_dofs[_end(fe, 0.0)].ravel()
+    free = np.setdiff1d(np.arange(fe.K_size), fixed)
+    b = fe.coupling_load(_end(fe, L), np.array([L, 0, 0]), np.array([0, 0, 1.0]), np.zeros(3))
+    U = np.zeros((1, fe.K_size))
+    U[0, free] = spla.splu(fe.K[free][:, free].tocsc(), permc_spec=PERMC).solve(b[free])
     S = fe.nodal_stress(U)[0]
-    i = np.nonzero(np.all(np.isclose(fe.node_xyz, [0.2, 0, h / 2]), axis=1))[0][0]
-    # σx = -M c / I with M = F (L - x), c = h/2, I = b h³ / 12 (top fibre in compression)
-    assert S[i, 0] == pytest.approx(-(L - 0.2) * (h / 2) / (b * h**3 / 12), rel=0.01)
+    top = np.isclose(fe.node_xyz[:, 0], 0.2) & np.isclose(fe.node_xyz[:, 2], H / 2)
+    # σx = -M c / I with M = F (L - x), c = h/2, I = b h³ / 12 (top fibre in compression;
+    # the mean over the fibre's nodes across the width)
+    assert S[top, 0].mean() == pytest.approx(-(L - 0.2) * (H / 2) / (B * H**3 / 12), rel=0.02)
     # tip deflection F L³ / (3 E I) (+ shear, small for L/h = 20)
     tip = np.nonzero(np.all(np.isclose(fe.node_xyz, [L, 0, 0]), axis=1))[0][0]
-    w = U[0, fe.node_dofs[tip, 2]]
-    assert w == pytest.approx(L**3 / (3 * E * b * h**3 / 12), rel=0.02)
+    assert U[0, fe.node_dofs[tip, 2]] == pytest.approx(L**3 / (3 * E * B * H**3 / 12),
+                                                       rel=0.02)
 
 
-def test_spider_load_resultant():
-    fe, _ = _arm(0.03)
-    nodes = fe.patch(geo.BALL_JOINT, geo.LOAD_PATCH_RADIUS)
+def test_coupling_load_resultant(bar):
+    fe, p = bar, np.array([L, 0.0, 0.0])
+    nodes = _end(bar, L)
     F, M = np.array([10.0, -20.0, 30.0]), np.array([1.0, 2.0, -3.0])
-    f = fe.spider_forces(nodes, geo.BALL_JOINT, F, M)
+    f = fe.spider_forces(nodes, p, F, M)
     np.testing.assert_allclose(f.sum(axis=0), F, atol=1e-9)
-    r = fe.node_xyz[nodes] - geo.BALL_JOINT
-    np.testing.assert_allclose(np.cross(r, f).sum(axis=0), M, atol=1e-9)
+    np.testing.assert_allclose(np.cross(fe.node_xyz[nodes] - p, f).sum(axis=0), M, atol=1e-9)
 
 
-def test_superposed_unit_cases_equal_direct_solution():
-    fe, sup = _arm(0.03)
-    cases = [LoadCase(f"{p}_{a}", geo.HARDPOINTS[p], geo.LOAD_PATCH_RADIUS, np.eye(3)[k],
-                      np.zeros(3)) for p in ("ball_joint", "damper_mount")
-             for k, a in enumerate("xyz")]
-    C = fe.nodal_stress(fe.solve_free(cases, sup)[0])  # unit cases, inertia relief
+def _unit_cases(fe: PartFE) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+    """Unit forces x, y, z at both ends (their node sets, centres): B (n_dofs, 6)."""
+    joints = [(_end(fe, x), np.array([x, 0.0, 0.0])) for x in (0.0, L)]
+    B = np.stack([fe.coupling_load(n, c, np.eye(3)[k], np.zeros(3)) for n, c in joints
+                  for k in range(3)], axis=1)
+    return B, joints
+
+
+def test_superposed_unit_cases_equal_direct_solution(bar):
+    fe = bar
+    B, joints = _unit_cases(fe)
+    sup = [0, int(np.argmax(fe.node_xyz[:, 0])), int(np.argmax(fe.node_xyz[:, 1]))]
+    C = fe.nodal_stress(fe.solve_loads(B, sup)[0])  # unit cases, inertia relief
     F = np.array([[350.0, -420.0, 3900.0, 0.0, 0.0, -6400.0]])
-    combined = [LoadCase("bj", geo.BALL_JOINT, geo.LOAD_PATCH_RADIUS, F[0, :3], np.zeros(3)),
-                LoadCase("dm", geo.DAMPER_MOUNT, geo.LOAD_PATCH_RADIUS, F[0, 3:], np.zeros(3))]
-    U2 = fe.solve_free(combined, sup)[0]
-    direct = fe.nodal_stress(U2.sum(axis=0, keepdims=True))[0]
-    sup_stress = stress_history(F, C)[0]
+    b = sum(fe.coupling_load(n, c, F[0, 3 * j:3 * j + 3], np.zeros(3))
+            for j, (n, c) in enumerate(joints))
+    direct = fe.nodal_stress(fe.solve_loads(b[:, None], sup)[0])[0]
     scale = np.abs(direct).max()
-    np.testing.assert_allclose(sup_stress, direct, atol=1e-9 * scale)
-    # one unit case scaled = FE solution at that load
-    U3 = fe.solve_free([LoadCase("bz", geo.BALL_JOINT, geo.LOAD_PATCH_RADIUS,
-                                 np.array([0, 0, 2500.0]), np.zeros(3))], sup)[0]
-    np.testing.assert_allclose(stress_history(np.array([[0, 0, 2500.0, 0, 0, 0]]), C)[0],
-                               fe.nodal_stress(U3)[0], atol=1e-9 * scale)
+    np.testing.assert_allclose(stress_history(F, C)[0], direct, atol=1e-9 * scale)
 
 
-def test_a_mesh_too_coarse_for_the_load_patches_is_a_scenario_error_naming_the_key(
-        monkeypatch, tmp_path):
-    """A load patch with fewer than three nodes (here: a patch radius far below the element
-    size) cannot carry a joint load: a ScenarioError naming the mesh key, exit code 2."""
-    from cosim.errors import ScenarioError
-    from nodes.fatigue.influence import builtin_influence
-    from nodes.fatigue.material import steel_817M40
-
-    monkeypatch.setattr(geo, "LOAD_PATCH_RADIUS", 1e-4)
-    with pytest.raises(ScenarioError, match="fatigue.mesh_size_m") as err:
-        builtin_influence(0.05, steel_817M40(), use_cache=False)
-    assert err.value.exit_code == 2
+def test_inertia_relief_reactions_vanish_and_stresses_do_not_depend_on_the_supports(bar):
+    fe = bar
+    B, _ = _unit_cases(fe)
+    xyz = fe.node_xyz
+    sup_a = [0, int(np.argmax(xyz[:, 0])), int(np.argmax(xyz[:, 1]))]
+    sup_b = [int(np.argmax(xyz @ [1, 1, 1])), int(np.argmin(xyz @ [1, 1, 1])),
+             int(np.argmax(xyz @ [0, -1, 1]))]
+    (U1, R1), (U2, R2) = fe.solve_loads(B, sup_a), fe.solve_loads(B, sup_b)
+    assert np.abs(R1).max() < 1e-6 and np.abs(R2).max() < 1e-6  # per 1 N case
+    S1, S2 = fe.nodal_stress(U1), fe.nodal_stress(U2)
+    assert np.abs(S1 - S2).max() < 1e-6 * np.abs(S1).max()
+    # without inertia relief a single unbalanced case does depend on the supports
+    V1 = fe.nodal_stress(fe.solve_loads(B[:, 2:3], sup_a, "321")[0])
+    V2 = fe.nodal_stress(fe.solve_loads(B[:, 2:3], sup_b, "321")[0])
+    assert np.abs(V1 - V2).max() > 0.1 * np.abs(V1).max()

@@ -15,8 +15,9 @@ from nodes.fatigue.screening import StressScreen, damage_bound, unsupported
 from nodes.fatigue.superposition import stress_history
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import analyse, load_influence
+from tests.conftest import COARSE_ARM
 
-COARSE = {"influence": "builtin:structured", "mesh_size_m": 0.03}
+COARSE = {"influence": str(COARSE_ARM)}  # a cheap arm, results shipped
 
 
 @pytest.fixture(autouse=True)

@@ -21,10 +21,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.conftest import CH3_STEP, ROOT, suscosim
+from tests.conftest import CH3_STEP, COARSE_ARM, ROOT, suscosim
 
 REALISTIC = ROOT / "scenarios" / "ch4_qvm_realistic_bump_pothole.toml"
-MESH = "0.03"  # m: coarse built-in FE mesh of the arm, to keep the fatigue step fast
 PNG_URI = re.compile(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
 
 
@@ -42,10 +41,8 @@ def _realistic_run(out: Path, law: str, tmp: Path) -> Path:
         scenario = tmp / f"{law}.toml"
         scenario.write_text(text)
     _ok(suscosim("run", str(scenario), "--out", str(out), "--quiet", "--set", "run.t_end=1.2",
-                 "--set", f"fatigue.mesh_size_m={MESH}",
-                 "--set", "fatigue.influence=builtin:structured", timeout=180))
-    _ok(suscosim("fatigue", str(out), "--set", f"mesh_size_m={MESH}",
-                 "--set", "influence=builtin:structured", timeout=180))
+                 "--set", f"fatigue.influence={COARSE_ARM}", timeout=180))
+    _ok(suscosim("fatigue", str(out), "--set", f"influence={COARSE_ARM}", timeout=180))
     return out
 
 

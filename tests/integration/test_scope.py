@@ -34,14 +34,14 @@ import pytest
 from cosim.bus import free_loopback_endpoint
 from cosim.table import read_table
 
-from ..conftest import CH3_STEP, ROOT, node_pids, popen_suscosim, suscosim
+from ..conftest import CH3_STEP, COARSE_ARM, ROOT, node_pids, popen_suscosim, suscosim
 
 pytestmark = pytest.mark.integration
 
 T_END = "3.0"  # s: 3000 steps of the ch3 quarter car, a few seconds of wall time
 REALISTIC = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
-REALISTIC_SET = ("--set", "run.t_end=0.6", "--set", "fatigue.mesh_size_m=0.03",
-                 "--set", "fatigue.influence=builtin:structured", "--set",
+REALISTIC_SET = ("--set", "run.t_end=0.6",
+                 "--set", f"fatigue.influence={COARSE_ARM}", "--set",
                  "run.stall_timeout_s=60")
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 NO_CHROMIUM = "headless Chromium not installed (Debian: apt-get install -y chromium): the " \

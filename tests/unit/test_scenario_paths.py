@@ -21,6 +21,6 @@ def test_a_list_of_part_files_is_made_absolute_and_a_shipped_name_stays_a_name()
 
 def test_sweep_overrides_use_the_same_rule() -> None:
     out = _absolute_paths({"fatigue.parts": ["k.toml", "upper_arm"],
-                           "fatigue": {"influence": "builtin:structured"}}, Path("/s"))
+                           "fatigue": {"influence": "builtin"}}, Path("/s"))
     assert out == {"fatigue.parts": ["/s/k.toml", "upper_arm"],
-                   "fatigue": {"influence": "builtin:structured"}}
+                   "fatigue": {"influence": "builtin"}}

@@ -1,9 +1,6 @@
 """Solid FE of a part on quadratic tetrahedra (scikit-fem ``ElementTetP2``): joint couplings,
 joint hardware masses, inertia relief, nodal stresses, free-free modes.
 
-Reuses :class:`nodes.fatigue.arm_fe.SolidModel` (its 3-2-1 support, inertia relief, nodal
-stress recovery and shift-invert eigen solver) and replaces the hex-specific parts:
-
 * assembly in element chunks (the 30 x 30 element matrices of P2 tets, vectorised):
   stiffness with 4 Gauss points (exact: the strains of a straight-sided P2 tet are linear),
   consistent mass with 11 points (degree 4, exact);
@@ -15,6 +12,16 @@ stress recovery and shift-invert eigen solver) and replaces the hex-specific par
 
 Nodes (the P2 dofs: vertices and edge midpoints) carry the stresses; a node's stress is the
 element stresses at the node averaged over its elements (as CalculiX does).
+
+Supports, for a free part loaded at all its joints (:meth:`PartFE.solve_loads`):
+
+* ``inertia_relief`` (the thesis's, Ch 6.2, as ANSYS and Nastran do it): each load vector f is
+  balanced by the rigid-body inertia forces it would cause, f_b = f - M Φ a with
+  a = (Φᵀ M Φ)⁻¹ Φᵀ f (Φ: the six rigid-body modes, M: the mass matrix), so Φᵀ f_b = 0; the
+  balanced load is then solved on a statically determinate **3-2-1** set of six constraints,
+  whose reactions are zero to rounding, so the stresses do not depend on which nodes carry them;
+* ``321``: the unbalanced unit load on the 3-2-1 set alone. A single case's stresses then
+  depend on the support nodes, but the superposition of a load set in equilibrium does not.
 """
 
 from __future__ import annotations
@@ -26,8 +33,11 @@ import scipy.sparse as sp
 from skfem import Basis, ElementTetP2, ElementVector, MeshTet
 from skfem.models.elasticity import lame_parameters
 
-from ..arm_fe import SolidModel
 from .mesh import TetMesh
+
+PERMC = "MMD_AT_PLUS_A"
+"""SuperLU column ordering: minimum degree on A^T + A suits the symmetric FE matrices (the
+default COLAMD fills 7x more and factors ~40x slower on an arm)."""
 
 DIRECT_MAX_DOFS = 400000
 """Up to this many dofs the static cases are solved by SuperLU (minimum-degree ordering) and
@@ -42,7 +52,7 @@ CHUNK = 20000
 INT_K, INT_M = 2, 4
 
 
-class PartFE(SolidModel):
+class PartFE:
     """Linear elastic P2-tet solid (m, Pa, kg/m^3) with point masses at joint nodes."""
 
     def __init__(self, mesh: TetMesh, E: float, nu: float, rho: float) -> None:
@@ -58,6 +68,20 @@ class PartFE(SolidModel):
         self.node_dofs = np.stack(split, axis=1)
         self.point_mass = np.zeros(self.n_nodes)
         self.K = self._assemble(self._stiffness_chunk, self.sbasis)
+
+    @property
+    def K_size(self) -> int:
+        return 3 * self.n_nodes
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.node_xyz.shape[0])
+
+    def surface_nodes(self) -> np.ndarray:
+        """Boolean mask of the nodes on the boundary."""
+        mask = np.zeros(self.n_nodes, dtype=bool)
+        mask[self.sbasis.get_dofs().all()] = True
+        return mask
 
     # ------------------------------------------------------------------ assembly
     def _assemble(self, kernel, basis: Basis) -> sp.csr_matrix:
@@ -127,6 +151,21 @@ class PartFE(SolidModel):
         return self._massprops
 
     # ------------------------------------------------------------------ loads
+    def spider_forces(self, nodes: np.ndarray, point: np.ndarray, force: np.ndarray,
+                      moment: np.ndarray) -> np.ndarray:
+        """Least-norm nodal forces (n, 3): resultant ``force`` (N), ``moment`` (N m) at point."""
+        r = self.node_xyz[nodes] - point
+        n = nodes.size
+        A = np.zeros((6, 3 * n))
+        for a in range(3):
+            A[a, a::3] = 1.0
+        # (r × f)_x = ry fz - rz fy, (r × f)_y = rz fx - rx fz, (r × f)_z = rx fy - ry fx
+        A[3, 2::3], A[3, 1::3] = r[:, 1], -r[:, 2]
+        A[4, 0::3], A[4, 2::3] = r[:, 2], -r[:, 0]
+        A[5, 1::3], A[5, 0::3] = r[:, 0], -r[:, 1]
+        f = A.T @ np.linalg.lstsq(A @ A.T, np.r_[force, moment], rcond=None)[0]
+        return np.asarray(f.reshape(n, 3))
+
     def coupling_load(self, nodes: np.ndarray, centre: np.ndarray, force: np.ndarray,
                       moment: np.ndarray) -> np.ndarray:
         """Load vector (n_dofs,) of a distributing coupling: the least-norm nodal forces on
@@ -140,7 +179,7 @@ class PartFE(SolidModel):
     def solve_loads(self, B: np.ndarray, support_nodes: Sequence[int],
                     method: str = "inertia_relief") -> tuple[np.ndarray, np.ndarray]:
         """Displacements (n_cases, n_dofs) of the free part under load vectors B (n_dofs,
-        n_cases) on inertia relief (as arm_fe.SolidModel.solve_free), and the 3-2-1
+        n_cases) on inertia relief (or ``method = "321"``; module docstring), and the 3-2-1
         reactions (n_cases, 6) [N]."""
         fixed = self.three_two_one(support_nodes)
         if method == "inertia_relief":
@@ -161,6 +200,57 @@ class PartFE(SolidModel):
         MPhi = M @ phi
         return np.asarray(B - MPhi @ np.linalg.solve(phi.T @ MPhi, phi.T @ B))
 
+    def nodal_stress(self, U: np.ndarray) -> np.ndarray:
+        """Nodal-averaged stresses (n_cases, n_nodes, 6) [Pa], order xx, yy, zz, xy, yz, zx,
+        of displacements (n_cases, n_dofs)."""
+        X = self.elem.doflocs.T  # reference coordinates of the local nodes
+        qb = Basis(self.mesh, ElementVector(self.elem), quadrature=(X, np.ones(X.shape[1])))
+        edofs = self.sbasis.element_dofs  # (n_local, n_elems): local node j <-> point j
+        counts = np.bincount(edofs.ravel(), minlength=self.n_nodes).astype(float)
+        out = np.zeros((U.shape[0], self.n_nodes, 6))
+        for c in range(U.shape[0]):
+            g = qb.interpolate(U[c]).grad  # (3, 3, n_elems, n_local)
+            eps = 0.5 * (g + g.transpose(1, 0, 2, 3))
+            tr = eps[0, 0] + eps[1, 1] + eps[2, 2]
+            mu2 = 2 * self.mu
+            comps = [mu2 * eps[0, 0] + self.lam * tr, mu2 * eps[1, 1] + self.lam * tr,
+                     mu2 * eps[2, 2] + self.lam * tr, mu2 * eps[0, 1], mu2 * eps[1, 2],
+                     mu2 * eps[2, 0]]
+            for k, s in enumerate(comps):
+                out[c, :, k] = np.bincount(edofs.T.ravel(), weights=s.ravel(),
+                                           minlength=self.n_nodes) / counts
+        return out
+
+    def rigid_body_modes(self, about: np.ndarray | None = None) -> np.ndarray:
+        """Φ (n_dofs, 6): unit translations x, y, z and unit rotations about x, y, z through
+        ``about`` (default: the centre of mass) [m per m, m per rad]."""
+        o = self.mass_properties()["centre_of_mass"] if about is None else np.asarray(about)
+        r = self.node_xyz - o
+        phi = np.zeros((self.K_size, 6))
+        for a in range(3):
+            phi[self.node_dofs[:, a], a] = 1.0
+        zero = np.zeros(len(r))  # rotation e_k: u = e_k × r
+        rot = [np.c_[zero, -r[:, 2], r[:, 1]], np.c_[r[:, 2], zero, -r[:, 0]],
+               np.c_[-r[:, 1], r[:, 0], zero]]
+        for k, u in enumerate(rot):
+            for a in range(3):
+                phi[self.node_dofs[:, a], 3 + k] = u[:, a]
+        return phi
+
+    def three_two_one(self, nodes: Sequence[int]) -> np.ndarray:
+        """The 6 global dofs of a 3-2-1 support on three nodes A, B, C (not collinear): A all
+        three translations, B the two axes least along AB, C the axis most normal to ABC."""
+        a, b, c = (int(n) for n in nodes)
+        pa, pb, pc = self.node_xyz[[a, b, c]]
+        ab = (pb - pa) / np.linalg.norm(pb - pa)
+        nrm = np.cross(pb - pa, pc - pa)
+        if np.linalg.norm(nrm) < 1e-9:
+            raise ValueError("3-2-1 support nodes are collinear")
+        dofs = [self.node_dofs[a, k] for k in range(3)]
+        dofs += [self.node_dofs[b, k] for k in np.argsort(np.abs(ab))[:2]]
+        dofs.append(self.node_dofs[c, int(np.argmax(np.abs(nrm)))])
+        return np.asarray(dofs)
+
     def modes(self, n_flexible: int = 6) -> tuple[np.ndarray, np.ndarray]:
         """First free-free flexible modes: frequencies [Hz] and shapes (n_dofs, n).
 
@@ -179,8 +269,6 @@ class PartFE(SolidModel):
         if self.K_size >= SHIFT_INVERT_MAX_DOFS:
             return self._modes_lobpcg(M, phi, n_flexible, direct=True)
         import scipy.sparse.linalg as spla
-
-        from ..arm_fe import PERMC
 
         shift = -(2 * np.pi * 5.0) ** 2
         lu = spla.splu((self.K - shift * M).tocsc(), permc_spec=PERMC)
@@ -203,8 +291,6 @@ class PartFE(SolidModel):
         sigma = (2 * np.pi * 100.0) ** 2 * ms / ks
         A = (Ks + sigma * Ms).tocsr()
         if direct:
-            from ..arm_fe import PERMC
-
             lu = spla.splu(A.tocsc(), permc_spec=PERMC)
             prec = spla.LinearOperator(A.shape, matvec=lu.solve, matmat=lu.solve,
                                        dtype=float)
@@ -236,8 +322,6 @@ def spd_solve(A: sp.csr_matrix, B: np.ndarray, near_null: np.ndarray) -> np.ndar
     except ImportError:
         pyamg = None
     if pyamg is None or A.shape[0] < DIRECT_MAX_DOFS:
-        from ..arm_fe import PERMC
-
         lu = spla.splu(A.tocsc(), permc_spec=PERMC)
         return np.asarray(lu.solve(np.ascontiguousarray(B)))
     ml = pyamg.smoothed_aggregation_solver(A, B=near_null, symmetry="symmetric",
