@@ -105,3 +105,14 @@ def test_an_inp_include_inside_the_folder_is_read_and_its_content_not_echoed(
     with pytest.raises(InputFileError) as err:
         read_mesh(mesh)
     assert "SECRET" not in str(err.value) and "arm.inp" in str(err.value)
+
+
+@pytest.mark.parametrize("name", ["../../escape", ".hidden", "a b"])
+def test_a_part_name_that_is_not_a_plain_file_name_is_refused(tmp_path: Path,
+                                                             name: str) -> None:
+    from nodes.fatigue.parts.schema import load_part
+
+    path = tmp_path / "p.toml"
+    path.write_text(f'[part]\nname = "{name}"\ngeometry = "builtin:lower_arm"\n')
+    with pytest.raises(InputFileError, match="part.name"):
+        load_part(path)

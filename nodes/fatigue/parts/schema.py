@@ -46,6 +46,8 @@ from typing import Any
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.keys import NAME
+from cosim.safe_open import read_user_file
 
 COUPLINGS = ("distributing", "rigid")
 UNITS = {"m": 1.0, "mm": 1e-3}
@@ -245,10 +247,8 @@ def load_part(path: str | Path) -> Part:
     path = Path(path).resolve()
     src = str(path)
     try:
-        raw_bytes = path.read_bytes()
+        raw_bytes = read_user_file(path, "scenario", "part file")
         raw = tomllib.loads(raw_bytes.decode())
-    except FileNotFoundError:
-        raise InputFileError(src, "file not found") from None
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise InputFileError(src, f"not a readable TOML file: {exc}") from None
     _check_keys(src, "", raw, ("part", "mesh", "joint"))
@@ -257,6 +257,9 @@ def load_part(path: str | Path) -> Part:
         raise InputFileError(src, "missing table [part]")
     _check_keys(src, "part.", p, ("name", "geometry", "length_unit", "material"))
     name = p.get("name", path.stem)
+    if not isinstance(name, str) or not NAME.match(name):  # it names cache and result files
+        raise InputFileError(src, f"key part.name: got {name!r:.80}, expected 1-64 letters, "
+                                  "digits, '_', '.', '-', not starting with '.' or '-'")
     geometry = p.get("geometry")
     if not isinstance(geometry, str) or not geometry:
         raise InputFileError(src, "key part.geometry: expected a STEP or mesh file name, or "
