@@ -61,16 +61,16 @@ class TyreRoad:
         else:
             self.tyre = build_tyre(scenario["tyre"])
         self._radius = driver_radius(scenario.get("vehicle", {}))
-        self._path: RoadPath | None = None
+        self._origin: tuple[float, float] | None = None
         self._u: np.ndarray | None = None
         self._h = RunSettings.of(scenario).h
         self.geo = wheel_geometry(start["info"][ch.PLANT])
         self.offsets = np.asarray(self.tyre.contact_offsets, dtype=float)
         self.centre = int(np.argmin(np.abs(self.offsets)))
 
-    STATE_ATTRS = ("_path", "_u", "tyre", "mf")
-    """What changes as the run goes (the Magic Formula's relaxation states, the road's path
-    and the wheels' last stations);
+    STATE_ATTRS = ("_origin", "_u", "tyre", "mf")
+    """What changes as the run goes (the Magic Formula's relaxation states, the road path's
+    origin and the wheels' last stations);
     the road, the wheel geometry and the step are rebuilt the same from the scenario."""
 
     def checkpoint_state(self) -> dict[str, Any]:
@@ -102,11 +102,12 @@ class TyreRoad:
             raise ScenarioError("tyre.model", "magic_formula",
                                 f"a vehicle whose plant/state carries the wheel kinematics "
                                 f"({exc} is missing): full_vehicle_double_wishbone") from None
-        if self._path is None:  # the front axle's centre at the first step (FL, FR first)
+        if self._origin is None:  # the front axle's centre at the first step (FL, FR first)
             front = slice(0, min(2, kin["x_wc"].size))
-            self._path = RoadPath((float(np.mean(kin["x_wc"][front])),
-                                   float(np.mean(kin["y_wc"][front]))), self._radius)
-        self._u = self._path.station(kin["x_wc"], kin["y_wc"], self._u)
+            self._origin = (float(np.mean(kin["x_wc"][front])),
+                            float(np.mean(kin["y_wc"][front])))
+        path = RoadPath(self._origin, self._radius)
+        self._u = path.station(kin["x_wc"], kin["y_wc"], self._u)
         geo = self.geo
         z_g = road_heights_at(self.road, self._u, geo["wheel_track"], self.offsets,
                               geo["corner_names"])

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cosim import plaindata
 from cosim import scenario as sc
 from nodes.tyre_road.node import TyreRoad
 from nodes.tyre_road.roads import SampledRoad
@@ -84,3 +85,7 @@ def test_the_node_reads_cornering_pave_along_the_arc() -> None:
                 for i, tr in enumerate((0, 1, 0, 1))]
         np.testing.assert_allclose(out["z_g"], want, atol=1e-12)
     assert s > 40.0  # the world x, R sin(s / R), is 6.3 m short of the arc by then
+    # its state (the path's origin, the last stations) is plain data for a checkpoint
+    state = plaindata.decode(plaindata.encode(node.checkpoint_state()))
+    assert state["_origin"] == pytest.approx((5.0, 0.2))
+    np.testing.assert_array_equal(state["_u"], node._u)
