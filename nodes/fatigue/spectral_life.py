@@ -33,6 +33,10 @@ def spectral_analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: Fatigu
                      track_length_m: float) -> tuple[FatigueResult, dict]:
     """(result, its ``spectral`` summary entry) of one pass of ``loads`` [N] at times ``t``
     [s] (uniform steps: the PSD needs them) over ``track_length_m`` [m]."""
+    if cfg.critical_plane is not None:
+        raise ScenarioError("fatigue.equivalent", cfg.critical_plane, f"abs_max_principal or "
+                            f"signed_von_mises with method {cfg.method!r} (the critical planes "
+                            "count the shear's cycles: method = \"stress_life\")")
     t = np.asarray(t, dtype=float)
     dt = np.diff(t)
     if t.size < 8 or np.ptp(dt) > 1e-6 * float(np.median(dt)):

@@ -97,6 +97,12 @@ def test_a_scenario_with_a_spectral_method_has_no_live_node() -> None:
         preflight(sc, ["arm"])
 
 
+def test_findley_is_refused(run_dir: Path, tmp_path: Path, capsys) -> None:
+    assert main([str(run_dir), "--quiet", "--method", "dirlik", "--equivalent", "findley",
+                 "--out", str(tmp_path / "x")]) == 2
+    assert "fatigue.equivalent" in capsys.readouterr().err
+
+
 def test_uneven_time_steps_are_refused(run_dir: Path, tmp_path: Path, capsys) -> None:
     lines = (run_dir / "table.csv").read_text().splitlines()
     head, rest = lines[0], lines[1:]
