@@ -116,8 +116,18 @@ def load(path: str | Path, key: str = "vehicle.corner") -> Corner:
         raise _err(str(p), exc) from None
 
 
+MAX_COORDINATE_M = 10.0
+"""Largest hardpoint coordinate or half track [m]: a road vehicle is < 20 m long and < 3 m
+wide, a corner's points within ~1 m of its wheel; more is millimetres, or not a number a
+model can take (1e308 m passed `corner check` and killed the run at step 0, #46)."""
+
+
 def _vec(r: ConfigReader, name: str) -> np.ndarray:
-    return np.array(r.number_list(name, length=3, expected="[x, y, z] in metres"))
+    v = np.array(r.number_list(name, length=3, expected="[x, y, z] in metres"))
+    if not np.all(np.abs(v) <= MAX_COORDINATE_M):
+        raise r.error(name, v.tolist(), f"[x, y, z] in metres, each within "
+                                        f"+-{MAX_COORDINATE_M:g} m (millimetres?)")
+    return v
 
 
 def from_dict(data: dict[str, Any], source: str = "<corner>") -> Corner:
@@ -151,7 +161,7 @@ def from_dict(data: dict[str, Any], source: str = "<corner>") -> Corner:
                            "[0, 0, 0] or absent with reference = 'wheel_centre'")
         raw.pop("wheel_centre", None)
         points = raw
-        half_track = fr.number("half_track", positive=True, unit="m")
+        half_track = fr.number("half_track", positive=True, hi=MAX_COORDINATE_M, unit="m")
     radius = fr.number("tyre_loaded_radius", 0.30, positive=True, unit="m")
     ms = top.section("masses", (*MASSES, "wheel"))
     masses = {n: ms.number(n, positive=True, unit="kg") for n in MASSES}

@@ -69,11 +69,16 @@ SAME_CONFIG_SKIP = ("track_length_m", "repeats_basis_m", "block_samples", "live"
 """Fatigue keys that may differ between events (they do not change a pass's damage)."""
 
 
+MAX_DUTY_NUMBER = 1e9
+"""Largest repeats, distance [km] or scatter figure a duty file takes: a vehicle's life is
+~3e5 km; 1e308 passes printed "inf km" with exit 0 (#46)."""
+
+
 def _number(v: Any, key: str, expected: str, lo: float = 0.0, lo_open: bool = False) -> float:
     ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and \
-        (v > lo if lo_open else v >= lo)
+        (v > lo if lo_open else v >= lo) and v <= MAX_DUTY_NUMBER
     if not ok:
-        raise ScenarioError(key, v, expected)
+        raise ScenarioError(key, v, f"{expected}, at most {MAX_DUTY_NUMBER:g}")
     return float(v)
 
 

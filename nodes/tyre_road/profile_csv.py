@@ -106,16 +106,18 @@ MAX_STEP_M = 0.5
 """Largest height change between two adjacent samples [m]: a kerb strike is 0.1-0.15 m."""
 
 
-def _check_physical(path: str | Path, z: np.ndarray, column: int) -> None:
+def _check_physical(path: str | Path, z: np.ndarray, column: int | str) -> None:
     """InputFileError naming the first sample beyond :data:`MAX_RELIEF_M` or
-    :data:`MAX_STEP_M` (``column``: the file's column, 1-based; the line is its data row)."""
+    :data:`MAX_STEP_M` (``column``: the file's column, 1-based, or an MDF channel's quoted
+    name; the line is its data row)."""
     relief = np.abs(z - z[0])
     bad = np.flatnonzero(relief > MAX_RELIEF_M)
     if bad.size:
         i = int(bad[0])
-        raise InputFileError(str(path), f"column {column}: height {z[i]!r} m is {relief[i]:.4g} m "
-                                   f"from the first sample's (at most {MAX_RELIEF_M:g} m: not "
-                                   f"a road profile; heights are in metres)")
+        raise InputFileError(str(path), f"column {column}: height {float(z[i])!r} m is "
+                                   f"{relief[i]:.4g} m from the first sample's (at most "
+                                   f"{MAX_RELIEF_M:g} m: not a road profile; heights are in "
+                                   "metres)")
     steps = np.abs(np.diff(z))
     bad = np.flatnonzero(steps > MAX_STEP_M)
     if bad.size:

@@ -21,6 +21,7 @@ from cosim.formats.mdf4 import read_mdf4
 from cosim.formats.units import to_si_factor
 from cosim.safe_open import check_user_file
 
+from .profile_csv import _check_physical
 from .roads import KMH, SampledRoad
 
 
@@ -60,6 +61,9 @@ def read_profile_mdf(path: str | Path, left: str, right: str | None = None,
         i = int(np.argmax(np.diff(x) <= 0)) + 1
         raise InputFileError(path, f"distance must increase strictly: {x[i]:g} m after "
                                    f"{x[i - 1]:g} m (sample {i})")
+    for name, z in ((left, zl), (right, zr)):  # the CSV profile's bounds (#46: 1e308 m)
+        if name:
+            _check_physical(path, z, repr(name))
     return x, zl, zr
 
 

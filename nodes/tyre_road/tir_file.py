@@ -12,6 +12,7 @@ Errors name the file and the line (:class:`cosim.errors.InputFileError`, exit 2)
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -67,6 +68,8 @@ def parse_tir(text: str, source: str = "<tir>") -> dict[str, float | str]:
             except ValueError:
                 raise InputFileError(source, f"{key}: expected a number or a quoted string, "
                                              f"got {value!r}", n) from None
+            if not math.isfinite(parsed):  # a NaN passed check and killed the run at step 0
+                raise InputFileError(source, f"{key}: {value!r} is not a finite number", n)
         out[qualified] = parsed
         out.setdefault(key, parsed)
     return out
