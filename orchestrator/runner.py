@@ -107,11 +107,22 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
         (n / wall_s if status == "ok" and wall_s > 0 else 0.0),
         "rejected_messages": ({k: v.rejected for k, v in result.nodes.items()}
                               | {"orchestrator": result.rejected}) if result else {},
-        "rows": rec.get("rows", 0), "files": rec.get("files", {}),
+        "rows": rec.get("rows", 0), "files": _relative(rec.get("files", {}), run.get("dir", ".")),
         "channels": rec.get("stats", {}),
     } | ({"table_note": rec["note"]} if rec.get("note") else {}) \
       | _coupling_summary(scenario, rec, status) | _adaptive_summary(scenario, rec) \
       | _resume_summary(run)
+
+
+def _relative(files: dict[str, str], folder: str) -> dict[str, str]:
+    """The run's table files named relative to its folder (#47: a run folder handed to a
+    colleague names no path of this machine); a file outside the folder keeps its path."""
+    base = Path(folder).resolve()
+    out = {}
+    for kind, name in files.items():
+        path = Path(name).resolve()
+        out[kind] = str(path.relative_to(base)) if path.is_relative_to(base) else name
+    return out
 
 
 RESIDUAL_WARNING = WARNING_THRESHOLD

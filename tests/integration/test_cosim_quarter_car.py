@@ -60,6 +60,10 @@ def test_full_distributed_run(tmp_path_factory, reference):
     assert summary["exchange"] == "sequential" and summary["n_steps"] == 4000
     assert summary["nodes"] == ["plant", "tyre_road", "controller", "recorder"]
     assert summary["steps_per_s"] > 0 and summary["wall_s"] > 0
+    # #47: the summary names the run's files relative to its folder, no path of this machine
+    assert summary["files"] == {"csv": "table.csv", "parquet": "table.parquet"}
+    text = (out / "summary.json").read_text()
+    assert str(out) not in text and str(out.resolve()) not in text
     for col in ("plant/state/z_b", "plant/state/z_w", "plant/response/a_w",
                 "tyre_road/force/F_t"):
         assert {"peak", "rms", "max", "min"} <= set(summary["channels"][col])
