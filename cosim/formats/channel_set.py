@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import check_user_file
 
 FORMATS = ("mdf4", "rpc3", "csv", "parquet")
 """Formats ``suscosim export --format`` writes."""
@@ -63,8 +64,7 @@ def read_channels(path: str | Path) -> ChannelSet:
     """Read any supported file (by suffix) into a checked :class:`ChannelSet`."""
     path = Path(path)
     fmt = format_of(path)
-    if not path.is_file():
-        raise InputFileError(str(path), "file not found")
+    check_user_file(path, "mdf" if fmt == "mdf4" else "loads", "load file")
     if fmt == "mdf4":
         from .mdf4 import read_mdf4 as reader
     elif fmt == "rpc3":

@@ -11,12 +11,14 @@ from __future__ import annotations
 import csv
 import math
 import re
+from array import array
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import open_user_text
 
 from .channel_set import ChannelSet
 
@@ -36,42 +38,86 @@ def _time_column(names: list[str], path: str) -> int:
     raise InputFileError(path, "no time column: the header needs a 't' (or 'time') column", 1)
 
 
+MAX_CSV_VALUES = 50_000_000
+"""Most numbers a load CSV may hold (rows x columns; 400 MB as float64): 1e7 rows of 5
+columns, a 10 kHz rig file of 1000 s with 4 channels. A longer history: Parquet or MDF 4,
+or split it (#46: a 1e7-row CSV read as lists of floats took 3 GiB)."""
+
+
 def read_csv(path: str | Path) -> ChannelSet:
-    """A CSV table (see the module docstring); ``k`` (a step index) is dropped."""
+    """A CSV table (see the module docstring); ``k`` (a step index) is dropped. Read by
+    NumPy's parser into one float64 array (1e7 rows of 2 columns: 2 s, 0.35 GB), at most
+    :data:`MAX_CSV_VALUES` numbers; a file it does not take is read again row by row by
+    :func:`_read_csv_rows`, which names the line of the problem."""
+    import warnings
+
     path = str(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            lines = [(i, row) for i, row in enumerate(csv.reader(fh), start=1)
-                     if row and row[0].strip() and not row[0].lstrip().startswith("#")]
-    except UnicodeDecodeError:
-        raise InputFileError(path, "not a text (UTF-8) file") from None
-    except OSError as exc:
-        raise InputFileError(path, f"cannot read: {exc.strerror}") from None
-    except csv.Error as exc:
-        raise InputFileError(path, f"not a CSV file ({exc})") from None
-    if not lines:
-        raise InputFileError(path, "empty file")
-    hline, header = lines[0]
+    with open_user_text(path, "loads", "load file") as fh:
+        try:
+            line, hline = fh.readline(), 1
+            while line and (not line.strip() or line.lstrip().startswith("#")):
+                line, hline = fh.readline(), hline + 1
+            header = next(csv.reader([line]), None) if line.strip() else None
+            if header and header[0].strip():
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")  # "input contained no data"
+                    a = np.loadtxt(fh, dtype=float, delimiter=",", comments="#", ndmin=2,
+                                   max_rows=MAX_CSV_VALUES // len(header) + 1)
+                if a.shape[1] == len(header) and a.size <= MAX_CSV_VALUES and \
+                        np.isfinite(a).all():
+                    return _channels(path, header, a, hline)
+        except (ValueError, UnicodeDecodeError, csv.Error):
+            pass  # not InputFileError: the row reader says what and where
+    return _read_csv_rows(path)
+
+
+def _channels(path: str, header: list[str], a: np.ndarray, hline: int) -> ChannelSet:
     split = [_split(h) for h in header]
     names = [n for n, _ in split]
     if len(set(names)) != len(names):
         raise InputFileError(path, "a column name appears twice in the header", hline)
     it = _time_column(names, path)
-    rows = []
-    for lineno, row in lines[1:]:
-        if len(row) != len(header):
-            raise InputFileError(path, f"expected {len(header)} fields, got {len(row)}", lineno)
-        try:
-            vals = [float(v) for v in row]
-        except ValueError:
-            raise InputFileError(path, "non-numeric value", lineno) from None
-        if not all(math.isfinite(v) for v in vals):
-            raise InputFileError(path, "non-finite value", lineno)
-        rows.append(vals)
-    a = np.asarray(rows, dtype=float).reshape(-1, len(header))
     chans = {n: a[:, j].copy() for j, n in enumerate(names) if j != it and n != "k"}
     units = {n: u for n, u in split if n in chans}
     return ChannelSet(t=a[:, it].copy(), channels=chans, units=units)
+
+
+def _read_csv_rows(path: str) -> ChannelSet:
+    """:func:`read_csv` row by row into a typed array, naming the line of a problem."""
+    header: list[str] | None = None
+    buf = array("d")
+    lineno = hline = 0
+    try:
+        with open_user_text(path, "loads", "load file") as fh:
+            for lineno, row in enumerate(csv.reader(fh), start=1):
+                if not row or not row[0].strip() or row[0].lstrip().startswith("#"):
+                    continue
+                if header is None:  # checked before any data row
+                    header, hline = row, lineno
+                    _channels(path, header, np.empty((0, len(header))), hline)
+                    continue
+                if len(row) != len(header):
+                    raise InputFileError(path, f"expected {len(header)} fields, got "
+                                               f"{len(row)}", lineno)
+                try:
+                    vals = [float(v) for v in row]
+                except ValueError:
+                    raise InputFileError(path, "non-numeric value", lineno) from None
+                if not all(math.isfinite(v) for v in vals):
+                    raise InputFileError(path, "non-finite value", lineno)
+                buf.extend(vals)
+                if len(buf) > MAX_CSV_VALUES:
+                    raise InputFileError(path, f"more than {MAX_CSV_VALUES:.3g} numbers (rows x "
+                                               "columns): write it as Parquet or MDF 4, or "
+                                               "split it", lineno)
+    except UnicodeDecodeError:
+        raise InputFileError(path, "not a text (UTF-8) file", lineno + 1) from None
+    except csv.Error as exc:
+        raise InputFileError(path, f"not a CSV file ({exc})", lineno + 1) from None
+    if header is None:
+        raise InputFileError(path, "empty file")
+    return _channels(path, header, np.frombuffer(buf, dtype=float).reshape(-1, len(header)),
+                     hline)
 
 
 def write_csv(cs: ChannelSet, path: str | Path, units_in_header: bool = False
