@@ -17,7 +17,7 @@ from .local import Runner
 from .results import result_rows, results_table, write_results, write_sweep_json
 from .sensitivity import sensitivity, sensitivity_table, write_sensitivity
 from .serve import serve
-from .spec import MAX_ID, _params_text, load_sweep, validate_points
+from .spec import MAX_ID, MAX_POINTS, _params_text, load_sweep, validate_points
 from .state import point_state
 
 
@@ -41,6 +41,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--scheduler", metavar="ADDRESS",
                     help="the Dask scheduler, e.g. tcp://HOST:8786 (suscosim cluster)")
     ap.add_argument("--no-fatigue", action="store_true", help="skip the fatigue worker")
+    ap.add_argument("--max-points", type=int, default=MAX_POINTS, metavar="N",
+                    help=f"run a sweep of more than {MAX_POINTS} points (default: refused)")
     ap.add_argument("--list", action="store_true",
                     help="validate and list the points (and whether they are done); run nothing")
     return ap
@@ -68,7 +70,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
-                           fatigue=False if args.no_fatigue else None)
+                           fatigue=False if args.no_fatigue else None,
+                           max_points=args.max_points)
         out = Path(args.out) if args.out else Path("sweeps") / sweep.name
         if args.out and sweep.runs_dir is not None:  # --out wins: everything under it (#46)
             print(f"suscosim sweep: runs under {out / 'runs'} (--out), not the sweep file's "

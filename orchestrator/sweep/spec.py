@@ -198,9 +198,15 @@ def _absolute_paths(overrides: dict[str, Any], folder: Path) -> dict[str, Any]:
     return out
 
 
-def load_sweep(path: str | Path, jobs: int | None = None,
-               fatigue: bool | None = None) -> Sweep:
-    """Read and check a sweep file and enumerate its points (scenarios not yet validated)."""
+MAX_POINTS = 10_000
+"""Most points a sweep enumerates unless ``--max-points`` says more (a 30 kB file with a
+1000 x 1000 grid made ``sweep --list`` run for minutes, #46)."""
+
+
+def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None = None,
+               max_points: int = MAX_POINTS) -> Sweep:
+    """Read and check a sweep file and enumerate its points (scenarios not yet validated);
+    more than ``max_points`` points is a ScenarioError, counted before any is made."""
     import tomllib
 
     path = Path(path)
@@ -294,6 +300,11 @@ def load_sweep(path: str | Path, jobs: int | None = None,
     if design is not None:
         samples, sampled = design_axis(design)
         axes.append(Axis(AXIS, list(samples), sampled, params=sampled))
+    n_points = math.prod(len(a.labels) for a in axes)
+    if n_points > max_points:
+        raise ScenarioError("sweep.grid", " x ".join(str(len(a.labels)) for a in axes) +
+                            f" = {n_points} points", f"at most {max_points} points "
+                            "(--max-points N to go past it)")
     sweep = Sweep(path=path, name=name, bases=bases, axes=axes, fixed=fixed, jobs=jobs,
                   fatigue=fatigue, channels=channels, raw_grid=grid, design=design,
                   runs_dir=runs_dir, fork_at=fork_at)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from cosim.errors import InputFileError
+from cosim.errors import InputFileError, ScenarioError
 from tests.conftest import ROOT, suscosim
 
 SCENARIO = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
@@ -116,3 +116,22 @@ def test_a_part_name_that_is_not_a_plain_file_name_is_refused(tmp_path: Path,
     path.write_text(f'[part]\nname = "{name}"\ngeometry = "builtin:lower_arm"\n')
     with pytest.raises(InputFileError, match="part.name"):
         load_part(path)
+
+
+def test_a_sweep_of_a_million_points_is_refused_before_it_is_enumerated(tmp_path: Path,
+                                                                        ) -> None:
+    from orchestrator.sweep.spec import load_sweep
+
+    values = ", ".join(str(1000.0 + i) for i in range(1000))
+    path = tmp_path / "big.toml"
+    path.write_text(f'[sweep]\nname = "big"\nbase = "{SCENARIO}"\n\n[sweep.grid]\n'
+                    f'"vehicle.sprung_mass" = [{values}]\n"tyre.stiffness" = [{values}]\n')
+    res = suscosim("sweep", str(path), "--list", "--out", str(tmp_path / "out"), timeout=60)
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert "1000 x 1000 = 1000000 points" in res.stderr and "--max-points" in res.stderr
+    small = ", ".join(str(1000.0 + i) for i in range(101))
+    path.write_text(f'[sweep]\nname = "big"\nbase = "{SCENARIO}"\n\n[sweep.grid]\n'
+                    f'"vehicle.sprung_mass" = [{small}]\n"tyre.stiffness" = [{small}]\n')
+    with pytest.raises(ScenarioError, match="101 x 101 = 10201 points"):
+        load_sweep(path)
+    assert len(load_sweep(path, max_points=10201).points) == 10201
