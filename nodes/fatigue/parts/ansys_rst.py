@@ -34,7 +34,6 @@ the file. ``ansys-mapdl-reader`` (with pyvista and vtk) is imported only there.
 from __future__ import annotations
 
 import importlib.util
-import os
 import subprocess
 import sys
 import tempfile
@@ -44,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.safe_open import check_user_file, open_user_file
 
 from ..influence import InfluenceSet, short_channel
 
@@ -105,8 +105,8 @@ def rst_header(path: Path) -> dict[str, int]:
     file that is not an MAPDL binary or is cut short is an `InputFileError` here."""
     src = str(path)
     try:
-        size = os.path.getsize(path)
-        with open(path, "rb") as fh:
+        size = check_user_file(path, "mesh", "part results (.rst)")
+        with open_user_file(path, "mesh", "part results (.rst)") as fh:
             head = fh.read(4 * (105 + 80))
     except OSError as exc:
         raise InputFileError(src, f"cannot read it ({exc.strerror or exc})") from None
