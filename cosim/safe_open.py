@@ -42,6 +42,7 @@ LIMITS: dict[str, int] = {
     "loads": 2048 * MiB,     # a load file (CSV / Parquet) for `suscosim fatigue`
     "fmu": 256 * MiB,        # controller.fmu (the zip itself; members: nodes.controller.fmu)
     "journal": 4096 * MiB,   # a run's journal.msgpack
+    "report": 256 * MiB,     # a handed folder's JSON, CSV, log or image read whole by the report
 }
 """Largest file read of each kind [bytes]; ``SUSCOSIM_MAX_<KIND>_MB`` overrides one."""
 

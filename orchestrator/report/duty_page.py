@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from cosim.safe_open import open_user_text, read_user_text
+
 from .markup import cmd, esc, kv_table, nav, note, page, section, table_html
 from .plots import fig_uri, img, new_figure
 from .run_data import BadInput
@@ -27,14 +29,14 @@ def is_duty_dir(d: Path) -> bool:
 def _load(d: Path) -> tuple[dict[str, Any], dict[str, np.ndarray] | None, str]:
     """(duty.json, columns of damage_per_node.csv or None, a problem with the CSV or "")."""
     try:
-        duty = json.loads((d / "duty.json").read_text())
+        duty = json.loads(read_user_text(d / "duty.json", "report", inside=d))
     except (OSError, ValueError) as exc:
         raise BadInput(f"{d / 'duty.json'}: not a duty result ({exc})") from None
     if not isinstance(duty, dict) or not isinstance(duty.get("events"), list):
         raise BadInput(f"{d / 'duty.json'}: not a duty result (no 'events' list)")
     path = d / "damage_per_node.csv"
     try:
-        with open(path, newline="") as fh:
+        with open_user_text(path, "report", inside=d) as fh:
             rows = list(csv.reader(fh))
         head, body = rows[0], rows[1:]
         cols = {h: np.array([float(r[i]) for r in body]) for i, h in enumerate(head)}

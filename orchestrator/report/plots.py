@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.channels import CORNERS
+from cosim.safe_open import read_user_file
 
 from .markup import esc
 
@@ -39,10 +40,11 @@ def fig_uri(fig, dpi: int = 90) -> str:
 
 
 def file_uri(path: Path) -> str | None:
-    """A PNG file as a data URI (None if it is not a PNG)."""
+    """A PNG file as a data URI (None if it is not a PNG, or not a regular file inside its
+    folder: a symlink out of a handed run folder is not embedded)."""
     try:
-        data = path.read_bytes()
-    except OSError:
+        data = read_user_file(path, "report", inside=path.parent)
+    except (OSError, ValueError):  # InputFileError
         return None
     if not data.startswith(b"\x89PNG\r\n\x1a\n"):
         return None

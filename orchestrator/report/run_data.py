@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from cosim.safe_open import read_user_text
+
 from .stream import TableSource
 
 
@@ -69,8 +71,8 @@ def _read_json(path: Path, problems: list[str]) -> Any:
     if not path.is_file():
         return None
     try:
-        return json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        return json.loads(read_user_text(path, "report", inside=path.parent))
+    except (OSError, ValueError) as exc:  # InputFileError, UnicodeDecodeError, JSON
         problems.append(f"{path.name}: unreadable ({exc})")
         return None
 

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from cosim.coupling_energy import WARNING_THRESHOLD
+from cosim.safe_open import read_user_file
 
 from .fatigue_section import fatigue_section
 from .markup import (
@@ -366,8 +367,9 @@ def logs_section(r: RunData) -> str:
     parts = []
     for p in logs:
         try:
-            lines = p.read_text(errors="replace").splitlines()
-        except OSError:
+            lines = read_user_file(p, "report", inside=r.path / "logs").decode(
+                errors="replace").splitlines()
+        except (OSError, ValueError):  # InputFileError: not a regular file, too large
             continue
         lines = [ln for ln in lines if ln.strip() and not ln.startswith("pybullet build time")]
         if lines:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from cosim.errors import SuscosimError
-from cosim.safe_open import read_user_text
+from cosim.safe_open import open_user_text, read_user_text
 
 from .markup import fmt, is_num
 from .run_data import BadInput, RunData, is_run_dir, load_run
@@ -107,8 +107,8 @@ def read_results(d: Path) -> tuple[list[dict], str]:
     pj, pc = d / "results.json", d / "results.csv"
     if pj.is_file():
         try:
-            data = json.loads(pj.read_text())
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            data = json.loads(read_user_text(pj, "report", inside=d))
+        except (OSError, ValueError) as exc:  # InputFileError, UnicodeDecodeError, JSON
             return [], f"results.json unreadable ({exc})"
         if isinstance(data, dict):
             data = data.get("rows", data.get("points", data.get("results", [])))
@@ -117,9 +117,9 @@ def read_results(d: Path) -> tuple[list[dict], str]:
         return [], "results.json: not a list of rows"
     if pc.is_file():
         try:
-            with open(pc, newline="") as fh:
+            with open_user_text(pc, "report", inside=d) as fh:
                 return list(csv.DictReader(fh)), "results.csv"
-        except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        except (OSError, ValueError, csv.Error) as exc:  # ValueError: InputFileError too
             return [], f"results.csv unreadable ({exc})"
     return [], ""
 

@@ -10,6 +10,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from cosim.safe_open import read_user_text
+
 from .markup import esc, note, section, table_html
 from .plots import fig_uri, img, new_figure
 
@@ -38,7 +40,7 @@ def read_sensitivity(d: Path) -> tuple[dict[str, Any] | None, str]:
     if not path.is_file():
         return None, ""
     try:
-        sens = json.loads(path.read_text())
+        sens = json.loads(read_user_text(path, "report", inside=d))
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         return None, f"sensitivity.json unreadable ({exc})"
     if not isinstance(sens, dict) or not isinstance(sens.get("rows"), list):

@@ -135,3 +135,21 @@ def test_a_sweep_of_a_million_points_is_refused_before_it_is_enumerated(tmp_path
     with pytest.raises(ScenarioError, match="101 x 101 = 10201 points"):
         load_sweep(path)
     assert len(load_sweep(path, max_points=10201).points) == 10201
+
+
+def test_the_report_embeds_no_image_from_outside_the_handed_folder(tmp_path: Path) -> None:
+    import os
+
+    from orchestrator.report.plots import file_uri
+    from tests.unit.test_bounded_reads import _in_thread
+
+    png = b"\x89PNG\r\n\x1a\n" + b"outside"
+    (tmp_path / "outside.png").write_bytes(png)
+    fat = tmp_path / "run" / "fatigue"
+    fat.mkdir(parents=True)
+    (fat / "damage_map.png").symlink_to(tmp_path / "outside.png")
+    assert file_uri(fat / "damage_map.png") is None
+    os.mkfifo(fat / "sn_curve.png")
+    assert _in_thread(file_uri, fat / "sn_curve.png") == {"value": None}
+    (fat / "own.png").write_bytes(png)
+    assert (file_uri(fat / "own.png") or "").startswith("data:image/png;base64,")
