@@ -43,7 +43,6 @@ COMMANDS: dict[str, tuple[str, bool, str]] = {
     "arm-fillet-order": ("arm_studies", True, "which fillets OCC accepts, in which order"),
     "arm-variant": ("arm_studies", True, "one CAD variant through the part card's FE"),
     "arm-convergence": ("arm_studies", True, "the built-in arm's mesh-convergence table"),
-    "arm-design-space": ("arm_studies", True, "the old arm's first modes against its hot spot"),
     "upper-arm-cad": ("arm_studies", True, "make the upper wishbone's STEP (and its card)"),
     "roll-budget": ("roll_budget", False,
                     "where the 0.5 g corner's roll departs from the hand formula (#44)"),

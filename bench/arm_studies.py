@@ -7,7 +7,6 @@ STEP file. Their results are in docs/parts.md.
     python -m bench arm-variant --size 0.03 --set section.rib_depth_root=0.047 [--modes 1]
     python -m bench arm-convergence [OUT.json] [--run RUN_DIR] [--local 0.005 0.0035]
                                     [--set section.hole_rib_width=[0.011,0.011,0.005]]
-    python -m bench arm-design-space                                            # ~3 min
     python -m bench upper-arm-cad [--card] [--mesh-size 0.008] [--out STEP]
 
 ``arm-cad-grid``: which CAD variants of the built-in pivot-tube arm OpenCASCADE can fillet.
@@ -37,16 +36,6 @@ and stdout). ``--run RUN_DIR``: each mesh's damage under that run's loads (every
 screening); the refinement also takes the global mesh's most damaged nodes in. The last lines
 are the part file's ``[mesh]`` keys for the balls (``refine_centres``).
 
-``arm-design-space`` (issue #12): how the first modes and the static hot spot move together, on
-variants of the forged arm of ``cosim/lower_arm.py`` through its hand-made hex-mesh FE
-(nodes/fatigue/arm_fe.py): a depth family (rib and boss depths x s, rib widths / s: mass
-nearly kept, bending stiffness ~ s^2, stress ~ 1 / s), a shallow base member, and the joint
-hardware (0.8 kg) as masses at their hardpoints. Per variant: mass, first mode and its shape,
-the vertical-bending mode, the static hot spot (von Mises, inertia relief), the nominal bending
-stress at the hand-calculation cut and the closed-form floor of nodes/fatigue/arm_bounds.py at
-the vertical-bending frequency. #12's M1 within 15 % of 362 Hz and a 50-250 MPa hot spot at
-5 kg +- 10 %: no variant meets both, and the floor says why.
-
 ``upper-arm-cad``: makes the upper wishbone's STEP (nodes/fatigue/parts/data/upper_arm.step)
 with gmsh's OpenCASCADE kernel (docs/parts.md, "A second part: the upper wishbone"): a forged
 A-arm in the frame of ``plant/upper_arm`` (origin the upper bushes' midpoint, x along the pivot
@@ -58,13 +47,11 @@ bores cut after the fillets. ``--card``: its model card under the plant's static
 from __future__ import annotations
 
 import argparse
-import contextlib
 import copy
 import json
 import math
 import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -295,121 +282,6 @@ def arm_convergence(args: argparse.Namespace) -> int:
     return 0
 
 
-# ---- arm-design-space -----------------------------------------------------------------------
-DEPTHS = ("RIB_DEPTH", "RIB_DEPTH_TIP", "BASE_RIB_DEPTH", "BUSH_EYE_DEPTH",
-          "BALL_JOINT_BOSS_DEPTH", "SEAT_DEPTH")
-WIDTHS = ("OUTER_RIB_WIDTH", "HOLE_RIB_WIDTH")
-HARDWARE = {"ball_joint": 0.5, "bush_front": 0.15, "bush_rear": 0.15}
-LEG_LENGTH = 0.32
-"""Pivot to ball joint along the legs [m] (front 0.312, rear 0.332)."""
-
-
-def _old_arm() -> None:
-    """The forged arm of cosim/lower_arm.py and its hand-made hex-mesh FE
-    (nodes/fatigue/arm_fe.py, arm_mesh.py), imported only by this study."""
-    global arm, arm_bounds, PERMC, SolidModel, arm_mesh, steel_817M40, sp, spla
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
-
-    from cosim import lower_arm as arm
-    from nodes.fatigue import arm_bounds
-    from nodes.fatigue.arm_fe import PERMC, SolidModel
-    from nodes.fatigue.arm_mesh import arm_mesh
-    from nodes.fatigue.material import steel_817M40
-
-
-@contextlib.contextmanager
-def _ds_variant(**values: float):
-    old = {k: getattr(arm, k) for k in values}
-    for k, v in values.items():
-        setattr(arm, k, v)
-    try:
-        yield
-    finally:
-        for k, v in old.items():
-            setattr(arm, k, v)
-
-
-def depth_scaled(s: float) -> dict[str, float]:
-    out = {k: getattr(arm, k) * s for k in DEPTHS}
-    out.update({k: getattr(arm, k) / s for k in WIDTHS})
-    return out
-
-
-def modes(hardware: dict[str, float], mesh_size: float = 0.02, n: int = 6):
-    """[(Hz, shape)] of the first n flexible free-free modes, and the structure's mass [kg]."""
-    mat = steel_817M40()
-    fe = SolidModel(arm_mesh(mesh_size), mat.E, mat.nu, mat.rho)
-    M = fe.mass_matrix()
-    if hardware:
-        d = np.zeros(fe.K_size)
-        for name, kg in hardware.items():
-            nodes = fe.patch(arm.HARDPOINTS[name], arm.LOAD_PATCH_RADIUS)
-            for c in range(3):
-                d[fe.node_dofs[nodes, c]] += kg / len(nodes)
-        M = M + sp.diags(d)
-    shift = -(2 * np.pi * 5.0) ** 2
-    lu = spla.splu((fe.K - shift * M).tocsc(), permc_spec=PERMC)
-    op = spla.LinearOperator(fe.K.shape, matvec=lu.solve, dtype=float)
-    vals, vecs = spla.eigsh(fe.K, k=6 + n, M=M, sigma=shift, which="LM", OPinv=op)
-    order = np.argsort(vals)[6:]
-    out = []
-    for i in order:
-        u = vecs[:, i][fe.node_dofs]
-        uz = {k: float(u[fe.patch(p, arm.LOAD_PATCH_RADIUS), 2].mean())
-              for k, p in arm.HARDPOINTS.items()}
-        planar = float(np.sum(u[:, :2] ** 2) / np.sum(u ** 2))
-        if planar > 0.5:
-            shape = "in-plane"
-        elif uz["bush_front"] * uz["bush_rear"] < 0:
-            shape = "twisting"
-        elif uz["ball_joint"] * uz["bush_front"] < 0:
-            shape = "vertical bending"
-        else:
-            shape = "other"
-        out.append((float(np.sqrt(max(vals[i], 0.0)) / (2 * np.pi)), shape))
-    return out, fe.volume() * mat.rho
-
-
-def evaluate(name: str, hardware: dict[str, float], **values: float) -> dict:
-    from orchestrator.studies.arm_card import card
-
-    with _ds_variant(**values):
-        c = card(0.02, modes=False)
-        ms, m_struct = modes(hardware)
-    mat = steel_817M40()
-    mass = m_struct + sum(hardware.values())
-    f_vb = next((f for f, s in ms if s == "vertical bending"), float("nan"))
-    moment = abs(c["static_loads"]["torsion_bar_mx"])
-    floor = arm_bounds.nominal_bending_stress(moment, mass, LEG_LENGTH, f_vb, mat.E, mat.rho)
-    return {"variant": name, "mass": mass, "m1": ms[0], "f_vb": f_vb,
-            "hot": c["static_hotspot_stress_mpa"],
-            "nominal": c["nominal_bending"]["fe_sigma_mpa"], "floor": floor / 1e6,
-            "meets": 308 <= ms[0][0] <= 416 and 50 <= c["static_hotspot_stress_mpa"] <= 250
-            and 4.5 <= mass <= 5.5}
-
-
-def design_space(args: argparse.Namespace) -> int:
-    """``arm-design-space``: modes and hot spot of the old arm's variants."""
-    _old_arm()
-    os.environ["SUSCOSIM_CACHE"] = tempfile.mkdtemp(prefix="arm-design-")
-    rows = [evaluate(f"depths × {s}", {}, **depth_scaled(s)) for s in (0.6, 0.75, 0.9, 1.0, 1.2)]
-    rows += [evaluate("base 15 mm", {}, BASE_RIB_DEPTH=0.015),
-             evaluate("base 8 mm", {}, BASE_RIB_DEPTH=0.008),
-             evaluate("+ joint hardware 0.8 kg", HARDWARE),
-             evaluate("depths × 0.75 + hardware", HARDWARE, **depth_scaled(0.75))]
-    print("| variant | mass kg | M1 Hz (shape) | vertical bending Hz | static hot spot MPa "
-          "| nominal at cut MPa | floor at vert. bending MPa | meets #12 |")
-    print("|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        vb = "not in M1-M6" if np.isnan(r["f_vb"]) else f"{r['f_vb']:.0f}"
-        fl = "-" if np.isnan(r["floor"]) else f"{r['floor']:.0f}"
-        print(f"| {r['variant']} | {r['mass']:.2f} | {r['m1'][0]:.0f} ({r['m1'][1]}) "
-              f"| {vb} | {r['hot']:.0f} | {abs(r['nominal']):.0f} "
-              f"| {fl} | {'yes' if r['meets'] else 'no'} |")
-    return 0
-
-
 # ---- upper-arm-cad --------------------------------------------------------------------------
 OUT = ROOT / "nodes" / "fatigue" / "parts" / "data" / "upper_arm.step"
 
@@ -567,8 +439,6 @@ def main(argv: list[str] | None = None) -> int:
                    help="override a CAD parameter of data/lower_arm_cad.toml (as "
                         "arm-variant): the table of a variant before adopting it")
     p.set_defaults(fn=arm_convergence)
-    p = sub.add_parser("arm-design-space", help="the old arm's modes against its hot spot")
-    p.set_defaults(fn=design_space)
     p = sub.add_parser("upper-arm-cad", help="make the upper wishbone's STEP file")
     p.add_argument("--out", type=Path, default=OUT)
     p.add_argument("--card", action="store_true",

@@ -631,10 +631,10 @@ def _pct(value: float, base: float) -> str:
 
 def ch6_sensitivity(args: argparse.Namespace) -> int:
     """``ch6-sensitivity``: the Chapter 6 sweep read more closely."""
-    from cosim.lower_arm import HOLE_CORNERS
+    from nodes.fatigue.parts.cad_arm import load_params
 
     doc = json.loads((args.sweep_dir / "sweep.json").read_text())
-    notch_xy = HOLE_CORNERS[2]
+    notch_xy = load_params()["plan"]["hole_corners"][2]  # the CAD arm's hole tip [m]
     roads = list(dict.fromkeys(p["params"]["road"] for p in doc["points"]
                                if "road" in p["params"]))
     by = {(p["params"].get("road"), p["params"]["strategy"]): args.sweep_dir / p["run_dir"]

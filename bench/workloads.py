@@ -333,8 +333,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--null-steps", type=int, default=3000)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="a scenario override for every workload run (e.g. "
-                        "'fatigue.influence=\"builtin:structured\"': the hand-meshed arm "
-                        "#28's fatigue bar was set on)")
+                        "'fatigue.mesh_size_m=0.03')")
     p.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
                    help="the nodes' transport (suscosim run --lowlatency/--no-lowlatency; "
                         "default: the run's own, universal nodes)")
