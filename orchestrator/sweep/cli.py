@@ -41,6 +41,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--scheduler", metavar="ADDRESS",
                     help="the Dask scheduler, e.g. tcp://HOST:8786 (suscosim cluster)")
     ap.add_argument("--no-fatigue", action="store_true", help="skip the fatigue worker")
+    ap.add_argument("--runs-dir", metavar="DIR",
+                    help="the run folders' folder, e.g. one the Dask workers share (default: "
+                         "OUT/runs; without --out the sweep file's runs_dir)")
     ap.add_argument("--max-points", type=int, default=MAX_POINTS, metavar="N",
                     help=f"run a sweep of more than {MAX_POINTS} points (default: refused)")
     ap.add_argument("--list", action="store_true",
@@ -73,9 +76,12 @@ def main(argv: list[str] | None = None) -> int:
                            fatigue=False if args.no_fatigue else None,
                            max_points=args.max_points)
         out = Path(args.out) if args.out else Path("sweeps") / sweep.name
-        if args.out and sweep.runs_dir is not None:  # --out wins: everything under it (#46)
+        if args.runs_dir:  # the command line's shared folder for the run folders
+            sweep.runs_dir = Path(args.runs_dir).resolve()
+        elif args.out and sweep.runs_dir is not None:  # --out wins over the file (#46)
             print(f"suscosim sweep: runs under {out / 'runs'} (--out), not the sweep file's "
-                  f"runs_dir {sweep.runs_dir}", flush=True)
+                  f"runs_dir {sweep.runs_dir} (--runs-dir DIR to keep a shared one)",
+                  flush=True)
             sweep.runs_dir = None
         print(f"suscosim sweep {sweep.name}: {len(sweep.points)} points, validating ...",
               flush=True)

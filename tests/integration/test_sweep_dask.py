@@ -255,12 +255,14 @@ runs_dir = "shared/runs"
 
 
 def test_dask_fatigue_in_a_shared_runs_dir_and_a_fatigue_only_rerun(tmp_path, cluster):
-    """The workers write the run folder in place under the sweep file's runs_dir (a shared
-    folder); a point whose fatigue results are missing gets only its fatigue, on a worker."""
+    """The workers write the run folder in place under --runs-dir (a shared folder; with
+    --out the sweep file's runs_dir is not used, #46); a point whose fatigue results are
+    missing gets only its fatigue, on a worker."""
     f = tmp_path / "f.toml"
     f.write_text(FATIGUE)
     out = tmp_path / "sw"
-    args = ("sweep", str(f), "--out", str(out), "--executor", "dask", "--scheduler", cluster)
+    args = ("sweep", str(f), "--out", str(out), "--runs-dir", str(tmp_path / "shared" / "runs"),
+            "--executor", "dask", "--scheduler", cluster)
     res = suscosim(*args, timeout=300)
     assert res.returncode == 0, res.stdout + res.stderr
     (row,) = json.loads((out / "results.json").read_text())

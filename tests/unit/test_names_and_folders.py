@@ -153,3 +153,16 @@ def test_the_report_embeds_no_image_from_outside_the_handed_folder(tmp_path: Pat
     assert _in_thread(file_uri, fat / "sn_curve.png") == {"value": None}
     (fat / "own.png").write_bytes(png)
     assert (file_uri(fat / "own.png") or "").startswith("data:image/png;base64,")
+
+
+def test_out_wins_over_a_sweep_files_runs_dir(tmp_path: Path) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text(f'[sweep]\nname = "tiny"\nbase = "{SCENARIO}"\n'
+                    f'runs_dir = "{tmp_path / "elsewhere"}"\n[sweep.grid]\n"run.t_end" = [0.1]\n')
+    out = tmp_path / "out"
+    res = suscosim("sweep", str(path), "--out", str(out), "--no-fatigue", "--jobs", "1",
+                   timeout=180)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert f"runs under {out / 'runs'} (--out), not the sweep file's runs_dir" in res.stdout
+    assert (out / "runs" / "tiny-0.1" / "summary.json").is_file()
+    assert not (tmp_path / "elsewhere").exists()
