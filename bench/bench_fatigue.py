@@ -4,18 +4,16 @@ Synthetic 37 s x 500 Hz load history (the thesis's pavé track length in time) o
 built-in arm, all surface nodes: superposition, equivalent stress, rainflow, Miner.
 
     python -m bench fatigue [--equivalent signed_von_mises] [--method strain_life]
-    python -m bench fatigue --run RUN_DIR [--screen 0.01] [--engine compiled] [--repeat 3]
+    python -m bench fatigue --run RUN_DIR [--screen 0.01] [--repeat 3]
 
 ``--run``: CPU time (process_time, not wall) per coupled step of the live engine fed a run's
 recorded ``plant/arm`` loads in blocks of ``fatigue.block_samples`` as the live node does
 (e.g. a Ch 6 realistic-corner run folder), unscreened and with ``--screen`` f (``--screen 0``:
-unscreened only). ``--engine`` (:data:`nodes.fatigue.worker.ENGINES`): ``compiled`` (numba,
-the default where numba is installed), ``numpy`` (the same turning-point idea in numpy, the
-fallback), ``block`` (every sample's equivalent stress: the reference), ``all`` the three
-back to back; every engine's damage, extremes, ranges and cycle counts are checked
-``array_equal`` to the first's. The numba kernels are compiled (or loaded from their cache)
-by ``worker.warm_up()`` before the clock starts (as the live node does before it is ready):
-the time is printed.
+unscreened only); every repeat's damage, extremes, ranges and cycle counts are checked
+``array_equal`` to the first's (the numpy oracles the tests compare the engine with are in
+``tests/fatigue/oracle_turning_eq.py``, not a product path). The numba kernels are compiled
+(or loaded from their cache) by ``worker.warm_up()`` before the clock starts (as the live
+node does before it is ready): the time is printed.
 """
 
 from __future__ import annotations
@@ -40,8 +38,7 @@ def main() -> None:
     p.add_argument("--nodes", default="surface")
     p.add_argument("--run", default=None, help="a run folder: live engine CPU per step")
     p.add_argument("--screen", type=float, default=0.01)
-    p.add_argument("--engine", choices=(*worker.ENGINES, "all"), default=worker.ENGINE)
-    p.add_argument("--repeat", type=int, default=1, help="repeats of each engine (--run)")
+    p.add_argument("--repeat", type=int, default=1, help="repeats (--run)")
     a = p.parse_args()
     if a.run:
         from nodes.fatigue import counting
@@ -52,10 +49,7 @@ def main() -> None:
               f" s wall (numba kernels, compiled or from the cache: {counting.COMPILE_S})")
         first: dict = {}
         for _ in range(a.repeat):
-            for eng in (worker.ENGINES if a.engine == "all" else (a.engine,)):
-                worker.ENGINE = eng
-                print(f"engine {eng}:")
-                _run_cpu(a.run, a.screen, first)
+            _run_cpu(a.run, a.screen, first)
         return
     cfg = FatigueConfig.from_dict({"equivalent": a.equivalent, "method": a.method,
                                    "mean_stress": a.mean_stress, "nodes": a.nodes})
@@ -101,7 +95,7 @@ def _run_cpu(run: str, screen: float, first: dict) -> None:
         same = all(np.array_equal(x, y, equal_nan=True) for x, y in zip(ref, got, strict=True))
         print(f"screen {f}: {cpu / t.size * 1e6:.0f} us CPU per step over {t.size} steps, "
               f"critical node {r.critical_node_id}, screened {r.screening.get('screened_nodes')}"
-              f", array_equal to the first engine: {same}")
+              f", array_equal to the first repeat: {same}")
 
 
 if __name__ == "__main__":

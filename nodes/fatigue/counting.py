@@ -26,7 +26,9 @@ feeding a history in blocks of any size gives exactly the same cycles as feeding
 in compiled code (:func:`_rainflow_packed`, numba): comparisons and copies only, so the same
 cycles with the same bits, each history's in the order they close (the order across histories
 differs from the lock-step loop's, which no result depends on: a node's damage sums its own
-cycles in order). Without numba it runs the lock-step loop on the packed points.
+cycles in order). numba is a dependency: the compiled kernels are the one implementation
+(the lock-step loop's packed and repeated-residue forms are test oracles,
+``tests/fatigue/oracle_turning_eq.py``).
 The kernels are compiled when first needed or ahead (:func:`nodes.fatigue.worker.warm_up`,
 which the worker's influence loading calls: the live node does it before it says ready), not
 at import (numba's import and start cost ~1 s, and every run's preflight imports this).
@@ -34,16 +36,12 @@ at import (numba's import and start cost ~1 s, and every run's preflight imports
 
 from __future__ import annotations
 
-import importlib.util
 import threading
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
-COMPILED = importlib.util.find_spec("numba") is not None
-"""Whether numba is installed: the fatigue kernels are then compiled (#28); without it the
-numpy paths run, with the same bits."""
 COMPILE_S: dict[str, float] = {}
 """Per module, the seconds its kernels took to compile or to load from numba's disk cache."""
 _COMPILE_LOCK = threading.Lock()
@@ -54,7 +52,7 @@ def compile_kernels(g: dict, kernels: tuple[tuple[str, str], ...]) -> None:
     of the module whose globals are ``g`` by numba functions compiled now: explicit
     signatures, ``cache=True`` (in ``__pycache__``, or numba's user cache where that is
     read-only), no fastmath (IEEE operations in the order written). Once per module, any
-    thread. A numba that is installed but does not import is an error, not a fallback."""
+    thread. numba is a dependency: one that does not import is an error."""
     name = g["__name__"]
     if name in COMPILE_S:
         return
@@ -65,8 +63,8 @@ def compile_kernels(g: dict, kernels: tuple[tuple[str, str], ...]) -> None:
         try:
             import numba
         except Exception as exc:  # a broken install: say so
-            raise RuntimeError(f"numba is installed but does not import ({exc}); the fatigue "
-                               "kernels need it (or uninstall it: the numpy path)") from exc
+            raise RuntimeError(f"numba does not import ({exc}); the fatigue kernels need it "
+                               "(a dependency: pip install numba)") from exc
         for fn, sig in kernels:
             g[fn] = numba.njit(sig, cache=True, error_model="numpy", nogil=True)(g[fn])
         COMPILE_S[name] = time.perf_counter() - t0
@@ -255,27 +253,6 @@ class StreamingRainflow:
         self._last = x[-1].copy()
         return self._feed_rows(rows_in)
 
-    def feed_points(self, rows: np.ndarray, last: np.ndarray) -> Cycles:
-        """Advance every history by a block given as its candidate turning points.
-
-        Args:
-            rows: (m, n_series) each history's samples of the block that may be turning
-                points, in order, padded by repeating its last one (a superset of
-                :func:`turning_points`' rows, e.g. :func:`.turning_eq_numpy.turning_equivalent`'s;
-                any sample left out must lie strictly between its neighbours).
-            last: (n_series,) the block's last sample (it must be the last of ``rows``).
-
-        Returns the full cycles closed, the same as :meth:`feed` of the whole block.
-        """
-        x = np.asarray(rows, dtype=float)
-        if x.ndim != 2 or x.shape[1] != self.n or np.shape(last) != (self.n,):
-            raise ValueError(f"rows must have shape (m, {self.n}) and last ({self.n},), got "
-                             f"{x.shape} and {np.shape(last)}")
-        if x.shape[0] == 0:
-            return Cycles.empty()
-        self._last = np.array(last, dtype=float)
-        return self._feed_rows(x)
-
     def feed_packed(self, vals: np.ndarray, counts: np.ndarray, last: np.ndarray,
                     start: int = 0) -> Cycles:
         """Advance histories ``start .. start + len(counts)`` by a block given packed.
@@ -305,35 +282,11 @@ class StreamingRainflow:
         need = int((depth + counts).max()) + 1  # each point pushes at most one
         while need > self._cap:
             self._grow()
-        if not COMPILED:  # the lock-step loop on the packed points (no numba)
-            return self._feed_packed_numpy(vals, counts, start)
         build()
         size = (int(depth.sum()) + vals.size) // 2 + 1
         s, b, c = np.empty(size, dtype=np.int64), np.empty(size), np.empty(size)
         nc = _rainflow_packed(vals, counts, start, self._stack, self._depth, s, b, c)
         return Cycles(s[:nc], b[:nc], c[:nc], np.ones(nc))
-
-    def _feed_packed_numpy(self, vals: np.ndarray, counts: np.ndarray, start: int
-                           ) -> Cycles:
-        """:meth:`feed_packed` by the lock-step loop (rows padded by repeating each
-        history's last value: a no-op), its cycles put in the compiled kernel's order."""
-        live = np.nonzero(counts > 0)[0]
-        c = counts[live]
-        starts = (np.cumsum(counts) - counts)[live]
-        rows = np.empty((int(c.max()), live.size))
-        rows[:] = vals[starts + c - 1][None, :]
-        at = np.concatenate([np.arange(a, a + m) for a, m in zip(starts, c, strict=True)])
-        rows[np.arange(vals.size) - np.repeat(starts, c), np.repeat(np.arange(live.size), c)] \
-            = vals[at]
-        sub = self.take(start + live)
-        cyc = sub._feed_rows(rows)
-        while sub._cap > self._cap:
-            self._grow()
-        self._stack[start + live, :sub._cap] = sub._stack
-        self._depth[start + live] = sub._depth
-        order = np.argsort(cyc.series, kind="stable")
-        return Cycles(start + live[cyc.series[order]], cyc.s1[order], cyc.s2[order],
-                      cyc.count[order])
 
     def _feed_rows(self, rows_in: np.ndarray) -> Cycles:
         out_i: list[np.ndarray] = []
@@ -381,9 +334,8 @@ class StreamingRainflow:
 
         ``"half_cycles"``: each range between consecutive residue points counts 0.5 (ASTM).
         ``"repeated"``: the residue is fed again (the next pass of a repeated track) and the
-        full cycles that close are returned (compiled: :meth:`feed_packed` on a copy, each
-        history's cycles in the order they close, histories in order; the lock-step loop's
-        order across histories differs, the cycles do not).
+        full cycles that close are returned (:meth:`feed_packed` on a copy, each history's
+        cycles in the order they close, histories in order).
         """
         if mode not in RESIDUE_MODES:
             raise ValueError(f"residue mode must be one of {RESIDUE_MODES}, got {mode!r}")
@@ -397,18 +349,8 @@ class StreamingRainflow:
             return Cycles(i.astype(np.int64), s1, s2, np.full(i.size, 0.5))
         if int(d.max()) == 0:
             return Cycles.empty()
-        if COMPILED:  # the compiled counter on a copy (each history's cycles in order)
-            other = self.copy()
-            keep = np.arange(self._cap)[None, :] < d[:, None]
-            return other.feed_packed(self._stack[keep], d.copy(), np.zeros(self.n))
-        other = self.copy()
-        m = int(d.max())
-        cols = np.arange(m)
-        # residue of history i, padded with its last point (a no-op for the counter)
-        take = np.minimum(cols[None, :], np.maximum(d - 1, 0)[:, None])
-        replay = self._stack[self._rows[:, None], take].T
-        # histories with an empty residue: replay nothing (pad with their own value)
-        return other._feed_rows(replay)
+        keep = np.arange(self._cap)[None, :] < d[:, None]
+        return self.copy().feed_packed(self._stack[keep], d.copy(), np.zeros(self.n))
 
 
 def _rainflow_packed(vals, counts, start, stack, depth, out_s, out_b, out_c):  # type: ignore[no-untyped-def]  # noqa: E501

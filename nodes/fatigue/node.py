@@ -33,6 +33,7 @@ from cosim import channels as ch
 from cosim import keys
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.listener import Listener, Received
+from cosim.load_blocks import StepBlocks
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
 from cosim.safe_open import check_user_file
@@ -42,7 +43,7 @@ from .config import FatigueConfig
 from .damage import SPECTRAL_METHODS
 from .live_sink import LiveLoads, Track
 from .more_parts import more_parts
-from .worker import FatigueResult
+from .worker import FatigueResult, LiveFatigue
 
 REPORT_PERIOD_S = 0.5
 """At most this often (wall time) the damage so far is published on ``fatigue/damage``."""
@@ -53,6 +54,23 @@ NICE = 10
 chain's critical path (it takes the plant's steps as they come, in arrears), so on a 2-core
 machine the plant, tyre/road and controller take the cores first and the fatigue node works in their
 idle time; its numbers do not depend on when it runs."""
+
+
+def restore(tr: Track, saved: dict[str, Any], plan: NodeCheckpoints) -> None:
+    """Put a checkpoint's state into the primary track ``tr``: its engine, buffered steps,
+    next load step and last time. A state that does not fit (a key missing, a field of the
+    wrong type) is a CheckpointError (exit 2) naming the node and the checkpoint
+    (:meth:`NodeCheckpoints.restoring`); one of another step a RunError."""
+    with plan.restoring():
+        live, steps = saved["live"], saved["steps"]
+        if not isinstance(live, LiveFatigue) or not isinstance(steps, StepBlocks):
+            raise TypeError(f"'live' is a {type(live).__name__}, 'steps' a "
+                            f"{type(steps).__name__} (a LiveFatigue and a StepBlocks expected)")
+        tr.live, tr.steps = live, steps
+        tr.next_k, tr.t_last = int(saved["next_k"]), float(saved["t_last"])
+    if tr.next_k != plan.start_k:
+        raise RunError(f"fatigue: its checkpoint holds load steps < {tr.next_k}, the "
+                       f"run resumes at {plan.start_k}")
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
@@ -77,11 +95,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                        "resume) is not supported yet")
     saved = plan.restored()
     if saved is not None:  # a resumed run: the engine after load step start_k - 1
-        main.live, main.steps, main.next_k, main.t_last = (
-            saved["live"], saved["steps"], saved["next_k"], saved["t_last"])
-        if main.next_k != plan.start_k:
-            raise RunError(f"fatigue: its checkpoint holds load steps < {main.next_k}, the "
-                           f"run resumes at {plan.start_k}")
+        restore(main, saved, plan)
     last_input = time.monotonic()
     last_report = 0.0
 

@@ -1,9 +1,10 @@
-"""The screening bound of :class:`.screening.StressScreen` compiled (numba, #28).
+"""The screening bound of :class:`.screening.StressScreen`: its compiled kernels (numba, #28).
 
 :meth:`.screening.StressScreen.block` bounds the equivalent stress of a set of nodes over a
 block of loads (envelope [lo, hi] and total variation TV, Pa) from per-sub-block statistics
-of the loads; in numpy, with 25-sample sub-blocks, that cost ~174 us per coupled step for the
-13 778 nodes of the CAD arm, more than computing them exactly. Here the same bound (the
+of the loads; in numpy (the form it had before #28; removed, #42), with 25-sample sub-blocks,
+that cost ~174 us per coupled step for the 13 778 nodes of the CAD arm, more than computing
+them exactly. Here the bound (the
 module docstring of :mod:`.screening`, steps 1-2) is one pass per node over the block's
 sub-blocks: the loads' statistics per sub-block are computed once in numpy
 (:func:`load_stats`, a few (sub-blocks, cases) arrays), then per node and sub-block ~550
@@ -19,9 +20,12 @@ by a half-width ``BRACKET_REL`` x 2p + ``BRACKET_ABS`` x |q| (r's rounding, a fe
 moves the root by at most ~sqrt(|Δr|) < 1e-7 at the double root r = -1; q's and the
 deviator's by a few ulp of |q|). The middle stress's own rounding (a sum of 15 products) is
 below 1e-15 x max_c |F_c| x Σ|A|: the envelope is padded by ``ROUNDING_MARGIN`` (1e-9)
-times that, |hi|, |lo| and Σ R, as in numpy; TV is raised by the same margin. Not
-bit-identical to the numpy bound (not needed: any upper bound is a valid screen), but the
-same inequalities; a non-finite tensor gives the node (+inf, -inf, +inf): never left out.
+times that, |hi|, |lo| and Σ R; TV is raised by the same margin. The tests check the bound
+against the exact envelope, variation and damage (any upper bound is a valid screen); a
+non-finite tensor gives the node (+inf, -inf, +inf): never left out.
+
+Kept apart from :mod:`.screening` (the damage bound and the rule): these kernels are written
+for LLVM's vectoriser (flat scratch rows, inlined scalar helpers), ~400 lines on their own.
 """
 
 from __future__ import annotations

@@ -37,23 +37,21 @@ Per block of loads (the previous block's last sample included):
    [LO, HI] has σm <= HI - a, so on a grid a_j = j A / K (A = (HI - LO) / 2) every cycle has
    d <= Δ · max_j d(a_(j+1), HI - a_j) / (2 a_(j+1)) =: Δ · g, and D <= g (TV + (HI - LO)/2).
 
-:meth:`StressScreen.block` computes it in numpy; :meth:`StressScreen.block_compiled` the same
-inequalities in numba (:mod:`.screen_bound`, without the Cauchy-Schwarz sum: ~1.8 ns per
-node-sample for 25-sample sub-blocks against 11-14 for the exact path), which the engine
-uses where numba is installed. The bound is rigorous for every history (the tests check it
-against exact counts); it is not tight (it takes every cycle as large as the largest one
-can be), which only costs how many nodes are screened out, never a wrong result. Rounding:
-the bound is raised by :data:`ROUNDING_MARGIN` (relative), far above the float error of its
-few sums.
+:meth:`StressScreen.block` computes steps 1-2 in numba (:mod:`.screen_bound`, the compiled
+kernels and their node tables; without the Cauchy-Schwarz sum: ~1.8 ns per node-sample for
+25-sample sub-blocks against 11-14 for the exact path); this module holds step 3 and the
+rule of which nodes are computed (:class:`Screening`). The bound is rigorous for every
+history (the tests check it against exact counts); it is not tight (it takes every cycle as
+large as the largest one can be), which only costs how many nodes are screened out, never a
+wrong result. Rounding: the bound is raised by :data:`ROUNDING_MARGIN` (relative), far above
+the float error of its few sums.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .counting import COMPILED
 from .damage import cycle_reversals, sn_curve
-from .equivalent_stress import principal_extremes, von_mises
 from .life_models import SNCurve
 from .material import Material
 from .screen_bound import NodeTables, load_stats
@@ -143,40 +141,20 @@ class StressScreen:
         self.kind = equivalent
         self.Q = np.diag(_FROB) if equivalent == "abs_max_principal" else _VM
         self.NA = self._norms(C)  # N(A_c) per case and node
-        self._G: np.ndarray | None = None
         self.V: np.ndarray | None = None
         self.CV = self.NAV = np.zeros(0)
-        self._tables: NodeTables | None = self._new_tables() if COMPILED else None
+        self._tables = NodeTables(C, self.NA, self.abs_tr3)
 
-    @property
-    def G(self) -> np.ndarray:
-        """N(Σ_c A_c x_c)² = xᵀ G x per node (n, cases²) (the numpy bound's Cauchy-Schwarz
-        sum; computed when first needed)."""
-        if self._G is None:
-            self._G = np.einsum("cni,ij,dnj->ncd", self.C, self.Q, self.C).reshape(self.n, -1)
-        return self._G
-
-    def _new_tables(self) -> NodeTables:
-        """The compiled bound's node table (its principal-axes part once they are set)."""
-        t = NodeTables(self.C, self.NA, self.abs_tr3)
-        if self.V is not None:
-            t.set_axes(self.CV, self.NAV)
-        return t
-    def __getstate__(self) -> dict:
-        """Pickled without the compiled bound's tables (rebuilt when next needed)."""
-        return {**self.__dict__, "_tables": None}
-
-    def block_compiled(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int,
-                       probe: np.ndarray | None = None
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`block` (the same inequalities, not the same bits) by the numba kernel of
-        :mod:`.screen_bound` (per node ~22 floating-point operations per sample), the
-        nodes ``idx`` kept in its slots between calls (the left-out set); ``probe``: more
-        nodes (gathered for this call), their results after idx's."""
+    def block(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int,
+              probe: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(hi, lo, tv) of nodes ``idx`` over the samples of ``Fe`` (n_e, cases): the block's
+        loads with the previous block's last sample first (its increment counts; the
+        envelope covers it too; TV covers the n_e - 1 increments). By the numba kernel of
+        :mod:`.screen_bound` (per node ~22 floating-point operations per sample), the nodes
+        ``idx`` kept in its slots between calls (the left-out set); ``probe``: more nodes
+        (gathered for this call), their results after idx's."""
         if self.V is None:
             self.set_axes(Fe)
-        if self._tables is None:
-            self._tables = self._new_tables()
         assert self.V is not None
         stats = load_stats(np.asarray(Fe, dtype=float), self.V, sub_samples)
         vm = self.kind != "abs_max_principal"
@@ -200,69 +178,7 @@ class StressScreen:
         self.V = V
         self.CV = np.tensordot(V, self.C, axes=(0, 0))  # (axes, n, 6)
         self.NAV = self._norms(self.CV)
-        if self._tables is not None:
-            self._tables.set_axes(self.CV, self.NAV)
-
-    def block(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(hi, lo, tv) of nodes ``idx`` over the samples of ``Fe`` (n_e, cases): the block's
-        loads with the previous block's last sample first (its increment counts; the
-        envelope covers it too). TV covers the n_e - 1 increments."""
-        if self.V is None:
-            self.set_axes(Fe)
-        assert self.V is not None
-        C, CV = self.C[:, idx], self.CV[:, idx]
-        k = idx.size
-        Z = Fe @ self.V
-        n_e, L = Fe.shape[0], max(1, int(sub_samples))
-        starts = np.arange(0, max(n_e - 1, 1), L)
-        stops = np.minimum(starts + L + 1, n_e)
-        M = np.array([0.5 * (Fe[a:b].min(axis=0) + Fe[a:b].max(axis=0))
-                      for a, b in zip(starts, stops, strict=True)])
-        H = np.array([0.5 * (Fe[a:b].max(axis=0) - Fe[a:b].min(axis=0))
-                      for a, b in zip(starts, stops, strict=True)])
-        # deviation along the principal axes from the same centre (F_mid in those axes)
-        Mz = M @ self.V
-        ZH = np.array([np.maximum(Z[a:b].max(axis=0) - Mz[j], Mz[j] - Z[a:b].min(axis=0))
-                       for j, (a, b) in enumerate(zip(starts, stops, strict=True))])
-        J = M.shape[0]
-        s_mid = (M @ C.reshape(self.n_cases, -1)).reshape(J, k, 6)
-        R = np.minimum(H @ np.abs(C).reshape(self.n_cases, -1),
-                       ZH @ np.abs(CV).reshape(self.n_cases, -1)).reshape(J, k, 6)
-        if self.kind == "abs_max_principal":
-            s1, s3 = principal_extremes(s_mid)
-            rho = np.maximum(principal_extremes(R)[0], 0.0)
-            p = s1 + s3
-            br1, br3 = p + 2.0 * rho >= 0.0, p - 2.0 * rho < 0.0
-            hi1, lo1 = s1 + rho, np.maximum(s1 - rho, 0.0)
-            hi3, lo3 = np.minimum(s3 + rho, 0.0), s3 - rho
-            jump = 2.0 * (np.minimum(np.abs(s1), np.abs(s3)) + rho)
-        else:
-            vm = von_mises(s_mid)
-            r_vm = np.sqrt(np.einsum("jni,ik,jnk->jn", R, np.abs(self.Q), R))
-            h = (s_mid[..., 0] + s_mid[..., 1] + s_mid[..., 2]) / 3.0
-            r_h = H @ self.abs_tr3[:, idx]
-            br1, br3 = h + r_h >= 0.0, h - r_h < 0.0
-            hi1, lo1 = vm + r_vm, np.maximum(vm - r_vm, 0.0)
-            hi3, lo3 = -lo1, -hi1
-            jump = 2.0 * (vm + r_vm)
-        hi = np.maximum(np.where(br1, hi1, -np.inf), np.where(br3, hi3, -np.inf))
-        lo = np.minimum(np.where(br1, lo1, np.inf), np.where(br3, lo3, np.inf))
-        pad = ROUNDING_MARGIN * (np.abs(hi) + np.abs(lo) + np.abs(R).sum(axis=2))
-        hi_b, lo_b = (hi + pad).max(axis=0), (lo - pad).min(axis=0)
-        if n_e < 2:
-            return hi_b, lo_b, np.zeros(k)
-        dF = np.diff(Fe, axis=0)
-        tvF = np.add.reduceat(np.abs(dF), starts, axis=0)  # (J, cases)
-        tvZ = np.add.reduceat(np.abs(np.diff(Z, axis=0)), starts, axis=0)
-        outer = (dF[:, :, None] * dF[:, None, :]).reshape(dF.shape[0], -1)
-        S = np.add.reduceat(outer, starts, axis=0)  # (J, cases²) scatter per sub-block
-        n_incr = (stops - starts - 1).astype(float)
-        tri = np.minimum(tvF @ self.NA[:, idx], tvZ @ self.NAV[:, idx])
-        cs = np.sqrt(np.maximum(n_incr[:, None] * (S @ self.G[idx].T), 0.0))
-        sumN = np.minimum(tri, cs)
-        step_tv = np.where(br1 & br3, 2.0 * sumN + n_incr[:, None] * jump, sumN)
-        return hi_b, lo_b, step_tv.sum(axis=0) * (1.0 + ROUNDING_MARGIN)
+        self._tables.set_axes(self.CV, self.NAV)
 
 
 def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, method: str,
@@ -286,21 +202,16 @@ def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, 
     return out
 
 
-COARSE_SAMPLES = 500
-"""Sub-block length of the first, cheap bound of a left-out node over a block."""
-FINE_SAMPLES = 25
-"""Sub-block length of the second bound, for the left-out nodes the first one cannot keep
-out (the tighter envelope costs ~20 times the first bound per node)."""
 DROP_MARGIN = 0.5
+"""A computed node is left out only when its bound is below this share of the threshold: its
+bound grows faster once it is no longer computed exactly (hysteresis: fewer catch-ups)."""
 PROJECTED_MARGIN = 0.3
-PROBE_SAMPLES = 2000
-"""A candidate computed node's bound is measured (:attr:`Screening.rate`) until it has
-seen this many samples; then its rate is taken as known."""
 """A candidate to leave out is left out only when its bound projected to the end of the run
 (its bound's variation per sample, :attr:`Screening.rate`, times the samples left) stays
 below this share of the threshold projected alike (grown in proportion to the samples)."""
-"""A computed node is left out only when its bound is below this share of the threshold: its
-bound grows faster once it is no longer computed exactly (hysteresis: fewer catch-ups)."""
+PROBE_SAMPLES = 2000
+"""A candidate computed node's bound is measured (:attr:`Screening.rate`) until it has
+seen this many samples; then its rate is taken as known."""
 
 
 class Screening:
@@ -346,10 +257,6 @@ class Screening:
         """Computed nodes whose :attr:`rate` the next block measures (the candidates)."""
         """Nodes brought back so far (each recomputed from where it was left out)."""
 
-    def _u(self, idx: np.ndarray | slice, hi: np.ndarray, lo: np.ndarray,
-           tv: np.ndarray) -> np.ndarray:
-        return self.d0[idx] + damage_bound(hi, lo, tv, *self.law)
-
     def bound(self, idx: np.ndarray | None = None, tv: np.ndarray | None = None
               ) -> np.ndarray:
         """U of nodes ``idx`` (all when None), or with variation ``tv`` instead of theirs;
@@ -383,10 +290,9 @@ class Screening:
         self.tv_r[idx] = residue_tv
 
     def add_block(self, F: np.ndarray, left_out: np.ndarray) -> None:
-        """Keep the block; bound it for the nodes ``left_out`` (compiled: the fine bound at
-        once, :mod:`.screen_bound`; numpy: coarsely, then finely where the coarse bound
-        would reach the threshold), and for the computed nodes to probe (:meth:`decide`)
-        their bound's variation per sample over this block (:attr:`rate`)."""
+        """Keep the block; bound it (:meth:`StressScreen.block`, sub-blocks of
+        :data:`SUB_SAMPLES`) for the nodes ``left_out``, and for the computed nodes to probe
+        (:meth:`decide`) their bound's variation per sample over this block (:attr:`rate`)."""
         F = np.asarray(F, dtype=float)
         Fe = F if self._prev is None else np.vstack([self._prev, F])
         self._prev = F[-1].copy()
@@ -395,15 +301,10 @@ class Screening:
         probe, self.probe = self.probe, np.zeros(0, dtype=np.int64)
         if left_out.size + probe.size == 0:
             return
-        if COMPILED:
-            hi, lo, tv = self.bounds.block_compiled(Fe, left_out, SUB_SAMPLES, probe)
-            k = left_out.size
-            self._rate(probe, tv[k:], F.shape[0])
-            hi, lo, tv = hi[:k], lo[:k], tv[:k]
-        else:
-            if probe.size:
-                self._rate(probe, self.bounds.block(Fe, probe, FINE_SAMPLES)[2], F.shape[0])
-            hi, lo, tv = self._numpy_bound(Fe, left_out)
+        hi, lo, tv = self.bounds.block(Fe, left_out, SUB_SAMPLES, probe)
+        k = left_out.size
+        self._rate(probe, tv[k:], F.shape[0])
+        hi, lo, tv = hi[:k], lo[:k], tv[:k]
         self._rate(left_out, tv, F.shape[0])
         self.envelope(left_out, hi, lo)
         self.tv_r[left_out] += tv
@@ -419,21 +320,6 @@ class Screening:
         in (left out, or a candidate to be); NaN: never bounded yet."""
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(self.rate_n > 0, self.rate_tv / self.rate_n, np.nan)
-
-    def _numpy_bound(self, Fe: np.ndarray, idx: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(hi, lo, tv) of nodes ``idx`` in numpy: coarse, then fine where the coarse bound
-        would reach the threshold."""
-        hi, lo, tv = self.bounds.block(Fe, idx, COARSE_SAMPLES)
-        U = self._u(idx, np.maximum(self.hi[idx], hi), np.minimum(self.lo[idx], lo),
-                    self.tv_r[idx] + tv)
-        near = np.nonzero(U >= self.threshold)[0]
-        if near.size:
-            hf, lf, tf = self.bounds.block(Fe, idx[near], FINE_SAMPLES)
-            hi[near] = np.minimum(hi[near], hf)
-            lo[near] = np.maximum(lo[near], lf)
-            tv[near] = np.minimum(tv[near], tf)
-        return hi, lo, tv
 
     def decide(self, active: np.ndarray, eq_max: np.ndarray, eq_min: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:

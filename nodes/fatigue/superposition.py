@@ -16,17 +16,14 @@ compiled kernel (numba, :func:`.turning_eq.products_compiled`: the loads of four
 time in registers, each sample's six components summed in that order; ~3.4 ns per
 node-sample on the 15-case CAD arm against 8-11 ns for the BLAS product per node of fixed
 shape it replaced, #28; the live engine fuses it per node with the turning-point gather,
-:func:`.turning_eq.superpose_gather`) and the numpy path
-(:func:`_products_numpy`, elementwise, the fallback without numba) give the same bits
-(``tests/fatigue/test_superposition_fast.py``), for any subset of nodes and any cut of the
-history (each sample is computed alone).
+:func:`.turning_eq.superpose_gather`) gives those bits
+(``tests/fatigue/test_superposition_fast.py`` checks them against the sum in Python floats),
+for any subset of nodes and any cut of the history (each sample is computed alone).
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-from .counting import COMPILED
 
 ROWS = 64
 """The buffers' sample axis is padded to a multiple of this (zero loads: zero stresses)."""
@@ -38,22 +35,11 @@ def node_major(coefficients: np.ndarray) -> np.ndarray:
 
 
 def build() -> None:
-    """Compile the product kernel now (or load it from numba's cache; once; no-op without
-    numba): :func:`.turning_eq.build`, where it lives beside the kernels it is fused with."""
-    if COMPILED:
-        from . import turning_eq
+    """Compile the product kernel now (or load it from numba's cache; once):
+    :func:`.turning_eq.build`, where it lives beside the kernels it is fused with."""
+    from . import turning_eq
 
-        turning_eq.build()
-
-
-def _products_numpy(FT: np.ndarray, coef: np.ndarray, out: np.ndarray) -> None:
-    """:func:`.turning_eq.products_compiled` elementwise in numpy (the same operations in
-    the same order: the same bits)."""
-    for cc in range(out.shape[0]):
-        o = out[cc]
-        np.multiply(coef[:, 0, cc][:, None], FT[0][None, :], out=o)
-        for c in range(1, FT.shape[0]):
-            o += coef[:, c, cc][:, None] * FT[c][None, :]
+    turning_eq.build()
 
 
 def _products(loads: np.ndarray, per_node: np.ndarray, scratch: np.ndarray | None = None
@@ -66,7 +52,7 @@ def _products(loads: np.ndarray, per_node: np.ndarray, scratch: np.ndarray | Non
     one otherwise)."""
     F = np.asarray(loads, dtype=float)
     k, n_cases, n_comp = per_node.shape
-    if F.ndim != 2 or F.shape[1] != n_cases:
+    if F.ndim != 2 or F.shape[1] != n_cases or n_comp != 6:
         raise ValueError(f"loads {F.shape} and coefficients {per_node.shape} do not match")
     n = F.shape[0]
     n_pad = max(1, -(-n // ROWS)) * ROWS
@@ -76,13 +62,9 @@ def _products(loads: np.ndarray, per_node: np.ndarray, scratch: np.ndarray | Non
     size = n_comp * k * n_pad
     out = np.empty(shape) if scratch is None else scratch[:size].reshape(shape)
     coef = np.ascontiguousarray(per_node, dtype=float)
-    if COMPILED and n_comp == 6:
-        from .turning_eq import products_compiled
+    from .turning_eq import products_compiled
 
-        products_compiled(FT, coef, out)
-    else:
-        with np.errstate(invalid="ignore", over="ignore"):
-            _products_numpy(FT, coef, out)
+    products_compiled(FT, coef, out)
     return out, n
 
 

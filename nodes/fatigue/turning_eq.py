@@ -1,9 +1,22 @@
 """The equivalent stress computed exactly only where rainflow needs it (#28): compiled.
 
-The idea and the proof of the numpy path's bracket are in :mod:`.turning_eq_numpy`
-(:func:`.turning_eq_numpy.turning_equivalent`, the reference and the fallback without numba).
+Rainflow counting needs a history's turning points only (:func:`.counting.turning_points`),
+and the extremes of a block are turning points or its first or last sample. On the Ch 6 arm
+2.5 % of the node-samples are turning points, and the two float64 cosines of the principal
+stress (:func:`.equivalent_stress.principal_extremes_of`) were half of the fatigue node's CPU.
+So each node's abs-max principal stress is *bracketed* at every sample (lo <= exact <= hi,
+proven below; where |σ1| and |σ3| may be equal the bracket spans both signs); a sample is left
+out only when the brackets prove the exact history strictly monotone through it (both
+differences to its neighbours of one sign); the block's first and last samples are always
+kept. The exact equivalent stress (:func:`.equivalent_stress.equivalent_of`, elementwise, so
+the same bits as over the whole block) is computed at the kept samples only: a superset of
+the turning points, which leaves the rainflow count, and the order in which a node's cycles
+close, unchanged. ``signed_von_mises`` has no transcendental beyond a square root: it is
+computed at every sample. This is the product's one implementation (numba is a dependency);
+the same idea in numpy (float32 cosines, another bracket: other samples kept) is the tests'
+oracle, ``tests/fatigue/oracle_turning_eq.py``: both give the same cycles, bit for bit.
 
-**Compiled (numba, #28):** :func:`kept_equivalent` does the bracket, the kept-sample test and
+**No transcendentals:** :func:`kept_equivalent` does the bracket, the kept-sample test and
 the gathering in one pass per node (:func:`_keep_gather`, no temporaries), with a bracket that
 needs no transcendental at all (scalar ``acos``/``cos`` per node-sample would cost more than
 the whole budget): the largest root c1 of 4c³ - 3c = r (σ1 = q + 2p c1) is a smooth function
@@ -17,11 +30,8 @@ its check falls back to the hard bound (1/2 below, 1 above) and the bracket stay
 q, p, det are computed by the operations of :func:`.equivalent_stress.invariants_of` in their
 order (the same bits; numba without fastmath neither fuses nor reorders). The exact path's
 acos/cos then differ from the root by far less than C64_TOL (a few ulp), its rounding of
-q + 2p c by less than ROUND_TOL. The rest (sign choice, kept test, exact values only at kept
-samples through the numpy code) is the numpy path's, so both give the same rows, bit for bit,
-to :meth:`.counting.StreamingRainflow.feed_packed`. Without numba (:data:`COMPILED` False) the
-numpy path (:func:`.turning_eq_numpy.turning_equivalent`) runs; the worker's results are the
-same bits.
+q + 2p c by less than ROUND_TOL. The exact values at the kept samples go to
+:meth:`.counting.StreamingRainflow.feed_packed`.
 
 **Fused with the products (#28, 2026-12-04):** :func:`superpose_gather` computes a node's
 stresses (:func:`_node_products`, :mod:`.superposition`'s sum in case order) into a
@@ -37,9 +47,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .counting import COMPILED, compile_kernels
+from .counting import compile_kernels
 from .equivalent_stress import equivalent_of
-from .turning_eq_numpy import ROUND_TOL
+
+ROUND_TOL = 4e-15
+"""Bracket half-width per unit of |q| + 2p: the float64 rounding of q + 2p c (a margin of ~9)."""
 
 ROOT_POLY = (0.5000000013442235, 0.40824818198579, -0.055553386430064314,
              0.018881567793504486, -0.008142182128495918, 0.003791443524522732,
@@ -325,12 +337,11 @@ def kept_equivalent(buf: np.ndarray, n: int, kind: str, scratch: np.ndarray | No
 
     Returns:
         ``vals`` (K,): node by node, its kept samples' exact equivalent stress in order (a
-        superset of the turning points with the block's first and last samples: the values
-        of :func:`.turning_eq_numpy.turning_equivalent`'s rows, bit for bit), ``counts``
+        superset of the turning points with the block's first and last samples), ``counts``
         (k,) per node.
     """
     k = buf.shape[1]
-    if not COMPILED or kind != "abs_max_principal" or n <= 2:
+    if kind != "abs_max_principal" or n <= 2:
         eq = equivalent_of(buf[:, :, :n].transpose(0, 2, 1), kind)  # (n, k)
         return np.ascontiguousarray(eq.T).ravel(), np.full(k, n, dtype=np.int64)
     counts = np.empty(k, dtype=np.int64)

@@ -13,7 +13,6 @@ Life (Eq 2.7): D is the damage of one pass of the simulated history; life = 1/D 
 
 from __future__ import annotations
 
-import os
 import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -24,30 +23,15 @@ from cosim.errors import ScenarioError
 
 from . import counting, screen_bound, superposition, turning_eq
 from .config import BUILTIN_PART, FatigueConfig
-from .counting import COMPILED, Cycles, StreamingRainflow
+from .counting import Cycles, StreamingRainflow
 from .damage import cycle_damage
 from .equivalent_stress import equivalent_of
 from .influence import InfluenceSet, import_influence, short_channel
 from .result import FatigueResult
 from .screening import Screening, unsupported
-from .superposition import ROWS, components_buffer, node_major, superpose_components
+from .superposition import ROWS, components_buffer, node_major
 from .turning_eq import kept_equivalent, superpose_gather
-from .turning_eq_numpy import turning_equivalent
 
-ENGINES = ("compiled", "numpy", "block")
-ENGINE = os.environ.get("SUSCOSIM_FATIGUE_ENGINE") or ("compiled" if COMPILED else "numpy")
-"""How :class:`_Engine` computes a block (all give the same bits, ``tests/fatigue``):
-``"compiled"`` (numba: the stresses node by node fused with the bracket and gather of
-:func:`.turning_eq.superpose_gather`, the equivalent stress exactly only at
-the samples a proven bracket cannot rule out as turning points, :func:`.turning_eq.
-kept_equivalent`, and the compiled rainflow, :meth:`.counting.StreamingRainflow.
-feed_packed`); ``"numpy"`` (the same idea in numpy, :func:`.turning_eq_numpy.turning_equivalent`,
-the fallback without numba); ``"block"`` (the equivalent stress of every sample, the
-reference). A module setting, not the engine's: the engine stays plain data (pickled in
-checkpoints). ``SUSCOSIM_FATIGUE_ENGINE`` in the environment picks it for a whole run (a
-measurement switch: ``python -m bench workloads`` A/B; an unknown name is an error)."""
-if ENGINE not in ENGINES:
-    raise ValueError(f"SUSCOSIM_FATIGUE_ENGINE={ENGINE!r}: one of {ENGINES}")
 TILE_ELEMS = 1 << 19
 """Stress components per node tile of the compiled path's signed von Mises (every sample:
 6 x nodes x samples, 4 MB: 170 nodes of a 500-sample block); abs-max principal is fused
@@ -69,15 +53,14 @@ _INFLUENCE_MEMO: dict[tuple, InfluenceSet] = {}
 
 
 def warm_up() -> None:
-    """Compile the compiled engine's numba kernels now, or load them from numba's disk cache
-    (once per process; a no-op without numba). :func:`load_influence` calls it, so the live
+    """Compile the engine's numba kernels now, or load them from numba's disk cache (once
+    per process). :func:`load_influence` calls it, so the live
     node has them before it says ready and no compile lands in a run's step loop: cold
     ~3 s, from the cache ~1 s (numba's own start; ``bench/bench_fatigue.py`` prints it)."""
-    if COMPILED:
-        counting.build()
-        superposition.build()
-        turning_eq.build()
-        screen_bound.build()
+    counting.build()
+    superposition.build()
+    turning_eq.build()
+    screen_bound.build()
 
 
 def load_influence(cfg: FatigueConfig) -> InfluenceSet:
@@ -177,11 +160,7 @@ class _Engine:
         """Nodes ``idx`` (the counter ``rf``'s series) through block ``F``, exactly."""
         if idx.size == 0:
             return
-        engine = ENGINE if COMPILED or ENGINE != "compiled" else "numpy"
-        if engine == "compiled":
-            hi, lo, cyc = self._exact_compiled(F, idx, rf)
-        else:
-            hi, lo, cyc = self._exact_numpy(F, idx, rf, engine == "block")
+        hi, lo, cyc = self._exact_compiled(F, idx, rf)
         self._add(cyc, idx, self.damage, self.ncyc, self.rmax)
         self.eq_max[idx] = np.maximum(self.eq_max[idx], hi)
         self.eq_min[idx] = np.minimum(self.eq_min[idx], lo)
@@ -195,7 +174,9 @@ class _Engine:
         block's ends) gathered, fused per node so its stresses stay in cache
         (:func:`.turning_eq.superpose_gather`); then their exact equivalent stress at once
         and the counter fed those (each node's cycles in order). Returns the block's
-        extremes and cycles. Signed von Mises (every sample) goes by tiles of nodes."""
+        extremes and cycles. Signed von Mises (every sample) goes by tiles of nodes. The one
+        path (numba is a dependency); the tests swap in numpy oracles of it and compare the
+        bits (``tests/fatigue/oracle_turning_eq.py``)."""
         n = F.shape[0]
         kind = self.cfg.equivalent
         whole = idx.size == self.per_node.shape[0] and bool(
@@ -225,29 +206,6 @@ class _Engine:
         hi = np.maximum.reduceat(vals, starts)
         lo = np.minimum.reduceat(vals, starts)
         return hi, lo, rf.feed_packed(vals, counts, vals[starts + counts - 1])
-
-    def _exact_numpy(self, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow,
-                     block: bool) -> tuple[np.ndarray, np.ndarray, Cycles]:
-        """In chunks of samples over all nodes: the equivalent stress of every sample
-        (``block``) or only where it may be a turning point (:func:`.turning_eq.
-        turning_equivalent`), the lock-step counter."""
-        coef = self.per_node[idx]
-        rows = max(ROWS, (2_000_000 // (6 * idx.size)) // ROWS * ROWS)
-        hi = np.full(idx.size, -np.inf)
-        lo = np.full(idx.size, np.inf)
-        parts = []
-        for i in range(0, F.shape[0], rows):
-            comp = superpose_components(F[i:i + rows], coef)
-            if block:
-                eq = equivalent_of(comp, self.cfg.equivalent)
-                bhi, blo = eq.max(axis=0), eq.min(axis=0)
-                parts.append(rf.feed(eq))
-            else:
-                pts, last, bhi, blo = turning_equivalent(comp, self.cfg.equivalent, rf.last)
-                parts.append(rf.feed_points(pts, last))
-            np.maximum(hi, bhi, out=hi)
-            np.minimum(lo, blo, out=lo)
-        return hi, lo, Cycles.concat(parts)
 
     def _park(self, nodes: np.ndarray) -> None:
         """Leave computed nodes out: keep their exact state at the end of this block."""

@@ -74,7 +74,8 @@ class TyreRoad:
     the road, the wheel geometry and the step are rebuilt the same from the scenario."""
 
     def checkpoint_state(self) -> dict[str, Any]:
-        """The node's state at a step boundary (issue #29 item 4), picklable."""
+        """The node's state at a step boundary (issue #29 item 4): plain data
+        (:mod:`cosim.plaindata`), as its checkpoint file holds it."""
         return {k: copy.deepcopy(getattr(self, k)) for k in self.STATE_ATTRS}
 
     def restore_state(self, state: Mapping[str, Any]) -> None:

@@ -1,12 +1,11 @@
 """The compiled fatigue engine (#28): a proven bracket, the same cycles, the same bits.
 
-numba is a dependency: without it this module fails at its import (never skipped); the
-fallback without numba is tested by switching the compiled paths off.
+numba is a dependency: without it this module fails at its import (never skipped). The
+compiled engine is the product's one path; the numpy oracles it is compared with, bit for
+bit, are in ``oracle_turning_eq.py``.
 """
 
 from __future__ import annotations
-
-import pickle
 
 import numba  # noqa: F401  (required: the test fails clearly where it is missing)
 import numpy as np
@@ -14,6 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from cosim import plaindata
 from nodes.fatigue import counting, screen_bound, turning_eq, worker
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.counting import StreamingRainflow, turning_points
@@ -21,6 +21,8 @@ from nodes.fatigue.equivalent_stress import equivalent_of
 from nodes.fatigue.superposition import components_buffer, superpose_components
 from nodes.fatigue.synthetic import pave_like_loads
 from tests.conftest import COARSE_ARM
+
+from .oracle_turning_eq import exact_block, exact_numpy, repeated_lock_step
 
 COARSE = {"influence": str(COARSE_ARM)}  # a cheap arm, results shipped
 FIELDS = ("damage", "eq_max", "eq_min", "eq_range_max", "n_cycles")
@@ -154,10 +156,10 @@ def test_kept_equivalent_scratch_too_small_is_reallocated() -> None:
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), ties=st.booleans(), nans=st.booleans())
 def test_feed_packed_equals_the_lock_step_counter(seed: int, ties: bool, nans: bool) -> None:
-    """The same cycles (each history's in order), residues and lasts, compiled or not."""
+    """The same cycles (each history's in order), residues and lasts as the lock-step loop."""
     rng = np.random.default_rng(seed)
     k = int(rng.integers(1, 9))
-    ref, new, npy = (StreamingRainflow(k, capacity=4) for _ in range(3))
+    ref, new = (StreamingRainflow(k, capacity=4) for _ in range(2))
     for _ in range(4):
         n = int(rng.integers(1, 40))
         x = rng.normal(size=(n, k))
@@ -168,22 +170,14 @@ def test_feed_packed_equals_the_lock_step_counter(seed: int, ties: bool, nans: b
         a = ref.feed(x, reduce=False)
         vals, counts = np.ascontiguousarray(x.T).ravel(), np.full(k, n)
         b = new.feed_packed(vals, counts, x[-1])
-        c = npy._feed_packed_numpy(vals, counts, 0)
-        npy._last = x[-1].copy()
         order = np.argsort(a.series, kind="stable")
         for f in ("series", "s1", "s2", "count"):
             assert np.array_equal(getattr(a, f)[order], getattr(b, f), equal_nan=True)
-            assert np.array_equal(getattr(c, f), getattr(b, f), equal_nan=True)
         for i in range(k):
             assert np.array_equal(ref.residue(i), new.residue(i), equal_nan=True)
-            assert np.array_equal(npy.residue(i), new.residue(i), equal_nan=True)
         assert np.array_equal(ref.last, new.last, equal_nan=True)
     rep = new.residue_cycles("repeated")  # compiled on a copy
-    counting.COMPILED = False
-    try:
-        lock_step = ref.residue_cycles("repeated")
-    finally:
-        counting.COMPILED = True
+    lock_step = repeated_lock_step(ref)
     order = np.argsort(lock_step.series, kind="stable")
     for f in ("series", "s1", "s2", "count"):
         assert np.array_equal(getattr(lock_step, f)[order], getattr(rep, f), equal_nan=True)
@@ -204,6 +198,11 @@ def test_feed_packed_part_of_the_counter_and_bad_shapes() -> None:
         rf.feed_packed(np.zeros(3), np.array([3]), np.zeros(1), start=5)
 
 
+ENGINES = {"compiled": worker._Engine._exact_compiled, "numpy": exact_numpy,
+           "block": exact_block}
+"""The engine's block step: the product's, and the oracles' replacements of it."""
+
+
 def _run(cfg: FatigueConfig, t, loads, cut: list[int], screen=None):
     names = list(loads)
     arr = np.stack([loads[c] for c in names], axis=1)
@@ -218,14 +217,14 @@ def _run(cfg: FatigueConfig, t, loads, cut: list[int], screen=None):
          "residue": "half_cycles"}])
 @pytest.mark.parametrize("screen", [None, 0.05])
 def test_engines_give_the_same_bits(monkeypatch, kw, screen) -> None:
-    """compiled == numpy (the fallback) == block (every sample: the reference), live in
-    blocks of block_samples and batch, bit for bit."""
+    """compiled (the product) == the numpy oracle == block (every sample: the reference),
+    live in blocks of block_samples and batch, bit for bit."""
     cfg = FatigueConfig.from_dict({**COARSE, **kw, "block_samples": 300})
     t, loads = pave_like_loads(3.0, seed=4, static_n=6000, rms_n=4000)
     cut = [*range(0, t.size, 300), t.size]
     got = {}
-    for eng in worker.ENGINES:
-        monkeypatch.setattr(worker, "ENGINE", eng)
+    for eng, fn in ENGINES.items():
+        monkeypatch.setattr(worker._Engine, "_exact_compiled", fn)
         got[eng] = (_run(cfg, t, loads, cut, screen).result(),
                     worker.analyse(t, loads, cfg, 40.0, screen=screen))
     for eng in ("numpy", "block"):
@@ -244,33 +243,17 @@ def test_noise_loads_keep_most_samples_and_the_same_bits(monkeypatch) -> None:
     cut = [*range(0, t.size, 400), t.size]
     got = {}
     for eng in ("compiled", "block"):
-        monkeypatch.setattr(worker, "ENGINE", eng)
+        monkeypatch.setattr(worker._Engine, "_exact_compiled", ENGINES[eng])
         got[eng] = _run(cfg, t, loads, cut).result()
     for f in FIELDS:
         assert np.array_equal(getattr(got["compiled"], f), getattr(got["block"], f))
     assert np.nanmin(got["block"].n_cycles) > 0.2 * t.size  # noise: cycles every few samples
 
 
-def test_without_numba_the_numpy_path_and_the_same_bits(monkeypatch) -> None:
-    cfg = FatigueConfig.from_dict({**COARSE, "block_samples": 250})
-    t, loads = pave_like_loads(2.0, seed=6, static_n=6000, rms_n=4000)
-    cut = [*range(0, t.size, 250), t.size]
-    compiled = _run(cfg, t, loads, cut).result()
-    for mod in (worker, turning_eq, counting):
-        monkeypatch.setattr(mod, "COMPILED", False)
-    called = []
-    monkeypatch.setattr(worker._Engine, "_exact_compiled",
-                        lambda *a: called.append(1))  # must not be reached
-    fallback = _run(cfg, t, loads, cut).result()
-    assert not called
-    for f in FIELDS:
-        assert np.array_equal(getattr(compiled, f), getattr(fallback, f), equal_nan=True)
-
-
 @pytest.mark.parametrize("screen", [None, 0.1])
-def test_live_fatigue_pickles_and_continues_with_the_same_bits(screen) -> None:
-    """The lead's checkpoints pickle LiveFatigue: plain data (no compiled objects; screened:
-    the compiled bound's tables are rebuilt after loading)."""
+def test_live_fatigue_as_plain_data_continues_with_the_same_bits(screen) -> None:
+    """A checkpoint holds LiveFatigue as plain data (:mod:`cosim.plaindata`: no compiled
+    objects); decoded, it continues with the same bits."""
     cfg = FatigueConfig.from_dict({**COARSE, "block_samples": 200})
     t, loads = pave_like_loads(2.0, seed=7, static_n=6000, rms_n=4000)
     names = list(loads)
@@ -279,9 +262,8 @@ def test_live_fatigue_pickles_and_continues_with_the_same_bits(screen) -> None:
     half = 600
     for i in range(0, half, 200):
         live.update(t[i:i + 200], arr[i:i + 200])
-    blob = pickle.dumps(live)
-    assert b"numba" not in blob and b"Dispatcher" not in blob
-    other = pickle.loads(blob)
+    other = plaindata.decode(plaindata.encode(live))
+    assert type(other) is worker.LiveFatigue
     for lf in (live, other):
         for i in range(half, t.size, 200):
             lf.update(t[i:i + 200], arr[i:i + 200])
@@ -307,9 +289,8 @@ def test_kernels_compiled_before_the_first_block_not_in_the_step_loop() -> None:
     inf = worker.load_influence(FatigueConfig.from_dict(COARSE))
     scr = StressScreen(inf.coefficients, "abs_max_principal")
     F = np.random.default_rng(2).normal(size=(120, len(inf.case_names)))
-    scr.block_compiled(F, np.arange(40), 25, probe=np.arange(40, 50))
+    scr.block(F, np.arange(40), 25, probe=np.arange(40, 50))
     assert [len(k.signatures) for k in kernels] == before
-    assert turning_eq.COMPILED and counting.COMPILED and worker.ENGINE == "compiled"
 
 
 def test_components_buffer_is_superpose_components() -> None:

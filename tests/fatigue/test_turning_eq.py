@@ -1,4 +1,8 @@
-"""The equivalent stress only where rainflow needs it: the same cycles, bit for bit."""
+"""The equivalent stress only where rainflow needs it: the same cycles, bit for bit.
+
+The numpy oracle (``oracle_turning_eq.turning_equivalent``) against the whole block, and the
+product's compiled path (:func:`nodes.fatigue.turning_eq.kept_equivalent`) against both: the same
+cycles (the kept samples differ: its bracket is another one), bit for bit."""
 
 from __future__ import annotations
 
@@ -10,13 +14,15 @@ from hypothesis import strategies as st
 from nodes.fatigue.counting import Cycles, StreamingRainflow, turning_points
 from nodes.fatigue.equivalent_stress import equivalent_of
 from nodes.fatigue.superposition import superpose_components
-from nodes.fatigue.turning_eq_numpy import turning_equivalent
+from nodes.fatigue.turning_eq import kept_equivalent
+
+from .oracle_turning_eq import feed_points, turning_equivalent
 
 
 def _both(comp_blocks: list[np.ndarray], kind: str = "abs_max_principal"
           ) -> tuple[list[Cycles], list[Cycles], StreamingRainflow, StreamingRainflow]:
     k = comp_blocks[0].shape[2]
-    ref, new = StreamingRainflow(k), StreamingRainflow(k)
+    ref, new, cmp = StreamingRainflow(k), StreamingRainflow(k), StreamingRainflow(k)
     out_r, out_n = [], []
     for comp in comp_blocks:
         eq = equivalent_of(comp, kind)
@@ -26,7 +32,14 @@ def _both(comp_blocks: list[np.ndarray], kind: str = "abs_max_principal"
         assert np.array_equal(hi, eq.max(axis=0)) and np.array_equal(lo, eq.min(axis=0))
         kept = turning_points(eq, None if len(out_n) == 0 else new.last)
         assert rows.shape[0] >= 1 and kept.shape[1] == rows.shape[1]
-        out_n.append(new.feed_points(rows, last))
+        out_n.append(feed_points(new, rows, last))
+        n = comp.shape[1]  # the product's compiled path: exact values, the same cycles
+        vals, counts = kept_equivalent(np.ascontiguousarray(comp.transpose(0, 2, 1)), n, kind)
+        at = np.cumsum(counts) - counts
+        assert np.array_equal(vals[at], eq[0]) and np.array_equal(vals[at + counts - 1], last)
+        assert _same(out_r[-1], cmp.feed_packed(vals, counts, last))
+    for mode in ("half_cycles", "repeated"):
+        assert _same(ref.residue_cycles(mode), cmp.residue_cycles(mode))
     return out_r, out_n, ref, new
 
 
@@ -105,13 +118,3 @@ def test_signed_von_mises_falls_back_to_the_whole_block() -> None:
     rng = np.random.default_rng(1)
     out_r, out_n, _, _ = _both(_blocks(rng, 120, 10, True, 0.0), "signed_von_mises")
     assert all(_same(a, b) for a, b in zip(out_r, out_n, strict=True))
-
-
-def test_feed_points_rejects_bad_shapes() -> None:
-    rf = StreamingRainflow(3)
-    try:
-        rf.feed_points(np.zeros((4, 2)), np.zeros(3))
-    except ValueError as e:
-        assert "rows must have shape" in str(e)
-    else:
-        raise AssertionError("no error")
