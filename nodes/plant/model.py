@@ -96,10 +96,11 @@ class PlantModel(ABC):
     the same way from the same scenario)."""
 
     def checkpoint_state(self) -> dict[str, Any]:
-        """The model's whole state at a step boundary (issue #29 item 4), picklable: the
-        PyBullet world as ``saveBullet`` writes it (positions, velocities, the solver's
-        state) and a deep copy of the model's own attributes (integrator memory, the
-        driver, held tyre forces, the last loads) but :attr:`checkpoint_keep`."""
+        """The model's whole state at a step boundary (issue #29 item 4), plain data
+        (:mod:`cosim.plaindata`): the PyBullet world as ``saveBullet`` writes it (positions,
+        velocities, the solver's state) and a deep copy of the model's own attributes
+        (integrator memory, the driver, held tyre forces, the last loads) but
+        :attr:`checkpoint_keep`."""
         client = getattr(self, "client", None)
         if client is None:
             raise TypeError(f"{type(self).__name__} has no PyBullet client to checkpoint")
