@@ -1,18 +1,7 @@
 """What the commands' ``main`` functions share: arguments parsed into an exit code instead of
-``SystemExit``, an error line that names the command, and the pace options of the commands that
-replay a journal (``replay``, ``scope``).
-
-Every error line starts ``suscosim: error: `` (:func:`error_line`, :func:`fail`, and argparse's
-usage errors through :func:`parse_args` / :class:`ArgumentParser`).
-
-A command returns its exit code (0 done, 2 bad input, ...) rather than exiting, so that it can
-be called from a test or from ``suscosim`` itself::
-
-    args = parse_args(build_parser(), argv)
-    if isinstance(args, int):
-        return args                       # --help (0) or a usage error argparse printed (2)
-    if args.wait < 0:
-        return fail("suscosim replay", f"--wait {args.wait:g}: expected a time >= 0 s")
+``SystemExit`` (so a test or ``suscosim`` can call them), error lines starting
+``suscosim: error: <command>:`` (:func:`error_line`, :func:`fail`, :class:`ArgumentParser`),
+and the pace options of the commands that replay a journal (``replay``, ``scope``).
 """
 
 from __future__ import annotations
@@ -62,8 +51,7 @@ def unify_errors(ap: argparse.ArgumentParser) -> None:
 def parse_args(ap: argparse.ArgumentParser,
                argv: Sequence[str] | None) -> argparse.Namespace | int:
     """``ap``'s arguments from ``argv`` (None: ``sys.argv[1:]``), or the exit code where argparse
-    would exit: 0 after ``--help``, 2 after a usage error (which argparse has printed, as
-    ``suscosim: error: <command>: ...``)."""
+    would exit: 0 after ``--help``, 2 after a usage error (printed)."""
     unify_errors(ap)
     try:
         return ap.parse_args(list(sys.argv[1:] if argv is None else argv))

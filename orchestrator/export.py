@@ -1,26 +1,15 @@
-"""``suscosim export``: a run's table rebuilt from its journal, or written in another format,
-in bounded memory whatever the run's length (#32).
+"""``suscosim export JOURNAL|RUN_DIR``: a run's table rebuilt from its journal, or written in
+another format, in bounded memory (docs/data_formats.md).
 
-    suscosim export JOURNAL|RUN_DIR [--format mdf4|rpc3|csv|parquet] [--channels PATTERN ...]
-                    [--rpc3-type int|float] [--out DIR]
-
-``export JOURNAL`` (or ``export RUN_DIR`` without ``--format``: its journal) streams the
-journal twice (each channel's fields by majority, then the rows: :mod:`cosim.table_writer`),
-so memory does not grow with the journal; the table is that of :func:`cosim.table.
-build_table`. Exit 0: every record intact (a torn last segment, normal after a crash, is only
-noted). Exit 2 with a message naming the journal: it is not one, it holds no complete step,
-or records were lost in it (damaged segments are skipped, the records they held counted),
-or the table already in the folder is larger; in the last two cases the table is written
-alongside as ``table.recovered.csv/.parquet`` and ``table.*`` is left as it was. With
-``--format mdf4|rpc3`` the rebuilt table is also written as ``<stem>.mf4`` / ``<stem>.rsp``.
-
-``export RUN_DIR --format mdf4|rpc3|csv|parquet``: the run's table (names and SI units) as
-``RUN_DIR/export/table.<ext>`` (or ``--out``); with ``--channels`` the file is named by the
-selection (``table.plant_arm_x.rsp`` for ``plant/arm/*``), so an export of other channels
-never replaces a previous one (#30 item 3); one that is replaced is said. CSV and Parquet are
-streamed from ``table.parquet`` in chunks; MDF 4 and RPC III (whose writers take whole
-arrays, and RPC III's integer scale needs each channel's max first) read only the selected
-columns. See docs/data_formats.md.
+``export JOURNAL`` (or a run folder without ``--format``) streams the journal twice (fields by
+majority, then rows: :mod:`cosim.table_writer`), the table of :func:`cosim.table.build_table`.
+Exit 0: every record intact (a torn last segment is only noted). Exit 2 naming the journal: not
+one, no complete step, records lost, or the folder's table is larger; in the last two cases
+the table goes to ``table.recovered.*`` beside it. ``--format mdf4|rpc3`` also writes
+``<stem>.mf4``/``.rsp``. ``export RUN_DIR --format ...``: the table as
+``RUN_DIR/export/table.<ext>`` (or ``--out``), named by the ``--channels`` selection
+(``table.plant_arm_x.rsp``) so exports of other channels do not replace each other. CSV and
+Parquet are streamed in chunks; MDF 4 and RPC III read only the selected columns.
 """
 
 from __future__ import annotations

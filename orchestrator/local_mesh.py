@@ -1,35 +1,15 @@
 """The explicit Zenoh mesh of a run's local nodes: who listens where and who connects to whom.
 
-A run's node processes on this machine and the orchestrator link to each other directly, a
-full mesh over Unix sockets in a private folder, with Zenoh's gossip off in every one of
-these sessions:
-
-* the orchestrator listens on ``orchestrator.sock`` (besides its TCP endpoint, which taps,
-  nodes elsewhere and routers use);
-* node *i* (in the scenario's order) listens on ``NAME.sock`` and connects to the
-  orchestrator's socket and to the sockets of the nodes before it: each pair is linked once,
-  by one side, so no two sessions open a link to each other at once.
-
-Why (docs/cosim.md "A wedged start"): with gossip, each joining peer learns the others
-through link-state messages that the receiving peers forward to their neighbours while
-holding Zenoh's routing lock. With the low-latency transport that forward is a blocking
-socket write from the receive thread, and the start of five peers wedged a session about
-once in 700 starts (``python -m bench join-stress --mesh gossip``; a Ch 6 sweep lost a run to
-it twice on 2026-12-04 even with the orchestrator universal). With every link given and no
-link states the start wedged in none of the rounds of ``--mesh explicit``, so the local nodes
-can take the low-latency transport (12-38 % more coupled steps/s than universal).
-
-Unix sockets rather than TCP ports chosen in advance: a path in a folder of the run's own
-cannot be taken by another program between the choice and the node's listen (a free port
-can, by any outgoing connection), and the folder (mode 0700) keeps other users of the
-machine off the run's links. The socket paths stay short (``/tmp/suscosim-mesh-XXXXXXXX/NAME.sock``)
-under the 107 bytes a Unix socket path may have. An orchestrator killed outright (SIGKILL)
-leaves its folder behind: the next run removes the folders whose owner process is gone
-(:func:`remove_stale`).
-
-Who is not in the mesh joins through the orchestrator, which routes for its clients: taps,
-scopes and replays on this machine open client sessions by default
-(:func:`cosim.zenoh_options.session_mode`), as nodes elsewhere always did.
+The orchestrator and the run's node processes on this machine link directly, a full mesh over
+Unix sockets in a private folder (mode 0700), gossip off in every session: the orchestrator
+listens on ``orchestrator.sock`` (besides its TCP endpoint); node *i* (scenario order) listens
+on ``NAME.sock`` and connects to the orchestrator's and the earlier nodes' sockets, so each
+pair is linked once, by one side. Why (no link-state forwarding, no wedged start): docs/cosim.md
+"The explicit mesh" and "A wedged start". Sockets rather than ports chosen in advance: a path
+in the run's own folder cannot be taken by another program meanwhile. Paths stay under the 107
+bytes of a Unix socket path; the folder of an orchestrator killed outright is removed by the
+next run (:func:`remove_stale`). Taps, scopes and replays join as clients of the orchestrator
+(:func:`cosim.zenoh_options.session_mode`).
 """
 
 from __future__ import annotations

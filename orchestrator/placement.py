@@ -1,19 +1,12 @@
 """CPU placement of the local node processes (pure logic, plus one system call to apply it).
 
-On a small machine the node processes of a run, their Zenoh threads and the orchestrator
-share few cores. Left to the scheduler they migrate between cores at every wake-up of the
-lock-step exchange; pinning each process to one core, with the two force nodes on different
-cores (they compute at the same time, on the plant's state) and the plant on the
-controller's core (the plant waits while they compute), gave about +40 % coupled steps/s in
-the sequential exchange on the 2-core machine of docs/cosim.md (``python -m bench throughput
---pin off`` against the default).
-
-Layout by the number of usable cores n (``os.sched_getaffinity``), c0 < c1 < ... :
-
-The layout is each kind's ``cores`` in the node registry (:mod:`cosim.node_kinds`):
+Each process is pinned to one core (each kind's ``cores`` in :mod:`cosim.node_kinds`; c0 < c1
+< ... are the usable cores, ``os.sched_getaffinity``): the two force nodes on different cores
+(they compute at the same time), the plant on the controller's core (it waits while they
+compute). ``python -m bench throughput --pin off`` measures the gain against the default.
 
 ==========  =====  =========  ==========  =========================================
-n           plant  tyre_road  controller  recorder, fatigue (and any other node)
+n cores     plant  tyre_road  controller  recorder, fatigue (and any other node)
 ==========  =====  =========  ==========  =========================================
 1           (no pinning)
 2           c0     c1         c0          c1
@@ -21,29 +14,14 @@ n           plant  tyre_road  controller  recorder, fatigue (and any other node)
 >= 4        c0     c1         c2          c3
 ==========  =====  =========  ==========  =========================================
 
-A pinned node also polls its input for a short while before it blocks (``--spin-us``, see
-``Participant.spin_s``): its core then does not go idle between two steps.
-
-A pinned node off the coupled chain's critical path (the recorder, the live fatigue node:
-every kind but the coupled ones, :func:`cosim.node_kinds.off_critical_path`) runs in Linux's
-``SCHED_IDLE`` class from the run's start on (:func:`background`): it gets the cores when
-the coupled nodes wait for each other, and a coupled node that wakes takes its core back at
-once instead of waiting for the recorder's or the fatigue node's work to yield. Both take
-their inputs as they come, in arrears, so their results do not depend on when they run.
-Interleaved runs on the 2-core VM (docs/cosim.md, "Background listeners"): the corner with
-live fatigue 1 494 -> 1 824 and the lumped car 2 351 -> 2 904 coupled steps/s (medians of
-three), and the runs ended sooner too (the listeners kept up). The price: on a machine where
-other programs keep every core busy a ``SCHED_IDLE`` listener gets almost nothing and could
-fall behind until the run stalls. So the orchestrator moves a starved listener back to the
-normal class for the rest of the run (:class:`BackgroundGuard`: one of its threads waited,
-runnable, for more than half of two seconds; summary.json ``background_starved``), and
-``--pin off`` keeps everything in the normal class from the start (the fatigue node's own
-``nice +10`` stays).
-
-``auto`` pins on machines of 2 to ``AUTO_MAX_CORES`` usable cores, where the processes must
-share cores anyway; on a bigger machine the scheduler keeps each process on a core of its own
-and pinning every run to the same cores would only hurt runs side by side (a sweep with
-several jobs starts its runs with ``--pin off``).
+A pinned node polls its input briefly before it blocks (``--spin-us``, ``Participant.spin_s``).
+A node off the coupled chain's critical path (:func:`cosim.node_kinds.off_critical_path`) runs
+in ``SCHED_IDLE`` once the run has started (:func:`background`); it takes its inputs in
+arrears, so its results do not depend on when it runs. A starved one goes back to the normal
+class for the rest of the run (:class:`BackgroundGuard`, summary.json ``background_starved``);
+``--pin off`` keeps everything in the normal class. ``auto`` pins on 2 to ``AUTO_MAX_CORES``
+usable cores; on a bigger machine pinning every run to the same cores would only hurt runs
+side by side.
 """
 
 from __future__ import annotations
@@ -109,11 +87,9 @@ def _set_class(pid: int, from_policy: int | None, to_policy: int) -> bool:
 
 
 def background(pid: int) -> bool:
-    """Put every thread of process ``pid`` in the ``SCHED_IDLE`` class (threads it starts
-    later inherit it); False where the OS has no such class or refuses. The orchestrator does
-    it once the run has started (:meth:`LocalNodes.go_background`): at start-up every process
-    of a run wants the cores at once, and a node in ``SCHED_IDLE`` then could wait for its
-    core longer than the start timeout."""
+    """Put every thread of process ``pid`` in the ``SCHED_IDLE`` class (later threads inherit
+    it); False where the OS has no such class or refuses. Called once the run has started: at
+    start-up an idle-class node could wait for its core longer than the start timeout."""
     return _set_class(pid, None, os.SCHED_IDLE) if hasattr(os, "SCHED_IDLE") else False
 
 
@@ -156,10 +132,8 @@ def starved(waited_s: float, over_s: float, fraction: float = STARVED_FRACTION) 
 
 
 class BackgroundGuard:
-    """Watches the ``SCHED_IDLE`` nodes of a run (:func:`background`) and moves one that is
-    starved (one of its threads :func:`starved` over :data:`STARVED_WINDOW_S`: other programs
-    keep its core busy) back to the normal class for the rest of the run, so it cannot fall
-    behind until the run stalls. :meth:`check` on every tick of the clock."""
+    """Moves a starved ``SCHED_IDLE`` node (:func:`starved` over :data:`STARVED_WINDOW_S`) back
+    to the normal class for the rest of the run; :meth:`check` on every tick of the clock."""
 
     def __init__(self, window_s: float = STARVED_WINDOW_S) -> None:
         self.window_s = window_s

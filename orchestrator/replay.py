@@ -1,23 +1,10 @@
-"""``suscosim replay``: republish a recorded journal on the bus, as if the run were live.
+"""``suscosim replay JOURNAL``: republish a recorded journal on the bus, as if the run were live.
 
-    suscosim replay JOURNAL [--run NEW_ID] [--speed X | --fast] [--connect EP ...]
-                    [--listen EP ...] [--wait S] [--lowlatency] [--mode auto|peer|client]
-
-``JOURNAL`` is a recorder journal (``journal.msgpack``) or a run folder holding one. Every
-record (``"<node>/<channel>"`` and the message bytes exactly as the recorder received them) is
-published on ``suscosim/<run>/<node>/<channel>``, in the journal's order, at the recorded pace
-(message time ``t`` against the wall clock; ``--speed 2`` is twice as fast) or, with
-``--fast``, as fast as the bus takes it. The default run id is ``<original>-replay``, so a
-replay never mixes with a live run of the same id; taps, the fatigue worker or any Zenoh
-subscriber listen to it as to a live run. Only data messages are in a journal: there is no
-clock, no liveliness token, no handshake.
-
-Endpoints: with neither ``--connect`` nor ``--listen`` the replay listens on
-``tcp/127.0.0.1:7447`` (where a bare ``suscosim tap`` connects). Before the first message it
-waits up to ``--wait`` s (default 5) for a subscriber to appear, so a tap started just before
-or after does not miss the beginning; it publishes anyway after that. ``--mode auto``: a
-Zenoh peer when it listens, a client otherwise (through the router or peer it connects to).
-
+Every record (a journal, or a run folder's) is published on ``suscosim/<run>/<node>/<channel>``
+with the bytes the recorder received, in order, at the recorded pace (``--speed X``) or at once
+(``--fast``); run id ``<original>-replay`` by default. Only data messages: no clock, liveliness
+or handshake. Without ``--connect``/``--listen`` it listens on ``tcp/127.0.0.1:7447``, and waits
+up to ``--wait`` s for a subscriber before the first message. docs/tap_replay.md has the rest.
 Exit codes: 0 replayed, 1 the endpoint cannot be reached (client mode), 2 bad input (no such
 file, not a journal, bad run id, bad endpoint, port in use), 130 interrupted.
 """
@@ -90,7 +77,7 @@ def _records(p: Path, counts: dict[str, Any] | None = None) -> Iterator[Record]:
 
 class Recorded:
     """A journal's records for a replay, streamed from the file each time it is iterated
-    (memory by the segment, not the run: #32). A first pass counts them: ``count``,
+    (memory by the segment, not the run). A first pass counts them: ``count``,
     ``channels``, ``t_first``/``t_last`` [s], ``skipped``, ``problem``, ``run_id``."""
 
     def __init__(self, path: str | Path) -> None:
@@ -117,11 +104,7 @@ class Recorded:
 
 def load(path: str | Path) -> tuple[str, list[Record], int, str]:
     """Read a journal (or a run folder's) whole: (run id, [(node, channel, raw, t)], skipped,
-    problem); :class:`Recorded` streams it instead.
-
-    ``skipped`` counts records that do not decode or whose channel is not ``node/channel``
-    (none in a journal the recorder wrote); ``problem`` says whether the tail was torn.
-    """
+    problem), as :func:`_records`; :class:`Recorded` streams it instead."""
     counts: dict[str, Any] = {}
     records = list(_records(_journal_path(path), counts))
     return counts["run_id"], records, counts["skipped"], counts["problem"]
@@ -146,10 +129,7 @@ def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
 def replay(bus: Any, run_id: str, records: Iterable[Record], speed: float | None,
            wait_s: float = 5.0, log: Any = None) -> tuple[int, float]:
     """Publish ``records`` (a list, or a streamed :class:`Recorded`) under ``run_id`` on
-    ``bus``; ``speed`` None = as fast as possible.
-
-    Returns (messages published, wall seconds from the first to the last).
-    """
+    ``bus`` (``speed`` None: at once); (messages published, wall s from the first to the last)."""
     log = log or (lambda text: None)
     pubs: dict[tuple[str, str], Any] = {}
     channels = records.channels if isinstance(records, Recorded) else \

@@ -1,20 +1,14 @@
-"""``suscosim run --resume RUN_DIR`` and ``suscosim run --fork RUN_DIR@T --set ...``: the
-scenario of a run that continues from a checkpoint (issue #29 items 4-5; the nodes' side is
-:mod:`cosim.run_checkpoint`).
+"""``suscosim run --resume RUN_DIR`` and ``--fork RUN_DIR@T --set ...``: the scenario of a run
+that continues from a checkpoint (docs/checkpoints.md; nodes: :mod:`cosim.run_checkpoint`).
 
-* **Resume**: the same scenario (its hash must equal the checkpoint's), the same run folder
-  and id, from the last complete checkpoint. The journal the killed run wrote is set aside as
-  ``checkpoints/journal-k<k>.msgpack`` (unless an earlier resume from the same checkpoint
-  set one aside already: that one is whole up to k, the later one may not be); the resumed
-  recorder journals its steps < k again into a fresh ``journal.msgpack``. The table, the
-  lives and every file of the run end equal to the uninterrupted run's.
-* **Fork**: a new run (new folder and id) from the parent's checkpoint at T, with ``--set``
-  applied to the parent's scenario. A fork may change the control (``controller``, the
-  ``[nodes]`` choice of controller), the report and the run's bookkeeping; it keeps the
-  parent's vehicle, tyre, road, step and fatigue model, which its state at T belongs to
-  (anything else is refused, naming the key: a changed speed, say, would put the road
-  somewhere else than the wheel is). The controller starts afresh when its settings changed
-  (its state is the other law's); every other node continues from the parent's state.
+* **Resume**: the same scenario (hash checked), folder and id, from the last complete
+  checkpoint; the killed run's journal is set aside as ``checkpoints/journal-k<k>.msgpack``
+  (unless one from the same checkpoint is there) and the steps < k are journalled again. The
+  run's files end equal to the uninterrupted run's.
+* **Fork**: a new run from the parent's checkpoint at T with ``--set`` applied. Only the
+  control, the report and the bookkeeping may change (:data:`FORK_MAY_CHANGE`; anything else
+  is refused naming the key: the state at T belongs to the parent's vehicle, road, step and
+  fatigue model). A controller whose settings changed starts afresh; every other node continues.
 """
 
 from __future__ import annotations
@@ -88,7 +82,7 @@ TRUST_CODE_ENV = "SUSCOSIM_TRUST_RUN_CODE"
 
 
 def code_named(scenario: dict[str, Any], run_dir: Path) -> list[str]:
-    """What a run folder's scenario names to run as code (issue #43): a user's node entry or
+    """What a run folder's scenario names to run as code: a user's node entry or
     law (``package.module:attr``: imported, the working directory on the path) and an FMU
     inside the run folder (a shared library handed over with it)."""
     found = [f"nodes.{kind} = {v!r}" for kind, v in (scenario.get("nodes") or {}).items()

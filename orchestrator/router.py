@@ -1,20 +1,10 @@
 """``suscosim router``: a Zenoh router in a Python process, until SIGTERM or Ctrl-C.
 
-    suscosim router [--listen ENDPOINT ...] [--config FILE.json5] [--lease-ms MS]
-
-The pip package ``eclipse-zenoh`` ships no ``zenohd`` binary; this is the same router (a
-Zenoh session opened in ``router`` mode) for tests and single machines where the
-``eclipse/zenoh`` image is not at hand. Nodes and the orchestrator reach it with
-``--connect tcp/HOST:7447`` (or ``tls/HOST:7447`` with the shipped TLS configuration,
-``deploy/zenoh/router.json5``).
-
-Defaults are safe: without ``--listen`` and without a listen endpoint in ``--config`` it
-listens on loopback only (``tcp/127.0.0.1:7447``); multicast scouting is off unless the
-configuration file turns it on. Give ``--listen tcp/0.0.0.0:7447`` (or a TLS endpoint) to
-accept other machines.
-
-Exit codes: 0 stopped by a signal, 1 the router could not start (e.g. port in use), 2 bad
-arguments or configuration file.
+The pip package ships no ``zenohd``; this is the same router (a session in ``router`` mode).
+Without ``--listen`` (or one in ``--config``) it listens on loopback only; multicast scouting
+is off unless the file turns it on; ``deploy/zenoh/router.json5`` is the TLS configuration.
+Exit codes: 0 stopped by a signal, 1 could not start (e.g. port in use), 2 bad arguments or
+configuration file.
 """
 
 from __future__ import annotations
@@ -49,18 +39,10 @@ def _is_unset(conf: Any, key: str) -> bool:
 
 def router_config(listen: list[str] | None = None, config_file: str | None = None,
                   lease_ms: int = DEFAULT_LEASE_MS) -> tuple[Any, list[str]]:
-    """The Zenoh configuration of a router and the endpoints it listens on.
-
-    Args:
-        listen: endpoints to listen on; they replace the file's. Default: the file's, else
-            loopback only (:data:`DEFAULT_LISTEN`).
-        config_file: Zenoh JSON5 configuration (TLS, access control) to start from.
-        lease_ms: link lease announced to peers [ms]; a peer that the router stops hearing
-            from is dropped after the peer's own lease (suscosim nodes use 2000 ms).
-
-    Raises:
-        ValueError: the file does not load, or an endpoint is malformed.
-    """
+    """The Zenoh configuration of a router and the endpoints it listens on. ``listen``
+    replaces the file's endpoints (default: the file's, else :data:`DEFAULT_LISTEN`);
+    ``config_file``: JSON5 to start from; ``lease_ms``: link lease [ms]. ValueError: the file
+    does not load, or an endpoint is malformed."""
     import zenoh
 
     try:

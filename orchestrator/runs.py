@@ -1,31 +1,14 @@
-"""``suscosim runs``: list run folders and their state, from the files alone.
+"""``suscosim runs [DIR] [--json]``: list run folders and their state, from the files alone.
 
-    suscosim runs [DIR] [--json]
-
-A run folder is a folder holding ``scenario.json`` (written by ``suscosim run`` before anything
-starts). ``DIR`` (default ``runs``) may hold run folders, or folders of run folders one or two
-levels deeper (a sweep: ``SWEEP_DIR/runs/*``). Nothing is asked of a running orchestrator, so
-a restarted orchestrator (or anyone with the folder) can tell what happened:
-
-* ``ok`` / ``failed``: ``summary.json`` says so (written at the end of every run, also a
-  failed one; its ``error`` is shown);
-* ``running``: no ``summary.json`` yet, and the orchestrator process recorded in ``run.json``
-  is alive (same host, same pid, same process start time: a reused pid is not taken for it);
-* ``interrupted``: no ``summary.json`` and that process is gone (killed, machine rebooted);
-* ``unknown``: no ``summary.json`` and no way to tell (no ``run.json``: a run from before it
-  existed; or the orchestrator ran on another host).
-
-Steps are the last step ``k`` every channel of the journal has reached, read from the
-journal's last segments only, against ``run.n_steps``. The whole journal is also walked
-(segment headers and CRCs, nothing decompressed) by the reader ``suscosim export`` uses, so
-both give the same ``records`` and ``skipped_records``; a damaged or torn journal is named in
-the NOTE column (and in ``--json``) with what export will skip, and so is an ``ok`` run whose
-journal ends before its last step (cut short after the run). DIR is each run's folder.
-
-``run.json`` is written by the runner right after ``scenario.json``:
-``{"run_id", "pid", "pid_start", "host", "started", "mode", "endpoints": {"listen": [...],
-"connect": [...]}, "lowlatency", "state": "started"}``; ``summary.json`` is the authority on
-how a run ended. ``suscosim tap RUN_DIR`` reads the endpoints from it.
+A run folder holds ``scenario.json``; ``DIR`` (default ``runs``) holds run folders, or folders
+of them one or two levels deeper (a sweep). Nothing is asked of a running orchestrator. States:
+``ok``/``failed`` (``summary.json``, the authority, with its ``error``); ``running`` (no summary,
+and ``run.json``'s orchestrator process is alive: same host, pid and start time); ``interrupted``
+(that process is gone); ``unknown`` (no ``run.json``, or another host). Steps are the last ``k``
+every journal channel reached (its last segments only), against ``run.n_steps``; the journal is
+walked (headers and CRCs) by the reader ``suscosim export`` uses, so a damaged or short journal
+is named in the NOTE column with what export will skip. ``run.json`` (runner): ``run_id``,
+``pid``, ``pid_start``, ``host``, ``started``, ``mode``, ``endpoints``, ``lowlatency``, ``state``.
 
 Exit codes: 0 listed (also when there is no run), 2 ``DIR`` is not a folder.
 """

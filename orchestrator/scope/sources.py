@@ -1,19 +1,10 @@
 """Where the scope's data come from: the bus of a live run, or the journal of a finished one.
 
-:class:`LiveSource` listens like ``suscosim tap``: plain Zenoh subscribers on the selected
-channels, the nodes' ``ctl`` messages, the orchestrator's clock, ``fatigue/damage``, the
-recorder's coupling residual ``recorder/coupling`` and (for the damage map) ``plant/arm``,
-and a liveliness subscriber on the nodes' tokens. It declares no token, publishes nothing and
-answers no query, so the run neither waits for it nor sees it; its callbacks only queue the
-bytes (they never hold Zenoh's thread), decoding and filing happen on the source's own
-thread.
-
-:class:`JournalSource` replays a run's ``journal.msgpack`` into the same state at ``speed``
-times the recorded pace (message time against the wall clock), without any bus. The journal
-does not hold ``recorder/coupling`` (it is no record: it is computed from the table's rows);
-given the run's ``h``, coupling and exchange, the replay computes it again as the recorder
-did (:class:`ReplayResidual`: the journal's messages in the recorder's order into a table of
-rows and a :class:`cosim.coupling_stream.LiveResidual`), the same numbers as the live run's.
+:class:`LiveSource` listens like ``suscosim tap`` (no token, nothing published, no query
+answered; callbacks only queue bytes, decoding happens on the source's thread).
+:class:`JournalSource` replays ``journal.msgpack`` at ``speed`` x the recorded pace, without a
+bus; the journal holds no ``recorder/coupling``, so the replay computes it again as the
+recorder did (:class:`ReplayResidual`): the same numbers as the live run's.
 """
 
 from __future__ import annotations
@@ -153,10 +144,9 @@ class LiveSource:
 
 
 class ReplayResidual:
-    """``recorder/coupling`` again from a journal: its data messages, in the order the
-    recorder journaled them, into a table of rows (:class:`cosim.table_writer.TableWriter`,
-    nothing on disk) and a :class:`cosim.coupling_stream.LiveResidual`, as the recorder does
-    (``channels``: the journal's ``node/channel``; ``run``: the scenario's ``[run]``)."""
+    """``recorder/coupling`` again from a journal: its data messages, in journal order, into a
+    table of rows (:class:`cosim.table_writer.TableWriter`, nothing on disk) and a
+    :class:`cosim.coupling_stream.LiveResidual`, as the recorder does."""
 
     def __init__(self, channels: Any, run: dict[str, Any], state: ScopeState,
                  period_s: float = 0.1) -> None:
@@ -189,11 +179,10 @@ class ReplayResidual:
 
 
 class JournalSource:
-    """Replay ``records`` ((node, channel, raw, t) in order: a list as
-    :func:`orchestrator.replay.load` gives it, or a streamed
+    """Replay ``records`` ((node, channel, raw, t) in order: a list or a streamed
     :class:`orchestrator.replay.Recorded`) into the state at ``speed`` x the recorded pace
-    (None: as fast as possible); with ``run`` (the scenario's ``[run]``) and a
-    :class:`~orchestrator.replay.Recorded` (its ``channels``), the coupling residual too."""
+    (None: at once); with ``run`` (the scenario's ``[run]``) and a ``Recorded``, the coupling
+    residual too."""
 
     def __init__(self, records: Any, state: ScopeState,
                  speed: float | None = 1.0, damage: DamageMap | None = None,

@@ -1,14 +1,8 @@
-"""What the scope knows about a run: the plotted samples, the progress and steps/s, each
-node's state, the fatigue numbers, the damage map and the coupling residual. Filled by a
-source (live bus or journal replay) on its thread, read by the web server's threads: every
-method holds one lock.
-
-:meth:`ScopeState.snapshot` is the ``/data?since=K`` answer: the samples of step ``k > K`` of
-every line, everything else whole. Samples: step ``k``, time ``t`` [s], value in the line's SI
-unit. The coupling residual (``recorder/coupling``: one point per message, the running
-relative residual of each bond and the total [-]) has a cursor of its own
-(``coupling_since``): its messages come a little after the rows they sum, so after the
-steps the lines have.
+"""What the scope knows about a run: plotted samples, progress, node states, fatigue numbers,
+the damage map and the coupling residual. A source fills it on its thread, the web server's
+threads read it; every method holds one lock. Samples: step ``k``, time ``t`` [s], value in
+the line's SI unit. :meth:`ScopeState.snapshot` is the ``/data`` answer. The coupling residual
+has a cursor of its own: its messages come a little after the rows they sum.
 """
 
 from __future__ import annotations

@@ -73,8 +73,8 @@ class Point:
     @property
     def run_id(self) -> str:
         """The run id of this point in this invocation: the point id and a random part
-        (:data:`INVOCATION`), so that two people running the same sweep through one router
-        never share a run id (#15 item 3); the run folder stays ``runs/<point id>``."""
+        (:data:`INVOCATION`), so two people running one sweep through one router never share
+        a run id; the run folder stays ``runs/<point id>``."""
         return keys.unique_run_id(self.id, INVOCATION)
 
     def _assignments(self, run_id: str) -> list[str]:

@@ -1,14 +1,8 @@
-"""One sweep point run whole on a Dask worker (:func:`run_point`): its nodes are local
-processes on that worker (``suscosim run`` with the embedded Zenoh mesh on loopback and the
-point's own run id), then the fatigue worker if the sweep wants it; the run folder goes back
-to the client as a tar.gz (or is written in place under a shared ``runs_dir``).
-
-The task function is importable on the worker (``orchestrator.sweep.task.run_point``): the
-worker needs suscosim installed or this checkout on its ``PYTHONPATH``. Paths under the
-client's project folder are rewritten to the worker's. The point's scenario travels whole
-(loaded and overridden on the client, file paths absolute), so a worker needs no scenario
-files, only the data files a scenario names (road profiles, influence tables), at the same
-path or under its own project folder.
+"""One sweep point run whole on a Dask worker (:func:`run_point`): ``suscosim run`` on the
+worker (local processes, the point's own run id), then the fatigue worker if wanted; the run
+folder goes back as a tar.gz (or is written under a shared ``runs_dir``). The worker needs
+suscosim importable; the scenario travels whole (paths absolute, those under the client's
+project folder rewritten to the worker's), so only the data files it names must be there.
 """
 
 from __future__ import annotations
@@ -130,15 +124,12 @@ def _remap(text: str, root: str) -> str:
 def run_point(task: dict[str, Any]) -> dict[str, Any]:
     """Run one sweep point on this Dask worker.
 
-    ``task``: ``{"point": point.json content, "scenario": the point's fully loaded scenario
-    as TOML text (its file paths absolute), "phase": "todo"|"fatigue",
-    "fatigue": bool, "runs_dir": shared folder or None, "archive": the run folder (fatigue
-    phase without a shared folder), "root": the client's project folder, "topic"}``.
-
-    Returns ``{"id", "status": "ok"|"failed"|"cancelled", "error", "worker", "archive":
-    tar.gz bytes of the run folder, or None when it was written under the shared
-    runs_dir}``. A failed run is a result, not an exception: Dask retries only a point whose
-    worker was lost.
+    ``task``: ``point`` (point.json), ``scenario`` (the loaded scenario as TOML, paths
+    absolute), ``phase`` ("todo"|"fatigue"), ``fatigue``, ``runs_dir`` (shared folder or None),
+    ``archive`` (the run folder, fatigue phase without a shared folder), ``root`` (the client's
+    project folder), ``topic``. Returns ``id``, ``status`` (ok|failed|cancelled), ``error``,
+    ``worker``, ``archive`` (tar.gz bytes, None under a shared runs_dir). A failed run is a
+    result, not an exception: Dask retries only a point whose worker was lost.
     """
     ctx = _Context(task)
     pid, root = ctx.id, task["root"]
