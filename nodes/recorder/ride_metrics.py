@@ -1,26 +1,16 @@
 """Ride metrics of a recorded run: RMS, PSD band RMS, ISO 2631-1 Wk weighting, suspension
 working space, dynamic tyre load, jerk; and a comparison table of runs (thesis Tables 5.3-5.6).
 
-Pure functions over numpy arrays. Sampling is given as ``fs`` (Hz) or taken from a run
-table's ``t`` column (s). Frequency bands are in Hz, never in bin indices.
+Pure functions over numpy arrays; ``fs`` in Hz or from a run table's ``t`` column (s);
+bands in Hz, never bin indices.
 
-* The thesis's RMS (Eq 4.8/4.9, App. IV; :func:`thesis_band_rms`): the signal resampled
-  anti-aliased to 500 Hz (a 2 ms run passes unchanged; a 0.5 ms MR run is low-passed first,
-  so its switching chatter above 250 Hz is not counted), MATLAB's default periodogram
-  (rectangular window, no detrend, nfft = 2^nextpow2(N)), integrated with the trapezoidal
-  rule over the bins of ``[f1, f2]`` (0-20 Hz, or 0-16 Hz for Tables 5.7-5.10), square root.
-  This is the headline body RMS of a run (:func:`metric_values` key ``a_b_rms``); the
-  time-domain RMS at the run's own rate is ``a_b_rms_full``.
-* :func:`band_rms` / :func:`psd`: the same band integral at the signal's own rate, mean
-  removed (kept for signals that are not run tables).
+* The thesis's RMS (Eq 4.8/4.9, App. IV; :func:`thesis_band_rms`): resampled anti-aliased
+  to 500 Hz (an MR run's chatter above 250 Hz is not counted), MATLAB's default periodogram,
+  ``sqrt(trapz)`` over the bins of ``[f1, f2]`` (0-20 Hz; 0-16 Hz for Tables 5.7-5.10).
 * ``% improvement`` (thesis Eq 5.13): ``(baseline - run) / baseline * 100``; positive = less.
-* ISO 2631-1:1997 Wk (vertical, seated/standing/recumbent): band limiting (high-pass 0.4 Hz,
-  low-pass 100 Hz, both 2nd-order Butterworth, Q = 1/sqrt(2)) times the acceleration-velocity
-  transition (f3 = f4 = 12.5 Hz, Q4 = 0.63) times the upward step (f5 = 2.37 Hz, Q5 = 0.91,
-  f6 = 3.35 Hz, Q6 = 0.91), applied exactly in the frequency domain (zero-padded FFT).
+* ISO 2631-1:1997 Wk (vertical, Annex A Table A.1), applied exactly in the frequency domain.
 
-These take whole signals; :mod:`.ride_stream` computes the same metrics from a table read in
-row batches (``suscosim report``: the same periodogram, to rounding; Wk to ~1e-7).
+:mod:`.ride_stream` computes the same metrics from row batches (to rounding; Wk to ~1e-7).
 """
 
 from __future__ import annotations
@@ -67,15 +57,8 @@ def sample_rate(t: np.ndarray) -> float:
 def psd(
     x: np.ndarray, fs: float, band_hz: tuple[float, float] | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One-sided periodogram PSD of ``x`` (unit²/Hz), mean removed, rectangular window.
-
-    Args:
-        x: signal sampled at ``fs`` (Hz).
-        band_hz: keep only frequencies ``f1 <= f <= f2`` (Hz).
-
-    Returns:
-        (f in Hz, P in unit²/Hz).
-    """
+    """(f in Hz, one-sided periodogram P in unit²/Hz) of ``x`` at ``fs`` (Hz), mean removed,
+    rectangular window; only ``f1 <= f <= f2`` of ``band_hz`` if given."""
     f, P = periodogram(np.asarray(x, dtype=float), fs=fs, window="boxcar", detrend="constant")
     if band_hz is not None:
         f1, f2 = _check_band(band_hz, fs)
@@ -105,23 +88,14 @@ def _check_band(band_hz: tuple[float, float], fs: float) -> tuple[float, float]:
 
 THESIS_FS = 500.0  # Hz, the rate of the thesis's PSDs (2 ms outputs, App. IV fs = 500)
 THESIS_BAND = (0.0, 20.0)  # Hz, Table 4.5 and 5.3; Tables 5.7-5.10 use 0-16 Hz
-# Kaiser beta of the anti-aliasing FIR of resample_poly: about -80 dB in the stop band, so the
-# switching chatter of an MR run (up to 1 kHz at h = 0.5 ms) does not fold into 0-20 Hz
+# Kaiser beta of resample_poly's anti-aliasing FIR: ~-80 dB stop band (MR chatter does not fold)
 _AA_KAISER_BETA = 8.0
 
 
 def resample_to(t: np.ndarray, x: np.ndarray, fs_out: float = THESIS_FS) -> np.ndarray:
-    """``x`` sampled at the times ``t`` (s, uniform) resampled to ``fs_out`` (Hz), anti-aliased.
-
-    Polyphase resampling (:func:`scipy.signal.resample_poly`, Kaiser-windowed FIR low-pass
-    at the lower Nyquist frequency, zero phase). A record already at ``fs_out`` (a run at
-    h = 2 ms for 500 Hz) is returned unchanged (a float copy). Sample ``j`` of the result is
-    at ``t[0] + j / fs_out``.
-
-    Raises:
-        ValueError: ``t`` not uniform, or the rate ratio not a fraction with denominator
-            below 10 000.
-    """
+    """``x`` at the uniform times ``t`` (s) resampled anti-aliased (polyphase, zero phase) to
+    ``fs_out`` (Hz); sample ``j`` at ``t[0] + j / fs_out``; a copy if already at ``fs_out``.
+    ValueError if ``t`` is not uniform or the ratio needs a denominator >= 10 000."""
     x = np.asarray(x, dtype=float)
     fs_in = sample_rate(t)
     if x.shape != np.shape(t):
@@ -136,14 +110,8 @@ def resample_to(t: np.ndarray, x: np.ndarray, fs_out: float = THESIS_FS) -> np.n
 
 
 def matlab_periodogram(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
-    """One-sided PSD as MATLAB's ``periodogram(x, [], [], fs)`` (thesis Eq 4.8).
-
-    Rectangular window, no detrending, ``nfft = max(256, 2^nextpow2(N))`` (zero padding),
-    density scaling ``|X|^2 / (fs N)`` with the non-DC, non-Nyquist bins doubled.
-
-    Returns:
-        (f in Hz, P in unit²/Hz).
-    """
+    """(f in Hz, P in unit²/Hz) as MATLAB's ``periodogram(x, [], [], fs)`` (thesis Eq 4.8):
+    rectangular window, no detrend, ``nfft = max(256, 2^nextpow2(N))``, one-sided density."""
     x = np.asarray(x, dtype=float)
     if x.size < 2:
         raise ValueError("need at least 2 samples for a periodogram")
@@ -158,13 +126,8 @@ def thesis_band_rms(
     band: tuple[float, float] = THESIS_BAND,
     fs_out: float = THESIS_FS,
 ) -> float:
-    """The thesis's RMS of ``x`` (unit of x) over ``band`` (Hz), whatever the run's step.
-
-    ``x`` at the times ``t`` (s) is resampled anti-aliased to ``fs_out`` (500 Hz,
-    :func:`resample_to`), its MATLAB-style periodogram taken (:func:`matlab_periodogram`,
-    Eq 4.8), and ``sqrt(trapz(P, f))`` integrated over the bins with ``f1 <= f <= f2``
-    (Eq 4.9; the band selected by frequency, not by App. IV's bin indices).
-    """
+    """The thesis's RMS (Eq 4.8/4.9) of ``x`` at times ``t`` (s) over ``band`` (Hz), whatever
+    the run's step: :func:`resample_to` ``fs_out``, then :func:`periodogram_band_rms`."""
     return periodogram_band_rms(resample_to(t, x, fs_out), fs_out, band)
 
 
@@ -186,9 +149,8 @@ def thesis_wk_rms(t: np.ndarray, a: np.ndarray, fs_out: float = THESIS_FS) -> fl
 
 
 def thesis_jerk_rms(t: np.ndarray, a: np.ndarray, fs_out: float = THESIS_FS) -> float:
-    """RMS jerk (m/s³) of the acceleration ``a`` (m/s², at times ``t`` in s) by central
-    differences on the signal resampled to ``fs_out`` (Hz), so it does not grow with the
-    run's own rate (differencing amplifies the high-frequency content of a fine step)."""
+    """RMS jerk (m/s³) of ``a`` (m/s², times ``t`` in s) resampled to ``fs_out`` (Hz), so it
+    does not grow with the run's own rate."""
     return rms(jerk(resample_to(t, a, fs_out), fs_out))
 
 
@@ -202,20 +164,13 @@ def wk_response(f_hz: np.ndarray | float) -> np.ndarray:
     high = s**2 / (s**2 + w1 * s / WK_Q12 + w1**2)
     low = w2**2 / (s**2 + w2 * s / WK_Q12 + w2**2)
     transition = (1 + s / w3) / (1 + s / (WK_Q4 * w4) + (s / w4) ** 2)
-    step = (
-        (1 + s / (WK_Q5 * w5) + (s / w5) ** 2)
-        / (1 + s / (WK_Q6 * w6) + (s / w6) ** 2)
-        * (w5 / w6) ** 2
-    )
+    step = ((1 + s / (WK_Q5 * w5) + (s / w5) ** 2) / (1 + s / (WK_Q6 * w6) + (s / w6) ** 2)
+            * (w5 / w6) ** 2)
     return high * low * transition * step
 
 
 def iso2631_wk(a: np.ndarray, fs: float) -> np.ndarray:
-    """Acceleration ``a`` (m/s²) sampled at ``fs`` (Hz) weighted by Wk (m/s²).
-
-    Applied exactly in the frequency domain on a zero-padded FFT (no bilinear warping near
-    the Nyquist frequency).
-    """
+    """``a`` (m/s²) at ``fs`` (Hz) weighted by Wk (m/s²), on a zero-padded FFT (no warping)."""
     a = np.asarray(a, dtype=float)
     n = a.size
     nfft = 1 << int(np.ceil(np.log2(max(2 * n, 2))))
@@ -284,28 +239,17 @@ def metric_values(
 ) -> dict[str, tuple[float, str, str]]:
     """Every ride metric a run table allows, per corner: ``{key: (value, unit, label)}``.
 
-    Keys are stable machine names (``a_b_rms``, ``a_b[2]_rms`` for corner 2 of a full
-    vehicle); labels are the text table's row names. Body and wheel accelerations use the
-    thesis's metric (:func:`thesis_band_rms`: resampled to ``fs_out``, periodogram, band
-    RMS), whatever the run's step:
+    Keys are machine names (``a_b[2]_rms`` for corner 2), labels the text table's rows.
+    Accelerations use :func:`thesis_band_rms` (resampled to ``fs_out``):
 
-    * ``a_b_rms``: body RMS over ``band_hz`` (default 0-20 Hz, Table 5.3) -- the headline;
-    * ``a_b_rms_0_16``: body RMS over 0-16 Hz (Tables 5.7-5.10);
-    * ``a_b_rms_full``: time-domain RMS of the record at the run's own rate (all of its band,
-      up to the run's Nyquist frequency; grows with switching chatter at a fine step);
-    * ``a_b_wk_rms``: ISO 2631-1 Wk-weighted RMS, ``jerk_b_rms``: RMS jerk, both on the
-      ``fs_out`` signal;
+    * ``a_b_rms``: body over ``band_hz`` (default 0-20 Hz, Table 5.3), the headline;
+      ``a_b_rms_0_16`` over 0-16 Hz (Tables 5.7-5.10); ``a_b_rms_full`` time-domain RMS at
+      the run's own rate; ``a_b_wk_rms`` ISO 2631-1 Wk RMS; ``jerk_b_rms`` (m/s³);
     * ``a_w_rms`` / ``a_w_rms_full``: wheel, the same two ways;
-    * ``a_arm_<loc>_<ax>_rms``: lower-arm point accelerations (``loc1``, ``cg``, ``loc2``;
-      ``x``, ``y``, ``z``; Table 5.4) over ``band_hz``;
-    * ``alpha_pitch_rms`` / ``alpha_roll_rms`` (rad/s²): the full vehicle's body pitch and roll
-      accelerations over ``band_hz``, and ``..._rms_0_16`` over 0-16 Hz (Tables 5.7-5.10);
-    * ``sws`` (mm), ``defl_rms`` (mm), ``dtl_rms`` (N), ``f_d_rms`` (N): suspension working
-      space, deflection RMS, dynamic tyre load RMS, damper force RMS, at the run's own rate.
-
-    Uses (when present) ``plant/response/a_b``, ``plant/response/a_w``, the arm-point and
-    pitch/roll fields above,
-    ``plant/state/z_b``/``z_w``, ``tyre_road/force/F_t`` and ``controller/force/F_d``.
+    * ``a_arm_<loc>_<ax>_rms``: lower-arm points (Table 5.4); ``alpha_pitch_rms`` /
+      ``alpha_roll_rms`` (rad/s², and ``_0_16``; Tables 5.7-5.10);
+    * ``sws``, ``defl_rms`` (mm), ``dtl_rms``, ``f_d_rms`` (N): working space, deflection,
+      dynamic tyre load, damper force, at the run's own rate.
     """
     t = np.asarray(table["t"], dtype=float)
     sample_rate(t)  # a non-uniform time column fails here, with its message
@@ -351,8 +295,7 @@ def metric_values(
 
 
 def run_metrics(table: Table, band_hz: tuple[float, float] = THESIS_BAND) -> dict[str, float]:
-    """Every ride metric a run table allows, per corner, as ``{label: value}`` (the text
-    table's row names, units in brackets); see :func:`metric_values` for the definitions."""
+    """:func:`metric_values` as ``{label: value}`` (units in the labels)."""
     return {label: value for value, _unit, label in metric_values(table, band_hz).values()}
 
 
@@ -362,15 +305,9 @@ def ride_summary(
     band_hz: tuple[float, float] = THESIS_BAND,
     fs_out: float = THESIS_FS,
 ) -> dict:
-    """Every metric of every run, machine-readable (``suscosim ride --json``).
-
-    Returns:
-        ``{"baseline": name, "band_hz": [f1, f2], "fs_metric_hz": fs_out,
-        "units": {key: unit}, "labels": {key: label},
-        "runs": [{"name", "metrics": {key: value}, "change_pct": {key: %}}]}`` in the order
-        of ``runs``; ``change_pct`` (thesis Eq 5.13, positive = reduction) against the
-        baseline (default: the first run) for the keys both have; empty for the baseline.
-    """
+    """Every metric of every run (``suscosim ride --json``): ``{"baseline", "band_hz",
+    "fs_metric_hz", "units", "labels", "runs": [{"name", "metrics", "change_pct"}]}``;
+    ``change_pct`` (Eq 5.13) against the baseline (default: the first run), empty for it."""
     names, base = _runs_and_baseline(runs, baseline)
     values = {n: metric_values(runs[n], band_hz, fs_out) for n in names}
     units: dict[str, str] = {}
@@ -411,23 +348,14 @@ def ride_table(
     band_hz: tuple[float, float] = (0.0, 20.0),
     metrics: Sequence[str] | None = None,
 ) -> str:
-    """Text table comparing runs, laid out like thesis Tables 5.5/5.6: one row per metric, the
-    baseline's value, then for every other run its value and the % improvement (Eq 5.13).
-
-    Args:
-        runs: run name -> run table (``t`` plus ``<node>/<channel>/<field>`` columns).
-        baseline: run the others are compared with (default: the first).
-        band_hz: band of the PSD-based RMS (Hz).
-        metrics: row names to keep (default: those every run has, in the first run's order).
-    """
+    """Text table like thesis Tables 5.5/5.6: per metric row (``metrics``, default those
+    every run has) the baseline's value (default: first run), then each run's value and %
+    improvement (Eq 5.13); ``band_hz`` is the PSD band (Hz)."""
     names, base = _runs_and_baseline(runs, baseline)
     order = [base] + [n for n in names if n != base]
     values = {n: run_metrics(runs[n], band_hz) for n in order}
-    rows = (
-        list(metrics)
-        if metrics is not None
-        else [k for k in values[base] if all(k in values[n] for n in order)]
-    )
+    rows = list(metrics) if metrics is not None else [
+        k for k in values[base] if all(k in values[n] for n in order)]
     header = ["metric", base]
     for n in order[1:]:
         header += [n, "%"]

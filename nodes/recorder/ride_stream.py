@@ -1,42 +1,20 @@
-"""Ride metrics of a run's table read in row batches (#32): :func:`.ride_metrics.metric_values`
-without holding whole columns (``suscosim report`` of an hour-long run).
+"""Ride metrics of a run's table read in row batches: :func:`.ride_metrics.metric_values`
+without holding whole columns. Each estimator is compared with the whole-signal one by
+``tests/unit/test_ride_stream.py``:
 
-Every estimator below is compared with the whole-signal one of :mod:`.ride_metrics` on tables
-by ``tests/unit/test_ride_stream.py``; what each is, and how far it may differ:
-
-* **Resampling to 500 Hz** (:class:`StreamResampler`): ``scipy.signal.resample_poly``'s own
-  FIR, padding and trimming (Kaiser beta 8, :func:`.ride_metrics.resample_to`), applied by
-  ``upfirdn`` to windows of the signal that hold each output sample's whole support: the same
-  samples, bit for bit.
-* **Band RMS** (thesis Eq 4.8/4.9, :class:`BandPeriodogram`): *the same estimator*, the
-  MATLAB-style periodogram of the whole record (rectangular window, no detrend,
-  ``nfft = max(256, 2^nextpow2(N))`` with ``N`` known from the row count), not a Welch
-  average. Only the bins up to the band's top are kept: ``X_k = sum over segments of
-  e^{-2 pi i k n0 / nfft} DFT_segment(k)``, each segment's DFT at those bins by a Bluestein
-  chirp-z whose chirp phases are reduced exactly in integers. It differs from the whole-signal
-  FFT by rounding only (tested to 1e-12 relative). Memory: the in-band bins,
-  ``16 B x nfft x f2 / fs`` per signal (at most 1.3 B per 500 Hz sample for 0-20 Hz): it still
-  grows with the run, at 1/6 to 1/12 of one 8-byte column at 500 Hz (0.34 MB a signal for
-  10^6 rows at 1 kHz), the price of keeping the thesis's number. A Welch average of band
-  powers would be bounded but moves the Chapter 5 values (a Hann window's leakage and the
-  DC term differ from the rectangular periodogram's).
-* **ISO 2631-1 Wk** (:class:`StreamWk`): the whole-signal way multiplies the FFT of the
-  signal zero-padded to ``nfft >= 2N`` by H(f) exactly, i.e. a two-sided linear convolution
-  with the impulse response of H sampled on that grid. Streamed, by overlap-save: for a
-  record whose grid is at most :data:`WK_GRID` points (65 536 samples, 131 s at 500 Hz) that
-  very impulse response, lags +-nfft/2 (equal to rounding, tested to 1e-13); for a longer
-  one H sampled on :data:`WK_GRID` points (262 s), its response cut to +-:data:`WK_HALF`
-  lags (65.5 s). The difference is then the response beyond 65 s (its causal part has
-  decayed to ~e^-100 by then; H's step at the Nyquist frequency, |H(250 Hz)| ~ 0.01, leaves
-  a ripple falling as 1/lag): 2.5e-8 relative measured at 500 s, tested to 1e-7.
-* **Jerk**: ``np.gradient``'s differences sample by sample (bit for bit); its RMS below.
-* **Time-domain RMS** (full band, deflection, damper force): the sum of squares batch by
-  batch instead of one pairwise ``np.mean``: a few ulps (tested to 1e-12). **SWS**: max - min,
-  exact. **DTL**: Chan's combination of the batches' means and centred sums of squares
-  (tested to 1e-12).
-
-The peak memory is a batch of the ride columns, each signal's filter state (~1.5-3 MB for the
-Wk filter, a filter's length, <= 161 samples, for the resampler) and the in-band bins above.
+* **Resampling to 500 Hz** (:class:`StreamResampler`): ``resample_poly``'s own FIR, padding
+  and trimming, applied by ``upfirdn`` to windows holding each output's support: bit for bit.
+* **Band RMS** (Eq 4.8/4.9, :class:`BandPeriodogram`): the same whole-record MATLAB-style
+  periodogram (``N`` known from the row count), only the bins up to the band's top:
+  ``X_k = sum over segments of e^{-2 pi i k n0 / nfft} DFT_segment(k)``, each by a Bluestein
+  chirp-z with integer-reduced phases (to 1e-12). Memory ``16 B x nfft x f2 / fs`` per
+  signal; a Welch average would be bounded but moves the Chapter 5 values.
+* **ISO 2631-1 Wk** (:class:`StreamWk`): overlap-save with the impulse response of H on the
+  whole-signal grid when it is at most :data:`WK_GRID` points (to 1e-13); longer records use
+  H on :data:`WK_GRID` points cut to +-:data:`WK_HALF` lags (65.5 s at 500 Hz; 2.5e-8 at
+  500 s, tested to 1e-7).
+* **Jerk**: ``np.gradient``'s differences (bit for bit). **RMS**: batch sums of squares (to
+  1e-12). **SWS**: max - min. **DTL**: Chan's combination of batch moments (to 1e-12).
 """
 
 from __future__ import annotations
@@ -63,8 +41,7 @@ Batches = Callable[[Sequence[str]], Iterable[dict[str, np.ndarray]]]
 
 
 def _output_len(len_h: int, n_in: int, up: int, down: int) -> int:
-    """Samples ``upfirdn`` returns for a filter of ``len_h`` taps and ``n_in`` inputs (scipy's
-    private ``_upfirdn._output_len``)."""
+    """Samples ``upfirdn`` returns (scipy's private ``_upfirdn._output_len``)."""
     return ((n_in - 1) * up + len_h - 1) // down + 1
 
 
@@ -72,8 +49,7 @@ _NOT_UNIFORM = "time column is not uniformly sampled (a run with missing steps?)
 
 
 def stream_rate(batches: Iterable[dict[str, np.ndarray]]) -> float:
-    """Sampling frequency [Hz] of a uniform ``t`` column [s] read in batches, as
-    :func:`.ride_metrics.sample_rate` (its messages; the step the first batch's median)."""
+    """:func:`.ride_metrics.sample_rate` [Hz] of a ``t`` column [s] read in batches."""
     step: float | None = None
     last: np.ndarray | None = None
     n = 0
@@ -98,9 +74,8 @@ def stream_rate(batches: Iterable[dict[str, np.ndarray]]) -> float:
 
 
 class StreamResampler:
-    """:func:`.ride_metrics.resample_to` of an ``n_in``-sample signal at ``fs_in`` [Hz] fed in
-    pieces: :meth:`add` and :meth:`finish` return the output samples [unit of x] that are
-    complete, in order (module docstring: the same samples, bit for bit)."""
+    """:func:`.ride_metrics.resample_to` of ``n_in`` samples at ``fs_in`` [Hz] fed in pieces:
+    :meth:`add` and :meth:`finish` return the output samples now complete, in order."""
 
     def __init__(self, n_in: int, fs_in: float, fs_out: float = rm.THESIS_FS) -> None:
         self.identity = abs(fs_in - fs_out) <= 1e-6 * fs_out
@@ -169,8 +144,8 @@ def _chirp(j: np.ndarray, nfft: int) -> np.ndarray:
 
 
 class BandPeriodogram:
-    """The in-band bins of :func:`.ride_metrics.matlab_periodogram` of an ``n``-sample
-    signal at ``fs`` [Hz] fed in pieces, up to ``f_max`` [Hz] (module docstring)."""
+    """Bins up to ``f_max`` [Hz] of :func:`.ride_metrics.matlab_periodogram` of ``n``
+    samples at ``fs`` [Hz] fed in pieces."""
 
     def __init__(self, n: int, fs: float, f_max: float) -> None:
         if n < 2:
@@ -209,8 +184,7 @@ class BandPeriodogram:
         self.pos += B
 
     def band_rms(self, band: tuple[float, float]) -> float:
-        """``sqrt(trapz(P, f))`` over the bins with ``f1 <= f <= f2`` [unit], as
-        :func:`.ride_metrics.periodogram_band_rms`."""
+        """:func:`.ride_metrics.periodogram_band_rms` [unit]."""
         if self.pos != self.n:
             raise ValueError(f"{self.pos} samples fed of the {self.n} announced")
         f1, f2 = rm._check_band(band, self.fs)
@@ -224,9 +198,8 @@ class BandPeriodogram:
 
 
 class StreamWk:
-    """Sum of squares of the ISO 2631-1 Wk-weighted signal (:func:`.ride_metrics.iso2631_wk`)
-    of an ``n``-sample signal at ``fs`` [Hz] fed in pieces, by overlap-save with a fixed
-    two-sided impulse response (module docstring)."""
+    """Sum of squares of :func:`.ride_metrics.iso2631_wk` of ``n`` samples at ``fs`` [Hz]
+    fed in pieces (overlap-save)."""
 
     def __init__(self, n: int, fs: float) -> None:
         nfft = 1 << int(np.ceil(np.log2(max(2 * n, 2))))  # iso2631_wk's grid
@@ -258,8 +231,7 @@ class StreamWk:
 
 
 class StreamJerk:
-    """Sum of squares of ``np.gradient(a, 1 / fs)`` (:func:`.ride_metrics.jerk`) of a signal
-    fed in pieces (the same differences, bit for bit)."""
+    """Sum of squares of :func:`.ride_metrics.jerk` of a signal fed in pieces."""
 
     def __init__(self, fs: float) -> None:
         self.dx = 1.0 / fs
@@ -289,8 +261,7 @@ class StreamJerk:
 
 
 class Moments:
-    """Count, sum of squares, extremes, mean and centred sum of squares (Chan et al. 1979)
-    of a signal fed in pieces."""
+    """Count, sum of squares, extremes, mean, centred sum of squares (Chan et al. 1979)."""
 
     def __init__(self) -> None:
         self.n, self.sumsq, self.mean, self.m2 = 0, 0.0, 0.0, 0.0
@@ -359,10 +330,8 @@ def streamed_metric_values(
     names: Sequence[str], n_rows: int, batches: Batches,
     band_hz: tuple[float, float] = rm.THESIS_BAND, fs_out: float = rm.THESIS_FS,
 ) -> dict[str, tuple[float, str, str]]:
-    """:func:`.ride_metrics.metric_values` of a table of ``n_rows`` rows and columns
-    ``names``, read by ``batches`` (two passes: ``t`` for the rate, then the ride columns
-    together): the same keys in the same order, ``{key: (value, unit, label)}``, by the
-    estimators of the module docstring."""
+    """:func:`.ride_metrics.metric_values` (same keys, same order) of a table of ``n_rows``
+    rows and columns ``names`` read by ``batches`` (two passes: ``t``, then the ride columns)."""
     R = "plant/response/"
     bases = (*(f"{R}{f}" for f in ("a_b", "a_w", *rm.ARM_ACCEL_FIELDS, *rm.ROTATION_FIELDS)),
              "plant/state/z_b", "tyre_road/force/F_t", "controller/force/F_d")
