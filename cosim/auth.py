@@ -1,45 +1,30 @@
 """Message authentication: every message of a run carries a MAC made with the run's own key.
 
-A run has a secret key of 32 bytes (:func:`derive_run_key` from a secret and the run id). Each
-message a participant or the orchestrator publishes is signed. A message of
-:mod:`cosim.wire` is a msgpack map of five fields (``0x85`` then the fields' bytes ``F``);
-signed, it is a map of six, the sixth ``"s"``: a 16-byte keyed BLAKE2b of the key expression
-it is published on and of ``F``::
+A run has a secret key of 32 bytes (:func:`derive_run_key` from a secret and the run id). A
+message of :mod:`cosim.wire` is a msgpack map of five fields (``0x85`` then the fields' bytes
+``F``); signed, it is a map of six, the sixth ``"s"``: a 16-byte keyed BLAKE2b of the key
+expression it is published on and of ``F``::
 
     raw = b"\x86" + F + b"\xa1s\xc4\x10" + blake2b(key=run_key, person="suscosim-msg-v1",
                                                 digest_size=16)(keyexpr + b"\0" + F)
 
-So a reader without the key (a tap, ``suscosim replay``, a plain ``msgpack.unpackb``) reads a
-signed message as before, with one more field to ignore, and a receiver with the key checks
-it on the bytes as they came (:meth:`RunKey.verify`: a slice and a hash, nothing re-encoded).
-The key expression is in the MAC, so a message cannot be replayed on another channel or
-under another run. A message that is unsigned or badly signed is rejected
-(:class:`AuthError`, counted like any rejected message) before it is decoded. BLAKE2b is
-keyed natively (no HMAC double hash) and is the fastest keyed hash of :mod:`hashlib`: about
-1 us a message.
+A reader without the key (a tap, ``suscosim replay``) reads it with one more field to ignore;
+a receiver with the key checks the bytes as they came (:meth:`RunKey.verify`). The key
+expression is in the MAC: no replay on another channel or run. An unsigned or badly signed
+message is rejected (:class:`AuthError`, counted) before it is decoded. BLAKE2b: keyed
+natively, the fastest keyed hash of :mod:`hashlib` (~1 us a message).
 
-**A run instance's nonce** (issue #30 item 11). The key binds the run id, and one secret
-with one run id can serve two runs (a sweep's ids can repeat, a run can be started again): a
-keyless tap that recorded run 1's signed ``ready`` and ``done`` could replay them into run 2
-and end it "ok" with run 1's statistics. So the orchestrator draws a fresh 16-byte nonce for
-every run it starts (:func:`new_nonce`) and every message of the run is signed bound to it
-(``RunKey(key, nonce)``: the MAC is a keyed BLAKE2b with person ``suscosim-msg-v2`` of
-``nonce + keyexpr + "\0" + F``). Only the scenario the orchestrator serves is signed without
-it (the key alone): that reply announces the nonce (field ``session``, hex) to the nodes,
-started by it or elsewhere, which bind to it before they say anything
-(:meth:`cosim.participant.Participant.bind`). A message of another instance of the run does
-not verify ("bad signature"), is rejected and counted.
+**A run instance's nonce.** One secret and run id can serve two runs (a sweep's ids repeat),
+so a keyless tap could replay run 1's signed ``ready``/``done`` into run 2. The orchestrator
+draws a 16-byte nonce per run (:func:`new_nonce`) and every message is signed bound to it
+(person ``suscosim-msg-v2`` over ``nonce + keyexpr + "\0" + F``), except the served scenario
+(key alone), which announces the nonce (field ``session``, hex) for the nodes to bind to
+(:meth:`cosim.participant.Participant.bind`).
 
-Where the key comes from (:func:`run_key_from_env`), in this order:
-
-* ``SUSCOSIM_RUN_KEY``: the run key itself, hex (the orchestrator hands it to the nodes it
-  starts, in their environment);
-* ``SUSCOSIM_KEY_FILE``: a file holding a secret (``suscosim node --key-file``): the run key
-  is derived from it and the run id. The orchestrator writes one, ``RUN/run.key``, when a run
-  has nodes started elsewhere and no secret was given; the file must not be readable by
-  group or others (mode 0600);
-* ``SUSCOSIM_KEY``: a secret in the environment (a deployment's shared secret), derived the
-  same way.
+Where the key comes from (:func:`run_key_from_env`), in this order: ``SUSCOSIM_RUN_KEY`` (the
+run key, hex, set by the orchestrator for the nodes it starts); ``SUSCOSIM_KEY_FILE`` (a
+secret file, mode 0600, e.g. the orchestrator's ``RUN/run.key`` for nodes started elsewhere;
+the key is derived from it and the run id); ``SUSCOSIM_KEY`` (a secret, derived the same way).
 """
 
 from __future__ import annotations

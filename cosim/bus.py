@@ -1,21 +1,12 @@
 """The bus: a thin layer over a Zenoh session (the tests have an in-memory twin with the same
 verbs, ``tests/memory_bus.py``; the one-process engine needs no bus, orchestrator/inprocess.py).
 
-The verbs:
-``publisher(key)``, ``subscribe(keyexpr, callback)``, ``feed(key)`` (a subscriber read from
-its own FIFO), ``token(key)`` (liveliness), ``watch(keyexpr, callback)`` (liveliness changes),
-``serve(key, reply)`` / ``query(key)`` / ``query_all(key)``, ``alive(keyexpr)`` (the live
-tokens now).
+Callbacks receive ``(key: str, payload: bytes)`` on the bus's own thread: they only hand the
+bytes over, never block. A feed (the lock-step inputs) is read by the node's own thread:
+``feed.recv()`` blocks, ``feed.wake()`` (any thread) makes it return ``b""``.
 
-Callbacks receive ``(key: str, payload: bytes)`` and run on the bus's own thread: they must
-only hand the bytes over (to a queue), never block. A feed is for the lock-step inputs: the
-node's thread blocks in ``feed.recv()`` and Zenoh's receive thread hands it the message
-directly, without a Python callback thread in between; ``feed.wake()`` (from any thread)
-makes a blocked ``recv()`` return an empty payload.
-
-Default transport is embedded: Zenoh in peer mode, listening on loopback only, multicast
-scouting off. Peers find each other through the endpoint they connect to (gossip), or, a
-run's local nodes, link as an explicit mesh with gossip off (``gossip=False``).
+Default transport: Zenoh in peer mode, listening on loopback only, multicast scouting off;
+peers find each other by gossip, or link as an explicit mesh (``gossip=False``).
 """
 
 from __future__ import annotations
@@ -47,8 +38,7 @@ class Feed(Protocol):
 
 
 class Bus(Protocol):
-    """What node code, the clock and the runner use of a bus: :class:`ZenohBus` implements
-    it (the verbs of the module docstring)."""
+    """What node code, the clock and the runner use of a bus (:class:`ZenohBus`)."""
 
     def publisher(self, key: str) -> Callable[[bytes], None]: ...
     def put(self, key: str, payload: bytes) -> None: ...
@@ -76,17 +66,14 @@ def free_loopback_endpoint() -> str:
 
 
 CALLBACK_DRAIN_TIMEOUT = 5.0
-"""How long :meth:`ZenohBus.close` waits, at most, for its callbacks' threads to deliver what
-they had received [s] (a tap's callback queues a sample in microseconds)."""
+"""How long :meth:`ZenohBus.close` waits at most for its callbacks' threads to deliver [s]."""
 
 CLIENT_CONNECT_TIMEOUT_MS = 30000
 """How long a client session keeps trying to reach its router before giving up [ms]."""
 
 CONNECT_RETRY = {"period_init_ms": 100, "period_max_ms": 500, "period_increase_factor": 1.5}
-"""How often a session retries an endpoint it could not reach. Zenoh's own (1 s, doubling to
-4 s) left a session opened a moment before the run listened unconnected for up to 4 s: a tap
-or a test that queried the run then met nobody (#30; CI failed on it twice). A retry to a
-dead loopback port costs a refused SYN."""
+"""How often a session retries an endpoint it could not reach (Zenoh's own, 1 s doubling to
+4 s, left a tap opened just before its run unconnected for seconds)."""
 
 
 def _unset(conf: Any, key: str) -> bool:
@@ -112,24 +99,18 @@ def zenoh_config(
             ``["tcp/192.168.1.10:7447"]``; added to the config file's own.
         listen: endpoints to listen on; default the config file's, else loopback only on a
             free port. Clients do not listen.
-        lowlatency: Zenoh's low-latency transport: a put writes to the socket from the
-            calling thread instead of waking a transmit thread (~15 % more coupled steps per
-            second). Negotiated per link: a peer without it (a plain tap) still connects.
-            Peers then connect to each other only from the greater Zenoh id (``greater-zid``):
-            two peers opening a low-latency link to each other at once both failed, about
-            one start in four.
+        lowlatency: Zenoh's low-latency transport (a put writes to the socket from the calling
+            thread; negotiated per link). Peers then connect only from the greater Zenoh id:
+            two peers opening a low-latency link to each other at once both failed.
         lease_ms: how long a silent peer is kept; bounds how fast a partitioned node is seen
             as gone (Zenoh's default is 10 s).
         config_file: a Zenoh JSON5 configuration file to start from (TLS, access control);
             its mode, endpoints and scouting settings are kept unless given here.
-        mode: ``"peer"`` (the embedded mesh: sessions connect to each other directly) or
-            ``"client"`` (every message goes through the router or peer it connects to; what a
-            node on another machine uses, since Zenoh >= 1.9 routers do not relay between two
-            peers). Default: the config file's mode, else ``default_mode``.
-        default_mode: the mode when neither ``mode`` nor the config file gives one.
+        mode: ``"peer"`` or ``"client"`` (everything through the router or peer it connects
+            to: a node on another machine; Zenoh >= 1.9 routers do not relay between peers).
+            Default: the config file's mode, else ``default_mode``.
         gossip: False for a session of a run's explicit mesh
-            (:class:`orchestrator.local_mesh.LocalMesh`): it links to the endpoints it is
-            given and to those that connect to it, and sends and forwards no link states.
+            (:class:`orchestrator.local_mesh.LocalMesh`): no link states sent or forwarded.
     """
     import zenoh
 
@@ -157,9 +138,7 @@ def zenoh_config(
         conf.insert_json5("transport/unicast/lowlatency", "true")
         conf.insert_json5("transport/unicast/qos/enabled", "false")
     elif not config_file:  # a user's config file decides for itself
-        # No priority lanes: suscosim sends one priority only, and one lane instead of
-        # eight saves ~10-15 % CPU per coupled step (python -m bench throughput). Peers with
-        # QoS on (a plain tap, a default router) still connect: QoS is negotiated per link.
+        # one priority only: one lane instead of eight saves CPU (negotiated per link)
         conf.insert_json5("transport/unicast/qos/enabled", "false")
     return conf
 
@@ -176,14 +155,9 @@ class ZenohBus:
         self._drained: list[threading.Event] = []
 
     def _handler(self, fn: Callable[[Any], None]) -> Any:
-        """``fn`` as a Zenoh callback that says when it is done: Zenoh runs a Python callback
-        in a Python thread of its own, which may still be delivering what it had received
-        when its subscriber is undeclared; ``drop`` is called once it has delivered the
-        last. :meth:`close` waits for it: a process that exited while that thread still
-        waited for the GIL in Zenoh's frames aborted at interpreter exit ("FATAL: exception
-        not rethrown": Python ends such a thread with a forced unwind, which the frames'
-        ``catch_unwind`` stops). Seen as a tap that printed its result, then died of SIGABRT
-        (CI, and 3 of 89 taps of a live run; 0 of 265 with this)."""
+        """``fn`` as a Zenoh callback whose ``drop`` says its thread has delivered the last:
+        :meth:`close` waits for it (a process exiting while that thread waited for the GIL
+        in Zenoh's frames died of SIGABRT at interpreter exit)."""
         drained = threading.Event()
         self._drained.append(drained)
         return self._z.handlers.Callback(fn, drop=drained.set)
@@ -243,11 +217,9 @@ class ZenohBus:
         return None
 
     def query_all(self, key: str, timeout: float = 1.0) -> list[bytes]:
-        """Every reply to a query on ``key`` (a rogue queryable may answer too: the caller
-        picks the one it can verify). Every matching queryable is asked and no reply is
-        consolidated away: by default Zenoh asks the best-matching one and keeps one reply
-        per key, so a rogue queryable behind the orchestrator (one of its clients) could
-        shadow the orchestrator's own reply on the same key."""
+        """Every reply to a query on ``key``, from every matching queryable, none
+        consolidated away (a rogue queryable must not shadow the orchestrator's reply: the
+        caller picks the one it can verify)."""
         z = self._z
         return [r.ok.payload.to_bytes() for r in self.session.get(
             key, timeout=timeout, target=z.QueryTarget.ALL,
@@ -277,23 +249,12 @@ class ZenohBus:
             time.sleep(0.02)
 
     def flush(self, timeout: float = 1.0) -> int:
-        """Wait until every router this session is connected to has routed what we sent.
-
-        A query travels on the same reliable, FIFO link and priority lane (``Priority.DATA``)
-        as our puts, so a router's admin-space reply to ``@/<router zid>/router`` arrives only
-        after the router has taken every earlier message off the link and queued it to its
-        subscribers. It needs a router with ``adminspace`` read enabled (``suscosim router``
-        enables it) whose access control lets the query in and the reply out; the shipped
-        ``deploy/zenoh/router.json5`` does neither (when it let the query in, the reply was
-        held back: 0 replies, the query ended in ~1 ms). Without a reply the
-        wait ends at ``timeout`` [s] or when the query ends. Returns the number of routers
-        that replied.
-
-        :meth:`close` does not call it: Zenoh's own close already writes what the session's
-        transmission queue holds before the link goes (zenoh-transport, the link's tx task
-        drains its pipeline), and the abort the kill test's tap "missed" (#30 item 17) had
-        reached it every time: the tap lost its own line (docs/deployment.md).
-        """
+        """Wait until every router this session is connected to has routed what we sent:
+        a query to ``@/<router zid>/router`` travels on the same FIFO link and lane as our
+        puts. Needs a router with ``adminspace`` read enabled that lets the query in and the
+        reply out (``suscosim router``; not the shipped ``deploy/zenoh/router.json5``);
+        without a reply the wait ends at ``timeout`` [s]. Returns the number of routers that
+        replied. :meth:`close` needs none: Zenoh's close drains its transmission queue."""
         answered = 0
         try:
             for zid in list(self.session.info.routers_zid()):
@@ -319,8 +280,7 @@ class ZenohBus:
 
 class _ZenohFeed:
     """A subscriber on one key whose samples wait in a bounded FIFO (Zenoh's ``FifoChannel``)
-    until the node's thread takes them; a full FIFO holds the sender back (lock-step
-    producers are never more than a few steps ahead)."""
+    until the node's thread takes them; a full FIFO holds the sender back."""
 
     def __init__(self, bus: ZenohBus, key: str, capacity: int) -> None:
         z = bus._z

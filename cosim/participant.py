@@ -2,33 +2,23 @@
 
 Life of a node (see DESIGN.md, "Lock-step co-simulation"):
 
-1. **Declare**: a liveliness token ``suscosim/<run>/<node>/alive``; fetch the resolved scenario
-   from the orchestrator's queryable.
-2. **Handshake** (start barrier): publish ``hello`` on every output channel every 50 ms and
-   listen to every input channel. A node is *ready* once it has heard every input (so the data
-   path from each producer is proven live: Zenoh delivers reliably and in order from then on);
-   it then publishes ``ready`` (with facts other nodes need, e.g. static tyre loads) until the
-   orchestrator's ``start`` arrives. ``start`` carries every node's facts.
-3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived (the
-   step barrier); :meth:`Participant.publish` adds an output to the node's step and
-   :meth:`Participant.send` (or the next :meth:`wait`) publishes the step: **one message per
-   producer per step** on ``<node>/step``, signed once (:mod:`cosim.outbox`: the step, the
-   block channels on their own keys, the records batches). Each producer a node listens to
-   has one FIFO (:meth:`bus.feed`) that the node's thread reads itself: one thread wake-up
-   per delivery (a callback and a queue cost a second one, ~20 % of the coupled step rate
-   on two cores). A watchdog thread wakes a node blocked on its FIFO when the stall timeout
-   passes, a control message (abort) comes, or the orchestrator is gone (its liveliness
-   token, or the process that started the node: :mod:`cosim.orchestrator_presence`). Progress goes
-   to the orchestrator at most every 0.1 s.
-4. **End**: ``done`` after the last step; an ``abort`` from the orchestrator, or an input that
-   does not come within the stall timeout, ends the node with :class:`RunError`.
+1. **Declare** a liveliness token ``suscosim/<run>/<node>/alive``; fetch the resolved scenario.
+2. **Handshake** (start barrier): ``hello`` on every output every 50 ms; once every input has
+   been heard (its data path is live), ``ready`` (with facts other nodes need) until the
+   orchestrator's ``start`` (carrying every node's facts) arrives.
+3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived;
+   :meth:`Participant.publish` adds an output to the node's step, published by
+   :meth:`Participant.send` (or the next ``wait``) as **one signed message per producer per
+   step** on ``<node>/step`` (:mod:`cosim.outbox`). Each producer has one FIFO
+   (:meth:`bus.feed`) read by the node's own thread (one wake-up per delivery). A watchdog
+   thread wakes a blocked node on stall timeout, a control message (abort), or when the
+   orchestrator is gone (:mod:`cosim.orchestrator_presence`). Progress: at most every 0.1 s.
+4. **End**: ``done`` after the last step; an ``abort``, or an input late by more than the
+   stall timeout, ends the node with :class:`RunError`.
 
-A message that does not decode or does not fit the schema (or lacks a field the node needs)
-is rejected: logged, counted, never a crash. With a run key (:class:`cosim.auth.RunKey`)
-every message the node publishes is signed and every message it takes must be signed with
-that key (else rejected and counted, before it is decoded). A ``start`` must be plausible
-(:func:`cosim.control.check_start`). Each input's mailbox is bounded
-(:mod:`cosim.mailbox`); what falls outside is rejected and counted.
+A message that does not verify (:class:`cosim.auth.RunKey`), decode, fit the schema or its
+bounded mailbox (:mod:`cosim.mailbox`) is rejected: logged, counted, never a crash. A
+``start`` must be plausible (:func:`cosim.control.check_start`).
 """
 
 from __future__ import annotations
@@ -82,9 +72,8 @@ class Participant:
         :func:`cosim.control.check_start`); set from the scenario by the node's shell."""
         self.stall_timeout_s = stall_timeout_s
         self.spin_s = spin_s
-        """How long :meth:`wait` polls an input (yielding the core between polls) before it
-        blocks [s] (0: at once). For a pinned node: waking an idle virtual CPU is what a hop
-        costs most on a small VM (docs/cosim.md)."""
+        """How long :meth:`wait` polls an input (yielding the core) before it blocks [s]
+        (0: at once; for pinned nodes, docs/cosim.md)."""
         self.inbox: queue.SimpleQueue[tuple[Channel, bytes]] = queue.SimpleQueue()
         self.feeds: dict[Channel, Any] = {}
         """Each stepped input's FIFO: its producer's (one per producer, :attr:`_pfeeds`)."""
@@ -104,9 +93,8 @@ class Participant:
         bus.watch(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE), self.orchestrator.on_token)
         self._blocked: tuple[Any, float] | None = None  # (feed, stall deadline) while waiting
         self._awaited: tuple[Channel, int, float] | None = None
-        """(input, step, since when [monotonic s]) while :meth:`wait` is blocked on it: the
-        watchdog tells the orchestrator whom this node waits for (``waiting``), so that a
-        stall is blamed on the node that stopped, not on the ones waiting for it."""
+        """(input, step, since when [monotonic s]) while :meth:`wait` is blocked on it (the
+        watchdog's ``waiting``: a stall is blamed on the node that stopped)."""
         self._last_waiting = 0.0
         self._wakes = 0  # wake-ups sent by the watchdog, not yet received
         self._wake_lock = threading.Lock()
@@ -134,12 +122,9 @@ class Participant:
         return lambda raw: pub(sign(raw))
 
     def open(self, key: str, raw: bytes) -> Message:
-        """Verify (with the run's key) and decode a message received on ``key``; raises
-        :class:`WireError` (an :class:`cosim.auth.AuthError` for a bad signature). A data
-        channel's message is checked against its schema (:class:`cosim.wire.ChannelCodec`:
-        finite, within the channel's bounds, ``k``, ``t`` >= 0). The messages inside a
-        ``records`` batch or a ``step`` are decoded by whoever takes them, each against its
-        own channel (:func:`cosim.wire.inner`)."""
+        """Verify and decode a message received on ``key`` (a data channel's against its
+        schema, :class:`cosim.wire.ChannelCodec`; a batch's or step's inner messages by whoever
+        takes them); raises :class:`WireError` (:class:`cosim.auth.AuthError`: signature)."""
         body = self.auth.verify(key, raw) if self.auth is not None else raw
         dec = self._codecs.get(key)
         if dec is None:
@@ -167,12 +152,9 @@ class Participant:
 
     def listen(self, node: str, channel: str, required: Iterable[str] = (),
                stepped: bool = True) -> Channel:
-        """Subscribe to an input; ``required`` fields must be present or the message is rejected.
-
-        A ``stepped`` input is read by :meth:`wait` from its own FIFO; otherwise its messages
-        come through :attr:`inbox` with the control messages (for nodes that take inputs as
-        they come, not step by step: :meth:`handle` files them in :attr:`mailbox`).
-        """
+        """Subscribe to an input; ``required`` fields must be present or the message is
+        rejected. A ``stepped`` input is read by :meth:`wait` from its producer's FIFO; others
+        come through :attr:`inbox` (filed by :meth:`handle`)."""
         tag = (node, channel)
         if tag not in self.inputs:
             self.inputs[tag] = Mailbox(tuple(required), stepped)
@@ -198,15 +180,11 @@ class Participant:
         return self.out.outputs
 
     def output(self, channel: str) -> None:
-        """Declare an output channel (:meth:`cosim.outbox.Outbox.output`: a per-step
-        channel goes out in the node's step message on ``suscosim/<run>/<node>/step``, a
-        block channel of the schema on its own key)."""
+        """Declare an output channel (:meth:`cosim.outbox.Outbox.output`)."""
         self.out.output(channel)
 
     def bind(self, nonce: bytes) -> None:
-        """Bind every message this node signs or takes from now on to the run instance's
-        ``nonce`` (:mod:`cosim.auth`): a message of another instance of the run (the same
-        id and key, replayed) no longer verifies."""
+        """Sign and verify from now on bound to the run instance's ``nonce`` (:mod:`cosim.auth`)."""
         if self.auth is None or self.auth.nonce == nonce:
             return
         self.auth = self.auth.bound(nonce)
@@ -214,10 +192,8 @@ class Participant:
         self.out.rebind(self._publisher)
 
     def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
-        """The resolved scenario, from the orchestrator's queryable (retried until it answers).
-        Only a reply signed with the run's key counts: a rogue queryable on the run's key
-        (another process on the bus) is rejected and counted, never run. The reply announces
-        the run instance's nonce: the node binds to it (:meth:`bind`)."""
+        """The resolved scenario from the orchestrator's queryable (retried): only a reply
+        signed with the run's key counts (others are rejected); binds to its nonce."""
         deadline = time.monotonic() + timeout_s
         key = keys.key(self.run, keys.ORCHESTRATOR, keys.SCENARIO)
         tag = (keys.ORCHESTRATOR, keys.SCENARIO)
@@ -239,10 +215,7 @@ class Participant:
     # ---- messages -----------------------------------------------------------------------
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
                 record: bool = True, hold: bool = False) -> None:
-        """One data message: a per-step channel's joins this step's message (sent by
-        :meth:`send`, or by the next :meth:`wait`), or with ``hold`` the next step's; a block
-        channel's is published at once; kept for the recorder unless ``record`` is false
-        (:class:`cosim.outbox.Outbox`)."""
+        """One data message (:meth:`cosim.outbox.Outbox.publish`)."""
         self.out.publish(channel, k, t, data, record, hold)
 
     def send(self) -> None:
@@ -250,13 +223,11 @@ class Participant:
         self.out.send()
 
     def flush_records(self) -> None:
-        """Send this step and the kept data messages to the recorder (at the end, and
-        before giving up)."""
+        """Send this step and the kept data messages to the recorder."""
         self.out.flush()
 
     def publish_hello(self) -> None:
-        """``hello`` on every output and the records feed (the start handshake's proof that
-        a data path is live)."""
+        """``hello`` on every output and the records feed (the start handshake)."""
         self.out.hello()
 
     def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: Any) -> None:
@@ -271,8 +242,7 @@ class Participant:
             self.ctl("progress", k, t, rejected=self.rejected)
 
     def reject(self, tag: Channel, why: str) -> None:
-        """Count and log (the first ten, then every thousandth) a message taken on ``tag``
-        that is not acted on: it does not verify, decode or fit what the node expects."""
+        """Count and log (the first ten, then every thousandth) a rejected message."""
         self.rejected += 1
         if self.rejected <= 10 or self.rejected % 1000 == 0:
             log.warning("%s: rejected message #%d on %s/%s: %s",
@@ -314,9 +284,8 @@ class Participant:
             self.reject(tag, "empty message")
 
     def _watch(self) -> None:
-        """Wake the node's thread when it waits on an input and must look elsewhere: a control
-        message came (abort), the stall timeout passed, or the orchestrator is gone. Repeats
-        every period while that holds (a wake-up may land on an input no longer waited on)."""
+        """Wake the node's thread blocked on an input when a control message came, the stall
+        timeout passed or the orchestrator is gone; every period while that holds."""
         while not self._closed.wait(WATCHDOG_PERIOD_S):
             blocked = self._blocked
             if blocked is None:
@@ -457,9 +426,8 @@ class Participant:
                 return msg.d
 
     def finish(self, k: int, t: float, linger_s: float = 120.0, **extra: Any) -> None:
-        """Report ``done`` and stay until the orchestrator closes the run (or is gone, or
-        aborts it): what this node still has in flight on the bus (its last records batch,
-        the recorder's last load blocks) is only delivered while its session is open."""
+        """Report ``done`` and stay until the orchestrator closes the run (or is gone): what is
+        still in flight is only delivered while the session is open."""
         self.flush_records()
         self.ctl("done", k, t, rejected=self.rejected, **extra)
         deadline = time.monotonic() + linger_s

@@ -1,29 +1,14 @@
 """The Zenoh session options of a command, and how its session is opened: in one place.
 
-In the style of the zenoh-python examples' ``common.py``: a command adds the options to its
-parser with :func:`add_zenoh_arguments` and opens its session with :func:`open_session`
-(:func:`resolve_mode`, then :func:`open_bus`).
+A command adds ``--connect``, ``--listen``, ``--lowlatency``, ``--mode auto|peer|client`` and
+``--zenoh-config`` with :func:`add_zenoh_arguments` (``tap``, ``replay``, ``scope``) or one at a
+time with its own defaults (``run``, ``sweep``, ``router``, ``node``), and opens its session
+with :func:`open_session` (:func:`resolve_mode`, then :func:`open_bus`).
 
-    --connect EP (repeatable)   endpoints to connect to (a run's, a router's)
-    --listen EP (repeatable)    endpoints to listen on
-    --lowlatency                Zenoh's low-latency transport (negotiated per link)
-    --mode auto|peer|client     auto: a peer when the session listens, a client otherwise
-    --zenoh-config FILE         a Zenoh JSON5 configuration file (TLS, access control)
-
-A *client* gets everything through the one router or peer it connects to: a run's
-orchestrator routes for its clients, and what a run's nodes send reaches a client connected to
-it whether it is on this machine or another. A *peer* only gets what is sent to it directly:
-a run's local nodes form an explicit mesh with gossip off (:mod:`orchestrator.local_mesh`), so
-a peer connected to the orchestrator would hear nothing of them (and a peer on another machine
-is not relayed by a router). A session that listens (a replay others connect to) is a peer.
-
-:func:`add_zenoh_arguments` (all five, with the session policy above) is used by ``suscosim
-tap``, ``replay`` and ``scope``, the commands that join a run from outside. A command with
-session defaults of its own (``run``, ``sweep``, ``router``; ``node`` can too) adds the options
-it has one at a time, with its own help text, metavar and default: :func:`add_connect_argument`,
-:func:`add_listen_argument`, :func:`add_lowlatency_argument` (``negatable``: ``run``'s
-``--lowlatency/--no-lowlatency``), :func:`add_mode_argument` (``choices``, ``default``),
-:func:`add_config_argument`.
+A *client* gets everything through the one router or peer it connects to (a run's
+orchestrator routes for its clients). A *peer* only gets what is sent to it directly: a run's
+local nodes form an explicit mesh with gossip off (:mod:`orchestrator.local_mesh`), so a peer
+connected to the orchestrator hears none of them. A session that listens (a replay) is a peer.
 """
 
 from __future__ import annotations
@@ -59,9 +44,7 @@ CONFIG_HELP = "Zenoh JSON5 config file (TLS, access control)"
 
 def add_connect_argument(ap: argparse.ArgumentParser, help: str, *, metavar: str | None = "EP",
                          default: list[str] | None = None) -> None:
-    """``--connect EP`` (repeatable): the endpoints the session connects to (a run's, a
-    router's). ``default`` None: absent gives None; ``[]``: absent gives an empty list.
-    ``metavar`` None: argparse's own (``CONNECT``)."""
+    """``--connect EP`` (repeatable); absent gives ``default``; ``metavar`` None: argparse's."""
     ap.add_argument("--connect", action="append", metavar=metavar, default=default, help=help)
 
 
@@ -73,9 +56,7 @@ def add_listen_argument(ap: argparse.ArgumentParser, help: str = LISTEN_HELP, *,
 
 def add_lowlatency_argument(ap: argparse.ArgumentParser, help: str, *,
                             negatable: bool = False) -> None:
-    """``--lowlatency``: Zenoh's low-latency transport (negotiated per link). A flag (absent:
-    False), or with ``negatable`` ``--lowlatency/--no-lowlatency`` (absent: None, the command
-    decides)."""
+    """``--lowlatency``: a flag, or with ``negatable`` ``--[no-]lowlatency`` (absent: None)."""
     if negatable:
         ap.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
                         help=help)
@@ -97,10 +78,7 @@ def add_config_argument(ap: argparse.ArgumentParser) -> None:
 def add_zenoh_arguments(ap: argparse.ArgumentParser, *, connect_help: str,
                         lowlatency_help: str, listen_help: str = LISTEN_HELP,
                         mode_help: str = MODE_HELP) -> None:
-    """Add ``--connect``, ``--listen``, ``--lowlatency``, ``--mode`` and ``--zenoh-config``
-    to ``ap``, for a command that opens its session with :func:`resolve_mode` and
-    :func:`open_bus` (the connect and low-latency help texts are the command's: their
-    defaults differ)."""
+    """All five options (the connect and low-latency help texts are the command's)."""
     add_connect_argument(ap, connect_help)
     add_listen_argument(ap, listen_help)
     add_lowlatency_argument(ap, lowlatency_help)
@@ -115,12 +93,8 @@ def is_loopback(ep: str) -> bool:
 
 
 def session_mode(mode: str, connect: list[str], listen: list[str] | None) -> str:
-    """``auto``: a peer when the session listens (others connect to it: a replay), else a
-    client (everything through the one endpoint it connects to, the run's orchestrator or a
-    router). Not a peer on loopback: a run's local nodes link as an explicit mesh with gossip
-    off (:mod:`orchestrator.local_mesh`), so a peer connected to the orchestrator would hear
-    none of them; the orchestrator routes for its clients. The endpoints in ``connect`` do not
-    decide (loopback or not, the way is the same)."""
+    """``auto``: a peer when the session listens, else a client (see the module docstring;
+    the endpoints in ``connect`` do not decide)."""
     if mode != "auto":
         return mode
     return "peer" if listen else "client"
@@ -138,9 +112,8 @@ def resolve_mode(mode: str, config_file: str | None, connect: list[str],
 def apply_mode(conf: Any, mode: str, connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS
                ) -> Any:
     """Make a :func:`cosim.bus.zenoh_config` a client's (no listening; keep trying to reach
-    the endpoint for ``connect_timeout_ms``), or leave it a peer's; either tries again every
-    0.1-0.5 s (:data:`cosim.bus.CONNECT_RETRY`: a scope started before its run must not
-    connect seconds late and miss a short run's start), also with a config file's own retry."""
+    the endpoint for ``connect_timeout_ms``), or leave it a peer's; either retries at
+    :data:`cosim.bus.CONNECT_RETRY`, overriding a config file's own."""
     import json
 
     from cosim.bus import CONNECT_RETRY
@@ -161,12 +134,8 @@ def _reason(exc: Exception) -> str:
 def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
              lowlatency: bool = False, config_file: str | None = None,
              connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS) -> Any:
-    """A :class:`cosim.bus.ZenohBus` in ``mode`` (from :func:`resolve_mode`); a client tries
-    to reach its endpoint for ``connect_timeout_ms``.
-
-    Raises :class:`SessionOpenError` with Zenoh's reason in one line (bad endpoint, port in
-    use, unreachable router) instead of its exception.
-    """
+    """A :class:`cosim.bus.ZenohBus` in ``mode``; raises :class:`SessionOpenError` with
+    Zenoh's reason in one line (bad endpoint, port in use, unreachable router)."""
     from cosim.bus import ZenohBus, zenoh_config
 
     try:
@@ -181,18 +150,11 @@ def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
 
 def open_session(args: argparse.Namespace, connect: list[str], listen: list[str] | None, *,
                  lowlatency: bool = False, wait: bool = False) -> tuple[Any, str]:
-    """The bus the options of :func:`add_zenoh_arguments` (``args``) ask for, and its mode:
-    :func:`resolve_mode` of ``args.mode``, then :func:`open_bus` on ``connect`` and ``listen``
-    (the command's endpoints: its options with its own defaults), low-latency when
-    ``args.lowlatency`` or ``lowlatency`` (e.g. the run uses it).
-
-    ``wait`` (a tap, a scope: started before the run they watch, as often as after): a client
-    chosen by ``--mode auto`` is a :class:`cosim.late_bus.LateBus`, opened as soon as its
-    endpoint answers; an explicit ``--mode client`` still gives up after
-    :data:`CLIENT_CONNECT_TIMEOUT_MS`.
-
-    Raises :class:`SessionOpenError` (its :meth:`~SessionOpenError.message` is the error line).
-    """
+    """The bus ``args`` (:func:`add_zenoh_arguments`) ask for on ``connect``/``listen``, and
+    its mode; low-latency when ``args.lowlatency`` or ``lowlatency``. ``wait`` (a tap, a scope
+    that may start before its run): a client chosen by ``--mode auto`` is a
+    :class:`cosim.late_bus.LateBus`, opened when its endpoint answers. Raises
+    :class:`SessionOpenError`."""
     mode = resolve_mode(args.mode, args.zenoh_config, connect, listen)
     ll = args.lowlatency or lowlatency
     if wait and mode == "client" and args.mode == "auto":
