@@ -1,20 +1,10 @@
-"""``suscosim cluster``: a local Dask cluster to try ``suscosim sweep --executor dask``.
+"""``suscosim cluster [--workers N] [--threads T]``: a local Dask cluster to try
+``suscosim sweep --executor dask`` (several machines, dask-jobqueue: docs/sweeps.md).
 
-    suscosim cluster [--workers N] [--threads T] [--host HOST] [--port PORT] [--no-nanny]
-                     [--dashboard]
-
-Starts a Dask scheduler (``python -m distributed.cli.dask_scheduler``, the ``dask
-scheduler`` command) and N workers (``dask worker``), each with T threads = T sweep points
-at once (default 1: a point is already 4-5 node processes), prints the scheduler's address
-and waits; Ctrl-C or SIGTERM stops them all. Workers get this checkout on their
-``PYTHONPATH`` so they import ``orchestrator.sweep.task``.
-
-On several machines start the same two commands by hand (``dask scheduler`` on one,
-``dask worker tcp://HOST:8786 --nthreads 1`` on each of the others), or use dask-jobqueue
-(Slurm, PBS) or dask-kubernetes: docs/sweeps.md.
-
-Exit codes: 0 stopped by Ctrl-C/SIGTERM, 1 the scheduler died (or did not start), 2 bad
-arguments or ``distributed`` missing.
+Starts a Dask scheduler and N workers of T threads (= T points at once; default 1: a point is
+already 4-5 processes) with this checkout on their ``PYTHONPATH``, prints the scheduler's
+address and waits for Ctrl-C/SIGTERM. Exit codes: 0 stopped, 1 the scheduler died (or did not
+start), 2 bad arguments or ``distributed`` missing.
 """
 
 from __future__ import annotations

@@ -1,20 +1,12 @@
 """The per-node parts of the deployment files, generated from the node registry.
 
-``python -m orchestrator.compose_gen`` rewrites, from :mod:`cosim.node_kinds`:
-
-* ``docker-compose.yml``: the node services (one per node of every run) and the
-  orchestrator's service (every node ``--external``);
-* ``deploy/compose/nodes.yml`` (the node services) and ``deploy/compose/orchestrator.yml``;
-* ``deploy/zenoh/router.json5`` and ``deploy/zenoh/acl_per_run.json5.template``: each
-  kind's publish rule, certificate subject and policy (a node may publish on its own keys
-  only);
-* ``deploy/zenoh/clients/<kind>.json5``: each kind's client configuration (whole files);
-* ``deploy/zenoh/make_certs.sh``: the default certificate names.
-
-Only the regions between the ``>>> generated`` and ``<<< generated`` marker lines (and the
-client files) are written; the rest of each file is kept as it is. ``--check`` writes
-nothing and exits 1 naming the stale files (tests/registry/test_compose_gen.py runs it: a
-kind added to the registry without regenerating fails the tests).
+``python -m orchestrator.compose_gen`` rewrites, from :mod:`cosim.node_kinds`: the node and
+orchestrator services of ``docker-compose.yml`` and ``deploy/compose/{nodes,orchestrator}.yml``;
+each kind's publish rule, certificate subject and policy in ``deploy/zenoh/router.json5`` and
+``acl_per_run.json5.template``; ``deploy/zenoh/clients/<kind>.json5`` (whole files); the
+certificate names of ``deploy/zenoh/make_certs.sh``. Only the regions between the
+``>>> generated``/``<<< generated`` lines (and the client files) are written. ``--check`` writes
+nothing and exits 1 naming the stale files (tests/registry/test_compose_gen.py runs it).
 """
 
 from __future__ import annotations

@@ -1,22 +1,12 @@
-"""``suscosim export-fmu SCENARIO.toml --out LAW.fmu``: the scenario's control law as an FMU.
+"""``suscosim export-fmu SCENARIO.toml --out LAW.fmu [--fmi 2|3]``: the scenario's control law
+as an FMI co-simulation FMU for one corner (2.0 with PythonFMU, 3.0 with pythonfmu3; docs/fmi.md).
 
-    suscosim export-fmu SCENARIO.toml --out LAW.fmu [--set KEY=VALUE ...] [--fmi 2|3]
-                        [--name MODEL_NAME]
-
-Builds an FMI co-simulation FMU (2.0 with PythonFMU, 3.0 with pythonfmu3) of the law of the
-scenario's ``[controller]`` table, for one corner, so the law runs in any FMI tool (Simulink,
-OpenModelica, Dymola, FMPy, or suscosim's own ``law = "fmu"``):
-
-* inputs ``z_b``, ``v_b``, ``z_w``, ``v_w`` (m, m/s; and ``v_damper`` with ``velocity =
-  "damper"``), outputs ``F_d`` (N on the body, upward positive), ``c_eff`` (N·s/m) and the
-  law's extras (``state``, ``I`` ...), parameters: the law's numeric settings as resolved
-  (``c_soft``, ``c_hard`` ...), changeable before initialisation;
-* ``doStep(t, dt)`` evaluates the law at t on the inputs set for t (see orchestrator/fmu_slave.py).
-
-The FMU carries the law's Python source (``nodes/controller``, ``cosim/errors.py``, a user's
-law module) and PythonFMU's runtime; the host needs a Python 3 with numpy (the FMU's binary
-embeds that interpreter). Exit 2 with a message on a bad scenario, a law that is not one
-corner's (``pnr``), ``law = "fmu"``, or an output path that does not end in ``.fmu``.
+Inputs ``z_b``, ``v_b``, ``z_w``, ``v_w`` [m, m/s] (and ``v_damper`` with ``velocity =
+"damper"``); outputs ``F_d`` [N on the body, upward positive], ``c_eff`` [N·s/m] and the law's
+extras; parameters: the law's resolved numeric settings. ``doStep(t, dt)`` evaluates the law at
+t (orchestrator/fmu_slave.py). The FMU carries the law's Python source and needs a Python 3
+with numpy on the host. Exit 2 on a bad scenario, a law not of one corner (``pnr``),
+``law = "fmu"``, or an output path not ending in ``.fmu``.
 """
 
 from __future__ import annotations

@@ -1,14 +1,9 @@
-"""The slave inside an FMU made by ``suscosim export-fmu`` (copied into it as suscosim_law.py).
-
-It is not imported by suscosim itself: PythonFMU (FMI 2.0) or pythonfmu3 (FMI 3.0) puts it,
-``suscosim_law.json`` (the scenario's ``[controller]`` table, the communication step, the
-variables) and a copy of ``nodes/controller`` and ``cosim/errors.py`` into the FMU's
-``resources/``; the FMU's binary starts a Python interpreter that imports it. The law is
-built with ``nodes.controller.laws.build_controller`` for one corner when the FMU leaves
-initialisation (its numeric settings can be changed as FMU parameters before), and every
-``doStep(t, dt)`` calls ``law.step(t, state)`` on the inputs set for t: the outputs are the
-law's force (N), its slope dF_d/dv_rel (N·s/m, v_rel as the law's ``velocity`` setting
-chooses) and extras at t, as in the controller node.
+"""The slave inside an FMU made by ``suscosim export-fmu`` (copied into it as suscosim_law.py;
+suscosim never imports it). Its ``resources/`` also hold ``suscosim_law.json`` (the
+``[controller]`` table, the step, the variables) and copies of ``nodes/controller`` and
+``cosim/errors.py``. The law is built (``build_controller``, one corner) when the FMU leaves
+initialisation; each ``doStep(t, dt)`` calls ``law.step(t, state)``: force [N], slope
+dF_d/dv_rel [N·s/m] and extras at t, as in the controller node.
 """
 
 from __future__ import annotations

@@ -24,13 +24,10 @@ coupled steps/s on the 2-core VM (docs/cosim.md); unpinned runs side by side got
 
 def local_lease_ms(stall_timeout_s: float) -> int:
     """Zenoh link lease [ms] of the orchestrator and the nodes it starts: the run's stall
-    timeout, between 2 and 30 s (issue #15 item 8). A process starved of CPU for longer than
-    its lease loses its links: its liveliness token drops (the run was ended as "gone" after
-    a 3-4 s pause even with a 30 s stall timeout) and the messages sent to it meanwhile are
-    lost (the recorder then stalls). With the lease at the stall timeout a pause is judged by
-    one rule. A local node that dies is still seen at once (its exit code; its sockets close,
-    which ends its links whatever the lease); nodes started elsewhere keep their own lease
-    (``suscosim node --lease-ms``, default 2 s), so a partitioned machine is seen in ~2 s."""
+    timeout, clamped to 2-30 s, so a process starved of CPU is judged by one rule (a shorter
+    lease drops its token and the messages sent to it). A local node that dies is seen at once
+    (exit code, closed sockets); nodes started elsewhere keep ``suscosim node --lease-ms``
+    (default 2 s)."""
     return int(1000.0 * min(max(stall_timeout_s, 2.0), 30.0))
 
 
@@ -111,11 +108,9 @@ class LocalNodes:
 
     def stop(self, grace_s: float = 5.0, tick: Callable[[], None] | None = None,
              tick_period_s: float = 0.25) -> None:
-        """Wait up to ``grace_s`` for the nodes to end on their own, calling ``tick`` every
-        ``tick_period_s`` meanwhile (the abort, said again for a node that subscribed after
-        it was first said: one killed at start-up leaves the others in their handshake),
-        then SIGTERM what is left, and SIGKILL what is left 2 s later; then remove the
-        mesh's socket folder."""
+        """Wait up to ``grace_s`` for the nodes to end, calling ``tick`` every
+        ``tick_period_s`` (the abort said again for late subscribers), then SIGTERM what is
+        left, SIGKILL 2 s later; then remove the mesh's socket folder."""
         deadline = time.monotonic() + grace_s
         for p in self.procs.values():
             while True:

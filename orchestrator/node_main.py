@@ -1,14 +1,10 @@
 """Start one node: ``suscosim node NAME --run ID [--connect ENDPOINT]``.
 
-The node opens its own Zenoh session, fetches the resolved scenario from the orchestrator of
-that run, and runs. It can live on any machine that reaches the orchestrator (or a router).
-Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario or input (or no
-run key).
-
-The messages of a run are authenticated with the run's key (:mod:`cosim.auth`): the node
-takes it from ``SUSCOSIM_RUN_KEY`` (what the orchestrator gives the nodes it starts), else
-derives it from the secret of ``--key-file`` / ``SUSCOSIM_KEY_FILE`` (e.g. the run folder's
-``run.key``) or ``SUSCOSIM_KEY``.
+The node opens its own Zenoh session, fetches the resolved scenario from the run's
+orchestrator and runs, on any machine that reaches it. The run key (:mod:`cosim.auth`):
+``SUSCOSIM_RUN_KEY``, else derived from ``--key-file``/``SUSCOSIM_KEY_FILE`` or
+``SUSCOSIM_KEY``. Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario
+or input (or no run key).
 """
 
 from __future__ import annotations

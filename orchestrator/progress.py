@@ -1,17 +1,10 @@
-"""A one-line progress bar on stderr (only when stderr is a terminal).
+"""A one-line progress bar on stderr (only when stderr is a terminal)::
 
-A run shows its start-up phases first, then the steps with their rate and an ETA::
-
-    ch3-step-... starting nodes ...
-    ch3-step-... handshake: 3/4 nodes ready ...
     ch3-step-... [###########...................]  37.2% step 1488/4000    2012 steps/s ETA 0:01
 
-The bar is made as the nodes are started: it shows ``starting nodes`` at once; the clock calls
-it with ``(k, n)``, k = -1 while its start barrier waits (shown as ``handshake``), then the
-steps. :meth:`ProgressBar.phase` shows any other phase, or a detail of one (``"handshake",
-"3/4 nodes ready"``). The rate and the ETA count from the first
-step shown, not from the start-up: the ETA is (n - k) / rate, rate = steps done since the
-first step shown / the wall time since then.
+It shows ``starting nodes`` at once, ``handshake`` while the clock's start barrier waits (k =
+-1), any :meth:`ProgressBar.phase`, then the steps. Rate and ETA count from the first step
+shown: ETA = (n - k) / rate.
 """
 
 from __future__ import annotations

@@ -1,27 +1,13 @@
-"""``suscosim ride``: ride metrics of finished runs, side by side (thesis Tables 5.3-5.6).
+"""``suscosim ride RUN_DIR [RUN_DIR ...] [--baseline NAME] [--band LO HI] [--json]``: ride
+metrics of finished runs, side by side (thesis Tables 5.3-5.6; docs/ch5_control_comparison.md).
 
-    suscosim ride RUN_DIR [RUN_DIR ...] [--baseline NAME] [--band LO HI] [--json]
-
-Reads each run folder's ``table.parquet`` (written by the recorder) and prints
-:func:`nodes.recorder.ride_metrics.ride_table`: body RMS acceleration [m/s²] as the thesis
-computes it (resampled to 500 Hz, periodogram, band ``LO``-``HI`` Hz, default 0-20; and
-0-16 Hz), the full-band RMS at the run's own rate, ISO 2631-1 Wk-weighted RMS [m/s²], body
-jerk RMS [m/s³], wheel RMS acceleration [m/s²], suspension working space and deflection RMS
-[mm], dynamic tyre load RMS [N], damper force RMS [N]; every run after the baseline with its
-% change against it (thesis Eq 5.13, positive = reduction).
-
-``--json`` prints every metric of every run instead
-(:func:`nodes.recorder.ride_metrics.ride_summary` plus each run's ``path``)::
-
-    {"baseline": "passive", "band_hz": [0, 20], "fs_metric_hz": 500, "units": {...},
-     "labels": {...}, "runs": [{"name": "passive", "path": "...",
-                                "metrics": {"a_b_rms": 0.89, ...}, "change_pct": {...}}]}
-
-(a change against a zero baseline is ``null``).
-
-A run is named by its folder name (``passive`` for ``/tmp/ch5/passive``); ``--baseline``
-takes such a name (default: the first run). Exit codes: 0 printed, 2 bad input (a missing
-folder or table, an unknown baseline, a bad band) with one line on stderr.
+Prints :func:`nodes.recorder.ride_metrics.ride_table` of each run's table (body RMS
+acceleration [m/s²] in band ``LO``-``HI`` Hz, default 0-20, the units of every metric there),
+every run after the baseline with its % change (thesis Eq 5.13, positive = reduction; null
+against a zero baseline). ``--json``: :func:`~nodes.recorder.ride_metrics.ride_summary` plus
+each run's ``path``. A run is named by its folder name; ``--baseline`` takes such a name
+(default: the first). Exit codes: 0 printed, 2 bad input (a missing folder or table, an
+unknown baseline, a bad band).
 """
 
 from __future__ import annotations

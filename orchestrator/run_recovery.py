@@ -24,16 +24,11 @@ def recover_table(folder: Path, interrupted: bool = False, since: float | None =
                   recorder_elsewhere: bool = False, wait_s: float = RECORDER_WAIT_S
                   ) -> dict[str, Any]:
     """After a failed run: whatever the journal holds, as a table, never put in place of a
-    larger one (see :func:`cosim.table.export_target`); a table that cannot be
-    written (a full disk) is removed rather than left truncated.
-
-    The recorder exports what it has when it hears the abort: a table of its, written
-    ``since`` the run began [s, Unix time], that already holds every step the journal reached
-    is taken as it is (its statistics read back, not rebuilt); for a recorder running
-    elsewhere and alive at the abort (``recorder_elsewhere``) it is waited for up to
-    ``wait_s``. On an ``interrupted`` run, or one whose recorder runs elsewhere, a journal
-    larger than :data:`INTERRUPT_REBUILD_BYTES` is not rebuilt here (the recorder's own
-    table, or ``suscosim export``): the summary says so and how."""
+    larger one (:func:`cosim.table.export_target`); one that cannot be written is removed.
+    The recorder's own table, written ``since`` the run began [s, Unix time] and holding every
+    step the journal reached, is taken as it is (waited for up to ``wait_s`` when
+    ``recorder_elsewhere``). On an ``interrupted`` run, or a recorder elsewhere, a journal
+    above :data:`INTERRUPT_REBUILD_BYTES` is not rebuilt here: the summary says how."""
     journal = folder / "journal.msgpack"
     if not recorder_elsewhere:
         _remove_stale_tables(folder)

@@ -1,17 +1,10 @@
-"""A run's table read in row batches for the report (#32): the time histories decimated
-(min/max per bucket) as the batches pass, the PSDs by Welch segments accumulated, the
-statistics combined batch by batch; the report's memory does not grow with the run.
+"""A run's table read in row batches for the report, so its memory does not grow with the run.
 
-* :class:`TableSource`: ``table.parquet`` read :data:`BATCH_ROWS` rows at a time (pyarrow
-  ``iter_batches``, only the columns asked for), or a table already in memory (a CSV table or
-  one rebuilt from the journal: runs that left no Parquet file).
-* :class:`StreamDecimator`: :func:`.plots.decimate`'s points (each bucket's min and max in
-  their order) computed from batches; the same points as ``decimate`` on the whole signal.
-* :class:`StreamWelch`: ``scipy.signal.welch`` (Hann, 50 % overlap, mean removed per
-  segment, density, one-sided) from batches, holding one segment; at most
-  :data:`PSD_MAX_NPERSEG` samples a segment (below it the report's segment length as before).
-* :func:`column_stats`: max/min/peak/mean/rms/std of every column (the recorder's combiner,
-  :class:`cosim.table_writer._Stats`).
+:class:`TableSource` (``table.parquet`` :data:`BATCH_ROWS` rows at a time, or a table in
+memory), :class:`StreamDecimator` (the points of :func:`.plots.decimate` on the whole signal),
+:class:`StreamWelch` (``scipy.signal.welch``: Hann, 50 % overlap, mean removed, density,
+one-sided; at most :data:`PSD_MAX_NPERSEG` samples a segment), :func:`column_stats`
+(max/min/peak/mean/rms/std, the recorder's combiner).
 """
 
 from __future__ import annotations
@@ -95,7 +88,7 @@ class TableSource:
 
     def read(self, keep: Callable[[str], bool]) -> dict[str, np.ndarray]:
         """The columns ``keep`` accepts (and ``t``), whole (:meth:`whole`; the ride metrics
-        read batches since #32, :mod:`nodes.recorder.ride_stream`)."""
+        read batches, :mod:`nodes.recorder.ride_stream`)."""
         cols = [c for c in self.names if c == "t" or keep(c)]
         parts: dict[str, list[np.ndarray]] = {c: [] for c in cols}
         for b in self.batches(cols):

@@ -1,16 +1,11 @@
 """The damage map on the scope's page, filled in block by block.
 
-The live fatigue node publishes the minimum life so far (``fatigue/damage``) but not the
-damage of every node. The map is computed here from the same loads (the ``plant/arm``
-messages, in step order) with the fatigue node's own engine
-(:class:`nodes.fatigue.worker.LiveFatigue`, the run's ``[fatigue]`` settings and its cached
-stress influence coefficients), so it equals the node's result on the same history: at the
-last step its largest damage is the run's ``fatigue/summary.json`` ``max_damage_per_pass``.
-Listening costs the run nothing: the messages are published anyway. A scope that joins a
-live run late takes the steps it missed from the run folder's journal first.
-
-Damage per node [-] (Miner, per pass of the history so far, residue closed as at the end of
-a run), sent as log10; node positions [mm] in the arm frame.
+The live fatigue node publishes only the minimum life; the map is computed here from the same
+``plant/arm`` loads with the node's own engine (:class:`nodes.fatigue.worker.LiveFatigue`, the
+run's ``[fatigue]``, its cached influence coefficients), so at the last step its largest
+damage is the run's ``max_damage_per_pass``. A scope that joins late takes the missed steps
+from the journal first. Damage per node [-] (Miner, per pass so far, residue closed as at the
+end of a run), sent as log10; node positions [mm] in the arm frame.
 """
 
 from __future__ import annotations

@@ -1,20 +1,11 @@
 """The scope's web server (stdlib ``http.server``, one thread per request, in a thread).
 
-    GET /                 the page (scope.html)
-    GET /data?since=K     JSON: the samples of steps k > K of every plotted line, progress,
-                          steps/s, node states, fatigue numbers, damage map (``K`` default -1:
-                          everything kept); see :meth:`ScopeState.snapshot`
-          &coupling_since=C   the coupling residual's points of messages k > C (default -1)
-    GET /meta             JSON: run id, lines and their units, the damage map's geometry
-    GET /<file>           the page's script and style, and the vendored uPlot files
-
-Loopback only unless told otherwise (``--host``): the page shows a run's data to whoever
-reaches the port. A request must also name the server in its ``Host`` header by a name it
-answers to (:func:`allowed_hosts`), else it gets 403: a web page elsewhere whose name is made
-to resolve to 127.0.0.1 (DNS rebinding) would otherwise read the run's data through the
-browser. Served on loopback, the names are ``localhost``, ``127.0.0.1`` and ``[::1]`` with
-the port; served on an address (``--host 192.168.1.5``) that address and this machine's host
-names too; on every address (``--host 0.0.0.0`` or ``::``) any IP address literal as well.
+``GET /`` the page; ``GET /data?since=K&coupling_since=C`` the JSON of
+:meth:`ScopeState.snapshot` (default -1: everything kept); ``GET /meta`` run id, lines and
+units, the damage map's geometry; ``GET /<file>`` the page's script, style and vendored uPlot.
+Loopback only unless ``--host``. A request whose ``Host`` header names the server by no name
+it answers to (:func:`allowed_hosts`) gets 403, so a DNS-rebinding page cannot read the run's
+data through the browser.
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
-"""The Dask executor (``--executor dask --scheduler tcp://HOST:8786``): every point is one
-task, :func:`orchestrator.sweep.task.run_point`, run whole on some worker of an existing
-Dask cluster (``suscosim cluster``, ``dask scheduler`` + ``dask worker``, dask-jobqueue on
-Slurm/PBS, dask-kubernetes). Dask schedules (as many points at once as the workers have
-threads), and retries a point whose worker was lost on another one; we only submit, follow
-and collect.
-
-The run folder of a finished point comes back in the task's result and is unpacked under
-``<out>/runs/<id>`` (or the workers wrote it under the sweep file's shared ``runs_dir``).
-Progress: every running task reports its run's step as a Dask event (``Worker.log_event``
-on a topic of this session) that feeds the one progress display; a point that starts again
-on another worker is announced.
+"""The Dask executor (``--executor dask --scheduler tcp://HOST:8786``): every point is one task,
+:func:`orchestrator.sweep.task.run_point`, run whole on a worker of an existing cluster; Dask
+schedules and retries a point whose worker was lost, we submit, follow and collect. A finished
+point's folder comes back in the result and is unpacked under ``<out>/runs/<id>`` (or the
+workers wrote it under the shared ``runs_dir``). Progress: each task's step as a Dask event
+(``Worker.log_event``) on this session's topic; a restarted point is announced.
 """
 
 from __future__ import annotations

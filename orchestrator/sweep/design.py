@@ -1,19 +1,9 @@
-"""Sampled designs of experiments over parameter ranges (``[sweep.design]``): Latin
-hypercube, Sobol' sequence (both ``scipy.stats.qmc``) and Saltelli's design for Sobol'
-indices (SALib), seeded, so the same file always gives the same points::
+"""Sampled designs of experiments over parameter ranges (``[sweep.design]``, docs/sweeps.md):
+Latin hypercube, Sobol' sequence (``scipy.stats.qmc``) and Saltelli's design (SALib), seeded.
 
-    [sweep.design]
-    method = "lhs"           # "lhs", "sobol" (n a power of 2) or "saltelli"
-    n = 16                   # lhs/sobol: points; saltelli: base samples N, points N (D + 2)
-    seed = 1                 # default 0
-    [sweep.design.ranges]    # dotted scenario keys and their [low, high]
-    "controller.c_soft" = [800.0, 1500.0]
-    "controller.c_hard" = { range = [2000.0, 4000.0], scale = "log" }
-
-The design is one axis of the sweep, ``sample`` (labels ``s000``, ``s001``, ...), whose
-points also carry each ranged key's value as a parameter; grid axes multiply it (every grid
-point gets every sample). Values are rounded to 6 significant digits (the run gets exactly
-the value in its point id's parameters).
+The design is one sweep axis, ``sample`` (``s000``, ``s001``, ...), whose points also carry
+each ranged key's value as a parameter; grid axes multiply it. Values are rounded to 6
+significant digits (the run gets exactly the value in its point id's parameters).
 """
 
 from __future__ import annotations

@@ -1,19 +1,11 @@
-"""The sensitivity table of a sampled design: how much each output (the arm's minimum life,
-the ride metrics) depends on each sampled parameter, written as ``sensitivity.csv`` /
-``sensitivity.json`` in the sweep folder.
+"""The sensitivity table of a sampled design (``sensitivity.csv``/``.json``): how much each
+output (the arm's minimum life, the ride metrics) depends on each sampled parameter, per grid
+point (``group``) when there are grid axes.
 
-What is computed, and when it is valid:
-
-* **Spearman rank correlation** rho (and its p-value) of each output with each parameter,
-  and the **partial rank correlation** (PRCC: the same with the other parameters' linear
-  effect on the ranks removed). Valid for any design whose points are spread over the
-  ranges (Latin hypercube, Sobol' sequence, Saltelli's); they measure monotonic association
-  in [-1, 1], not shares of the output's variance.
-* **Sobol' indices** (first order S1, total ST, with 95 % bootstrap confidence; SALib's
-  Saltelli/Jansen estimators) only for ``method = "saltelli"``, the design they need, and only
-  when every point of the group succeeded (the estimators use the points' fixed pattern).
-
-With grid axes besides the design, the table is per grid point (``group``).
+* Spearman rank correlation rho (with p-value) and partial rank correlation (PRCC): valid
+  for any space-filling design; monotonic association in [-1, 1], not variance shares.
+* Sobol' indices S1, ST with 95 % bootstrap confidence (SALib's Saltelli/Jansen): only for
+  ``method = "saltelli"`` and only when every point of the group succeeded.
 """
 
 from __future__ import annotations
