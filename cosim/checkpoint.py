@@ -1,5 +1,5 @@
-"""Checkpoints of a whole run, the storage layer (issue #29 item 4): what each node writes, the
-manifest the orchestrator writes last, and how ``--resume`` finds and checks the last complete one.
+"""Checkpoints of a whole run, the storage layer: what each node writes, the manifest the
+orchestrator writes last, and how ``--resume`` finds and checks the last complete one.
 
 Layout inside a run folder::
 
@@ -9,28 +9,12 @@ Layout inside a run folder::
                                         "nodes": {node: {"file", "sha256", "bytes"}}}
 
 A node file is ``MAGIC`` + the 32-byte SHA-256 of the payload + a 32-byte MAC (zeros when the
-run has no key) + the payload: the node's state dict as plain data (:mod:`cosim.plaindata`:
-numbers, strings, arrays by dtype and bytes, whitelisted classes by their fields; never a
-pickle, nothing that runs code when read). Every file is written aside (``.tmp`` in the same
-folder), flushed, fsynced and renamed into place, so a reader sees either no file or a whole
-one. A checkpoint without a manifest is incomplete (a kill between the nodes' writes and the
-manifest) and is ignored.
-
-**Signed checkpoints** (issue #43). The SHA-256 guards against damage, not against a person:
-with the run's key (:mod:`cosim.auth`) each node file carries an HMAC-SHA256 of its step,
-node name and payload, and the manifest one of its canonical JSON (field ``mac``), both with
-a key derived from the run key (:func:`checkpoint_key`). :func:`load_for_resume` given the
-key refuses a file or manifest whose MAC differs or that is unsigned; without one it refuses a
-signed checkpoint (it cannot check it).
-
-:func:`load_for_resume` refuses, with :class:`CheckpointError` (exit code 2, the reason named:
-the node, the file, what is wrong): a folder with no complete checkpoint, a manifest that is
-not one (wrong types, a node file outside its folder), a scenario that differs from the
-checkpoint's (other than the keys a fork is allowed to change), a node file missing,
-truncated, of an older format (a pickle: never loaded), whose hash or MAC differs, or whose
-payload is not plain data.
-
-Pure file I/O with no bus: the clock's checkpoint message and the nodes' shells call this.
+run has no key) + the payload: the node's state dict as plain data (:mod:`cosim.plaindata`;
+never a pickle). Every file is written aside, fsynced and renamed into place; a checkpoint
+without a manifest is incomplete and ignored. With the run's key each node file carries an
+HMAC-SHA256 of its step, node name and payload, and the manifest one of its canonical JSON
+(field ``mac``), with :func:`checkpoint_key`. Whatever is wrong is a :class:`CheckpointError`
+(exit code 2) naming the node, the file and the fault. Pure file I/O with no bus.
 """
 
 from __future__ import annotations
@@ -51,8 +35,7 @@ from .errors import SuscosimError
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
 MAGIC = b"SUSCKPT2"
-"""The header of a node file: version 2, plain data (version 1, ``SUSCKPT1``, was a pickle:
-refused, never loaded)."""
+"""The header of a node file: version 2, plain data (version 1, a pickle, is refused)."""
 MAC_BYTES = 32
 _HEAD = len(MAGIC) + 32 + MAC_BYTES
 _NODE = re.compile(r"^[A-Za-z0-9_.-]+$")
@@ -155,11 +138,8 @@ def write_node_state(run_dir: Path, k: int, node: str, state: dict[str, Any],
 
 def write_manifest(run_dir: Path, k: int, t: float, scenario: dict[str, Any],
                    entries: dict[str, dict[str, Any]], key: bytes | None = None) -> Path:
-    """Write the manifest LAST, once every node's file is in place: the checkpoint is complete
-    (with its MAC, field ``mac``, when ``key`` is given: :func:`checkpoint_key`).
-
-    Raises :class:`CheckpointError` when a listed node file is not there (never a manifest for
-    an incomplete checkpoint)."""
+    """Write the manifest LAST (with its MAC when ``key`` is given): the checkpoint is complete.
+    Raises :class:`CheckpointError` when a listed node file is not there."""
     folder = step_folder(run_dir, k)
     for node, entry in entries.items():
         if not (folder / entry["file"]).is_file():
@@ -338,12 +318,9 @@ def read_checkpoint(folder: Path) -> Checkpoint:
 
 
 def checkpoint_steps(every_s: float, h: float, n_steps: int) -> list[int]:
-    """The step boundaries k (a checkpoint at the start of step k, t = k h [s]: steps 0..k-1
-    are done, a resumed run starts with step k) of
-    ``run.checkpoint_every_s`` = ``every_s`` [s]: every round(every_s / h) steps, the last
-    step excluded (the run's end is its own result). Every node computes the same list from
-    the scenario alone, so the boundary needs no negotiation; the clock's checkpoint message
-    only collects that each node has written its file."""
+    """The step boundaries k (t = k h [s]) of ``run.checkpoint_every_s`` = ``every_s`` [s]:
+    every round(every_s / h) steps, the last step excluded. Every node computes the same list
+    from the scenario alone (no negotiation)."""
     if not every_s > 0 or not h > 0:
         raise ValueError(f"run.checkpoint_every_s = {every_s!r}: a positive number of seconds")
     every = round(every_s / h)

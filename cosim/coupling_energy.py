@@ -4,18 +4,17 @@ After the energy-conservation idea of ECCO (Sadjina et al., "Energy conservation
 bonds in co-simulations", arXiv 1602.06434; worked on a quarter car in arXiv 2406.17353): a
 force exchanged between two nodes and the velocity it acts through form a *power bond*. The
 force node computes F from the plant's state; between two exchanges the plant applies its own
-version of that force (held, extrapolated or linearised: ``run.coupling``). If the coupling were
-exact, the force the plant applies at the end of a step would be the force the force node
-computes from the state the plant reaches there. Their difference, times the bond's velocity,
-is power that one side of the bond sends and the other does not receive:
+version of that force (held, extrapolated or linearised: ``run.coupling``). The difference
+between the force the plant applies at a step's end and the one the force node computes from
+the state reached there, times the bond's velocity, is power one side sends and the other
+does not receive:
 
     dE_k = h/2 [ (F_app(t_k+) - F(x_k)) v_k + (F_app(t_k+1-) - F(x_k+1)) v_k+1 ]     [J]
 
 (the trapezoidal rule over step k; in the sequential exchange the first term is zero, since
 the plant starts each step from the force computed from its own state). Everything in it is
-in the run's table: the force nodes' outputs ``F`` and their derivatives (``k_t``, ``c_eff``),
-and the plant's states. So the residual needs neither a reference solution nor a model of
-the vehicle: it works on the realistic corner, the full vehicle, an FMU or a user's node.
+in the run's table (forces, their derivatives ``k_t``, ``c_eff``, the plant's states): no
+reference solution nor vehicle model is needed.
 
 Two bonds, per corner, summed over corners:
 
@@ -25,8 +24,7 @@ Two bonds, per corner, summed over corners:
   vertical velocity v_w [m/s].
 
 The relative residual of a bond is sum_k |dE_k| over the energy the bond carried,
-sum_k h |F(x_k) v_k|. The per-step series is what a live view shows; the totals go into
-``summary.json`` as ``coupling_energy_residual``.
+sum_k h |F(x_k) v_k|; the totals go into ``summary.json`` as ``coupling_energy_residual``.
 """
 
 from __future__ import annotations
@@ -36,7 +34,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BONDS = ("damper", "tyre")
 WARNING_THRESHOLD = 0.003
 """A total relative residual above this (0.3 %) is said after the run and in the report:
 through the Chapter 3 study's factor of ~3.5 between the held forces' peak error and their

@@ -1,4 +1,4 @@
-"""The coupling energy residual computed as the rows come, block by block (#29 item 1, #32).
+"""The coupling energy residual computed as the rows come, block by block.
 
 :func:`cosim.coupling_energy.coupling_residual` needs the whole table; a run of an hour has
 millions of rows. :class:`ResidualStream` takes the same columns in blocks of any size (the
@@ -234,16 +234,11 @@ class LiveResidual:
     ``recorder/coupling`` channel (docs/coupling_residual.md, "The live channel").
 
     The recorder gives it each data message it tabulates (:meth:`add`) and says when the
-    table wrote the row of a step (:meth:`row`): the rows it feeds to :class:`ResidualStream`
-    are then the table's own rows, in the table's order, with the same float64 values (the
-    table stores the message's numbers as float64; so does this). A step held but not a row
-    when a later row is written is dropped (at the next :meth:`take`), as the table drops
-    it. :meth:`take` feeds the rows complete since the last call, in blocks of at most
-    :data:`MAX_STEPS` rows, and returns one message per block that completed a step (a
-    block's ``dE`` ends ``1 + lag`` rows before its last row: a step is complete once the
-    force computed from its end state is in; the run's last ``1 + lag`` rows complete none,
-    as in the whole-table residual). Memory: the rows of one period between two takes and
-    the steps still incomplete.
+    table wrote a step's row (:meth:`row`): the rows fed to :class:`ResidualStream` are the
+    table's own, in its order, as float64 (a step the table drops is dropped too).
+    :meth:`take` feeds the rows complete since the last call, in blocks of at most
+    :data:`MAX_STEPS`, and returns one message per block that completed a step (a step is
+    complete ``1 + lag`` rows later, as in the whole-table residual).
 
     Args:
         h: the communication step [s]; ``coupling``, ``exchange``: as :class:`ResidualStream`.
@@ -346,15 +341,9 @@ def _messages(done: list[tuple[int, float]], dE: Mapping[str, np.ndarray],
 
 def message(k0: int, dE: Mapping[str, np.ndarray], totals: Mapping[str, BondResidual],
             threshold: float) -> dict[str, Any]:
-    """The payload of one ``recorder/coupling`` message: the steps ``k0 .. k0 + n - 1``
-    (the message's own ``k`` is the last, ``k0 + n - 1``; its ``t`` that step's time [s]).
-
-    Fields: ``k0`` [-]; per bond B (``damper``, ``tyre``): ``dE_B``, (n,) [J], each step's
-    residual summed over corners; the running totals over the rows fed so far: ``res_B`` =
-    sum |dE| [J], ``carried_B`` = sum h |F v| [J], ``rel_B`` = res_B / carried_B [-];
-    ``rel_total`` [-] (all bonds' sum |dE| over all bonds' carried energy, as
-    ``summary.json``'s ``total``) and ``threshold`` [-]
-    (:data:`cosim.coupling_energy.WARNING_THRESHOLD`)."""
+    """The payload of one ``recorder/coupling`` message of the steps ``k0 .. k0 + n - 1``
+    (its fields and units: :mod:`cosim.schema`; ``rel_B`` = res_B / carried_B, ``rel_total``
+    as ``summary.json``'s ``total``)."""
     d: dict[str, Any] = {"k0": int(k0)}
     for name, v in dE.items():
         d[f"dE_{name}"] = [float(x) for x in v]

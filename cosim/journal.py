@@ -2,7 +2,7 @@
 crash, read in bounded memory whatever its length.
 
 The file starts with one msgpack record, the header ``["#suscosim-journal", VERSION, run_id]``.
-In version 3 (written since #32) segments follow, one per flush of the writer (every ~50 ms,
+In version 3 segments follow, one per flush of the writer (every ~50 ms,
 or when the records held reach :data:`SEGMENT_RAW_BYTES`)::
 
     "SJS3" | clen u32 | rawlen u32 | nrec u32 | first u64 | hcrc u32 | body (clen) | bcrc u32
@@ -11,23 +11,16 @@ or when the records held reach :data:`SEGMENT_RAW_BYTES`)::
 msgpack arrays ``[channel, payload]``: ``channel`` is ``"<node>/<channel>"``, ``payload`` the
 raw bus message exactly as received. ``first`` is how many records the journal held before
 this segment, ``hcrc`` the CRC-32 of the 24 header bytes before it, ``bcrc`` that of the
-compressed body. zstd takes a run's messages to ~0.8 of the 8-byte values they carry (the
-keys and envelopes of repeated messages cost almost nothing): 88 B a step for the Chapter 3
-quarter car's 14 columns, against 408 B in version 2 (docs/memory.md).
+compressed body (88 B a step for the Chapter 3 quarter car's 14 columns, docs/memory.md).
 
-Crash safety: a segment is written by one ``write`` of the append-only file, so a killed
-recorder loses at most the records of its last ~50 ms (a torn last segment: the reader stops
-there and says so, with the records its header counts). A damaged segment in the middle (a
-flipped byte: bad CRC of its header or body, a body that does not decompress) costs that
-segment only: the reader resynchronises on the next intact segment header and reports the
-stretch it skipped (:class:`Skipped`) with the exact number of records lost, from the
-``first`` of the segments around it (#30 item 15: counted, not guessed). A segment holds
-~50 ms of records (a few hundred at 1500 steps/s), at most :data:`SEGMENT_RAW_BYTES` of them.
+Crash safety: a segment is one ``write`` of the append-only file, so a killed recorder loses
+at most its last ~50 ms (a torn last segment: the reader stops there and says so). A damaged
+segment in the middle (bad CRC, a body that does not decompress) costs that segment only: the
+reader resynchronises on the next intact header and reports the stretch (:class:`Skipped`)
+with the exact records lost, from the ``first`` of the segments around it.
 
-Versions 1 and 2 (one framed record after another, a CRC each: :mod:`cosim.journal_v2`) are
-still read. Everything that reads a journal (``export``, ``runs``, ``sweep``'s progress,
-``report``, ``replay``, ``scope``) goes through :class:`JournalReader` (streamed) or
-:func:`read_journal` (the records in a list, for small journals and tests).
+Versions 1 and 2 (:mod:`cosim.journal_v2`) are still read. Every reader goes through
+:class:`JournalReader` (streamed) or :func:`read_journal` (a list, for small journals).
 """
 
 from __future__ import annotations
@@ -225,11 +218,8 @@ def _next_head(win: _Window, pos: int) -> int:
 
 def _body_records(body: bytes, rawlen: int, nrec: int, dctx: Any) -> list[tuple[str, bytes]]:
     """The records of a segment body whose CRC matched; ValueError if it does not decode.
-
-    Decompressed by a stream reader that stops one byte past the header's ``rawlen``, itself
-    at most :data:`MAX_SEGMENT_BYTES` (python-zstandard's ``decompress`` ignores
-    ``max_output_size`` when the frame states its size: a 65 kB body declaring 2 GiB was
-    inflated in full, #46)."""
+    A stream reader stops one byte past ``rawlen`` (<= :data:`MAX_SEGMENT_BYTES`): zstd's
+    ``decompress`` would inflate whatever size a forged frame states."""
     if rawlen > MAX_SEGMENT_BYTES:
         raise ValueError(f"declares {rawlen} raw bytes, more than {MAX_SEGMENT_BYTES}")
     parts: list[bytes] = []
@@ -264,12 +254,9 @@ class JournalReader:
     """Stream a journal's intact records (``for channel, payload in reader``) in bounded
     memory; after the iteration, :meth:`contents` says what was skipped or torn.
 
-    A damaged segment is stepped over (the reader resynchronises on the next intact segment
-    header) and listed with the records it lost. With ``tail_bytes``, reading starts at the
-    first intact segment of the file's last ``tail_bytes`` (more, doubling, until a whole
-    segment is found): cheap on a journal of any size (a live progress display). With
-    ``decode=False`` the segments' CRCs are checked and their records counted without
-    decompressing them (``runs``' integrity check); nothing is yielded then.
+    With ``tail_bytes``, reading starts at the first intact segment of the file's last
+    ``tail_bytes`` (doubled until a whole segment is found). With ``decode=False`` only the
+    CRCs are checked and records counted (nothing is yielded).
     """
 
     def __init__(self, path: str | Path, tail_bytes: int | None = None,
@@ -417,8 +404,7 @@ def _lost(bad: list[tuple[int, int, int | None]], lost: int, pos: int) -> list[S
 
 
 def read_journal(path: str | Path, tail_bytes: int | None = None) -> JournalContents:
-    """Read a journal: every intact record, in order, in a list (see :class:`JournalReader`
-    for the rules; stream with it instead when the journal may be long)."""
+    """Every intact record of a journal, in order, in a list (:class:`JournalReader`)."""
     reader = JournalReader(path, tail_bytes)
     records = list(reader)
     contents = reader.contents()
@@ -427,8 +413,7 @@ def read_journal(path: str | Path, tail_bytes: int | None = None) -> JournalCont
 
 
 def iter_records(path: str | Path) -> Iterator[tuple[str, bytes]]:
-    """The (channel, payload) records of a journal (damaged ones skipped, torn tail ignored),
-    streamed."""
+    """The intact (channel, payload) records of a journal, streamed."""
     yield from JournalReader(path)
 
 
@@ -464,8 +449,7 @@ TAIL_BYTES = 64 * 1024
 
 def last_step(path: str | Path, tail_bytes: int = TAIL_BYTES) -> int | None:
     """The last step ``k`` every channel in the journal's tail has reached, or None (no
-    journal, no data record in the tail). Only the header and the last segments are read,
-    so it is cheap on a journal of any size (``runs``, a sweep's progress display)."""
+    journal, no data record in the tail); reads only the header and the last segments."""
     try:
         contents = read_journal(path, tail_bytes=tail_bytes)
     except (OSError, ValueError):

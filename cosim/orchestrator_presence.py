@@ -5,14 +5,9 @@ A node knows it is gone in two ways, whichever comes first (:class:`Orchestrator
 
 * **its liveliness token dropped** (any node, here or elsewhere) and stayed dropped for
   :data:`ORCHESTRATOR_GONE_S`: the orchestrator was killed, or the network to it failed;
-* **the process that started the node ended** (a local node only). The orchestrator of
-  ``suscosim run`` starts its local nodes as child processes and puts its PID in their
-  environment (:data:`ENV_PARENT_PID`); a child whose parent died is adopted by init or a
-  subreaper, so ``os.getppid()`` changes at once. Without it a node whose orchestrator was
-  killed outright (SIGKILL, the OOM killer) before the node had fetched its scenario waited
-  the fetch's 30 s (the token had never been seen, so its drop said nothing); later in a
-  run the nodes went after the token's 2 s. Nodes started elsewhere (another machine, a
-  container) have no such parent and go by the token alone.
+* **the process that started the node ended** (a local node only: the orchestrator puts its
+  PID in its children's environment, :data:`ENV_PARENT_PID`; an orphan's ``os.getppid()``
+  changes at once, even before the token was ever seen). Remote nodes go by the token alone.
 """
 
 from __future__ import annotations
@@ -30,9 +25,7 @@ ORCHESTRATOR_GONE_S = 2.0
 
 def parent_from_env(environ: Mapping[str, str] | None = None) -> int | None:
     """The orchestrator's PID if this process is a local node that it started, else None
-    (unset or not a PID). Not checked against ``os.getppid()`` here: an orchestrator killed
-    before its last node's interpreter got this far is already gone, and
-    :func:`parent_gone` says so at once."""
+    (unset or not a PID); :func:`parent_gone` checks it."""
     raw = (os.environ if environ is None else environ).get(ENV_PARENT_PID, "")
     try:
         pid = int(raw)
@@ -47,10 +40,8 @@ def parent_gone(pid: int | None) -> bool:
 
 
 class OrchestratorPresence:
-    """The orchestrator of run ``run`` as node ``node`` sees it: :meth:`on_token` is the
-    watch of its liveliness token (called on the bus's thread), ``parent`` the PID of the
-    process that started this node (:func:`parent_from_env`; None for a node started
-    elsewhere)."""
+    """The orchestrator of run ``run`` as node ``node`` sees it: :meth:`on_token` watches its
+    liveliness token (bus thread); ``parent``: :func:`parent_from_env`."""
 
     def __init__(self, run: str, node: str, parent: int | None) -> None:
         self.run, self.node, self.parent = run, node, parent

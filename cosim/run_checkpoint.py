@@ -1,33 +1,20 @@
-"""What a node's shell does about checkpoints in one run (issue #29 items 4-5): when to save,
-where it starts, and the state it starts from. The storage is :mod:`cosim.checkpoint`.
+"""What a node's shell does about checkpoints in one run: when to save, where it starts, and
+the state it starts from. The storage is :mod:`cosim.checkpoint`.
 
-A checkpoint ``k`` is the state of the run at the **start of step k** (t = k h [s]): every
-step < k is done, published and recorded; a resumed (or forked) run starts with step k. The
-steps are ``run.checkpoint_every_s`` apart (:func:`cosim.checkpoint.checkpoint_steps`): every
-node computes the same list from the scenario, so nobody negotiates a boundary. At each one a
-node
+A checkpoint ``k`` is the run's state at the **start of step k** (t = k h [s]): every step < k
+is done, published and recorded; a resumed (or forked) run starts with step k. At each
+boundary (:func:`cosim.checkpoint.checkpoint_steps`) a node sends what it still holds for the
+steps < k, writes its whole state to ``RUN_DIR/checkpoints/k<k>/<node>.ckpt`` and tells the
+clock (``checkpoint``: file, SHA-256, size) without waiting; the clock writes the manifest
+once every node has (:class:`orchestrator.clock.Clock`). Every node needs the run folder (a
+remote node: mounted at the same path). The recorder saves once every channel has every step
+< k in its journal, fsynced (its state is the journal, replayed on resume); the fatigue node
+once it has taken load step k - 1.
 
-1. sends what it still holds for the steps < k (a producer: its records batch, the plant its
-   last response and loads, which it otherwise sends during the next step),
-2. writes its whole state to ``RUN_DIR/checkpoints/k<k>/<node>.ckpt`` (atomically),
-3. tells the clock (``checkpoint`` on its control key: the file, its SHA-256 and size), and
-   goes on without waiting: the clock writes the manifest, which makes the checkpoint
-   complete, once every node of the run has said so (:class:`orchestrator.clock.Clock`).
-
-Every node therefore needs the run folder (the recorder writes its journal there already; a
-node on another machine needs it mounted at the same path: README, design).
-
-The listening nodes save when what they hold reaches the boundary: the recorder once every
-channel has every step < k in its journal, flushed and fsynced (its state is the journal: a
-resumed recorder journals and tabulates the old journal's records of the steps < k again, in
-their order, through the same code as live ones, then takes the live steps >= k); the fatigue
-node once it has taken load step k - 1 (its whole engine, as plain data: :mod:`cosim.plaindata`).
-
-``run.resume`` (set by ``suscosim run --resume`` / ``--fork``, never by a user) says where a
-run starts: ``{"k", "t", "folder": the checkpoint's folder, "journal": the journal holding
-the steps < k, "fresh": nodes that start afresh instead (a fork's changed controller),
-"sha256": {node: the SHA-256 of its file, as the orchestrator checked it (MAC included)}}``:
-a node reads its file only if it is still the one checked.
+``run.resume`` (set by ``suscosim run --resume`` / ``--fork``, never by a user):
+``{"k", "t", "folder", "journal": the journal holding the steps < k, "fresh": nodes that start
+afresh (a fork's changed controller), "sha256": {node: its file's SHA-256 as the orchestrator
+checked it}}``: a node reads its file only if it is still the one checked.
 """
 
 from __future__ import annotations
@@ -117,9 +104,8 @@ class NodeCheckpoints:
 
     @contextmanager
     def restoring(self) -> Iterator[None]:
-        """Around putting the restored state into the node: a state that does not fit it
-        (a wrong key or type in an unsigned file) is a CheckpointError (exit 2) naming the
-        node and the checkpoint, never an internal error."""
+        """Around putting the restored state into the node: a state that does not fit it is a
+        CheckpointError (exit 2) naming the node and the checkpoint."""
         try:
             yield
         except CheckpointError:

@@ -1,4 +1,4 @@
-"""The adaptive communication step (``run.h = "auto"``, issue #29 item 3): ECCO's power-bond
+"""The adaptive communication step (``run.h = "auto"``): ECCO's power-bond
 error estimate and its PI step-size controller (Sadjina et al., arXiv 1602.06434, Sec. 4;
 the same structure as libcosim's ``ecco_algorithm``). Pure numerics, no I/O.
 
