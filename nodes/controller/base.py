@@ -35,8 +35,6 @@ import numpy as np
 from cosim import plaindata
 from cosim.config import ConfigReader as ConfigReader  # re-exported (fmu.py imports it here)
 
-#: Keys every ``state`` mapping passed to :meth:`Controller.step` carries (per corner).
-CORNER_KEYS = ("z_b", "v_b", "z_w", "v_w")
 #: Values of the generic ``velocity`` key: which velocity the laws use as ``v_rel``.
 VELOCITY_SOURCES = ("relative", "damper")
 #: Below this |v_w - v_b| (m/s) the motion-ratio estimate is not updated (ill-conditioned).
@@ -47,15 +45,9 @@ BODY_KEYS = ("v_heave", "w_pitch", "w_roll", "pitch", "roll")
 
 @dataclass
 class ControlOutput:
-    """What a controller returns at each communication step.
-
-    Attributes:
-        F_d: damper force on the body per corner, upward positive (N), shape (n_corners,).
-        c_eff: local slope dF_d/dv_rel per corner (N·s/m) that the plant may use to linearise
-            the force between communication steps: ``F ≈ F_d + c_eff * (v_rel(t) - v_rel(t_k))``.
-        extra: further per-corner channels to record (e.g. ``I`` current in A, ``state``
-            1 = hard / 0 = soft, ``F_demand`` in N).
-    """
+    """Per corner: ``F_d`` on the body, upward positive (N); ``c_eff`` = dF_d/dv_rel (N·s/m)
+    for the plant's ``F ≈ F_d + c_eff (v_rel(t) - v_rel(t_k))``; ``extra`` channels to record
+    (``I`` in A, ``state`` 1 = hard / 0 = soft, ``F_demand`` in N)."""
 
     F_d: np.ndarray
     c_eff: np.ndarray
@@ -63,12 +55,8 @@ class ControlOutput:
 
 
 class Controller(ABC):
-    """One instance drives every corner of a vehicle, vectorised over ``n_corners``.
-
-    Args:
-        n_corners: 1 (quarter car) or 4 (full vehicle, order FL, FR, RL, RR).
-        h: communication step (s).
-    """
+    """Drives every corner, vectorised over ``n_corners`` (1, or 4: FL, FR, RL, RR); ``h``
+    the communication step (s)."""
 
     #: registry name of the law (set by subclasses)
     law: str = ""
@@ -94,14 +82,10 @@ class Controller(ABC):
         return None
 
     def checkpoint_state(self) -> dict[str, Any]:
-        """The law's whole internal state (filters, switching memory, an MR damper's fluid
-        state) for a checkpoint (issue #29 item 4): a deep copy of the instance's attributes
-        that are plain data (:mod:`cosim.plaindata`: they encode). The others (a law's
-        functions and its registry spec, fixed by the scenario when the law is built) are
-        rebuilt by the fresh instance and listed under ``rebuilt``;
-        tests/controller/test_controller_checkpoint.py checks, law by law, that nothing with
-        state is among them. A law holding state outside Python or
-        inside a closure overrides this (the FMU law)."""
+        """The law's whole internal state for a checkpoint: a deep copy of the attributes that
+        are plain data (:mod:`cosim.plaindata`); the others (functions, registry spec) are
+        rebuilt by the fresh instance and listed under ``rebuilt`` (none holds state:
+        tests/controller/test_controller_checkpoint.py). The FMU law overrides this."""
         attrs: dict[str, Any] = {}
         rebuilt: list[str] = []
         for key, value in self.__dict__.items():
@@ -123,10 +107,7 @@ class Controller(ABC):
         self.__dict__.update(copy.deepcopy(state["attrs"]))
 
     def corners(self, state: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(v_b, v_w, v_rel) per corner in m/s, validated against ``n_corners``.
-
-        ``v_rel`` is ``v_w - v_b``, or the plant's ``v_damper`` when ``velocity = "damper"``.
-        """
+        """(v_b, v_w, v_rel) per corner (m/s); ``v_rel`` is ``v_w - v_b`` or ``v_damper``."""
         v_b = corner_array(state, "v_b", self.n)
         v_w = corner_array(state, "v_w", self.n)
         if self.velocity == "damper":
@@ -134,12 +115,9 @@ class Controller(ABC):
         return v_b, v_w, v_w - v_b
 
     def plant_slope(self, c_eff: np.ndarray, state: Mapping[str, Any]) -> np.ndarray:
-        """The law's slope dF_d/dv_rel (N·s/m) as the plant's dF_d/d(v_w - v_b).
-
-        Unchanged for ``velocity = "relative"``. For ``"damper"`` it is multiplied by the
-        motion ratio r = v_damper / (v_w - v_b) (-), re-estimated whenever
-        |v_w - v_b| > :data:`RATIO_MIN_SPEED` and held otherwise (1.0 until the first estimate).
-        """
+        """The law's slope (N·s/m) as dF_d/d(v_w - v_b): for ``"damper"`` times the motion ratio
+        v_damper / (v_w - v_b), updated when |v_w - v_b| > :data:`RATIO_MIN_SPEED` (else held;
+        1.0 at first)."""
         if self.velocity != "damper":
             return c_eff
         v_rel = corner_array(state, "v_w", self.n) - corner_array(state, "v_b", self.n)
@@ -171,9 +149,8 @@ def body_scalar(state: Mapping[str, Any], key: str) -> float:
     try:
         arr = np.asarray(state[key], dtype=float).reshape(-1)
     except KeyError:
-        raise ValueError(
-            f"controller state has no '{key}' (needed by a full-vehicle law)"
-        ) from None
+        msg = f"controller state has no '{key}' (needed by a full-vehicle law)"
+        raise ValueError(msg) from None
     if arr.size != 1:
         raise ValueError(f"controller state '{key}' has {arr.size} values, expected 1")
     return float(arr[0])

@@ -28,15 +28,7 @@ from nodes.controller.registry import Param, control_law
 
 
 def passive_linear(v_rel: np.ndarray | float, c: float) -> np.ndarray:
-    """Linear viscous damper ``F_d = c * v_rel``.
-
-    Args:
-        v_rel: relative velocity v_w - v_b (m/s), compression positive.
-        c: damping coefficient (N·s/m), >= 0.
-
-    Returns:
-        Force on the body, upward positive (N).
-    """
+    """Linear viscous damper: force on the body ``F_d = c * v_rel`` (N), ``c`` >= 0 (N·s/m)."""
     return c * np.asarray(v_rel, dtype=float)
 
 
@@ -49,11 +41,7 @@ def passive(v_rel: np.ndarray, *, c: float = Param(1500.0, lo=0.0, unit="N·s/m"
 def two_state_force(
     hard: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """A two-state damper: ``c = c_hard`` where ``hard`` else ``c_soft``; ``F_d = c v_rel``.
-
-    Returns:
-        (F_d in N, c in N·s/m).
-    """
+    """Two-state damper: ``c = c_hard`` where ``hard`` else ``c_soft``; (F_d = c v_rel in N, c)."""
     c = np.where(hard, c_hard, c_soft)
     return c * np.asarray(v_rel, dtype=float), c
 
@@ -61,20 +49,9 @@ def two_state_force(
 def semi_active_force(
     F_demand: np.ndarray, v_rel: np.ndarray, c_min: float, c_max: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Closest force a variable damper with ``c_min <= c <= c_max`` can give to ``F_demand``.
-
-    A demand with the wrong sign (``F_demand * v_rel <= 0``: it would need energy input) gets
-    ``c_min``; a dissipative demand gets ``c = F_demand / v_rel`` clipped to the range. At
-    ``v_rel == 0`` the damper gives no force and reports ``c_min``.
-
-    Args:
-        F_demand: wanted force on the body (N).
-        v_rel: relative velocity (m/s), compression positive.
-        c_min, c_max: damper coefficient range (N·s/m), 0 <= c_min <= c_max.
-
-    Returns:
-        (F_d, c): force on the body (N) and the coefficient used (N·s/m).
-    """
+    """(F_d in N, c in N·s/m): the force closest to ``F_demand`` (N) of a damper with
+    ``c_min <= c <= c_max``. A non-dissipative demand (``F_demand * v_rel <= 0``) and
+    ``v_rel == 0`` get ``c_min``; else ``c = F_demand / v_rel`` clipped to the range."""
     F_demand = np.asarray(F_demand, dtype=float)
     v_rel = np.asarray(v_rel, dtype=float)
     dissipative = F_demand * v_rel > 0.0
@@ -84,18 +61,9 @@ def semi_active_force(
 
 
 class PassiveCurve:
-    """Piecewise-linear passive damper ``F_d = f(v_rel)`` through given points.
-
-    Beyond the first/last point the end segments are extended linearly. The origin is added
-    when absent, so the curve passes through (0, 0). Bump (compression, v_rel > 0) and rebound
-    (v_rel < 0) branches are independent: an asymmetric damper simply has different points on
-    each side.
-
-    Args:
-        v: relative velocities (m/s), strictly increasing.
-        F: forces on the body (N) at ``v``; each must satisfy ``F * v >= 0`` (dissipative).
-        source: where the points came from, for error messages.
-    """
+    """Piecewise-linear passive damper ``F_d = f(v_rel)`` through the points ``v`` (m/s,
+    strictly increasing), ``F`` (N, ``F * v >= 0``), the origin added, end segments extended;
+    bump (v_rel > 0) and rebound branches independent. ``source`` names them in errors."""
 
     def __init__(self, v: Sequence[float] | np.ndarray, F: Sequence[float] | np.ndarray,
                  source: str = "<points>") -> None:
@@ -144,25 +112,15 @@ def _curve_problem(v: np.ndarray, F: np.ndarray) -> tuple[str, int | None] | Non
         if i and v[i] <= v[i - 1]:
             return f"velocities must be strictly increasing (point {i + 1}: {v[i]:g})", i + 1
         if F[i] * v[i] < 0.0 or (v[i] == 0.0 and F[i] != 0.0):
-            return (
-                f"point {i + 1} (v={v[i]:g} m/s, F={F[i]:g} N) is not dissipative: "
-                "the force must have the sign of the velocity (compression positive)",
-                i + 1,
-            )
+            return (f"point {i + 1} (v={v[i]:g} m/s, F={F[i]:g} N) is not dissipative: the force"
+                    " must have the sign of the velocity (compression positive)", i + 1)
     return None
 
 
 def load_curve_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a damper force-velocity curve.
-
-    Format: two comma-separated columns, relative velocity ``v_rel`` (m/s, compression
-    positive) and force on the body ``F_d`` (N), one point per line, velocities strictly
-    increasing, negative velocities for rebound. Blank lines and lines starting with ``#``
-    are ignored; a first non-numeric line is taken as a header.
-
-    Raises:
-        InputFileError: naming the file and the 1-based line of the problem.
-    """
+    """Read a damper curve: CSV ``v_rel`` (m/s, compression positive), ``F_d`` (N), velocities
+    strictly increasing; blank and ``#`` lines ignored, a first non-numeric line is a header.
+    InputFileError names the file and the 1-based line."""
     p = Path(path)
     text = read_user_text(p, "curve", "controller.curve")
     v: list[float] = []
@@ -182,9 +140,8 @@ def load_curve_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
             raise InputFileError(str(p), f"not a number in {row!r}", lineno) from None
         seen_data = True
         if len(values) != 2:
-            raise InputFileError(
-                str(p), f"expected 2 columns (v_rel m/s, F_d N), got {len(values)}", lineno
-            )
+            raise InputFileError(str(p), f"expected 2 columns (v_rel m/s, F_d N), got "
+                                 f"{len(values)}", lineno)
         v.append(values[0])
         F.append(values[1])
         lines.append(lineno)

@@ -63,12 +63,8 @@ from nodes.controller.base import (
 )
 
 #: (c_soft, c_hard) in N·s/m of thesis Table 5.2 (``preset`` key).
-PRESETS: dict[str, tuple[float, float]] = {
-    "lumped": (1500.0, 2368.0),
-    "realistic": (3800.0, 6000.0),
-}
-#: Inputs that are not per-corner state arrays.
-SPECIAL_INPUTS = ("t", "h", "n", "memory")
+PRESETS: dict[str, tuple[float, float]] = {"lumped": (1500.0, 2368.0),
+                                           "realistic": (3800.0, 6000.0)}
 
 _REQUIRED = object()
 
@@ -77,17 +73,9 @@ Builder = Callable[[ConfigReader, int, float], Controller]
 
 @dataclass(frozen=True)
 class ParamInfo:
-    """A law setting: its default (none: required), range, unit, choices, or preset role.
-
-    Made by :func:`Param`; the registry reads it from the law's signature.
-
-    Args:
-        default: value when the key is absent; absent means the key is required.
-        lo, hi: accepted range of a number (``lo_open``: lo excluded).
-        unit: shown in error messages, e.g. ``"N·s/m"``.
-        choices: the accepted strings of a text setting.
-        preset: ``"soft"`` or ``"hard"``: default from :data:`PRESETS` through ``preset``.
-    """
+    """A law setting (made by :func:`Param`): ``default`` (absent: required), range ``lo``,
+    ``hi`` (``lo_open``: lo excluded), ``unit`` for messages, text ``choices``, ``preset``
+    ``"soft"``/``"hard"`` (default from :data:`PRESETS`)."""
 
     default: Any = _REQUIRED
     lo: float | None = None
@@ -114,21 +102,11 @@ class ParamInfo:
         return (self.lo or 0.0) + 1.0
 
 
-def Param(
-    default: Any = _REQUIRED,
-    lo: float | None = None,
-    hi: float | None = None,
-    lo_open: bool = False,
-    unit: str = "",
-    choices: tuple[str, ...] = (),
-    preset: str = "",
-) -> Any:
-    """A law setting's :class:`ParamInfo` (arguments as its fields), as the default of the
-    setting: ``gain: float = Param(lo=0.0, unit="N·s/m")``.
-
-    Typed ``Any`` (like :func:`dataclasses.field`) so that the setting keeps its own type
-    (``float``) for a type checker; the registry takes the :class:`ParamInfo` off the signature.
-    """
+def Param(default: Any = _REQUIRED, lo: float | None = None, hi: float | None = None,
+          lo_open: bool = False, unit: str = "", choices: tuple[str, ...] = (),
+          preset: str = "") -> Any:
+    """A setting's :class:`ParamInfo`, as its default: ``gain: float = Param(lo=0.0)``; typed
+    ``Any`` (like :func:`dataclasses.field`) so the setting keeps its own type."""
     return ParamInfo(default, lo, hi, lo_open, unit, choices, preset)
 
 
@@ -227,11 +205,8 @@ def discover() -> None:
 
 
 def lookup(name: Any, key: str = "controller.law") -> LawSpec:
-    """The spec of the law ``name`` (a registered name or ``"package.module:function"``).
-
-    Raises:
-        ScenarioError: unknown name, a module that does not import, or not a law.
-    """
+    """The spec of the law ``name`` (registered, or ``"package.module:function"``);
+    ScenarioError if unknown, not importable or not a law."""
     discover()
     if isinstance(name, str) and name in LAWS:
         return LAWS[name]
