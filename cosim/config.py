@@ -1,11 +1,8 @@
 """One reader for every configuration table: typed values, checked, named by dotted key.
 
-Every model factory (``[run]``, ``[vehicle]``, ``[tyre]``, ``[road]``, ``[controller]``,
-``[fatigue]``) reads its scenario table through a :class:`ConfigReader`: a small typed reader
-that takes the table and its dotted name and hands out checked values. A bad value, a missing
-required key or an unknown key raises :class:`cosim.errors.ScenarioError` whose message names
-the full dotted key (``controller.c_sky``, ``road.events[1].height``), the value and what was
-expected; the CLI turns it into one line and exit code 2.
+Every model factory reads its scenario table through a :class:`ConfigReader`. A bad value, a
+missing required key or an unknown key raises :class:`cosim.errors.ScenarioError` naming the
+full dotted key (``road.events[1].height``), the value and what was expected (exit code 2).
 
 Example::
 
@@ -14,14 +11,9 @@ Example::
     n = r.integer("n", 4, lo=1)                                  # optional, >= 1
     model = r.choice("model", ("point_contact", "fixed_footprint"), "point_contact")
 
-Unknown keys are almost always typos: give the accepted keys to the constructor (or to
-:meth:`ConfigReader.only`) to refuse the others at once, or call :meth:`ConfigReader.finish`
-after reading to refuse every key that was neither read nor declared. Either names the key,
-lists the accepted ones and suggests the closest (``did you mean 'c_sky'?``).
-
-Numbers: ``bool`` is not a number (TOML ``true`` is refused where a number is expected), an
-``int`` is accepted and returned as ``float`` by :meth:`ConfigReader.number`, and ``inf`` /
-``nan`` are refused.
+Unknown keys (typos) are refused by :meth:`ConfigReader.only` (or the constructor's ``keys``)
+or :meth:`ConfigReader.finish`, with the closest accepted key suggested. ``bool`` is not a
+number; ``inf`` / ``nan`` are refused.
 """
 
 from __future__ import annotations
@@ -74,15 +66,8 @@ def _in_range(x: float, lo: float | None, hi: float | None, lo_open: bool,
 class ConfigReader:
     """Reads one configuration table, naming the dotted key in every error.
 
-    Args:
-        cfg: the table (a mapping of key names to TOML values).
-        name: its dotted name, e.g. ``"controller"`` or ``"road.events[2]"``; ``""`` for a
-            top-level table (the keys are then named alone).
-        keys: when given, the accepted key names: any other key is refused at once
-            (see :meth:`only`).
-
-    Raises:
-        ScenarioError: ``cfg`` is not a table, or (with ``keys``) it has an unknown key.
+    ``name``: the table's dotted name (``""``: top level); ``keys``: see :meth:`only`.
+    ScenarioError when ``cfg`` is not a table or has an unknown key.
     """
 
     def __init__(self, cfg: object, name: str, keys: Iterable[str] | None = None) -> None:
@@ -102,8 +87,7 @@ class ConfigReader:
         return f"{self.name}.{name}" if self.name else name
 
     def error(self, name: str, value: object, expected: str) -> ScenarioError:
-        """The :class:`ScenarioError` for key ``name`` (to ``raise``): for checks of one
-        model (``c_hard >= c_soft``) that the typed methods do not cover."""
+        """The :class:`ScenarioError` for key ``name`` (to ``raise``)."""
         return ScenarioError(self.key(name), value, expected)
 
     def has(self, name: str) -> bool:
@@ -125,9 +109,8 @@ class ConfigReader:
     # ------------------------------------------------------------------ unknown keys
 
     def only(self, keys: Iterable[str], *, unlisted: Iterable[str] = ()) -> None:
-        """Refuse every key of the table outside ``keys`` (and ``unlisted``: accepted but not
-        listed in the message, e.g. keys a program fills in); the keys are also declared for
-        :meth:`finish`."""
+        """Refuse every key outside ``keys`` (and ``unlisted``: accepted, not listed in the
+        message); declared for :meth:`finish` too."""
         allowed = set(keys)
         self._declared |= allowed | set(unlisted)
         for k in self.cfg:
@@ -150,24 +133,15 @@ class ConfigReader:
     # ------------------------------------------------------------------ values
 
     def value(self, name: str, default: Any = None) -> Any:
-        """The raw value of ``name`` (``default`` when absent), unchecked: for a value of
-        several kinds that the caller checks itself, raising :meth:`error`."""
+        """The raw value of ``name`` (``default`` when absent), unchecked."""
         return self._get(name, default, "a value")
 
     def number(self, name: str, default: Any = REQUIRED, *, lo: float | None = None,
                hi: float | None = None, lo_open: bool = False, hi_open: bool = False,
                positive: bool = False, unit: str = "", expected: str | None = None) -> float:
-        """A finite real number (``int`` or ``float``, not ``bool``) as ``float``.
-
-        Args:
-            name: the key.
-            default: value when absent (returned as ``float``, unchecked); absent:
-                :data:`REQUIRED`.
-            lo, hi: the accepted range, inclusive unless ``lo_open`` / ``hi_open``.
-            positive: shorthand for ``lo=0, lo_open=True`` (a number > 0).
-            unit: shown in the message, e.g. ``"N·s/m"``.
-            expected: the message's "expected" text in place of the generated one.
-        """
+        """A finite number as ``float`` in [lo, hi] (open with ``lo_open``/``hi_open``;
+        ``positive``: > 0); ``default`` is returned unchecked; ``unit`` and ``expected``
+        are for the message."""
         if positive and lo is None:
             lo, lo_open = 0.0, True
         what = expected or "a number" + describe_range(lo, hi, lo_open=lo_open,

@@ -13,34 +13,18 @@ For ``kind == "data"`` the payload maps field names to a number or a list of num
 corner for per-corner quantities; a quarter car sends plain numbers). Field names and units of
 each channel are listed in :mod:`cosim.channels`. Control kinds carry a free msgpack map.
 
-``kind == "records"`` is the recorder's feed (``suscosim/<run>/<node>/records``): a node's
-data messages of the last few steps, exactly as published, ``d = {"records": [[channel,
-raw message bytes], ...]}`` in publication order; ``k``/``t`` are those of the last one.
-The batch is signed; the messages in it are not (the batch's signature covers them).
+Two kinds carry other data messages, each exactly as it would be on its own (unsigned: the
+bundle's signature covers it), ``d = {FIELD: [[channel, raw message bytes], ...]}``, ``k``/``t``
+the newest inner message's: ``records`` (``<node>/records``, the recorder's feed of a node's
+last few steps) and ``step`` (``<node>/step``, ``d["msgs"]``: one producer's messages of one
+communication step, sent as ONE bus message). A consumer decodes only the inner messages of
+the channels it reads (:func:`inner`).
 
-``kind == "step"`` is a producer's step (``suscosim/<run>/<node>/step``, issue #28 item 2):
-the data messages a node publishes for one communication step, in ONE bus message signed
-once, ``d = {"msgs": [[channel, raw message bytes], ...]}`` (the plant's: its ``response``
-and component loads of step k - 2, encoded while it waited for the forces of step k - 1,
-then ``state`` of step k; a force node's: its ``force``). ``k``/``t`` are the newest inner
-message's. Each inner message is the data
-message it would have been on its own (unsigned: the step's signature covers it), so the
-records batches, the journal and the tables are unchanged; a consumer decodes only the inner
-messages of the channels it listens to (:func:`inner`), each against its channel's schema.
-
-Encoding and decoding are msgspec's (compiled; the bytes are msgpack's, identical to
-``msgpack.packb``): a message is decoded into a typed struct per kind in C, the numbers of a
-data payload type-checked there; with ``channel`` (``node/channel``) the numbers are
-bounded by that channel's limit of :mod:`cosim.schema` (NaN, +-inf, 1e308 refused), its
-non-negative fields checked, ``k >= 0`` and ``t >= 0``. A message that fails is explained
-field by field (the slow path, on errors only). python -m bench wire measures this against
-msgpack with the checks in Python.
-
-Every message a run publishes is signed with the run's key: the map gets a sixth field, last,
-``"s"``: 16 bytes, the MAC of the five before it (see :mod:`cosim.auth`). A reader without
-the key (a tap, replay, a plain ``msgpack.unpackb``) reads the message as before and may
-ignore ``s``; nodes and the orchestrator check it first with
-:meth:`cosim.auth.RunKey.verify`.
+Encoding and decoding are msgspec's (compiled; the bytes are msgpack's): with ``channel`` the
+numbers are bounded by that channel's limit of :mod:`cosim.schema` (NaN, +-inf, 1e308
+refused), its non-negative fields checked, ``k >= 0`` and ``t >= 0``; a message that fails is
+explained field by field (the slow path). A signed message has a sixth field ``"s"``
+(:mod:`cosim.auth`).
 """
 
 from __future__ import annotations
@@ -60,9 +44,8 @@ from .errors import WireError
 
 SCHEMA_VERSION = 1
 MAX_MESSAGE_BYTES = 48 * 1024
-"""Largest message a node publishes [bytes]. Zenoh's low-latency transport (the embedded
-default) does not fragment: a message must fit one 64 KiB batch with its headers, or it is
-dropped. Data messages are far smaller; batches (records, load blocks) are cut to fit."""
+"""Largest message a node publishes [bytes]: Zenoh's low-latency transport does not fragment
+(a message must fit one 64 KiB batch with its headers); batches are cut to fit."""
 CONTROL_KINDS = ("hello", "ready", "waiting", "start", "progress", "done", "abort", "error",
                  "checkpoint")
 KINDS = frozenset({"data", "records", "step", *CONTROL_KINDS})
@@ -212,9 +195,8 @@ class ChannelCodec:
 
 
     def _undeclared(self, raw: bytes) -> Any:
-        """The slow path: ``raw`` failed the bounded decoder. It is taken if only fields
-        the schema does not declare are out of bounds (a law's extras may be NaN: TSS3's
-        ``F_demand`` at rest), else WireError saying why."""
+        """The slow path: ``raw`` failed the bounded decoder. It is taken if only undeclared
+        fields are out of bounds (a law's extras may be NaN), else WireError saying why."""
         try:
             m = _GENERIC.decode(raw)
         except (msgspec.DecodeError, msgspec.ValidationError):
@@ -272,12 +254,6 @@ def decode(raw: bytes, channel: str | None = None) -> Message:
     if m.v != SCHEMA_VERSION:
         raise WireError(_version(m.v))
     return Message(_KIND_OF[type(m)], m.k, m.t, m.d)
-
-
-def check_data(name: str, k: int, t: float, raw: bytes) -> None:
-    """Raise WireError unless the encoded data message ``raw`` fits channel ``name`` (what a
-    producer checks before it publishes)."""
-    codec(name).decode(raw)
 
 
 # ---- the slow path: what is wrong, field by field (errors only) -----------------------------
