@@ -1,21 +1,11 @@
 """Build a scenario's controller: ``build_controller(cfg, n_corners, h)`` from its
 ``[controller]`` table, and the laws that need a class.
 
-Every law is registered by name in :mod:`nodes.controller.registry`: most are one function
-each (``@control_law``, beside their numerics: ``passive`` in dampers.py, ``tss1`` /
-``skyhook_on_off``, ``skyhook``, ``skyhook_no_jerk`` in skyhook.py, ``groundhook``,
-``groundhook_on_off`` in groundhook.py, ``hybrid`` in hybrid.py); the laws below need state or
-substeps and register their builder (``@law_builder``): ``passive_curve``, ``passive_mr``,
-``tss2``, ``tss3``, ``pnr`` / ``tss1_pnr``; ``fmu`` (an FMI co-simulation FMU) is in fmu.py.
-``python3 -m nodes.controller.registry`` lists them all with their keys; docs/control.md
-has the table with defaults and thesis sources.
-
-Every law also accepts ``velocity`` ["relative" | "damper"]: "damper" makes the law use the
-plant's ``v_damper`` (damper compression velocity, m/s, published by the double-wishbone
-corner) instead of ``v_w - v_b``; see :mod:`nodes.controller.base`.
-
-MR overrides (``damper`` table): c_pre, K_f, M_f, I_max, motion_ratio, dynamics, substep —
-see :class:`nodes.controller.mr_damper.MRParams`.
+Most laws are one ``@control_law`` function beside their numerics (dampers.py, skyhook.py,
+groundhook.py, hybrid.py); those below need state or substeps and register a builder
+(``@law_builder``); ``fmu`` is in fmu.py. ``python3 -m nodes.controller.registry`` lists them
+all; docs/control.md gives defaults and thesis sources. Every law also accepts ``velocity``
+(:mod:`nodes.controller.base`); the MR laws a ``damper`` table (:class:`.mr_damper.MRParams`).
 """
 
 from __future__ import annotations
@@ -28,12 +18,7 @@ import numpy as np
 
 from cosim.config import ConfigReader
 from cosim.errors import ScenarioError
-from nodes.controller.base import (
-    VELOCITY_SOURCES,
-    Controller,
-    ControlOutput,
-    body_scalar,
-)
+from nodes.controller.base import VELOCITY_SOURCES, Controller, ControlOutput, body_scalar
 from nodes.controller.dampers import PassiveCurve
 from nodes.controller.full_vehicle import pnr_select
 from nodes.controller.mr_damper import MRParams
@@ -58,27 +43,15 @@ class PassiveCurveController(Controller):
 
 
 class PitchRoll(Controller):
-    """TSS1 PnR on a full vehicle (thesis Sec 5.4.4): minimum-product choice among the 16
-    soft/hard combinations, see :mod:`nodes.controller.full_vehicle`.
-
-    Angular accelerations: ``angular_acc = "rates"`` differentiates the body rates
-    ``w_pitch``/``w_roll`` over the call interval (0 at the first call);
-    ``"corners"`` uses Eqs 5.4/5.5 with the per-corner body accelerations ``a_b`` (m/s²,
-    must be in the state) and the ``wheelbase``/``track`` (m).
-    """
+    """TSS1 PnR on a full vehicle (thesis Sec 5.4.4, :mod:`nodes.controller.full_vehicle`).
+    ``angular_acc = "rates"`` differentiates ``w_pitch``/``w_roll`` over the call interval (0
+    at the first call); ``"corners"`` uses Eqs 5.4/5.5 with ``a_b`` (m/s²) and the
+    ``wheelbase``/``track`` (m)."""
 
     law = "pnr"
 
-    def __init__(
-        self,
-        n_corners: int,
-        h: float,
-        c_soft: float,
-        c_hard: float,
-        angular_acc: str,
-        wheelbase: float,
-        track: float,
-    ) -> None:
+    def __init__(self, n_corners: int, h: float, c_soft: float, c_hard: float,
+                 angular_acc: str, wheelbase: float, track: float) -> None:
         super().__init__(n_corners, h)
         self.c_soft, self.c_hard = c_soft, c_hard
         self.angular_acc, self.wheelbase, self.track = angular_acc, wheelbase, track
@@ -90,9 +63,8 @@ class PitchRoll(Controller):
             try:
                 a = np.asarray(state["a_b"], dtype=float).reshape(4)
             except KeyError:
-                raise ValueError(
-                    "controller state has no 'a_b' (angular_acc = 'corners')"
-                ) from None
+                msg = "controller state has no 'a_b' (angular_acc = 'corners')"
+                raise ValueError(msg) from None
             return (a[0] - a[2]) / self.wheelbase, (a[0] - a[1]) / self.track
         wp, wr = body_scalar(state, "w_pitch"), body_scalar(state, "w_roll")
         prev, self._prev = self._prev, (float(t), wp, wr)
@@ -105,16 +77,9 @@ class PitchRoll(Controller):
         _, _, v_rel = self.corners(state)
         theta_dd, phi_dd = self.accelerations(t, state)
         n, F, c = pnr_select(v_rel, self.c_soft, self.c_hard, theta_dd, phi_dd)
-        return ControlOutput(
-            F_d=F,
-            c_eff=c,
-            extra={
-                "state": (c == self.c_hard).astype(float),
-                "mp": np.full(self.n, float(n + 1)),
-                "theta_dd": np.full(self.n, theta_dd),
-                "phi_dd": np.full(self.n, phi_dd),
-            },
-        )
+        return ControlOutput(F_d=F, c_eff=c, extra={
+            "state": (c == self.c_hard).astype(float), "mp": np.full(self.n, float(n + 1)),
+            "theta_dd": np.full(self.n, theta_dd), "phi_dd": np.full(self.n, phi_dd)})
 
 
 # --------------------------------------------------------------------------- builders
@@ -141,11 +106,8 @@ def _mr_params(r: ConfigReader) -> MRParams:
 def _passive_curve(r: ConfigReader, n: int, h: float) -> Controller:
     """Passive damper on a force-velocity curve (CSV path or points)."""
     if r.has("curve") == r.has("points"):
-        raise ScenarioError(
-            r.key("curve"),
-            r.cfg.get("curve"),
-            "either 'curve' (a CSV path) or 'points' ([[v_rel, F_d], ...]), not both",
-        )
+        raise ScenarioError(r.key("curve"), r.cfg.get("curve"), "either 'curve' (a CSV path) "
+                            "or 'points' ([[v_rel, F_d], ...]), not both")
     if r.has("curve"):
         return PassiveCurveController(n, h, PassiveCurve.from_csv(Path(r.string("curve"))))
     pts = r.cfg["points"]
@@ -188,11 +150,8 @@ def _tss3(r: ConfigReader, n: int, h: float) -> Controller:
 def _pnr(r: ConfigReader, n: int, h: float) -> Controller:
     """Full-vehicle pitch-and-roll TSS1, minimum product of 16 combinations (Sec 5.4.4)."""
     if n != 4:
-        raise ScenarioError(
-            r.key("law"),
-            r.cfg.get("law"),
-            f"a per-corner law: 'pnr' needs a full vehicle (4 corners), this model has {n}",
-        )
+        raise ScenarioError(r.key("law"), r.cfg.get("law"), f"a per-corner law: 'pnr' needs a "
+                            f"full vehicle (4 corners), this model has {n}")
     c_soft, c_hard = _soft_hard(r)
     source = r.choice("angular_acc", ("rates", "corners"), "rates")
     wheelbase = track = float("nan")
@@ -205,22 +164,11 @@ def _pnr(r: ConfigReader, n: int, h: float) -> Controller:
     return PitchRoll(n, h, c_soft, c_hard, source, wheelbase, track)
 
 
-def build_controller(
-    cfg: Mapping[str, Any], n_corners: int, h: float, key_prefix: str = "controller"
-) -> Controller:
-    """Build the controller a scenario's ``[controller]`` table asks for.
-
-    Args:
-        cfg: the table, e.g. ``{"law": "tss1", "c_soft": 1500, "c_hard": 2368}``.
-        n_corners: 1 (quarter car) or 4 (full vehicle: FL, FR, RL, RR).
-        h: communication step (s).
-        key_prefix: dotted path of the table, used in error messages.
-
-    Raises:
-        ScenarioError: unknown law, unknown key, or a bad value (names the dotted key);
-            ``law`` may be a registered name or ``"package.module:function"``.
-        InputFileError: a malformed damper-curve CSV.
-    """
+def build_controller(cfg: Mapping[str, Any], n_corners: int, h: float,
+                     key_prefix: str = "controller") -> Controller:
+    """The controller of the ``[controller]`` table ``cfg`` (dotted path ``key_prefix``) for
+    ``n_corners`` (1, or 4: FL, FR, RL, RR) at the step ``h`` (s). ScenarioError naming the
+    key for an unknown law or key or a bad value; InputFileError for a bad curve CSV."""
     if n_corners < 1:
         raise ValueError(f"n_corners must be >= 1, got {n_corners}")
     if not h > 0.0:

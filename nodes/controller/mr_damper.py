@@ -52,18 +52,10 @@ F_Y_POLY = (-13417.0, 25233.0, -17787.0, 6145.8, 1.33)
 
 @dataclass(frozen=True)
 class MRParams:
-    """MR damper parameters (thesis Table 5.1 unless noted).
-
-    Attributes:
-        c_pre: pre-yield damping (N·s/m), 55.76 kN·s/m.
-        K_f: fluid stiffness (N/m), 1.29 MN/m.
-        M_f: fluid mass (kg), 1.5 kg.
-        I_max: upper end of the current range (A) over which the fits hold, 0.6 A.
-        motion_ratio: damper velocity / wheel relative velocity (-), 1.0 (not in the thesis).
-        dynamics: integrate the K_f/M_f dynamics (True) or use the static bi-viscous law.
-        substep: internal integration step (s) for the dynamics; not in the thesis.
-        c_post_poly, F_y_poly: Table 5.1 polynomials in I (A), highest power first.
-    """
+    """MR damper parameters (thesis Table 5.1 unless noted): c_pre (N·s/m), K_f (N/m), M_f
+    (kg), I_max (A, end of the fits' range), motion_ratio r (-, not in the thesis), dynamics
+    (K_f/M_f integrated, else the static law), substep (s, not in the thesis), the Table 5.1
+    polynomials in I (A), highest power first."""
 
     c_pre: float = 55760.0
     K_f: float = 1.29e6
@@ -78,20 +70,17 @@ class MRParams:
     @classmethod
     def from_config(cls, cfg: Mapping[str, Any], prefix: str) -> MRParams:
         """Overrides from a scenario table (``[controller.damper]``); unknown keys are errors."""
-        r = ConfigReader(
-            cfg, prefix, ("c_pre", "K_f", "M_f", "I_max", "motion_ratio", "dynamics", "substep")
-        )
+        r = ConfigReader(cfg, prefix,
+                         ("c_pre", "K_f", "M_f", "I_max", "motion_ratio", "dynamics", "substep"))
         d = cls()
-        return replace(
-            d,
+        return replace(d,
             c_pre=r.number("c_pre", d.c_pre, lo=0.0, lo_open=True, unit="N·s/m"),
             K_f=r.number("K_f", d.K_f, lo=0.0, lo_open=True, unit="N/m"),
             M_f=r.number("M_f", d.M_f, lo=0.0, lo_open=True, unit="kg"),
             I_max=r.number("I_max", d.I_max, lo=0.0, hi=0.6, lo_open=True, unit="A"),
             motion_ratio=r.number("motion_ratio", d.motion_ratio, lo=0.0, lo_open=True),
             dynamics=r.boolean("dynamics", d.dynamics),
-            substep=r.number("substep", d.substep, lo=0.0, hi=1e-3, lo_open=True, unit="s"),
-        )
+            substep=r.number("substep", d.substep, lo=0.0, hi=1e-3, lo_open=True, unit="s"))
 
 
 def c_post(I: np.ndarray | float, p: MRParams = MRParams()) -> np.ndarray:
@@ -109,9 +98,8 @@ def yield_velocity(I: np.ndarray | float, p: MRParams = MRParams()) -> np.ndarra
     return yield_force(I, p) / (p.c_pre - c_post(I, p))
 
 
-def bi_viscous_force(
-    v: np.ndarray | float, I: np.ndarray | float, p: MRParams = MRParams()
-) -> np.ndarray:
+def bi_viscous_force(v: np.ndarray | float, I: np.ndarray | float,
+                     p: MRParams = MRParams()) -> np.ndarray:
     """Static bi-viscous force F_bv(v, I) (N) at damper velocity v (m/s), damper frame."""
     v = np.asarray(v, dtype=float)
     cp = c_post(I, p)
@@ -126,16 +114,10 @@ CurrentFn = Callable[[float, np.ndarray], np.ndarray]
 
 
 class MRDamper:
-    """MR damper per corner with fluid dynamics, in the wheel frame of the controller.
+    """MR damper of ``n`` corners with fluid dynamics, in the controller's wheel frame.
 
-    Call :meth:`advance` once per communication step with the relative velocities at the
-    start and end of the step; the velocity is interpolated linearly inside the step and the
-    current can be recomputed at every substep (the thesis's Simulink block ran the
-    controller and the damper model at its own, finer rate).
-
-    Args:
-        n: number of corners.
-        params: :class:`MRParams`.
+    :meth:`advance` once per communication step: v_rel interpolated linearly inside the step,
+    the current recomputed every substep (the thesis's Simulink block ran at its finer rate).
     """
 
     def __init__(self, n: int, params: MRParams = MRParams()) -> None:
@@ -175,13 +157,10 @@ class MRDamper:
         self.started = True
         return self.force
 
-    def advance(
-        self, v_rel0: np.ndarray, v_rel1: np.ndarray, duration: float, current: CurrentFn
-    ) -> np.ndarray:
-        """Integrate over ``duration`` (s) with v_rel going linearly from v_rel0 to v_rel1.
-
-        Returns the force at the wheel (N) at the end of the interval.
-        """
+    def advance(self, v_rel0: np.ndarray, v_rel1: np.ndarray, duration: float,
+                current: CurrentFn) -> np.ndarray:
+        """Integrate ``duration`` (s), v_rel linear from v_rel0 to v_rel1; the force at the
+        wheel (N) at the end."""
         p = self.p
         if not p.dynamics or duration <= 0.0:
             I = self._current(current, 1.0, self.force)

@@ -32,20 +32,11 @@ from nodes.controller.mr_damper import MRDamper, MRParams
 from nodes.controller.skyhook import skyhook_condition
 
 
-def tss2_current(
-    F_star: np.ndarray, F_mr: np.ndarray, B: float, G: float, I_max: float
-) -> np.ndarray:
-    """TSS2 feedback current ``sat_[0, I_max](G (|F*| - B |F_MR|))`` (A).
-
-    Args:
-        F_star: TSS1 force demand (N).
-        F_mr: force the MR damper gives now (N).
-        B: feedback gain on the damper force (-), thesis 0.8.
-        G: current per newton of error (A/N), thesis 0.001.
-        I_max: current limit (A), 0.6.
-    """
-    raw = G * (np.abs(F_star) - B * np.abs(F_mr))
-    return np.clip(raw, 0.0, I_max)
+def tss2_current(F_star: np.ndarray, F_mr: np.ndarray, B: float, G: float,
+                 I_max: float) -> np.ndarray:
+    """TSS2 current ``sat_[0, I_max](G (|F*| - B |F_MR|))`` (A): F* the TSS1 demand and F_MR
+    the damper's force (N), B (-) and G (A/N) the gains (thesis 0.8, 0.001), I_max (A)."""
+    return np.clip(G * (np.abs(F_star) - B * np.abs(F_mr)), 0.0, I_max)
 
 
 class MRController(Controller):
@@ -90,11 +81,8 @@ class MRController(Controller):
         self._t, self._v_b, self._v_rel = float(t), v_b.copy(), v_rel.copy()
         F_dem, hard = self.demand(v_b, v_rel)
         I = d.I.copy()
-        return ControlOutput(
-            F_d=F.copy(),
-            c_eff=d.c_eff(I),
-            extra={"I": I, "state": hard.astype(float), "F_demand": F_dem},
-        )
+        return ControlOutput(F_d=F.copy(), c_eff=d.c_eff(I),
+                             extra={"I": I, "state": hard.astype(float), "F_demand": F_dem})
 
 
 class PassiveMR(MRController):
@@ -119,9 +107,8 @@ class TSS3(MRController):
 
     law = "tss3"
 
-    def __init__(
-        self, n_corners: int, h: float, params: MRParams, I_soft: float, I_hard: float
-    ) -> None:
+    def __init__(self, n_corners: int, h: float, params: MRParams, I_soft: float,
+                 I_hard: float) -> None:
         super().__init__(n_corners, h, params)
         self.I_soft, self.I_hard = I_soft, I_hard
 
@@ -130,26 +117,13 @@ class TSS3(MRController):
 
 
 class TSS2(MRController):
-    """MR force tracking the TSS1 force by current feedback (see module docstring).
-
-    Args:
-        c_soft, c_hard: TSS1 coefficients of the tracked force (N·s/m).
-        B: feedback gain on the damper force (-), thesis 0.8.
-        G: current gain (A/N), thesis 0.001.
-    """
+    """MR force tracking the TSS1 force (c_soft, c_hard in N·s/m) by current feedback with the
+    gains B (-) and G (A/N) (module docstring)."""
 
     law = "tss2"
 
-    def __init__(
-        self,
-        n_corners: int,
-        h: float,
-        params: MRParams,
-        c_soft: float,
-        c_hard: float,
-        B: float,
-        G: float,
-    ) -> None:
+    def __init__(self, n_corners: int, h: float, params: MRParams, c_soft: float,
+                 c_hard: float, B: float, G: float) -> None:
         super().__init__(n_corners, h, params)
         self.c_soft, self.c_hard, self.B, self.G = c_soft, c_hard, B, G
 
