@@ -1,28 +1,15 @@
 """The node registry: every kind of node a run can have, declared once.
 
-Each :class:`NodeKind` says what a node is: its name (also its key segment, its log file,
-its certificate's common name), the entry of its implementation, its role, the channels it
-reads and writes, its preflight check, the scenario keys of its that are file paths, and
-the core it is pinned to. What used to be spread over ten files is derived from here:
+Each :class:`NodeKind` gives a node's name (also its key segment, log file and certificate
+name), implementation, role, channels, preflight check, path keys and core. ``suscosim
+node``, the run's node list and preflight, CPU placement, the recorder's producers, the
+plant's force sources and the deploy files (``python -m orchestrator.compose_gen``; a test
+fails when they are stale) derive from it. Adding a kind: docs/nodes.md. Entries are
+``package.module:attribute`` strings, imported when used (:func:`load`).
 
-* ``suscosim node NAME`` (``orchestrator.node_main``: which kinds exist, what to run),
-* the run's node list and preflight (``orchestrator.runner.resolve``),
-* CPU placement (``orchestrator.placement``),
-* whom the recorder records (:func:`producers`), whom the plant takes forces from
-  (:func:`force_sources`),
-* the per-node services of ``docker-compose.yml`` / ``deploy/compose/*.yml``, the router's
-  access control (``deploy/zenoh/*.json5``), the client configurations and the certificate
-  names (``python -m orchestrator.compose_gen``; a test fails when they are stale).
-
-Adding a kind: one :class:`NodeKind` in :data:`KINDS`, its node module, then ``python -m
-orchestrator.compose_gen`` (docs/nodes.md). This module imports nothing outside ``cosim``:
-entries are ``package.module:attribute`` strings, imported when used (:func:`load`).
-
-A scenario picks an implementation per kind in ``[nodes]`` (:func:`implementation`):
-``controller = "fmu"`` (a named alternative of the kind) or ``controller =
-"package.module:Class"`` / ``"package.module:function"`` (a user's own node, as mosaik
-names its simulators). A bad value is a :class:`ScenarioError` naming ``nodes.<kind>``,
-found at preflight (:func:`check_nodes_section`), before any process starts.
+A scenario picks an implementation per kind in ``[nodes]``: a named alternative
+(``controller = "fmu"``) or a user's ``"package.module:Class"`` / ``"...:function"``; a bad
+value is a :class:`ScenarioError` naming ``nodes.<kind>`` at preflight.
 """
 
 from __future__ import annotations
@@ -50,12 +37,9 @@ SECTION = "nodes"
 
 @dataclass(frozen=True)
 class Check:
-    """A preflight check: ``entry(scenario, *facts[takes])``, run by the orchestrator before
-    any node starts; it raises :class:`ScenarioError` / :class:`InputFileError` on bad input.
-
-    ``gives``: the name of the fact its result is (e.g. ``duration_s``); None: the result is a
-    mapping of facts (or None), merged into the facts the later checks take. The check of an
-    *optional* kind returns whether the kind joins the run."""
+    """A preflight check ``entry(scenario, *facts[takes])`` (raises on bad input); ``gives``:
+    the fact its result is (None: a mapping of facts, merged). An *optional* kind's check
+    returns whether it joins the run."""
 
     entry: str
     takes: tuple[str, ...] = ()
@@ -83,12 +67,10 @@ class NodeKind:
     reads: tuple[tuple[str, str], ...] = ()
     """(node, channel) inputs; node ``*``: every coupled kind that writes that channel."""
     writes: tuple[str, ...] = ()
-    """Output channels (under ``suscosim/<run>/<name>/``): the kind's channels of the schema
-    (:func:`cosim.schema.writes`), its ``step`` (its per-step channels' messages of a step in
-    one message: the key it publishes them on) and its records feed."""
+    """Output channels (under ``suscosim/<run>/<name>/``): its schema channels, ``step``
+    and ``records``."""
     provides: tuple[str, ...] = ()
-    """The coupling fields of its ``force`` output the plant applies (F_t, k_t / F_d, c_eff):
-    the schema's required fields of that channel (:func:`cosim.schema.coupling`)."""
+    """The coupling fields of its ``force`` output (:func:`cosim.schema.coupling`)."""
     path_keys: tuple[str, ...] = ()
     """Dotted scenario keys of its that hold file paths (relative: to the scenario file)."""
     cores: tuple[int, int, int] = (1, 0, 3)

@@ -1,11 +1,8 @@
 """Scenario files: one TOML file, validated before anything starts.
 
-The common sections are checked here; the model sections (``vehicle``, ``tyre``, ``road``,
-``controller``, ``fatigue``) are checked by the model factories of the nodes that own them
-(the orchestrator runs those checks in a preflight, before starting any node). An error names
-the dotted key, the value and what was expected, and the CLI exits with code 2. Every number
-of every section must be finite (:func:`check_finite`): ``inf`` and ``nan`` are refused here,
-whatever model reads them.
+The common sections are checked here, the model sections by the model factories of the nodes
+that own them (at preflight). An error names the dotted key, the value and what was expected
+(exit code 2). Every number of every section must be finite (:func:`check_finite`).
 
 Example (Chapter 3 step)::
 
@@ -89,6 +86,10 @@ RUN_KEYS: dict[str, Key] = {
                       doc="coupling (communication) step [s]: a whole multiple of run.h; the "
                           "nodes exchange once per coupling step, the plant takes its run.h "
                           "steps between on the coupling's extrapolated inputs; 0 = run.h"),
+    "sink_window_s": Key(float, 10.0, low=0.0, high=1e6,
+                         doc="how far (simulated s) a sink (recorder, live fatigue) may lag "
+                             "behind the coupled chain before the chain waits for it; "
+                             "0 = unbounded"),
     "mode": Key(str, "distributed", ("distributed", "monolithic", "reference"),
                 doc="distributed: the node models co-simulated (run.transport says how; "
                     "monolithic: the same as run.transport = \"inprocess\"); reference: "
@@ -151,10 +152,8 @@ PHYSICAL_RANGES: tuple[tuple[str, str, float, float, str], ...] = (
     ("road", "length_m", 0.0, 1e7, "m"),
 )
 """(section, key pattern, lowest, highest, unit): the physical range of the numbers of the
-model sections, wherever they sit in their section (``road.events[2].height`` too). A
-value outside is a ScenarioError naming the key. The models' own validators check more
-(e.g. a mass > 0); this table catches what no model would run sensibly (a 1e30 kg body,
-a 10 km step)."""
+model sections, at any depth (``road.events[2].height``); outside is a ScenarioError. The
+models check more; this catches what no model would run sensibly (a 1e30 kg body)."""
 
 
 def check_ranges(scenario: dict[str, Any]) -> None:
@@ -180,9 +179,7 @@ def check_ranges(scenario: dict[str, Any]) -> None:
 
 
 def check_finite(value: Any, key: str = "") -> None:
-    """Every number anywhere in a scenario must be finite: TOML's ``inf`` / ``nan`` (and
-    ``--set tyre.stiffness=inf``) are refused here, once for every section and every model,
-    naming the dotted key (``road.points[3]`` for an array element)."""
+    """Refuse a non-finite number anywhere in a scenario, naming its dotted key."""
     if isinstance(value, float) and not math.isfinite(value):
         raise ScenarioError(key, value, "a finite number")
     if isinstance(value, dict):
@@ -232,11 +229,9 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
 
 
 def _coupling_step(run: dict[str, Any]) -> None:
-    """``run.coupling_h`` (multi-rate, DESIGN.md): the nodes exchange every coupling step, the
-    plant takes its run.h steps between. Resolved in place: run.h becomes the coupling
-    (communication) step and run.substeps the plant's substeps in it (run.substeps x
-    coupling_h / h: the plant's own step, h / substeps, is unchanged); then coupling_h = h,
-    so resolving again changes nothing."""
+    """Resolve ``run.coupling_h`` (multi-rate, DESIGN.md) in place: run.h becomes the
+    coupling step, run.substeps x coupling_h / h the plant's substeps in it (its own step
+    unchanged), coupling_h = h (idempotent)."""
     every = run["coupling_h"]
     if not every:
         return
@@ -296,14 +291,9 @@ def _override_key(assignment: str) -> str:
 
 
 def override_hint(exc: ScenarioError, overrides: list[str] | tuple[str, ...]) -> ScenarioError:
-    """``exc`` with a hint when ``--set`` changed single keys of the table that now has a key
-    it does not take, left over from the scenario file (``--set 'controller.law="skyhook"'``
-    on a passive scenario keeps its ``controller.c``): how to replace the whole table
-    instead. Any other error is returned as it is.
-
-    ``--set`` never drops a key by itself (a typo in a key must still be an error): a table
-    given whole (``--set 'controller={law="skyhook", c_sky=2500.0}'``) replaces the file's.
-    """
+    """``exc`` with a hint when ``--set`` changed single keys of a table that now has an
+    unknown key left over from the file (``controller.law`` set, ``controller.c`` kept): how
+    to give the table whole instead. Other errors are returned as they are."""
     if not isinstance(exc, UnknownKeyError):
         return exc
     table, _, leaf = exc.key.rpartition(".")
@@ -384,23 +374,19 @@ relative ones are relative to the scenario file's folder."""
 
 
 def absolute_path(value: Any, folder: Path) -> Any:
-    """``value`` with a relative file path in it made absolute against ``folder``: a string,
-    or a list of them (``fatigue.parts``). Not a path, left as it is: anything but a string,
-    ``"builtin..."``, and inside a list a bare name without a suffix (a shipped part's,
-    ``"upper_arm"``)."""
+    """``value`` (a string or a list of them) with relative file paths made absolute against
+    ``folder``; ``"builtin..."`` and, in a list, bare names without a suffix are left."""
     if isinstance(value, list):
         return [absolute_path(v, folder) if isinstance(v, str) and Path(v).suffix else v
                 for v in value]
     if not isinstance(value, str) or not value or value.startswith("builtin"):
         return value
-    p = Path(value)  # as written: no ~ or $VARIABLE expansion (#46)
+    p = Path(value)  # as written: no ~ or $VARIABLE expansion
     return value if p.is_absolute() else str(folder / p)
 
 
 def absolute_paths(scenario: dict[str, Any], folder: Path) -> None:
-    """Make the relative file paths of a scenario absolute against ``folder`` (in place), so
-    a node started in any working directory (or on another machine with the same mount) finds
-    them (:func:`absolute_path`)."""
+    """Make the relative file paths of a scenario absolute against ``folder``, in place."""
     for section, key in PATH_KEYS:
         sec = scenario.get(section)
         if isinstance(sec, dict) and key in sec:
