@@ -1,21 +1,13 @@
 """The barrier-synchronised clock: start barrier, progress, end of run, stall and death.
 
-The clock does not grant every step (that would double the messages per step): the step
-barrier is data-driven inside each node (see cosim.participant). The clock
-
-* serves the resolved scenario to the nodes (a Zenoh queryable);
-* waits until every node of the scenario is present (liveliness token) and ready, then
-  publishes ``start`` (n_steps, h, and every node's facts) until every node has started;
-* follows every node's last completed step (progress messages), for the progress bar;
-* ends the run when every node is done, or aborts it (publishing ``abort`` so the others stop)
-  when a node reports an error, loses its liveliness token (killed, partitioned) or makes no
-  progress for the stall timeout. The error names the node.
-
-With the run's key (:class:`cosim.auth.RunKey`) the clock signs what it publishes (start,
-abort, done, the scenario) and takes a node's control message only when it is signed with
-that key, well formed field by field (:func:`cosim.control.check_node_control`) and
-plausible (a step within the run; ``done`` only at the last step); anything else is rejected
-and counted (``rejected`` of the clock), never acted on.
+The step barrier is data-driven inside each node (cosim.participant); the clock serves the
+resolved scenario (a queryable), publishes ``start`` (n_steps, h, every node's facts) once
+every node is present (liveliness token) and ready, follows each node's last step, and ends
+the run when every node is done, or aborts it when a node reports an error, loses its token or
+makes no progress for the stall timeout (the error names the node). With the run's key
+(:class:`cosim.auth.RunKey`) it signs what it publishes and acts on a node's control message
+only when signed, well formed (:func:`cosim.control.check_node_control`) and plausible (a step
+within the run; ``done`` only at the last); anything else is counted (``rejected``).
 """
 
 from __future__ import annotations
@@ -110,9 +102,8 @@ class Clock:
         sign = auth.signer(clock_key) if auth else (lambda raw: raw)
         self._sent: set[bytes] = set()  # the aborts this clock signed (a handful)
         self.foreign_abort: str | None = None
-        """Why the run was aborted by someone else: a validly signed ``abort`` on the clock's
-        key that this clock did not send (an insider with the run's key, issue #30 item
-        15): the run's error says so instead of blaming the nodes that obeyed it."""
+        """Why the run was aborted by someone else (a validly signed ``abort`` this clock did
+        not send: an insider with the run's key); the run's error says so."""
 
         def clock_pub(raw: bytes) -> None:
             signed = sign(raw)

@@ -98,17 +98,3 @@ class ProgressBar:
             self.stream.write("\n")
             self.stream.flush()
 
-
-class NullProgress:
-    """The bar of a ``--quiet`` run: the same calls, nothing shown."""
-
-    phases: list[tuple[str, float]] = []
-
-    def phase(self, name: str, detail: str = "") -> None:
-        """Nothing (see :meth:`ProgressBar.phase`)."""
-
-    def __call__(self, k: int, n: int) -> None:
-        """Nothing."""
-
-    def close(self) -> None:
-        """Nothing."""

@@ -51,8 +51,6 @@ from .stream import (
 
 RUN_KEYS = ("name", "id", "mode", "exchange", "coupling", "h", "substeps", "t_end",
             "t_end_source", "n_steps", "nodes")
-SUMMARY_KEYS = ("status", "wall_s", "run_wall_s", "step_wall_s", "steps_per_s", "n_steps", "rows",
-                "nodes")
 
 
 def run_header(r: RunData, title_prefix: str = "Run") -> str:

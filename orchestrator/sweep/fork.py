@@ -1,31 +1,16 @@
-"""``[sweep] fork_at = T``: the points of a sweep share their common prefix (issue #29 item 5).
+"""``[sweep] fork_at = T``: the points of a sweep share their common prefix (docs/sweeps.md).
 
-The points are grouped by everything a fork may **not** change (:data:`FORK_MAY_CHANGE` of
-:mod:`orchestrator.resume`: a fork may change only the control, the report and the run's
-bookkeeping): points whose resolved scenarios differ only in those keys form one group. Each
-group gets ONE parent run, from t = 0 to the end, with ``run.checkpoint_every_s = T``; every
-point of the group is then ``suscosim run --fork PARENT@T`` with the point's own controller
-(and report, ``nodes.controller``, bookkeeping): the rows < k = T / h of its table are the
-parent's, byte for byte, and its own law acts from step k on.
-
-**The parent runs the base's controller**: the base scenario with ``[sweep.set]`` and the
-group's other axis values, without the axes' controller overrides (so the prefix does not
-depend on the order of the variants). A point whose controller is the base's continues its
-parent byte for byte. A group of one point still forks (its law acts from T on like the
-others'), at a cost of n - k steps more than a plain run.
-
-The semantics change: **each law acts only from T on**; before T every point of a group ran
-the parent's law. The sweep says so at the start, in ``fork.json`` and in the results
-(``fork_at``, ``parent`` columns).
-
-What it saves, per sweep: the prefix steps the forks did not simulate again (sum of k over the
-points), and net of the parents' runs: ``plain`` (sum of n over the points) against
-``simulated`` (sum of n over the parents + sum of n - k over the points); the run wall time
-from the runs' ``summary.json`` against an estimate of the plain runs' (each as long as its
-parent's run: the same steps from t = 0).
-
-Only the local executor (a fork needs its parent's run folder where it runs), without
-``--external`` / ``--serve``.
+Points whose resolved scenarios differ only in what a fork may change
+(:data:`orchestrator.resume.FORK_MAY_CHANGE`: the control, the report, the bookkeeping) form
+one group with ONE parent run (t = 0 to the end, ``run.checkpoint_every_s = T``) of the base's
+controller (the base with ``[sweep.set]`` and the group's other axis values, so the prefix does
+not depend on the order of the variants); every point is ``suscosim run --fork PARENT@T`` with
+its own controller: rows < k = T / h are the parent's, byte for byte, and **each law acts only
+from T on** (said at the start, in ``fork.json`` and in the results' ``fork_at``/``parent``).
+A group of one point still forks. Saved: ``plain`` (sum of n over the points) against
+``simulated`` (n over the parents + n - k over the points), and the run wall time against an
+estimate of the plain runs' (each as long as its parent's). Local executor only, without
+``--external``/``--serve``.
 """
 
 from __future__ import annotations
