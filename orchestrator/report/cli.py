@@ -21,6 +21,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="a run folder, a sweep folder or a duty folder (suscosim duty)")
     ap.add_argument("--out", metavar="FILE.html", help="output file (default DIR/report.html)")
     ap.add_argument("--open", action="store_true", help="open the page in a web browser")
+    ap.add_argument("--runs-dir", metavar="DIR",
+                    help="a sweep's shared runs folder (suscosim sweep --runs-dir): its run "
+                         "folders are read too (by default only those inside the sweep folder)")
     return ap
 
 
@@ -28,12 +31,12 @@ def _fail(message: str) -> int:
     return fail("suscosim report", message)
 
 
-def render(d: Path) -> tuple[str, str]:
+def render(d: Path, runs_dir: Path | None = None) -> tuple[str, str]:
     """(kind, HTML) of a run, sweep or duty folder; raises BadInput if it is none."""
     if not d.is_dir():
         raise BadInput(f"{d}: no such folder")
     if is_sweep_dir(d):
-        return "sweep", render_sweep(d)
+        return "sweep", render_sweep(d, runs_dir)
     if is_duty_dir(d):
         return "duty", render_duty(d)
     if is_run_dir(d):
@@ -50,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         return args
     d = Path(args.dir)
     try:
-        kind, text = render(d)
+        kind, text = render(d, Path(args.runs_dir) if args.runs_dir else None)
     except BadInput as exc:
         return _fail(str(exc))
     out = Path(args.out) if args.out else d / "report.html"

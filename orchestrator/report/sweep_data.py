@@ -74,8 +74,10 @@ class Point:
             or self.id
 
 
-def load_sweep(d: Path) -> tuple[dict, list[Point]]:
-    """sweep.json and its points (raises BadInput for an unreadable sweep.json)."""
+def load_sweep(d: Path, runs_dir: Path | None = None) -> tuple[dict, list[Point]]:
+    """sweep.json and its points (raises BadInput for an unreadable sweep.json). A point's
+    run folder is read inside the sweep folder, or inside ``runs_dir`` when the user names
+    one on the command line (a shared runs folder, ``suscosim sweep --runs-dir``)."""
     p = d / "sweep.json"
     try:
         spec = json.loads(read_user_text(p, "scenario", inside=d))
@@ -92,14 +94,21 @@ def load_sweep(d: Path) -> tuple[dict, list[Point]]:
         if not isinstance(params, dict):
             raise BadInput(f"{p}: points[{i}].params is not an object")
         rd = d / str(pt.get("run_dir") or f"runs/{pid}")
-        if os.path.commonpath([os.path.realpath(rd), os.path.realpath(d)]) != \
-                os.path.realpath(d):  # a handed folder's references stay inside it (#46)
+        if not any(_inside(rd, top) for top in (d, runs_dir) if top is not None):
             raise BadInput(f"{p}: points[{i}].run_dir {str(pt.get('run_dir'))!r:.200} leaves "
-                           f"the sweep folder (only run folders inside it are read)")
+                           "the sweep folder (only run folders inside it are read; a shared "
+                           "runs folder is read when named: suscosim report DIR --runs-dir R)")
         run = load_run(rd) if rd.is_dir() and is_run_dir(rd) else None
         ov = pt.get("overrides")
         points.append(Point(pid, params, rd, run, ov if isinstance(ov, dict) else {}))
     return spec, points
+
+
+def _inside(path: Path, top: Path) -> bool:
+    """Whether ``path`` resolves inside ``top`` (a handed folder's references stay inside
+    it, #46)."""
+    real = os.path.realpath(top)
+    return os.path.commonpath([os.path.realpath(path), real]) == real
 
 
 def read_results(d: Path) -> tuple[list[dict], str]:

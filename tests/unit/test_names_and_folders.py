@@ -69,6 +69,13 @@ def test_a_sweep_json_run_dir_outside_the_sweep_folder_is_refused(tmp_path: Path
         assert res.returncode == 2, res.stdout + res.stderr
         assert "leaves the sweep folder" in res.stderr and run_dir in res.stderr, res.stderr
         assert not (sweep / "report.html").exists()
+    # a shared runs folder the user names on the command line is read (suscosim sweep
+    # --runs-dir on shared storage writes such run_dirs); another folder still is not
+    res = suscosim("report", str(sweep), "--runs-dir", str(tmp_path / "elsewhere"), timeout=60)
+    assert res.returncode == 2 and "leaves the sweep folder" in res.stderr, res.stderr
+    res = suscosim("report", str(sweep), "--runs-dir", str(tmp_path), timeout=60)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert (sweep / "report.html").exists()
 
 
 TET = ("*NODE\n1, 0.0, 0.0, 0.0\n2, 1.0, 0.0, 0.0\n3, 0.0, 1.0, 0.0\n4, 0.0, 0.0, 1.0\n"
