@@ -36,40 +36,23 @@ def combination_label(index: int) -> str:
     return f"MP{index + 1} {pattern}"
 
 
-def pnr_products(
-    v_rel: np.ndarray, c_soft: float, c_hard: float, theta_dd: float, phi_dd: float
-) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Forces and products of all 16 combinations.
-
-    Args:
-        v_rel: relative velocities v_w - v_b (m/s) at FL, FR, RL, RR.
-        c_soft, c_hard: damping coefficients (N·s/m), Table 5.2: 1500 / 2368.
-        theta_dd: nose-up pitch acceleration (rad/s²).
-        phi_dd: left-up roll acceleration (rad/s²).
-
-    Returns:
-        (forces (16, 4) in N on the body, products (16,) in N·rad/s², pitch_branch flag).
-    """
+def pnr_products(v_rel: np.ndarray, c_soft: float, c_hard: float, theta_dd: float,
+                 phi_dd: float) -> tuple[np.ndarray, np.ndarray, bool]:
+    """(forces (16, 4) on the body in N, products (16,) in N·rad/s², pitch branch) of all 16
+    combinations, from ``v_rel`` (m/s, FL, FR, RL, RR), ``c_soft``/``c_hard`` (N·s/m, Table
+    5.2: 1500 / 2368), ``theta_dd`` nose-up and ``phi_dd`` left-up (rad/s²)."""
     v = np.asarray(v_rel, dtype=float).reshape(4)
     forces = np.where(COMBINATIONS, c_hard, c_soft) * v
     fl, fr, rl, rr = forces.T
     pitch_branch = abs(theta_dd) > abs(phi_dd)
-    if pitch_branch:
-        products = (fl + fr - rl - rr) * theta_dd
-    else:
-        products = (fl + rl - fr - rr) * phi_dd
+    products = (fl + fr - rl - rr) * theta_dd if pitch_branch else (fl + rl - fr - rr) * phi_dd
     return forces, products, pitch_branch
 
 
-def pnr_select(
-    v_rel: np.ndarray, c_soft: float, c_hard: float, theta_dd: float, phi_dd: float
-) -> tuple[int, np.ndarray, np.ndarray]:
-    """Choose the minimum-product combination (ties: the lowest MP number, so no angular
-    acceleration means all soft).
-
-    Returns:
-        (index 0..15 of MPn = index+1, forces (4,) in N, coefficients (4,) in N·s/m).
-    """
+def pnr_select(v_rel: np.ndarray, c_soft: float, c_hard: float, theta_dd: float,
+               phi_dd: float) -> tuple[int, np.ndarray, np.ndarray]:
+    """(index n of MP(n+1), forces (4,) in N, coefficients (4,) in N·s/m) of the
+    minimum-product combination (ties: the lowest MP, so no angular acceleration: all soft)."""
     forces, products, _ = pnr_products(v_rel, c_soft, c_hard, theta_dd, phi_dd)
     n = int(np.argmin(products))
     c = np.where(COMBINATIONS[n], c_hard, c_soft).astype(float)

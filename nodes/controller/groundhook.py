@@ -19,32 +19,18 @@ def groundhook_condition(v_w: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
     return np.asarray(v_w, dtype=float) * np.asarray(v_rel, dtype=float) > 0.0
 
 
-def groundhook_on_off(
-    v_w: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Two-state groundhook: ``c = c_hard if v_w * v_rel > 0 else c_soft``, ``F_d = c v_rel``.
-
-    Returns:
-        (F_d in N, c in N·s/m, hard flag).
-    """
+def groundhook_on_off(v_w: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two-state groundhook ``c = c_hard if v_w * v_rel > 0 else c_soft``, ``F_d = c v_rel``:
+    (F_d in N, c in N·s/m, hard flag)."""
     hard = groundhook_condition(v_w, v_rel)
     return (*two_state_force(hard, v_rel, c_soft, c_hard), hard)
 
 
-def groundhook_continuous(
-    v_w: np.ndarray, v_rel: np.ndarray, c_gnd: float, c_min: float, c_max: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Continuous groundhook clipped to a variable damper: demand ``F_d = c_gnd * v_w``.
-
-    Args:
-        v_w: wheel (unsprung-mass) vertical velocity (m/s).
-        v_rel: v_w - v_b (m/s).
-        c_gnd: groundhook gain (N·s/m).
-        c_min, c_max: damper coefficient range (N·s/m).
-
-    Returns:
-        (F_d in N, c in N·s/m).
-    """
+def groundhook_continuous(v_w: np.ndarray, v_rel: np.ndarray, c_gnd: float, c_min: float,
+                          c_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """Continuous groundhook, demand ``F_d = c_gnd * v_w`` (gain in N·s/m, v_w the wheel's
+    velocity in m/s) clipped to ``c_min..c_max`` (N·s/m): (F_d in N, c in N·s/m)."""
     return semi_active_force(c_gnd * np.asarray(v_w, dtype=float), v_rel, c_min, c_max)
 
 

@@ -24,13 +24,8 @@ from nodes.controller.skyhook import skyhook_condition
 
 
 def hybrid_demand(v_b: np.ndarray, v_w: np.ndarray, alpha: float, G: float) -> np.ndarray:
-    """Hybrid force demand on the body (N).
-
-    Args:
-        v_b, v_w: body and wheel vertical velocities (m/s).
-        alpha: skyhook share, 0 <= alpha <= 1 (-).
-        G: gain (N·s/m).
-    """
+    """Hybrid force demand on the body (N) from ``v_b``, ``v_w`` (m/s), the skyhook share
+    ``alpha`` in [0, 1] and the gain ``G`` (N·s/m)."""
     v_b = np.asarray(v_b, dtype=float)
     v_w = np.asarray(v_w, dtype=float)
     v_rel = v_w - v_b
@@ -39,24 +34,17 @@ def hybrid_demand(v_b: np.ndarray, v_w: np.ndarray, alpha: float, G: float) -> n
     return G * (alpha * sigma_sh + (1.0 - alpha) * sigma_gh)
 
 
-def hybrid(
-    v_b: np.ndarray, v_w: np.ndarray, alpha: float, G: float, c_min: float, c_max: float
-) -> tuple[np.ndarray, np.ndarray]:
+def hybrid(v_b: np.ndarray, v_w: np.ndarray, alpha: float, G: float, c_min: float,
+           c_max: float) -> tuple[np.ndarray, np.ndarray]:
     """Hybrid law realised by a variable damper. Returns (F_d in N, c in N·s/m)."""
     v_rel = np.asarray(v_w, dtype=float) - np.asarray(v_b, dtype=float)
     return semi_active_force(hybrid_demand(v_b, v_w, alpha, G), v_rel, c_min, c_max)
 
 
 @control_law("hybrid")
-def hybrid_law(
-    v_b: np.ndarray,
-    v_w: np.ndarray,
-    *,
-    alpha: float = Param(lo=0.0, hi=1.0),
-    G: float = Param(lo=0.0, unit="N·s/m"),
-    c_min: float = SOFT,
-    c_max: float = HARD,
-):
+def hybrid_law(v_b: np.ndarray, v_w: np.ndarray, *, alpha: float = Param(lo=0.0, hi=1.0),
+               G: float = Param(lo=0.0, unit="N·s/m"), c_min: float = SOFT,
+               c_max: float = HARD):
     """Hybrid skyhook-groundhook G [alpha sky + (1 - alpha) ground] (thesis Eq 2.5)."""
     F, c = hybrid(v_b, v_w, alpha, G, c_min, c_max)
     return F, c, {"c": c}

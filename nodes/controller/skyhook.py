@@ -22,55 +22,29 @@ def skyhook_condition(v_b: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
     return np.asarray(v_b, dtype=float) * np.asarray(v_rel, dtype=float) < 0.0
 
 
-def skyhook_on_off(
-    v_b: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Two-state skyhook switching the damping coefficient (TSS1, thesis Eq 5.3, Moline [44]).
+def skyhook_on_off(v_b: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two-state skyhook TSS1 (thesis Eq 5.3, Moline [44]): (F_d in N, c in N·s/m, hard flag).
 
-    Thesis: ``c = C_hard if z_b'(z_b' - z_w') > 0 else C_soft``, ``F_d = c (z_b' - z_w')``
-    (extension positive). Here: ``c = c_hard if v_b * v_rel < 0 else c_soft``,
-    ``F_d = c * v_rel``.
-
-    Args:
-        v_b: body (sprung-mass) vertical velocity at the corner (m/s).
-        v_rel: relative velocity v_w - v_b (m/s).
-        c_soft, c_hard: damping coefficients (N·s/m); Table 5.2 gives 1500/2368 (lumped QVM,
-            7-DOF FVM) and 3800/6000 (realistic QVM).
-
-    Returns:
-        (F_d in N, c in N·s/m, hard flag as bool array).
-    """
+    Thesis: ``c = C_hard if z_b'(z_b' - z_w') > 0 else C_soft``, ``F_d = c (z_b' - z_w')``;
+    here ``c = c_hard if v_b * v_rel < 0 else c_soft``, ``F_d = c * v_rel`` (v in m/s).
+    Table 5.2: 1500/2368 N·s/m (lumped QVM, 7-DOF FVM), 3800/6000 (realistic QVM)."""
     hard = skyhook_condition(v_b, v_rel)
     return (*two_state_force(hard, v_rel, c_soft, c_hard), hard)
 
 
-def skyhook_continuous(
-    v_b: np.ndarray, v_rel: np.ndarray, c_sky: float, c_min: float, c_max: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Continuous skyhook clipped to a variable damper (c_min <= c <= c_max).
-
-    Demand ``F = -c_sky * v_b`` (Karnopp, thesis Eq 2.2); realised as ``c * v_rel`` with
-    ``c = clip(-c_sky v_b / v_rel, c_min, c_max)`` when the demand is dissipative, else
-    ``c_min``.
-
-    Returns:
-        (F_d in N, c in N·s/m).
-    """
+def skyhook_continuous(v_b: np.ndarray, v_rel: np.ndarray, c_sky: float, c_min: float,
+                       c_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """Continuous skyhook, demand ``-c_sky * v_b`` (Karnopp, thesis Eq 2.2) realised by
+    :func:`semi_active_force`: (F_d in N, c in N·s/m)."""
     F_dem = -c_sky * np.asarray(v_b, dtype=float)
     return semi_active_force(F_dem, v_rel, c_min, c_max)
 
 
 def skyhook_no_jerk_demand(v_b: np.ndarray, v_rel: np.ndarray, G: float) -> np.ndarray:
-    """Force demanded by the no-jerk skyhook (Ahmadian [49,50]), N.
-
-    The skyhook gain is made proportional to the relative velocity, ``c_sky = G |v_rel|``, so
-    the demand ``G |v_b| v_rel`` (equal to ``-G v_b |v_rel|`` where it applies) goes to zero
-    continuously at both ends of the "on" region (v_b -> 0 and v_rel -> 0): no force jump at
-    switching. Zero where the skyhook force is not dissipative.
-
-    Args:
-        G: gain (N·s²/m²).
-    """
+    """No-jerk skyhook demand (Ahmadian [49,50]), N: ``c_sky = G |v_rel|`` (G in N·s²/m²),
+    so the demand ``G |v_b| v_rel`` goes to zero at both ends of the "on" region (no jump at
+    switching); zero where the skyhook force is not dissipative."""
     v_b = np.asarray(v_b, dtype=float)
     v_rel = np.asarray(v_rel, dtype=float)
     return np.where(skyhook_condition(v_b, v_rel), G * np.abs(v_b) * v_rel, 0.0)
@@ -79,12 +53,8 @@ def skyhook_no_jerk_demand(v_b: np.ndarray, v_rel: np.ndarray, G: float) -> np.n
 def skyhook_no_jerk(
     v_b: np.ndarray, v_rel: np.ndarray, G: float, c_min: float, c_max: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """No-jerk skyhook realised by a variable damper: ``c = clip(G |v_b|, c_min, c_max)`` in the
-    skyhook region, ``c_min`` elsewhere — continuous in both velocities.
-
-    Returns:
-        (F_d in N, c in N·s/m).
-    """
+    """No-jerk skyhook by a variable damper, ``c = clip(G |v_b|, c_min, c_max)`` in the
+    skyhook region, ``c_min`` elsewhere: (F_d in N, c in N·s/m)."""
     return semi_active_force(skyhook_no_jerk_demand(v_b, v_rel, G), v_rel, c_min, c_max)
 
 

@@ -33,9 +33,7 @@ y left, z up) with origin at the static wheel centre of this **front-left** corn
     instant centre, the ball joint 4.00 m), so the wheel-centre lever is 0.2984 m (the
     PyBullet corner: 0.2984 m) and the wheel rate K_theta / 0.2984^2 = 30.1 kN/m (Table 4.3:
     31 kN/m, -3 %; identified: 30.0 kN/m). Parallel arms would give 0.294 m and 31.0 kN/m,
-    but no camber gain. A shorter upper arm (0.20 m, swing arm 3.4 m) was tried first: 29.9
-    kN/m kinematically but 29.1 kN/m identified (its lever changes faster with the arm angle,
-    and the 1.6 kN m preload acting through that change softens the rate).
+    but no camber gain.
   The bushes are 0.28 m apart (an A-arm whose legs straddle the damper, 50 mm in diameter,
   which passes between them at y = -0.19 m).
 * *steering axis*: lower ball joint (0.025, -0.06, -0.13) to upper (-0.005, -0.10, 0.20):
@@ -102,8 +100,7 @@ BODY, LOWER_ARM, HUB, UPPER_ARM, TIE_ROD = 0, 1, 2, 3, 4
 
 class CornerGeometry:
     """A corner file's points as the PyBullet corner uses them (corner frame [m]), its lower
-    arm's frame and named points, and its URDF. Every number in the same arithmetic as
-    before the corner was a file, so the built-in corner gives the same bits."""
+    arm's frame and named points, and its URDF."""
 
     def __init__(self, corner: Corner) -> None:
         self.corner = c = corner
@@ -142,11 +139,8 @@ class CornerGeometry:
         self.bush_spacing = float(np.linalg.norm(self.lower_bush_front - self.lower_bush_rear))
         com_arm, self._arm_inertia_per_kg = self._arm_mass_model()
         self.lower_arm_com = self.to_corner(com_arm)
-        self.arm_accel_points = {
-            "loc1": hp["ball_joint"] - np.array([0.0, 0.020, 0.0]),
-            "cg": com_arm,
-            "loc2": np.array([0.0, 0.020, 0.0]),
-        }
+        self.arm_accel_points = {"loc1": hp["ball_joint"] - np.array([0.0, 0.020, 0.0]),
+                                 "cg": com_arm, "loc2": np.array([0.0, 0.020, 0.0])}
         self.lever_ball_joint = float(hp["ball_joint"][1])
         """Horizontal distance of the ball joint from the pivot axis, L [m]."""
 
@@ -179,7 +173,7 @@ class CornerGeometry:
 
     def lower_arm_inertia(self, mass: float) -> np.ndarray:
         """(I_xx, I_yy, I_zz) of the lower arm about its centre of mass [kg m^2]."""
-        if self.fe_arm:  # the FE arm's tensor scaled to ``mass``, as before (same bits)
+        if self.fe_arm:  # the FE arm's tensor scaled to ``mass``
             props = la.MASS_PROPERTIES
             inertia = np.array(props["inertia_kg_m2"], dtype=float)
             out: np.ndarray = np.diag(inertia) * mass / float(props["mass_kg"])
