@@ -1,48 +1,13 @@
 """``suscosim duty DUTY.toml``: damage and life of the lower arm over a proving-ground schedule.
 
-A duty file lists events, each a scenario (run here, once, into ``<out>/runs/<event>``; a
-finished run there is reused unless ``--rerun``) or a finished run folder, with how often the
-schedule drives it::
-
-    [duty]
-    name = "ch6_proving_ground"
-    survival_probability = 0.9   # life also at this certainty of survival ...
-    scatter_band = 3.0           # ... from T_N = N10/N90 of the S-N curve (or log10_std = s)
-
-    [[events]]
-    name = "pave"
-    scenario = "../thesis/ch6_realistic_qvm.toml"
-    set = ["road.seed=2"]        # --set overrides of that scenario
-    repeats = 200                # passes per schedule (or distance_km = 20: repeats = 20 km / L)
-
-    [[events]]
-    name = "pothole"
-    run = "../../runs/ch6-bump"  # a finished run folder (its fatigue/ results)
-    repeats = 50
-
-**Laws** (optional): the same schedule under each of several damper laws, every scenario event
-run once per law (its ``set`` applied after the event's own)::
-
-    [[laws]]
-    name = "passive"             # no set: the scenarios' own [controller]
-    [[laws]]
-    name = "skyhook_on_off"
-    set = ['controller = {law = "skyhook_on_off", preset = "realistic", velocity = "damper"}']
-
-The runs go to ``<out>/runs/<law>/<event>``, each law's sum to ``<out>/laws/<law>/`` (the
-files below), the first law's also to ``<out>/`` itself (the reference), and ``laws.csv``
-(one row per law and event) and ``duty.json``'s ``laws`` compare them at one node: the
-reference's critical node, where each event's damage per schedule under each law is given
-beside the reference's (``ratio``), with each law's own life and critical node.
-
-Every event's damage per node comes from its run's ``fatigue/`` (the live fatigue node's or
-``suscosim fatigue``'s; computed in batch when absent); all events must share the fatigue
-settings and node set. The sum (nodes/fatigue/duty_cycle.py) is written to ``<out>/`` (default
-``duty/<name>/`` beside the working directory): ``duty.json`` (events, totals, life in
-schedules and km, critical node, dominant event, life at the probability),
-``events.csv`` (one row per event) and ``damage_per_node.csv`` (each event's damage per
-schedule, the total and the life per node). Exit 2 for a bad duty file (key named), 1 if a
-run fails.
+The duty file format and the outputs are in docs/data_formats.md ("duty cycles"). Each
+``[[events]]`` entry is a scenario (run once into ``<out>/runs/<event>``, reused unless
+``--rerun``) or a finished run folder, with ``repeats`` or ``distance_km`` per schedule; the
+optional ``[[laws]]`` run every scenario event once per damper law (``runs/<law>/<event>``,
+``laws/<law>/``; the first law is the reference, also written to ``<out>/``) and compare the
+laws at the reference's critical node (``laws.csv``, duty.json ``laws``). All events must share
+the fatigue settings and node set; the sum: ``duty_cycle.schedule_damage``. Exit 2 for a bad
+duty file (key named), 1 if a run fails.
 """
 
 from __future__ import annotations
@@ -70,8 +35,8 @@ SAME_CONFIG_SKIP = ("track_length_m", "repeats_basis_m", "block_samples", "live"
 
 
 MAX_DUTY_NUMBER = 1e9
-"""Largest repeats, distance [km] or scatter figure a duty file takes: a vehicle's life is
-~3e5 km; 1e308 passes printed "inf km" with exit 0 (#46)."""
+"""Largest repeats, distance [km] or scatter figure a duty file takes (a vehicle's life is
+~3e5 km)."""
 
 
 def _number(v: Any, key: str, expected: str, lo: float = 0.0, lo_open: bool = False) -> float:
