@@ -9,14 +9,11 @@ import numpy as np
 
 from .double_wishbone_geometry import HUB, LOWER_ARM
 from .point_kinematics import cross3
+from .quarter_car_lumped import quat_matrix as _rot
 from .quiet_pybullet import p
 
 if TYPE_CHECKING:
     from .double_wishbone import DoubleWishboneCorner
-
-
-def _rot(quat) -> np.ndarray:
-    return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
 
 
 def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:

@@ -34,11 +34,8 @@ compression-positive, >= 0, the force the bumper applies on the body (upward) an
 arm's pad (downward), from the state at the start of the step, as the torsion-bar torque.
 
 **Arm accelerations** ``a_arm_{loc1,cg,loc2}_{x,y,z}`` [m/s^2] (in ``plant/response``, via
-:meth:`response_velocities`): vehicle axes, of three points of the lower arm
-(:data:`ARM_ACCEL_POINTS`: 20 mm inboard of the ball joint, the centre of mass, 20 mm
-outboard of the bush midpoint; thesis Table 5.4's Loc1, CG, Loc2), computed as the plant
-node computes a_b and a_w: the change of the point's velocity over the step's first substep
-divided by its length.
+:meth:`response_velocities`): vehicle axes, of the lower arm's points :data:`ARM_ACCEL_POINTS`
+(thesis Table 5.4's Loc1, CG, Loc2), derived by the node as a_b and a_w are.
 
 **Arm loads** (``loads()["arm"]``): the loads ON the lower arm in the arm frame (origin at the
 midpoint of the two body bushes, x along the pivot axis forward, y outward toward the ball
@@ -92,7 +89,8 @@ from .double_wishbone_geometry import (  # the corner's geometry, re-exported
 )
 from .model import GRAVITY, PlantModel
 from .point_kinematics import point_velocity, world_point
-from .quarter_car_lumped import load_urdf_text, new_direct_client
+from .quarter_car_lumped import load_urdf_text, new_direct_client, release_joint
+from .quarter_car_lumped import quat_matrix as _rot
 from .quiet_pybullet import p
 from .upper_arm_loads import upper_arm_frame, upper_arm_loads
 
@@ -174,10 +172,6 @@ class DoubleWishboneParams:
                               transition=self.bump_stop_transition)
 
 
-def _rot(quat) -> np.ndarray:
-    return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
-
-
 class DoubleWishboneCorner(PlantModel):
     """Double-wishbone front-left corner; one corner named "FL" on the left track."""
 
@@ -204,17 +198,9 @@ class DoubleWishboneCorner(PlantModel):
         self.body = b = load_urdf_text(g.urdf(pr), c, useFixedBase=True,
                                        flags=p.URDF_USE_INERTIA_FROM_FILE)
         for j in range(p.getNumJoints(b, physicsClientId=c)):
-            info = p.getJointInfo(b, j, physicsClientId=c)
-            if info[2] == p.JOINT_SPHERICAL:
-                p.setJointMotorControlMultiDof(b, j, p.POSITION_CONTROL, [0, 0, 0, 1],
-                                               targetVelocity=[0, 0, 0], positionGain=0,
-                                               velocityGain=0, force=[0, 0, 0],
-                                               physicsClientId=c)
-            else:
-                p.setJointMotorControl2(b, j, p.VELOCITY_CONTROL, force=0, physicsClientId=c)
+            release_joint(b, j, c)
             p.changeDynamics(b, j, linearDamping=0, angularDamping=0, jointDamping=0,
                              physicsClientId=c)
-            p.enableJointForceTorqueSensor(b, j, True, physicsClientId=c)
         self._arm_r_com = np.array(p.getLinkState(b, LOWER_ARM, physicsClientId=c)[2])
         # the upper arm's loads (nodes/plant/upper_arm_loads.py): its centre of mass in its
         # link frame, its frame's axes in the link frame (link axes = corner axes at rest),
@@ -260,17 +246,13 @@ class DoubleWishboneCorner(PlantModel):
 
     # --- helpers ---
     def _read(self) -> None:
-        """Read the links' states after a substep. Plain floats where the arithmetic is
-        elementwise (differences, cross products, scaling: the same IEEE operations numpy
-        does, so the same bits); the rotations and the dot product stay numpy calls (BLAS, in
-        the order and with the fused multiply-adds it uses here), so every number is what it
-        was with small arrays throughout."""
+        """Read the links' states after a substep (plain floats where elementwise; rotations
+        and the dot product stay numpy calls, for the same bits)."""
         c, b = self.client, self.body
         js = p.getJointStates(b, [BODY, LOWER_ARM], physicsClientId=c)
         self._zb_abs, self._vb = js[0][0], js[0][1]
         self._theta, self._omega = js[1][0], js[1][1]
-        # one call for the three links: the forward kinematics computed once, not thrice
-        # (the same states, ~8 us less a substep)
+        # one call for the links: the forward kinematics computed once
         hub, body, arm, ua = p.getLinkStates(b, _READ_LINKS, computeLinkVelocity=1,
                                              computeForwardKinematics=1, physicsClientId=c)
         self._ua_quat = ua[5]  # the upper arm's rotation: for its loads
@@ -371,13 +353,11 @@ class DoubleWishboneCorner(PlantModel):
         return np.array([(pr.body_mass + pr.unsprung_mass) * GRAVITY])
 
     def state(self) -> dict[str, np.ndarray]:
-        return {
-            "z_b": np.array([self._zb_abs - self._z_b0]), "v_b": np.array([self._vb]),
-            "z_w": np.array([self._zw_abs - self._z_w0]), "v_w": np.array([self._vw]),
-            "z_damper": np.array([self._L0 - self._damper_len]),
-            "v_damper": np.array([self._v_damper]),
-            "arm_angle": np.array([self._theta - self._theta0]),
-        }
+        return {"z_b": np.array([self._zb_abs - self._z_b0]), "v_b": np.array([self._vb]),
+                "z_w": np.array([self._zw_abs - self._z_w0]), "v_w": np.array([self._vw]),
+                "z_damper": np.array([self._L0 - self._damper_len]),
+                "v_damper": np.array([self._v_damper]),
+                "arm_angle": np.array([self._theta - self._theta0])}
 
     def spring_force(self) -> np.ndarray:
         """Dynamic torsion-bar torque expressed as a vertical force at the ball joint,
@@ -392,15 +372,10 @@ class DoubleWishboneCorner(PlantModel):
         return {"F_bs": np.array([self.bump_stop_force()])}
 
     def response_velocities(self) -> dict[str, float]:
-        """World (vehicle-axes) velocities [m/s] of the lower arm's points
-        :data:`ARM_ACCEL_POINTS` in the current state, keyed by the acceleration fields the
-        plant node derives from them: ``a_arm_{loc1,cg,loc2}_{x,y,z}`` (x forward, y left,
-        z up; kinematic acceleration, gravity not included, 0 at static equilibrium). Each
-        velocity is that of the material point at its current position, v_com + omega x
-        (r - r_com), from the arm's link state that :meth:`_read` already fetched (no
-        PyBullet call: the dynamics are untouched). Plain floats (the wire encodes a float as
-        a length-1 array, and the node's difference quotient is the same IEEE operation): 18
-        arrays a coupled step fewer, 16 % of this method's time (pyinstrument, docs/cosim.md)."""
+        """Vehicle-axes velocities [m/s] (x forward, y left, z up) of the lower arm's points
+        :data:`ARM_ACCEL_POINTS`, keyed by the fields the node derives from them,
+        ``a_arm_{loc1,cg,loc2}_{x,y,z}`` (kinematic, no gravity): v_com + omega x (r - r_com)
+        from the link state :meth:`_read` fetched; plain floats."""
         arm, R_arm = self._arm_state, self._R_arm
         out: dict[str, float] = {}
         for _name, loc, names in self._loc_accel:
@@ -432,8 +407,7 @@ class DoubleWishboneCorner(PlantModel):
         bs = self.bump_stop
         d.update({"model": self.name, "corner_names": ["FL"], "wheel_x": [0.0],
                   "wheel_track": [0], "unsprung_mass": [self.params.unsprung_mass],
-                  "torsion_preload_nm": self.tau0,
-                  "corner": self.corner.name,
+                  "torsion_preload_nm": self.tau0, "corner": self.corner.name,
                   "arm_points": {k: [float(x) for x in self.geom.to_arm_frame(v)]
                                  for k, v in self.geom.arm_points.items()},
                   "bump_stop": None if bs is None else {

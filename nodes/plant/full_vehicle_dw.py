@@ -54,7 +54,8 @@ from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
 from .driver import Driver
 from .full_vehicle_dw_wheels import WheelsAndDriver, steer_lever, wheel_inertia, wheel_mass
 from .model import GRAVITY, PlantModel
-from .quarter_car_lumped import load_urdf_text, new_direct_client
+from .quarter_car_lumped import load_urdf_text, new_direct_client, release_joint
+from .quarter_car_lumped import quat_matrix as _rot
 from .quiet_pybullet import p
 
 
@@ -84,9 +85,6 @@ class FullVehicleDWParams:
 RACK_MASS = 2.0
 """The steering rack's mass [kg], taken from ``sprung_mass`` (the rack is body) and placed at
 the CG, so the vehicle's mass and CG do not move (ours: a small car's rack and pinion)."""
-
-def _rot(quat) -> np.ndarray:
-    return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
 
 
 class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
@@ -129,15 +127,7 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                                                      "tie_rod", "wheel")} for n in CORNERS]
         self.rack = names["rack"]
         for j in names.values():
-            info = p.getJointInfo(bd, j, physicsClientId=cl)
-            if info[2] == p.JOINT_SPHERICAL:
-                p.setJointMotorControlMultiDof(bd, j, p.POSITION_CONTROL, [0, 0, 0, 1],
-                                               targetVelocity=[0, 0, 0], positionGain=0,
-                                               velocityGain=0, force=[0, 0, 0],
-                                               physicsClientId=cl)
-            else:
-                p.setJointMotorControl2(bd, j, p.VELOCITY_CONTROL, force=0, physicsClientId=cl)
-            p.enableJointForceTorqueSensor(bd, j, True, physicsClientId=cl)
+            release_joint(bd, j, cl)
         for j in [-1, *names.values()]:
             p.changeDynamics(bd, j, linearDamping=0, angularDamping=0, jointDamping=0,
                              physicsClientId=cl)

@@ -56,6 +56,22 @@ def new_direct_client() -> int:
     return client
 
 
+def quat_matrix(quat) -> np.ndarray:
+    """The 3x3 rotation matrix of a PyBullet quaternion."""
+    return np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+
+
+def release_joint(body: int, j: int, client: int) -> None:
+    """Switch off joint ``j``'s default motor (spherical or not) and enable its force sensor."""
+    if p.getJointInfo(body, j, physicsClientId=client)[2] == p.JOINT_SPHERICAL:
+        p.setJointMotorControlMultiDof(body, j, p.POSITION_CONTROL, [0, 0, 0, 1],
+                                       targetVelocity=[0, 0, 0], positionGain=0, velocityGain=0,
+                                       force=[0, 0, 0], physicsClientId=client)
+    else:
+        p.setJointMotorControl2(body, j, p.VELOCITY_CONTROL, force=0, physicsClientId=client)
+    p.enableJointForceTorqueSensor(body, j, True, physicsClientId=client)
+
+
 def free_joints(body: int, joints: list[int], client: int) -> None:
     """Remove PyBullet's default joint motors and damping so only our forces act."""
     for j in joints:
