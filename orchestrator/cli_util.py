@@ -48,8 +48,7 @@ def unify_errors(ap: argparse.ArgumentParser) -> None:
                 parsers.extend(action.choices.values())
 
 
-def parse_args(ap: argparse.ArgumentParser,
-               argv: Sequence[str] | None) -> argparse.Namespace | int:
+def parse_args(ap: argparse.ArgumentParser, argv: Sequence[str] | None) -> argparse.Namespace | int:
     """``ap``'s arguments from ``argv`` (None: ``sys.argv[1:]``), or the exit code where argparse
     would exit: 0 after ``--help``, 2 after a usage error (printed)."""
     unify_errors(ap)

@@ -91,8 +91,7 @@ class Clock:
         """Called once every node has the start (the run steps from then on)."""
         self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
         self.rejected = 0
-        plan = NodeCheckpoints.of(scenario, keys.ORCHESTRATOR) if "dir" in scenario["run"] \
-            else None
+        plan = NodeCheckpoints.of(scenario, keys.ORCHESTRATOR) if "dir" in scenario["run"] else None
         self._ckpt_due = plan.due if plan is not None else frozenset()
         self._ckpt_entries: dict[int, dict[str, dict[str, Any]]] = {}
         self.checkpoints: list[int] = []
@@ -115,8 +114,7 @@ class Clock:
         bus.subscribe(clock_key, self._on_clock)
         # the served scenario announces the run instance's nonce (cosim.auth): signed with
         # the key alone, as the nodes that fetch it do not know the nonce yet
-        served = {**scenario, SESSION_FIELD: auth.nonce.hex()} if auth and auth.nonce \
-            else scenario
+        served = {**scenario, SESSION_FIELD: auth.nonce.hex()} if auth and auth.nonce else scenario
         blob = encode("start", -1, 0.0, served)  # raises on a number msgpack cannot hold
         scenario_key = keys.key(run, keys.ORCHESTRATOR, keys.SCENARIO)
         if auth:
@@ -124,8 +122,7 @@ class Clock:
         # the nodes watch this token: a killed orchestrator ends its nodes too
         self._token = bus.token(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE))
         bus.serve(scenario_key, lambda: blob)
-        bus.subscribe(keys.key(run, "*", keys.CTL),
-                      lambda k, raw: self.events.put(("ctl", k, raw)))
+        bus.subscribe(keys.key(run, "*", keys.CTL), lambda k, raw: self.events.put(("ctl", k, raw)))
         bus.watch(keys.key(run, "*", keys.ALIVE),
                   lambda k, alive: self.events.put(("alive", k, alive)))
 
@@ -351,5 +348,4 @@ class Clock:
         coupled = [st.done_at for n, st in self.status.items()
                    if n in ch.COUPLED and st.done_at is not None]
         step_wall = max(coupled) - t_run if coupled else run_wall
-        return ClockResult(self.status, time.monotonic() - t0, run_wall, step_wall,
-                           self.rejected)
+        return ClockResult(self.status, time.monotonic() - t0, run_wall, step_wall, self.rejected)

@@ -189,8 +189,7 @@ def fill(text: str, regs: dict[str, str], path: str) -> str:
 
 def render(root: Path = ROOT) -> dict[Path, str]:
     """Every generated file's text as the registry has it."""
-    out = {root / rel: fill((root / rel).read_text(), regs, rel)
-           for rel, regs in regions().items()}
+    out = {root / rel: fill((root / rel).read_text(), regs, rel) for rel, regs in regions().items()}
     for name in nk.names():
         out[root / "deploy/zenoh/clients" / f"{name}.json5"] = client_config(name)
     return out

@@ -90,8 +90,7 @@ class LocalNodes:
         class (:class:`~orchestrator.placement.BackgroundGuard`, said on stderr), then
         :meth:`dead`."""
         if self.background:
-            alive = {n: self.procs[n].pid for n in self.background
-                     if self.procs[n].poll() is None}
+            alive = {n: self.procs[n].pid for n in self.background if self.procs[n].poll() is None}
             for name in self.guard.check(alive):
                 print(f"suscosim: node '{name}' was starved of CPU in SCHED_IDLE (other "
                       f"programs keep its core busy): back in the normal class",

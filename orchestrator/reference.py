@@ -64,8 +64,7 @@ def reference_solution(scenario: dict[str, Any], t_eval: np.ndarray) -> Table:
     def rhs(t: float, y: np.ndarray) -> list[float]:
         z_b, z_w, v_b, v_w = y
         F_t, F_d, F_s, _ = forces(t, z_b, z_w, v_b, v_w)
-        return [v_b, v_w, (F_s + F_d) / p.sprung_mass,
-                (F_t - W[0] - F_s - F_d) / p.unsprung_mass]
+        return [v_b, v_w, (F_s + F_d) / p.sprung_mass, (F_t - W[0] - F_s - F_d) / p.unsprung_mass]
 
     rtol = float(scenario["run"].get("rtol", 1e-10))
     t_end = float(t_eval[-1])

@@ -71,8 +71,7 @@ def _records(p: Path, counts: dict[str, Any] | None = None) -> Iterator[Record]:
             continue
         yield parts[0], parts[1], raw, t
     if counts is not None:
-        counts.update(run_id=reader.run_id, skipped=skipped,
-                      problem=reader.contents().problem)
+        counts.update(run_id=reader.run_id, skipped=skipped, problem=reader.contents().problem)
 
 
 class Recorded:

@@ -192,8 +192,7 @@ def _changes(a: Any, b: Any, key: str = "") -> list[str]:
         out: list[str] = []
         for k in sorted(set(a) | set(b)):
             sub = f"{key}.{k}" if key else str(k)
-            if key == "run" and k not in a and k in sc.RUN_KEYS \
-                    and b[k] == sc.RUN_KEYS[k].default:
+            if key == "run" and k not in a and k in sc.RUN_KEYS and b[k] == sc.RUN_KEYS[k].default:
                 continue
             if k not in a or k not in b:
                 out.append(sub)

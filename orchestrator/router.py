@@ -55,8 +55,7 @@ def router_config(listen: list[str] | None = None, config_file: str | None = Non
         conf.insert_json5("scouting/multicast/enabled", "false")
     if listen:
         endpoints = list(listen)
-    elif not _is_unset(conf, "listen/endpoints") and json.loads(
-            conf.get_json("listen/endpoints")):
+    elif not _is_unset(conf, "listen/endpoints") and json.loads(conf.get_json("listen/endpoints")):
         endpoints = json.loads(conf.get_json("listen/endpoints"))
     else:
         endpoints = [DEFAULT_LISTEN]

@@ -116,8 +116,7 @@ def _remove_tables(folder: Path, stem: str) -> None:
             pass
 
 
-def _recorders_table(folder: Path, journal: Path, since: float | None
-                     ) -> dict[str, Any] | None:
+def _recorders_table(folder: Path, journal: Path, since: float | None) -> dict[str, Any] | None:
     """The recorder's table in ``folder``, when it was written ``since`` the run began and
     holds every step the journal reached: its statistics, rows and files."""
     from cosim.journal import last_step

@@ -157,8 +157,7 @@ def map_section(duty: dict[str, Any], cols: dict[str, np.ndarray] | None, proble
     fig = Figure(figsize=(12, 5.2))
     xyz = np.column_stack([cols["x_m"], cols["y_m"], cols["z_m"]])
     ids = cols["node_id"].astype(int) if "node_id" in cols else None
-    draw(fig, xyz, d, node_ids=ids, hardpoints=geo.HARDPOINTS,
-         label="damage per schedule")
+    draw(fig, xyz, d, node_ids=ids, hardpoints=geo.HARDPOINTS, label="damage per schedule")
     fig.suptitle("lower arm: damage of one schedule (all events)")
     return section("map", "Damage map", img(fig_uri(fig), "damage map of one schedule"))
 

@@ -57,8 +57,7 @@ def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:
     unmapped = [u.get("channel") for u in fs.get("unmapped_channels") or []
                 if isinstance(u, dict) and u.get("peak_abs")]
     if unmapped:
-        pairs.append(("loaded channels no influence case maps (not in the stresses)",
-                      unmapped))
+        pairs.append(("loaded channels no influence case maps (not in the stresses)", unmapped))
     return pairs
 
 

@@ -68,8 +68,7 @@ def _grouped_change(ax, points: list[Point], keys: list[str], change: dict[str, 
                                          if not is_passive(p, axis))
             if any(q.id in change for q in points if fmt(q.params.get(axis)) == law)]
     cells = list(dict.fromkeys(_cell_label(p, others) for p in points))
-    value = {(_cell_label(p, others), fmt(p.params.get(axis))): change.get(p.id)
-             for p in points}
+    value = {(_cell_label(p, others), fmt(p.params.get(axis))): change.get(p.id) for p in points}
     nl = max(1, len(laws))
     width = min(0.8 / nl, 0.35)
     for j, law in enumerate(laws):
@@ -78,8 +77,7 @@ def _grouped_change(ax, points: list[Point], keys: list[str], change: dict[str, 
             (j - (nl - 1) / 2) * (width if len(cells) > 1 else 0.5)
         bars = ax.bar(xs, [np.nan if y is None else y for y in ys], width=width,
                       label=str(law), color=colour[str(law)])
-        ax.bar_label(bars, labels=[f"{y:+.1f} %" if y is not None else "" for y in ys],
-                     fontsize=7)
+        ax.bar_label(bars, labels=[f"{y:+.1f} %" if y is not None else "" for y in ys], fontsize=7)
     if len(cells) > 1:
         ax.set_xticks(np.arange(len(cells)), cells, fontsize=8)
         ax.set_xlim(-0.7, len(cells) - 0.3)
@@ -146,8 +144,7 @@ def overlay_groups(points: list[Point], keys: list[str]
     groups: dict[str, list[tuple[Point, str, str]]] = {}
     for p in points:
         v = fmt(p.params.get(axis))
-        groups.setdefault(_cell_label(p, others) if others else "", []).append(
-            (p, v, colour[v]))
+        groups.setdefault(_cell_label(p, others) if others else "", []).append((p, v, colour[v]))
     return list(groups.items())
 
 

@@ -70,8 +70,7 @@ class Point:
 
     @property
     def label(self) -> str:
-        return ", ".join(f"{k.split('.')[-1]}={fmt(v)}" for k, v in self.params.items()) \
-            or self.id
+        return ", ".join(f"{k.split('.')[-1]}={fmt(v)}" for k, v in self.params.items()) or self.id
 
 
 def load_sweep(d: Path, runs_dir: Path | None = None) -> tuple[dict, list[Point]]:

@@ -14,8 +14,7 @@ from .sweep_data import Point, grid_keys, load_sweep, read_results, rms_of, vs_p
 from .sweep_sensitivity import sensitivity_section
 
 
-def sweep_results_section(spec: dict, points: list[Point], keys: list[str],
-                          d: Path) -> str:
+def sweep_results_section(spec: dict, points: list[Point], keys: list[str], d: Path) -> str:
     life_change = vs_passive(points, keys, lambda p: p.life_km)
     acc_change = vs_passive(points, keys, lambda p: rms_of(p, BODY_ACC))
     header = ["point", *keys, "status", "wall [s]", "steps/s", "a_b rms [m/s²]",
@@ -86,8 +85,7 @@ def point_section(p: Point, d: Path) -> str:
         if s.get("error"):
             parts.append(f'<div class="error">{esc(s["error"])}</div>')
         pairs = [(k, s.get(k)) for k in ("wall_s", "steps_per_s", "n_steps", "rows") if k in s]
-        pairs += [("a_b rms [m/s²]", rms_of(p, BODY_ACC)),
-                  ("F_t rms [N]", rms_of(p, TYRE_FORCE))]
+        pairs += [("a_b rms [m/s²]", rms_of(p, BODY_ACC)), ("F_t rms [N]", rms_of(p, TYRE_FORCE))]
         if p.run.fatigue:
             pairs += fatigue_numbers(p.run.fatigue)[:5]
         else:

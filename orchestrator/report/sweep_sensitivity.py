@@ -72,8 +72,7 @@ def sensitivity_section(d: Path, results: list[dict]) -> str:
     outputs = [str(o) for o in sens.get("outputs") or []][:MAX_SCATTER_OUTPUTS]
     ok = [r for r in results if r.get("status") == "ok"]
     if params and outputs and ok:
-        fig, axes = new_figure(len(outputs), len(params), width=4.0 * len(params) + 1.0,
-                               row_h=2.6)
+        fig, axes = new_figure(len(outputs), len(params), width=4.0 * len(params) + 1.0, row_h=2.6)
         for i, out in enumerate(outputs):
             for j, p in enumerate(params):
                 ax = axes[i * len(params) + j]

@@ -100,8 +100,7 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
             records = Recorded(folder)  # streamed from the journal (#32): not held whole
             run_id, problem = records.run_id, records.problem
         except ReplayInputError as exc:
-            raise ScopeInputError(f"{exc} (a finished run is replayed from its journal)") \
-                from None
+            raise ScopeInputError(f"{exc} (a finished run is replayed from its journal)") from None
         if problem:
             print(f"suscosim scope: note: {problem}", file=sys.stderr)
         where = f"replay of {folder / 'journal.msgpack'} at " + \

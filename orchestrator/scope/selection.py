@@ -53,8 +53,7 @@ class Pattern:
         return f"{keys.PREFIX}/{run}/{part(self.node)}/{part(self.channel)}"
 
     def matches(self, node: str, channel: str) -> bool:
-        return fnmatch.fnmatchcase(node, self.node) and \
-            fnmatch.fnmatchcase(channel, self.channel)
+        return fnmatch.fnmatchcase(node, self.node) and fnmatch.fnmatchcase(channel, self.channel)
 
     def takes(self, fld: str) -> bool:
         return self.field is None or fnmatch.fnmatchcase(fld, self.field)

@@ -158,8 +158,7 @@ class ScopeServer:
 
     def __init__(self, state: ScopeState, host: str = "127.0.0.1", port: int = 0) -> None:
         self.allowed_names, any_ip = allowed_hosts(host)
-        self.httpd = ThreadingHTTPServer((host, port), _handler(state, self.allowed_names,
-                                                                any_ip))
+        self.httpd = ThreadingHTTPServer((host, port), _handler(state, self.allowed_names, any_ip))
         self.httpd.daemon_threads = True
         self._thread = threading.Thread(target=self.httpd.serve_forever, name="scope-http",
                                         daemon=True)

@@ -256,8 +256,7 @@ class _Coupling:
         for b, ys in self.rel.items():
             v = d.get(f"rel_{b}")
             ys.append(float(v) if isinstance(v, int | float) and math.isfinite(v) else None)
-        n = next((len(v) for f, v in d.items() if f.startswith("dE_") and isinstance(v, list)),
-                 0)
+        n = next((len(v) for f, v in d.items() if f.startswith("dE_") and isinstance(v, list)), 0)
         self.steps += n
         if self.from_k is None and isinstance(d.get("k0"), int):
             self.from_k = d["k0"]

@@ -14,8 +14,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--contact-length", type=float, default=0.2)
     ap.add_argument("-n", type=int, default=4)
     a = ap.parse_args(argv)
-    print(summary(compare(a.speed_kmh, a.contact_length, a.n), a.speed_kmh, a.contact_length,
-                  a.n))
+    print(summary(compare(a.speed_kmh, a.contact_length, a.n), a.speed_kmh, a.contact_length, a.n))
     return 0
 
 

@@ -90,8 +90,7 @@ class DaskRunner:
                 self._events.append(msg)
 
     def _task(self, p: Point, phase: str, topic: str) -> dict[str, Any]:
-        meta = point_meta(self.sweep.name, p.id, p.params, str(p.base), p.overrides,
-                          p.fingerprint)
+        meta = point_meta(self.sweep.name, p.id, p.params, str(p.base), p.overrides, p.fingerprint)
         scenario = sc.load(p.base, p.set_args)  # as validate_points loaded it
         return task_doc(meta, scenario, phase, self.sweep.fatigue, self.sweep.runs_dir,
                         self.sweep.run_dir(self.out, p), topic)
@@ -107,8 +106,7 @@ class DaskRunner:
         token = uuid.uuid4().hex[:8]
         topic = f"suscosim-sweep-{self.sweep.name}-{token}"
         self.client.subscribe_topic(topic, self._on_event)
-        display = Display(self.stream, len(todo),
-                          sum(p.n_steps for p, st in todo if st == "todo"))
+        display = Display(self.stream, len(todo), sum(p.n_steps for p, st in todo if st == "todo"))
         points = {p.id: (p, st) for p, st in todo}
         futures: dict[Any, str] = {}
         running: dict[str, RemoteJob] = {}

@@ -134,8 +134,7 @@ def _unit_samples(method: str, n: int, seed: int, d: int, ranges: list[Range]) -
     from SALib.sample import sobol as salib_sobol
 
     unit_problem = {"num_vars": d, "names": [r.key for r in ranges], "bounds": [[0, 1]] * d}
-    return salib_sobol.sample(unit_problem, n, calc_second_order=False, scramble=True,
-                              seed=seed)
+    return salib_sobol.sample(unit_problem, n, calc_second_order=False, scramble=True, seed=seed)
 
 
 def design_axis(design: Design) -> tuple[list[str], list[dict[str, Any]]]:

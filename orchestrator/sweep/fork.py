@@ -266,8 +266,7 @@ def keep_only_fork_checkpoint(parent: Parent, run_dir: Path) -> None:
 
 def _wall(run_dir: Path) -> float | None:
     s = read_json(run_dir / "summary.json")
-    if isinstance(s, dict) and s.get("status") == "ok" and isinstance(s.get("wall_s"),
-                                                                       int | float):
+    if isinstance(s, dict) and s.get("status") == "ok" and isinstance(s.get("wall_s"), int | float):
         return float(s["wall_s"])
     return None
 

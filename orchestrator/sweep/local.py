@@ -171,8 +171,7 @@ class Runner:
                     finished += 1
                     st, err = self.status[job.point.id]
                     failed += st != "ok"
-                    display.event(event_line(job.run_dir, job.point.id, st, err,
-                                             finished, n_total))
+                    display.event(event_line(job.run_dir, job.point.id, st, err, finished, n_total))
                     if job.parent is not None:
                         steps_done += job.point.n_steps
                         forks = waiting.pop(job.point.id, [])

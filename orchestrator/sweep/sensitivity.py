@@ -79,8 +79,7 @@ def sobol_indices(problem: dict[str, Any], y: np.ndarray, seed: int) -> dict[str
     """S1, S1_conf, ST, ST_conf of Saltelli's design (SALib, no second order)."""
     from SALib.analyze import sobol
 
-    res = sobol.analyze(problem, y, calc_second_order=False, print_to_console=False,
-                        seed=seed)
+    res = sobol.analyze(problem, y, calc_second_order=False, print_to_console=False, seed=seed)
     return {k: np.asarray(res[k], dtype=float) for k in ("S1", "S1_conf", "ST", "ST_conf")}
 
 
@@ -100,8 +99,7 @@ def sensitivity(sweep: Sweep, rows: list[dict]) -> dict[str, Any]:
         for out in outputs:
             ok = [r for r in grows if r.get("status") == "ok" and _finite(r.get(out))
                   and all(_finite(r.get(k)) for k in params)]
-            x = np.array([[float(r[k]) for k in params] for r in ok]).reshape(len(ok),
-                                                                              len(params))
+            x = np.array([[float(r[k]) for k in params] for r in ok]).reshape(len(ok), len(params))
             y = np.array([float(r[out]) for r in ok])
             corr = rank_correlations(x, y)
             sob = None

@@ -345,8 +345,7 @@ def validate_points(sweep: Sweep, out: Path) -> None:
             resolved = resolve(copy.deepcopy(scenario), out / "runs" / p.id)
             p.n_steps = int(resolved["run"]["n_steps"])
         except SuscosimError as exc:
-            raise SweepError(f"sweep point '{p.id}' ({_params_text(p.params)}): {exc}") \
-                from None
+            raise SweepError(f"sweep point '{p.id}' ({_params_text(p.params)}): {exc}") from None
         resolved_all[p.id] = resolved
     if sweep.fork_at is not None:
         from .fork import plan_forks

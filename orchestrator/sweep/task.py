@@ -81,8 +81,7 @@ class _Context:
         self.worker = get_worker()
         self.key = self.worker.get_current_task()
         self.topic, self.id = task["topic"], task["point"]["id"]
-        self.info = this_worker("dask", address=self.worker.address,
-                                name=str(self.worker.name))
+        self.info = this_worker("dask", address=self.worker.address, name=str(self.worker.name))
         self.last = 0.0
 
     def cancelled(self) -> bool:

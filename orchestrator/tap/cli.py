@@ -87,8 +87,7 @@ def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
     try:
         for kx in step_keyexprs(target.keyexpr):  # a channel's messages come in steps
             bus.subscribe(kx, lambda key, raw: inbox.put((key, raw, clock())))
-        where = ", ".join(target.endpoints) + (f" (from {target.source})" if target.source
-                                               else "")
+        where = ", ".join(target.endpoints) + (f" (from {target.source})" if target.source else "")
         if target.note:
             print(f"suscosim tap: note: {target.note}", file=sys.stderr)
         print(f"suscosim tap: tapping {target.keyexpr} via {where} ({mode} session)",
@@ -106,8 +105,7 @@ def _tap(args: argparse.Namespace, target: Target, sink: CsvSink | None) -> int:
                 pass
             else:
                 msg = tap.handle(key, raw, at)
-                if args.count and msg is not None and msg.kind == "data" and \
-                        tap.data >= args.count:
+                if args.count and msg is not None and msg.kind == "data" and tap.data >= args.count:
                     break
                 if clock() < next_show:
                     continue

@@ -68,8 +68,7 @@ def _local(ep: str) -> str:
     return ep
 
 
-def resolve_target(run: str | None, pattern: str | None,
-                   connect: list[str] | None) -> Target:
+def resolve_target(run: str | None, pattern: str | None, connect: list[str] | None) -> Target:
     """Resolve RUN (id, ``*`` or a run folder), PATTERN and endpoints."""
     endpoints: list[str] = list(connect or [])
     lowlatency, source, note = False, "", ""
