@@ -68,18 +68,13 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
     glance = kv_table(at_a_glance(r), "At a glance", cls="kv glance")
     status_tab = ""
     if r.summary is not None:
+        labels = {"wall_s": "wall time [s]", "step_wall_s": "stepping wall time [s]",
+                  "run_wall_s": "start to all nodes done [s]",
+                  "steps_per_s": "coupled steps per s"}
+        labels |= {k: k for k in ("n_steps", "rows", "mode", "exchange", "coupling", "h",
+                                  "substeps", "t_end")}
         pairs: list[tuple[str, Any]] = [("status", r.status)]
-        if "wall_s" in s:
-            pairs.append(("wall time [s]", s.get("wall_s")))
-        if "step_wall_s" in s:
-            pairs.append(("stepping wall time [s]", s.get("step_wall_s")))
-        if "run_wall_s" in s:
-            pairs.append(("start to all nodes done [s]", s.get("run_wall_s")))
-        if "steps_per_s" in s:
-            pairs.append(("coupled steps per s", s.get("steps_per_s")))
-        for k in ("n_steps", "rows", "mode", "exchange", "coupling", "h", "substeps", "t_end"):
-            if k in s:
-                pairs.append((k, s[k]))
+        pairs += [(lab, s[k]) for k, lab in labels.items() if k in s]
         rej = {k: v for k, v in (s.get("rejected_messages") or {}).items() if v}
         pairs.append(("rejected messages", rej or "none"))
         pairs += coupling_residual_rows(s)
@@ -95,7 +90,7 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
 
 
 def coupling_residual_rows(s: dict) -> list[tuple[str, Any]]:
-    """``summary.json``'s coupling energy residual (#29 item 1) as rows [%]: the total and
+    """``summary.json``'s coupling energy residual as rows [%]: the total and
     each power bond's (:mod:`cosim.coupling_energy`); none for a run without it."""
     res = s.get("coupling_energy_residual") or {}
     if "total" not in res:
