@@ -27,7 +27,7 @@ roll inertia 465.3 kg m^2. The thesis gives no wheelbase or track; the defaults
 L = 2.774 m, t = 1.411 m are those for which the tabulated inertias follow from the masses
 read per axle (see shared/reference/thesis-ch4.md Sec. 4).
 
-**One mass basis (issue #27).** Sec. 4.4 says the sprung mass "is represented as lumped
+**One mass basis.** Sec. 4.4 says the sprung mass "is represented as lumped
 masses at each corner" (after Hudson [103]). So the body here is point masses m_i at the
 corners (x_i, y_i) and everything follows from them: M = sum m_i, the CG where the static
 corner loads balance (a = L m_rear / (m_front + m_rear) behind the front axle), and, unless a
@@ -37,10 +37,8 @@ cars). ``mass_basis`` reads the sprung masses as per **corner** (default: 2*535 
 1870 kg, each corner the quarter car's 535 / 400 kg, so a front corner is Table 4.3's QVM and
 Appendix III's 1.14 Hz) or per **axle** (935 kg). With the axle reading the point-mass
 inertias are Table 4.4's printed 1761.3 / 465.3 kg m^2 to 0.1 %; with the corner reading
-they double (3522.5 / 930.8 kg m^2). The old default mixed the two (an 1870 kg body with the
-935 kg body's inertias: dynamic index 0.5, pitch and roll at 1.72 / 1.77 Hz against heave
-1.2 Hz). 935 kg is also too light for an unladen MPV (the thesis's earlier 7-DOF MPV,
-App. I: 1600 kg); 1870 kg sprung + 191 kg unsprung is a mid-size MPV's kerb mass. The radii
+they double (3522.5 / 930.8 kg m^2). 935 kg is too light for an unladen MPV (App. I's 7-DOF
+MPV: 1600 kg); 1870 kg sprung + 191 kg unsprung is a mid-size MPV's kerb mass. The radii
 of gyration are k_pitch = 1.372 m (0.49 L) and k_roll = t/2 = 0.706 m; App. I's MPV
 (1600 kg, I = 1580 / 628 kg m^2) has 0.99 / 0.63 m, so ours are upper bounds of a real body
 (mass inboard of the wheels), by 38 % / 13 % in radius; see docs/vehicles_roads.md.
@@ -193,18 +191,15 @@ class FullVehicle7DOF(PlantModel):
 
     def state(self) -> dict[str, np.ndarray]:
         zb, vb, _ = self._corner_kinematics()
-        return {
-            "z_b": zb, "v_b": vb, "z_w": self._q[3:].copy(), "v_w": self._qd[3:].copy(),
-            "heave": self._q[0:1].copy(), "pitch": self._q[1:2].copy(),
-            "roll": self._q[2:3].copy(), "v_heave": self._qd[0:1].copy(),
-            "w_pitch": self._qd[1:2].copy(), "w_roll": self._qd[2:3].copy(),
-        }
+        return {"z_b": zb, "v_b": vb, "z_w": self._q[3:].copy(), "v_w": self._qd[3:].copy(),
+                "heave": self._q[0:1].copy(), "pitch": self._q[1:2].copy(),
+                "roll": self._q[2:3].copy(), "v_heave": self._qd[0:1].copy(),
+                "w_pitch": self._qd[1:2].copy(), "w_roll": self._qd[2:3].copy()}
 
     def response_velocities(self) -> dict[str, np.ndarray]:
-        """The body's pitch and roll rates [rad/s] (length 1), whose change over the first
-        substep the plant node publishes as ``alpha_pitch`` and ``alpha_roll`` in
-        ``plant/response`` [rad/s^2] (pitch about +y, nose down positive; roll about +x,
-        left side up positive), as it does a_b."""
+        """The body's pitch and roll rates [rad/s], which the node derives as ``alpha_pitch``
+        and ``alpha_roll`` [rad/s^2] in ``plant/response`` (pitch +y nose down, roll +x left
+        up), as it does a_b."""
         return {"alpha_pitch": self._qd[1:2].copy(), "alpha_roll": self._qd[2:3].copy()}
 
     def spring_force(self) -> np.ndarray:
@@ -233,21 +228,13 @@ class FullVehicle7DOF(PlantModel):
     def info(self) -> dict[str, object]:
         pr = self.params
         d = super().info()
-        d.update({
-            "model": self.name,
-            "corner_names": list(CORNERS),
-            "wheel_x": [0.0, 0.0, -pr.wheelbase, -pr.wheelbase],
-            "wheel_track": [0, 1, 0, 1],
-            "wheelbase": pr.wheelbase,
-            "track": pr.track,
-            "cg_to_front_axle": pr.a,
-            "body_mass": pr.body_mass,
-            "pitch_inertia": pr.I_pitch,
-            "roll_inertia": pr.I_roll,
-            "dynamic_index": pr.dynamic_index,
-            "unsprung_mass": [pr.unsprung_mass] * 4,
-            "spring_stiffness": [pr.spring_stiffness] * 4,
-        })
+        d.update({"model": self.name, "corner_names": list(CORNERS),
+                  "wheel_x": [0.0, 0.0, -pr.wheelbase, -pr.wheelbase],
+                  "wheel_track": [0, 1, 0, 1], "wheelbase": pr.wheelbase, "track": pr.track,
+                  "cg_to_front_axle": pr.a, "body_mass": pr.body_mass,
+                  "pitch_inertia": pr.I_pitch, "roll_inertia": pr.I_roll,
+                  "dynamic_index": pr.dynamic_index, "unsprung_mass": [pr.unsprung_mass] * 4,
+                  "spring_stiffness": [pr.spring_stiffness] * 4})
         return d
 
     def close(self) -> None:

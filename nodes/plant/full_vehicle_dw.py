@@ -1,5 +1,4 @@
-"""Full vehicle on four double-wishbone corners built from corner files (#31 item 2, the first
-piece: the multi-body model; docs/corners.md has the design of the rest).
+"""Full vehicle on four double-wishbone corners built from corner files (docs/corners.md).
 
 One PyBullet multibody: the **body** is the floating base (6 DOF; its frame at the CG at ride
 height, mass and inertias there); each corner FL, FR, RL, RR is the quarter car's linkage
@@ -72,7 +71,7 @@ class FullVehicleDWParams:
     yaw_inertia: float = 3522.5 + 930.8
     cg_height: float = 0.55
     anti_roll_bars: bool = True
-    """A bar on each axle (:mod:`.anti_roll_bar`); false: none (the model before #31's)."""
+    """A bar on each axle (:mod:`.anti_roll_bar`); false: none."""
     arb_front_nm_per_deg: float = ARB_FRONT_NM_PER_DEG
     """The front bar's roll stiffness at the wheels [N m/deg] (the value's reasoning there)."""
     arb_rear_nm_per_deg: float = ARB_REAR_NM_PER_DEG

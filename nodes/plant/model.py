@@ -66,17 +66,14 @@ class PlantModel(ABC):
         """Apply the tyre and damper forces (held during ``dt``) and integrate ``dt`` seconds."""
 
     def extra_response(self) -> dict[str, np.ndarray]:
-        """Model-specific fields of ``plant/response`` at t_k, from the current state (what the
-        next substep applies), per corner; e.g. the double-wishbone corner's bump-stop force
-        ``F_bs`` [N]. Empty by default."""
+        """Model-specific fields of ``plant/response`` at t_k per corner (e.g. the bump-stop
+        force ``F_bs`` [N]); empty by default."""
         return {}
 
     def response_velocities(self) -> Mapping[str, np.ndarray | float]:
-        """Velocities in the current state whose rate of change ``plant/response`` carries,
-        keyed by the acceleration field's name, per corner or length 1: the plant node
-        publishes ``(after - before) / dt`` over the step's first substep, as it does a_b and
-        a_w (e.g. the double-wishbone arm points' ``a_arm_loc1_z`` [m/s^2], the full
-        vehicle's ``alpha_pitch`` [rad/s^2]). Empty by default."""
+        """Velocities keyed by the acceleration field of ``plant/response`` the node derives as
+        ``(after - before) / dt`` over the first substep (e.g. ``a_arm_loc1_z`` [m/s^2],
+        ``alpha_pitch`` [rad/s^2]), per corner or length 1; empty by default."""
         return {}
 
     def loads(self) -> dict[str, dict[str, float]]:
@@ -85,10 +82,8 @@ class PlantModel(ABC):
 
     def info(self) -> dict[str, object]:
         """Static facts other nodes need at start (sent in the ready handshake)."""
-        return {
-            "n_corners": self.n_corners,
-            "static_tyre_load": [float(x) for x in self.static_tyre_load()],
-        }
+        return {"n_corners": self.n_corners,
+                "static_tyre_load": [float(x) for x in self.static_tyre_load()]}
 
     checkpoint_keep: tuple[str, ...] = ("client",)
     """Attributes :meth:`restore_state` leaves as they are: the PyBullet client of this
@@ -96,7 +91,7 @@ class PlantModel(ABC):
     the same way from the same scenario)."""
 
     def checkpoint_state(self) -> dict[str, Any]:
-        """The model's whole state at a step boundary (issue #29 item 4), plain data
+        """The model's whole state at a step boundary, plain data
         (:mod:`cosim.plaindata`): the PyBullet world as ``saveBullet`` writes it (positions,
         velocities, the solver's state) and a deep copy of the model's own attributes
         (integrator memory, the driver, held tyre forces, the last loads) but

@@ -14,13 +14,12 @@
 * ``full_vehicle_7dof`` (Table 4.4): ``sprung_mass_front``, ``sprung_mass_rear``,
   ``unsprung_mass``, ``spring_stiffness``, ``pitch_inertia``, ``roll_inertia``, ``wheelbase``,
   ``track``, ``mass_basis`` ("corner" | "axle").
-* ``full_vehicle_double_wishbone`` (#31 item 2, first piece: vertical tyre forces):
-  ``front``, ``rear`` (corner files of the left corners, default the built-in; the rear
-  defaults to the front), the body's ``sprung_mass``, ``cg_to_front_axle``, ``wheelbase``,
-  ``pitch_inertia``, ``roll_inertia``, ``yaw_inertia``, ``cg_height``, ``speed_kmh`` (the
-  speed at t = 0), ``driver`` (a table: ``speed`` [[t, v], ...] m/s, ``steer`` [[t, delta],
-  ...] rad or ``radius`` m, ``brake_balance``, ``driven``: :mod:`.driver`)
-  (:mod:`.full_vehicle_dw`; with ``[tyre] model = "magic_formula"`` its tyres act in 3-D).
+* ``full_vehicle_double_wishbone`` (:mod:`.full_vehicle_dw`; with ``[tyre] model =
+  "magic_formula"`` its tyres act in 3-D): ``front``, ``rear`` (corner files of the left
+  corners, default the built-in; the rear defaults to the front), the body's ``sprung_mass``,
+  ``cg_to_front_axle``, ``wheelbase``, ``pitch_inertia``, ``roll_inertia``, ``yaw_inertia``,
+  ``cg_height``, ``speed_kmh`` (at t = 0), ``driver`` (a table: ``speed`` [[t, v], ...] m/s,
+  ``steer`` [[t, delta], ...] rad or ``radius`` m, ``brake_balance``, ``driven``: :mod:`.driver`).
 
 Missing parameters take the defaults of the model's params dataclass. Numbers must be > 0,
 switches true or false. Bad keys or values raise :class:`cosim.errors.ScenarioError`.
