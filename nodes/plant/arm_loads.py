@@ -49,9 +49,8 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
       taken about the child's **centre of mass**, with the joint motor torque included. It
       includes the forces of the loop-closing POINT2POINT constraints. The child frame is
       the one at the **start** of the substep (where the step's forces are evaluated), so
-      every load is rotated with the arm's and hub's orientation at t_k, the time the loads
-      belong to (the orientation after the step misplaces them by omega dt: 0.2 % of the
-      joint forces at 4 rad/s and 0.5 ms, enough to spoil the dynamic balance).
+      every load is rotated with the arm's and hub's orientation at t_k (the orientation
+      after the step would misplace them by omega dt and spoil the dynamic balance).
     * ball joint: minus the lower-ball-joint sensor wrench's force (parent arm -> child hub),
       rotated from the hub frame to the arm frame;
     * damper mount and bump stop: the actuator forces we applied in that substep;
@@ -61,12 +60,23 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
       F_front,z = F_z/2 - M_y/d, F_rear,z = F_z/2 + M_y/d, F_front,y = F_y/2 + M_z/d,
       F_rear,y = F_y/2 - M_z/d; the axial force F_x is shared equally (statically
       indeterminate between two bushes of equal stiffness). M_x is the torsion-bar moment.
-    (``getConstraintState`` of a POINT2POINT returns the 3 force components the constraint
-    applies on its child body B, world axes; it is not needed here.)
     """
     return arm_loads_at(model.client, model.body, LOWER_ARM, HUB, model.geom.arm_rotation,
                         model._applied_pose, model._arm_r_com, model._F_d,
                         np.array([0.0, 0.0, -model._F_bs]), model.geom.bush_spacing)
+
+
+def bush_split(w: tuple, r_com: np.ndarray, R_f: np.ndarray, d: float
+               ) -> tuple[float, tuple[float, float, float], tuple[float, float, float]]:
+    """(M_x, front bush force, rear bush force) in an arm frame with axes ``R_f`` (in the
+    link frame) from a pivot sensor wrench ``w`` (about the centre of mass ``r_com`` [m]):
+    moved to the frame origin, split between bushes ``d`` [m] apart (:func:`arm_loads`)."""
+    rxF = cross3(r_com, w[:3])
+    M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
+    F0, F1, F2 = (R_f.T @ np.array(w[:3])).tolist()
+    M0, M1, M2 = (R_f.T @ np.array(M_link)).tolist()
+    return (M0, (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d),
+            (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d))
 
 
 def arm_loads_at(c: int, b: int, arm_link: int, hub_link: int, R_af: np.ndarray,
@@ -81,13 +91,8 @@ def arm_loads_at(c: int, b: int, arm_link: int, hub_link: int, R_af: np.ndarray,
     R_arm, hub_quat, u = applied_pose  # the pose at the start of the substep
     to_arm = R_af.T @ R_arm.T  # world -> arm frame
 
-    w = p.getJointState(b, arm_link, physicsClientId=c)[2]
-    rxF = cross3(r_com, w[:3])
-    M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
-    F0, F1, F2 = (R_af.T @ np.array(w[:3])).tolist()
-    M0, M1, M2 = (R_af.T @ np.array(M_link)).tolist()
-    front = (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d)
-    rear = (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d)
+    M0, front, rear = bush_split(p.getJointState(b, arm_link, physicsClientId=c)[2], r_com,
+                                 R_af, d)
 
     w_bj = np.array(p.getJointStateMultiDof(b, hub_link, physicsClientId=c)[2][:3])
     ball = (to_arm @ (-(_rot(hub_quat) @ w_bj))).tolist()

@@ -23,7 +23,8 @@ import numpy as np
 from cosim import lower_arm as la
 from cosim.corner import Corner
 
-from .point_kinematics import cross3
+from .arm_loads import bush_split
+from .quarter_car_lumped import quat_matrix
 from .quiet_pybullet import p
 
 if TYPE_CHECKING:
@@ -77,17 +78,12 @@ def upper_arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     (tested in tests/vehicles/test_double_wishbone.py)."""
     c, b = model.client, model.body
     # the arm link's world rotation at the start of the substep
-    R_link = np.array(p.getMatrixFromQuaternion(model._ua_quat_applied)).reshape(3, 3)
+    R_link = quat_matrix(model._ua_quat_applied)
     R_f = model._ua_frame_R  # the frame's axes in the link frame
     to_frame = R_f.T @ R_link.T  # world -> upper-arm frame
     d = model._ua_spacing
     w = p.getJointState(b, model._ua_link, physicsClientId=c)[2]
-    rxF = cross3(model._ua_r_com, w[:3])
-    M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
-    F0, F1, F2 = (R_f.T @ np.array(w[:3])).tolist()
-    _M0, M1, M2 = (R_f.T @ np.array(M_link)).tolist()
-    front = (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d)
-    rear = (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d)
+    _M0, front, rear = bush_split(w, model._ua_r_com, R_f, d)
     on_hub = np.array(p.getConstraintState(model._c_upper, physicsClientId=c)[:3])
     ball = (to_frame @ -on_hub).tolist()
     out: dict[str, float] = {}

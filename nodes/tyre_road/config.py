@@ -103,17 +103,9 @@ def _power_law_keys(r: ConfigReader
 def _event(r: ConfigReader, kind: str, speed: float) -> RoadEvent:
     if r.has("x_start") and r.has("t_start"):
         raise r.error("t_start", r.value("t_start"), "either x_start or t_start, not both")
-    if r.has("t_start"):
-        x0 = r.number("t_start", lo=0.0) * speed
-    else:
-        x0 = r.number("x_start", 0.0)
-    if kind == "pothole":
-        h = r.number("depth", positive=True)
-    else:
-        h = r.number("height")
-    length = 0.0
-    if kind != "step":
-        length = r.number("length", positive=True)
+    x0 = r.number("t_start", lo=0.0) * speed if r.has("t_start") else r.number("x_start", 0.0)
+    h = r.number("depth", positive=True) if kind == "pothole" else r.number("height")
+    length = 0.0 if kind == "step" else r.number("length", positive=True)
     shape = r.choice("shape", ("cosine", "rect"), "cosine")
     tracks = r.choice("tracks", tuple(_TRACKS), "both")
     return RoadEvent(kind=kind, x_start=x0, height=h, length=length, shape=shape,
