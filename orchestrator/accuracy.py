@@ -12,10 +12,8 @@ from typing import Any
 from cosim.table import Table
 
 TABLE_3_3_SIGNALS = {
-    "body displacement": "plant/state/z_b",
-    "wheel displacement": "plant/state/z_w",
-    "wheel acceleration": "plant/response/a_w",
-    "tyre force": "plant/response/F_t",
+    "body displacement": "plant/state/z_b", "wheel displacement": "plant/state/z_w",
+    "wheel acceleration": "plant/response/a_w", "tyre force": "plant/response/F_t",
 }
 
 

@@ -78,8 +78,7 @@ class Clock:
     def __init__(self, bus: Bus, run: str, nodes: list[str], scenario: dict[str, Any],
                  on_progress: Callable[[int, int], None] | None = None,
                  check_processes: Callable[[], str | None] | None = None,
-                 auth: RunKey | None = None,
-                 on_started: Callable[[], None] | None = None) -> None:
+                 auth: RunKey | None = None, on_started: Callable[[], None] | None = None) -> None:
         self.bus, self.run_id, self.scenario, self.auth = bus, run, scenario, auth
         self.status = {n: NodeStatus() for n in nodes}
         self.n_steps = int(scenario["run"]["n_steps"])

@@ -61,8 +61,7 @@ class SuscosimLaw(SlaveBase):
         if FMI_VERSION == 3 and causality == Causality.parameter:
             extra["start"] = value
         self.register_variable(Real(
-            name, causality=causality,
-            getter=lambda n=name: self.values[n],
+            name, causality=causality, getter=lambda n=name: self.values[n],
             setter=lambda v, n=name: self.values.__setitem__(n, float(v)),
             **extra), nested=False)
 

@@ -134,8 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         bus = ZenohBus(zenoh_config(args.connect, args.listen, args.lowlatency,
                                     lease_ms=args.lease_ms, config_file=args.zenoh_config,
-                                    mode=args.mode, default_mode="client",
-                                    gossip=args.gossip))
+                                    mode=args.mode, default_mode="client", gossip=args.gossip))
     except Exception as exc:  # unreachable router, bad config file or certificate
         text = " ".join(str(exc).split())
         print(f"suscosim node {args.name}: cannot open the Zenoh session "

@@ -56,8 +56,7 @@ class ProgressBar:
             self.phases.append((name, time.monotonic() - self.t0))
         if self.enabled:
             elapsed = time.monotonic() - self.t0
-            self._write(f"{self.label} {name}{': ' + detail if detail else ''} ... "
-                        f"{elapsed:.1f} s")
+            self._write(f"{self.label} {name}{': ' + detail if detail else ''} ... {elapsed:.1f} s")
 
     def line(self, k: int, n: int, now: float) -> str:
         """The bar's text at step ``k`` of ``n`` (wall time ``now``, monotonic)."""

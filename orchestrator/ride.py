@@ -115,8 +115,7 @@ def main(argv: list[str] | None = None) -> int:
             summary = ride_summary(runs, baseline=args.baseline, band_hz=(lo, hi))
             summary["runs"] = [
                 {"name": e["name"], "path": str(d), "metrics": e["metrics"],
-                 "change_pct": e["change_pct"]}
-                for e, d in zip(summary["runs"], dirs, strict=True)]
+                 "change_pct": e["change_pct"]} for e, d in zip(summary["runs"], dirs, strict=True)]
             text = json.dumps(_finite_or_none(summary), indent=1)
         else:
             text = ride_table(runs, baseline=args.baseline, band_hz=(lo, hi))

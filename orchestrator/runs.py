@@ -77,8 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="suscosim runs",
                                  description="list runs and their state from the run folders")
     ap.add_argument("dir", nargs="?", default="runs",
-                    help="folder of run folders, a sweep folder, or one run folder "
-                         "(default: runs)")
+                    help="folder of run folders, a sweep folder, or one run folder (default: runs)")
     ap.add_argument("--json", action="store_true", help="print JSON (a list of runs)")
     args = parse_args(ap, argv)
     if isinstance(args, int):

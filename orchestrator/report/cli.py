@@ -42,8 +42,7 @@ def render(d: Path, runs_dir: Path | None = None) -> tuple[str, str]:
     if is_run_dir(d):
         return "run", render_run(d)
     raise BadInput(f"{d}: neither a run folder (scenario.json, summary.json, table.*, "
-                   "journal.msgpack) nor a sweep folder (sweep.json) nor a duty folder "
-                   "(duty.json)")
+                   "journal.msgpack) nor a sweep folder (sweep.json) nor a duty folder (duty.json)")
 
 
 def main(argv: list[str] | None = None) -> int:

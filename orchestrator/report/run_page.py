@@ -69,8 +69,7 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
     status_tab = ""
     if r.summary is not None:
         labels = {"wall_s": "wall time [s]", "step_wall_s": "stepping wall time [s]",
-                  "run_wall_s": "start to all nodes done [s]",
-                  "steps_per_s": "coupled steps per s"}
+                  "run_wall_s": "start to all nodes done [s]", "steps_per_s": "coupled steps per s"}
         labels |= {k: k for k in ("n_steps", "rows", "mode", "exchange", "coupling", "h",
                                   "substeps", "t_end")}
         pairs: list[tuple[str, Any]] = [("status", r.status)]

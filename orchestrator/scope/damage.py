@@ -115,8 +115,7 @@ class DamageMap:
             "k": k, "from_k": self.k0, "missing_steps": self.gaps, "final": k >= self.n_steps,
             "from_journal": self.backfilled,
             "max_damage": dmax, "critical_node_id": int(res.critical_node_id),
-            "distance_m": distance,
-            "life_km": distance / dmax / 1000.0 if dmax > 0 else "inf",
+            "distance_m": distance, "life_km": distance / dmax / 1000.0 if dmax > 0 else "inf",
             "log10_damage": [None if np.isnan(v) else float(v) for v in logd],
         })
 

@@ -209,8 +209,7 @@ class ScopeState:
                 "k": self.k, "t": self.t, "n_steps": n, "h": self.h,
                 "progress": (max(0, self.k) / n if n else None),
                 "steps_per_s": self._steps_per_s(now), "run_state": self.run_state,
-                "reason": self.reason, "messages": self.messages,
-                "undecodable": self.undecodable,
+                "reason": self.reason, "messages": self.messages, "undecodable": self.undecodable,
                 "nodes": {name: dict(v) for name, v in sorted(self._nodes.items())},
                 "lines": {key: {**vars(s.line), **s.since(since)}
                           for key, s in self._lines.items()},

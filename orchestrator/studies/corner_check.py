@@ -63,8 +63,7 @@ def check(corner: corner_file.Corner, travel: tuple[float, float], n: int, k_t: 
     ride = k_s * k_t / (k_s + k_t)
     out: dict[str, object] = {
         "corner": corner.name, "source": corner.source, "half_track_m": corner.half_track,
-        "curves": rows, "unreachable_travel_m": unreachable,
-        "ride_height": {
+        "curves": rows, "unreachable_travel_m": unreachable, "ride_height": {
             "camber_gain_rad_per_m": float((g["camber"][2] - g["camber"][0]) / (2 * h)),
             "bump_steer_rad_per_m": float((g["toe"][2] - g["toe"][0]) / (2 * h)),
             "mr_damper": eq["mr_damper"], "wheel_rate_n_per_m": k_s,

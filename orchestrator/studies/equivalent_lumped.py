@@ -61,8 +61,7 @@ def main(argv: list[str] | None = None) -> int:
           f"(L = {eq['lever_m']:.3f} m), C (MR cos lean)^2 = {eq['c_s_lever']:.0f} N s/m "
           f"(lean {eq['damper_lean_deg']:.1f} deg)")
     if cmp is not None:
-        print("realistic vs equivalent lumped (2-DOF k_s, c_s), Ch. 4 bump + pothole "
-              "at 34 km/h:")
+        print("realistic vs equivalent lumped (2-DOF k_s, c_s), Ch. 4 bump + pothole at 34 km/h:")
         for key in ("z_b", "z_w"):
             print(f"  {key}: peak {cmp[f'{key}_peak_realistic'] * 1e3:.2f} mm realistic, "
                   f"{cmp[f'{key}_peak_lumped'] * 1e3:.2f} mm lumped "

@@ -73,15 +73,13 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
-                           fatigue=False if args.no_fatigue else None,
-                           max_points=args.max_points)
+                           fatigue=False if args.no_fatigue else None, max_points=args.max_points)
         out = Path(args.out) if args.out else Path("sweeps") / sweep.name
         if args.runs_dir:  # the command line's shared folder for the run folders
             sweep.runs_dir = Path(args.runs_dir).resolve()
         elif args.out and sweep.runs_dir is not None:  # --out wins over the file (#46)
             print(f"suscosim sweep: runs under {out / 'runs'} (--out), not the sweep file's "
-                  f"runs_dir {sweep.runs_dir} (--runs-dir DIR to keep a shared one)",
-                  flush=True)
+                  f"runs_dir {sweep.runs_dir} (--runs-dir DIR to keep a shared one)", flush=True)
             sweep.runs_dir = None
         print(f"suscosim sweep {sweep.name}: {len(sweep.points)} points, validating ...",
               flush=True)

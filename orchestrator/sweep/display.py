@@ -95,8 +95,7 @@ class Display:
         n = max(1, j.point.n_steps)
         frac = min(1.0, max(0.0, k / n))
         fill = int(frac * 24)
-        return (f"run [{'#' * fill}{'.' * (24 - fill)}] {100 * frac:5.1f}% step {k}/{n} "
-                f"{t:6.0f} s")
+        return (f"run [{'#' * fill}{'.' * (24 - fill)}] {100 * frac:5.1f}% step {k}/{n} {t:6.0f} s")
 
     def close(self) -> None:
         self._clear()

@@ -301,8 +301,7 @@ def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
     doc: dict[str, Any] = {
         "fork_at": plan.at, "semantics": SEMANTICS,
         "parents": parents_doc, "points": sum(len(pa.members) for pa in plan.parents),
-        "points_ok": n_ok,
-        "steps": {"plain": plain, "simulated": simulated,
+        "points_ok": n_ok, "steps": {"plain": plain, "simulated": simulated,
                   "prefix_not_simulated_again": prefix,
                   "prefix_share": prefix / plain if plain else 0.0,
                   "saved": saved, "saved_share": saved / plain if plain else 0.0,

@@ -139,9 +139,7 @@ def write_sweep_json(sweep: Sweep, out: Path) -> None:
         "name": sweep.name,
         "base": str(sweep.bases[0]) if len(sweep.bases) == 1 else [str(b) for b in sweep.bases],
         "grid": {a.name: a.labels for a in sweep.axes},
-        "set": sweep.fixed,
-        "fatigue": sweep.fatigue,
-        "sweep_file": str(sweep.path.resolve()),
+        "set": sweep.fixed, "fatigue": sweep.fatigue, "sweep_file": str(sweep.path.resolve()),
         "variants": {k: v for k, v in sweep.raw_grid.items() if isinstance(v, dict)},
         "points": [{"id": p.id, "params": p.params, "run_dir": sweep.run_dir_text(p),
                     "base": str(p.base), "overrides": p.overrides, "n_steps": p.n_steps,
@@ -157,12 +155,10 @@ def write_sweep_json(sweep: Sweep, out: Path) -> None:
                                     "n_steps": pa.point.n_steps, "base": str(pa.point.base),
                                     "overrides": pa.point.overrides,
                                     "fingerprint": pa.point.fingerprint,
-                                    "points": [p.id for p in pa.members]}
-                                   for pa in plan.parents]}
+                                    "points": [p.id for p in pa.members]} for pa in plan.parents]}
     if sweep.design is not None:
         d = sweep.design
-        doc["design"] = {"method": d.method, "n": d.n, "seed": d.seed,
-                         "parameters": d.keys,
+        doc["design"] = {"method": d.method, "n": d.n, "seed": d.seed, "parameters": d.keys,
                          "ranges": [{"key": r.key, "low": r.low, "high": r.high,
                                      "scale": r.scale} for r in d.ranges],
                          "sensitivity": "sensitivity.json"}

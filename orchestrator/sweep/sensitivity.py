@@ -27,8 +27,7 @@ VALIDITY = {
     "lhs": "Latin hypercube: Spearman and partial rank correlations (monotonic association, "
            "not variance shares); Sobol' indices need method = \"saltelli\" and are not given.",
     "sobol": "Sobol' sequence: Spearman and partial rank correlations (monotonic association, "
-             "not variance shares); Sobol' indices need method = \"saltelli\" and are not "
-             "given.",
+             "not variance shares); Sobol' indices need method = \"saltelli\" and are not given.",
     "saltelli": "Saltelli's design: Sobol' indices S1/ST (variance shares, SALib) and, on the "
                 "same points, rank correlations (Saltelli's points are not independent "
                 "samples: their p-values are indicative only).",

@@ -32,8 +32,7 @@ MAX_ID = 64
 INVOCATION = keys.invocation_token()
 """The random part of this invocation's run ids (one per ``suscosim sweep`` process)."""
 RESERVED = ("base", "point", "status", "error", "wall_s", "steps_per_s", "n_steps", "run_dir",
-            "worker", "sample", "fork_at", "parent",
-            *FATIGUE_COLUMNS)
+            "worker", "sample", "fork_at", "parent", *FATIGUE_COLUMNS)
 """Names a grid axis cannot have (result columns, the base axis)."""
 
 

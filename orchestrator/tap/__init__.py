@@ -29,5 +29,4 @@ from .target import (
 
 __all__ = ["DEFAULT_ENDPOINT", "CsvSink", "KeyStats", "Tap", "TapInputError", "Target",
            "apply_mode", "build_parser", "channel_keyexpr", "flatten", "fmt_fields",
-           "fmt_value", "is_loopback", "main", "resolve_target", "session_mode",
-           "tap_keyexpr"]
+           "fmt_value", "is_loopback", "main", "resolve_target", "session_mode", "tap_keyexpr"]
