@@ -91,12 +91,12 @@ class FmuPlan:
 
 
 MAX_FMU_BYTES = 1 << 30
-"""The most an FMU may unpack to [bytes] (its members' sizes; more is a zip bomb, #43)."""
+"""The most an FMU may unpack to [bytes] (its members' sizes; more is a zip bomb)."""
 MAX_FMU_MEMBERS = 10_000
 """The most members an FMU may hold (a real one: a description, binaries, resources)."""
 MAX_MEMBER_RATIO = 200
 """The largest inflation of a member over 1 MiB: binaries and XML deflate 2-20 times, zeros
-about 1000 times (#46: 2.3 MB holding 2 GiB of zeros)."""
+about 1000 times."""
 
 
 def _check_members(path: Path, zf: zipfile.ZipFile) -> None:
@@ -362,7 +362,7 @@ class FmuController(Controller):
     # ------------------------------------------------------------------ checkpoints
     def checkpoint_state(self) -> dict[str, Any]:
         """Every corner's FMU state, serialised by the FMU itself (FMI get + serialize FMU
-        state), for a checkpoint (#29 item 6). Raises :class:`cosim.checkpoint.
+        state), for a checkpoint. Raises :class:`cosim.checkpoint.
         CheckpointError` (exit 2) naming the FMU when it cannot, never a partial state."""
         from cosim.checkpoint import CheckpointError
 
@@ -370,15 +370,11 @@ class FmuController(Controller):
         if why:
             raise CheckpointError(why)
         blobs: list[bytes] = []
+        s = "State" if self._fmi3 else "state"  # FMI 3 getFMUState, FMI 2 getFMUstate
         for fmu in self._instances:
-            if self._fmi3:
-                st = fmu.getFMUState()
-                blobs.append(bytes(fmu.serializeFMUState(st)))
-                fmu.freeFMUState(st)
-            else:
-                st = fmu.getFMUstate()
-                blobs.append(bytes(fmu.serializeFMUstate(st)))
-                fmu.freeFMUstate(st)
+            st = getattr(fmu, f"getFMU{s}")()
+            blobs.append(bytes(getattr(fmu, f"serializeFMU{s}")(st)))
+            getattr(fmu, f"freeFMU{s}")(st)
         return {"fmu": self.plan.path.name, "fmi": self.plan.version, "started": bool(blobs),
                 "states": blobs}
 
@@ -400,28 +396,21 @@ class FmuController(Controller):
             return  # checkpointed before its first step: nothing started yet
         if not self._instances:
             self._start(float(t), self._signals(state_inputs))
+        s, de = ("State", "deserialize") if self._fmi3 else ("state", "deSerialize")
         for fmu, blob in zip(self._instances, state["states"], strict=True):
-            if self._fmi3:
-                st = fmu.deserializeFMUState(blob)
-                fmu.setFMUState(st)
-                fmu.freeFMUState(st)
-            else:
-                st = fmu.deSerializeFMUstate(blob)
-                fmu.setFMUstate(st)
-                fmu.freeFMUstate(st)
+            st = getattr(fmu, f"{de}FMU{s}")(blob)
+            getattr(fmu, f"setFMU{s}")(st)
+            getattr(fmu, f"freeFMU{s}")(st)
 
     # ------------------------------------------------------------------ the law
     def _signals(self, state: Mapping[str, Any]) -> list[list[float]]:
         """Input values per corner, in the order of the input map."""
         v_b, v_w, v_rel = self.corners(state)
         cols = []
+        velocities = {"v_b": v_b, "v_w": v_w, "v_rel": v_rel}
         for _, signal in self._in:
-            if signal == "v_b":
-                col = v_b
-            elif signal == "v_w":
-                col = v_w
-            elif signal == "v_rel":
-                col = v_rel
+            if signal in velocities:
+                col = velocities[signal]
             elif signal in BODY_KEYS:
                 col = corner_array(state, signal, 1)[0] * np.ones(self.n)
             else:
