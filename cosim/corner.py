@@ -42,9 +42,6 @@ POINTS = ("lower_bush_front", "lower_bush_rear", "lower_ball_joint", "upper_bush
 OPTIONAL_POINTS = ("bump_stop_pad", "spring_lower", "spring_upper", "wheel_centre")
 """Hardpoints a corner gives when it has the part (bump stop, coil spring) or the frame
 (``wheel_centre`` with ``reference = "vehicle"``)."""
-LOWER_ARM_POINTS = ("lower_bush_front", "lower_bush_rear", "lower_ball_joint", "damper_lower",
-                    "bump_stop_pad", "spring_lower")
-"""Points fixed to the lower arm (the others: body, upright, upper arm, tie rod)."""
 BUSHES = ("lower_front", "lower_rear", "upper_front", "upper_rear")
 MASSES = ("body", "hub", "lower_arm", "upper_arm", "tie_rod")
 

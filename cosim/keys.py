@@ -48,11 +48,6 @@ def key(run: str, node: str, channel: str) -> str:
     return f"{PREFIX}/{run}/{node}/{channel}"
 
 
-def run_keyexpr(run: str) -> str:
-    """Every key of a run."""
-    return f"{PREFIX}/{run}/**"
-
-
 def parse_key(k: str) -> tuple[str, str, str]:
     """``suscosim/<run>/<node>/<channel>`` -> (run, node, channel)."""
     parts = str(k).split("/")

@@ -146,8 +146,3 @@ def to_corner(point_arm: np.ndarray) -> np.ndarray:
 def lever_ball_joint() -> float:
     """Horizontal distance of the ball joint from the pivot axis, L [m]."""
     return float(BALL_JOINT[1])
-
-
-def motion_ratio_damper() -> float:
-    """Damper seat lever / ball-joint lever (before the damper's lean) [-]."""
-    return float(DAMPER_MOUNT[1] / BALL_JOINT[1])

@@ -1,7 +1,5 @@
-"""The run folder: what a run writes where, and reading it back. Every command that reads or
-writes a run folder (the runner, the recorder, ``runs``, ``sweep``, ``report``, ``tap``,
-``fatigue``) goes through this module, :mod:`cosim.journal` (``journal.msgpack``) and
-:mod:`cosim.table` (``table.csv`` / ``table.parquet``).
+"""The run folder: what a run writes where, and reading it back (with :mod:`cosim.journal`
+and :mod:`cosim.table`).
 
 A run folder holds, in the order they are written:
 
@@ -24,13 +22,10 @@ The state of a run (:func:`run_info`) is read from the files alone:
 * ``running``: no ``summary.json`` yet, and the orchestrator process recorded in ``run.json``
   is alive (same host, same pid, same process start time: a reused pid is not taken for it);
 * ``interrupted``: no ``summary.json`` and that process is gone (killed, machine rebooted);
-* ``unknown``: no ``summary.json`` and no way to tell (no ``run.json``: a run from before it
-  existed; or the orchestrator ran on another host).
+* ``unknown``: no ``summary.json`` and no way to tell (no ``run.json``, or another host).
 
-Steps are the last step ``k`` every channel of the journal has reached, read from the
-journal's last 64 KiB only (:func:`cosim.journal.last_step`), against ``run.n_steps``. The
-whole journal is also walked (frames and CRCs only) by the reader ``suscosim export`` uses, so
-both give the same ``records`` and ``skipped_records``.
+Steps: the last step every channel of the journal has reached (:func:`cosim.journal.last_step`),
+against ``run.n_steps``; ``records`` and ``skipped_records`` from a CRC-only scan.
 """
 
 from __future__ import annotations
@@ -48,8 +43,6 @@ SCENARIO_JSON = "scenario.json"
 RUN_JSON = "run.json"
 SUMMARY_JSON = "summary.json"
 JOURNAL = "journal.msgpack"
-TABLE_STEM = "table"
-FATIGUE_DIR = "fatigue"
 STATUSES = ("ok", "failed", "running", "interrupted", "unknown")
 
 
@@ -116,7 +109,7 @@ def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
 
 def mark_run_ended(folder: Path, status: str) -> None:
     """Say in ``run.json`` that the run has ended (``"state": status``, ``"ended"``): written
-    after ``summary.json``, so that run.json no longer says "started" (#30 item 8)."""
+    after ``summary.json``."""
     path = Path(folder) / RUN_JSON
     info = _dict(read_json(path))
     if info is None:
@@ -206,7 +199,7 @@ def run_info(folder: Path, host: str | None = None) -> dict[str, Any]:
         n_steps, steps = info["n_steps"], info["steps"]
         if info["status"] == "ok" and isinstance(n_steps, int) and (steps is None
                                                                     or steps < n_steps):
-            # #30 item 15: an ok run whose journal ends early was cut after the run
+            # an ok run whose journal ends early was cut after the run
             reach = f"ends at step {steps}" if steps is not None else "holds no complete step"
             note = (f"{note}; " if note else "journal: ") + \
                 f"{reach} of {n_steps}: cut short after the run (the table is the record)"

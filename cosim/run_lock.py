@@ -1,11 +1,8 @@
 """One run per run folder (a lock file), and one live run per run id on a shared bus.
 
 ``RUN_DIR/.run.lock`` is locked with ``flock`` (exclusive, non-blocking) for the whole run
-and holds the pid of the process that holds it. A second run given the same ``--out`` (or the
-same run id, hence the same default folder) finds it locked and is refused with exit 2,
-naming the pid, before it writes anything: two runs never write one journal. The lock is
-the kernel's: it goes with the process, so a killed run leaves no stale lock (the file
-stays, empty of meaning, and is taken over by the next run).
+and holds the pid of its holder: a second run on the same folder is refused with exit 2,
+naming the pid, before it writes anything. The lock goes with the process (no stale lock).
 """
 
 from __future__ import annotations
@@ -79,9 +76,8 @@ class RunLock:
 
 SETTLE_S = 1.0
 """How long :func:`live_nodes` looks for a run's liveliness tokens on a session just opened
-[s]. A peer session's first liveliness query through a router answers ``[]`` at once, before
-the router has told it of the tokens it knows (measured on 2 cores: 3-4 ms idle, 4 of 5
-first queries empty; ~0.3 s under load, issue #30 item 13): one query missed a live run."""
+[s]: a first query through a router can answer ``[]`` before the router has told the session
+of the tokens it knows (up to ~0.3 s under load)."""
 
 POLL_S = 0.05
 """Time between two liveliness queries within :data:`SETTLE_S` [s]."""

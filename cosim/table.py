@@ -251,9 +251,3 @@ def export_target(folder: str | Path, rows: int, damaged: bool) -> tuple[str, st
     if before is not None and before > rows:
         return RECOVERED_STEM, f"the table already there has more rows ({before} > {rows})"
     return "table", ""
-
-
-def export_safely(table: Table, folder: str | Path, damaged: bool) -> tuple[dict[str, str], str]:
-    """:func:`export` to :func:`export_target`'s place: (paths written, why alongside)."""
-    stem, why = export_target(folder, len(table["t"]), damaged)
-    return export(table, folder, stem), why
