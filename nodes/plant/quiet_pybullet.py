@@ -1,14 +1,10 @@
 """``import pybullet`` without its banner.
 
-The PyBullet module prints ``pybullet build time: <date>`` from C when it is first imported
-(this build: on fd 2, stderr; others print it on fd 1), so every ``suscosim run`` showed it
-among its own output (#30 item 8). Here fds 1 and 2 point at the null device for the length
-of the import; C's stdio buffers are flushed before the descriptors are given back (when
-stdout is a pipe, C buffers the line and would otherwise write it at exit, to the restored
-descriptor). Python's own ``sys.stdout`` and ``sys.stderr`` are flushed before, so nothing
-of ours is lost; an import error is raised after the descriptors are back. Import ``p`` from
-here, or import this module before anything that imports pybullet (the plant models do,
-:mod:`.model`).
+PyBullet prints ``pybullet build time: <date>`` from C on its first import (on fd 2 or fd 1).
+Here fds 1 and 2 point at the null device for the import, C's stdio buffers flushed before
+they are given back (a piped stdout buffers the line until exit); Python's streams are
+flushed first, and an import error is raised after the descriptors are back. Import ``p``
+from here, or this module before anything that imports pybullet (:mod:`.model` does).
 """
 
 from __future__ import annotations

@@ -1,6 +1,5 @@
 """The steps a channel has delivered, as sorted disjoint ranges: memory by the number of
-holes, not the number of steps (#32: a Python set of every step index per channel grew by
-~0.1 kB a step and channel)."""
+holes, not the number of steps."""
 
 from __future__ import annotations
 

@@ -111,16 +111,14 @@ def _check_physical(path: str | Path, z: np.ndarray, column: int | str) -> None:
     :data:`MAX_STEP_M` (``column``: the file's column, 1-based, or an MDF channel's quoted
     name; the line is its data row)."""
     relief = np.abs(z - z[0])
-    bad = np.flatnonzero(relief > MAX_RELIEF_M)
-    if bad.size:
+    if (bad := np.flatnonzero(relief > MAX_RELIEF_M)).size:
         i = int(bad[0])
         raise InputFileError(str(path), f"column {column}: height {float(z[i])!r} m is "
                                    f"{relief[i]:.4g} m from the first sample's (at most "
                                    f"{MAX_RELIEF_M:g} m: not a road profile; heights are in "
                                    "metres)")
     steps = np.abs(np.diff(z))
-    bad = np.flatnonzero(steps > MAX_STEP_M)
-    if bad.size:
+    if (bad := np.flatnonzero(steps > MAX_STEP_M)).size:
         i = int(bad[0])
         raise InputFileError(str(path), f"column {column}: the height changes by {steps[i]:.4g} m "
                                    f"between data rows {i + 1} and {i + 2} (at most "
@@ -135,7 +133,6 @@ def csv_road(path: str | Path, speed: float, length: float | None = None,
     x = x - x[0]
     if zero_start:
         zl, zr = zl - zl[0], zr - zr[0]
-    if length is None:
-        length = float(x[-1])
-    return SampledRoad(x=x, z_left=zl, z_right=zr, speed=speed, length=length,
+    return SampledRoad(x=x, z_left=zl, z_right=zr, speed=speed,
+                       length=float(x[-1]) if length is None else length,
                        name=f"csv:{Path(path).name}")
