@@ -1,31 +1,18 @@
 """The typed channel schema, declared once: every data channel's fields, units and bounds.
 
-From :data:`CHANNELS` the rest is derived:
+From :data:`CHANNELS` derive: the wire codec's plausibility checks (:mod:`cosim.wire`: a
+producer refuses to publish what a consumer would reject, so a diverged model ends the run
+naming the field), the fields a consumer requires (:func:`required`), a force node's coupling
+fields (:func:`coupling`), a node's outputs (:func:`writes`), the docs' channel table
+(:func:`doc_table`, docs/cosim.md; a test keeps them equal) and the table's column names
+(:func:`columns`).
 
-* the wire codec's plausibility checks (:func:`cosim.wire.decode` with a channel, and
-  :meth:`cosim.participant.Participant.publish`): a data message of a declared channel is
-  decoded by a compiled msgspec decoder whose numbers are bounded by the channel's
-  :attr:`Channel.limit` (NaN fails every bound; +-inf and e.g. 1e308 fail a finite one), its
-  non-negative fields checked after it; a producer refuses to publish what a consumer would
-  reject (a diverged model ends the run naming the field, rather than filling the table with
-  NaN);
-* the fields a consumer requires (:func:`required`) and the coupling fields a force node
-  provides (:func:`coupling`, the registry's ``provides``), the registry's output channels
-  (:func:`writes`);
-* the docs' channel table (:func:`doc_table`, in docs/cosim.md; a test keeps them equal) and
-  the recorder's column names (``node/channel/field``, :func:`columns`).
-
-Bounds. The thesis fixes none: they are plausibility limits, chosen far outside anything a
-road vehicle's suspension produces, so that they never reject a real run and always reject
-garbage. The channel limit is ``|x| <= 1e9`` in SI units (a force of 1 GN, a displacement of
-1e6 km, a stiffness of 1e9 N/m: the Chapter 6 corner's largest, the bump stop at full
-compression, is below 1e6 N/m and 1e5 N); fields declared ``nonneg`` must be ``>= 0``
-(DESIGN.md: the tyre force is compressive-positive and never negative). Fields a channel
-does not declare (a law's extras, a user's node's outputs, a channel not declared here) are
-type-checked only (numbers or lists of them): a law's extra may be NaN by design (TSS3's
-``F_demand`` where it demands nothing). The compiled decoder bounds every number of a
-message; a message it refuses is taken after all when only undeclared fields were out of
-bounds (the slow path, taken only by such messages).
+Bounds. The thesis fixes none: they are plausibility limits far outside anything a road
+vehicle's suspension produces. The channel limit is ``|x| <= 1e9`` in SI units (the Chapter 6
+corner's largest stiffness, the bump stop at full compression, is below 1e6 N/m and 1e5 N);
+``nonneg`` fields must be ``>= 0`` (DESIGN.md: the tyre force is compressive-positive).
+Undeclared fields (a law's extras, a user's node's outputs) are type-checked only: a law's
+extra may be NaN by design (TSS3's ``F_demand`` where it demands nothing).
 
 Per-corner fields are a number for a quarter car and a list of 4 (FL, FR, RL, RR) for a
 full vehicle (:data:`cosim.channels.CORNERS`).
@@ -50,9 +37,8 @@ are undeclared: out of it, they take the slow path and are type-checked only).""
 @dataclass(frozen=True)
 class Field:
     """One field of a channel: ``name``, SI ``unit``, ``meaning``; ``nonneg``: >= 0;
-    ``required``: a message of the channel without it is rejected by the consumers that
-    couple through it; ``models``: the plant models (or nodes) that publish it, for the
-    docs ("" : all)."""
+    ``required``: by the consumers that couple through it; ``models``: who publishes it
+    ("": all)."""
 
     name: str
     unit: str

@@ -1,20 +1,14 @@
-"""A run's table written as its rows complete, in bounded memory (#32, #28 item 5).
+"""A run's table written as its rows complete, in bounded memory.
 
 The table is the one :func:`cosim.table.build_table` makes from a journal, column for column
 and bit for bit: ``k``, ``t`` [s], then ``<node>/<channel>/<field>`` (a list field becomes
 ``<field>[i]``), channels sorted by name and each channel's fields sorted; a row is a step
 every channel delivered, ``t`` that of the channel heard first; the first message of a step
-counts. :class:`TableWriter` takes the messages as they come (the recorder's feed, or a
-journal streamed by ``suscosim export``) and holds only the steps not yet complete: a row is
-written as soon as every channel has given its step, ``table.csv`` appended (``repr`` floats,
-CRLF, as :func:`cosim.table.write_csv`) and ``table.parquet`` in row groups of
-:data:`GROUP_ROWS` rows (pyarrow's ``ParquetWriter``), both beside their place until
-:meth:`TableWriter.close` renames them over it. Statistics are gathered chunk by chunk.
-
-What a streamed table leaves out that a table rebuilt in memory would keep: a step completed
-*after* a later step was written (its channels' records out of their own order). A producer's
-records reach the recorder in order (one reliable Zenoh publisher each) and a journal keeps
-that order, so this does not happen in a run; such a step is counted in ``late``.
+counts. :class:`TableWriter` holds only the steps not yet complete: a row is written once
+every channel has given its step, to ``table.csv`` (as :func:`cosim.table.write_csv`) and
+``table.parquet`` (row groups of :data:`GROUP_ROWS`), both beside their place until
+:meth:`TableWriter.close` renames them over it. A step completed *after* a later row was
+written (records out of their own order: never in a run) is left out, counted in ``late``.
 
 A channel's layout (its fields, each a number or a list of one length) is fixed by its first
 message, or given (``layout``: what :func:`journal_layout` finds by majority in a journal,
@@ -121,9 +115,7 @@ class TableWriter:
     def add(self, channel: str, k: int, t: float, d: Mapping[str, Any]) -> str | None:
         """Take ``channel``'s message of step ``k``: None when it is valid for the table, else
         why it is left out (not a channel of the table, another layout, a step already
-        given). A valid message of a step at or before the last row written cannot make a
-        row any more: it is taken and counted in :attr:`late` (a channel's records out of
-        their own order; never in a run)."""
+        given); one of a step at or before the last row written is counted in :attr:`late`."""
         ci = self._index.get(channel)
         if ci is None:
             return f"channel {channel} is not one of the table's"

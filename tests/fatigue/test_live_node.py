@@ -10,30 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cosim.load_blocks import LoadStreamer
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.run_dir import read_table, track_length
 from nodes.fatigue.worker import analyse
 from tests.conftest import ROOT, suscosim
 
 REALISTIC = ROOT / "scenarios" / "ch4_qvm_realistic_bump_pothole.toml"
-
-
-def test_load_streamer_cuts_ordered_gapless_blocks_from_any_arrival_order() -> None:
-    s = LoadStreamer(block_steps=3)
-    order = [1, 0, 4, 2, 2, 3, 6, 5]  # out of order, one duplicate
-    out = []
-    for k in order:
-        s.add(k, 0.01 * k, {"a": float(k) if k != 2 else 2.0, "b": -float(k)})
-        out += s.blocks(last_k=None)
-    assert [b["k0"] for b in out] == [0, 3]
-    assert out[0]["a"] == [0.0, 1.0, 2.0] and out[1]["b"] == [-3.0, -4.0, -5.0]
-    assert s.blocks(last_k=7) == []  # step 7 not there yet: no final block
-    s.add(7, 0.07, {"a": 7.0, "b": -7.0})
-    last = s.blocks(last_k=7)
-    assert [b["k0"] for b in last] == [6] and last[0]["t"] == [0.06, 0.07]
-    s.add(3, 9.9, {"a": 99.0, "b": 0.0})  # a late duplicate of a sent step is ignored
-    assert s.pending == {}
 
 
 def _damage_csv(path: Path) -> dict[int, float]:
@@ -97,27 +79,6 @@ def test_live_fatigue_off_and_refused_on_a_plant_without_arm_loads(tmp_path: Pat
                    "--out", str(tmp_path / "bad"), "--set", "fatigue.live=true")
     assert bad.returncode == 2
     assert "fatigue.live" in bad.stderr and "arm loads" in bad.stderr
-
-
-def test_a_block_is_read_back_as_written_and_a_bad_one_is_named():
-    import pytest
-
-    from cosim.load_blocks import block_loads, load_fields
-
-    s = LoadStreamer(block_steps=2)
-    for k in range(3):
-        s.add(k, 0.1 * k, {"ball_joint_z": 10.0 * k, "spring_m": -1.0 * k})
-    blocks = s.blocks(last_k=2)
-    assert [b["k0"] for b in blocks] == [0, 2]
-    fields = load_fields(blocks[0])
-    assert fields == ["ball_joint_z", "spring_m"]
-    t, loads = block_loads(blocks[0], fields)
-    assert t.tolist() == [0.0, 0.1] and loads.tolist() == [[0.0, -0.0], [10.0, -1.0]]
-    with pytest.raises(ValueError, match="no field 'spring_m'"):
-        block_loads({"k0": 0, "t": [0.0], "ball_joint_z": [1.0]}, fields)
-    with pytest.raises(ValueError, match="2 rows for 1 times"):
-        block_loads({"k0": 0, "t": [0.0], "ball_joint_z": [1.0, 2.0], "spring_m": [0, 0]},
-                    fields)
 
 
 def test_a_node_computing_a_long_block_keeps_telling_the_orchestrator() -> None:

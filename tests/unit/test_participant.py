@@ -5,13 +5,11 @@ from __future__ import annotations
 import threading
 import time
 
-import msgpack
 import pytest
 
 from cosim import keys
 from cosim.auth import RunKey
 from cosim.errors import RunError, WireError
-from cosim.load_blocks import wire_pieces
 from cosim.participant import Participant
 from cosim.wire import MAX_MESSAGE_BYTES, decode, encode, encode_step
 from tests.memory_bus import MemoryBus
@@ -105,24 +103,6 @@ def test_records_batches_stay_under_the_message_limit() -> None:
     with pytest.raises(RunError, match="plant/arm.*bytes"):
         part.publish("arm", 5, 5e-3, {"x": [1.0] * 10_000})
     part.close()
-
-
-def test_load_blocks_are_cut_into_pieces_that_fit_one_message() -> None:
-    n, names = 500, [f"load_{i}" for i in range(13)]
-    blk = {"k0": 1000, "t": [1e-3 * (1000 + i) for i in range(n)],
-           **{f: [float(i * j) for i in range(n)] for j, f in enumerate(names)}}
-    pieces = wire_pieces(blk)
-    assert len(pieces) > 1
-    for p in pieces:
-        raw = encode("data", p["k0"] + len(p["t"]) - 1, p["t"][-1], p)
-        assert len(raw) <= MAX_MESSAGE_BYTES
-    assert [p["k0"] for p in pieces] == [1000 + sum(len(q["t"]) for q in pieces[:i])
-                                         for i in range(len(pieces))]
-    for f in ["t", *names]:
-        assert sum((p[f] for p in pieces), []) == blk[f]
-    small = {"k0": 0, "t": [0.0], "a": [1.0]}
-    assert wire_pieces(small) == [small]
-    assert msgpack.unpackb(encode("data", 0, 0.0, small))["d"]["a"] == [1.0]
 
 
 def test_finish_keeps_draining_inputs_until_the_orchestrator_closes_the_run() -> None:
