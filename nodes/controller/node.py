@@ -38,7 +38,7 @@ class Controller:
                                     scenario["run"]["h"])
         self._restore: dict[str, Any] | None = None
 
-    # ---- checkpoints (issue #29; the shell calls these, cosim.stepped) -------------------
+    # ---- checkpoints (the shell calls these, cosim.stepped) -----------------------------
     def checkpoint_refusal(self) -> str | None:
         """Why this law's state cannot be checkpointed (an FMU without FMI state
         serialisation), or None."""

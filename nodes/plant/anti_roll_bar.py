@@ -1,4 +1,4 @@
-"""Anti-roll bars of the four-corner double-wishbone vehicle (#31): one per axle, a torsion
+"""Anti-roll bars of the four-corner double-wishbone vehicle: one per axle, a torsion
 bar across the body whose ends turn with the two lower arms of the axle.
 
 **Data.** Each bar is given by the roll stiffness it adds at the wheels, K_bar [N m/rad of

@@ -1,4 +1,4 @@
-"""A driver for the four-corner vehicle (#31 item 3): a speed profile held by wheel torques
+"""A driver for the four-corner vehicle: a speed profile held by wheel torques
 with a brake balance, and a steering input (open loop, or a yaw-rate follower for a constant
 radius). Pure numerics, no I/O, no PyBullet: it maps what the driver sees (time, the body's
 forward speed u, its yaw rate r) to the plant's inputs (the torque on each wheel's spin joint
@@ -20,8 +20,7 @@ positive. Or a constant ``radius`` R [m] (left turn positive): the yaw rate want
 r_ref = u / R, the steer the Ackermann angle L / R plus a PI on the yaw-rate error
 (k_p = 0.1 s, k_i = 0.5, ours: the understeer gradient is what the integral finds).
 Either way the steer moves at most ``steer_rate`` (0.5 rad/s at the wheels, ~8 rad/s at a
-16:1 hand wheel, ours: a brisk driver): a step of the Ackermann angle at t = 0 made the rack
-jump 11 mm in one substep and the tie rods' impulse put 1.6 MN on the ball joints (measured).
+16:1 hand wheel, ours: a brisk driver; an unlimited step put 1.6 MN on the ball joints).
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The four-corner vehicle, its 3-D tyres, a passive damper and the driver stepped together in
-one process, in the co-simulation's exchange (#31 items 2-3): every communication step h the
+one process, in the co-simulation's exchange: every communication step h the
 tyre forces, damper forces and driver's inputs are computed from the plant's state at t_k and
 held over the step's substeps, as the distributed run's sequential exchange with the ``hold``
 coupling does. Pure numerics (no bus, no files): the bars' tests and studies use it; a run

@@ -1,4 +1,4 @@
-"""The four-corner vehicle's wheels on a 3-D tyre and its driver's inputs (#31 items 2-3):
+"""The four-corner vehicle's wheels on a 3-D tyre and its driver's inputs:
 the spinning wheel's mass and inertia, the contact frame and wheel kinematics the tyre/road
 node takes, the road-plane tyre forces and the wheel torques and rack travel the plant
 applies (a mixin of :class:`.full_vehicle_dw.FullVehicleDoubleWishbone`, which owns the

@@ -56,7 +56,7 @@ class PlantStepper:
 
     # ---- checkpoints: {"model", "before", "prev", "st"} at the start of step k -----------
     def checkpoint(self) -> dict[str, Any]:
-        """The whole state at the start of step :attr:`k` (issue #29)."""
+        """The whole state at the start of step :attr:`k`."""
         return {"model": self.model.checkpoint_state(), "before": self.before,
                 "prev": self.prev, "st": self.st}
 
@@ -85,7 +85,7 @@ class PlantStepper:
         model, st, ctrl = self.model, self.st, self.ctrl
         seen = self.prev if self.settings.lag else st  # what the forces were computed from
         forces = {f: m.array(f) for node, m in msgs.items() for f in self.provides[node]}
-        road = msgs.get(ch.TYRE_ROAD)  # a 3-D tyre (#31): Fx, Fy, Mz too
+        road = msgs.get(ch.TYRE_ROAD)  # a 3-D tyre: Fx, Fy, Mz too
         if road is not None and "Fx" in road.d and hasattr(model, "set_tyre_forces"):
             model.set_tyre_forces(road.array("Fx"), road.array("Fy"), road.array("Mz"))
         now = StepInputs(F_t=forces["F_t"], k_t=forces["k_t"], F_d=forces["F_d"],

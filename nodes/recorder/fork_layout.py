@@ -1,5 +1,4 @@
-"""The table's layout across a fork whose controller starts afresh (issue #29 item 5; pure,
-no I/O).
+"""The table's layout across a fork whose controller starts afresh (pure, no I/O).
 
 A fork with another law (``suscosim run --fork RUN@T --set controller.law=...``) records the
 parent's steps < k and its own steps >= k in one table, but the two laws may publish other

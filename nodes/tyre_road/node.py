@@ -6,7 +6,7 @@ step k-1 in the parallel one), evaluates the road height at each contact point o
 publishes ``force``: F_t [N] (absolute, compressive-positive, >= 0), k_t = dF_t/d(z_g - z_w)
 [N/m] for the plant's coupling, z_g [m] (road height at the contact centre).
 
-With ``[tyre] model = "magic_formula"`` (the four-corner vehicle, #31): F_t from the point
+With ``[tyre] model = "magic_formula"`` (the four-corner vehicle): F_t from the point
 contact as above, and the Magic Formula's road-plane Fx, Fy [N], Mz [N m] and the slips
 kappa, alpha from the wheel kinematics the plant publishes (:mod:`.tyre_3d`); the road is
 read where the wheels are: the vehicle moves itself, the profile is laid along the path its
@@ -38,12 +38,9 @@ def wheel_geometry(info: dict[str, Any]) -> dict[str, Any]:
     """Static tyre load W [N] and wheel path facts per corner, from the plant's facts."""
     W = np.atleast_1d(np.asarray(info["static_tyre_load"], dtype=float))
     n = W.size
-    return {
-        "W": W,
-        "wheel_x": np.asarray(info.get("wheel_x", [0.0] * n), dtype=float),
-        "wheel_track": info.get("wheel_track", [1] * n),
-        "corner_names": info.get("corner_names"),
-    }
+    return {"W": W, "wheel_x": np.asarray(info.get("wheel_x", [0.0] * n), dtype=float),
+            "wheel_track": info.get("wheel_track", [1] * n),
+            "corner_names": info.get("corner_names")}
 
 
 class TyreRoad:
@@ -70,12 +67,10 @@ class TyreRoad:
 
     STATE_ATTRS = ("_origin", "_u", "tyre", "mf")
     """What changes as the run goes (the Magic Formula's relaxation states, the road path's
-    origin and the wheels' last stations);
-    the road, the wheel geometry and the step are rebuilt the same from the scenario."""
+    origin, the wheels' last stations); the rest is rebuilt the same from the scenario."""
 
     def checkpoint_state(self) -> dict[str, Any]:
-        """The node's state at a step boundary (issue #29 item 4): plain data
-        (:mod:`cosim.plaindata`), as its checkpoint file holds it."""
+        """The node's state at a step boundary, plain data (:mod:`cosim.plaindata`)."""
         return {k: copy.deepcopy(getattr(self, k)) for k in self.STATE_ATTRS}
 
     def restore_state(self, state: Mapping[str, Any]) -> None:

@@ -42,7 +42,7 @@ def _check_data_reference(path: str) -> None:
     """A ``$ROAD_CRG_FILE`` block (the data in another file) must name a regular file inside
     the CRG file's folder, as written: pyopencrg expands ``$VARIABLES`` in it (an environment
     variable would leak into the error) and reads any absolute path, so both are refused
-    here, before pyopencrg sees the file (issue #46)."""
+    here, before pyopencrg sees the file."""
     from pyopencrg.io import cut_block  # type: ignore[import-untyped]
 
     lines: list[str] = []

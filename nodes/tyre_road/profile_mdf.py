@@ -61,7 +61,7 @@ def read_profile_mdf(path: str | Path, left: str, right: str | None = None,
         i = int(np.argmax(np.diff(x) <= 0)) + 1
         raise InputFileError(path, f"distance must increase strictly: {x[i]:g} m after "
                                    f"{x[i - 1]:g} m (sample {i})")
-    for name, z in ((left, zl), (right, zr)):  # the CSV profile's bounds (#46: 1e308 m)
+    for name, z in ((left, zl), (right, zr)):  # the CSV profile's bounds
         if name:
             _check_physical(path, z, repr(name))
     return x, zl, zr

@@ -1,4 +1,4 @@
-"""The 3-D tyre of the four-corner vehicle (#31 item 2): the Magic Formula's road-plane forces
+"""The 3-D tyre of the four-corner vehicle: the Magic Formula's road-plane forces
 from the wheel's kinematics, beside the vertical force of the point-contact tyre. Pure
 numerics: no I/O (the tyre/road node and :mod:`nodes.plant.full_vehicle_dw_sim` call it).
 
