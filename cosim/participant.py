@@ -241,6 +241,13 @@ class Participant:
             self.check_orchestrator()
             self.ctl("progress", k, t, rejected=self.rejected)
 
+    def poll_control(self) -> None:
+        """Handle the control messages that came (RunError on an abort) and check that the
+        orchestrator is there: for a node waiting on something other than an input
+        (:class:`cosim.sink_window.SinkWindow`)."""
+        self._drain_inbox()
+        self.check_orchestrator()
+
     def reject(self, tag: Channel, why: str) -> None:
         """Count and log (the first ten, then every thousandth) a rejected message."""
         self.rejected += 1

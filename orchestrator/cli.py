@@ -40,7 +40,9 @@ def _print_summary(summary: dict) -> None:
     if summary.get("sinks"):  # buffered, never waited for: how far behind they fell
         print("  sinks (buffered): " + ", ".join(
             f"{n} lagged <= {v['max_lag_steps']} steps, {v['drain_s']:.2f} s after the chain"
-            for n, v in summary["sinks"].items()))
+            for n, v in summary["sinks"].items())
+            + (f"; the chain waited {summary['sink_window_held_s']:.2f} s for them "
+               "(run.sink_window_s)" if summary.get("sink_window_held_s") else ""))
     if summary.get("inprocess"):
         print(f"  in-process: the sinks took {summary['inprocess']['sink_s']:.2f} s of the "
               f"steps; the chain alone {summary['inprocess']['chain_steps_per_s']:.0f} "

@@ -362,6 +362,8 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
     summary = _summary(scenario, result, time.monotonic() - t0, rec, "ok")
     summary.update(_transport(nodes.local, lowlatency))
     summary["sinks"] = _sink_lags(result)
+    if ch.PLANT in result.nodes:  # the chain's wait for a sink beyond run.sink_window_s
+        summary["sink_window_held_s"] = result.nodes[ch.PLANT].result.get("sink_held_s", 0.0)
     if ch.FATIGUE in result.nodes:  # the live fatigue node's headline (files in fatigue/)
         summary["fatigue"] = {k: v for k, v in result.nodes[ch.FATIGUE].result.items()
                               if k != "rejected"}

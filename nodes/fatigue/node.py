@@ -110,9 +110,10 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         except ValueError as exc:  # a step already taken (a duplicate)
             part.reject(tr.tag, str(exc))
             return
+        if tr is main:  # the steps it has taken (rate-limited): the plant's window
+            part.progress(k, t)  # counts them (cosim/sink_window.py)
         if computed and tr is main:
             assert tr.live is not None
-            part.progress(k, t)
             if not tr.done and now - last_report >= REPORT_PERIOD_S:
                 last_report = now  # residue closed: the life if the run ended here
                 _report(part, tr.live.result(), k, tr.t_last, sink.length_m * sink.share())
@@ -123,7 +124,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     while not sink.done:
         got = early.pop(0) if early else listener.poll(timeout=0.05)  # raises on abort
         now = time.monotonic()
-        if got is not None:
+        if got is None:
+            part.progress(main.next_k - 1, main.t_last)  # (rate-limited) idle: as far as it got
+        else:
             for name, raw in inner(got.msg):  # the plant's messages as it published them
                 tr = sink.by_channel.get(name)
                 if tr is None:

@@ -18,6 +18,7 @@ from cosim.errors import RunError
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
 from cosim.run_settings import RunSettings
+from cosim.sink_window import SinkWindow, window_steps
 
 from .models import build_plant_model
 from .stepper import PlantStepper
@@ -42,6 +43,10 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             raise RunError("plant: run.h = 'auto' needs the sequential exchange and no "
                            "checkpoints (preflight should have said so)")
         plant = PlantStepper(model, settings, int(start["n_steps"]), plan.start_k)
+        window_s = float(scenario["run"].get("sink_window_s", 0.0) or 0.0)
+        sinks = SinkWindow(part, [n for n in scenario["run"]["nodes"]
+                                  if nk.off_critical_path(n)],
+                           window_steps(window_s, settings.h), plan.start_k)
         later: list[tuple[str, int, float, dict]] = []
         saved = plan.restored()
         if saved is not None:  # a resumed run: the state at the start of step start_k
@@ -52,6 +57,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 part.publish(ch.STATE, k0, k0 * settings.h, plant.prev, record=False)
         while True:
             k, t, st = plant.begin()
+            sinks.hold(k)  # a sink more than run.sink_window_s behind: wait for it
             part.publish(ch.STATE, k, t, st)
             part.send()  # one message a step (#28): state k, the response and loads of k - 1
             # last step's response and loads: encoded while the force nodes compute, off the
@@ -74,7 +80,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 later.clear()
                 part.flush_records()
                 plan.save(part, plant.k, plant.checkpoint())
-        part.finish(k, t)
+        part.finish(k, t, sink_held_s=sinks.held_s)
     finally:
         model.close()
 

@@ -184,6 +184,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 rec.release_early()
                 last_data = time.monotonic()
             if batch is None:
+                if rec.n_steps is not None and rec.expected:  # (rate-limited) the plant may
+                    k = rec.done_k()  # be holding the chain for it (cosim/sink_window.py)
+                    part.progress(k, k * run_cfg["h"])
                 continue
             feed(batch)
             if rec.gap is not None:
