@@ -15,8 +15,9 @@ bands in Hz, never bin indices.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 from scipy.integrate import trapezoid
@@ -253,44 +254,67 @@ def metric_values(
     """
     t = np.asarray(table["t"], dtype=float)
     sample_rate(t)  # a non-uniform time column fails here, with its message
+    cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # the array kept: its id stays its
+
+    def a5(a: np.ndarray) -> np.ndarray:  # resampled once per signal
+        if id(a) not in cache:
+            cache[id(a)] = (a, resample_to(t, a, fs_out))
+        return cache[id(a)][1]
+
+    return assemble(lambda name: columns(table, name),
+                    lambda a, band: periodogram_band_rms(a5(a), fs_out, band), rms,
+                    lambda a: iso2631_wk_weighted_rms(a5(a), fs_out),
+                    lambda a: rms(jerk(a5(a), fs_out)),
+                    lambda b, w: (working_space(b, w), rms(suspension_deflection(b, w))),
+                    lambda F: rms(dynamic_tyre_load(F)), rms, band_hz)
+
+
+def assemble(series: Callable[[str], list[tuple[str, Any]]],
+             band_rms: Callable[[Any, tuple[float, float]], float],
+             full_rms: Callable[[Any], float], wk_rms: Callable[[Any], float],
+             jerk_rms: Callable[[Any], float],
+             deflection: Callable[[Any, Any], tuple[float, float]],
+             dtl_rms: Callable[[Any], float], f_d_rms: Callable[[Any], float],
+             band_hz: tuple[float, float]) -> dict[str, tuple[float, str, str]]:
+    """The keys, units and labels of :func:`metric_values` from the estimators of a signal
+    ``s`` of ``series(column base)`` = ``[(label, s)]`` (whole arrays here, streamed ones in
+    :mod:`.ride_stream`): ``deflection(z_b, z_w)`` = (working space, RMS) [m]."""
+    R = "plant/response/"
     f1, f2 = (float(b) for b in band_hz)
     m: dict[str, tuple[float, str, str]] = {}
-    for lab, a in columns(table, "plant/response/a_b"):
-        a5 = resample_to(t, a, fs_out)  # once per signal; every metric below but the full band
-        m[f"a_b{lab}_rms"] = (periodogram_band_rms(a5, fs_out, (f1, f2)), "m/s2",
+    for lab, a in series(f"{R}a_b"):
+        m[f"a_b{lab}_rms"] = (band_rms(a, (f1, f2)), "m/s2",
                               f"a_b{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
         if (f1, f2) != BAND_16:
-            m[f"a_b{lab}_rms_0_16"] = (periodogram_band_rms(a5, fs_out, BAND_16), "m/s2",
+            m[f"a_b{lab}_rms_0_16"] = (band_rms(a, BAND_16), "m/s2",
                                        f"a_b{lab} RMS 0-16 Hz [m/s2]")
-        m[f"a_b{lab}_rms_full"] = (rms(a), "m/s2", f"a_b{lab} RMS full band [m/s2]")
-        m[f"a_b{lab}_wk_rms"] = (iso2631_wk_weighted_rms(a5, fs_out), "m/s2",
-                                 f"a_b{lab} Wk RMS [m/s2]")
-        m[f"jerk_b{lab}_rms"] = (rms(jerk(a5, fs_out)), "m/s3", f"jerk_b{lab} RMS [m/s3]")
-    for lab, a in columns(table, "plant/response/a_w"):
-        m[f"a_w{lab}_rms"] = (thesis_band_rms(t, a, (f1, f2), fs_out), "m/s2",
+        m[f"a_b{lab}_rms_full"] = (full_rms(a), "m/s2", f"a_b{lab} RMS full band [m/s2]")
+        m[f"a_b{lab}_wk_rms"] = (wk_rms(a), "m/s2", f"a_b{lab} Wk RMS [m/s2]")
+        m[f"jerk_b{lab}_rms"] = (jerk_rms(a), "m/s3", f"jerk_b{lab} RMS [m/s3]")
+    for lab, a in series(f"{R}a_w"):
+        m[f"a_w{lab}_rms"] = (band_rms(a, (f1, f2)), "m/s2",
                               f"a_w{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
-        m[f"a_w{lab}_rms_full"] = (rms(a), "m/s2", f"a_w{lab} RMS full band [m/s2]")
+        m[f"a_w{lab}_rms_full"] = (full_rms(a), "m/s2", f"a_w{lab} RMS full band [m/s2]")
     for name in ARM_ACCEL_FIELDS:
-        for lab, a in columns(table, f"plant/response/{name}"):
-            m[f"{name}{lab}_rms"] = (thesis_band_rms(t, a, (f1, f2), fs_out), "m/s2",
+        for lab, a in series(f"{R}{name}"):
+            m[f"{name}{lab}_rms"] = (band_rms(a, (f1, f2)), "m/s2",
                                      f"{name}{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
     for name in ROTATION_FIELDS:
-        for lab, a in columns(table, f"plant/response/{name}"):
-            a5 = resample_to(t, a, fs_out)
-            m[f"{name}{lab}_rms"] = (periodogram_band_rms(a5, fs_out, (f1, f2)), "rad/s2",
+        for lab, a in series(f"{R}{name}"):
+            m[f"{name}{lab}_rms"] = (band_rms(a, (f1, f2)), "rad/s2",
                                      f"{name}{lab} RMS {f1:g}-{f2:g} Hz [rad/s2]")
             if (f1, f2) != BAND_16:
-                m[f"{name}{lab}_rms_0_16"] = (periodogram_band_rms(a5, fs_out, BAND_16),
-                                              "rad/s2", f"{name}{lab} RMS 0-16 Hz [rad/s2]")
-    zb, zw = columns(table, "plant/state/z_b"), columns(table, "plant/state/z_w")
+                m[f"{name}{lab}_rms_0_16"] = (band_rms(a, BAND_16), "rad/s2",
+                                              f"{name}{lab} RMS 0-16 Hz [rad/s2]")
+    zb, zw = series("plant/state/z_b"), series("plant/state/z_w")
     for (lab, b), (_, w) in zip(zb, zw, strict=False):
-        m[f"sws{lab}"] = (1e3 * working_space(b, w), "mm", f"SWS{lab} [mm]")
-        m[f"defl{lab}_rms"] = (1e3 * rms(suspension_deflection(b, w)), "mm",
-                               f"defl{lab} RMS [mm]")
-    for lab, F in columns(table, "tyre_road/force/F_t"):
-        m[f"dtl{lab}_rms"] = (rms(dynamic_tyre_load(F)), "N", f"DTL{lab} RMS [N]")
-    for lab, F in columns(table, "controller/force/F_d"):
-        m[f"f_d{lab}_rms"] = (rms(F), "N", f"F_d{lab} RMS [N]")
+        sws, defl_rms = deflection(b, w)
+        m[f"sws{lab}"] = (1e3 * sws, "mm", f"SWS{lab} [mm]")
+        m[f"defl{lab}_rms"] = (1e3 * defl_rms, "mm", f"defl{lab} RMS [mm]")
+    for lab, F in series("tyre_road/force/F_t"):
+        m[f"dtl{lab}_rms"] = (dtl_rms(F), "N", f"DTL{lab} RMS [N]")
+    for lab, F in series("controller/force/F_d"):
+        m[f"f_d{lab}_rms"] = (f_d_rms(F), "N", f"F_d{lab} RMS [N]")
     return m
 
 

@@ -365,44 +365,22 @@ def streamed_metric_values(
     if seen != n_rows:
         raise ValueError(f"the table gave {seen} rows of the {n_rows} announced")
 
-    m: dict[str, tuple[float, str, str]] = {}
-    for lab, col in _series(names, f"{R}a_b"):
-        s = band[col]
-        assert s.wk is not None and s.jerk is not None
-        m[f"a_b{lab}_rms"] = (s.pg.band_rms((f1, f2)), "m/s2",
-                              f"a_b{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
-        if (f1, f2) != rm.BAND_16:
-            m[f"a_b{lab}_rms_0_16"] = (s.pg.band_rms(rm.BAND_16), "m/s2",
-                                       f"a_b{lab} RMS 0-16 Hz [m/s2]")
-        m[f"a_b{lab}_rms_full"] = (s.raw.rms(), "m/s2", f"a_b{lab} RMS full band [m/s2]")
-        m[f"a_b{lab}_wk_rms"] = (s.wk.rms(), "m/s2", f"a_b{lab} Wk RMS [m/s2]")
-        m[f"jerk_b{lab}_rms"] = (s.jerk.rms(), "m/s3", f"jerk_b{lab} RMS [m/s3]")
-    for lab, col in _series(names, f"{R}a_w"):
-        s = band[col]
-        m[f"a_w{lab}_rms"] = (s.pg.band_rms((f1, f2)), "m/s2",
-                              f"a_w{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
-        m[f"a_w{lab}_rms_full"] = (s.raw.rms(), "m/s2", f"a_w{lab} RMS full band [m/s2]")
-    for name in rm.ARM_ACCEL_FIELDS:
-        for lab, col in _series(names, f"{R}{name}"):
-            m[f"{name}{lab}_rms"] = (band[col].pg.band_rms((f1, f2)), "m/s2",
-                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
-    for name in rm.ROTATION_FIELDS:
-        for lab, col in _series(names, f"{R}{name}"):
-            pg = band[col].pg
-            m[f"{name}{lab}_rms"] = (pg.band_rms((f1, f2)), "rad/s2",
-                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [rad/s2]")
-            if (f1, f2) != rm.BAND_16:
-                m[f"{name}{lab}_rms_0_16"] = (pg.band_rms(rm.BAND_16), "rad/s2",
-                                              f"{name}{lab} RMS 0-16 Hz [rad/s2]")
-    for (lab, cb), _w in pairs:
-        d = defl[cb]
-        m[f"sws{lab}"] = (1e3 * (d.hi - d.lo), "mm", f"SWS{lab} [mm]")
-        m[f"defl{lab}_rms"] = (1e3 * d.rms(), "mm", f"defl{lab} RMS [mm]")
-    for lab, col in _series(names, "tyre_road/force/F_t"):
-        m[f"dtl{lab}_rms"] = (plain[col].centred_rms(), "N", f"DTL{lab} RMS [N]")
-    for lab, col in _series(names, "controller/force/F_d"):
-        m[f"f_d{lab}_rms"] = (plain[col].rms(), "N", f"F_d{lab} RMS [N]")
-    return m
+    return rm.assemble(lambda name: _series(names, name),
+                       lambda col, b: band[col].pg.band_rms(b), lambda col: band[col].raw.rms(),
+                       lambda col: _wk(band[col]).rms(), lambda col: _jerk(band[col]).rms(),
+                       lambda cb, _cw: (defl[cb].hi - defl[cb].lo, defl[cb].rms()),
+                       lambda col: plain[col].centred_rms(), lambda col: plain[col].rms(),
+                       band_hz)
+
+
+def _wk(s: _Band) -> StreamWk:
+    assert s.wk is not None
+    return s.wk
+
+
+def _jerk(s: _Band) -> StreamJerk:
+    assert s.jerk is not None
+    return s.jerk
 
 
 def streamed_run_metrics(names: Sequence[str], n_rows: int, batches: Batches,
