@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
+from typing import cast
 
 import numpy as np
 from scipy.fft import next_fast_len
@@ -367,20 +368,11 @@ def streamed_metric_values(
 
     return rm.assemble(lambda name: _series(names, name),
                        lambda col, b: band[col].pg.band_rms(b), lambda col: band[col].raw.rms(),
-                       lambda col: _wk(band[col]).rms(), lambda col: _jerk(band[col]).rms(),
+                       lambda col: cast(StreamWk, band[col].wk).rms(),
+                       lambda col: cast(StreamJerk, band[col].jerk).rms(),
                        lambda cb, _cw: (defl[cb].hi - defl[cb].lo, defl[cb].rms()),
                        lambda col: plain[col].centred_rms(), lambda col: plain[col].rms(),
                        band_hz)
-
-
-def _wk(s: _Band) -> StreamWk:
-    assert s.wk is not None
-    return s.wk
-
-
-def _jerk(s: _Band) -> StreamJerk:
-    assert s.jerk is not None
-    return s.jerk
 
 
 def streamed_run_metrics(names: Sequence[str], n_rows: int, batches: Batches,
