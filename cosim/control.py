@@ -1,11 +1,8 @@
 """Control messages, field by field: what each kind must carry before anyone acts on it.
 
-:func:`cosim.wire.decode` checks the envelope (version, kind, k, t, a map payload) and the
-numbers of data messages; this module checks the payload of every control kind, so that a
-malformed field (``progress`` with ``rejected: "lots"``, ``waiting`` with ``missing: 5``)
-is a :class:`WireError` (rejected and counted) and never a crash of the orchestrator or of a
-node. :func:`check_start` also checks that a ``start`` is plausible: it must be the run the
-node fetched (same number of steps and step size), with a table of facts for every node.
+A malformed field of a control kind is a :class:`WireError` (rejected and counted), never a
+crash. :func:`check_start` also checks that a ``start`` is the run the node fetched (same
+number of steps and step size), with a table of facts for every node.
 
 ==========  ======================================================================  ========
 kind        fields (payload ``d``)                                                  from

@@ -1,19 +1,15 @@
 """A double-wishbone corner as data: the reader of a corner file (``suscosim-corner``, v1).
 
 A corner file (TOML; schema and the built-in corner's sources in docs/corners.md) holds what
-an ADAMS/Car hardpoint table holds: the hardpoints in vehicle axes (ISO 8855: x forward,
-y left, z up; metres) of the **left** corner, the masses of its parts, its spring (a torsion
-bar about the lower arm's pivot axis and/or a coil spring between two points), the nominal
-damper, the jounce bumper and the arms' body bushes. Python holds the methods (the PyBullet
-corner, :mod:`nodes.plant.double_wishbone`; the kinematics, :mod:`nodes.plant.corner_kinematics`;
-the lower arm's frame and FE, :mod:`cosim.lower_arm`); the file holds the things, and each
-hardpoint is defined once, here.
+an ADAMS/Car hardpoint table holds: the **left** corner's hardpoints in vehicle axes (ISO 8855:
+x forward, y left, z up; metres), part masses, spring (torsion bar about the lower arm's pivot
+axis and/or coil spring), nominal damper, jounce bumper and body bushes; each hardpoint is
+defined once, here.
 
-Every point is returned in the **corner frame**: vehicle axes with the origin at the static
-wheel centre. With ``frame.reference = "wheel_centre"`` the file's numbers are used as they
-are (the built-in corner: the same doubles the code had before it was a file); with
-``"vehicle"`` the file's ``wheel_centre`` is subtracted from every point and the half track
-is its y. Bad input raises :class:`cosim.errors.InputFileError` naming the file and the key.
+Every point is returned in the **corner frame**: vehicle axes, origin at the static wheel
+centre. With ``frame.reference = "wheel_centre"`` the file's numbers are used as they are;
+with ``"vehicle"`` the file's ``wheel_centre`` is subtracted and the half track is its y. Bad
+input raises :class:`cosim.errors.InputFileError` naming the file and the key.
 """
 
 from __future__ import annotations
@@ -116,7 +112,7 @@ def load(path: str | Path, key: str = "vehicle.corner") -> Corner:
 MAX_COORDINATE_M = 10.0
 """Largest hardpoint coordinate or half track [m]: a road vehicle is < 20 m long and < 3 m
 wide, a corner's points within ~1 m of its wheel; more is millimetres, or not a number a
-model can take (1e308 m passed `corner check` and killed the run at step 0, #46)."""
+model can take."""
 
 
 def _vec(r: ConfigReader, name: str) -> np.ndarray:

@@ -32,7 +32,7 @@ MAX_NAME = 64
 def invocation_token() -> str:
     """A random part for the run ids of one invocation (e.g. one ``suscosim sweep``): 6 hex
     digits, so that two people running the same sweep through one router never share a run
-    id (issue #15 item 3)."""
+    id."""
     return secrets.token_hex(3)
 
 

@@ -1,14 +1,8 @@
 """A client session that may open after its command started: a tap or scope waiting for a run.
 
-A Zenoh client cannot open without reaching its endpoint (``zenoh.open`` fails after its
-connect timeout, whatever ``exit_on_failure`` says), while a tap or a scope is often started
-before the run it watches. :class:`LateBus` opens the client in a thread of its own, trying
-again until it succeeds or is closed, and declares the subscriptions and liveliness watches
-asked of it meanwhile once the session is there. Until then a query answers nothing.
-
-The verbs are those of :class:`cosim.bus.Bus` that watching a run needs: ``subscribe``,
-``watch``, ``query``, ``query_all``, ``close``; :meth:`LateBus.linked` says whether the
-session has reached its endpoint.
+A Zenoh client cannot open without reaching its endpoint. :class:`LateBus` opens it in a
+thread of its own, trying again until it succeeds or is closed, then declares the
+subscriptions and watches asked of it meanwhile; until then a query answers nothing.
 """
 
 from __future__ import annotations

@@ -1,21 +1,13 @@
 """The shell of a node that only listens: takes its inputs as they come, not step by step.
 
-The recorder (every producer's ``records`` feed) and the live fatigue node (the recorder's
-load blocks) are not in the lock-step exchange: they take each message when it arrives,
-before the run's ``start`` as after it. A :class:`Listener` does for them what
-:meth:`Participant.handshake` and :meth:`Participant.wait` do for a coupled node, through
-the participant's public API only:
-
-* :meth:`Listener.feed` subscribes to an input (``node/channel``);
-* :meth:`Listener.poll` takes one message (or None after ``timeout``): a feed's message is
-  verified with the run's key and decoded (:meth:`Participant.open`), of a kind the feed
-  takes and with the fields it requires, else rejected and counted
-  (:meth:`Participant.reject`); ``hello`` proves the feed live and is not returned. A clock
-  message is handled (an abort raises :class:`RunError`); a ``start`` must be plausible
-  (:func:`cosim.control.check_start`) and sets :attr:`Listener.start`.
-* until the start, every poll keeps the handshake going: ``hello`` on the node's outputs,
-  ``ready`` once every feed has been heard (else ``waiting``, naming the silent ones, every
-  second), a :class:`RunError` after the start timeout naming them.
+The recorder and the live fatigue node are not in the lock-step exchange: they take each
+message when it arrives, before the run's ``start`` as after it. A :class:`Listener` does for
+them what :meth:`Participant.handshake` and :meth:`Participant.wait` do for a coupled node:
+:meth:`Listener.feed` subscribes to an input; :meth:`Listener.poll` takes one message,
+verified, decoded and checked (else rejected and counted; ``hello`` is not returned), handles
+clock messages (abort: :class:`RunError`; a plausible ``start`` sets :attr:`Listener.start`)
+and, until the start, keeps the handshake going (``hello``, ``ready`` once every feed has
+been heard, else ``waiting``; :class:`RunError` after the start timeout).
 """
 
 from __future__ import annotations

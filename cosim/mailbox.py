@@ -1,19 +1,11 @@
 """An input's mailbox: the decoded messages of one input channel a node has not used yet.
 
-A node's :class:`cosim.participant.Participant` keeps one per input. The mailbox decides
-what a message that decoded and verified may do (file it, or reject it with a reason) and is
-bounded whatever a producer sends:
-
-* a **stepped** input (the lock-step inputs the node waits for step by step) holds only the
-  steps from the one last waited for up to :data:`MAILBOX_WINDOW` ahead: a lock-step producer
-  is at most a step or two ahead, so a flood of far-ahead steps is rejected, not stored;
-* any other input (load blocks, taken as they come) holds at most :data:`MAILBOX_MAX`
-  messages.
-
-``hello`` (the start handshake's, step -1) is kept once; a second message for a step already
-filed, a kind other than ``data`` or a message lacking a field the node needs is rejected.
-A producer's ``step`` message (:func:`cosim.wire.encode_step`) is filed by
-:func:`file_step`: each inner message into the mailbox of its channel.
+A node's :class:`cosim.participant.Participant` keeps one per input; it files a verified
+message or rejects it with a reason, and is bounded whatever a producer sends: a **stepped**
+input holds only the steps from the one last waited for up to :data:`MAILBOX_WINDOW` ahead;
+any other input at most :data:`MAILBOX_MAX` messages. ``hello`` (step -1) is kept once; a
+second message for a filed step, a kind other than ``data`` or a message lacking a needed
+field is rejected. :func:`file_step` files a producer's ``step`` message, inner by inner.
 """
 
 from __future__ import annotations

@@ -4,11 +4,8 @@ A node's :class:`cosim.participant.Participant` keeps one :class:`Outbox`. Every
 is encoded once and checked against its channel's schema before it leaves (what a consumer
 would reject is never sent: a diverged model ends the run naming the field). Then:
 
-* a **per-step channel**'s message joins the node's *step*: the data messages of one
-  communication step, published as ONE message on ``suscosim/<run>/<node>/step``, signed
-  once (:func:`cosim.wire.encode_step`, issue #28 item 2) by :meth:`Outbox.send` (the
-  participant sends before it waits for its next inputs). A step that would not fit one
-  bus message goes out in two;
+* a **per-step channel**'s message joins the node's *step*, published as ONE signed message
+  on ``<node>/step`` by :meth:`Outbox.send` (in two if it would not fit one);
 * a **block channel** of the schema (``stepped=False``: ``fatigue/damage``,
   ``recorder/coupling``) goes out at once on its own key ``suscosim/<run>/<node>/<channel>``;
 * every data message is also kept, as encoded, for the recorder, which gets them in batches
@@ -16,10 +13,9 @@ would reject is never sent: a diverged model ends the run naming the field). The
   message goes out right after the step (:meth:`Outbox.send`): never between a step's last
   input and its output, which the coupled chain waits for.
 
-A message published with ``hold=True`` (the plant's response and component loads of the step
-before, encoded while it waits for this step's forces instead of between the forces and the
-next state, issue #28) joins the *next* step message, ahead of that step's own messages
-(chronological order); :meth:`Outbox.flush` sends it at once.
+A message published with ``hold=True`` (the plant's response and loads of the step before,
+encoded while it waits for this step's forces) joins the *next* step message, ahead of that
+step's own; :meth:`Outbox.flush` sends it at once.
 """
 
 from __future__ import annotations

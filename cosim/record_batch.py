@@ -2,9 +2,8 @@
 
 Every data message a node publishes also goes to the recorder, as published (the bytes it
 signed), on ``<node>/records``: at most :data:`RECORD_BATCH` messages or
-:data:`RECORD_PERIOD_S` old a batch, and never more than one message may carry. One message
-per batch instead of one per step keeps the recorder off the per-step critical path (it
-would otherwise take as much CPU per step as the plant on a 2-core machine).
+:data:`RECORD_PERIOD_S` old a batch, never more than one message may carry (batches keep the
+recorder off the per-step critical path).
 """
 
 from __future__ import annotations

@@ -1,21 +1,13 @@
 """Opening a file a user names: a regular file only, read within a stated bound.
 
-Every reader of a path from a scenario, a part, a sweep or duty file, a run folder or the
-command line opens it here (issue #46). :func:`open_user_file` opens with ``O_NONBLOCK``
-(a named pipe with no writer returns at once instead of hanging), ``fstat``\\ s the open
-descriptor and refuses what is not a regular file (a device such as ``/dev/zero``, a FIFO,
-a socket, a folder). It then reads at most :func:`limit` bytes for that kind of file,
-*counting* the bytes it reads: ``st_size`` is not trusted (it is 0 for a device, and a
-file may grow while read). ``inside`` refuses a path whose real location (symlinks
-followed) leaves the folder a reader was handed.
-
-Libraries that open a path themselves (asammdf, pyopencrg, meshio, pyarrow) get it only
-after :func:`check_user_file` (regular file, size within the kind's limit).
-
-Limits (bytes, per kind; ``SUSCOSIM_MAX_<KIND>_MB`` in the environment raises or lowers one,
-e.g. ``SUSCOSIM_MAX_PROFILE_MB=1024`` for a longer road): see :data:`LIMITS` and
-docs/reliability.md. Every refusal is an :class:`~cosim.errors.InputFileError` (exit 2) naming
-the file as written and, when given, the key that named it.
+Every reader of a path a user names opens it here. :func:`open_user_file` opens with
+``O_NONBLOCK`` (a pipe with no writer does not hang), refuses what is not a regular file (a
+device, FIFO, socket, folder) and reads at most :func:`limit` bytes, *counting* them
+(``st_size`` is not trusted). ``inside`` refuses a path whose real location leaves the folder
+a reader was handed. Libraries that open a path themselves get it only after
+:func:`check_user_file`. Limits per kind: :data:`LIMITS` (``SUSCOSIM_MAX_<KIND>_MB`` overrides
+one; docs/reliability.md). Every refusal is an :class:`~cosim.errors.InputFileError` (exit 2)
+naming the file as written and, when given, the key that named it.
 """
 
 from __future__ import annotations

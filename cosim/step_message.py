@@ -1,12 +1,9 @@
 """Reading a producer's ``step`` messages as the per-channel messages they carry.
 
-A producer publishes the data messages of one communication step as ONE message on
-``suscosim/<run>/<node>/step`` (:func:`cosim.wire.encode_step`, issue #28 item 2). A reader
-that thinks in channels (a tap of ``plant/state``, the scope) subscribes to the logical key
-expression *and* its step key (:func:`step_keyexprs`) and expands each step into
-``(suscosim/<run>/<node>/<channel>, message)`` pairs (:func:`expand`), keeping those the
-logical expression matches (:func:`matches`). Nodes do not use this: their participant files
-a step's inner messages straight into its input mailboxes (:mod:`cosim.participant`).
+A reader that thinks in channels (a tap, the scope) subscribes to the logical key expression
+*and* its step key (:func:`step_keyexprs`) and expands each ``step`` message (:mod:`cosim.wire`)
+into ``(suscosim/<run>/<node>/<channel>, message)`` pairs (:func:`expand`), keeping those the
+logical expression matches (:func:`matches`).
 """
 
 from __future__ import annotations

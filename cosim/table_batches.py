@@ -1,4 +1,4 @@
-"""A Parquet table read in row batches, one row group at a time (#32: the report, batch
+"""A Parquet table read in row batches, one row group at a time (the report, batch
 fatigue and the bench read a run's table without holding it whole)."""
 
 from __future__ import annotations
@@ -15,10 +15,8 @@ BATCH_ROWS = 65_536
 def parquet_batches(path: Path, columns: Sequence[str], rows: int = BATCH_ROWS
                     ) -> Iterator[dict[str, np.ndarray]]:
     """``{column: float values}`` of a Parquet file, one row group at a time (cut to at most
-    ``rows`` rows), read without threads or pre-buffering: pyarrow's ``iter_batches`` reads
-    ahead, and its peak RSS grew 158 -> 210 MB from 10^5 to 10^6 rows of the Chapter 3
-    table, row groups read one by one 138 -> 145 MB. A file of larger row groups (a table
-    written whole: one group) goes through ``iter_batches``, which cuts inside a group."""
+    ``rows`` rows), without threads or pre-buffering (pyarrow's ``iter_batches`` reads
+    ahead); a file of larger row groups goes through ``iter_batches``."""
     import pyarrow.parquet as pq
 
     f = pq.ParquetFile(path, pre_buffer=False)

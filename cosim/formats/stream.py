@@ -1,6 +1,6 @@
 """A run's table written as CSV or Parquet of the formats' layout (:mod:`.tables`) chunk by
 chunk, read from ``table.parquet`` in record batches (or ``table.csv`` line by line): memory
-by the chunk, not the run (#32). The output is that of :func:`.tables.write_csv` /
+by the chunk, not the run. The output is that of :func:`.tables.write_csv` /
 :func:`.tables.write_parquet` on the whole table (CSV byte for byte; Parquet the same
 columns, values and units, written in row groups)."""
 
@@ -46,7 +46,7 @@ def iter_chunks(src: str | Path, names: list[str], rows: int | None = None
         from cosim.table_batches import parquet_batches
 
         try:
-            yield from parquet_batches(src, names, rows)  # a row group at a time (#32)
+            yield from parquet_batches(src, names, rows)  # a row group at a time
         except InputFileError:
             raise
         except Exception as exc:

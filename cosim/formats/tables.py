@@ -41,7 +41,7 @@ def _time_column(names: list[str], path: str) -> int:
 MAX_CSV_VALUES = 50_000_000
 """Most numbers a load CSV may hold (rows x columns; 400 MB as float64): 1e7 rows of 5
 columns, a 10 kHz rig file of 1000 s with 4 channels. A longer history: Parquet or MDF 4,
-or split it (#46: a 1e7-row CSV read as lists of floats took 3 GiB)."""
+or split it."""
 
 
 def read_csv(path: str | Path) -> ChannelSet:
