@@ -9,7 +9,7 @@ tests.
     python -m bench adaptive-step [--out /tmp/adaptive_step] [--coupling hold]   (~2 min)
 
 ``cosim`` (thesis Tables 3.2 and 3.3): for each communication step h, the wall time of the
-reference (solve_ivp), monolithic (one process, in-memory bus) and distributed (4 node processes
+reference (solve_ivp), monolithic (the one-process engine, no bus) and distributed (4 node processes
 over Zenoh on loopback) runs, coupled steps/s, and the peak errors of the distributed run
 against the reference (true peaks on a 20 us grid); rows also in ``OUT/bench_cosim.json``.
 
