@@ -102,10 +102,9 @@ class LumpedQuarterCar(PlantModel):
         self.params = params or LumpedQuarterCarParams()
         pr = self.params
         self.client = new_direct_client()
-        self.body = load_urdf_text(
-            _URDF.format(mb=pr.sprung_mass, mw=pr.unsprung_mass), self.client,
-            useFixedBase=True, flags=p.URDF_USE_INERTIA_FROM_FILE,
-        )
+        self.body = load_urdf_text(_URDF.format(mb=pr.sprung_mass, mw=pr.unsprung_mass),
+                                   self.client, useFixedBase=True,
+                                   flags=p.URDF_USE_INERTIA_FROM_FILE)
         self._joints = [0, 1]
         free_joints(self.body, self._joints, self.client)
         self._dt: float | None = None
@@ -121,10 +120,8 @@ class LumpedQuarterCar(PlantModel):
             self.body, self._joints, physicsClientId=self.client)
 
     def state(self) -> dict[str, np.ndarray]:
-        return {
-            "z_b": np.array((self._z_b,)), "v_b": np.array((self._v_b,)),
-            "z_w": np.array((self._z_w,)), "v_w": np.array((self._v_w,)),
-        }
+        return {"z_b": np.array((self._z_b,)), "v_b": np.array((self._v_b,)),
+                "z_w": np.array((self._z_w,)), "v_w": np.array((self._v_w,))}
 
     def _spring(self) -> float:
         """F_s = k_s (z_w - z_b) [N], on the body, upward positive (dynamic part)."""

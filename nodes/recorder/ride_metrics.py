@@ -55,9 +55,8 @@ def sample_rate(t: np.ndarray) -> float:
     return 1.0 / step
 
 
-def psd(
-    x: np.ndarray, fs: float, band_hz: tuple[float, float] | None = None
-) -> tuple[np.ndarray, np.ndarray]:
+def psd(x: np.ndarray, fs: float, band_hz: tuple[float, float] | None = None
+        ) -> tuple[np.ndarray, np.ndarray]:
     """(f in Hz, one-sided periodogram P in unit²/Hz) of ``x`` at ``fs`` (Hz), mean removed,
     rectangular window; only ``f1 <= f <= f2`` of ``band_hz`` if given."""
     f, P = periodogram(np.asarray(x, dtype=float), fs=fs, window="boxcar", detrend="constant")
@@ -121,12 +120,8 @@ def matlab_periodogram(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray
                        return_onesided=True, scaling="density")
 
 
-def thesis_band_rms(
-    t: np.ndarray,
-    x: np.ndarray,
-    band: tuple[float, float] = THESIS_BAND,
-    fs_out: float = THESIS_FS,
-) -> float:
+def thesis_band_rms(t: np.ndarray, x: np.ndarray, band: tuple[float, float] = THESIS_BAND,
+                    fs_out: float = THESIS_FS) -> float:
     """The thesis's RMS (Eq 4.8/4.9) of ``x`` at times ``t`` (s) over ``band`` (Hz), whatever
     the run's step: :func:`resample_to` ``fs_out``, then :func:`periodogram_band_rms`."""
     return periodogram_band_rms(resample_to(t, x, fs_out), fs_out, band)
@@ -235,9 +230,8 @@ ROTATION_FIELDS = ("alpha_pitch", "alpha_roll")
 [rad/s^2] (7-DOF model; thesis Tables 5.7-5.10's x and y rows)."""
 
 
-def metric_values(
-    table: Table, band_hz: tuple[float, float] = THESIS_BAND, fs_out: float = THESIS_FS
-) -> dict[str, tuple[float, str, str]]:
+def metric_values(table: Table, band_hz: tuple[float, float] = THESIS_BAND,
+                  fs_out: float = THESIS_FS) -> dict[str, tuple[float, str, str]]:
     """Every ride metric a run table allows, per corner: ``{key: (value, unit, label)}``.
 
     Keys are machine names (``a_b[2]_rms`` for corner 2), labels the text table's rows.
@@ -323,12 +317,8 @@ def run_metrics(table: Table, band_hz: tuple[float, float] = THESIS_BAND) -> dic
     return {label: value for value, _unit, label in metric_values(table, band_hz).values()}
 
 
-def ride_summary(
-    runs: Mapping[str, Table],
-    baseline: str | None = None,
-    band_hz: tuple[float, float] = THESIS_BAND,
-    fs_out: float = THESIS_FS,
-) -> dict:
+def ride_summary(runs: Mapping[str, Table], baseline: str | None = None,
+                 band_hz: tuple[float, float] = THESIS_BAND, fs_out: float = THESIS_FS) -> dict:
     """Every metric of every run (``suscosim ride --json``): ``{"baseline", "band_hz",
     "fs_metric_hz", "units", "labels", "runs": [{"name", "metrics", "change_pct"}]}``;
     ``change_pct`` (Eq 5.13) against the baseline (default: the first run), empty for it."""
@@ -366,12 +356,9 @@ def improvement(baseline: float, value: float) -> float:
     return float("nan") if baseline == 0.0 else (baseline - value) / baseline * 100.0
 
 
-def ride_table(
-    runs: Mapping[str, Table],
-    baseline: str | None = None,
-    band_hz: tuple[float, float] = (0.0, 20.0),
-    metrics: Sequence[str] | None = None,
-) -> str:
+def ride_table(runs: Mapping[str, Table], baseline: str | None = None,
+               band_hz: tuple[float, float] = (0.0, 20.0),
+               metrics: Sequence[str] | None = None) -> str:
     """Text table like thesis Tables 5.5/5.6: per metric row (``metrics``, default those
     every run has) the baseline's value (default: first run), then each run's value and %
     improvement (Eq 5.13); ``band_hz`` is the PSD band (Hz)."""

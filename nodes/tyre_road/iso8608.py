@@ -41,10 +41,8 @@ N0 = 0.1
 WAVINESS = 2.0
 """ISO 8608 waviness w (slope of log G_d against log n)."""
 
-GD_N0 = {
-    "A": 16e-6, "B": 64e-6, "C": 256e-6, "D": 1024e-6,
-    "E": 4096e-6, "F": 16384e-6, "G": 65536e-6, "H": 262144e-6,
-}
+GD_N0 = {"A": 16e-6, "B": 64e-6, "C": 256e-6, "D": 1024e-6,
+         "E": 4096e-6, "F": 16384e-6, "G": 65536e-6, "H": 262144e-6}
 """ISO 8608 class geometric-mean G_d(n0) [m^3]."""
 
 DEFAULT_N_MIN = 0.011
