@@ -1,69 +1,54 @@
 """Jounce bumper (bump stop) of the realistic front corner: a pure force law, no I/O.
 
-The thesis's realistic corner had a bump stop (Table 4.1 lists a translational "bump stop"
-joint; Ch. 5 sees it hit on the bump, and Table 4.5 explains the higher lateral component
-levels on the pavé by it) but gives none of its numbers. This module gives ours.
+The thesis's realistic corner had a bump stop (Table 4.1's translational "bump stop" joint;
+Ch. 5 sees it hit on the bump, Table 4.5 explains the pavé's lateral levels by it) but gives
+none of its numbers; these are ours.
 
 **Where it acts.** A microcellular polyurethane (MCU) jounce bumper hangs from the body above
-the lower arm's bump-stop pad (:data:`cosim.lower_arm.BUMP_STOP_PAD`, 0.215 m outboard of the
-pivot axis, 0.73 of the ball-joint lever). Its compression is measured along the body's
-vertical axis:
+the lower arm's pad (:data:`cosim.lower_arm.BUMP_STOP_PAD`, 0.215 m outboard of the pivot
+axis, 0.73 of the ball-joint lever). Its compression along the body's vertical is
 
     delta = (z_pad - z_pad,0) - (z_bumper - z_bumper,0) - g            [m]
 
-with z_pad the height of the pad point on the arm, z_bumper the height of the bumper's
-mounting on the body (both from static ride height) and g the clearance between the bumper's
-tip and the pad at static ride height. For delta <= 0 the bumper is free (F = 0). The force
-F_bs = F(delta) >= 0 pushes the body up and the arm's pad down, equal and opposite, along the
-body's vertical (the plant applies it, :mod:`nodes.plant.double_wishbone`).
+(heights from static ride height, g the tip-to-pad clearance there). For delta <= 0 it is
+free; F_bs = F(delta) >= 0 pushes the body up and the pad down, along the body's vertical
+(applied by :mod:`nodes.plant.double_wishbone`).
 
-**Characteristic** (compression-positive force F [N] of the compression delta [m]):
+**Characteristic** (compression-positive force F [N] of delta [m]):
 
     F(delta) = k_0 delta / (1 - delta / s_b)                 for 0 < delta <= r s_b
     F(delta) = F(r s_b) + k_1 (delta - r s_b),  k_1 = k_0 / (1 - r)^2   beyond,
 
-a hyperbolic progression: the rate is k_0 at first contact (the soft, thin-walled tip of the
-bumper buckling), it doubles by delta = 0.29 s_b and grows without bound as the cell structure
-closes towards its block compression s_b (the bumper turning into solid polyurethane). Past
-r s_b (r = 0.9, where the rate is 100 k_0) the law continues along its tangent, so the force
-stays finite, monotonic and C1 if a violent impact drives delta past the block (the model
-integrates with a fixed step; a pole at s_b would change sign there).
+a hyperbolic progression: rate k_0 at first contact (the soft tip buckling), doubled by
+delta = 0.29 s_b, unbounded as the cells close towards the block compression s_b. Past
+r s_b (r = 0.9, rate 100 k_0) it continues along its tangent: finite, monotonic and C1 if
+an impact drives delta past the block (a pole at s_b would change sign under a fixed step).
 
 **Numbers** (:class:`BumpStopParams` defaults) and why:
 
-* *bumper*: an MCU jounce bumper of about 60 mm free length (the size fitted inside or beside
-  the damper of C-segment cars and small MPVs); MCU compresses to about a third of its free
-  length before it is solid, so the block compression is s_b = 40 mm;
-* *initial rate* k_0 = 80 kN/m = 80 N/mm at the pad. Seen at the wheel centre it is
-  k_0 (0.715)^2 = 41 kN/m (0.715 = the pad's vertical speed over the wheel centre's at first
-  contact), the order of the 31 kN/m suspension rate (MCU bumpers are sized so that first
-  contact is not felt as a knock). The characteristic then gives F(15 mm) = 1.9 kN,
-  F(20 mm) = 3.2 kN, F(30 mm) = 9.6 kN, F(34 mm) = 18.1 kN and F(36 mm) = 28.8 kN: a few kN
-  at 15-20 mm, above 15 kN near full compression, the shape of the published
-  force-deflection curves of MCU jounce bumpers (a long soft start, then a steep wall in the
-  last 10-15 % of the stroke);
-* *clearance* g = 42 mm at the pad. With the pad 0.215 m from the pivot axis, first contact
-  is at an arm rotation asin(0.042 / 0.215) = 11.3 deg, i.e. **58.5 mm of wheel jounce
-  relative to the body** from static ride height (front-view four-bar of the corner; the
-  PyBullet corner touches within 0.1 mm of it, ``tests/vehicles/test_bump_stop.py``). Why
-  that much: Table 4.2 is the *unladen* MPV, and a bumper is placed for the laden car; five
-  occupants and luggage put about 100 kg more on a front corner, 100 g / 31 kN/m = 32 mm of
-  sag, so 58 mm unladen is about 27 mm laden, the 25-40 mm of free jounce of passenger-car
-  fronts. It also reconciles the thesis's two statements on its bump + pothole: the passive
-  corner of Ch. 4's validation "did not engage" the bump stop ("low amplitude"), the
-  semi-active runs of Ch. 5 hit it on the bump. On our version of that road (1-cos bump
-  50 mm x 1.0 m at 34 km/h) the passive corner (3800 N s/m) reaches 53.7 mm of jounce, clear
-  of the bumper by 5 mm; with 2000 or 1000 N s/m (a soft semi-active state) it reaches 60
-  and 65 mm and touches (0.1 and 0.4 kN). A cobbled durability track with Table 4.5's hub
-  levels reaches it on its larger stones;
+* *bumper*: MCU, ~60 mm free length (C-segment cars, small MPVs), solid at about a third of
+  it: block compression s_b = 40 mm;
+* *initial rate* k_0 = 80 kN/m at the pad, k_0 (0.715)^2 = 41 kN/m at the wheel centre
+  (0.715: pad over wheel-centre speed at contact), the order of the 31 kN/m suspension rate
+  (first contact not felt as a knock). Then F(15, 20, 30, 34, 36 mm) = 1.9, 3.2, 9.6, 18.1,
+  28.8 kN: a long soft start, then a steep wall in the last 10-15 % of the stroke, the shape
+  of published MCU force-deflection curves;
+* *clearance* g = 42 mm at the pad: first contact at an arm rotation asin(0.042 / 0.215) =
+  11.3 deg, **58.5 mm of wheel jounce relative to the body** (the PyBullet corner touches
+  within 0.1 mm of it, ``tests/vehicles/test_bump_stop.py``). Table 4.2 is the *unladen*
+  MPV; a laden front corner (+100 kg: 100 g / 31 kN/m = 32 mm of sag) keeps ~27 mm, the
+  25-40 mm of passenger-car fronts. It also fits the thesis's bump + pothole: the passive
+  corner of Ch. 4 "did not engage" the bump stop, the semi-active runs of Ch. 5 hit it. On
+  our version of that road (1-cos bump 50 mm x 1.0 m at 34 km/h) the passive corner
+  (3800 N s/m) reaches 53.7 mm, 5 mm clear; with 2000 or 1000 N s/m it reaches 60 and
+  65 mm and touches (0.1 and 0.4 kN). A pavé with Table 4.5's hub levels reaches it on its
+  larger stones;
 * at the block (delta = 36 mm, r s_b) the pad has risen 78 mm: 109 mm of wheel jounce
-  unladen (about 77 mm laden; total jounce of a small MPV front: 80-110 mm), and the bumper
-  carries 28.8 kN, 20.4 kN at the wheel (3.6 times the static corner load of 5.7 kN;
-  jounce bumpers are sized for 3-4 g at the wheel).
+  unladen (~77 mm laden; small MPV fronts: 80-110 mm), 28.8 kN on the bumper, 20.4 kN at
+  the wheel (3.6 times the 5.7 kN static corner load; bumpers are sized for 3-4 g).
 
-Not modelled: the bumper's hysteresis (MCU dissipates 10-20 % of the work in a cycle), its
-mass, and friction between its tip and the pad. The rebound stop (inside the damper) is not
-modelled either.
+Not modelled: the bumper's hysteresis (MCU dissipates 10-20 % a cycle), its mass, tip
+friction, and the rebound stop (inside the damper).
 """
 
 from __future__ import annotations

@@ -11,31 +11,25 @@ Profile of one wheel track, height z [m] against distance x [m]::
     on the stone:  z = h_i + c * 4 u (1 - u),              u = (x - a_i) / L_i  in [0, 1]
     in the joint:  z = (1 - v) h_i + v h_(i+1) - d (1 - cos 2 pi v) / 2,  v = (x - b_i) / w
 
-so the contact point rides over a crowned stone, drops into a smooth (cosine) joint of depth d
-below the chord between the two stone edges and comes up on the next stone, whose height may
-differ by a step h_(i+1) - h_i. The stone lengths L_i are Gamma distributed (mean L, standard
-deviation s_L: positive, with exactly that mean and scatter), the stone heights h_i are
-independent normal (0, s_h^2); the first stone starts at a random phase so that x = 0 is not a
-stone edge. The long waves z_lw(x) are a thesis Eq. 4.10 road, S(n) = G n^-p
-(:mod:`nodes.tyre_road.power_law`); the track is z_lw + z_stones, shifted so that z(0) = 0.
-Left and right tracks have their own stones (independent draws) and long waves with the
-``correlation`` of the power-law road.
+a crowned stone, a smooth (cosine) joint of depth d below the chord of the two stone edges,
+the next stone a step h_(i+1) - h_i higher. Lengths L_i are Gamma (mean L, std s_L), heights
+h_i independent normal (0, s_h^2), the first stone at a random phase. The long waves z_lw(x)
+are a thesis Eq. 4.10 road, S(n) = G n^-p (:mod:`nodes.tyre_road.power_law`); the track is
+z_lw + z_stones, shifted to z(0) = 0; left and right have their own stones and long waves
+with the power-law road's ``correlation``.
 
-What reaches the 0-20 Hz ride band (n < 2.1 cycles/m at 34 km/h): the stone pitch (about
-0.165 m, 57 Hz at 34 km/h), the joints and the crowns lie far above it; in the band the stones
-act through their random heights, a piecewise-constant process whose one-sided PSD at low n is
-about 2 s_h^2 E[P^2] / E[P], P = L + w the pitch (flat, "white" displacement: 8.5e-6 m^3 for
-s_h = 5 mm; it drives the wheel hop; tests/roads/test_cobblestone.py), while the long
-waves drive the body. So the two parameters calibrated against Table 4.5 (hub and body 0-20 Hz
-RMS on the passive realistic corner, ``python -m bench calibrate-pave``, ``docs/vehicles_roads.md``)
-are s_h and G; the others are fixed beforehand from the geometry of Belgian block (defaults
-:data:`DEFAULTS`, each with its reasoning in :class:`PaveParameters`).
+In the 0-20 Hz ride band (n < 2.1 cycles/m at 34 km/h; the stone pitch P = L + w, ~0.165 m,
+is at 57 Hz) the stones act through their random heights: a one-sided PSD at low n of about
+2 s_h^2 E[P^2] / E[P] (white displacement, 8.5e-6 m^3 for s_h = 5 mm; tests/roads/
+test_cobblestone.py), driving the wheel hop, while the long waves drive the body. So s_h and G
+are calibrated against Table 4.5 (hub and body 0-20 Hz RMS of the passive realistic corner,
+``python -m bench calibrate-pave``, ``docs/vehicles_roads.md``); the others are fixed from the
+geometry of Belgian block (:class:`PaveParameters`).
 
-Sampling: the profile is tabulated every :data:`DX` = 2 mm (at least 7 points across the 15 mm
-joint, the crown's parabola to 0.1 % of c) and linearly interpolated by
-:class:`~nodes.tyre_road.roads.SampledRoad`. A point-contact tyre sampled every coupled step
-h sees the joints only at the spacing v h (4.7 mm at 34 km/h and h = 0.5 ms; 18.9 mm at 2 ms,
-as the thesis's own 2 ms digitisation of the measured track).
+Sampling: every :data:`DX` = 2 mm (7 points across the 15 mm joint, the crown's parabola to
+0.1 % of c), linearly interpolated by :class:`~nodes.tyre_road.roads.SampledRoad`; a
+point-contact tyre sees the joints at the spacing v h (18.9 mm at 34 km/h and 2 ms, as the
+thesis's own 2 ms digitisation).
 """
 
 from __future__ import annotations
@@ -64,12 +58,9 @@ class PaveParameters:
             angles): 0.03 m (20 %), Gamma distributed.
         joint_width: width w [m] of the gap between two stones: the brief's 10-20 mm range,
             middle value 0.015 m.
-        joint_depth: depth d [m] of the dip between the stone edges as followed by the contact
-            point. A worn sett joint is 10-20 mm deep but filled with sand or grit and
-            bridged by the tyre: a 15 mm gap under a tyre of radius 0.3 m lets a rigid ring
-            sink w^2 / (8 R) = 0.1 mm, the tread rubber locally a few mm. 0.005 m (a
-            point-contact tyre, which cannot bridge, would otherwise see the full geometric
-            depth 50 times a second).
+        joint_depth: depth d [m] of the dip as the contact point follows it: a worn joint is
+            10-20 mm deep but filled with grit and bridged by the tyre (a rigid ring of
+            R = 0.3 m sinks w^2 / (8 R) = 0.1 mm into 15 mm, the tread a few mm): 0.005 m.
         stone_height_std: scatter s_h [m] of the height of a stone's top about the base road:
             set (settled, tilted, worn stones) so that the step between neighbours,
             sqrt(2) s_h in standard deviation, is a few mm to 15 mm. CALIBRATED (hub 0-20 Hz
@@ -111,14 +102,11 @@ class PaveParameters:
 
 
 DEFAULTS = PaveParameters()
-"""The calibrated pavé. Calibrated once (2026-12-01, ``python -m bench calibrate-pave --search
---G 1e-5 --stone-height-std 0.008``, plant at commit 31e82c4 with the bump stop and the
-cosim.lower_arm hardpoints): the passive realistic corner of
-``scenarios/thesis/ch6_realistic_qvm.toml`` over 100 m, seeds 1-3, gives 0-20 Hz RMS (thesis
-metric) hub 59.6 +- 3.7 and body 3.22 +- 0.26 m/s^2 at (G, s_h) = (1.503e-5, 9.54 mm),
-Table 4.5: 59.2 / 3.23; fixed at the rounded (1.5e-5, 9.5 mm). The numbers per seed and the
-check of the rounded values: ``docs/vehicles_roads.md``. Only these two ride numbers were
-used: no fatigue life enters."""
+"""The calibrated pavé (``python -m bench calibrate-pave --search``): the passive realistic
+corner of ``scenarios/thesis/ch6_realistic_qvm.toml`` over 100 m, seeds 1-3, gives 0-20 Hz
+RMS hub 59.6 +- 3.7 and body 3.22 +- 0.26 m/s^2 at (G, s_h) = (1.503e-5, 9.54 mm), Table 4.5:
+59.2 / 3.23; fixed at the rounded (1.5e-5, 9.5 mm) (per seed: ``docs/vehicles_roads.md``).
+Only these two ride numbers were used: no fatigue life enters."""
 
 
 def stone_layout(length: float, rng: np.random.Generator, p: PaveParameters
