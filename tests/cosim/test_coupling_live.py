@@ -15,6 +15,7 @@ from cosim.table import read_table
 from cosim.table_writer import TableWriter
 from cosim.wire import MAX_MESSAGE_BYTES, decode, encode
 
+from .. import coupling_oracle as oracle
 from .test_coupling_stream import _table
 
 CHANNELS = {"plant/state": ("v_b", "z_w", "v_w"),
@@ -66,7 +67,7 @@ def _feed(msgs, live: LiveResidual, table: TableWriter, every: int):
 def test_messages_carry_the_whole_table_residual_step_by_step(exchange, corners, every) -> None:
     n = 3100 if every == 5000 else 997  # 5000: one take of 3 x MAX_STEPS rows and more
     ref_table = _table(n, corners)
-    ref = ce.coupling_residual(ref_table, 1e-3, "linear", exchange)
+    ref = oracle.coupling_residual(ref_table, 1e-3, "linear", exchange)
     live = LiveResidual(1e-3, "linear", exchange, CHANNELS)
     writer = TableWriter(CHANNELS, None)
     got = _feed(_messages(ref_table, corners), live, writer, every)
@@ -122,7 +123,7 @@ def test_a_step_the_table_drops_is_dropped_too(tmp_path: Path) -> None:
     assert live.held == 0  # step 40's messages are not kept for ever
     table = read_table(tmp_path / "table.parquet")
     assert 40 not in table["k"]
-    ref = ce.coupling_residual(table, 1e-3, "hold", "sequential")
+    ref = oracle.coupling_residual(table, 1e-3, "hold", "sequential")
     ks: list[int] = []
     dE: list[float] = []
     for k, _t, d in got:

@@ -25,6 +25,7 @@ from cosim.bus import free_loopback_endpoint
 from cosim.table import read_table
 from cosim.wire import decode
 
+from .. import coupling_oracle as oracle
 from ..conftest import CH3_STEP, popen_suscosim, run_client
 from .test_scope import _start_scope, _stop, _until, _wait_json
 
@@ -107,7 +108,7 @@ def test_the_tapped_residual_is_the_tables_step_by_step(tapped) -> None:
             series[bond] += m.d[f"dE_{bond}"]
     assert k_next - 1 == N_LAST
     table = read_table(out / "table.parquet")
-    ref = ce.coupling_residual(table, 1e-3, "hold", "parallel")
+    ref = oracle.coupling_residual(table, 1e-3, "hold", "parallel")
     assert set(ref) == {"damper", "tyre"}
     for bond, r in ref.items():
         assert np.array_equal(np.asarray(series[bond]), r.dE), bond  # bit for bit
