@@ -19,19 +19,15 @@ as the thesis applies it.
 **Hardpoints**: :mod:`.double_wishbone_geometry` (the thesis gives none; our values and
 reasoning there).
 
-**Damper force convention**: ``F_d`` is the damper's axial force, compression-positive as a
-force on the body (pushes the top mount up along the axis); the arm gets -F_d along the axis.
-Its vertical component on the body is F_d cos(lean) = 0.998 F_d (lean 4.0 deg). Because
-the damper moves at about MR = 0.62 of the wheel centre, the state also gives ``z_damper``
-(compression from static) and ``v_damper`` (compression velocity, positive when the damper
-shortens): a controller that computes F_d = c * v_damper with the physical c = 3800 N s/m
-reproduces the thesis's damper; one that uses v_w - v_b should use an equivalent c_s instead
-(1500 N s/m in Table 4.3; identified for this geometry by ``suscosim equivalent-lumped``,
-docs/vehicles_roads.md).
+**Damper force convention**: ``F_d`` is the damper's axial force, compression-positive on the
+body (the arm gets -F_d along the axis; vertical share cos 4.0 deg = 0.998). The damper moves
+at about MR = 0.62 of the wheel centre, so the state also gives ``z_damper`` and ``v_damper``
+(compression, positive when it shortens): F_d = c v_damper with the physical c = 3800 N s/m
+is the thesis's damper; a law on v_w - v_b needs an equivalent c_s (Table 4.3: 1500 N s/m;
+``suscosim equivalent-lumped``, docs/vehicles_roads.md).
 
-**Bump-stop force** ``F_bs`` [N] (in ``plant/response``, via :meth:`extra_response`):
-compression-positive, >= 0, the force the bumper applies on the body (upward) and on the
-arm's pad (downward), from the state at the start of the step, as the torsion-bar torque.
+**Bump-stop force** ``F_bs`` [N] (``plant/response``, :meth:`extra_response`): >= 0, up on the
+body and down on the pad, from the state at the start of the step.
 
 **Arm accelerations** ``a_arm_{loc1,cg,loc2}_{x,y,z}`` [m/s^2] (in ``plant/response``, via
 :meth:`response_velocities`): vehicle axes, of the lower arm's points :data:`ARM_ACCEL_POINTS`

@@ -3,27 +3,21 @@ named points, and its URDF (links with masses and inertias, joints). Pure number
 PyBullet; :mod:`.double_wishbone` builds the multi-body model from them.
 
 **Hardpoints** are data: a corner file (:mod:`cosim.corner`, docs/corners.md) read into a
-:class:`CornerGeometry`; the module's constants (``LOWER_BALL_JOINT``, ``ARM_ROTATION``, ...)
-are the built-in corner's, ``cosim/corners/mpv_front.toml``. Its numbers (the thesis gives
-none: "the actual dimensions of the arms are not available"; plausible values for a small MPV,
-our reasoning): Corner frame = vehicle axes (x forward,
-y left, z up) with origin at the static wheel centre of this **front-left** corner (outboard
-= +y, so the arm frame has z up). Metres.
+:class:`CornerGeometry`; the module's constants are the built-in corner's,
+``cosim/corners/mpv_front.toml``. The thesis gives none ("the actual dimensions of the arms
+are not available"); ours, for a small MPV, in metres, corner frame = vehicle axes (x
+forward, y left, z up) at the static wheel centre of this **front-left** corner:
 
-* *lower arm*: every point comes from :mod:`cosim.lower_arm`, the one definition the fatigue
-  worker's FE reads too (bushes (+-0.13, 0, 0), ball joint (0.025, 0.294, 0), damper seat
-  (0.064, 0.185, 0) on the front leg, bump-stop pad (-0.017, 0.215, 0) on the rear leg, in
-  the arm frame; frame origin
-  ``ARM_ORIGIN`` = (0, -0.354, -0.13) in the corner frame, axes parallel to the corner's: the
-  pivot axis along x, so no anti-dive, and the arm plane horizontal at static ride height).
+* *lower arm*: from :mod:`cosim.lower_arm`, the one definition the FE reads too (arm frame:
+  bushes (+-0.13, 0, 0), ball joint (0.025, 0.294, 0), damper seat (0.064, 0.185, 0), pad
+  (-0.017, 0.215, 0); origin ``ARM_ORIGIN`` = (0, -0.354, -0.13), axes the corner's: no
+  anti-dive, the arm plane horizontal at ride height).
   The lever 0.294 m is what makes the torsion bar a 31 kN/m wheel rate (K_theta / L^2);
   ``tests/vehicles/test_arm_geometry_consistent.py`` checks that the PyBullet corner puts the
   arm's points where :mod:`cosim.lower_arm` says.
 * *upper arm*: bushes (+-0.14, -0.34, 0.18), ball joint (-0.005, -0.10, 0.20); 0.24 m long
-  in front view, 0.82 of the lower arm (a short-long arm: the shorter upper arm gives camber
-  gain). Its inner end is 20 mm lower than its outer end, so the two arms converge inboard:
-  in front view the upright's instant centre is where the lines of the arms meet,
-  y = -4.06 m, z = -0.13 m (front-view swing arm 4.06 m), which gives
+  in front view, 0.82 of the lower arm (short-long: camber gain), its inner end 20 mm lower,
+  so the arms meet inboard at the instant centre y = -4.06 m, z = -0.13 m, which gives
   - camber gain 1 / 4.06 m = 1.4 deg per 100 mm of jounce at ride height (wheel top inward;
     the PyBullet corner: 0.31 deg at 20 mm, 1.06 deg at 59 mm), in the 1-2.5 deg/100 mm of
     passenger-car double wishbones;
@@ -47,24 +41,19 @@ y left, z up) with origin at the static wheel centre of this **front-left** corn
   = 1454 N s/m (Table 4.3: 1500 N s/m).
 * *tie rod*: outer ball joint (-0.14, -0.072, -0.03) on the steering axis, 0.14 m behind the
   axle (rear steer); inner (rack) end (-0.14, -0.350, -0.037), 0.278 m long. The inner end is
-  where the line from the upright's instant centre through the outer end meets the line
-  through the two arms' inner pivots: the tie rod then points at the instant centre, so its
-  length does not change to first order as the upright moves (no bump steer to first order),
-  and the arc it swings matches the upright's (the second-order condition). The PyBullet
-  corner steers 0.002 deg at 20 mm and 0.024 deg at 59 mm of jounce.
+  where the line from the instant centre through the outer end meets the line through the
+  arms' inner pivots: no bump steer to first and second order (the PyBullet corner steers
+  0.002 deg at 20 mm and 0.024 deg at 59 mm of jounce).
 * *bump stop*: the jounce bumper on the body above the arm's pad; clearance, rate and the
   wheel travel to first contact (58.5 mm) in :mod:`.bump_stop`.
 * *half track* 0.7055 m (t = 1.411 m, Ch. 4 extraction); the body's centre of mass is put on
   the vehicle centreline (it only moves vertically, so its position has no effect).
 
-*Mass properties*: the built-in lower arm's centre of mass and inertia are the FE arm's
-(:data:`cosim.lower_arm.MASS_PROPERTIES`, scaled to the corner's arm mass; its product of
-inertia is dropped). Another corner's lower arm (other hardpoints: not the FE part's shape)
-takes its mass as a triangle of three equal point masses at its bushes and ball joint
-(centre of mass at their centroid, the inertia of the three points about it, plus 10 % of
-the polar value on each axis for the arm's depth; a model choice, ours: a forged A-arm's mass
-sits mostly in its eyes and bosses). The hub's inertia is a wheel's (spin axis y), the tie
-rod is a slender rod, the upper arm a small triangle (the same for every corner).
+*Mass properties*: the built-in lower arm's are the FE arm's (:data:`cosim.lower_arm.
+MASS_PROPERTIES`, scaled to its mass, product of inertia dropped). Another corner's lower arm
+is three equal point masses at its bushes and ball joint, plus 10 % of the polar inertia on
+each axis for its depth (ours: a forged A-arm's mass sits in its eyes and bosses). The hub
+is a wheel (spin axis y), the tie rod a slender rod, the upper arm a small triangle.
 """
 
 from __future__ import annotations
@@ -258,22 +247,15 @@ ARM_POINTS = _G.arm_points
 
 ARM_ACCEL_POINTS = _G.arm_accel_points
 """Points of the lower arm whose accelerations ``plant/response`` carries (thesis Table 5.4),
-in the arm frame [m]. The thesis names them only "Loc1" (near the hub), the arm's "CG" and
-"Loc2" (near the body pivot / gearbox); its arm drawing is not available, so:
+in the arm frame [m]. The thesis names them only "Loc1" (near the hub), "CG" and "Loc2"
+(near the body pivot) without a drawing, so (ours; another corner: the same rule):
 
-* ``loc1``: 20 mm inboard of the ball joint along the arm's y (toward the pivot axis),
-  (0.025, 0.274, 0): on the ball-joint boss's edge, the nearest arm material to the hub that
-  is not the joint itself, 0.274 m from the pivot axis;
-* ``cg``: the arm's centre of mass (:data:`cosim.lower_arm.MASS_PROPERTIES`), 0.085 m from
-  the pivot axis;
-* ``loc2``: 20 mm outboard of the bush midpoint (the arm-frame origin), (0, 0.020, 0): on the
-  base member between the bush eyes, 0.020 m from the pivot axis, so it moves almost with
-  the body.
+* ``loc1``: (0.025, 0.274, 0), 20 mm inboard of the ball joint, on its boss's edge;
+* ``cg``: the arm's centre of mass, 0.085 m from the pivot axis;
+* ``loc2``: (0, 0.020, 0), 20 mm outboard of the bush midpoint, moving almost with the body.
 
-For an arm turning about its pivot axis (x) the vertical acceleration of a point is the
-body's plus the arm's angular acceleration times the point's distance from that axis, so
-it falls from Loc1 to the CG to Loc2, as in Table 5.4. (Another corner: the same rule on its
-own arm.)"""
+A point's vertical acceleration is the body's plus the arm's angular acceleration times its
+distance from the pivot axis, so it falls from Loc1 to the CG to Loc2, as in Table 5.4."""
 
 ARM_ROTATION = arm_frame()[1]
 """The arm frame's axes in the corner frame at static ride height (columns x, y, z)."""
