@@ -42,14 +42,8 @@ residual, it is about 1 % peak error (docs/coupling_residual.md)."""
 
 @dataclass(frozen=True)
 class BondResidual:
-    """One power bond's residual over a run.
-
-    Attributes:
-        dE: residual per step [J], summed over corners (steps k = lag .. n - 2 - lag: those
-            whose end state and the force computed from it are in the table).
-        abs_residual: sum |dE| [J].
-        carried: energy the bond carried, sum h |F v| [J].
-    """
+    """One power bond's residual over a run: ``dE`` per step [J] summed over corners (steps
+    k = lag .. n - 2 - lag), ``abs_residual`` = sum |dE| [J], ``carried`` = sum h |F v| [J]."""
 
     dE: np.ndarray
     abs_residual: float
@@ -76,18 +70,12 @@ def _columns(table: Mapping[str, np.ndarray], name: str) -> np.ndarray:
 def applied_force(coupling: str, F: np.ndarray, dFdx: np.ndarray, x_seen: np.ndarray,
                   x_now: np.ndarray, F_before: np.ndarray, r: float | np.ndarray, clip: bool,
                   sign: float) -> np.ndarray:
-    """The force the plant applies within a step (as ``nodes/plant/coupling.py`` does).
-
-    Args:
-        coupling: ``hold``, ``linear`` or ``jacobian``.
-        F: the step's force [N]; ``dFdx``: its derivative the force node sent (k_t [N/m] or
-            c_eff [N s/m]); ``x_seen``: the plant variable the force was computed from
-            (z_w [m] or v_rel [m/s]); ``x_now``: that variable at the moment of interest.
-        F_before: the previous step's force [N] (for ``linear``); ``r``: time into the step
-            over h (0 at its start, 1 at its end).
-        clip: the tyre's no-tension clip (F >= 0); ``sign``: +1 if F grows with x (damper),
-            -1 if it falls (tyre: F_t = F_t,k - k_t (z_w - z_w,k)).
-    """
+    """The force the plant applies within a step (as ``nodes/plant/coupling.py`` does):
+    ``coupling`` ``hold``, ``linear`` or ``jacobian``; ``F`` the step's force [N], ``dFdx`` its
+    derivative (k_t [N/m] or c_eff [N s/m]) about ``x_seen`` (z_w [m] or v_rel [m/s]),
+    ``x_now`` that variable now; ``F_before`` the previous step's force [N]; ``r`` time into
+    the step over h; ``clip``: the tyre's F >= 0; ``sign``: +1 if F grows with x (damper), -1
+    if it falls (tyre: F_t = F_t,k - k_t (z_w - z_w,k))."""
     if coupling == "hold":
         out = F
     elif coupling == "linear":

@@ -30,12 +30,8 @@ from .coupling_energy import BondResidual, _columns, applied_force, summary
 
 @dataclass(frozen=True)
 class BondSpec:
-    """Which columns form a bond, and how its force behaves (as ``coupling_residual`` has it).
-
-    ``force``/``slope``: the force node's output F [N] and its derivative; ``seen``: the
-    plant variable the coupling linearises about; ``velocity``: the bond's velocity [m/s];
-    a name ``a-b`` is the difference of two columns (v_rel = v_w - v_b).
-    """
+    """Which columns form a bond: ``force`` F [N] and ``slope`` dF/dx, ``seen`` the plant
+    variable the coupling linearises about, ``velocity`` [m/s]; ``a-b``: a difference."""
 
     force: str
     slope: str
@@ -82,13 +78,8 @@ class _BondState:
 
 class ResidualStream:
     """Feed blocks of a run's rows in order (:meth:`feed`); :meth:`result` gives the totals.
-
-    Args:
-        h: the communication step [s], or None for an adaptive one (``run.h = "auto"``: each
-            step's length from the rows' ``t``; a row's carried energy uses the step that
-            ends at it, row 0 the first step); ``coupling``: ``hold``, ``linear`` or
-            ``jacobian``; exchange: ``sequential`` (lag 0) or ``parallel`` (lag 1).
-    """
+    ``h`` [s], or None for an adaptive step (each step's length from the rows' ``t``);
+    ``coupling``: ``hold``, ``linear``, ``jacobian``; ``exchange``: ``sequential``/``parallel``."""
 
     def __init__(self, h: float | None, coupling: str, exchange: str) -> None:
         if h is not None and not h > 0:
@@ -240,10 +231,8 @@ class LiveResidual:
     :data:`MAX_STEPS`, and returns one message per block that completed a step (a step is
     complete ``1 + lag`` rows later, as in the whole-table residual).
 
-    Args:
-        h: the communication step [s]; ``coupling``, ``exchange``: as :class:`ResidualStream`.
-        channels: the table's channels (``node/channel``); those of :data:`BOND_CHANNELS`
-            among them are read.
+    ``h``, ``coupling``, ``exchange``: as :class:`ResidualStream`; ``channels``: the table's
+    (those of :data:`BOND_CHANNELS` are read).
     """
 
     def __init__(self, h: float | None, coupling: str, exchange: str,

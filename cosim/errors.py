@@ -15,13 +15,8 @@ class SuscosimError(Exception):
 
 
 class ScenarioError(SuscosimError, ValueError):
-    """A scenario (or configuration) key has a bad value.
-
-    Args:
-        key: dotted key, e.g. ``"vehicle.sprung_mass"``.
-        value: the offending value (``None`` when the key is missing).
-        expected: what would have been accepted, in words.
-    """
+    """A scenario (or configuration) key has a bad value: ``key`` dotted, ``value`` (None:
+    missing), ``expected`` in words."""
 
     exit_code = 2
 
@@ -48,10 +43,8 @@ class UnknownKeyError(ScenarioError):
 
 
 class InputFileError(SuscosimError, ValueError):
-    """A user-supplied file (CSV profile, damper curve, FE table...) is malformed.
-
-    The message names the file, the line (1-based, when known) and what is wrong.
-    """
+    """A user-supplied file is malformed: the message names the file, the line (1-based,
+    when known) and what is wrong."""
 
     exit_code = 2
 
