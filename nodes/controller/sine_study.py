@@ -59,23 +59,14 @@ class QuarterCar:
 def sine_response(law: Mapping[str, Any], freqs: Sequence[float], *, amplitude: float = 0.01,
                   h: float = 5e-4, substeps: int = 4, t_end: float | None = None,
                   car: QuarterCar = QuarterCar()) -> dict[str, np.ndarray]:
-    """Quarter cars on z_g = amplitude sin(2 pi f t), one per frequency, from rest.
+    """Quarter cars on z_g = amplitude [m] sin(2 pi f t), one per frequency [Hz], from rest,
+    as the independent "corners" of one controller built from the ``[controller]`` table
+    ``law``; ``h`` [s] (the MR laws need 0.5 ms, Sec 5.3.3); ``t_end`` default 6 s (the body
+    transient, 1/(zeta omega) = 0.7 s, decayed to 0.02 %) plus 3 periods of the lowest f.
 
-    The frequencies run side by side as the "corners" of one vectorised controller (the
-    corners of a law are independent), so one loop serves them all.
-
-    Args:
-        law: a ``[controller]`` table (e.g. ``THESIS_LAWS["tss3"]``).
-        freqs: road frequencies [Hz]; amplitude [m]; h: communication step [s] (the thesis's
-            MR laws need 0.5 ms, Sec 5.3.3); t_end [s]: default 6 s plus 3 periods of the
-            lowest frequency (the body mode's transient, 1/(zeta omega) = 0.7 s, has decayed
-            by 6 s to 0.02 %).
-
-    Returns:
-        time histories, shape (steps + 1, len(freqs)) (``t``: (steps + 1,)): ``t`` [s],
-        ``z_g``, ``z_b``, ``z_w`` [m], ``v_rel`` = v_w - v_b [m/s], ``F_d`` [N] (on the body,
-        up positive), ``a_b``, ``a_w`` [m/s^2], ``I`` [A] (NaN for a law without current).
-    """
+    Returns histories of shape (steps + 1, len(freqs)): ``z_g``, ``z_b``, ``z_w`` [m],
+    ``v_rel`` [m/s], ``F_d`` [N, on the body], ``a_b``, ``a_w`` [m/s^2], ``I`` [A, NaN
+    without current]; ``t`` [s] of shape (steps + 1,)."""
     f = np.asarray(freqs, dtype=float).reshape(-1)
     if f.size == 0 or np.any(f <= 0) or amplitude <= 0 or h <= 0:
         raise ValueError(f"freqs, amplitude and h must be > 0, got {freqs}, {amplitude}, {h}")
