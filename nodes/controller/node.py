@@ -3,12 +3,8 @@
 Every step k it waits for the plant's ``state`` (of step k in the sequential exchange, of
 step k-1 in the parallel one), runs the law, and publishes ``force``: F_d [N] (on the body,
 upward positive), c_eff = dF_d/d(v_w - v_b) [N s/m] for the plant's coupling, and the law's
-extras (MR current, switching state...).
-
-With ``velocity = "damper"`` in the ``[controller]`` table the laws use the plant's
-``v_damper`` (damper compression velocity, m/s; the double-wishbone corner publishes it and
-applies F_d along the damper axis) and ``c_eff`` is converted to dF_d/d(v_w - v_b) with the
-current motion ratio; a plant without ``v_damper`` ends the run with a clear error.
+extras (MR current, switching state...). ``velocity = "damper"``: :mod:`.base`; a plant
+without ``v_damper`` then ends the run with a clear error.
 """
 
 from __future__ import annotations

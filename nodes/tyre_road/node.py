@@ -9,9 +9,7 @@ publishes ``force``: F_t [N] (absolute, compressive-positive, >= 0), k_t = dF_t/
 With ``[tyre] model = "magic_formula"`` (the four-corner vehicle): F_t from the point
 contact as above, and the Magic Formula's road-plane Fx, Fy [N], Mz [N m] and the slips
 kappa, alpha from the wheel kinematics the plant publishes (:mod:`.tyre_3d`); the road is
-read where the wheels are: the vehicle moves itself, the profile is laid along the path its
-driver follows (straight, or the ``vehicle.driver.radius`` circle) and each wheel centre's
-world (x, y) is read at its station along it (:class:`.wheel_paths.RoadPath`).
+read where the wheels are (:class:`.wheel_paths.RoadPath`).
 """
 
 from __future__ import annotations
