@@ -211,10 +211,8 @@ def complete_checkpoints(run_dir: Path) -> list[Checkpoint]:
 
 def read_node_state(ckpt: Checkpoint, node: str, key: bytes | None = None,
                     sha256: str | None = None, lenient: bool = False) -> dict[str, Any]:
-    """``node``'s state from ``ckpt``, its hash checked against the file and the manifest
-    (and ``sha256``, the hash the orchestrator checked, when given), its MAC with ``key`` when
-    given (``lenient``: :func:`cosim.plaindata.decode`). CheckpointError naming the node, the
-    file and what is wrong."""
+    """``node``'s state from ``ckpt``, its hash checked (against the manifest and ``sha256``
+    when given) and its MAC with ``key`` when given; CheckpointError naming what is wrong."""
     entry = ckpt.manifest.get("nodes", {}).get(node)
     if entry is None:
         raise CheckpointError(f"checkpoint k={ckpt.k} has no state for node {node!r}")
@@ -251,12 +249,9 @@ def read_node_state(ckpt: Checkpoint, node: str, key: bytes | None = None,
 def load_for_resume(run_dir: Path, scenario: dict[str, Any], at_t: float | None = None,
                     key: bytes | None = None) -> Checkpoint:
     """The checkpoint to resume (the last complete one) or fork (the one at ``at_t`` [s]).
-
-    ``scenario`` is the parent's resolved scenario for a fork (its ``--set`` keys applied after)
-    or the scenario to run now for a resume: it must hash equal to the checkpoint's. Every node
-    file is checked, and with ``key`` (:func:`checkpoint_key`) the manifest's and every file's
-    MAC; without one a signed checkpoint is refused. Raises :class:`CheckpointError` naming
-    what is wrong."""
+    ``scenario`` (a fork's parent's, or the one to resume) must hash equal to the
+    checkpoint's; every node file is checked, with ``key`` every MAC (without one a signed
+    checkpoint is refused). Raises :class:`CheckpointError` naming what is wrong."""
     cks = complete_checkpoints(run_dir)
     if not cks:
         raise CheckpointError(f"{run_dir}: no complete checkpoint (no {CHECKPOINTS_DIR}/k*/"
@@ -288,10 +283,8 @@ def load_for_resume(run_dir: Path, scenario: dict[str, Any], at_t: float | None 
 
 
 def prune_checkpoints(run_dir: Path, keep: int) -> list[int]:
-    """Delete every complete checkpoint of ``run_dir`` but the ``keep`` newest (``run.
-    checkpoint_keep``): the manifest first (the checkpoint is then incomplete, never half a
-    complete one), then its folder. Returns the k deleted; a folder that cannot be removed
-    is left (the next prune tries again)."""
+    """Delete every complete checkpoint of ``run_dir`` but the ``keep`` newest: the manifest
+    first (never half a complete one), then its folder. Returns the k deleted."""
     import shutil
 
     gone: list[int] = []

@@ -118,10 +118,9 @@ class Skipped:
 
 @dataclass
 class JournalContents:
-    """What a journal holds: the run id, the good records, what was skipped, and whether the
-    tail was torn. ``problem`` is one line for a user ("" when the journal is intact).
-    ``count`` is the number of intact records (``records`` may be left empty by a reader
-    that streamed them); ``torn_records`` the records a torn tail lost, when it can tell."""
+    """What a journal holds: run id, good records (empty if streamed; ``count`` intact),
+    what was skipped, whether the tail was torn (``torn_records`` lost, when known);
+    ``problem``: one line for a user ("" when intact)."""
 
     run_id: str
     records: list[tuple[str, bytes]]

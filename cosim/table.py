@@ -25,12 +25,9 @@ Table = dict[str, np.ndarray]
 
 
 def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
-    """Table of the data records (hello/control and undecodable records are skipped).
-
-    A channel's fields are those most of its messages carry; for each step the first message
-    that carries them all is used, so a stray or forged message (wrong fields) on a channel
-    cannot displace the real one. Returns (table, number of records left out as bad).
-    """
+    """(table, records left out as bad) of the data records. A channel's fields are those
+    most of its messages carry; per step the first message that carries them all is used (a
+    stray or forged message cannot displace the real one)."""
     per_channel: dict[str, list[Message]] = {}
     bad = 0
     for channel, payload in records:
@@ -112,11 +109,8 @@ def write_parquet(table: Table, path: str | Path) -> None:
 
 def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> Table:
     """Read a table written by :func:`write_parquet` or :func:`write_csv` (by its suffix),
-    only the columns whose name ``keep`` accepts when it is given (``k`` and ``t`` always).
-
-    A file that is not such a table is an :class:`~cosim.errors.InputFileError` naming it
-    (and the CSV line): not Parquet, no header, a row of another length, a value that is not
-    a number."""
+    only the columns ``keep`` accepts (``k`` and ``t`` always); a file that is not such a
+    table is an :class:`~cosim.errors.InputFileError` naming it (and the CSV line)."""
     path = Path(path)
 
     def wanted(name: str) -> bool:
@@ -158,10 +152,9 @@ def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> T
 
 def iter_table(path: str | Path, keep: Callable[[str], bool] | None = None,
                batch_rows: int = 65_536) -> Iterator[Table]:
-    """The rows of a ``table.parquet`` in blocks of at most ``batch_rows`` (the columns as
-    :func:`read_table` selects them, as float), one row group at a time
-    (:func:`cosim.table_batches.parquet_batches`), for what must not hold a long run in
-    memory. A file that is not such a table is an :class:`~cosim.errors.InputFileError`."""
+    """The rows of a ``table.parquet`` in blocks of at most ``batch_rows`` (columns as
+    :func:`read_table` selects them, as float), one row group at a time; InputFileError for a
+    file that is not such a table."""
     import pyarrow.parquet as pq
 
     from cosim.table_batches import parquet_batches
@@ -197,11 +190,8 @@ def channel_stats(table: Table) -> dict[str, dict[str, float]]:
 
 
 def export(table: Table, folder: str | Path, stem: str = "table") -> dict[str, str]:
-    """Write ``<stem>.csv`` and ``<stem>.parquet`` in ``folder``; return their paths.
-
-    Each file is written beside its place and renamed over it: a reader (or a second writer:
-    the recorder and the orchestrator both export on an error path, a killed exporter) never
-    leaves or sees half a table."""
+    """Write ``<stem>.csv`` and ``<stem>.parquet`` in ``folder`` (each aside, then renamed
+    over its place: never half a table); return their paths."""
     folder = Path(folder)
     paths = {"csv": str(folder / f"{stem}.csv"), "parquet": str(folder / f"{stem}.parquet")}
     for kind, write in (("csv", write_csv), ("parquet", write_parquet)):
@@ -241,10 +231,9 @@ def table_rows(folder: str | Path, stem: str = "table") -> int | None:
 
 
 def export_target(folder: str | Path, rows: int, damaged: bool) -> tuple[str, str]:
-    """Where a table of ``rows`` rebuilt from a journal may go without ever replacing a
-    table silently by a smaller one: (stem, why). ``table`` (why = "") unless the journal was
-    ``damaged`` (records skipped in its middle) or a ``table.*`` with more rows is already in
-    ``folder``: then ``table.recovered``, alongside, and ``why`` says which."""
+    """(stem, why) for a table of ``rows`` rebuilt from a journal: ``table`` (why "") unless
+    the journal was ``damaged`` or a ``table.*`` with more rows is in ``folder``: then
+    ``table.recovered``, alongside, and ``why`` says which."""
     before = table_rows(folder)
     if damaged:
         return RECOVERED_STEM, "the journal is damaged"
