@@ -1,38 +1,14 @@
 """The FMU law: an FMI 2.0 or 3.0 co-simulation FMU as the controller (run with FMPy).
 
-A controller built in Simulink, Modelica (OpenModelica, Dymola), or exported from suscosim
-itself (``suscosim export-fmu``) runs in the controller node's place::
-
-    [controller]
-    law = "fmu"
-    fmu = "/path/to/law.fmu"      # absolute, or relative to the controller's working directory
-    substeps = 1                  # doStep calls per communication step [1]
-    c_eff = 0.0                   # N·s/m handed to the plant when the FMU has no c_eff output [0]
-    [controller.inputs]           # FMU input <- our signal [FMU inputs named like a signal]
-    u_vbody = "v_b"
-    [controller.outputs]          # FMU output -> our channel [FMU outputs F_d, c_eff + extras]
-    y_force = "F_d"
-    [controller.fmu_parameters]   # FMU parameter = value, set before initialisation
-    c_hard = 2400.0
-
-Signals an input can take (per corner, SI): ``z_b``, ``v_b``, ``z_w``, ``v_w`` (m, m/s),
-``v_rel`` (m/s: ``v_w - v_b``, or ``v_damper`` with ``velocity = "damper"``), ``v_damper``, and
-on a full vehicle ``v_heave``, ``w_pitch``, ``w_roll``, ``pitch``, ``roll``. Outputs: ``F_d``
-(N, on the body, upward positive; required), ``c_eff`` (N·s/m) and any other name (recorded as
-an extra channel of ``controller/force``).
-
-One FMU instance per corner (a full vehicle runs four). At communication step k (time t_k)
-each instance gets the inputs of t_k, steps from t_k to t_k + h (``substeps`` equal doStep
-calls) and its outputs are the force of step k, which the plant holds over the step: for an
-algebraic law this is exactly f(u(t_k)), the native law's value. The inputs of t_0 are set
-before the FMU leaves initialisation.
-
-Preflight (:func:`check_fmu`, run by ``build_controller`` before anything starts) opens the
-FMU and reads its model description: a missing file, a file that is not an FMU (not a zip,
-no modelDescription.xml, bad XML), FMI 1.0, a model-exchange-only FMU, no binary for this
-platform, a mapped variable that the FMU does not have (or not as input / output /
-parameter) is an error naming the file or the key (exit 2). The FMU is instantiated only at
-the first step of the run.
+``[controller] law = "fmu"`` with ``fmu`` (path), ``substeps`` [1], ``c_eff`` [0 N·s/m] and
+the tables ``inputs`` (FMU input -> one of :data:`INPUT_SIGNALS`), ``outputs`` (FMU output ->
+channel; ``F_d`` in N on the body, upward positive, required) and ``fmu_parameters``;
+docs/fmi.md gives the keys, defaults and errors. One FMU instance per corner; at step k each
+gets the inputs of t_k and steps to t_k + h, its outputs the force of step k (an algebraic
+law gives exactly the native f(u(t_k))). :func:`check_fmu` (preflight) refuses a file that is
+not a readable FMI 2/3 co-simulation FMU for this platform, or a map naming what the FMU
+lacks, with an error naming the file or the key (exit 2); the FMU is instantiated at the
+run's first step.
 """
 
 from __future__ import annotations

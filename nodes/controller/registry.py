@@ -12,32 +12,17 @@ and decorate it; name it in a scenario (``[controller] law = "my_law"``) and it 
         c = np.clip(gain * np.abs(v_b), c_min, c_max)
         return c * v_rel, c                       # F_d (N), c_eff (N·s/m) [, extras]
 
-**Inputs** are the parameters before the ``*``, filled by name at every step:
-
-* ``v_b``, ``v_w`` (m/s), ``v_rel`` (m/s; ``v_w - v_b``, or the plant's ``v_damper`` with
-  ``velocity = "damper"``), ``z_b``, ``z_w`` (m) and any other per-corner state key
-  (``v_damper``, ``a_b`` ...): float arrays of shape (n_corners,);
-* the full vehicle's body scalars ``v_heave``, ``w_pitch``, ``w_roll``, ``pitch``, ``roll``
-  (floats);
-* ``t`` (s, time of the state), ``h`` (s, communication step), ``n`` (number of corners);
-* ``memory``: a dict kept between the calls of one run, for a law with state (a filter, the
-  previous value of a signal).
-
-**Settings** are the keyword-only parameters after the ``*``: each is a key of the scenario's
-``[controller]`` table. A plain default (``gain: float = 2500.0``) makes it optional; a
-:func:`Param` gives its range and unit, or makes it required (no ``default``); :data:`SOFT`
-and :data:`HARD` are the damper's two coefficients with the thesis's presets (the law then also
-accepts ``preset = "lumped" | "realistic"``, and ``hard >= soft`` is checked). Bad or unknown
-keys are a ``ScenarioError`` naming the dotted key (exit 2), like every built-in law.
-
-**Outputs**: ``(F_d, c_eff)`` or ``(F_d, c_eff, extras)``: the damper force on the body,
-upward positive (N), its slope dF_d/dv_rel handed to the plant (N·s/m), and a dict of further
-channels to record; each is an array of n_corners values or a scalar (broadcast).
-
-**Where**: any module in ``nodes/controller/`` is found by :func:`discover`; a law kept
-elsewhere is named ``law = "package.module:function"`` (importable by the controller process).
-A law that needs a class (the MR damper's substeps, say) registers its builder with
-:func:`law_builder` instead.
+**Inputs** (before the ``*``, filled by name every step): per-corner float arrays ``v_b``,
+``v_w``, ``v_rel`` (m/s; ``v_w - v_b`` or ``v_damper``), ``z_b``, ``z_w`` (m) or any other
+state key; the full vehicle's scalars ``v_heave``, ``w_pitch``, ``w_roll``, ``pitch``,
+``roll``; ``t``, ``h`` (s), ``n`` (corners); ``memory``, a dict kept for the run.
+**Settings** (after the ``*``): keys of ``[controller]``, optional with a plain default,
+ranged or required with :func:`Param`; :data:`SOFT`/:data:`HARD` take the ``preset``
+defaults and ``hard >= soft`` is checked; a bad key is a ScenarioError naming it (exit 2).
+**Outputs**: ``(F_d, c_eff[, extras])``: force on the body, upward positive (N), its slope
+dF_d/dv_rel (N·s/m), further channels; n_corners values or scalars. A law outside this
+package is named ``"package.module:function"``; one that needs a class registers a
+:func:`law_builder`. docs/control.md walks through writing one.
 """
 
 from __future__ import annotations
