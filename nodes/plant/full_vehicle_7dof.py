@@ -1,16 +1,12 @@
 """Lumped 7-DOF full vehicle in PyBullet (thesis Ch. 4 Sec. 4.4, Fig. 4.2, Table 4.4).
 
-Degrees of freedom: body heave z, pitch theta, roll phi (a rigid sprung body; no yaw, no x/y
-translation) and the vertical motion of the four wheels (unsprung masses on vertical prismatic
-joints, restrained laterally and longitudinally). Corners FL, FR, RL, RR are independent
-(no anti-roll bar). Each corner has a suspension spring k_s and receives its damper force F_d
-and tyre force F_t from the other nodes, as in the quarter car.
+Degrees of freedom: body heave z, pitch theta, roll phi (no yaw, no x/y translation) and the
+four wheels' vertical motion (prismatic joints). Corners FL, FR, RL, RR are independent (no
+anti-roll bar), each a spring k_s with F_d and F_t from the other nodes, as in the quarter car.
 
-PyBullet structure: a fixed ``ground``; chain ground -prismatic z-> ``heave`` -revolute y->
-``pitch`` -revolute x-> ``body`` (mass M, inertias I_yy pitch, I_xx roll at the CG); four
-``wheel_i`` links on prismatic z joints from the ground. The intermediate links carry a
-negligible mass (1 g); their weight is included in the static preload, so the model starts at
-equilibrium.
+PyBullet: ground -prismatic z-> ``heave`` -revolute y-> ``pitch`` -revolute x-> ``body``
+(mass M, I_yy pitch, I_xx roll at the CG); four ``wheel_i`` on prismatic z joints from the
+ground. The intermediate links weigh 1 g, included in the static preload.
 
 Axes ISO 8855 (x forward, y left, z up): pitch theta is a rotation about +y (positive
 nose-down), roll phi about +x (positive left side up). Corner i at (x_i, y_i) from the CG moves

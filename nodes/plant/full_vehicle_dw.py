@@ -1,32 +1,25 @@
 """Full vehicle on four double-wishbone corners built from corner files (docs/corners.md).
 
-One PyBullet multibody: the **body** is the floating base (6 DOF; its frame at the CG at ride
-height, mass and inertias there); each corner FL, FR, RL, RR is the quarter car's linkage
-(:class:`.double_wishbone_geometry.CornerGeometry` of its corner file: lower and upper arm on
-revolute joints to the body, the hub on a spherical joint at the lower ball joint, the tie rod
-on a spherical joint at the rack end, the upper ball joint and the tie rod's outer joint closed
-by POINT2POINT constraints). The front corners are the ``front`` corner file, the rear ones
-the ``rear`` file (both the left corner's; FR and RR are mirrored, :meth:`cosim.corner.Corner
-.mirrored`), placed with their static wheel centres at (x_i, +-half track, r - h_cg) from the
-CG: x = a ahead for the front axle, b = L - a behind for the rear.
+One PyBullet multibody: the **body** is the floating base (6 DOF, frame at the CG at ride
+height); each corner FL, FR, RL, RR is the quarter car's linkage (:class:`.double_wishbone_
+geometry.CornerGeometry`; the loops closed by POINT2POINT constraints), the front ones from
+the ``front`` corner file, the rear from ``rear`` (FR, RR mirrored: :meth:`cosim.corner.
+Corner.mirrored`), static wheel centres at (x_i, +-half track, r - h_cg) from the CG, x = a
+ahead for the front axle, b = L - a behind for the rear.
 
-Forces per corner, as the quarter car applies them (:mod:`.double_wishbone`): the torsion bar
-tau = tau_0 - K_theta theta on the lower arm's joint (and the axle's anti-roll bar's torque
-there, :mod:`.anti_roll_bar`), the damper force F_d along the damper
-axis (compression-positive on the body), the jounce bumper along the body's z, the tyre force
-F_t vertical at the wheel centre (the vertical tyre models); or, once
-:meth:`~.full_vehicle_dw_wheels.WheelsAndDriver.set_tyre_forces` gave the Magic Formula's
-road-plane F_x, F_y, M_z (:mod:`nodes.tyre_road.tyre_3d`), F_t along the road normal with
-them at the contact point on the wheel link. The driver's inputs (:meth:`set_driver`): a
-torque on each wheel's spin joint (brake or drive; the reaction on the upright) and the
-travel of the steering rack, a prismatic link across the body carrying the front tie rods'
-inner joints (held by a position motor; 2 kg, taken from the body at its CG).
+Forces per corner, as :mod:`.double_wishbone` applies them: the torsion bar tau = tau_0 -
+K_theta theta (plus the axle's :mod:`.anti_roll_bar` torque) on the lower arm's joint, F_d
+along the damper axis, the bumper along the body's z, F_t vertical at the wheel centre; or,
+once :meth:`~.full_vehicle_dw_wheels.WheelsAndDriver.set_tyre_forces` gave the Magic
+Formula's F_x, F_y, M_z (:mod:`nodes.tyre_road.tyre_3d`), F_t along the road normal with
+them at the contact point. The driver (:meth:`set_driver`) gives a torque on each wheel's
+spin joint and the travel of the steering rack, a prismatic link carrying the front tie
+rods' inner joints (a position motor; 2 kg, taken from the body at its CG).
 
-**Static state.** The tyre loads W_i balance the weight of every link and its moment about the
-CG (left = right; the two axles from the force and pitch-moment balance), and the four torsion
-preloads tau_0,i are those for which the arms have no angular acceleration under them: the
-arms' accelerations are affine in the four torques, so five trial steps from rest (all zero,
-then each in turn) give them (a 4 x 4 solve). The body is then at rest too.
+**Static state.** The tyre loads W_i balance every link's weight and its pitch moment (left =
+right), and the torsion preloads tau_0,i are those that leave the arms unaccelerated: the
+arms' accelerations are affine in the four torques, so five trial steps from rest give them
+(a 4 x 4 solve); the body is then at rest too.
 
 Body (defaults: Table 4.4 read per corner, as ``full_vehicle_7dof``'s ``corner`` basis):
 1870 kg, the CG a = 1.181 m behind the front axle (L = 2.774 m), I_pitch = 3522.5,

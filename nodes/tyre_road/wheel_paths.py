@@ -17,14 +17,11 @@ a time wheelbase / v earlier (thesis Eq. 4.11, t_d = d_wb / v), and sees a flat 
 s < 0. If the road names ``corners``, the corners not named see a flat road.
 
 A vehicle that moves itself (the four-corner vehicle) gives its wheel centres' world (x, y);
-the road is then laid along the path its driver is told to follow (:class:`RoadPath`: the
-line from the front axle's centre at t = 0, heading +x, straight or the ``vehicle.driver``
-circle of radius R), and a point is read at its station u, the arc length along that line of
-the point's foot on it (a curved road's u, as OpenCRG's reference line). A wheel on the circle
-therefore meets the profile at its arc length, not at its world x. The wheels keep their
-tracks (0 left, 1 right): the track profiles are laid at v = +-t/2 beside the line, so a track
-off the line meets the same profile over (R -+ t/2) / R of the line's distance, as on a real
-curved road whose cross sections stand square to its centreline.
+the road is laid along the path its driver follows (:class:`RoadPath`: from the front axle's
+centre at t = 0, heading +x, straight or the ``vehicle.driver`` circle of radius R) and a
+point is read at its station u, the arc length of its foot on that line (as OpenCRG's
+reference line). The tracks (0 left, 1 right) lie at +-t/2 beside the line, so an outer track
+meets the profile over (R + t/2) / R of the line's distance, cross sections square to it.
 """
 
 from __future__ import annotations
