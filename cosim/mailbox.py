@@ -75,11 +75,9 @@ class Mailbox:
 
 def file_step(inputs: dict[tuple[str, str], Mailbox], node: str, msg: Message
               ) -> list[tuple[tuple[str, str], str]]:
-    """File producer ``node``'s step message (verified) into ``inputs`` (``(node,
-    channel)`` -> mailbox): each inner message of a stepped input decoded and checked against
-    its channel's schema (the step's signature covered them; channels not read are skipped
-    unread); a ``hello`` proves every stepped input from ``node`` live. Returns the
-    rejections, ``(input, why)``."""
+    """File producer ``node``'s verified step message into ``inputs``: each inner message of
+    a stepped input decoded against its channel's schema (others skipped unread); a ``hello``
+    proves every stepped input from ``node`` live. Returns the rejections, ``(input, why)``."""
     rejected: list[tuple[tuple[str, str], str]] = []
     if msg.kind == "hello":
         for (n, _), each in inputs.items():

@@ -86,9 +86,8 @@ POLL_S = 0.05
 def live_nodes(bus: Bus, run_id: str, settle_s: float = SETTLE_S, poll_s: float = POLL_S,
                stop_at: set[str] | None = None) -> set[str]:
     """The nodes (``orchestrator`` included) of run ``run_id`` whose liveliness token is on
-    the bus, looked for over ``settle_s`` seconds from now: a liveliness subscriber with
-    history (the tokens the routing knows, and any it learns of) and a query every
-    ``poll_s``. Returns early once a node outside ``stop_at`` (None: any node) is found."""
+    the bus, looked for over ``settle_s`` [s] (a subscriber with history and a query every
+    ``poll_s``); early once a node outside ``stop_at`` (None: any) is found."""
     found: set[str] = set()
     pattern = keys.key(run_id, "*", keys.ALIVE)
 
@@ -126,10 +125,8 @@ def live_nodes(bus: Bus, run_id: str, settle_s: float = SETTLE_S, poll_s: float 
 
 def check_run_id_free(bus: Bus, run_id: str, external: list[str],
                       settle_s: float = SETTLE_S) -> None:
-    """Refuse (exit 2) a run id that is live on the bus already: another run's orchestrator,
-    or a node of this run that this orchestrator is about to start itself (the nodes named
-    ``--external`` are expected to be there). Looks for ``settle_s`` seconds
-    (:func:`live_nodes`), so that a session just opened through a router sees the tokens."""
+    """Refuse (exit 2) a run id that is live on the bus already (another run's orchestrator,
+    or a node it is about to start; ``--external`` nodes are expected), over ``settle_s``."""
     taken = sorted(live_nodes(bus, run_id, settle_s, stop_at=set(external)) - set(external))
     if taken:
         raise RunIdInUseError(f"run id '{run_id}' is already live on the bus (live there "
