@@ -1,15 +1,11 @@
 """Anti-roll bars of the four-corner double-wishbone vehicle: one per axle, a torsion
 bar across the body whose ends turn with the two lower arms of the axle.
 
-**Data.** Each bar is given by the roll stiffness it adds at the wheels, K_bar [N m/rad of
-body roll, the wheels held on the ground, the tyres rigid] (``FullVehicleDWParams.
-arb_front_nm_per_deg``, ``arb_rear_nm_per_deg``, in N m/deg as roll-stiffness data are
-usually quoted). A bar of torsional stiffness k_bar [N m/rad] with lever arms a [m] on drop
-links at the motion ratio MR (link travel / wheel travel) twists by MR (z_L - z_R) / a when the
-wheels move z_L, z_R and pushes each wheel with k_bar MR^2 (z_L - z_R) / a^2: with
-z_L - z_R = t phi the roll moment is K_bar phi, K_bar = k_bar (MR / a)^2 t^2. The roll
-stiffness at the wheels is what the bar's diameter, arms and links are chosen for, so it is
-the number given here (the bar's dimensions need not be).
+**Data.** Each bar is its roll stiffness at the wheels, K_bar [N m/rad of body roll, wheels
+on the ground, tyres rigid] (``FullVehicleDWParams.arb_front_nm_per_deg``,
+``arb_rear_nm_per_deg``, in N m/deg as usually quoted): a bar of torsional stiffness k_bar
+[N m/rad], arms a [m], drop links at motion ratio MR gives K_bar = k_bar (MR / a)^2 t^2, the
+number a bar is designed for (its dimensions need not be given).
 
 **Model.** The bar couples the axle's two lower arms by their jounce angles
 alpha_i = side_i (theta_i - theta_i,0) (the arm angle from static, jounce positive: the
@@ -17,18 +13,14 @@ alpha_i = side_i (theta_i - theta_i,0) (the arm angle from static, jounce positi
 
     tau_L = -K_a (alpha_L - alpha_R),   tau_R = -K_a (alpha_R - alpha_L),
 
-reacted on the body (PyBullet's joint motor torque acts on both links of the joint, as the
-torsion bar's does). The body rolling by phi with the wheels on the ground moves the wheel
-centres by -+ t phi / 2, the arms by -+ t phi / (2 l) (l = dz_wc / dtheta, the wheel-centre
-lever of the corner's linkage at ride height, :func:`wheel_lever`: 0.2984 m for the built-in
-corner), so alpha_L - alpha_R = t phi / l and the roll moment of the two arms' torques is
-K_a t^2 phi / l^2: K_a = K_bar l^2 / t^2. Heave and pitch (alpha_L = alpha_R) leave it
-unloaded.
+reacted on the body (as the torsion bar's joint torque). A body roll phi moves the arms by
+-+ t phi / (2 l) (l = dz_wc / dtheta at ride height, :func:`wheel_lever`: 0.2984 m for the
+built-in corner), so the roll moment is K_a t^2 phi / l^2: K_a = K_bar l^2 / t^2. Heave and
+pitch leave it unloaded.
 
-**The arm loads.** The bar's torque enters each lower arm at its pivot, as the torsion
-bar's: the ``torsion_bar_mx`` field of the arm channel carries both (a bar on drop links
-would load the arm at the link's eye instead: a point force, not modelled; the FE's
-torsion-spring unit case takes the moment at the pivot either way).
+**The arm loads.** The bar's torque enters each lower arm at its pivot, in the arm channel's
+``torsion_bar_mx`` with the torsion bar's (drop links would load the link's eye instead: a
+point force, not modelled).
 """
 
 from __future__ import annotations

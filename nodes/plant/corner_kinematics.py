@@ -14,23 +14,18 @@ its two bushes; positive: the outer end up, jounce, on the left corner). For eac
    equation in psi); the wheel centre and the spin axis (static: along y, no static camber
    or toe) move with it.
 
-From the pose: wheel travel z_w [m] (wheel centre's rise), camber gamma [rad] (ISO: positive
-top outward, so the left wheel's spin axis (outboard, +y) dips: gamma = asin(-a_z)), toe
-delta [rad] (toe-in positive: the wheel's front inward, delta = atan2(a_x, a_y) for the left
-wheel), the damper's length and compression, the bumper pad's rise. Rates by central
-differences in theta (step 1e-5 rad; exact for the polynomial parts, error O(h^2) ~ 1e-10
-relative), chained to travel: motion ratio MR_d = -dL_d/dz_w (damper compression per wheel
-travel), the wheel rate from virtual work (energy U(theta) of the springs and bumper, wheel
-load F = dU/dz_w, rate k = dF/dz_w):
+From the pose: wheel travel z_w [m], camber gamma [rad] (ISO, top outward positive: gamma =
+asin(-a_z) for the left wheel's spin axis a), toe delta [rad] (toe-in positive, atan2(a_x,
+a_y)), the damper's length and compression, the pad's rise. Rates by central differences in
+theta (1e-5 rad, error ~1e-10 relative), chained to travel: MR_d = -dL_d/dz_w, and the wheel
+rate from virtual work (U(theta) of the springs and bumper, F = dU/dz_w, k = dF/dz_w):
 
     F(z) = (tau_0 + K_theta theta) / z' + k_c (L_s0 - L_s + s_0) (-L_s') / z' + F_bs pad' / z'
 
 with z' = dz_w/dtheta and the static preload tau_0 (torsion bar) or s_0 (coil: it carries the
-static load when fitted) chosen so that F(0) = M_b g, the sprung weight (the unsprung parts'
-weights go to the tyre; the 15 kg of arm and tie-rod weight the spring carries in part is
-left out, 0.3 % of the load). The elastic part of the rate at ride height is the closed form
-K_theta / z'^2 + k_c MR_s^2; the preload term (tau_0 times the change of the lever) is what
-the elastic closed form leaves out.
+static load when fitted) chosen so that F(0) = M_b g (the arms' share of their 15 kg left
+out: 0.3 % of the load). The elastic part at ride height is K_theta / z'^2 + k_c MR_s^2; the
+rest is the preload acting through the change of the lever.
 """
 
 from __future__ import annotations
