@@ -10,13 +10,11 @@ Sign convention (whole package), per corner:
 * a passive linear damper gives ``F_d = c * v_rel``;
 * a semi-active (dissipative) damper can only give ``F_d * v_rel >= 0``.
 
-Damper velocity (``velocity = "damper"`` in the ``[controller]`` table): a plant whose damper
-is oblique (the double-wishbone corner) also publishes ``v_damper``, the damper's own
-compression velocity (m/s, positive when it shortens), and applies ``F_d`` along the damper
-axis (positive pushing the body). With ``velocity = "damper"`` every law reads ``v_damper`` in
-place of ``v_w - v_b`` (so a physical damper coefficient such as 3800 N·s/m applies as is),
-and the slope it hands to the plant is converted back to dF_d/d(v_w - v_b) with the current
-motion ratio ``v_damper / (v_w - v_b)`` (see :meth:`Controller.plant_slope`).
+Damper velocity (``velocity = "damper"``): a plant with an oblique damper (the
+double-wishbone corner) publishes ``v_damper`` (m/s, positive when it shortens) and applies
+``F_d`` along the damper axis; every law then reads ``v_damper`` as ``v_rel`` (a physical
+3800 N·s/m applies as is) and its slope goes back to the plant through the motion ratio
+(:meth:`Controller.plant_slope`).
 
 The thesis writes its laws with the extension-positive velocity ``z_b' - z_w'``; each law's
 docstring gives the thesis form and its translation into the convention above.

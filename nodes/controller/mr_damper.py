@@ -7,10 +7,9 @@ Stanway/Wereley is used)::
                = F_y(I) * sgn(v) + c_post(I) * v    if |v| >  v_y(I)
     v_y(I)     = F_y(I) / (c_pre - c_post(I))       (the two branches meet: continuous)
 
-``F_y`` is the *intercept* of the post-yield line (the Bingham yield force). This keeps the
-meaning of the published polynomials, which are Bingham fits of the post-yield data; the other
-convention (F_y = force at the knee, v_y = F_y/c_pre) would lower every post-yield force by
-``F_y * c_post / c_pre`` (about 100 N at 0.6 A). See docs/control.md.
+``F_y`` is the *intercept* of the post-yield line (Bingham), the meaning of the published
+polynomials (post-yield fits); a knee force F_y (v_y = F_y/c_pre) would lower every
+post-yield force by ``F_y c_post / c_pre`` (~100 N at 0.6 A). See docs/control.md.
 
 Current dependence (Table 5.1, valid for 0 <= I <= 0.6 A)::
 
@@ -25,14 +24,12 @@ compliance K_f in series with a fluid mass M_f that drives the bi-viscous elemen
     F   = K_f * s                       force transmitted by the damper (N)
     M_f x_f'' = K_f * s - F_bv(x_f', I)
 
-In steady flow (constant velocity) ``F -> F_bv(v, I)``. The equations are stiff (pre-yield
-pole ``M_f / c_pre`` ~ 27 us) and are integrated with backward Euler in substeps, each solved
-exactly because ``F_bv`` is piecewise linear and increasing in ``x_f'``.
+In steady flow ``F -> F_bv(v, I)``. Stiff (pre-yield pole ``M_f / c_pre`` ~ 27 us): backward
+Euler in substeps, each solved exactly (``F_bv`` piecewise linear, increasing in ``x_f'``).
 
-Motion ratio ``r`` (damper stroke velocity / wheel relative velocity): ``x_d' = r * v_rel`` and
-the force at the wheel is ``F_d = r * F``. ``r = 1`` (default) mounts the damper vertically at
-the wheel; the thesis's realistic QVM damper is oblique, its lumped models scale the damping by
-1500/3800 = 0.395 (r ~ 0.628) — the thesis does not say whether the MR force was scaled.
+Motion ratio ``r``: ``x_d' = r v_rel``, ``F_d = r F`` at the wheel; ``r = 1`` (default) is a
+vertical damper. The thesis's lumped models scale its oblique damper by 1500/3800 = 0.395
+(r ~ 0.628) and do not say whether the MR force was scaled.
 """
 
 from __future__ import annotations

@@ -9,16 +9,13 @@
 
       I = sat_[0, I_max]( G * (|F*| - B * |F_MR|) )
 
-  ``F_MR`` is the force the damper transmits (its fluid-spring force). For a Bingham damper
-  ``F = c v + a I`` the loop gives ``F = (c + a G K) v / (1 + a G B)`` for ``F* = K v``: a
-  linear, viscous-like characteristic (the "feedback linearisation"); B < 1 compensates the
-  droop of a proportional loop, so the slope reaches K. With the fluid dynamics on, the loop
-  is evaluated at every internal substep (the thesis ran its Simulink damper/controller block
-  at its own fine rate); with the dynamics off, the algebraic loop is solved exactly.
+  ``F_MR`` is the damper's (fluid-spring) force. For a Bingham damper ``F = c v + a I`` and
+  ``F* = K v`` the loop gives ``F = (c + a G K) v / (1 + a G B)``: viscous-like ("feedback
+  linearisation"), B < 1 making up the droop. It is evaluated every internal substep (the
+  thesis's Simulink block ran at its own fine rate); without fluid dynamics, solved exactly.
 
-The MR model is integrated from the previous call's time to ``t`` with the velocities
-interpolated linearly between the two calls, so the force returned at ``t`` is the damper's
-force at ``t``. ``c_eff`` given to the plant is the post-yield damping ``r^2 c_post(I)``.
+The MR model is integrated from the previous call to ``t``, the velocities interpolated
+linearly, so the force returned is the damper's at ``t``; ``c_eff`` = ``r^2 c_post(I)``.
 """
 
 from __future__ import annotations
