@@ -13,11 +13,10 @@ Method: **sum of sinusoids with random phases on an FFT grid** (deterministic am
 
     z(x) = sum_k sqrt(2 G_d(n_k) dn) cos(2 pi n_k x + phi_k),   n_min <= n_k <= n_max,
 
-with n_k = k dn, dn = 1 / L_gen, phases phi_k uniform on [0, 2 pi) from a seeded
-``numpy.random.Generator`` (PCG64), so a (class, seed, band, length) quadruple always gives the
-same road. It is evaluated on a uniform grid of spacing dx <= 1 / (20 n_max) by an inverse real
-FFT and linearly interpolated between grid points (the interpolation attenuates the PSD by less
-than 1 % at n_max). Each track is shifted so that z(0) = 0 (no step at t = 0).
+with n_k = k dn, dn = 1 / L_gen, phases phi_k uniform on [0, 2 pi) from a seeded PCG64
+(the same road for the same class, seed, band and length), evaluated by an inverse real FFT on
+a grid dx <= 1 / (20 n_max), linearly interpolated (< 1 % PSD loss at n_max); each track
+shifted to z(0) = 0.
 
 Left/right tracks (``correlation``):
 

@@ -32,15 +32,9 @@ KMH = 1.0 / 3.6
 
 @dataclass(kw_only=True)
 class Road:
-    """A road surface under two wheel tracks (0 left, 1 right), driven at constant speed.
-
-    Attributes (keyword-only, after a subclass's own fields):
-        speed: forward speed v [m/s].
-        length: road length L [m] (the run's distance), or None when unbounded.
-        corners: if not None, the corner names ("FL", "FR", "RL", "RR") that see this road;
-            the others run on a flat road (thesis Ch. 4: only the front-right wheel is excited).
-        name: what the road is ("events", "sampled", "pave", "csv:FILE" ...).
-    """
+    """A road under two wheel tracks (0 left, 1 right) at constant ``speed`` v [m/s]; ``length``
+    L [m] or None; ``corners``: the corner names that see it (the others a flat road; thesis
+    Ch. 4 excites only FR), None for all; ``name`` ("events", "pave", "csv:FILE" ...)."""
 
     speed: float = 0.0
     length: float | None = None
@@ -87,10 +81,8 @@ def bump_height(s: np.ndarray, x_start: float, height: float, length: float) -> 
 
 def pothole_height(s: np.ndarray, x_start: float, depth: float, length: float,
                    shape: str = "cosine") -> np.ndarray:
-    """Pothole of ``depth`` [m] (> 0, downwards) and ``length`` [m] starting at ``x_start``.
-
-    ``shape``: "cosine" (smooth 1 - cos dip) or "rect" (sharp edges, flat bottom).
-    """
+    """Pothole of ``depth`` [m] (> 0, downwards) and ``length`` [m] from ``x_start``: ``shape``
+    "cosine" (1 - cos dip) or "rect" (sharp edges, flat bottom)."""
     s = np.asarray(s, dtype=float)
     if shape == "cosine":
         return -bump_height(s, x_start, depth, length)
@@ -102,10 +94,8 @@ def pothole_height(s: np.ndarray, x_start: float, depth: float, length: float,
 
 @dataclass(frozen=True)
 class RoadEvent:
-    """One discrete event: ``kind`` in step|ramp|bump|pothole, on ``tracks`` (0, 1 or both).
-
-    ``height`` is the step/ramp/bump height [m] or the pothole depth [m] (positive).
-    """
+    """One event: ``kind`` step|ramp|bump|pothole on ``tracks``; ``height`` [m] (a pothole's
+    depth, positive)."""
 
     kind: str
     x_start: float

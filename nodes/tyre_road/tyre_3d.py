@@ -5,24 +5,20 @@ numerics: no I/O (the tyre/road node and :mod:`nodes.plant.full_vehicle_dw_sim` 
 Per corner, from what the plant publishes (``FullVehicleDoubleWishbone.wheel_kinematics``,
 the fields ``vx_wc``, ``vy_wc``, ``omega_w``, ``gamma``, ``r_l`` of ``plant/state``):
 
-* the slips (ISO-W, the .tir file's axes): longitudinal slip
-  kappa = (omega r_l - V_x) / max(|V_x|, V_LOW) (the loaded radius taken as the effective
-  rolling radius: ours, below), slip angle alpha = atan(V_y / max(|V_x|, V_LOW)) (ISO 8855:
-  the angle from the wheel's x axis to the centre's velocity, positive about z up; the MF
-  gives F_y of the opposite sign, PKY1 < 0), inclination gamma;
-* transient slip: the slips that act are first-order lags of the kinematic ones over the
-  travelled distance with the MF 6.1 relaxation lengths sigma_x = K_xk / C_x,
-  sigma_y = |K_ya| / C_y of the current load (:func:`.magic_formula.relax`, held over the
-  communication step h: the node computes once per step);
+* slips (ISO-W, the .tir's axes): kappa = (omega r_l - V_x) / max(|V_x|, V_LOW), alpha =
+  atan(V_y / max(|V_x|, V_LOW)) (from the wheel's x axis to the centre's velocity, about z
+  up; F_y has the opposite sign, PKY1 < 0), inclination gamma;
+* transient slip: first-order lags over the travelled distance with the MF 6.1 relaxation
+  lengths sigma_x = K_xk / C_x, sigma_y = |K_ya| / C_y (:func:`.magic_formula.relax`, once
+  per communication step h);
 * F_z: the vertical tyre's F_t (point contact, W + k_t (z_g - z_w) >= 0, the thesis's);
 * F_x, F_y, M_z: :func:`.magic_formula.steady_state` at (F_z, kappa', alpha', gamma, V_x),
   combined slip.
 
-Effective rolling radius (a choice the thesis does not make): the corner file's loaded
-radius r_l (0.30 m for the built-in), the same radius the plant rolls the wheel at (free
-rolling omega = V / r_l gives kappa = 0). A radial tyre's R_e is ~ R_0 - F_z / (3 k_z)
-(Pacejka 2012 Sec. 7.2.2, 0.34 m for the shipped .tir); any constant R_e only shifts the
-free-rolling spin, so the forces of a manoeuvre do not depend on it.
+Effective rolling radius (ours; the thesis has none): the corner file's loaded radius r_l
+(0.30 m built in), the plant's rolling radius (free rolling gives kappa = 0). A radial tyre's
+R_e ~ R_0 - F_z / (3 k_z) (Pacejka 2012 Sec. 7.2.2: 0.34 m for the shipped .tir); a constant
+R_e only shifts the free-rolling spin, not a manoeuvre's forces.
 
 V_LOW = 1 m/s (ours): below it the slips' denominator is held (MF-Tyre's low-speed
 treatment is not ported: magic_formula.py); the events run above 3 m/s.
