@@ -40,12 +40,13 @@ import numpy as np
 
 from cosim.errors import InputFileError
 
-from ..influence import InfluenceSet, short_channel
+from ..lib.influence_set import InfluenceSet, short_channel
 from .ansys_rst import LENGTH_UNITS, read_in_child
 
 OP2_TO_VOIGT = (0, 1, 2, 3, 4, 5)
 """Columns of pyNastran's (oxx, oyy, ozz, txy, tyz, txz) taken for (xx, yy, zz, xy, yz, zx)."""
-PIP_HINT = "pip install pyNastran"
+PIP_HINT = ('pip install --no-deps "pyNastran==1.4.1" cpylog docopt-ng colorama'
+            "  (its numpy<2 pin does not hold: pyproject.toml)")
 STATIC = 1
 """pyNastran's ``analysis_code`` of a static solution (SOL 101)."""
 
