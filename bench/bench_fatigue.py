@@ -41,7 +41,7 @@ def main() -> None:
     p.add_argument("--repeat", type=int, default=1, help="repeats (--run)")
     a = p.parse_args()
     if a.run:
-        from nodes.fatigue import counting
+        from nodes.fatigue.lib import counting
 
         t0 = time.perf_counter()
         worker.warm_up()

@@ -56,11 +56,11 @@ CLASSES = frozenset({
     "nodes.tyre_road.magic_formula.MagicFormula", "nodes.tyre_road.tyre_3d.Tyre3D",
     "nodes.tyre_road.tyres.PointContact", "nodes.tyre_road.wheel_paths.RoadPath",
     "cosim.load_blocks.StepBlocks", "nodes.fatigue.config.FatigueConfig",
-    "nodes.fatigue.counting.StreamingRainflow", "nodes.fatigue.fkm.FKMSpec",
-    "nodes.fatigue.influence.InfluenceSet", "nodes.fatigue.life_models.SNCurve",
-    "nodes.fatigue.material.ComponentSpec", "nodes.fatigue.material.Material",
-    "nodes.fatigue.screen_bound.NodeTables", "nodes.fatigue.screening.Screening",
-    "nodes.fatigue.screening.StressScreen", "nodes.fatigue.worker.LiveFatigue",
+    "nodes.fatigue.lib.counting.StreamingRainflow", "nodes.fatigue.lib.fkm.FKMSpec",
+    "nodes.fatigue.lib.influence_set.InfluenceSet", "nodes.fatigue.lib.life_models.SNCurve",
+    "nodes.fatigue.lib.material.ComponentSpec", "nodes.fatigue.lib.material.Material",
+    "nodes.fatigue.lib.screen_bound.NodeTables", "nodes.fatigue.lib.screening.Screening",
+    "nodes.fatigue.lib.screening.StressScreen", "nodes.fatigue.worker.LiveFatigue",
     "nodes.fatigue.worker._Engine", "nodes.fatigue.worker._Parked",
 })
 """The whitelist: the classes (``module.QualName``) whose objects a node's state may hold.

@@ -67,7 +67,7 @@ def load_duty(path: str | Path) -> dict[str, Any]:
     if "log10_std" in duty and "scatter_band" in duty:
         raise ScenarioError("duty.scatter_band", duty["scatter_band"],
                             "either log10_std or scatter_band, not both")
-    from nodes.fatigue.duty_cycle import log10_std_from_scatter_band
+    from nodes.fatigue.lib.duty_cycle import log10_std_from_scatter_band
 
     if "log10_std" in duty:
         out["log10_std"] = _number(duty["log10_std"], "duty.log10_std",
@@ -228,7 +228,7 @@ def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
 def _compare_laws(done: list, first: dict) -> dict[str, Any]:
     """duty.json's ``laws``: each law's damage per schedule of every event at the reference
     (first) law's critical node, its ratio to the reference's, each law's own totals."""
-    from nodes.fatigue.duty_cycle import law_matrix
+    from nodes.fatigue.lib.duty_cycle import law_matrix
 
     for name, _, _, fat in done[1:]:
         if fat["ids"] != first["ids"]:
@@ -273,7 +273,7 @@ def _schedule(duty: dict[str, Any], out: Path, runs: Path, mode: str | None, rer
     (duty.json's content, the DutyResult, the first event's fatigue)."""
     import numpy as np
 
-    from nodes.fatigue.duty_cycle import Event, life_factor, schedule_damage
+    from nodes.fatigue.lib.duty_cycle import Event, life_factor, schedule_damage
 
     out.mkdir(parents=True, exist_ok=True)
     infos: list[dict[str, Any]] = []  # name, run_dir, fat (_event_fatigue) per event

@@ -26,10 +26,10 @@ from pathlib import Path
 
 from cosim.errors import SuscosimError
 from nodes.fatigue.config import RESIDUES
-from nodes.fatigue.critical_plane import CRITICAL_PLANES
-from nodes.fatigue.damage import METHODS
-from nodes.fatigue.equivalent_stress import EQUIVALENTS
-from nodes.fatigue.mean_stress import MEAN_STRESS_METHODS
+from nodes.fatigue.lib.critical_plane import CRITICAL_PLANES
+from nodes.fatigue.lib.damage import METHODS
+from nodes.fatigue.lib.equivalent_stress import EQUIVALENTS
+from nodes.fatigue.lib.mean_stress import MEAN_STRESS_METHODS
 
 
 def _value(text: str):

@@ -6,7 +6,7 @@ by side (#30 item 5: compare a simulation with a rig or road measurement, or two
 A SOURCE is a run folder (its table's ``plant/arm/...`` columns) or a load file (RPC III,
 MDF 4, CSV, Parquet: every channel, in its own unit). Per channel: the rainflow cycles
 (ASTM half cycles for the residue), D = Σ n (ΔF / 1 kN)^k / N_ref and the damage-equivalent
-range ΔF_eq at N_ref cycles (:mod:`nodes.fatigue.pseudo_damage`); each source after the first
+range ΔF_eq at N_ref cycles (:mod:`nodes.fatigue.lib.pseudo_damage`); each source after the first
 with its ratio D / D_first. Exit codes: 0 printed, 2 bad input (one line on stderr).
 """
 
@@ -51,7 +51,7 @@ def source_loads(src: Path) -> dict[str, np.ndarray]:
 
 def compare(sources: Sequence[Path], k: float = 5.0, n_ref: float = 1e6) -> dict:
     """{"k", "n_ref", "sources": [...], "channels": {name: [{d, eq_range, ratio}, ...]}}."""
-    from nodes.fatigue.pseudo_damage import channel_pseudo_damage
+    from nodes.fatigue.lib.pseudo_damage import channel_pseudo_damage
 
     per = []
     for s in sources:

@@ -101,25 +101,24 @@ from typing import Any
 
 from cosim.config import ConfigReader
 
-from .critical_plane import CRITICAL_PLANES, RANKING
-from .damage import METHODS
-from .equivalent_stress import EQUIVALENTS
-from .fkm import T_RANGE_C, FKMSpec, fkm_sn_curve
-from .life_models import ENDURANCE_MODES
-from .material import (
+from .lib.critical_plane import CRITICAL_PLANES, RANKING
+from .lib.damage import METHODS
+from .lib.equivalent_stress import EQUIVALENTS
+from .lib.fkm import T_RANGE_C, FKMSpec, fkm_sn_curve
+from .lib.life_models import ENDURANCE_MODES
+from .lib.material import (
     ALIASES,
     CYCLIC_CURVES,
     ComponentSpec,
     Material,
     compatibility,
     component_sn_curve,
-    database_material,
-    material_names,
     material_sn_curve,
     with_overrides,
 )
-from .mean_stress import MEAN_STRESS_METHODS
-from .sn_data import TabulatedSN
+from .lib.mean_stress import MEAN_STRESS_METHODS
+from .lib.sn_data import TabulatedSN
+from .materials import database_material, material_names
 from .strength_sections import read_component, read_fkm, read_sn_table
 
 STRUCTURED_ARM = "builtin:structured"

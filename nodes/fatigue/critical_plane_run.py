@@ -18,12 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from . import critical_plane as cp
 from .config import FatigueConfig
-from .damage import cycle_reversals
-from .influence import InfluenceSet, short_channel
-from .result import FatigueResult
-from .superposition import stress_history
+from .lib import critical_plane as cp
+from .lib.damage import cycle_reversals
+from .lib.influence_set import InfluenceSet, short_channel
+from .lib.result import FatigueResult
+from .lib.superposition import stress_history
 
 N_HOT_SPOTS = 50
 """Nodes assessed on critical planes: the most damaged of the equivalent-stress pass (a 30 m

@@ -1,9 +1,5 @@
-"""Stress influence coefficients c_i (Pa per unit load) of a part: the set and imported tables.
-
-An `InfluenceSet` holds, for n load cases and m nodes, the six stress components per unit
-load: ``coefficients[i, node, :] = (σx, σy, σz, τxy, τyz, τzx)`` in Pa/N (Pa/(N m) for a unit
-moment), with the name of the load channel each case answers to (``ball_joint_z`` answers to
-the column ``plant/arm/ball_joint_z``).
+"""Where stress influence coefficients (an :class:`~nodes.fatigue.lib.influence_set.InfluenceSet`)
+come from:
 
 * the built-in arm and every part file are meshed and solved by :mod:`nodes.fatigue.parts`
   (results shipped beside the part file, else cached under `cache_dir`);
@@ -18,7 +14,6 @@ from __future__ import annotations
 import csv
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -27,31 +22,8 @@ import numpy as np
 from cosim.errors import InputFileError
 from cosim.safe_open import open_user_text
 
+from .lib.influence_set import InfluenceSet, short_channel
 from .prnsol import looks_like_prnsol, read_prnsol
-
-
-@dataclass
-class InfluenceSet:
-    """Unit-load stresses: coefficients (n_cases, n_nodes, 6) in Pa per N."""
-
-    case_names: list[str]
-    coefficients: np.ndarray
-    node_xyz: np.ndarray | None  # (n_nodes, 3) m, None if the import has no coordinates
-    node_ids: np.ndarray  # (n_nodes,) labels (FE node numbers)
-    surface: np.ndarray  # (n_nodes,) bool, nodes on the surface
-    meta: dict = field(default_factory=dict)
-
-    @property
-    def n_nodes(self) -> int:
-        return int(self.coefficients.shape[1])
-
-    def subset(self, mask: np.ndarray) -> InfluenceSet:
-        """The same set restricted to the nodes in ``mask``."""
-        return InfluenceSet(
-            list(self.case_names), np.ascontiguousarray(self.coefficients[:, mask]),
-            None if self.node_xyz is None else self.node_xyz[mask], self.node_ids[mask],
-            self.surface[mask], dict(self.meta),
-        )
 
 
 # ------------------------------------------------------------------------------- cache
@@ -150,8 +122,3 @@ def import_influence(base: Path, mapping: Mapping[str, str | Mapping[str, Any]],
                         np.ones(ids_ref.size, dtype=bool),
                         {"source": "imported", "folder": str(folder),
                          "mapping": {k: v for k, v in mapping.items()}})
-
-
-def short_channel(name: str) -> str:
-    """``plant/arm/ball_joint_z`` -> ``ball_joint_z``."""
-    return name[len("plant/arm/"):] if name.startswith("plant/arm/") else name

@@ -31,7 +31,7 @@ from cosim.errors import InputFileError, ScenarioError
 from cosim.formats import ChannelSet
 from cosim.formats.units import to_si_factor
 
-from .influence import short_channel
+from .lib.influence_set import short_channel
 
 MAX_FORCE_N = 1.0e7
 """Largest plausible force sample (N) in a load history (module docstring)."""

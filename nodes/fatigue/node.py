@@ -40,7 +40,7 @@ from cosim.safe_open import check_user_file
 from cosim.wire import codec, inner
 
 from .config import FatigueConfig
-from .damage import SPECTRAL_METHODS
+from .lib.damage import SPECTRAL_METHODS
 from .live_sink import LiveLoads, Track
 from .more_parts import more_parts
 from .worker import FatigueResult, LiveFatigue

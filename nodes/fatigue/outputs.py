@@ -32,14 +32,14 @@ from pathlib import Path
 import numpy as np
 
 from .config import SN_METHODS, FatigueConfig
-from .counting import Cycles, count_series
-from .damage import sn_curve
-from .equivalent_stress import equivalent
-from .fkm import T_RANGE_C
-from .influence import short_channel
-from .mean_stress import equivalent_amplitude
-from .pseudo_damage import K_REF, channel_pseudo_damage, matrix_rows, rainflow_matrix
-from .superposition import stress_history
+from .lib.counting import Cycles, count_series
+from .lib.damage import sn_curve
+from .lib.equivalent_stress import equivalent
+from .lib.fkm import T_RANGE_C
+from .lib.influence_set import short_channel
+from .lib.mean_stress import equivalent_amplitude
+from .lib.pseudo_damage import K_REF, channel_pseudo_damage, matrix_rows, rainflow_matrix
+from .lib.superposition import stress_history
 from .worker import FatigueResult, analyse, load_influence
 
 

@@ -19,9 +19,9 @@ from cosim.errors import InputFileError, ScenarioError
 from cosim.safe_open import read_user_text
 
 from .config import FatigueConfig
-from .damage import SPECTRAL_METHODS
 from .damage_map import plot_damage_map
-from .influence import short_channel
+from .lib.damage import SPECTRAL_METHODS
+from .lib.influence_set import short_channel
 from .worker import FatigueResult, analyse, load_influence
 
 

@@ -45,9 +45,19 @@ import numpy as np
 from cosim.errors import InputFileError
 
 from .config import FatigueConfig
-from .counting import Cycles, StreamingRainflow
-from .equivalent_stress import equivalent
-from .influence import short_channel
+from .lib.counting import Cycles, StreamingRainflow
+from .lib.equivalent_stress import equivalent
+from .lib.influence_set import short_channel
+from .lib.pseudo_damage import (
+    K_REF,
+    N_REF,
+    ChannelPseudoDamage,
+    equivalent_range,
+    matrix_rows,
+    rainflow_matrix,
+    reference_range,
+)
+from .lib.superposition import stress_history
 from .load_file import MAX_FORCE_N, MAX_MOMENT_NM
 from .outputs import (
     SnSpectrum,
@@ -57,16 +67,6 @@ from .outputs import (
     write_pseudo_damage,
     write_vtu,
 )
-from .pseudo_damage import (
-    K_REF,
-    N_REF,
-    ChannelPseudoDamage,
-    equivalent_range,
-    matrix_rows,
-    rainflow_matrix,
-    reference_range,
-)
-from .superposition import stress_history
 from .worker import FatigueResult, LiveFatigue, load_influence
 
 BATCH_ROWS = 65_536

@@ -18,12 +18,12 @@ import numpy as np
 
 from cosim.errors import ScenarioError
 
-from . import spectral
 from .config import FatigueConfig
-from .damage import cycle_reversals
-from .equivalent_stress import equivalent_of
-from .result import FatigueResult
-from .superposition import node_major, superpose_components
+from .lib import spectral
+from .lib.damage import cycle_reversals
+from .lib.equivalent_stress import equivalent_of
+from .lib.result import FatigueResult
+from .lib.superposition import node_major, superpose_components
 from .worker import _case_columns, _matrix, load_influence
 
 NODE_CHUNK = 256

@@ -14,9 +14,9 @@ from typing import Any
 from cosim.config import ConfigReader
 from cosim.errors import ScenarioError
 
-from .fkm import FKMSpec
-from .material import LOADINGS, SURFACE_FACTORS, ComponentSpec
-from .sn_data import TabulatedSN, ncode_curve, points_curve
+from .lib.fkm import FKMSpec
+from .lib.material import LOADINGS, SURFACE_FACTORS, ComponentSpec
+from .lib.sn_data import TabulatedSN, ncode_curve, points_curve
 
 COMPONENT_KEYS = ("enabled", "surface", "section_h_m", "section_b_m", "equivalent_diameter_m",
                   "loading", "reliability", "temperature_c", "kf", "knee_cycles", "method",
@@ -41,7 +41,7 @@ def read_fkm(r: ConfigReader) -> FKMSpec:
 
 def read_sn_table(r: ConfigReader, material_name: str) -> TabulatedSN | None:
     """``[fatigue.sn_curve]`` (or the named material's ``sn`` in the database)."""
-    from .material import load_database
+    from .materials import load_database
 
     if r.has("sn_curve"):
         t = r.section("sn_curve", expected="a table (type = \"points\" | \"segments\")")

@@ -21,16 +21,17 @@ import numpy as np
 
 from cosim.errors import ScenarioError
 
-from . import counting, screen_bound, superposition, turning_eq
 from .config import BUILTIN_PART, FatigueConfig
-from .counting import Cycles, StreamingRainflow
-from .damage import cycle_damage
-from .equivalent_stress import equivalent_of
-from .influence import InfluenceSet, import_influence, short_channel
-from .result import FatigueResult
-from .screening import Screening, unsupported
-from .superposition import ROWS, components_buffer, node_major
-from .turning_eq import kept_equivalent, superpose_gather
+from .influence import import_influence
+from .lib import counting, screen_bound, superposition, turning_eq
+from .lib.counting import Cycles, StreamingRainflow
+from .lib.damage import cycle_damage
+from .lib.equivalent_stress import equivalent_of
+from .lib.influence_set import InfluenceSet, short_channel
+from .lib.result import FatigueResult
+from .lib.screening import Screening, unsupported
+from .lib.superposition import ROWS, components_buffer, node_major
+from .lib.turning_eq import kept_equivalent, superpose_gather
 
 TILE_ELEMS = 1 << 19
 """Stress components per node tile of the compiled path's signed von Mises (every sample:

@@ -6,7 +6,7 @@ results shipped beside it (``lower_arm.influence.npz``: no meshing, no solve) an
 wheel load (the plant's joint loads at static equilibrium, superposed on the unit cases with
 inertia relief) with its node and position, the largest stress under a 3 g vertical bump (the
 static load set times 3, quasi-static), the yield strength, the mesh, and the mode-stress floor
-(nodes/fatigue/arm_bounds.py). ``suscosim part check`` meshes and solves a part (the full card:
+(nodes/fatigue/lib/arm_bounds.py). ``suscosim part check`` meshes and solves a part (the full card:
 hot spots, mode shapes, convergence).
 
 The static loads come from the realistic corner itself (``nodes.plant.double_wishbone``: a
@@ -29,7 +29,7 @@ TABLE_6_1_M1_HZ = 362.3
 """Table 6.1's first flexible mode of the thesis's arm (fundamental vertical bending) [Hz]."""
 LEG_LENGTH = 0.32
 """Pivot to ball joint along the legs [m] (front 0.312, rear 0.332): the beam length of the
-mode-stress floor (nodes/fatigue/arm_bounds.py)."""
+mode-stress floor (nodes/fatigue/lib/arm_bounds.py)."""
 
 def static_plant_loads() -> dict[str, dict[str, float]]:
     """Each plant load channel's fields at static ride height [N, N m] (``arm``: the lower
@@ -54,9 +54,9 @@ def static_arm_loads() -> dict[str, float]:
 def stress_floor(moment: float, mass: float, mat) -> dict[str, float]:
     """The least nominal bending stress [MPa] an arm of this mass can carry the torsion
     spring's static moment at, if its first vertical bending mode is at Table 6.1's 362 Hz and
-    at its +15 % (nodes/fatigue/arm_bounds.py, ideal section κ = 1): why a 5 kg arm with the
+    at its +15 % (nodes/fatigue/lib/arm_bounds.py, ideal section κ = 1): why a 5 kg arm with the
     thesis's M1 cannot also keep its static hot spot under 250 MPa."""
-    from nodes.fatigue.arm_bounds import nominal_bending_stress as sigma
+    from nodes.fatigue.lib.arm_bounds import nominal_bending_stress as sigma
 
     return {f"at_{f:.0f}_hz": sigma(moment, mass, LEG_LENGTH, f, mat.E, mat.rho) / 1e6
             for f in (TABLE_6_1_M1_HZ, 1.15 * TABLE_6_1_M1_HZ)}
@@ -65,8 +65,8 @@ def stress_floor(moment: float, mass: float, mat) -> dict[str, float]:
 def card() -> dict:
     """The model card as a dict (SI inside, MPa where the key says so)."""
     from nodes.fatigue.config import BUILTIN_PART
-    from nodes.fatigue.equivalent_stress import von_mises
-    from nodes.fatigue.material import steel_817M40
+    from nodes.fatigue.lib.equivalent_stress import von_mises
+    from nodes.fatigue.materials import steel_817M40
     from nodes.fatigue.parts import load_part
     from nodes.fatigue.parts.results_file import part_results
 

@@ -34,7 +34,7 @@ def _static_loads(channels: list[str]) -> dict[str, float]:
 
 
 def check(args: argparse.Namespace) -> int:
-    from nodes.fatigue.equivalent_stress import von_mises
+    from nodes.fatigue.lib.equivalent_stress import von_mises
     from nodes.fatigue.parts.card import card, convergence
     from nodes.fatigue.parts.schema import load_part
 

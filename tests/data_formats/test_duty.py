@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.fatigue.duty_cycle import (
+from nodes.fatigue.lib.duty_cycle import (
     Z_90,
     Event,
     life_factor,

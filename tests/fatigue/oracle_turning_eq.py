@@ -1,13 +1,13 @@
 """Test oracles of the fatigue engine's one (compiled) path: the same idea in numpy (#28, #42).
 
-The product computes a block by :func:`nodes.fatigue.turning_eq.superpose_gather` and
-:func:`nodes.fatigue.turning_eq.kept_equivalent` (numba; the bracket's proof is in that
-module's docstring) and counts with :meth:`nodes.fatigue.counting.StreamingRainflow.
+The product computes a block by :func:`nodes.fatigue.lib.turning_eq.superpose_gather` and
+:func:`nodes.fatigue.lib.turning_eq.kept_equivalent` (numba; the bracket's proof is in that
+module's docstring) and counts with :meth:`nodes.fatigue.lib.counting.StreamingRainflow.
 feed_packed`. Here, for the bit-equality tests only:
 
 * :func:`turning_equivalent`: the bracket in numpy (float32 cosines; the proof below), the
   kept-sample test and the exact values at the kept samples, packed per node as
-  :func:`nodes.fatigue.counting.turning_points` packs them;
+  :func:`nodes.fatigue.lib.counting.turning_points` packs them;
 * :func:`exact_numpy` / :func:`exact_block`: drop-in replacements of the worker's
   ``_Engine._exact_compiled`` (monkeypatched by the tests): in chunks of samples over all
   nodes, the numpy turning points, or the equivalent stress of every sample (the reference),
@@ -31,10 +31,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodes.fatigue.counting import Cycles, StreamingRainflow, turning_points
-from nodes.fatigue.equivalent_stress import TILE_NODES, equivalent_of, invariants_of
-from nodes.fatigue.superposition import ROWS, superpose_components
-from nodes.fatigue.turning_eq import ROUND_TOL
+from nodes.fatigue.lib.counting import Cycles, StreamingRainflow, turning_points
+from nodes.fatigue.lib.equivalent_stress import TILE_NODES, equivalent_of, invariants_of
+from nodes.fatigue.lib.superposition import ROWS, superpose_components
+from nodes.fatigue.lib.turning_eq import ROUND_TOL
 
 COS_TOL = 4e-6
 """Bracket half-width per unit of 2p (the cosine term; see the module docstring)."""
@@ -98,8 +98,8 @@ def turning_equivalent(comp: np.ndarray, kind: str, previous: np.ndarray | None
 
     Args:
         comp: (6, n, k) stress components (Pa) of k nodes over n samples, as
-            :func:`nodes.fatigue.superposition.superpose_components` gives them.
-        kind: the equivalent stress (:data:`nodes.fatigue.equivalent_stress.EQUIVALENTS`).
+            :func:`nodes.fatigue.lib.superposition.superpose_components` gives them.
+        kind: the equivalent stress (:data:`nodes.fatigue.lib.equivalent_stress.EQUIVALENTS`).
         previous: (k,) the last equivalent stress fed before this block, or None.
 
     Returns:

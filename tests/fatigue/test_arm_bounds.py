@@ -1,5 +1,5 @@
-"""The mode-stress closed form (nodes/fatigue/arm_bounds.py) against the part FE's bar
-(P2 tetrahedra, nodes/fatigue/parts/solid.py), and what it says about issue #12's bars."""
+"""The mode-stress closed form (nodes/fatigue/lib/arm_bounds.py) against the part FE's bar
+(P2 tetrahedra, nodes/fatigue/lib/solid.py), and what it says about issue #12's bars."""
 
 from __future__ import annotations
 
@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 from skfem import MeshTet
 
-from nodes.fatigue import arm_bounds as ab
-from nodes.fatigue.parts.mesh import TetMesh
-from nodes.fatigue.parts.solid import PartFE
+from nodes.fatigue.lib import arm_bounds as ab
+from nodes.fatigue.lib.solid import PartFE, TetMesh
 
 E, NU, RHO = 200e9, 0.3, 7800.0
 

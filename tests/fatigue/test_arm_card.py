@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cosim import lower_arm as geo
-from nodes.fatigue.material import steel_817M40
+from nodes.fatigue.materials import steel_817M40
 from orchestrator.studies.arm_card import main
 
 from .oracle_hex_arm import arm_mesh, mass_properties

@@ -12,14 +12,14 @@ import pytest
 
 from cosim.errors import ScenarioError
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.damage import cycle_reversals, strain_life_knee
-from nodes.fatigue.life_models import SNCurve, cyclic_strain, neuber
-from nodes.fatigue.material import (
+from nodes.fatigue.lib.damage import cycle_reversals, strain_life_knee
+from nodes.fatigue.lib.life_models import SNCurve, cyclic_strain, neuber
+from nodes.fatigue.lib.material import (
     ComponentSpec,
     component_sn_curve,
     material_sn_curve,
-    steel_817M40,
 )
+from nodes.fatigue.materials import steel_817M40
 
 MPa = 1e6
 MAT = steel_817M40()

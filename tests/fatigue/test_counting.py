@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import rainflow
 
-from nodes.fatigue.counting import Cycles, StreamingRainflow, count_series, histogram
+from nodes.fatigue.lib.counting import Cycles, StreamingRainflow, count_series, histogram
 
 # ASTM E1049-85, Fig. 6(a) rainflow example: load history in units, and Table/Fig. 6(f)
 # published counts: range 3 -> 0.5, 4 -> 1.5, 6 -> 0.5, 8 -> 1.0, 9 -> 0.5 (10, 7, 5 -> 0).

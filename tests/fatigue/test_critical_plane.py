@@ -1,4 +1,4 @@
-"""#44 item 1: Findley critical planes (nodes/fatigue/critical_plane.py), checked against
+"""#44 item 1: Findley critical planes (nodes/fatigue/lib/critical_plane.py), checked against
 closed forms.
 
 Findley on the plane of normal angle θ to the load axis, k its normal-stress factor
@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.fatigue import critical_plane as cp
-from nodes.fatigue.counting import count_series
+from nodes.fatigue.lib import critical_plane as cp
+from nodes.fatigue.lib.counting import count_series
 
 SF, B = 1.2e9, -0.1  # a Basquin line σa = σ'f (2N)^b for the tests [Pa]
 PERIODS = 20
@@ -198,7 +198,7 @@ def test_cli_findley_writes_life_plane_and_csv(run_dir: Path, capsys) -> None:
 
 def test_live_summary_says_the_planes_were_not_computed() -> None:
     from nodes.fatigue.config import FatigueConfig
-    from nodes.fatigue.result import FatigueResult
+    from nodes.fatigue.lib.result import FatigueResult
     from nodes.fatigue.run_dir import summary_dict
 
     cfg = FatigueConfig.from_dict({"equivalent": "findley"})

@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.fatigue.counting import StreamingRainflow, count_series
-from nodes.fatigue.damage import cycle_reversals, miner_per_node
-from nodes.fatigue.life_models import cyclic_strain, neuber
-from nodes.fatigue.material import compatibility, steel_817M40, uniform_material_law, with_overrides
-from nodes.fatigue.mean_stress import equivalent_amplitude
+from nodes.fatigue.lib.counting import StreamingRainflow, count_series
+from nodes.fatigue.lib.damage import cycle_reversals, miner_per_node
+from nodes.fatigue.lib.life_models import cyclic_strain, neuber
+from nodes.fatigue.lib.material import compatibility, uniform_material_law, with_overrides
+from nodes.fatigue.lib.mean_stress import equivalent_amplitude
+from nodes.fatigue.materials import steel_817M40
 
 MAT = steel_817M40()
 
@@ -81,7 +82,7 @@ def test_miner_per_node_streaming_equals_closed_form_per_node():
     x = np.stack([_sine(a, 0.0, n) for a in amps], axis=1)
     rf = StreamingRainflow(3)
     cyc = rf.feed(x)
-    from nodes.fatigue.counting import Cycles
+    from nodes.fatigue.lib.counting import Cycles
     c = Cycles.concat([cyc, rf.residue_cycles("repeated")])
     D = miner_per_node(c, 3, MAT, "stress_life", "none")
     Nf = 0.5 * (amps / MAT.sf) ** (1 / MAT.b)

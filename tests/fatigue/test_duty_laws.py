@@ -1,6 +1,6 @@
 """#31 item 3: a duty cycle under several damper laws (``[[laws]]`` in the duty file): every
 scenario event run under each law, each law's schedule summed, and the event x law table at
-the reference law's critical node (orchestrator/duty.py, nodes/fatigue/duty_cycle.py). Short:
+the reference law's critical node (orchestrator/duty.py, nodes/fatigue/lib/duty_cycle.py). Short:
 two four-corner events of 0.1 and 0.3 s (50 and 150 steps) under two laws, monolithic."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.fatigue.duty_cycle import Event, law_matrix, schedule_damage
+from nodes.fatigue.lib.duty_cycle import Event, law_matrix, schedule_damage
 
 from ..conftest import COARSE_ARM, ROOT, suscosim
 

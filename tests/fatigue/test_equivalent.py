@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodes.fatigue.equivalent_stress import (
+from nodes.fatigue.lib.equivalent_stress import (
     abs_max_principal,
     principal_extremes,
     signed_von_mises,
     von_mises,
 )
-from nodes.fatigue.superposition import stress_history
+from nodes.fatigue.lib.superposition import stress_history
 
 
 def _tensor(s):

@@ -14,11 +14,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cosim import plaindata
-from nodes.fatigue import counting, screen_bound, turning_eq, worker
+from nodes.fatigue import worker
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.counting import StreamingRainflow, turning_points
-from nodes.fatigue.equivalent_stress import equivalent_of
-from nodes.fatigue.superposition import components_buffer, superpose_components
+from nodes.fatigue.lib import counting, screen_bound, turning_eq
+from nodes.fatigue.lib.counting import StreamingRainflow, turning_points
+from nodes.fatigue.lib.equivalent_stress import equivalent_of
+from nodes.fatigue.lib.superposition import components_buffer, superpose_components
 from nodes.fatigue.synthetic import pave_like_loads
 from tests.conftest import COARSE_ARM
 
@@ -284,7 +285,7 @@ def test_kernels_compiled_before_the_first_block_not_in_the_step_loop() -> None:
     comp = _random_tensors(np.random.default_rng(1), 8, 100)
     vals, counts = turning_eq.kept_equivalent(comp, 100, "abs_max_principal")
     StreamingRainflow(8).feed_packed(vals, counts, vals[np.cumsum(counts) - 1])
-    from nodes.fatigue.screening import StressScreen
+    from nodes.fatigue.lib.screening import StressScreen
 
     inf = worker.load_influence(FatigueConfig.from_dict(COARSE))
     scr = StressScreen(inf.coefficients, "abs_max_principal")

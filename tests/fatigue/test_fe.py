@@ -1,4 +1,4 @@
-"""The part FE (nodes/fatigue/parts/solid.py, P2 tetrahedra) on a bar: closed-form cantilever,
+"""The part FE (nodes/fatigue/lib/solid.py, P2 tetrahedra) on a bar: closed-form cantilever,
 coupling resultant, superposition against a direct solve, inertia relief's supports."""
 
 from __future__ import annotations
@@ -8,9 +8,8 @@ import pytest
 import scipy.sparse.linalg as spla
 from skfem import MeshTet
 
-from nodes.fatigue.parts.mesh import TetMesh
-from nodes.fatigue.parts.solid import PERMC, PartFE
-from nodes.fatigue.superposition import stress_history
+from nodes.fatigue.lib.solid import PERMC, PartFE, TetMesh
+from nodes.fatigue.lib.superposition import stress_history
 
 E, NU, RHO = 200e9, 0.3, 7800.0
 L, B, H = 0.4, 0.04, 0.02

@@ -10,7 +10,7 @@ import math
 
 import pytest
 
-from nodes.fatigue.material import (
+from nodes.fatigue.lib.material import (
     ComponentSpec,
     Material,
     compatibility,
@@ -20,11 +20,11 @@ from nodes.fatigue.material import (
     reliability_factor,
     size_factor,
     specimen_endurance_limit,
-    steel_817M40,
     surface_factor,
     temperature_factor,
     with_overrides,
 )
+from nodes.fatigue.materials import steel_817M40
 
 MPa = 1e6
 MAT = steel_817M40()

@@ -28,14 +28,14 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from nodes.fatigue.config import BUILTIN_PART, RESIDUES, SN_METHODS, FatigueConfig
-from nodes.fatigue.counting import count_series
-from nodes.fatigue.damage import cycle_damage
-from nodes.fatigue.equivalent_stress import equivalent
-from nodes.fatigue.fkm import temperature_factor
-from nodes.fatigue.influence import short_channel
-from nodes.fatigue.life_models import ENDURANCE_MODES
-from nodes.fatigue.mean_stress import MEAN_STRESS_METHODS
-from nodes.fatigue.superposition import stress_history
+from nodes.fatigue.lib.counting import count_series
+from nodes.fatigue.lib.damage import cycle_damage
+from nodes.fatigue.lib.equivalent_stress import equivalent
+from nodes.fatigue.lib.fkm import temperature_factor
+from nodes.fatigue.lib.influence_set import short_channel
+from nodes.fatigue.lib.life_models import ENDURANCE_MODES
+from nodes.fatigue.lib.mean_stress import MEAN_STRESS_METHODS
+from nodes.fatigue.lib.superposition import stress_history
 from nodes.fatigue.worker import load_influence
 from orchestrator.fatigue_cli import main
 

@@ -16,7 +16,7 @@ from ansys.mapdl.reader import examples, read_binary
 from cosim.errors import InputFileError
 from nodes.fatigue import worker
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.equivalent_stress import von_mises
+from nodes.fatigue.lib.equivalent_stress import von_mises
 from nodes.fatigue.parts import ansys_rst, rst_influence
 from nodes.fatigue.parts.ansys_rst import rst_header
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from cosim.errors import InputFileError
-from nodes.fatigue.equivalent_stress import von_mises
+from nodes.fatigue.lib.equivalent_stress import von_mises
 from nodes.fatigue.parts.build import part_model, solve_part
 from nodes.fatigue.parts.calculix import calculix_unit_cases, frd_influence, read_frd_stress
 from nodes.fatigue.parts.schema import load_part

@@ -190,7 +190,7 @@ def test_missing_geometry_and_selection(tmp_path, capsys):
 def test_amg_paths_match_the_direct_solver(link, monkeypatch):
     """The iterative paths (AMG-CG statics, AMG-LOBPCG modes) that large meshes take give the
     direct solver's answers."""
-    import nodes.fatigue.parts.solid as solid
+    import nodes.fatigue.lib.solid as solid
 
     _, path, _ = link
     pm = part_model(load_part(path), 0.02)

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nodes.fatigue.counting import count_series
-from nodes.fatigue.pseudo_damage import pseudo_damage, rainflow_matrix
+from nodes.fatigue.lib.counting import count_series
+from nodes.fatigue.lib.pseudo_damage import pseudo_damage, rainflow_matrix
 from orchestrator.pseudo_damage_cli import main
 
 

@@ -46,8 +46,8 @@ def test_streamed_equals_whole(tmp_path):
         assert np.array_equal(getattr(res, k), getattr(whole, k)), k
     assert res.summary() == whole.summary()
     assert methods == extra["sn_methods"] and methods is not None
-    from nodes.fatigue.counting import count_series
-    from nodes.fatigue.pseudo_damage import rainflow_matrix
+    from nodes.fatigue.lib.counting import count_series
+    from nodes.fatigue.lib.pseudo_damage import rainflow_matrix
 
     for c, v in loads.items():
         assert matrices[c] == rainflow_matrix(count_series(v, cfg.residue)), c
@@ -104,8 +104,8 @@ def test_scan_memory_does_not_grow_with_the_history():
 def test_sn_spectrum_counts_the_cycles_at_or_above_each_level():
     """The S-N plot's spectrum by level equals the cycles' own count at or above each level
     (infinite σar, a mean past Su, counted above all), in any order of the cycles."""
-    from nodes.fatigue.counting import Cycles, count_series
-    from nodes.fatigue.mean_stress import equivalent_amplitude
+    from nodes.fatigue.lib.counting import Cycles, count_series
+    from nodes.fatigue.lib.mean_stress import equivalent_amplitude
     from nodes.fatigue.outputs import SnSpectrum
 
     cfg = FatigueConfig.from_dict({**COARSE, "mean_stress": "goodman"})

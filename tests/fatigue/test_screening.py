@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.counting import count_series
-from nodes.fatigue.damage import miner_per_node
-from nodes.fatigue.equivalent_stress import equivalent
-from nodes.fatigue.screening import StressScreen, damage_bound, unsupported
-from nodes.fatigue.superposition import stress_history
+from nodes.fatigue.lib.counting import count_series
+from nodes.fatigue.lib.damage import miner_per_node
+from nodes.fatigue.lib.equivalent_stress import equivalent
+from nodes.fatigue.lib.screening import StressScreen, damage_bound, unsupported
+from nodes.fatigue.lib.superposition import stress_history
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import analyse, load_influence
 from tests.conftest import COARSE_ARM
@@ -130,7 +130,7 @@ def test_compiled_bound_of_kept_slots_equals_the_gathered_one_as_the_set_changes
     blocks, nodes leaving and joining) gives each node the bound bounds() gathers for it, bit
     for bit (a node's lanes never mix with another's)."""
     pytest.importorskip("numba")
-    from nodes.fatigue.screen_bound import load_stats
+    from nodes.fatigue.lib.screen_bound import load_stats
 
     cfg = FatigueConfig.from_dict(COARSE)
     inf = load_influence(cfg)

@@ -10,17 +10,16 @@ import pytest
 
 from cosim.errors import ScenarioError
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.counting import Cycles
-from nodes.fatigue.damage import miner_per_node
-from nodes.fatigue.fkm import FKMSpec, fkm_factors, fkm_sn_curve, roughness_factor
-from nodes.fatigue.material import (
+from nodes.fatigue.lib.counting import Cycles
+from nodes.fatigue.lib.damage import miner_per_node
+from nodes.fatigue.lib.fkm import FKMSpec, fkm_factors, fkm_sn_curve, roughness_factor
+from nodes.fatigue.lib.material import (
     component_sn_curve,
-    database_material,
-    steel_817M40,
     with_overrides,
 )
-from nodes.fatigue.mean_stress import equivalent_amplitude
-from nodes.fatigue.sn_data import ncode_curve, points_curve
+from nodes.fatigue.lib.mean_stress import equivalent_amplitude
+from nodes.fatigue.lib.sn_data import ncode_curve, points_curve
+from nodes.fatigue.materials import database_material, steel_817M40
 
 
 def random_cycles(n: int = 4000, seed: int = 2) -> Cycles:

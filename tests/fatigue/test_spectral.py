@@ -1,4 +1,4 @@
-"""Frequency-domain fatigue (nodes/fatigue/spectral.py, #44 item 2): Dirlik's and
+"""Frequency-domain fatigue (nodes/fatigue/lib/spectral.py, #44 item 2): Dirlik's and
 Tovo-Benasciutti's cycle densities and damage against FLife (an independent implementation,
 a test dependency) on the same PSD, and against rainflow of a Gaussian history of that PSD."""
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import rainflow
 
-from nodes.fatigue import spectral
+from nodes.fatigue.lib import spectral
 
 K = 7.3
 C = 1.8e22 * 1e6 ** K  # N = C a^-k, a in Pa (FLife's example curve, there in MPa)

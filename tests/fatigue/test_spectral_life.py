@@ -13,9 +13,9 @@ import pytest
 from scipy.signal import welch
 
 from cosim.errors import ScenarioError
-from nodes.fatigue import spectral
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.damage import cycle_reversals
+from nodes.fatigue.lib import spectral
+from nodes.fatigue.lib.damage import cycle_reversals
 from nodes.fatigue.node import preflight
 from orchestrator.fatigue_cli import main
 

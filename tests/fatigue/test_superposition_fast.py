@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from nodes.fatigue.equivalent_stress import equivalent_of
-from nodes.fatigue.superposition import superpose, superpose_components
+from nodes.fatigue.lib.equivalent_stress import equivalent_of
+from nodes.fatigue.lib.superposition import superpose, superpose_components
 
 
 def _reference(F: np.ndarray, per_node: np.ndarray) -> np.ndarray:

@@ -1,8 +1,8 @@
 """The equivalent stress only where rainflow needs it: the same cycles, bit for bit.
 
-The numpy oracle (``oracle_turning_eq.turning_equivalent``) against the whole block, and the
-product's compiled path (:func:`nodes.fatigue.turning_eq.kept_equivalent`) against both: the same
-cycles (the kept samples differ: its bracket is another one), bit for bit."""
+The numpy oracle (``oracle_turning_eq.turning_equivalent``) against the whole block, and
+the product's compiled path (:func:`nodes.fatigue.lib.turning_eq.kept_equivalent`) against both:
+the same cycles (the kept samples differ: its bracket is another one), bit for bit."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import rainflow
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nodes.fatigue.counting import Cycles, StreamingRainflow, turning_points
-from nodes.fatigue.equivalent_stress import equivalent_of
-from nodes.fatigue.superposition import superpose_components
-from nodes.fatigue.turning_eq import kept_equivalent
+from nodes.fatigue.lib.counting import Cycles, StreamingRainflow, turning_points
+from nodes.fatigue.lib.equivalent_stress import equivalent_of
+from nodes.fatigue.lib.superposition import superpose_components
+from nodes.fatigue.lib.turning_eq import kept_equivalent
 
 from .oracle_turning_eq import feed_points, turning_equivalent
 

@@ -9,7 +9,7 @@ import pytest
 
 from cosim.errors import InputFileError, ScenarioError
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.screening import SCREEN_FRACTION
+from nodes.fatigue.lib.screening import SCREEN_FRACTION
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import LiveFatigue, analyse
 from orchestrator.fatigue_cli import main
@@ -158,9 +158,9 @@ def test_imported_tables_appendix_v_mapping(tmp_path):
     r = analyse(t, {"plant/arm/ball_joint_x": FX, "plant/arm/ball_joint_y": FY,
                     "plant/arm/ball_joint_z": FZ}, cfg, 10.0)
     # independent: App V loop, Sxt(:, i) = SxLC1(i) FY + SxLC2(i) FX + SxLC3(i) FZ
-    from nodes.fatigue.counting import count_series
-    from nodes.fatigue.damage import miner_per_node
-    from nodes.fatigue.equivalent_stress import signed_von_mises
+    from nodes.fatigue.lib.counting import count_series
+    from nodes.fatigue.lib.damage import miner_per_node
+    from nodes.fatigue.lib.equivalent_stress import signed_von_mises
     node = 5
     s = c[0, node] * FY[:, None] + c[1, node] * FX[:, None] + c[2, node] * FZ[:, None]
     cyc = count_series(signed_von_mises(s), "repeated")

@@ -35,7 +35,7 @@ ALLOWED: dict[str, dict[str, str]] = {
                                       "gp.read_bytes()": "a part's geometry, for its digest"},
     "nodes/fatigue/parts/calculix.py": {"read_text(errors=\"replace\")": "CalculiX's output"},
     "nodes/fatigue/parts/build.py": {"part.path.read_bytes()": "a part file already loaded"},
-    "nodes/fatigue/material.py": {"path.read_text()": "the shipped material library"},
+    "nodes/fatigue/materials/__init__.py": {"path.read_text()": "the shipped material library"},
     "nodes/plant/model.py": {"path.read_bytes()": "the .bullet file PyBullet just wrote"},
     "orchestrator/fmu_slave.py": {"read_text()": "the exported FMU's own resources"},
     "orchestrator/duty.py": {"done.read_text()": "a duty run's summary.json (under --out)"},

@@ -52,10 +52,8 @@ log(2 Ne) (Fig 6-18; f = 0.9 for Sut < 490 MPa); below 10³ cycles the conservat
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
-from pathlib import Path
 from statistics import NormalDist
 from typing import TYPE_CHECKING, Any
 
@@ -136,60 +134,27 @@ def specimen_endurance_limit(Su: float) -> float:
     return 0.5 * Su if Su <= 1400 * MPa else 700 * MPa
 
 
-DATABASE = Path(__file__).with_name("materials") / "materials.toml"
-"""The shipped material database (schema in its header; docs/fatigue.md)."""
 _REQUIRED = ("E", "nu", "rho", "Su", "Sy")
 _OPTIONAL = ("sf", "b", "ef", "c", "K", "n", "Se", "K_table", "n_table")
+"""A database entry's required and optional numbers (SI units, as `Material`)."""
 
 
-def load_database(path: Path | None = None) -> dict[str, dict[str, Any]]:
-    """The material tables of a database file (default: the shipped one), by name.
-
-    Raises ValueError naming the file and the material for a missing or non-numeric value.
-    """
-    path = Path(path) if path is not None else DATABASE
-    try:
-        data = tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise ValueError(f"{path}: unreadable material database ({exc})") from None
-    for name, entry in data.items():
-        if not isinstance(entry, dict):
-            raise ValueError(f"{path}: [{name}] is not a table")
-        for k in _REQUIRED:
-            if k not in entry:
-                raise ValueError(f"{path}: [{name}] lacks {k}")
-        for k in (*_REQUIRED, *_OPTIONAL):
-            v = entry.get(k)
-            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
-                raise ValueError(f"{path}: [{name}] {k} = {v!r} is not a number")
-    return data
-
-
-def material_names(path: Path | None = None) -> list[str]:
-    """The names in a material database (default: the shipped one)."""
-    return list(load_database(path))
-
-
-def database_material(name: str = "817M40", cyclic: str = "uml",
-                      path: Path | None = None,
-                      base: Mapping[str, float] | None = None) -> Material:
-    """Material ``name`` of the database: its values with their sources; each strain-life
+def material_from_entry(name: str, entry: Mapping[str, Any], cyclic: str = "uml",
+                        base: Mapping[str, float] | None = None) -> Material:
+    """Material ``name`` from its database ``entry`` (a table of the database file, read by
+    :mod:`nodes.fatigue.materials`): its values with their sources; each strain-life
     constant it lacks from the UML, Se' from Shigley Eq 6-8 if absent.
 
-    ``base`` replaces the file's E, nu, rho, Su, Sy *before* those estimates, so that the
+    ``base`` replaces the entry's E, nu, rho, Su, Sy *before* those estimates, so that the
     estimated values follow an overridden strength (σ'f = 1.5 Su, Se' = 0.5 Su, ...; a
-    value the file gives itself stays).
+    value the entry gives itself stays).
 
-    ``cyclic`` chooses K', n': "uml" (the file's K, n, else 1.65 σu, 0.15), "table_6_2"
-    (the file's K_table, n_table) or "compatible" (σ'f/ε'f^(b/c), b/c).
+    ``cyclic`` chooses K', n': "uml" (the entry's K, n, else 1.65 σu, 0.15), "table_6_2"
+    (the entry's K_table, n_table) or "compatible" (σ'f/ε'f^(b/c), b/c).
     """
     if cyclic not in CYCLIC_CURVES:
         raise ValueError(f"cyclic must be one of {CYCLIC_CURVES}, got {cyclic!r}")
-    db = load_database(path)
-    if name not in db:
-        raise ValueError(f"material {name!r} is not in {path or DATABASE} (it has "
-                         + ", ".join(db) + ")")
-    e = dict(db[name])
+    e = dict(entry)
     src_file = dict(e.get("source") or {})
     for k, v in (base or {}).items():
         if k not in _REQUIRED:
@@ -233,16 +198,6 @@ def database_material(name: str = "817M40", cyclic: str = "uml",
     return Material(name=name, E=vals["E"], nu=vals["nu"], rho=vals["rho"], Su=vals["Su"],
                     Sy=vals["Sy"], sf=vals["sf"], b=vals["b"], ef=vals["ef"], c=vals["c"],
                     K=vals["K"], n=vals["n"], Se=vals["Se"], source=source)
-
-
-def steel_817M40(cyclic: str = "uml") -> Material:
-    """817M40 quenched and tempered (≈ EN24T / AISI 4340): Table 6.2 + UML estimates, from
-    the shipped database (`database_material`).
-
-    ``cyclic`` chooses K', n': "uml" (1.65 σu, 0.15; default), "table_6_2" (1166 MPa, 0.0246,
-    implausible, see module docstring) or "compatible" (σ'f/ε'f^(b/c), b/c).
-    """
-    return database_material("817M40", cyclic)
 
 
 def with_overrides(mat: Material, overrides: Mapping[str, float]) -> Material:

@@ -27,13 +27,12 @@ Supports, for a free part loaded at all its joints (:meth:`PartFE.solve_loads`):
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 from skfem import Basis, ElementTetP2, ElementVector, MeshTet
 from skfem.models.elasticity import lame_parameters
-
-from .mesh import TetMesh
 
 PERMC = "MMD_AT_PLUS_A"
 """SuperLU column ordering: minimum degree on A^T + A suits the symmetric FE matrices (the
@@ -50,6 +49,44 @@ LOBPCG_TOL = 1e-6
 CHUNK = 20000
 """Elements assembled at a time (bounds the memory of the vectorised element matrices)."""
 INT_K, INT_M = 2, 4
+
+
+@dataclass
+class TetMesh:
+    """Linear tetrahedral mesh: p (n, 3) m, t (m, 4) vertex indices; labels (n,) of the
+    input; node_sets name -> vertex indices; sharp_edges (k, 3) sample points [m] of the
+    CAD's sharp re-entrant edges (empty without CAD)."""
+
+    p: np.ndarray
+    t: np.ndarray
+    labels: np.ndarray
+    node_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    sharp_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    fillet_faces: int = 0
+    source: str = ""
+
+
+def _orient(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Tetrahedra with positive volume (swap two vertices of the inverted ones)."""
+    a, b, c, d = (p[t[:, k]] for k in range(4))
+    vol = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)
+    t = t.copy()
+    neg = vol < 0
+    t[neg, 1], t[neg, 2] = t[neg, 2], t[neg, 1].copy()
+    if np.any(np.abs(vol) < 1e-30):
+        raise ValueError("degenerate tetrahedra (zero volume) in the mesh")
+    return t
+
+
+def compact_mesh(p: np.ndarray, t: np.ndarray, labels: np.ndarray,
+             sets: dict[str, np.ndarray]) -> TetMesh:
+    """Keep only the vertices the tetrahedra use, renumbered."""
+    used = np.unique(t)
+    new = -np.ones(p.shape[0], dtype=np.int64)
+    new[used] = np.arange(used.size)
+    out_sets = {k: new[v][new[v] >= 0] for k, v in sets.items()}
+    return TetMesh(p[used], _orient(p[used], new[t]), labels[used], out_sets)
+
 
 
 class PartFE:

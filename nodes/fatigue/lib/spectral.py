@@ -14,7 +14,7 @@ Symbols (SI: stress in Pa, frequency f in Hz, time in s):
 * Cycle densities n(a) [1/(s Pa)]: expected cycles per second of amplitude a per Pa, so that
   the damage rate is int n(a) / N(a) da (Palmgren-Miner, N(a) the cycles to failure of a
   cycle of amplitude a about the history's mean, from the same S-N curve, mean-stress rule and
-  endurance rule as the rainflow method: :func:`nodes.fatigue.damage.cycle_reversals`).
+  endurance rule as the rainflow method: :func:`nodes.fatigue.lib.damage.cycle_reversals`).
 
 **Dirlik** (T. Dirlik, "Application of computers in fatigue analysis", PhD thesis, University
 of Warwick, 1985; as written in Zorman, Slavic & Boltezar, MSSP 2023, and FLife's

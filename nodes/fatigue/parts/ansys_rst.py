@@ -45,7 +45,7 @@ import numpy as np
 from cosim.errors import InputFileError
 from cosim.safe_open import check_user_file, open_user_file
 
-from ..influence import InfluenceSet, short_channel
+from ..lib.influence_set import InfluenceSet, short_channel
 
 RST_TO_VOIGT = (0, 1, 2, 3, 4, 5)
 """Columns of the reader's (X, Y, Z, XY, YZ, XZ) taken for (xx, yy, zz, xy, yz, zx): the same

@@ -29,10 +29,11 @@ from scipy.spatial import cKDTree
 
 from cosim.errors import InputFileError
 
-from ..influence import InfluenceSet, cache_dir
-from .mesh import Ball, TetMesh, mesh_cad, read_mesh
+from ..influence import cache_dir
+from ..lib.influence_set import InfluenceSet
+from ..lib.solid import PartFE, TetMesh
+from .mesh import Ball, mesh_cad, read_mesh
 from .schema import Joint, Part
-from .solid import PartFE
 
 VERSION = "part-fe-v1"
 AXIS_INDEX = {"x": 0, "y": 1, "z": 2}

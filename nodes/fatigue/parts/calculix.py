@@ -25,7 +25,7 @@ import numpy as np
 
 from cosim.errors import InputFileError
 
-from ..influence import InfluenceSet
+from ..lib.influence_set import InfluenceSet
 
 CCX_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
 """C3D10 midside nodes 5-10: edges 1-2, 2-3, 3-1, 1-4, 2-4, 3-4 (CalculiX manual §6.2.5)."""

@@ -39,7 +39,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from ..equivalent_stress import von_mises
+from ..lib.equivalent_stress import von_mises
 from .build import PartModel, part_model, solve_part
 from .schema import Part
 

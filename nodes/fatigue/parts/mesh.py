@@ -4,7 +4,8 @@ meshio from a mesh file (Gmsh ``.msh``, Abaqus/CalculiX ``.inp``, Nastran ``.bdf
 Both give a `TetMesh`: vertex coordinates [m], tetrahedra (4 vertices; a 10-node input keeps
 its corner nodes: the FE puts its quadratic nodes at the straight edges' midpoints, so a
 curved-edge input mesh is taken with straight edges), the input's node labels, and named node
-sets. The FE (``solid.py``) uses quadratic tetrahedra (scikit-fem ``ElementTetP2``) on it.
+sets. The FE (:mod:`nodes.fatigue.lib.solid`) uses quadratic tetrahedra (scikit-fem
+``ElementTetP2``) on it.
 
 gmsh meshing: a size field refines to ``fillet_size`` on the fillet faces and along the
 sharp re-entrant edges (``features.py``), growing to ``size`` over 4 fillet sizes; mesh
@@ -19,13 +20,14 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from cosim.errors import InputFileError
 from cosim.safe_open import check_user_file, open_user_file
+
+from ..lib.solid import TetMesh, compact_mesh
 
 MESH_SUFFIXES = {".msh": "gmsh", ".inp": "abaqus", ".bdf": "nastran", ".nas": "nastran"}
 CAD_SUFFIXES = (".step", ".stp")
@@ -36,43 +38,6 @@ mesh before it was stopped)."""
 
 Ball = tuple[float, float, float, float, float]
 """A refinement ball: centre x, y, z [m], radius [m], element size inside [m]."""
-
-
-@dataclass
-class TetMesh:
-    """Linear tetrahedral mesh: p (n, 3) m, t (m, 4) vertex indices; labels (n,) of the
-    input; node_sets name -> vertex indices; sharp_edges (k, 3) sample points [m] of the
-    CAD's sharp re-entrant edges (empty without CAD)."""
-
-    p: np.ndarray
-    t: np.ndarray
-    labels: np.ndarray
-    node_sets: dict[str, np.ndarray] = field(default_factory=dict)
-    sharp_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
-    fillet_faces: int = 0
-    source: str = ""
-
-
-def _orient(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Tetrahedra with positive volume (swap two vertices of the inverted ones)."""
-    a, b, c, d = (p[t[:, k]] for k in range(4))
-    vol = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)
-    t = t.copy()
-    neg = vol < 0
-    t[neg, 1], t[neg, 2] = t[neg, 2], t[neg, 1].copy()
-    if np.any(np.abs(vol) < 1e-30):
-        raise ValueError("degenerate tetrahedra (zero volume) in the mesh")
-    return t
-
-
-def _compact(p: np.ndarray, t: np.ndarray, labels: np.ndarray,
-             sets: dict[str, np.ndarray]) -> TetMesh:
-    """Keep only the vertices the tetrahedra use, renumbered."""
-    used = np.unique(t)
-    new = -np.ones(p.shape[0], dtype=np.int64)
-    new[used] = np.arange(used.size)
-    out_sets = {k: new[v][new[v] >= 0] for k, v in sets.items()}
-    return TetMesh(p[used], _orient(p[used], new[t]), labels[used], out_sets)
 
 
 def _inp_includes(path: Path, folder: Path, depth: int = 0) -> list[Path]:
@@ -128,7 +93,7 @@ def read_mesh(path: Path, scale: float = 1.0) -> TetMesh:
             labels = np.asarray(m.point_data[key]).astype(np.int64)
     sets = {str(k): np.asarray(v, dtype=np.int64) for k, v in (m.point_sets or {}).items()}
     try:
-        mesh = _compact(p, t, labels, sets)
+        mesh = compact_mesh(p, t, labels, sets)
     except ValueError as exc:
         raise InputFileError(str(path), str(exc)) from None
     mesh.source = str(path)
@@ -274,7 +239,7 @@ def mesh_cad(step: Path | None, size: float, fillet_size: float, scale: float = 
             sharp += sharp_reentrant_edges(v)
         p, t = _mesh_current_model(size, fillet_size, fillets, [e["curve"] for e in sharp],
                                    refine)
-        mesh = _compact(p, t, np.arange(1, p.shape[0] + 1), {})
+        mesh = compact_mesh(p, t, np.arange(1, p.shape[0] + 1), {})
         mesh.labels = np.arange(1, mesh.p.shape[0] + 1)
         mesh.sharp_edges = (np.vstack([e["points_m"] for e in sharp]) if sharp
                             else np.zeros((0, 3)))

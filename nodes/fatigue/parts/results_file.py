@@ -45,7 +45,7 @@ import numpy as np
 
 from cosim.errors import InputFileError
 
-from ..influence import InfluenceSet
+from ..lib.influence_set import InfluenceSet
 from .build import part_influence, part_key, part_names
 from .schema import Part
 

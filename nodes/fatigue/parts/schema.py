@@ -115,9 +115,9 @@ class Part:
 
 
 def material_card(name: str) -> PartMaterial:
-    """A material card by name (817M40: Table 6.2 via nodes.fatigue.material)."""
+    """A material card by name (817M40: Table 6.2 via nodes.fatigue.lib.material)."""
     if name.upper() in ("817M40", "EN24T"):
-        from ..material import steel_817M40
+        from ..materials import steel_817M40
 
         m = steel_817M40()
         return PartMaterial("817M40", m.E, m.nu, m.rho, m.Sy)
