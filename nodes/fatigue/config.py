@@ -122,8 +122,7 @@ from .materials import database_material, material_names
 from .strength_sections import read_component, read_fkm, read_sn_table
 
 STRUCTURED_ARM = "builtin:structured"
-"""``influence`` of the hand-meshed arm removed on 2026-12-06 (issue #42): refused, naming
-what to use instead."""
+"""``influence`` of the removed hand-meshed arm: refused, naming what to use instead."""
 BUILTIN_PART = Path(__file__).parent / "parts" / "data" / "lower_arm.toml"
 """``influence = "builtin"``: the CAD lower arm (docs/parts.md), results shipped beside it."""
 
@@ -351,7 +350,7 @@ FATIGUE_KEYS = ("influence", "mapping", "stress_scale", "equivalent", "method", 
                 "screen", "live", "corner", "parts")
 """The keys of ``[fatigue]`` (module docstring)."""
 CORNERS = ("FL", "FR", "RL", "RR")
-"""``corner``: whose lower arm, on the four-corner vehicle (#31; its plant/arm_<corner>)."""
+"""``corner``: whose lower arm, on the four-corner vehicle (its plant/arm_<corner>)."""
 
 
 SHIPPED_PARTS = Path(__file__).parent / "parts" / "data"

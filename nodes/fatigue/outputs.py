@@ -124,15 +124,12 @@ shows 0.05 Se to 1.5 Su."""
 
 
 class SnSpectrum:
-    """The critical node's cycles for the S-N plot, counted by level (#32: nothing held per
+    """The critical node's cycles for the S-N plot, counted by level (nothing held per
     cycle or per sample): each cycle's corrected amplitude σar (``cfg.mean_stress_rule``, Pa) into
     :data:`SN_LEVELS` log-spaced bins; :meth:`cumulative` gives at each bin's lower edge the
     cycles whose σar is at or above it (those beyond the top edge and the infinite ones of a
     mean stress past Su counted above every level, as the sorted-cycles spectrum counted
-    them). The counts are sums of 0.5 and 1: the same whatever the order the cycles come in.
-    Before #32 the plot held every cycle (its σar sorted, the cumulative count at each):
-    memory and sn_plot.json that grew with the run; the curve drawn is the same at the
-    levels' resolution."""
+    them). The counts are sums of 0.5 and 1: the same whatever the order the cycles come in."""
 
     def __init__(self, cfg: FatigueConfig) -> None:
         self.cfg = cfg

@@ -1,5 +1,5 @@
 """ANSYS ``PRNSOL,S,COMP`` listings (a unit-load case's nodal stresses) read, or refused
-naming the format expected (#30 item 6).
+naming the format expected.
 
 The listing ANSYS Mechanical APDL prints with ``PRNSOL,S,COMP`` (``/OUTPUT`` to a file):
 page headers (``PRINT S NODAL SOLUTION PER NODE``, ``LOAD STEP=...``, ``THE FOLLOWING X,Y,Z

@@ -433,7 +433,7 @@ def _with_critical_planes(loads, cfg: FatigueConfig, result: FatigueResult, extr
 def _stream_and_write(run_dir: Path, scenario: dict, cfg: FatigueConfig, out: Path,
                       what_if: dict | None, progress: Callable[[str], None] | None
                       ) -> FatigueResult:
-    """A run's table read in row batches (:mod:`.run_stream`, #32: memory that does not grow
+    """A run's table read in row batches (:mod:`.run_stream`: memory that does not grow
     with the run), analysed by the live node's block engine, the batch outputs computed as the
     batches pass, ``out`` written whole; with ``[fatigue] parts`` each more part the same way,
     into ``out/<name>/``, and the primary summary's ``parts`` naming them all."""

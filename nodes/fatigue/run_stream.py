@@ -1,4 +1,4 @@
-"""Batch fatigue of a run folder read in row batches (#32): memory that does not grow with the run.
+"""Batch fatigue of a run folder read in row batches: memory that does not grow with the run.
 
 ``suscosim fatigue RUN_DIR`` reads ``table.parquet`` (or ``table.csv``) in batches of
 :data:`BATCH_ROWS` rows, never whole, and feeds the same block engine the live fatigue node
@@ -22,8 +22,7 @@ sample, so the damage is :func:`.worker.analyse`'s bit for bit). Three passes ov
 
 Memory: a batch of the arm's columns (~16 columns x 65 536 rows x 8 B = 8 MB), the engines'
 per-node state, the rainflow residues and the fixed-size spectrum and matrices: nothing
-grows with the run (until #32 the critical node's equivalent stress was kept whole, 8 B a
-row, for the S-N plot and its matrix).
+grows with the run.
 
 Bit-identity with the whole-table path (``analyse`` and ``outputs.batch_outputs``): the
 damage, lives, extremes, cycles, S-N method lives, the critical-node files and the rainflow

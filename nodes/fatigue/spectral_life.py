@@ -1,5 +1,5 @@
 """The frequency-domain life of a run or a load file (``method = "dirlik"`` or
-``"tovo_benasciutti"``, #44 item 2): per node, the signed equivalent stress of the whole history
+``"tovo_benasciutti"``): per node, the signed equivalent stress of the whole history
 (superposition, as the rainflow method's), its Welch PSD, the method's cycle-amplitude density
 and Miner's sum with the stress-life S-N curve, mean-stress rule and endurance rule of the
 config (:mod:`.spectral`), as a `FatigueResult` like the rainflow method's.

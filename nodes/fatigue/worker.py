@@ -74,7 +74,7 @@ def load_influence(cfg: FatigueConfig) -> InfluenceSet:
     if memo_key in _INFLUENCE_MEMO:
         return _INFLUENCE_MEMO[memo_key]
     if cfg.influence == "builtin" or cfg.influence_path.suffix.lower() == ".toml":
-        # a part file (#26; "builtin": the CAD lower arm's): its shipped results when they
+        # a part file ("builtin": the CAD lower arm's): its shipped results when they
         # are this part's, else meshed and solved; mesh_size_m overrides its global size
         from .parts import load_part
         from .parts.results_file import part_results

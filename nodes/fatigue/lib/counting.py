@@ -22,7 +22,7 @@ points of a block are fed (`turning_points`), which leaves the count unchanged.
 Because the state (the stack of unclosed turning points per history) is kept between calls,
 feeding a history in blocks of any size gives exactly the same cycles as feeding it at once.
 
-**Compiled (#28):** :meth:`StreamingRainflow.feed_packed` runs the same rule history by history
+**Compiled:** :meth:`StreamingRainflow.feed_packed` runs the same rule history by history
 in compiled code (:func:`_rainflow_packed`, numba): comparisons and copies only, so the same
 cycles with the same bits, each history's in the order they close (the order across histories
 differs from the lock-step loop's, which no result depends on: a node's damage sums its own

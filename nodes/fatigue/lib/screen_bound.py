@@ -1,16 +1,13 @@
-"""The screening bound of :class:`.screening.StressScreen`: its compiled kernels (numba, #28).
+"""The screening bound of :class:`.screening.StressScreen`: its compiled kernels (numba).
 
 :meth:`.screening.StressScreen.block` bounds the equivalent stress of a set of nodes over a
-block of loads (envelope [lo, hi] and total variation TV, Pa) from per-sub-block statistics
-of the loads; in numpy (the form it had before #28; removed, #42), with 25-sample sub-blocks,
-that cost ~174 us per coupled step for the 13 778 nodes of the CAD arm, more than computing
-them exactly. Here the bound (the
-module docstring of :mod:`.screening`, steps 1-2) is one pass per node over the block's
-sub-blocks: the loads' statistics per sub-block are computed once in numpy
-(:func:`load_stats`, a few (sub-blocks, cases) arrays), then per node and sub-block ~550
+block of loads (envelope [lo, hi] and total variation TV, Pa) from per-sub-block statistics of
+the loads. The bound (the module docstring of :mod:`.screening`, steps 1-2) is one pass per
+node over the block's sub-blocks: the loads' statistics per sub-block are computed once in
+numpy (:func:`load_stats`, a few (sub-blocks, cases) arrays), then per node and sub-block ~550
 floating-point operations (the middle stress, the two deviation bounds R, their principal
-stresses, the triangle and Cauchy-Schwarz sums), ~22 per node-sample against ~280 for the
-exact path, with the node's coefficients in cache.
+stresses, the triangle and Cauchy-Schwarz sums), ~22 per node-sample against ~280 for the exact
+path, with the node's coefficients in cache.
 
 **Principal stresses without transcendentals, proven:** the largest root of 4c³ - 3c = r is
 bracketed by :func:`.turning_eq._root1` (a polynomial proposal checked by the sign of the

@@ -1,4 +1,4 @@
-"""Frequency-domain fatigue (#44 item 2): a stress history's PSD -> the density of its cycle
+"""Frequency-domain fatigue: a stress history's PSD -> the density of its cycle
 amplitudes (Dirlik; Tovo-Benasciutti) -> Miner damage. Pure numerics, no I/O.
 
 Symbols (SI: stress in Pa, frequency f in Hz, time in s):

@@ -5,18 +5,15 @@ For every node and component c ∈ {σx, σy, σz, τxy, τyz, τzx}:
 with c_i the stress influence coefficient of load case i (Pa/N for a unit force, Pa/(N m)
 for a unit moment) and F_i(t) the load history of channel i (N or N m).
 
-**The same bits for a node whatever is computed with it, on every engine.** One BLAS product
-of all samples by all nodes picks its kernel (its fused multiply-adds, its summation order) by
-the matrices' shapes: the same node came out up to 1.2e-7 Pa apart (1 ulp of ~4e8 Pa) computed
-among 113 nodes or among all 2925 (measured on the Ch 6 arm). Screening (:mod:`.screening`)
-computes a changing subset of nodes that must give the unscreened result exactly, so each
-component is *defined* as the plain sum in case order, every product rounded, no fused
-multiply-add: ``c = ((c_0 F_0 + c_1 F_1) + c_2 F_2) + ...`` per sample and node. The
+**The same bits for a node whatever is computed with it.** A BLAS product picks its kernel
+(fused multiply-adds, summation order) by the matrices' shapes, so a node's stress would depend
+on the node set (up to 1 ulp, 1.2e-7 Pa of ~4e8 Pa, on the Ch 6 arm). Screening
+(:mod:`.screening`) computes a changing subset of nodes that must give the unscreened result
+exactly, so each component is *defined* as the plain sum in case order, every product rounded,
+no fused multiply-add: ``c = ((c_0 F_0 + c_1 F_1) + c_2 F_2) + ...`` per sample and node. The
 compiled kernel (numba, :func:`.turning_eq.products_compiled`: the loads of four cases at a
-time in registers, each sample's six components summed in that order; ~3.4 ns per
-node-sample on the 15-case CAD arm against 8-11 ns for the BLAS product per node of fixed
-shape it replaced, #28; the live engine fuses it per node with the turning-point gather,
-:func:`.turning_eq.superpose_gather`) gives those bits
+time in registers, each sample's six components summed in that order; the live engine fuses it
+per node with the turning-point gather, :func:`.turning_eq.superpose_gather`) gives those bits
 (``tests/fatigue/test_superposition_fast.py`` checks them against the sum in Python floats),
 for any subset of nodes and any cut of the history (each sample is computed alone).
 """

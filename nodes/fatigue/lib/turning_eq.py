@@ -1,4 +1,4 @@
-"""The equivalent stress computed exactly only where rainflow needs it (#28): compiled.
+"""The equivalent stress computed exactly only where rainflow needs it: compiled.
 
 Rainflow counting needs a history's turning points only (:func:`.counting.turning_points`),
 and the extremes of a block are turning points or its first or last sample. On the Ch 6 arm
@@ -33,14 +33,10 @@ acos/cos then differ from the root by far less than C64_TOL (a few ulp), its rou
 q + 2p c by less than ROUND_TOL. The exact values at the kept samples go to
 :meth:`.counting.StreamingRainflow.feed_packed`.
 
-**Fused with the products (#28, 2026-12-04):** :func:`superpose_gather` computes a node's
-stresses (:func:`_node_products`, :mod:`.superposition`'s sum in case order) into a
-6 x n scratch that stays in cache and brackets and gathers them at once (:func:`_node_keep`),
-node after node: no 4 MB tile written out and read back, no per-tile Python call. On the
-CAD arm (13 778 nodes, Ch 6 pave) the engine went from ~245 to ~180 us CPU per step.
-The bracket then runs in stages over the node's samples (:func:`_node_keep`: short loops of
-independent samples, not one long dependency chain per sample): ~165 -> ~147 us per step
-unscreened, ~95 -> ~88 at the live node's screen f = 0.1 (docs/live_fatigue.md).
+**Fused with the products:** :func:`superpose_gather` computes a node's stresses
+(:func:`_node_products`, :mod:`.superposition`'s sum in case order) into a 6 x n scratch that
+stays in cache and brackets and gathers them at once (:func:`_node_keep`, in stages over the
+node's samples), node after node: no tile written out and read back, no per-tile Python call.
 """
 
 from __future__ import annotations
@@ -101,10 +97,8 @@ def _node_keep(buf, i, n, out, pos, lo, hi, w):  # type: ignore[no-untyped-def] 
 
     In stages over the node's samples (invariants; r; the largest root; the smallest root
     and the bracket; the kept test; the gather), each a short loop of independent samples:
-    one loop doing it all was one long dependency chain per sample (two divisions, three
-    square roots, two degree-9 polynomials in a row) that the core could not overlap
-    across samples (#28: 146 -> 118 us per step for the product + bracket kernel on the CAD
-    arm). The same operations on the same values as the one loop: the same bits."""
+    one loop doing it all would be one long dependency chain per sample that the core cannot
+    overlap across samples. The same operations on the same values: the same bits."""
     wq = w[0]
     wp = w[1]
     wt = w[2]

@@ -1,4 +1,4 @@
-"""Parts as data (#26): a part file (TOML: geometry as STEP or a mesh, a material card, the
+"""Parts as data: a part file (TOML: geometry as STEP or a mesh, a material card, the
 joints and their load channels) -> the FE influence coefficients the fatigue worker uses.
 
 API: ``load_part(path) -> Part`` (validated; a bad file is an `InputFileError` naming the

@@ -12,16 +12,15 @@ z = 0, the forging's parting plane):
 * **web**: the plan face less the hole, ``section.web`` thick (>= 6 mm: a web thinner than
   about 1/50 of the plan size does not fill in a closed die);
 * **ribs** along the outer edge and round the hole (the H's flanges), ``rib_depth_root`` deep
-  at the legs' roots, tapering linearly to ``rib_depth_tip`` toward the ball joint (the
-  bending moment of the wheel load falls toward the ball joint). ``hole_rib_width`` [m] is
-  one plan width or three, one per ``hole_corners`` entry (the hole's outline offset by each
-  corner's own width: the rib's width then varies linearly along each side of the hole, so
-  [w_eye, w_eye, w_tip] makes the legs' inner flanges wider at their roots on the eyes,
-  where the bending moment is largest, and narrower toward the ball joint; one number: the
-  same solid as before the per-corner form). Optional eye haunch: ``rib_depth_eye`` [m]
-  (default ``rib_depth_root``: no haunch) is the ribs' depth up to ``haunch_y[0]`` [m from
-  the pivot axis], tapering linearly to ``rib_depth_root`` at ``haunch_y[1]`` (measured
-  2026-12-03: OCC's fillet pass fails on most haunched variants, docs/parts.md);
+  at the legs' roots, tapering linearly to ``rib_depth_tip`` toward the ball joint (the bending
+  moment of the wheel load falls toward the ball joint). ``hole_rib_width`` [m] is one plan width
+  or three, one per ``hole_corners`` entry (the hole's outline offset by each corner's own width:
+  the rib's width then varies linearly along each side of the hole, so [w_eye, w_eye, w_tip]
+  makes the legs' inner flanges wider at their roots on the eyes, where the bending moment is
+  largest, and narrower toward the ball joint). Optional eye haunch: ``rib_depth_eye`` [m]
+  (default ``rib_depth_root``: no haunch) is the ribs' depth up to ``haunch_y[0]`` [m from the
+  pivot axis], tapering linearly to ``rib_depth_root`` at ``haunch_y[1]`` (OCC's fillet pass
+  fails on most haunched variants, docs/parts.md);
 * **bush eyes**: hollow tubes along x (the pivot axis), bore = the bushes' outer sleeves;
   with ``[bush_eye] pivot_tube`` one tube from eye to eye (closing the triangle), its bore
   ``pivot_tube_bore`` between the eyes entered by 15-degree cones;
@@ -220,8 +219,8 @@ def build(params: dict[str, Any], fillet: bool = True) -> dict[str, list[int]]:
     if fillet:
         # One fillet pass on the solid WITHOUT its bores: OpenCASCADE refuses a second pass
         # (a fillet cannot end on a fillet face) and, with the bores cut first, returned an
-        # invalid solid (7.19 kg and a -3.00 kg shell: the pivot tube's bore filled; measured
-        # 2026-12-02, docs/parts.md). The bores are cut after, away from every fillet.
+        # invalid solid (the pivot tube's bore filled, docs/parts.md). The bores are cut
+        # after, away from every fillet.
         vols, root_curves, sharp_pts = _fillet_all(vols[0], sec)
     solid, _ = occ.cut([(3, vols[0])], _bores(params, hp, xs))
     occ.synchronize()

@@ -1,4 +1,4 @@
-"""Nastran result files (``.op2``) of unit-load cases as an `InfluenceSet` (#44 item 4).
+"""Nastran result files (``.op2``) of unit-load cases as an `InfluenceSet`.
 
 Each subcase of the file (ascending SUBCASE id; each time step of a subcase with several) is
 one unit case, named by ``case_names``. Read by pyNastran's OP2 reader (``read_op2_geom``):

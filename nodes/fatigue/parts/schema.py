@@ -237,8 +237,7 @@ def short(ch: str) -> str:
 
 def _content(raw: dict) -> bytes:
     """A TOML file's parsed content as canonical JSON: the part key's input, so that a
-    comment or a reflowed line does not orphan a part's shipped results (#47: a comment
-    edit in lower_arm.toml had turned its 1 s load into a minutes-long solve)."""
+    comment or a reflowed line does not orphan a part's shipped results."""
     return json.dumps(raw, sort_keys=True, default=str).encode()
 
 
