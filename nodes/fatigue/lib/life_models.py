@@ -30,17 +30,6 @@ ENDURANCE_MODES = ("haibach", "elementary", "none")
 MAX_REVERSALS = 1e30  # beyond this a cycle is treated as doing no damage (2Nf = inf)
 
 
-def basquin_reversals(sar: np.ndarray, sf: float, b: float, Se: float | None = None) -> np.ndarray:
-    """2Nf from Basquin, σar = σ'f (2Nf)^b. σar <= 0 (or < Se when given) -> inf."""
-    sar = np.asarray(sar, dtype=float)
-    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-        rev = (sar / sf) ** (1.0 / b)
-    rev = np.where(sar > 0.0, rev, np.inf)
-    if Se is not None:
-        rev = np.where(sar < Se, np.inf, rev)
-    return rev
-
-
 def below_knee(rev: np.ndarray, sar: np.ndarray, Se: float, knee_reversals: float, k: float,
                endurance: str) -> np.ndarray:
     """Apply the endurance treatment to reversals ``rev`` of cycles of equivalent amplitude σar.
