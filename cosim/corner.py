@@ -15,7 +15,6 @@ input raises :class:`cosim.errors.InputFileError` naming the file and the key.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -24,7 +23,7 @@ import numpy as np
 
 from .config import ConfigReader
 from .errors import InputFileError, ScenarioError
-from .safe_open import read_user_text
+from .safe_open import read_user_toml
 
 FORMAT = "suscosim-corner"
 VERSION = 1
@@ -98,11 +97,7 @@ def _err(path: str, exc: ScenarioError) -> InputFileError:
 def load(path: str | Path, key: str = "vehicle.corner") -> Corner:
     """Read and check a corner file (``key``: the scenario key that names it)."""
     p = Path(path)
-    text = read_user_text(p, "corner", key)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputFileError(str(p), f"not valid TOML: {exc}") from None
+    data = read_user_toml(p, "corner", key)
     try:
         return from_dict(data, str(p))
     except ScenarioError as exc:

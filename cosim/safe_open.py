@@ -16,7 +16,7 @@ import io
 import os
 import stat
 from pathlib import Path
-from typing import BinaryIO, TextIO
+from typing import Any, BinaryIO, TextIO
 
 from .errors import InputFileError
 
@@ -155,6 +155,46 @@ def read_user_text(path: str | Path, kind: str, key: str = "", encoding: str = "
     except UnicodeDecodeError as exc:
         raise InputFileError(str(path), f"{_where(key)}not a text ({encoding}) file: byte "
                                         f"{exc.start} is 0x{data[exc.start]:02x}") from None
+
+
+MAX_TOML_DEPTH = 64
+"""Deepest nesting of tables and arrays a TOML file a user names may have (a scenario is ~4
+deep); deeper is refused before any reader walks it (a RecursionError otherwise)."""
+
+
+def read_user_toml(path: str | Path, kind: str, key: str = "") -> dict[str, Any]:
+    """:func:`read_user_text` parsed by :func:`parse_user_toml`."""
+    return parse_user_toml(read_user_text(path, kind, key), path, key)
+
+
+def parse_user_toml(text: str, path: str | Path, key: str = "") -> dict[str, Any]:
+    """The TOML ``text`` of the file ``path``: invalid TOML, or nesting deeper than
+    :data:`MAX_TOML_DEPTH`, is an :class:`InputFileError` naming the file."""
+    import tomllib
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputFileError(str(path), f"{_where(key)}not valid TOML: {exc}") from None
+    except RecursionError:
+        data = None
+    if data is None or _depth(data) > MAX_TOML_DEPTH:
+        raise InputFileError(str(path), f"{_where(key)}tables or arrays nested deeper than "
+                                        f"{MAX_TOML_DEPTH} levels")
+    return data
+
+
+def _depth(value: object) -> int:
+    """The nesting depth of dicts and lists in ``value``, walked without recursion (stops
+    counting past :data:`MAX_TOML_DEPTH`)."""
+    deepest, todo = 0, [(value, 1)]
+    while todo:
+        v, d = todo.pop()
+        if isinstance(v, dict | list):
+            deepest = max(deepest, d)
+            if d <= MAX_TOML_DEPTH:
+                todo.extend((c, d + 1) for c in (v.values() if isinstance(v, dict) else v))
+    return deepest
 
 
 def check_user_file(path: str | Path, kind: str, key: str = "",

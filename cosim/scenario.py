@@ -36,9 +36,9 @@ from typing import Any
 
 from . import node_kinds
 from .config import ConfigReader
-from .errors import InputFileError, ScenarioError, UnknownKeyError
+from .errors import ScenarioError, UnknownKeyError
 from .keys import check_name
-from .safe_open import read_user_text
+from .safe_open import read_user_toml
 
 SECTIONS = ("run", "vehicle", "tyre", "road", "controller", "fatigue", "sweep", "report",
             "nodes")
@@ -356,11 +356,7 @@ def to_toml(scenario: dict[str, Any]) -> str:
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[str, Any]:
     """Read a scenario TOML file, apply ``--set`` overrides, validate the common sections."""
     path = Path(path)
-    text = read_user_text(path, "scenario", "scenario file")
-    try:
-        scenario = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputFileError(str(path), f"not valid TOML: {exc}") from None
+    scenario = read_user_toml(path, "scenario", "scenario file")
     absolute_paths(scenario, path.resolve().parent)
     for assignment in overrides:
         apply_override(scenario, assignment)

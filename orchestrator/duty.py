@@ -17,7 +17,6 @@ import csv
 import json
 import math
 import sys
-import tomllib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -25,7 +24,7 @@ from typing import Any
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
-from cosim.safe_open import open_user_text, read_user_text
+from cosim.safe_open import open_user_text, read_user_text, read_user_toml
 
 DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
 EVENT_KEYS = ("name", "scenario", "run", "set", "repeats", "distance_km")
@@ -50,10 +49,7 @@ def _number(v: Any, key: str, expected: str, lo: float = 0.0, lo_open: bool = Fa
 def load_duty(path: str | Path) -> dict[str, Any]:
     """Read and validate a duty file; paths made absolute (relative to its folder)."""
     path = Path(path)
-    try:
-        data = tomllib.loads(read_user_text(path, "scenario", "duty file"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputFileError(str(path), f"not valid TOML: {exc}") from None
+    data = read_user_toml(path, "scenario", "duty file")
     base = path.resolve().parent
     ConfigReader(data, "", ("duty", "events", "laws"))  # a typo: "did you mean"
     duty = data.get("duty", {})

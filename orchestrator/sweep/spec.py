@@ -19,7 +19,7 @@ from cosim import scenario as sc
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
-from cosim.safe_open import read_user_text
+from cosim.safe_open import read_user_toml
 
 from .design import AXIS, Design, design_axis, parse_design
 
@@ -206,13 +206,9 @@ def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None =
                max_points: int = MAX_POINTS) -> Sweep:
     """Read and check a sweep file and enumerate its points (scenarios not yet validated);
     more than ``max_points`` points is a ScenarioError, counted before any is made."""
-    import tomllib
 
     path = Path(path)
-    try:
-        data = tomllib.loads(read_user_text(path, "scenario", "sweep file"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputFileError(str(path), f"not valid TOML: {exc}") from None
+    data = read_user_toml(path, "scenario", "sweep file")
     if not isinstance(data.get("sweep"), dict):
         raise ScenarioError("sweep", data.get("sweep"), "a [sweep] table (with base and grid)")
     sw = ConfigReader(data["sweep"], "sweep", SWEEP_KEYS)  # a typo: "did you mean"

@@ -47,7 +47,7 @@ import numpy as np
 
 from cosim.errors import InputFileError
 from cosim.keys import NAME
-from cosim.safe_open import read_user_file
+from cosim.safe_open import parse_user_toml, read_user_file
 
 COUPLINGS = ("distributing", "rigid")
 UNITS = {"m": 1.0, "mm": 1e-3}
@@ -247,9 +247,10 @@ def load_part(path: str | Path) -> Part:
     src = str(path)
     try:
         raw_bytes = read_user_file(path, "scenario", "part file")
-        raw = tomllib.loads(raw_bytes.decode())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        text = raw_bytes.decode()
+    except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(src, f"not a readable TOML file: {exc}") from None
+    raw = parse_user_toml(text, src, "part file")
     _check_keys(src, "", raw, ("part", "mesh", "joint"))
     p = raw.get("part")
     if not isinstance(p, dict):
