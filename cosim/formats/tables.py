@@ -175,6 +175,12 @@ def read_parquet(path: str | Path) -> ChannelSet:
         except (TypeError, ValueError):
             continue  # a text column: not a channel
         md = tab.schema.field(n).metadata or {}
-        units[n] = md.get(b"unit", b"").decode()
-    t = tab.column(names[it]).to_numpy(zero_copy_only=False).astype(float)
+        try:
+            units[n] = md.get(b"unit", b"").decode()
+        except UnicodeDecodeError:
+            raise InputFileError(path, f"column {n!r}: its unit is not UTF-8 text") from None
+    try:
+        t = tab.column(names[it]).to_numpy(zero_copy_only=False).astype(float)
+    except (TypeError, ValueError):
+        raise InputFileError(path, f"the time column {names[it]!r} is not numeric") from None
     return ChannelSet(t=t, channels=chans, units=units)

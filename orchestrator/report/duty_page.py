@@ -171,9 +171,14 @@ def render_duty(d: Path) -> str:
             f"{cmd(str(duty.get('duty_file')))} · report written "
             f"{esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
     navs = [("totals", "Totals"), ("events", "Events"), ("map", "Damage map")]
-    laws = laws_section(duty)
+    try:  # duty.json is a handed file: a value of the wrong type is its named error
+        laws = laws_section(duty)
+        sections = totals_section(duty) + events_section(duty) + laws
+        sections += map_section(duty, cols, problem)
+    except (TypeError, ValueError, KeyError, AttributeError) as exc:
+        raise BadInput(f"{d / 'duty.json'}: not a duty result (a value of the wrong type: "
+                       f"{type(exc).__name__}: {exc})") from None
     if laws:
         navs.insert(2, ("laws", "Damper laws"))
-    body = "".join(head) + nav(navs) + totals_section(duty) + events_section(duty) + laws
-    body += map_section(duty, cols, problem)
+    body = "".join(head) + nav(navs) + sections
     return page(f"suscosim duty {name}", body)
