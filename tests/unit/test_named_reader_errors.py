@@ -41,3 +41,12 @@ def test_a_duty_json_with_text_where_numbers_go(tmp_path: Path) -> None:
     _exit_2_naming(suscosim("report", str(duty), timeout=120), "duty.json",
                    "a value of the wrong type")
     assert not (duty / "report.html").exists()
+
+
+def test_random_bytes_as_a_runs_scenario_json_for_batch_fatigue(tmp_path: Path) -> None:
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "summary.json").write_text(json.dumps({"status": "ok"}))
+    (run / "scenario.json").write_bytes(bytes(range(256)) * 2)
+    _exit_2_naming(suscosim("fatigue", str(run), timeout=120), "scenario.json",
+                   "not a text (utf-8) file")
