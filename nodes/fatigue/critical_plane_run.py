@@ -24,6 +24,7 @@ from .lib.damage import cycle_reversals
 from .lib.influence_set import InfluenceSet, short_channel
 from .lib.result import FatigueResult
 from .lib.superposition import stress_history
+from .worker import load_influence
 
 N_HOT_SPOTS = 50
 """Nodes assessed on critical planes: the most damaged of the equivalent-stress pass (a 30 m
@@ -119,3 +120,22 @@ def critical_plane_pass(loads: Iterable[Mapping[str, np.ndarray]], cfg: FatigueC
                             f"{_life_km(float(result.damage[top[i]]), L):.6e}",
                             f"{r.rotation_factor:.4f}"])
     return extra, write
+
+
+def with_critical_planes(loads, cfg: FatigueConfig, result: FatigueResult, extra: dict,
+                          files: Callable[[Path], None], say: Callable[[str], None]
+                          ) -> Callable[[Path], None]:
+    """``equivalent = "findley"``: the critical-plane pass (:func:`critical_plane_pass`) over
+    the load batches ``loads``, its summary keys put in ``extra`` and its file written
+    after ``files``; else ``files`` as they are."""
+    if not cfg.critical_plane:
+        return files
+    say(f"fatigue: critical planes ({cfg.critical_plane}) at the hot spots")
+    more, write = critical_plane_pass(loads, cfg, result, load_influence(cfg))
+    extra.update(more)
+    extra["outputs"] = [*extra.get("outputs", []), more["critical_plane"]["file"]]
+
+    def both(folder: Path) -> None:
+        files(folder)
+        write(folder)
+    return both

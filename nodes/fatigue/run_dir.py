@@ -19,6 +19,7 @@ from cosim.errors import InputFileError, ScenarioError
 from cosim.safe_open import read_user_text
 
 from .config import FatigueConfig
+from .critical_plane_run import with_critical_planes
 from .damage_map import plot_damage_map
 from .lib.damage import SPECTRAL_METHODS
 from .lib.influence_set import short_channel
@@ -287,7 +288,7 @@ def _analyse_and_write(t: np.ndarray, loads: dict[str, np.ndarray], cfg: Fatigue
         return result
     files, more = batch_outputs(t, loads, cfg, L, result, say)
     extra.update(more)
-    files = _with_critical_planes([loads], cfg, result, extra, files, say)
+    files = with_critical_planes([loads], cfg, result, extra, files, say)
     write_results(result, out, extra, files)
     return result
 
@@ -405,29 +406,8 @@ def _stream(run_dir: Path, scenario: dict, cfg: FatigueConfig, channel: str, wha
         extra["what_if"] = {"settings": what_if, "hash": settings_hash(what_if)}
     files, more = rs.outputs_streamed(batches, cfg, s, result, methods, matrices, say)
     extra.update(more)
-    files = _with_critical_planes((b for _t, b in batches()), cfg, result, extra, files, say)
+    files = with_critical_planes((b for _t, b in batches()), cfg, result, extra, files, say)
     return result, extra, files, methods
-
-
-def _with_critical_planes(loads, cfg: FatigueConfig, result: FatigueResult, extra: dict,
-                          files: Callable[[Path], None], say: Callable[[str], None]
-                          ) -> Callable[[Path], None]:
-    """``equivalent = "findley"``: the critical-plane pass (:mod:`.critical_plane_run`) over
-    the load batches ``loads``, its summary keys put in ``extra`` and its file written
-    after ``files``; else ``files`` as they are."""
-    if not cfg.critical_plane:
-        return files
-    from .critical_plane_run import critical_plane_pass
-
-    say(f"fatigue: critical planes ({cfg.critical_plane}) at the hot spots")
-    more, write = critical_plane_pass(loads, cfg, result, load_influence(cfg))
-    extra.update(more)
-    extra["outputs"] = [*extra.get("outputs", []), more["critical_plane"]["file"]]
-
-    def both(folder: Path) -> None:
-        files(folder)
-        write(folder)
-    return both
 
 
 def _stream_and_write(run_dir: Path, scenario: dict, cfg: FatigueConfig, out: Path,
