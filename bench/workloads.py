@@ -6,6 +6,8 @@ the cores do: run them on a quiet machine; timing is measured here, never assert
     python -m bench throughput [--repeats 3] [--t-end 8] [--pin auto|on|off] [--lowlatency]
                                [--exchange sequential|parallel]
     python -m bench corner-cpu [--steps 1000] [--repeats 5] [--substeps 2] [--h 0.0005]
+    python -m bench fatigue [--equivalent signed_von_mises] [--method strain_life]
+    python -m bench fatigue --run RUN_DIR [--screen 0.01] [--repeat 3]
 
 ``workloads`` (issues #16 and #28): every row of issue #28's table with its bar. ``--rows``
 (default ``null,lumped,corner_fatigue,corner,full``; ``sweep`` on request, it takes minutes):
@@ -30,6 +32,18 @@ shell): the calls the plant node makes (``spring_force``, ``extra_response``,
 ``response_velocities`` before and after the first substep, ``loads``, ``state`` after every
 substep) with constant forces (the static tyre load, no damper force); the best of
 ``--repeats`` runs of ``--steps`` steps in ``time.process_time`` [us] (docs/cosim.md, issue #16).
+
+``fatigue``: throughput of the fatigue chain in node-samples per second: a synthetic 37 s x 500
+Hz load history (the thesis's pavé track length in time) on the default built-in arm, all
+surface nodes: superposition, equivalent stress, rainflow, Miner. ``--run``: CPU time
+(process_time, not wall) per coupled step of the live engine fed a run's recorded ``plant/arm``
+loads in blocks of ``fatigue.block_samples`` as the live node does (e.g. a Ch 6 realistic-corner
+run folder), unscreened and with ``--screen`` f (``--screen 0``: unscreened only); every
+repeat's damage, extremes, ranges and cycle counts are checked ``array_equal`` to the first's
+(the numpy oracles the tests compare the engine with are in
+``tests/fatigue/oracle_turning_eq.py``, not a product path). The numba kernels are compiled (or
+loaded from their cache) by ``worker.warm_up()`` before the clock starts (as the live node does
+before it is ready): the time is printed.
 """
 
 from __future__ import annotations
@@ -157,7 +171,7 @@ def _load() -> str:
 def null_chain(repeats: int, steps: int) -> tuple[float, float]:
     """(raw, protocol) steps/s of ``null-chain``'s 5-process sequential chain,
     medians of ``repeats``, measured in one run of it."""
-    out = subprocess.run([sys.executable, "-m", "bench.protocol", "null-chain",
+    out = subprocess.run([sys.executable, "-m", "bench.null_chain", "null-chain",
                           "--counts", "5", "--exchanges", "sequential", "--wires",
                           "raw,protocol", "--repeats", str(repeats), "--steps", str(steps),
                           "--pingpong-n", "300"], cwd=ROOT, capture_output=True, text=True,
@@ -322,6 +336,72 @@ def corner_cpu(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---- fatigue --------------------------------------------------------------------------------
+def fatigue(a: argparse.Namespace) -> int:
+    """``fatigue``: the chain's node-samples per second, or the live engine's CPU per step."""
+    t_import = time.perf_counter()
+    from nodes.fatigue import worker  # the numba kernels compile or load here
+    from nodes.fatigue.config import FatigueConfig
+    from nodes.fatigue.synthetic import pave_like_loads
+    from nodes.fatigue.worker import analyse, load_influence
+
+    t_import = time.perf_counter() - t_import
+    if a.run:
+        from nodes.fatigue.lib import counting
+
+        t0 = time.perf_counter()
+        worker.warm_up()
+        print(f"import of the worker {t_import:.2f} s, warm_up {time.perf_counter() - t0:.2f}"
+              f" s wall (numba kernels, compiled or from the cache: {counting.COMPILE_S})")
+        first: dict = {}
+        for _ in range(a.repeat):
+            _fatigue_live_cpu(a.run, a.screen, first)
+        return 0
+    cfg = FatigueConfig.from_dict({"equivalent": a.equivalent, "method": a.method,
+                                   "mean_stress": a.mean_stress, "nodes": a.nodes})
+    t0 = time.perf_counter()
+    inf = load_influence(cfg)
+    t_inf = time.perf_counter() - t0
+    t, loads = pave_like_loads(37.0, 500.0)
+    t0 = time.perf_counter()
+    r = analyse(t, loads, cfg, 350.0)
+    dt = time.perf_counter() - t0
+    ns = inf.n_nodes * t.size
+    print(f"influence (cache or cold FE build): {t_inf:.2f} s; {inf.n_nodes} nodes, "
+          f"{len(inf.case_names)} load cases")
+    print(f"chain: {t.size} samples x {inf.n_nodes} nodes = {ns:.3g} node-samples in {dt:.2f} s"
+          f" -> {ns / dt:.3g} node-samples/s ({a.equivalent}, {a.method}, {a.mean_stress})")
+    print(f"min life {r.life_km:.3g} km, critical node {r.critical_node_id}")
+    return 0
+
+
+def _fatigue_live_cpu(run: str, screen: float, first: dict) -> None:
+    """The live engine's CPU per step on a run's recorded loads (``fatigue --run``)."""
+    from nodes.fatigue.config import FatigueConfig
+    from nodes.fatigue.run_dir import read_table
+    from nodes.fatigue.worker import LiveFatigue
+
+    sc = json.loads((Path(run) / "scenario.json").read_text())
+    cfg = FatigueConfig.from_dict(sc.get("fatigue"))
+    t, loads = read_table(Path(run))
+    names = list(loads)
+    arr = np.stack([loads[c] for c in names], axis=1)
+    n = cfg.block_samples
+    for f in (None, screen) if screen else (None,):
+        live = LiveFatigue(cfg, names, 1.0, screen=f, total_samples=t.size)
+        c0 = time.process_time()
+        for i in range(0, t.size, n):
+            live.update(t[i:i + n], arr[i:i + n])
+        r = live.result()
+        cpu = time.process_time() - c0
+        got = [r.damage, r.eq_max, r.eq_min, r.eq_range_max, r.n_cycles]
+        ref = first.setdefault(f, got)
+        same = all(np.array_equal(x, y, equal_nan=True) for x, y in zip(ref, got, strict=True))
+        print(f"screen {f}: {cpu / t.size * 1e6:.0f} us CPU per step over {t.size} steps, "
+              f"critical node {r.critical_node_id}, screened {r.screening.get('screened_nodes')}"
+              f", array_equal to the first repeat: {same}")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="command", required=True)
@@ -355,6 +435,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--substeps", type=int, default=2)
     p.add_argument("--h", type=float, default=0.0005, help="coupled step [s]")
     p.set_defaults(fn=corner_cpu)
+    p = sub.add_parser("fatigue", help="the fatigue chain's node-samples/s; live CPU per step")
+    p.add_argument("--equivalent", default="abs_max_principal")
+    p.add_argument("--method", default="stress_life")
+    p.add_argument("--mean-stress", default="goodman")
+    p.add_argument("--nodes", default="surface")
+    p.add_argument("--run", default=None, help="a run folder: live engine CPU per step")
+    p.add_argument("--screen", type=float, default=0.01)
+    p.add_argument("--repeat", type=int, default=1, help="repeats (--run)")
+    p.set_defaults(fn=fatigue)
     args = ap.parse_args(argv)
     return int(args.fn(args) or 0)
 

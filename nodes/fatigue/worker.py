@@ -57,7 +57,7 @@ def warm_up() -> None:
     """Compile the engine's numba kernels now, or load them from numba's disk cache (once
     per process). :func:`load_influence` calls it, so the live
     node has them before it says ready and no compile lands in a run's step loop: cold
-    ~3 s, from the cache ~1 s (numba's own start; ``bench/bench_fatigue.py`` prints it)."""
+    ~3 s, from the cache ~1 s (numba's own start; ``python -m bench fatigue --run`` prints it)."""
     counting.build()
     superposition.build()
     turning_eq.build()

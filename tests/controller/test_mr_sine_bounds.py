@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def _bench():
     spec = importlib.util.spec_from_file_location("thesis",
-                                                  ROOT / "bench" / "thesis.py")
+                                                  ROOT / "bench" / "thesis_ch5.py")
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

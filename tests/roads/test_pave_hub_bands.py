@@ -1,13 +1,13 @@
 """The calibrated pavé's hub spectrum up to 50 Hz (issue #27 item 4), on a short road.
 
 The passive realistic corner of scenarios/thesis/ch6_realistic_qvm.toml runs in-process
-(bench/thesis.py calibrate-pave: corner_rms, monolithic, live fatigue off) over 30 m of the default
-pavé (seed 1). Its hub vertical acceleration, reduced by the thesis's metric (500 Hz, boxcar
-periodogram, sqrt(trapz), Eq. 4.8/4.9) in the bands of HUB_BANDS, must lie within 25 % of the
-seed-mean (seeds 1-3) of the 100 m calibration runs written in docs/vehicles_roads.md
-(measured at 2026-12-02; a 30 m record scatters by up to 21 % per band between seeds), and
-the Welch peak must sit at the wheel hop (thesis 11.97 Hz; the thesis's Figs 4.10-4.13 show
-"the wheel-hop influence", Sec. 4.6.2).
+(bench/thesis_ch6.py calibrate-pave: corner_rms, monolithic, live fatigue off) over 30 m of
+the default pavé (seed 1). Its hub vertical acceleration, reduced by the thesis's metric
+(500 Hz, boxcar periodogram, sqrt(trapz), Eq. 4.8/4.9) in the bands of HUB_BANDS, must lie
+within 25 % of the seed-mean (seeds 1-3) of the 100 m calibration runs written in
+docs/vehicles_roads.md (measured at 2026-12-02; a 30 m record scatters by up to 21 % per band
+between seeds), and the Welch peak must sit at the wheel hop (thesis 11.97 Hz; the thesis's
+Figs 4.10-4.13 show "the wheel-hop influence", Sec. 4.6.2).
 """
 
 import importlib.util
@@ -28,7 +28,7 @@ TOLERANCE = 0.25
 
 def _bench():
     spec = importlib.util.spec_from_file_location("thesis",
-                                                  ROOT / "bench" / "thesis.py")
+                                                  ROOT / "bench" / "thesis_ch6.py")
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -134,8 +134,8 @@ def test_steady_cornering_at_0_5_g_roll_and_lateral_load_transfer(cornering):
     assert phi / a_y * GRAVITY == pytest.approx(np.radians(5.13), rel=0.01)  # 5.1 deg/g
     roll = float(np.mean(np.abs(hist.roll[win])))
     # measured 0.0490 against 0.0446, +9.9 %, accounted for in docs/vehicles_roads.md ("Roll
-    # in the 0.5 g corner", bench/roll_budget.py): +3.1 % the tyres carrying each axle's whole
-    # load transfer (the series formula passes only the springs' moment through them), +6.8 %
+    # in the 0.5 g corner", python -m bench roll-budget): +3.1 % the tyres carrying each axle's
+    # whole load transfer (the series formula passes only the springs' moment through them), +6.8 %
     # the springs carrying more (the roll centre at the real +-25 mm travels, the cambered
     # wheels' contact points)
     assert roll == pytest.approx(phi, rel=0.10)
