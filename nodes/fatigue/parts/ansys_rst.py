@@ -144,6 +144,19 @@ def read_rst(path: Path, timeout: float = 600.0) -> dict[str, np.ndarray]:
     return read_in_child(_CHILD, Path(path), timeout, "MAPDL result file", "the MAPDL reader")
 
 
+def case_channels(case_names: Sequence[str], length_unit: str) -> list[str]:
+    """The unit cases' channel names of an imported result file (:func:`short_channel`),
+    after checking the arguments every importer takes: ValueError for a ``length_unit`` not
+    in :data:`LENGTH_UNITS` or a case name given twice."""
+    if length_unit not in LENGTH_UNITS:
+        raise ValueError(f"length_unit must be one of {tuple(LENGTH_UNITS)}, got "
+                         f"{length_unit!r}")
+    names = [short_channel(c) for c in case_names]
+    if len(set(names)) != len(names):
+        raise ValueError(f"case names repeat: {list(case_names)}")
+    return names
+
+
 def read_in_child(code: str, path: Path, timeout: float, kind: str, reader: str
                   ) -> dict[str, np.ndarray]:
     """The arrays the Python ``code`` saves (``np.savez(sys.argv[2], ...)``) from the file
@@ -183,12 +196,7 @@ def rst_influence(path: Path, case_names: Sequence[str], stress_scale: float = 1
     component order, units, why the reader runs in a child process.
     """
     src = str(path)
-    if length_unit not in LENGTH_UNITS:
-        raise ValueError(f"length_unit must be one of {tuple(LENGTH_UNITS)}, got "
-                         f"{length_unit!r}")
-    names = [short_channel(c) for c in case_names]
-    if len(set(names)) != len(names):
-        raise ValueError(f"case names repeat: {list(case_names)}")
+    names = case_channels(case_names, length_unit)
     hdr = rst_header(Path(path))
     analysis = ANALYSIS_TYPES.get(hdr["kan"], f"ANTYPE {hdr['kan']}")
     if static_only and hdr["kan"] != 0:

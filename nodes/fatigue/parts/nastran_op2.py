@@ -40,8 +40,8 @@ import numpy as np
 
 from cosim.errors import InputFileError
 
-from ..lib.influence_set import InfluenceSet, short_channel
-from .ansys_rst import LENGTH_UNITS, read_in_child
+from ..lib.influence_set import InfluenceSet
+from .ansys_rst import LENGTH_UNITS, case_channels, read_in_child
 
 OP2_TO_VOIGT = (0, 1, 2, 3, 4, 5)
 """Columns of pyNastran's (oxx, oyy, ozz, txy, tyz, txz) taken for (xx, yy, zz, xy, yz, zx)."""
@@ -148,12 +148,7 @@ def op2_influence(path: Path, case_names: Sequence[str], stress_scale: float = 1
     id) as an `InfluenceSet` in Pa per unit load (module docstring: which tables, the nodal
     average, coordinate systems, units)."""
     src = str(path)
-    if length_unit not in LENGTH_UNITS:
-        raise ValueError(f"length_unit must be one of {tuple(LENGTH_UNITS)}, got "
-                         f"{length_unit!r}")
-    names = [short_channel(c) for c in case_names]
-    if len(set(names)) != len(names):
-        raise ValueError(f"case names repeat: {list(case_names)}")
+    names = case_channels(case_names, length_unit)
     if not Path(path).is_file():
         raise InputFileError(src, "file not found")
     if importlib.util.find_spec("pyNastran") is None:
