@@ -55,26 +55,6 @@ def sample_rate(t: np.ndarray) -> float:
     return 1.0 / step
 
 
-def psd(x: np.ndarray, fs: float, band_hz: tuple[float, float] | None = None
-        ) -> tuple[np.ndarray, np.ndarray]:
-    """(f in Hz, one-sided periodogram P in unit²/Hz) of ``x`` at ``fs`` (Hz), mean removed,
-    rectangular window; only ``f1 <= f <= f2`` of ``band_hz`` if given."""
-    f, P = periodogram(np.asarray(x, dtype=float), fs=fs, window="boxcar", detrend="constant")
-    if band_hz is not None:
-        f1, f2 = _check_band(band_hz, fs)
-        keep = (f >= f1) & (f <= f2)
-        f, P = f[keep], P[keep]
-    return f, P
-
-
-def band_rms(x: np.ndarray, fs: float, band_hz: tuple[float, float]) -> float:
-    """RMS in a frequency band, ``sqrt(integral of PSD over [f1, f2])`` (thesis Eq 4.9)."""
-    f, P = psd(x, fs, band_hz)
-    if f.size < 2:
-        raise ValueError(f"band {band_hz} Hz holds fewer than 2 frequency bins; record too short")
-    return float(np.sqrt(trapezoid(P, f)))
-
-
 def _check_band(band_hz: tuple[float, float], fs: float) -> tuple[float, float]:
     f1, f2 = (float(b) for b in band_hz)
     if not (0.0 <= f1 < f2):
@@ -136,18 +116,6 @@ def periodogram_band_rms(x: np.ndarray, fs: float, band: tuple[float, float]) ->
     if np.count_nonzero(keep) < 2:
         raise ValueError(f"band {band} Hz holds fewer than 2 frequency bins; record too short")
     return float(np.sqrt(trapezoid(P[keep], f[keep])))
-
-
-def thesis_wk_rms(t: np.ndarray, a: np.ndarray, fs_out: float = THESIS_FS) -> float:
-    """ISO 2631-1 Wk-weighted RMS (m/s²) of the acceleration ``a`` (m/s², at times ``t`` in s)
-    after resampling to ``fs_out`` (Hz), as the thesis's band RMS is."""
-    return iso2631_wk_weighted_rms(resample_to(t, a, fs_out), fs_out)
-
-
-def thesis_jerk_rms(t: np.ndarray, a: np.ndarray, fs_out: float = THESIS_FS) -> float:
-    """RMS jerk (m/s³) of ``a`` (m/s², times ``t`` in s) resampled to ``fs_out`` (Hz), so it
-    does not grow with the run's own rate."""
-    return rms(jerk(resample_to(t, a, fs_out), fs_out))
 
 
 # --------------------------------------------------------------------- ISO 2631-1 Wk

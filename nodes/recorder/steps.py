@@ -47,7 +47,3 @@ class StepSet:
 
     def __len__(self) -> int:
         return self.count
-
-    @property
-    def ranges(self) -> list[tuple[int, int]]:
-        return list(zip(self.lo, self.hi, strict=True))
