@@ -2,8 +2,8 @@
 crash, read in bounded memory whatever its length.
 
 The file starts with one msgpack record, the header ``["#suscosim-journal", VERSION, run_id]``.
-In version 3 segments follow, one per flush of the writer (every ~50 ms,
-or when the records held reach :data:`SEGMENT_RAW_BYTES`)::
+Then segments follow, one per flush of the writer (every ~50 ms, or when the records held
+reach :data:`SEGMENT_RAW_BYTES`)::
 
     "SJS3" | clen u32 | rawlen u32 | nrec u32 | first u64 | hcrc u32 | body (clen) | bcrc u32
 
@@ -19,8 +19,8 @@ segment in the middle (bad CRC, a body that does not decompress) costs that segm
 reader resynchronises on the next intact header and reports the stretch (:class:`Skipped`)
 with the exact records lost, from the ``first`` of the segments around it.
 
-Versions 1 and 2 (:mod:`cosim.journal_v2`) are still read. Every reader goes through
-:class:`JournalReader` (streamed) or :func:`read_journal` (a list, for small journals).
+Versions 1 and 2 (before 2026-12-02) are refused as unsupported (exit 2). Every reader goes
+through :class:`JournalReader` (streamed) or :func:`read_journal` (a list, for small journals).
 """
 
 from __future__ import annotations
@@ -35,12 +35,10 @@ from typing import IO, Any
 
 import msgpack
 
-from . import journal_v2
 from .errors import InputFileError
 
 MAGIC = "#suscosim-journal"
 VERSION = 3
-VERSIONS = (1, 2, 3)  # what the reader takes
 HEADER_MAX = 64 * 1024  # the header record is read from the first bytes only
 SEG_MAGIC = b"SJS3"
 _SEG = struct.Struct("<4sIIIQ")  # magic, clen, rawlen, nrec, first
@@ -53,8 +51,7 @@ _CHUNK = 1 << 20  # bytes read at a time
 
 
 class JournalWriter:
-    """Append records to ``path`` (version 3, segments); call :meth:`flush` often and
-    :meth:`close` at the end. The one journal writer: versions 1 and 2 are only read."""
+    """Append records to ``path``; call :meth:`flush` often and :meth:`close` at the end."""
 
     def __init__(self, path: str | Path, run_id: str) -> None:
         import zstandard
@@ -113,7 +110,6 @@ class Skipped:
     offset: int  # byte offset of its start
     length: int  # bytes
     records: int  # records lost in it
-    exact: bool = True  # False: an estimate (a version 1/2 journal whose frames are gone)
 
 
 @dataclass
@@ -128,7 +124,6 @@ class JournalContents:
     problem: str = ""
     skipped: list[Skipped] = field(default_factory=list)
     count: int = 0
-    version: int = VERSION
     torn_records: int | None = None
 
     @property
@@ -141,7 +136,7 @@ class JournalContents:
         return bool(self.skipped)
 
 
-def _header(data: bytes, path: str | Path) -> tuple[str, int, int]:
+def _header(data: bytes, path: str | Path) -> tuple[str, int]:
     unpacker = msgpack.Unpacker(raw=False, use_list=True)
     unpacker.feed(data[:HEADER_MAX])
     try:
@@ -150,10 +145,10 @@ def _header(data: bytes, path: str | Path) -> tuple[str, int, int]:
         raise InputFileError(str(path), f"not a suscosim journal (no header: {exc})") from None
     if not (isinstance(header, list) and len(header) == 3 and header[0] == MAGIC):
         raise InputFileError(str(path), "not a suscosim journal (bad header)")
-    if header[1] not in VERSIONS:
+    if header[1] != VERSION:
         raise InputFileError(str(path), f"journal version {header[1]!r:.20} not supported "
-                             f"(this reader takes {', '.join(map(str, VERSIONS))})")
-    return str(header[2]), int(header[1]), unpacker.tell()
+                             f"(this reader takes {VERSION})")
+    return str(header[2]), unpacker.tell()
 
 
 class _Window:
@@ -263,7 +258,7 @@ class JournalReader:
         self.path = Path(path)
         with open(self.path, "rb") as fh:
             head = fh.read(HEADER_MAX)
-        self.run_id, self.version, self._start = _header(head, self.path)
+        self.run_id, self._start = _header(head, self.path)
         self.tail_bytes, self.decode = tail_bytes, decode
         self._result: JournalContents | None = None
 
@@ -274,24 +269,6 @@ class JournalReader:
         return self._result
 
     def __iter__(self) -> Iterator[tuple[str, bytes]]:
-        if self.version < 3:
-            yield from self._old()
-        else:
-            yield from self._segments()
-
-    def _old(self) -> Iterator[tuple[str, bytes]]:
-        data = self.path.read_bytes()
-        pos, base = self._start, 0
-        if self.tail_bytes is not None:
-            start = base = max(pos, len(data) - self.tail_bytes)
-            data = data[start:]
-            found = journal_v2.resync(data, 0, self.version) if start > pos else 0
-            pos = len(data) if found is None else found
-        records, skipped, tail = journal_v2.read_frames(data, pos, self.version, base)
-        yield from records if self.decode else ()
-        self._finish([Skipped(*s) for s in skipped], len(records), tail, None)
-
-    def _segments(self) -> Iterator[tuple[str, bytes]]:
         import zstandard
 
         dctx = zstandard.ZstdDecompressor()
@@ -375,12 +352,11 @@ class JournalReader:
             where = ", ".join(f"byte {s.offset} ({s.length} bytes)" for s in skipped[:5])
             more = f" and {len(skipped) - 5} more" if len(skipped) > 5 else ""
             n = sum(s.records for s in skipped)
-            estimated = "" if all(s.exact for s in skipped) else " (estimated from its length)"
-            text = (f"{n} damaged record(s){estimated} skipped at {where}{more}; "
+            text = (f"{n} damaged record(s) skipped at {where}{more}; "
                     f"{count} intact records kept")
             problem = text + (f"; {problem}" if problem else "")
         self._result = JournalContents(self.run_id, [], bool(tail), problem, skipped, count,
-                                       self.version, torn_records)
+                                       torn_records)
 
 
 def _lost(bad: list[tuple[int, int, int | None]], lost: int, pos: int) -> list[Skipped]:
@@ -418,7 +394,7 @@ def iter_records(path: str | Path) -> Iterator[tuple[str, bytes]]:
 
 def scan_journal(path: str | Path) -> JournalContents:
     """The journal's integrity without its records: CRCs checked, records counted, nothing
-    decompressed (version 3) -- what :func:`cosim.run_folder.run_info` shows."""
+    decompressed -- what :func:`cosim.run_folder.run_info` shows."""
     reader = JournalReader(path, decode=False)
     for _ in reader:
         pass
@@ -426,11 +402,9 @@ def scan_journal(path: str | Path) -> JournalContents:
 
 
 def segment_index(path: str | Path) -> list[tuple[int, int, int, int]]:
-    """The intact segment headers of a version-3 journal, in order: (offset, bytes, records,
-    first record's index); [] for an older journal (a bench, a test)."""
+    """The intact segment headers of a journal, in order: (offset, bytes, records, first
+    record's index)."""
     reader = JournalReader(path)
-    if reader.version < 3:
-        return []
     out = []
     with open(reader.path, "rb") as fh:
         win, pos = _Window(fh, reader._start), reader._start
