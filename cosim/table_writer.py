@@ -1,18 +1,19 @@
 """A run's table written as its rows complete, in bounded memory.
 
-The table is the one :func:`cosim.table.build_table` makes from a journal, column for column
-and bit for bit: ``k``, ``t`` [s], then ``<node>/<channel>/<field>`` (a list field becomes
-``<field>[i]``), channels sorted by name and each channel's fields sorted; a row is a step
-every channel delivered, ``t`` that of the channel heard first; the first message of a step
-counts. :class:`TableWriter` holds only the steps not yet complete: a row is written once
-every channel has given its step, to ``table.csv`` (as :func:`cosim.table.write_csv`) and
-``table.parquet`` (row groups of :data:`GROUP_ROWS`), both beside their place until
-:meth:`TableWriter.close` renames them over it. A step completed *after* a later row was
-written (records out of their own order: never in a run) is left out, counted in ``late``.
+The table of a run or a journal (:func:`table_of_journal`, :func:`journal_table`): ``k``,
+``t`` [s], then ``<node>/<channel>/<field>`` (a list field becomes ``<field>[i]``), channels
+sorted by name and each channel's fields sorted; a row is a step every channel delivered (a
+step some channel never gave is no row), ``t`` that of the channel heard first; the first
+message of a step counts. :class:`TableWriter` holds only the steps not yet complete: a row is
+written once every channel has given its step, to ``table.csv`` (as
+:func:`cosim.table.write_csv`) and ``table.parquet`` (row groups of :data:`GROUP_ROWS`), both
+beside their place until :meth:`TableWriter.close` renames them over it. A step completed
+*after* a later row was written (records out of their own order: never in a run) is left out,
+counted in ``late``.
 
 A channel's layout (its fields, each a number or a list of one length) is fixed by its first
-message, or given (``layout``: what :func:`journal_layout` finds by majority in a journal,
-the rule of ``build_table``); a message of another layout is left out, with the reason.
+message, or given (``layout``: what :func:`journal_layout` finds by majority in a journal);
+a message of another layout is left out, with the reason.
 """
 
 from __future__ import annotations
@@ -23,11 +24,15 @@ import io
 import math
 import os
 import threading
-from collections.abc import Iterable, Mapping
+from collections import Counter
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .errors import WireError
+from .wire import decode
 
 Layout = tuple[tuple[str, int | None], ...]
 """A channel's fields in table order: (name, None for a number or n for a list of n)."""
@@ -77,15 +82,16 @@ class TableWriter:
     """Rows written as they complete; see the module docstring.
 
     ``channels``: the channels of the table (every one must give a step for it to be a row);
-    ``folder`` None keeps nothing on disk (rows and stats only: a test, a dry count);
+    ``folder`` None keeps nothing on disk (rows and stats only; with ``keep`` the columns in
+    memory, :meth:`table`);
     ``first``: the channels in the order they were first heard (``t`` is the first's), when
     known before their messages come; ``strict``: a message must have exactly its channel's
-    fields (the recorder), else at least them (``build_table``'s rule, for old journals)."""
+    fields (the recorder), else at least them (a journal's table)."""
 
     def __init__(self, channels: Iterable[str], folder: str | Path | None,
                  layout: Mapping[str, Layout] | None = None, first: Iterable[str] = (),
                  chunk_rows: int | None = None, group_rows: int | None = None,
-                 strict: bool = True) -> None:
+                 strict: bool = True, keep: bool = False) -> None:
         self.channels = sorted(set(channels))
         if not self.channels:
             raise ValueError("a table needs at least one channel")
@@ -94,7 +100,7 @@ class TableWriter:
         self._rank: dict[str, int] = {c: i for i, c in enumerate(first)}
         self.folder = None if folder is None else Path(folder)
         self.chunk_rows = CHUNK_ROWS if chunk_rows is None else chunk_rows
-        self.strict = strict
+        self.strict, self.keep = strict, keep
         self.group_rows = GROUP_ROWS if group_rows is None else group_rows
         self._pending: dict[int, list[Any]] = {}  # k -> [t, rank of t, n, vals per channel]
         self._heap: list[int] = []
@@ -207,16 +213,17 @@ class TableWriter:
         ts = vals[:, 0]
         for j, st in enumerate(self._stats):
             st.add(vals[:, j + 1], ts)
-        if self.folder is None:
+        if self.folder is None and not self.keep:
             return
-        ks_l = ks.tolist()
-        self._csv.writelines(f"{k}," + ",".join(map(str, r)) + "\r\n"
-                             for k, r in zip(ks_l, vals.tolist(), strict=True))
         assert self.columns is not None
         cols = {"k": ks}
         for j, name in enumerate(self.columns[1:]):
             cols[name] = np.ascontiguousarray(vals[:, j])
         self._group.append(cols)
+        if self.folder is None:
+            return
+        self._csv.writelines(f"{k}," + ",".join(map(str, r)) + "\r\n"
+                             for k, r in zip(ks.tolist(), vals.tolist(), strict=True))
         self._group_n += len(rows)
         if self._group_n >= self.group_rows:
             self._write_group()
@@ -281,6 +288,13 @@ class TableWriter:
             for tmp in self._tmp.values():
                 tmp.unlink(missing_ok=True)
 
+    def table(self) -> dict[str, np.ndarray]:
+        """The rows complete so far as columns (``keep``); only ``k`` and ``t`` without a row."""
+        self._chunk()
+        if self.columns is None:
+            return {"k": np.zeros(0, dtype=np.int64), "t": np.zeros(0)}
+        return {c: np.concatenate([g[c] for g in self._group]) for c in self.columns}
+
     def stats(self) -> dict[str, dict[str, float]]:
         """:func:`cosim.table.channel_stats` of the rows complete so far."""
         if self._rows:
@@ -289,6 +303,24 @@ class TableWriter:
             return {}
         return {c: s.result() for c, s in zip(self.columns[2:], self._stats, strict=True)
                 if s.n}
+
+
+_Shape = tuple[tuple[str, ...], tuple[type, ...]]
+
+
+def _shape_verdicts(counts: Mapping[_Shape, int], fields: tuple[str, ...]) -> dict[_Shape, bool]:
+    """Whether a message of each shape (its field names and value types, in its order) goes
+    in the table: it carries every one of the channel's ``fields``, each a list or not as in
+    the channel's most common such shape."""
+    def listness(shape: _Shape) -> dict[str, bool] | None:
+        kinds = dict(zip(*shape, strict=True))
+        if not all(f in kinds for f in fields):
+            return None
+        return {f: kinds[f] is list for f in fields}
+
+    complete = [(n, shape) for shape, n in counts.items() if listness(shape) is not None]
+    ref = listness(max(complete, key=lambda c: c[0])[1]) if complete else None
+    return {shape: ref is not None and listness(shape) == ref for shape in counts}
 
 
 def _fits(d: Mapping[str, Any], lay: Layout, strict: bool) -> bool:
@@ -310,17 +342,11 @@ def _text(lay: Layout) -> str:
 # ---- a journal's table, streamed -----------------------------------------------------------
 def journal_layout(records: Iterable[tuple[str, bytes]]
                    ) -> tuple[dict[str, Layout], list[str]]:
-    """The first pass over a journal: each channel's layout by ``build_table``'s rule (the
-    field set most of its data messages carry, each field a list or not as in its most
-    common complete shape, a list's length from the first such message) and the channels in
-    the order they were first heard. Memory: a few counters per channel."""
-    from collections import Counter
-
-    from cosim.errors import WireError
-    from cosim.wire import decode
-
-    from .table import _shape_verdicts
-
+    """The first pass over a journal: each channel's layout (the field set most of its data
+    messages carry, each field a list or not as in its most common complete shape, a list's
+    length from the first such message; a stray or forged message cannot displace the real
+    ones) and the channels in the order they were first heard. Memory: a few counters per
+    channel."""
     fields: dict[str, Counter[tuple[str, ...]]] = {}
     shapes: dict[str, Counter[Any]] = {}
     lengths: dict[str, dict[Any, dict[str, int]]] = {}
@@ -351,14 +377,12 @@ def journal_layout(records: Iterable[tuple[str, bytes]]
 
 
 def table_of_journal(open_records: Any, folder: str | Path | None,
-                     chunk_rows: int | None = None) -> tuple[TableWriter | None, int]:
+                     chunk_rows: int | None = None, keep: bool = False
+                     ) -> tuple[TableWriter | None, int]:
     """The second pass: a :class:`TableWriter` fed the journal's data messages (``open_records``
     is called once per pass and returns an iterable of (channel, payload)); returns it (not
     closed: the caller picks the stem) and the records left out as bad, or (None, bad) when
     the journal holds no data message."""
-    from cosim.errors import WireError
-    from cosim.wire import decode
-
     layout, first = journal_layout(open_records())
     if not layout:
         bad = 0
@@ -369,7 +393,7 @@ def table_of_journal(open_records: Any, folder: str | Path | None,
                 bad += 1
         return None, bad
     writer = TableWriter(layout, folder, layout=layout, first=first, chunk_rows=chunk_rows,
-                         strict=False)
+                         strict=False, keep=keep)
     bad = 0
     for channel, payload in open_records():
         try:
@@ -380,3 +404,12 @@ def table_of_journal(open_records: Any, folder: str | Path | None,
         if m.kind == "data" and m.k >= 0 and writer.add(channel, m.k, m.t, m.d) is not None:
             bad += 1
     return writer, bad + writer.late
+
+
+def journal_table(records: Sequence[tuple[str, bytes]]) -> tuple[dict[str, np.ndarray], int]:
+    """(table, records left out as bad) of a journal's records in memory: the table
+    :func:`table_of_journal` writes, as columns."""
+    writer, bad = table_of_journal(lambda: records, None, keep=True)
+    if writer is None:
+        return {"k": np.zeros(0, dtype=np.int64), "t": np.zeros(0)}, bad
+    return writer.table(), bad

@@ -2,7 +2,7 @@
 another format, in bounded memory (docs/data_formats.md).
 
 ``export JOURNAL`` (or a run folder without ``--format``) streams the journal twice (fields by
-majority, then rows: :mod:`cosim.table_writer`), the table of :func:`cosim.table.build_table`.
+majority, then rows: :mod:`cosim.table_writer`).
 Exit 0: every record intact (a torn last segment is only noted). Exit 2 naming the journal: not
 one, no complete step, records lost, or the folder's table is larger; in the last two cases
 the table goes to ``table.recovered.*`` beside it. ``--format mdf4|rpc3`` also writes

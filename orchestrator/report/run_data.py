@@ -112,10 +112,10 @@ def load_run(d: Path) -> RunData:
     if r.source is None and (d / "journal.msgpack").is_file():
         try:
             from cosim.journal import read_journal
-            from cosim.table import build_table
+            from cosim.table_writer import journal_table
 
             contents = read_journal(d / "journal.msgpack")
-            tab, _bad = build_table(contents.records)
+            tab, _bad = journal_table(contents.records)
             extra = f"; journal: {contents.problem}" if contents.problem else ""
             if len(tab["t"]):
                 r.source = TableSource(table={k: np.asarray(v, dtype=float)

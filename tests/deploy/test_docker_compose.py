@@ -31,7 +31,8 @@ import numpy as np
 import pytest
 
 from cosim.journal import read_journal
-from cosim.table import build_table, read_table
+from cosim.table import read_table
+from cosim.table_writer import journal_table
 
 from ..conftest import CH3_STEP, ROOT, suscosim
 from . import docker_env as de
@@ -226,7 +227,7 @@ def test_killed_plant_container_ends_the_run_naming_it_and_the_journal_is_readab
         summary = json.loads((run_dir / "summary.json").read_text())
         assert summary["status"] == "failed" and "plant" in summary["error"], summary
         journal = run_dir / "journal.msgpack"
-        table, bad = build_table(read_journal(journal).records)
+        table, bad = journal_table(read_journal(journal).records)
         assert bad == 0 and 50 < len(table["t"]) < 120_001
         # the recorder (its own container) may write its last batches after the orchestrator
         # counted the journal for summary.json: the journal never holds fewer rows

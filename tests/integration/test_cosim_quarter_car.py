@@ -17,7 +17,8 @@ import pytest
 from cosim import channels as ch
 from cosim.bus import free_loopback_endpoint
 from cosim.journal import read_journal
-from cosim.table import build_table, read_table
+from cosim.table import read_table
+from cosim.table_writer import journal_table
 from cosim.wire import encode, encode_step
 from orchestrator.accuracy import peak_errors, worst
 from orchestrator.placement import core_layout, usable_cores
@@ -149,7 +150,7 @@ def test_killed_node_ends_run_with_error_naming_it(tmp_path, ch3_step):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and "controller" in summary["error"]
     contents = read_journal(out / "journal.msgpack")
-    table, _ = build_table(contents.records)
+    table, _ = journal_table(contents.records)
     assert 0 < len(table["t"]) < 60001
     assert summary["rows"] == len(table["t"])
 

@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 
 from cosim.journal import read_journal
-from cosim.table import build_table, read_table
+from cosim.table import read_table
+from cosim.table_writer import journal_table
 
 from ..conftest import CH3_STEP, ROOT, suscosim
 from .netns import ADDR, MAIN, PLANT, ROUTER, ROUTER_ADDR, Topology, unavailable
@@ -123,7 +124,7 @@ def test_partitioned_plant_ends_the_run_naming_it_and_keeps_the_record(topo, tmp
     summary = json.loads((out_dir / "summary.json").read_text())
     assert summary["status"] == "failed" and "plant" in summary["error"]
     contents = read_journal(journal)
-    table, _ = build_table(contents.records)
+    table, _ = journal_table(contents.records)
     assert 0 < len(table["t"]) < 120_001
     assert summary["rows"] == len(table["t"])
     csv = read_table(out_dir / "table.csv")

@@ -16,7 +16,7 @@ from cosim import keys
 from cosim.bus import free_loopback_endpoint
 from cosim.journal import read_journal
 from cosim.step_message import expand, step_keyexprs
-from cosim.table import build_table
+from cosim.table_writer import journal_table
 from cosim.wire import decode, encode, encode_step
 from tests.conftest import CH3_STEP, popen_suscosim, run_client, suscosim
 
@@ -26,7 +26,7 @@ N = 1000
 
 
 def _table(folder) -> dict:
-    table, bad = build_table(read_journal(folder / "journal.msgpack").records)
+    table, bad = journal_table(read_journal(folder / "journal.msgpack").records)
     assert bad == 0
     return table
 

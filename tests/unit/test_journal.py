@@ -1,7 +1,8 @@
 import os
 
 from cosim.journal import JournalWriter, read_journal
-from cosim.table import build_table, channel_stats
+from cosim.table import channel_stats
+from cosim.table_writer import journal_table
 from cosim.wire import encode
 
 
@@ -21,7 +22,7 @@ def test_journal_roundtrip_to_table(tmp_path):
     _write(p, 10, every=3)
     c = read_journal(p)
     assert c.run_id == "run1" and not c.torn and len(c.records) == 20
-    table, bad = build_table(c.records)
+    table, bad = journal_table(c.records)
     assert bad == 0
     assert table["k"].tolist() == list(range(10))
     assert table["plant/state/z_b"][3] == 0.003
@@ -38,7 +39,7 @@ def test_a_torn_last_segment_loses_that_segment_and_says_how_many_records(tmp_pa
     c = read_journal(p)
     assert c.torn and "torn segment" in c.problem and "4 records" in c.problem
     assert len(c.records) == 16 and c.torn_records == 4 and not c.skipped
-    table, _ = build_table(c.records)
+    table, _ = journal_table(c.records)
     assert len(table["t"]) == 8
 
 
@@ -60,7 +61,7 @@ def test_a_stray_first_message_neither_crashes_nor_displaces_the_channel():
     records += [("plant/state", encode("data", k, k * 0.001, {"z_b": 0.1 * k, "v_b": -1.0 * k}))
                 for k in range(5)]
     records += [("plant/state", encode("data", 5, 0.005, {"z_b": [1.0], "v_b": 0.0}))]
-    table, bad = build_table(records)
+    table, bad = journal_table(records)
     assert bad == 2
     assert table["k"].tolist() == [0, 1, 2, 3, 4]
     assert table["plant/state/z_b"].tolist() == [0.1 * k for k in range(5)]

@@ -17,9 +17,10 @@ import numpy as np
 from cosim import keys
 from cosim.journal import last_step, read_journal
 from cosim.participant import Participant
-from cosim.table import build_table, read_table
+from cosim.table import read_table
 from cosim.wire import decode, encode
 from tests.memory_bus import MemoryBus
+from tests.table_oracle import build_table
 
 H = 1e-3
 

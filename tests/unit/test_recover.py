@@ -6,7 +6,8 @@ import time
 import numpy as np
 
 from cosim.journal import JournalWriter, read_journal
-from cosim.table import build_table, export, read_table
+from cosim.table import export, read_table
+from cosim.table_writer import journal_table
 from cosim.wire import encode
 from orchestrator import run_recovery, runner
 
@@ -36,7 +37,7 @@ def test_the_recorders_fresh_table_is_taken_as_it_is(tmp_path):
     not rebuilt (marked: its values here differ from the journal's, so a rebuild shows)."""
     _journal(tmp_path, 20)
     t0 = time.time() - 1.0
-    table, _ = build_table(read_journal(tmp_path / "journal.msgpack").records)
+    table, _ = journal_table(read_journal(tmp_path / "journal.msgpack").records)
     table["plant/state/z"] = table["plant/state/z"] + 1000.0  # the recorder's (marked)
     export(table, tmp_path)
     rec = run_recovery.recover_table(tmp_path, since=t0)
@@ -47,7 +48,7 @@ def test_the_recorders_fresh_table_is_taken_as_it_is(tmp_path):
 
 def test_a_table_older_than_the_run_or_short_of_the_journal_is_rebuilt(tmp_path):
     _journal(tmp_path, 20)
-    table, _ = build_table(read_journal(tmp_path / "journal.msgpack").records)
+    table, _ = journal_table(read_journal(tmp_path / "journal.msgpack").records)
     stale = dict(table, **{"plant/state/z": table["plant/state/z"] + 1000.0})
     export(stale, tmp_path)
     rec = run_recovery.recover_table(tmp_path, since=time.time() + 5.0)  # before the run
@@ -103,7 +104,7 @@ def test_a_recorder_elsewhere_is_waited_for_then_left_its_long_table(tmp_path, m
     assert "running elsewhere" in rec["note"] and "suscosim export" in rec["note"]
     assert not (tmp_path / "table.csv").exists()
     # the recorder's table arrives while the orchestrator waits: taken as it is
-    table, _ = build_table(read_journal(tmp_path / "journal.msgpack").records)
+    table, _ = journal_table(read_journal(tmp_path / "journal.msgpack").records)
     later = threading.Timer(0.3, export, (table, tmp_path))
     later.start()
     rec = run_recovery.recover_table(tmp_path, since=time.time() - 60,

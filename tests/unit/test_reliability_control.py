@@ -15,7 +15,7 @@ from cosim import keys
 from cosim.errors import InputLate
 from cosim.journal import read_journal
 from cosim.participant import MAILBOX_MAX, MAILBOX_WINDOW, Participant
-from cosim.table import build_table
+from cosim.table_writer import journal_table
 from cosim.wire import encode, encode_step
 from orchestrator.clock import Clock
 from tests.memory_bus import MemoryBus
@@ -197,7 +197,7 @@ def test_a_ragged_records_batch_is_rejected_and_the_journal_stays_exportable(
     th.join(timeout=10)
     assert errors.empty(), errors.get()
     assert "done" in ctl and part.rejected == 3
-    table, bad = build_table(read_journal(tmp_path / "journal.msgpack").records)
+    table, bad = journal_table(read_journal(tmp_path / "journal.msgpack").records)
     assert bad == 0 and list(table["plant/state/z_b"]) == [0.0, 0.1, 0.2, 0.3]
     assert (tmp_path / "table.csv").exists()
     part.close()

@@ -8,9 +8,10 @@ import random
 
 import numpy as np
 
-from cosim.table import build_table, channel_stats, read_table
-from cosim.table_writer import TableWriter, table_of_journal
+from cosim.table import channel_stats, read_table
+from cosim.table_writer import TableWriter, journal_table, table_of_journal
 from cosim.wire import encode
+from tests.table_oracle import build_table
 
 
 def _stream(seed: int, n: int = 3000) -> list[tuple[str, bytes]]:
@@ -38,7 +39,7 @@ def _stream(seed: int, n: int = 3000) -> list[tuple[str, bytes]]:
     return out
 
 
-def test_streamed_table_equals_build_table(tmp_path) -> None:
+def test_streamed_table_equals_journal_table(tmp_path) -> None:
     for seed in range(3):
         records = _stream(seed)
         ref, bad_ref = build_table(records)
@@ -51,8 +52,11 @@ def test_streamed_table_equals_build_table(tmp_path) -> None:
         for col, x in ref.items():
             assert got[col].dtype == x.dtype and got[col].tobytes() == x.tobytes(), (seed, col)
         csv = read_table(files["csv"])
+        mem, bad_mem = journal_table(records)  # the same table, held in memory
+        assert list(mem) == list(ref) and bad_mem == bad_ref, seed
         for col, x in ref.items():
             np.testing.assert_array_equal(csv[col], x)
+            assert mem[col].dtype == x.dtype and mem[col].tobytes() == x.tobytes(), (seed, col)
         st, st_ref = writer.stats(), channel_stats(ref)
         for col in st_ref:
             for q in ("max", "min", "peak", "t_peak"):
