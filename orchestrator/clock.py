@@ -1,13 +1,8 @@
-"""The barrier-synchronised clock: start barrier, progress, end of run, stall and death.
-
-The step barrier is data-driven inside each node (cosim.participant); the clock serves the
-resolved scenario (a queryable), publishes ``start`` (n_steps, h, every node's facts) once
-every node is present (liveliness token) and ready, follows each node's last step, and ends
-the run when every node is done, or aborts it when a node reports an error, loses its token or
-makes no progress for the stall timeout (the error names the node). With the run's key
-(:class:`cosim.auth.RunKey`) it signs what it publishes and acts on a node's control message
-only when signed, well formed (:func:`cosim.control.check_node_control`) and plausible (a step
-within the run; ``done`` only at the last); anything else is counted (``rejected``).
+"""The clock: serves the resolved scenario, publishes ``start`` once every node is present
+(liveliness token) and ready, follows each node's step (the step barrier is in the nodes,
+cosim.participant), ends the run when all are done, aborts it naming the node on an error, a
+lost token or a stall. Signed with the run's key (:class:`cosim.auth.RunKey`); a node's control
+message counts only when signed, well formed and plausible, else it is ``rejected``.
 """
 
 from __future__ import annotations
@@ -32,9 +27,8 @@ from cosim.wire import decode, encode
 
 START_PERIOD_S = 0.05
 LIVELINESS_GRACE_S = 1.0
-"""A dropped liveliness token must stay dropped this long to count as a dead node: Zenoh can
-drop and re-declare a token while its peer links reorganise (seen under heavy CPU load).
-A local node process that exits is seen at once through its exit code."""
+"""How long [s] a dropped liveliness token stays dropped before the node counts as dead (Zenoh
+re-declares tokens while links reorganise under load; a local process's exit is seen at once)."""
 
 
 @dataclass
@@ -53,23 +47,16 @@ class NodeStatus:
     result: dict[str, Any] = field(default_factory=dict)
     gone_since: float | None = None
     waiting_for: list[str] = field(default_factory=list)  # inputs not heard yet (start barrier)
-    max_lag: int = 0
-    """A sink's (a node off the coupled chain: recorder, fatigue) largest lag behind the
-    coupled chain seen [steps] (its input is buffered, never waited for: docs/cosim.md)."""
+    max_lag: int = 0  # a sink's largest lag behind the coupled chain [steps]
 
 
 @dataclass
 class ClockResult:
     nodes: dict[str, NodeStatus]
-    wall_s: float
-    """From the clock's start to the end: start barrier, steps and every node's last work."""
-    run_wall_s: float
-    """From ``start`` until every node is done (the recorder's table export included)."""
-    step_wall_s: float
-    """From ``start`` until the last node of the coupling (plant, tyre/road, controller) has
-    done its last step: what ``steps_per_s`` is measured on."""
-    rejected: int = 0
-    """Control messages the clock rejected (unsigned, badly signed, malformed, implausible)."""
+    wall_s: float  # [s] clock start to the end
+    run_wall_s: float  # [s] ``start`` until every node is done (table export included)
+    step_wall_s: float  # [s] ``start`` until the coupled chain's last step (steps_per_s)
+    rejected: int = 0  # control messages rejected
 
 
 class Clock:
@@ -81,27 +68,22 @@ class Clock:
                  auth: RunKey | None = None, on_started: Callable[[], None] | None = None) -> None:
         self.bus, self.run_id, self.scenario, self.auth = bus, run, scenario, auth
         self.status = {n: NodeStatus() for n in nodes}
-        self.n_steps = int(scenario["run"]["n_steps"])
-        """N; for an adaptive step (``run.h = "auto"``) the bound t_end / h_min."""
+        self.n_steps = int(scenario["run"]["n_steps"])  # adaptive step: the bound t_end / h_min
         self._adaptive = bool(scenario["run"].get("adaptive"))
         self.on_progress = on_progress or (lambda k, n: None)
         self.check_processes = check_processes or (lambda: None)
-        self.on_started = on_started or (lambda: None)
-        """Called once every node has the start (the run steps from then on)."""
+        self.on_started = on_started or (lambda: None)  # once every node has the start
         self.events: queue.SimpleQueue[tuple[str, str, Any]] = queue.SimpleQueue()
         self.rejected = 0
         plan = NodeCheckpoints.of(scenario, keys.ORCHESTRATOR) if "dir" in scenario["run"] else None
         self._ckpt_due = plan.due if plan is not None else frozenset()
         self._ckpt_entries: dict[int, dict[str, dict[str, Any]]] = {}
-        self.checkpoints: list[int] = []
-        """The checkpoints this run completed (their manifests written), in order."""
+        self.checkpoints: list[int] = []  # the checkpoints completed (manifest written)
         clock_key = keys.key(run, keys.ORCHESTRATOR, keys.CLOCK)
         pub = bus.publisher(clock_key)
         sign = auth.signer(clock_key) if auth else (lambda raw: raw)
         self._sent: set[bytes] = set()  # the aborts this clock signed (a handful)
-        self.foreign_abort: str | None = None
-        """Why the run was aborted by someone else (a validly signed ``abort`` this clock did
-        not send: an insider with the run's key); the run's error says so."""
+        self.foreign_abort: str | None = None  # a signed abort this clock did not send
 
         def clock_pub(raw: bytes) -> None:
             signed = sign(raw)
@@ -126,8 +108,7 @@ class Clock:
                   lambda k, alive: self.events.put(("alive", k, alive)))
 
     def _on_clock(self, key: str, raw: bytes) -> None:
-        """A message on the clock's own key (on the bus's thread): an ``abort`` this clock
-        did not send is noted (:attr:`foreign_abort`)."""
+        """A message on the clock's key (bus thread): notes a :attr:`foreign_abort`."""
         if raw in self._sent or self.foreign_abort is not None:
             return
         try:
@@ -214,9 +195,8 @@ class Clock:
                 return
 
     def _checkpointed(self, node: str, k: int, entry: dict[str, Any]) -> None:
-        """A node wrote its state at boundary ``k``: once every node has, the manifest makes
-        the checkpoint complete (:mod:`cosim.run_checkpoint`). A manifest that cannot be
-        written is said, and the run goes on (the previous checkpoint stays the last)."""
+        """A node wrote its state at ``k``: once all have, the manifest completes the
+        checkpoint; a manifest that cannot be written is said and the run goes on."""
         got = self._ckpt_entries.setdefault(k, {})
         got[node] = {f: entry[f] for f in ("file", "sha256", "bytes")}
         if len(got) < len(self.status):
@@ -261,9 +241,8 @@ class Clock:
         raise err if err is not None else RunError(reason)
 
     def _blame(self, stale: list[tuple[int, str]], stall: float) -> str:
-        """The stall's error, naming the node that stopped: of the stale nodes, one that
-        others wait for (their ``waiting``) and that waits for nobody itself; else one that
-        others wait for; else a node of the coupling; else the one furthest behind."""
+        """The stall's error naming, of the stale nodes, one others wait for that waits for
+        nobody; else one others wait for; else a coupled node; else the furthest behind."""
         waiters: dict[str, list[str]] = {}
         for name, st in self.status.items():
             if st.done:
@@ -288,9 +267,9 @@ class Clock:
         return text
 
     def _blame_late(self, noticed_by: str, late: list[str], message: str) -> str:
-        """The error when ``noticed_by`` gave up waiting for the nodes ``late``: the blame
-        goes to them (the stall timeout of a node and of this clock are the same, so which
-        of the two notices first is a race; the answer must not be)."""
+        """The error when ``noticed_by`` gave up waiting for ``late``: they are blamed (which
+        of node and clock notices first is a race; the answer must not be)."""
+
         stall = self.scenario["run"]["stall_timeout_s"]
         k, node = min((self.status[n].k, n) for n in late)
         return (f"node '{node}' made no progress for {stall:.1f} s (stalled at step {k} of "

@@ -1,24 +1,13 @@
-"""The one-process engine (``run.transport = "inprocess"``, ``suscosim run --inprocess``; the
-thesis's "purely multi-body"): the same node models of the same scenario stepped in this
-process, one thread, with no bus, in the sequential order of the distributed run.
-
-Every step k: the plant's state of step k (:class:`nodes.plant.stepper.PlantStepper`); each
-force node's step on it (the tyre/road node, the controller, or a user's stepped class:
-:mod:`cosim.stepped`), in registry order; the plant applies the forces, takes its first
-substep and gives the step's response and loads; the sinks take every data message (the
-recorder's :class:`nodes.recorder.recording.Recording`: journal and table; the live fatigue
-node's :class:`nodes.fatigue.live_sink.LiveLoads`); the plant integrates to t_{k+1}.
-
-Every data message is encoded and decoded by the run's codec (:mod:`cosim.wire`), exactly as
-a node publishes it and its consumer takes it: the values the nodes and sinks see are the
-distributed run's bit for bit, and so are ``table.csv``, ``table.parquet`` and the fatigue
-files (a test checks both on the lumped car and the corner with live fatigue). It is the
-reference every overhead ratio divides by (``bench/bench_overhead.py``) and the fast path for
-sweeps on one machine. DESIGN.md allows this module, and only it, to import node modules.
-
-Not here (a ScenarioError, exit 2, says so): checkpoints and resume/fork, and a node given as a
-function (``[nodes] controller = "pkg.mod:function"``: it is written against the bus; a
-class is stepped here).
+"""The one-process engine (``run.transport = "inprocess"``, ``--inprocess``; the thesis's
+"purely multi-body"): the node models stepped in this process, one thread, no bus, in the
+distributed run's sequential order. Every step k: the plant's state
+(:class:`nodes.plant.stepper.PlantStepper`), each force node's step in registry order, the plant
+couples the forces and gives response and loads, the sinks (recorder's
+:class:`nodes.recorder.recording.Recording`, live fatigue's LiveLoads) take every message, the
+plant integrates to t_{k+1}. Every message goes through the run's codec (:mod:`cosim.wire`), so
+the tables and fatigue files are the distributed run's bit for bit (tested). DESIGN.md allows
+this module, and only it, to import node modules. Refused (ScenarioError, exit 2): checkpoints,
+resume/fork, a node given as a function (it is written against the bus).
 """
 
 from __future__ import annotations
@@ -47,25 +36,18 @@ PROGRESS_PERIOD_S = 0.1
 
 @dataclass
 class EngineResult:
-    """What the engine did: the recorder's result (as the recorder node reports it), the
-    fatigue node's ``done`` facts (None without live fatigue), the wall times [s]."""
+    """The recorder's result, the live fatigue's ``done`` facts (or None), times [s]."""
 
     recorder: dict[str, Any]
     fatigue: dict[str, Any] | None
-    step_wall_s: float
-    """From the first step to the last step's outputs (sinks included: one thread)."""
-    run_wall_s: float
-    """From the first step until the table and the fatigue files are written."""
-    sink_s: float = 0.0
-    """Of :attr:`step_wall_s`, the time the sinks (recorder, live fatigue) took: what the
-    distributed run does on other cores, off the coupled chain."""
-    step_cpu_s: float = 0.0
-    """This process's CPU time over the steps [s] (one thread: the work, whatever else the
-    machine runs; wall time on a shared machine is not)."""
+    step_wall_s: float  # first step to the last step's outputs (sinks included)
+    run_wall_s: float  # first step until the table and fatigue files are written
+    sink_s: float = 0.0  # of step_wall_s, the sinks' share
+    step_cpu_s: float = 0.0  # this process's CPU time over the steps
 
 
 def refusal(scenario: dict[str, Any]) -> None:
-    """A ScenarioError for what the engine does not run (see the module's docstring)."""
+    """A ScenarioError for what the engine does not run."""
     run = scenario["run"]
     if run.get("checkpoint_every_s"):
         raise ScenarioError("run.checkpoint_every_s", run["checkpoint_every_s"],
@@ -86,8 +68,7 @@ def refusal(scenario: dict[str, Any]) -> None:
 
 
 class _Stepped:
-    """A force node's stepped class and what it reads (as :func:`cosim.stepped.run_stepped`
-    sets it up on a participant)."""
+    """A force node's stepped class and its inputs (as :func:`cosim.stepped.run_stepped`)."""
 
     def __init__(self, name: str, scenario: dict[str, Any]) -> None:
         self.name = name
@@ -107,7 +88,7 @@ class _Stepped:
 
 
 class Engine:
-    """One run's nodes in this process (see the module's docstring)."""
+    """One run's nodes in this process."""
 
     def __init__(self, scenario: dict[str, Any],
                  on_progress: Callable[[int, int], None] | None = None) -> None:
@@ -117,18 +98,15 @@ class Engine:
         self.settings = RunSettings.of(scenario)
         self.n = int(run["n_steps"])
         self.on_progress = on_progress or (lambda k, n: None)
-        self.latest: dict[tuple[str, str], dict[int, Message]] = {}
-        """Each channel's last two messages by step (the parallel exchange reads k - 1)."""
+        self.latest: dict[tuple[str, str], dict[int, Message]] = {}  # last two by step
         self.rec: Recording | None = None
-        self.fatigue: Any = None
-        """The live fatigue node's :class:`nodes.fatigue.live_sink.LiveLoads`, if any."""
-        self.sink_s = 0.0
-        """Time the sinks (recorder, live fatigue) took within the steps [s]."""
+        self.fatigue: Any = None  # the live fatigue's LiveLoads, if any
+        self.sink_s = 0.0  # [s] the sinks' time within the steps
 
     def emit(self, node: str, channel: str, k: int, t: float, data: Any) -> Message:
-        """One data message of ``node/channel``, encoded and checked as a node's outbox does
-        (:class:`cosim.outbox.Outbox`), decoded as its consumers take it, given to the
-        sinks."""
+        """One data message encoded and checked as a node's outbox does, decoded as its
+        consumers take it, given to the sinks."""
+
         raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{node}/{channel}: a message of {len(raw)} bytes at step {k} "

@@ -1,15 +1,8 @@
-"""The explicit Zenoh mesh of a run's local nodes: who listens where and who connects to whom.
-
-The orchestrator and the run's node processes on this machine link directly, a full mesh over
-Unix sockets in a private folder (mode 0700), gossip off in every session: the orchestrator
-listens on ``orchestrator.sock`` (besides its TCP endpoint); node *i* (scenario order) listens
-on ``NAME.sock`` and connects to the orchestrator's and the earlier nodes' sockets, so each
-pair is linked once, by one side. Why (no link-state forwarding, no wedged start): docs/cosim.md
-"The explicit mesh" and "A wedged start". Sockets rather than ports chosen in advance: a path
-in the run's own folder cannot be taken by another program meanwhile. Paths stay under the 107
-bytes of a Unix socket path; the folder of an orchestrator killed outright is removed by the
-next run (:func:`remove_stale`). Taps, scopes and replays join as clients of the orchestrator
-(:func:`cosim.zenoh_options.session_mode`).
+"""The explicit Zenoh mesh of a run's local nodes (docs/cosim.md "The explicit mesh"): a full
+mesh over Unix sockets in a private folder (0700), gossip off: the orchestrator listens on
+``orchestrator.sock``, node *i* on ``NAME.sock`` and connects to the orchestrator's and the
+earlier nodes' sockets (each pair linked once). Sockets, not ports: a path in the run's own
+folder cannot be taken meanwhile. A killed orchestrator's folder is removed by the next run.
 """
 
 from __future__ import annotations
@@ -21,33 +14,26 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 ORCHESTRATOR = "orchestrator"
-PREFIX = "suscosim-mesh-"
-"""The name of a mesh folder starts so, in the system's temporary folder."""
-OWNER_FILE = "owner.pid"
-"""The file in a mesh folder holding the process id of the orchestrator that made it."""
-SOCKET_PATH_MAX = 107
-"""The longest path a Unix socket may have on Linux (``sun_path`` is 108 bytes) [bytes]."""
+PREFIX = "suscosim-mesh-"  # of a mesh folder, in the temporary folder
+OWNER_FILE = "owner.pid"  # the pid of the orchestrator that made it
+SOCKET_PATH_MAX = 107  # [bytes] Linux ``sun_path`` is 108
 
 
 def unix_endpoint(path: Path) -> str:
-    """The Zenoh endpoint of a Unix stream socket at ``path``."""
     return f"unixsock-stream/{path}"
 
 
 @dataclass
 class LocalMesh:
-    """The socket folder of one run's explicit mesh (:func:`create`), and each member's
-    endpoints: ``names`` are the local nodes in the order they are started."""
+    """One run's socket folder; ``names``: the local nodes in start order."""
 
     folder: Path
     names: list[str] = field(default_factory=list)
 
     @classmethod
     def create(cls, names: list[str]) -> LocalMesh:
-        """A new private folder (mode 0700) for the sockets of ``names`` and the orchestrator,
-        under the system's temporary folder, or under ``/tmp`` when a socket path there would
-        be too long (a deep ``TMPDIR``). Raises ValueError for a name that is not a plain
-        file name or when no folder gives short enough paths, OSError when none can be made."""
+        """A new private folder in the temporary folder, or ``/tmp`` when paths there would be
+        too long; ValueError for a bad name or no short enough path, OSError if none."""
         error: ValueError | None = None
         for base in dict.fromkeys([tempfile.gettempdir(), "/tmp"]):
             remove_stale(Path(base))
@@ -65,7 +51,6 @@ class LocalMesh:
         raise error
 
     def socket(self, name: str) -> Path:
-        """The socket path of member ``name`` (a node or :data:`ORCHESTRATOR`)."""
         if not name or "/" in name or name in (".", ".."):
             raise ValueError(f"mesh member name {name!r} is not a plain file name")
         path = self.folder / f"{name}.sock"
@@ -75,24 +60,21 @@ class LocalMesh:
         return path
 
     def listen(self, name: str) -> str:
-        """The endpoint member ``name`` listens on."""
         return unix_endpoint(self.socket(name))
 
     def connect(self, name: str) -> list[str]:
-        """The endpoints node ``name`` connects to: the orchestrator's, then those of the nodes
-        started before it (each pair of the mesh is linked by exactly one side)."""
+        """The orchestrator's and the earlier nodes' endpoints."""
         before = self.names[:self.names.index(name)]
         return [self.listen(ORCHESTRATOR), *(self.listen(n) for n in before)]
 
     def remove(self) -> None:
-        """Remove the socket folder (once every member has closed; idempotent)."""
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
 def remove_stale(base: Path | None = None) -> list[Path]:
-    """Remove the mesh folders of this user in ``base`` (default: the temporary folder)
-    whose orchestrator process is gone (killed before it could remove its own); return them.
-    A folder without a readable owner file is left alone (it may be one being made now)."""
+    """Remove (and return) this user's mesh folders in ``base`` whose orchestrator is gone; one
+    without a readable owner file may be being made: left alone."""
+
     removed = []
     for folder in (base or Path(tempfile.gettempdir())).glob(f"{PREFIX}*"):
         try:

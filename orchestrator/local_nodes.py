@@ -1,5 +1,4 @@
-"""The node processes a run starts on this machine: their command lines, logs, cores and
-fate, and the Zenoh link lease they share with the orchestrator."""
+"""The node processes a run starts on this machine: command lines, logs, cores, fate."""
 
 from __future__ import annotations
 
@@ -23,11 +22,8 @@ coupled steps/s on the 2-core VM (docs/cosim.md); unpinned runs side by side got
 
 
 def local_lease_ms(stall_timeout_s: float) -> int:
-    """Zenoh link lease [ms] of the orchestrator and the nodes it starts: the run's stall
-    timeout, clamped to 2-30 s, so a process starved of CPU is judged by one rule (a shorter
-    lease drops its token and the messages sent to it). A local node that dies is seen at once
-    (exit code, closed sockets); nodes started elsewhere keep ``suscosim node --lease-ms``
-    (default 2 s)."""
+    """Zenoh link lease [ms] of the orchestrator and its nodes: the stall timeout clamped to
+    2-30 s, so a starved process is judged by one rule (a shorter lease drops its messages)."""
     return int(1000.0 * min(max(stall_timeout_s, 2.0), 30.0))
 
 
@@ -38,10 +34,8 @@ class LocalNodes:
                  log_dir: Path, zenoh_config_file: str | None = None,
                  cores: dict[str, int] | None = None, lease_ms: int = 2000,
                  run_key: bytes | None = None, mesh: LocalMesh | None = None) -> None:
-        """Start ``names`` (each a ``suscosim node`` process, its output in
-        ``log_dir/NAME.log``), connecting to ``connect``; with ``mesh``, each also listens on
-        its socket of the run's explicit mesh and links to the members before it, gossip off
-        (:mod:`orchestrator.local_mesh`; the folder is removed by :meth:`stop`)."""
+        """Start ``names`` as ``suscosim node`` processes (output in ``log_dir/NAME.log``);
+        with ``mesh``, linked by it, gossip off (its folder removed by :meth:`stop`)."""
         self.mesh = mesh
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
@@ -49,7 +43,6 @@ class LocalNodes:
         self.guard = BackgroundGuard()
         log_dir.mkdir(parents=True, exist_ok=True)
         # their parent's PID: a node ends at once when this process is gone
-        # (cosim.orchestrator_presence)
         env = dict(os.environ, PYTHONUNBUFFERED="1", **{ENV_PARENT_PID: str(os.getpid())})
         if run_key is not None:  # the run key, in the environment (readable by this user only)
             env[au.ENV_RUN_KEY] = run_key.hex()
@@ -77,18 +70,14 @@ class LocalNodes:
                 self.cores[name] = core
 
     def go_background(self) -> None:
-        """Once the run has started: put the pinned nodes off the coupled chain's critical
-        path (the recorder, the live fatigue node) in ``SCHED_IDLE``
-        (:mod:`orchestrator.placement`)."""
+        """Once started: pinned nodes off the critical path to ``SCHED_IDLE``."""
         for name in self.cores:
             if nk.off_critical_path(name) and self.procs[name].poll() is None \
                     and background(self.procs[name].pid):
                 self.background.append(name)
 
     def check(self) -> str | None:
-        """On every tick of the clock: move a starved background node back to the normal
-        class (:class:`~orchestrator.placement.BackgroundGuard`, said on stderr), then
-        :meth:`dead`."""
+        """Every clock tick: a starved background node back to normal (said), then :meth:`dead`."""
         if self.background:
             alive = {n: self.procs[n].pid for n in self.background if self.procs[n].poll() is None}
             for name in self.guard.check(alive):
@@ -107,9 +96,9 @@ class LocalNodes:
 
     def stop(self, grace_s: float = 5.0, tick: Callable[[], None] | None = None,
              tick_period_s: float = 0.25) -> None:
-        """Wait up to ``grace_s`` for the nodes to end, calling ``tick`` every
-        ``tick_period_s`` (the abort said again for late subscribers), then SIGTERM what is
-        left, SIGKILL 2 s later; then remove the mesh's socket folder."""
+        """Wait ``grace_s`` for the nodes to end (``tick`` every ``tick_period_s``), then
+        SIGTERM, SIGKILL 2 s later; remove the mesh folder."""
+
         deadline = time.monotonic() + grace_s
         for p in self.procs.values():
             while True:

@@ -14,14 +14,11 @@ n cores     plant  tyre_road  controller  recorder, fatigue (and any other node)
 >= 4        c0     c1         c2          c3
 ==========  =====  =========  ==========  =========================================
 
-A pinned node polls its input briefly before it blocks (``--spin-us``, ``Participant.spin_s``).
-A node off the coupled chain's critical path (:func:`cosim.node_kinds.off_critical_path`) runs
-in ``SCHED_IDLE`` once the run has started (:func:`background`); it takes its inputs in
-arrears, so its results do not depend on when it runs. A starved one goes back to the normal
-class for the rest of the run (:class:`BackgroundGuard`, summary.json ``background_starved``);
-``--pin off`` keeps everything in the normal class. ``auto`` pins on 2 to ``AUTO_MAX_CORES``
-usable cores; on a bigger machine pinning every run to the same cores would only hurt runs
-side by side.
+A pinned node polls its input briefly before it blocks (``--spin-us``). A node off the
+critical path (:func:`cosim.node_kinds.off_critical_path`) runs in ``SCHED_IDLE`` once the run
+has started (its inputs are buffered: results do not depend on when it runs); a starved one
+goes back to the normal class (:class:`BackgroundGuard`). ``auto`` pins on 2 to
+``AUTO_MAX_CORES`` cores (on a bigger machine, runs side by side would share the same cores).
 """
 
 from __future__ import annotations
@@ -45,9 +42,7 @@ def usable_cores() -> list[int]:
 
 
 def core_layout(nodes: Iterable[str], cores: list[int]) -> dict[str, int]:
-    """The core of each node (see the table above: each kind's ``cores`` in the registry,
-    :mod:`cosim.node_kinds`; a name that is no kind is placed as the listeners are); empty
-    with fewer than 2 cores."""
+    """The core of each node (the table above); empty with fewer than 2 cores."""
     n = len(cores)
     if n < 2:
         return {}
@@ -55,7 +50,6 @@ def core_layout(nodes: Iterable[str], cores: list[int]) -> dict[str, int]:
 
 
 def should_pin(mode: str, cores: list[int]) -> bool:
-    """Whether to pin, for ``mode`` in :data:`PIN_MODES` and the usable ``cores``."""
     if mode not in PIN_MODES:
         raise ValueError(f"pin mode must be one of {', '.join(PIN_MODES)}, got {mode!r}")
     if mode == "off" or len(cores) < 2:
@@ -64,13 +58,12 @@ def should_pin(mode: str, cores: list[int]) -> bool:
 
 
 def _threads(pid: int) -> list[int]:
-    """The thread ids of process ``pid`` (OSError if it is gone)."""
     return [int(t) for t in os.listdir(f"/proc/{pid}/task")]
 
 
 def _set_class(pid: int, from_policy: int | None, to_policy: int) -> bool:
-    """Every thread of ``pid`` (in ``from_policy``; None: any but real-time) to ``to_policy``;
-    False if the process is gone, the OS refuses or has no such class."""
+    """Every thread of ``pid`` in ``from_policy`` (None: any not real-time) to ``to_policy``;
+    False if the process is gone or the OS refuses."""
     try:
         for tid in _threads(pid):
             try:
@@ -87,30 +80,24 @@ def _set_class(pid: int, from_policy: int | None, to_policy: int) -> bool:
 
 
 def background(pid: int) -> bool:
-    """Put every thread of process ``pid`` in the ``SCHED_IDLE`` class (later threads inherit
-    it); False where the OS has no such class or refuses. Called once the run has started: at
-    start-up an idle-class node could wait for its core longer than the start timeout."""
+    """Every thread of ``pid`` to ``SCHED_IDLE`` (only once the run has started: an idle node
+    could miss the start timeout); False where the OS refuses."""
     return _set_class(pid, None, os.SCHED_IDLE) if hasattr(os, "SCHED_IDLE") else False
 
 
 def foreground(pid: int) -> bool:
-    """Move every ``SCHED_IDLE`` thread of process ``pid`` back to the normal class (its
-    nice value is kept); False if the process is gone or the OS refuses."""
+    """Every ``SCHED_IDLE`` thread of ``pid`` back to the normal class."""
     if not hasattr(os, "SCHED_IDLE"):
         return False
     return _set_class(pid, os.SCHED_IDLE, os.SCHED_OTHER)
 
 
-STARVED_WINDOW_S = 2.0
-"""How long [s] a background node's waiting is measured over (:class:`BackgroundGuard`)."""
-STARVED_FRACTION = 0.5
-"""A background node one of whose threads waited on its core's run queue for more than this
-fraction of :data:`STARVED_WINDOW_S` is starved: it had work and did not get the core."""
+STARVED_WINDOW_S = 2.0  # [s] over which a background node's run-queue wait is measured
+STARVED_FRACTION = 0.5  # a thread runnable but waiting more than this share of it is starved
 
 
 def run_queue_waits_s(pid: int) -> dict[int, float]:
-    """How long [s] each thread of process ``pid`` has waited on a run queue, runnable but
-    not running (``/proc/PID/task/TID/schedstat``, second field); empty if it is gone."""
+    """[s] each thread of ``pid`` waited runnable on a run queue (schedstat field 2)."""
     out: dict[int, float] = {}
     try:
         tids = _threads(pid)
@@ -126,23 +113,19 @@ def run_queue_waits_s(pid: int) -> dict[int, float]:
 
 
 def starved(waited_s: float, over_s: float, fraction: float = STARVED_FRACTION) -> bool:
-    """Whether a thread that waited ``waited_s`` on a run queue during ``over_s`` of wall
-    time is starved (it waited more than ``fraction`` of it)."""
     return over_s > 0 and waited_s > fraction * over_s
 
 
 class BackgroundGuard:
-    """Moves a starved ``SCHED_IDLE`` node (:func:`starved` over :data:`STARVED_WINDOW_S`) back
-    to the normal class for the rest of the run; :meth:`check` on every tick of the clock."""
+    """Moves a starved ``SCHED_IDLE`` node back to the normal class for the rest of the run."""
 
     def __init__(self, window_s: float = STARVED_WINDOW_S) -> None:
         self.window_s = window_s
         self._since: dict[int, tuple[float, dict[int, float]]] = {}  # pid -> (t, waits)
-        self.moved: list[str] = []
-        """The nodes moved back to the normal class, in order."""
+        self.moved: list[str] = []  # the nodes moved back, in order
 
     def check(self, pids: dict[str, int]) -> list[str]:
-        """Measure the background nodes ``{name: pid}``; the names moved back this call."""
+        """Measure the background nodes ``{name: pid}``; the names moved back now."""
         now, moved = time.monotonic(), []
         for name, pid in pids.items():
             if name in self.moved or not (waits := run_queue_waits_s(pid)):
@@ -159,8 +142,8 @@ class BackgroundGuard:
 
 
 def pin(pid: int, core: int) -> bool:
-    """Pin process ``pid`` to ``core`` (its threads started later inherit it); False if the
-    process is gone already or the OS refuses."""
+    """Pin ``pid`` to ``core`` (later threads inherit it); False if refused."""
+
     try:
         os.sched_setaffinity(pid, {core})
         return True

@@ -28,10 +28,11 @@ class ProgressBar:
     """The bar of one run, labelled ``label`` (the run id), on ``stream`` (stderr)."""
 
     def __init__(self, label: str, stream: TextIO | None = None, width: int = 30,
-                 min_interval_s: float = 0.1, start_phase: str = "starting nodes") -> None:
+                 min_interval_s: float = 0.1, start_phase: str = "starting nodes",
+                 quiet: bool = False) -> None:
         self.label, self.width = label, width
         self.stream = stream or sys.stderr
-        self.enabled = self.stream.isatty()
+        self.enabled = self.stream.isatty() and not quiet
         self.min_interval_s = min_interval_s
         self.t0 = time.monotonic()
         self._last = 0.0

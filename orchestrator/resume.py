@@ -1,14 +1,9 @@
-"""``suscosim run --resume RUN_DIR`` and ``--fork RUN_DIR@T --set ...``: the scenario of a run
-that continues from a checkpoint (docs/checkpoints.md; nodes: :mod:`cosim.run_checkpoint`).
-
-* **Resume**: the same scenario (hash checked), folder and id, from the last complete
-  checkpoint; the killed run's journal is set aside as ``checkpoints/journal-k<k>.msgpack``
-  (unless one from the same checkpoint is there) and the steps < k are journalled again. The
-  run's files end equal to the uninterrupted run's.
-* **Fork**: a new run from the parent's checkpoint at T with ``--set`` applied. Only the
-  control, the report and the bookkeeping may change (:data:`FORK_MAY_CHANGE`; anything else
-  is refused naming the key: the state at T belongs to the parent's vehicle, road, step and
-  fatigue model). A controller whose settings changed starts afresh; every other node continues.
+"""``suscosim run --resume RUN_DIR`` and ``--fork RUN_DIR@T --set ...`` (docs/checkpoints.md).
+Resume: the same scenario (hash checked), folder and id from the last complete checkpoint; the
+killed run's journal is set aside as ``checkpoints/journal-k<k>.msgpack`` and the steps < k
+journalled again (the files end equal to the uninterrupted run's). Fork: a new run from the
+parent's checkpoint at T with ``--set``; only :data:`FORK_MAY_CHANGE` may change (else a
+ScenarioError naming the key); a changed controller starts afresh, the other nodes continue.
 """
 
 from __future__ import annotations
@@ -37,14 +32,11 @@ JOURNAL = "journal.msgpack"
 FORK_MAY_CHANGE = ("controller", "report", "nodes.controller", "run.id", "run.name",
                    "run.dir", "run.mode", "run.checkpoint_every_s", "run.stall_timeout_s",
                    "run.start_timeout_s", "run.resume")
-"""What a fork may change (dotted prefixes); the rest is the parent's state's."""
-RESTARTED_BY = {"controller": ("controller", "nodes.controller")}
-"""A node that starts afresh in a fork when one of these changed."""
+RESTARTED_BY = {"controller": ("controller", "nodes.controller")}  # fresh when these changed
 
 
 def parent_scenario(run_dir: Path) -> dict[str, Any]:
-    """The resolved scenario a run folder was run with (``scenario.json``), without the
-    ``run.resume`` of a run that was itself resumed."""
+    """A run folder's ``scenario.json`` without its own ``run.resume``."""
     path = Path(run_dir) / "scenario.json"
     try:
         scenario = json.loads(read_user_text(path, "scenario", "the run's scenario.json",
@@ -58,10 +50,8 @@ def parent_scenario(run_dir: Path) -> dict[str, Any]:
 
 
 def key_of(run_dir: Path, scenario: dict[str, Any]) -> bytes | None:
-    """The key of the checkpoint MACs of the run in ``run_dir`` (:func:`cosim.checkpoint.
-    checkpoint_key`): from ``SUSCOSIM_KEY_FILE`` / ``SUSCOSIM_KEY``, else the folder's
-    ``run.key`` (mode 0600), else None (an unsigned run). A run.key handed over with the folder
-    is only as trusted as the folder: a deployment secret outside it authenticates."""
+    """The checkpoint MAC key from ``SUSCOSIM_KEY[_FILE]``, else the folder's ``run.key``, else
+    None (an unsigned run)."""
     secret = au.secret_from_env()
     path = Path(run_dir) / au.KEY_FILE_NAME
     if secret is None and path.is_file():
@@ -73,18 +63,15 @@ def key_of(run_dir: Path, scenario: dict[str, Any]) -> bytes | None:
 
 
 def checked_files(ck: Checkpoint) -> dict[str, str]:
-    """``run.resume.sha256``: each node file's SHA-256 as checked (a node reads only that)."""
     return {node: str(e["sha256"]) for node, e in ck.manifest["nodes"].items()}
 
 
-TRUST_CODE_ENV = "SUSCOSIM_TRUST_RUN_CODE"
-"""Set to 1 to resume or fork a run folder whose scenario names code (:func:`code_named`)."""
+TRUST_CODE_ENV = "SUSCOSIM_TRUST_RUN_CODE"  # 1: resume/fork a folder that names code
 
 
 def code_named(scenario: dict[str, Any], run_dir: Path) -> list[str]:
-    """What a run folder's scenario names to run as code: a user's node entry or
-    law (``package.module:attr``: imported, the working directory on the path) and an FMU
-    inside the run folder (a shared library handed over with it)."""
+    """What a run folder's scenario names to run as code: a ``package.module:attr`` node or
+    law, an FMU inside the run folder."""
     found = [f"nodes.{kind} = {v!r}" for kind, v in (scenario.get("nodes") or {}).items()
              if isinstance(v, str) and ":" in v]
     got = scenario.get("controller")
@@ -107,9 +94,8 @@ def _refuse_code(scenario: dict[str, Any], run_dir: Path) -> None:
 
 
 def journal_for(run_dir: Path, k: int) -> Path:
-    """The journal of ``run_dir`` that holds every step < ``k``: a journal set aside by a
-    resume from a checkpoint >= k (that run's whole record up to there), else the run's
-    own (whole up to k, the checkpoint being complete)."""
+    """The journal holding every step < ``k``: one set aside by a resume from >= k, else the
+    run's own."""
     root = Path(run_dir) / CHECKPOINTS_DIR
     aside = sorted((int(p.stem.split("-k")[1]), p) for p in root.glob("journal-k*.msgpack")
                    if p.stem.split("-k")[1].isdigit())
@@ -124,8 +110,7 @@ def journal_for(run_dir: Path, k: int) -> Path:
 
 
 def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], Checkpoint]:
-    """The scenario that resumes ``run_dir`` from its last complete checkpoint (the journal
-    set aside: see the module's docstring). CheckpointError (exit 2) naming what is wrong."""
+    """The scenario resuming ``run_dir``; CheckpointError (exit 2) naming what is wrong."""
     run_dir = Path(run_dir)
     scenario = parent_scenario(run_dir)
     _refuse_code(scenario, run_dir)
@@ -146,9 +131,7 @@ def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], Checkpoint]:
 
 def fork_scenario(spec: str, overrides: list[str], out: str | None,
                   resolve: Any) -> tuple[dict[str, Any], Checkpoint, list[str]]:
-    """The scenario of a fork ``RUN_DIR@T`` with ``overrides`` (``--set``) applied, resolved
-    with ``resolve(scenario, out)``; also the checkpoint and what changed (dotted keys).
-    ScenarioError (exit 2) names a key a fork may not change."""
+    """(scenario, checkpoint, changed keys) of a fork ``RUN_DIR@T`` with ``overrides``."""
     try:
         parent_dir, at = parse_fork(spec)
     except ValueError as exc:
@@ -186,8 +169,8 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
 
 
 def _changes(a: Any, b: Any, key: str = "") -> list[str]:
-    """The dotted keys whose values differ between ``a`` (the parent) and ``b`` (the fork);
-    a ``run`` key the parent's scenario predates, at its default in the fork, is no change."""
+    """Dotted keys differing between ``a`` and ``b`` (a new ``run`` key at its default: none)."""
+
     if isinstance(a, dict) and isinstance(b, dict):
         out: list[str] = []
         for k in sorted(set(a) | set(b)):

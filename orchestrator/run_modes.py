@@ -1,7 +1,4 @@
-"""A distributed run's nodes: one process per node on Zenoh. The runner
-(:mod:`orchestrator.runner`) runs the clock on what this gives; the one-process engine
-(:mod:`orchestrator.inprocess`) and the reference mode start no node process at all.
-"""
+"""A distributed run's nodes: one process per node on Zenoh (the runner's clock runs on them)."""
 
 from __future__ import annotations
 
@@ -24,31 +21,20 @@ class Nodes:
     """The bus a run's clock uses, and the nodes on it."""
 
     bus: Bus
-    dead: Callable[[], str | None]
-    """Why a node is gone (its process exited), or None; called on every tick of the clock
-    (it also looks after the background nodes: :meth:`LocalNodes.check`)."""
+    dead: Callable[[], str | None]  # why a node is gone, or None (every clock tick)
     local: LocalNodes | None = None
-    """The local node processes."""
 
     def started(self) -> None:
-        """Every node has the clock's start: local nodes off the critical path go to the
-        background (:meth:`LocalNodes.go_background`)."""
         if self.local is not None:
             self.local.go_background()
 
-    def stop(self, grace_s: float | None = None,
-             tick: Callable[[], None] | None = None) -> None:
-        """Stop the local processes (``grace_s`` before they are killed, ``tick`` called
-        while waiting); at the end of a run, or after a failure."""
+    def stop(self, grace_s: float = 5.0, tick: Callable[[], None] | None = None) -> None:
         if self.local:
-            if grace_s is None:
-                self.local.stop()
-            else:
-                self.local.stop(grace_s=grace_s, tick=tick)
+            self.local.stop(grace_s=grace_s, tick=tick)
 
 
 def close_quietly(bus: Bus) -> None:
-    """Close ``bus`` on an error path: the first error is the one to report."""
+    """Close ``bus`` on an error path (the first error is the one to report)."""
     try:
         bus.close()
     except Exception:
@@ -59,16 +45,11 @@ def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,
                 external: list[str] | None, listen: list[str], lowlatency: bool,
                 zenoh_config_file: str | None, pin_mode: str, run_key: bytes,
                 as_client: bool) -> Nodes:
-    """The orchestrator's Zenoh session and a process per node not run ``external``ly.
+    """The orchestrator's Zenoh session and a process per node not ``external``: linked as an
+    explicit mesh (:mod:`.local_mesh`) unless a Zenoh configuration file decides (gossip);
+    the orchestrator gossips only through a ``connect``ed router (where a second run of the
+    same id is refused). Its own session is universal; ``lowlatency`` is the nodes'."""
 
-    The local nodes and the orchestrator link as an explicit mesh, the nodes' gossip off
-    (:mod:`orchestrator.local_mesh`), unless a Zenoh configuration file is given (TLS, access
-    control: its endpoints decide, and peers find each other by gossip as before). The
-    orchestrator's gossip is off too, unless it connects to a shared mesh (``connect``: a
-    router, through which the peers of other runs find it: a second run of the same id is
-    refused by what it sees there, :func:`check_run_id_free`).
-    ``lowlatency`` is the local nodes' transport; the orchestrator's own session is always
-    Zenoh's universal one (:data:`orchestrator.runner.LOWLATENCY_DEFAULT`)."""
     lease = local_lease_ms(float(run["stall_timeout_s"]))
     names = [n for n in run["nodes"] if n not in (external or [])]
     try:

@@ -1,5 +1,4 @@
-"""What a failed or interrupted run leaves as its table: one writer per table, and a stopped
-run that ends within seconds whatever its length (issues #15, #18)."""
+"""What a failed or interrupted run leaves as its table, within seconds whatever its length."""
 
 from __future__ import annotations
 
@@ -9,26 +8,16 @@ from pathlib import Path
 from typing import Any
 
 INTERRUPT_REBUILD_BYTES = 4 << 20
-"""On an interrupt (Ctrl-C, SIGTERM: ``docker compose down``) the orchestrator rebuilds the
-table from a journal of up to this size [bytes] (~0.7 s on this 2-core machine: the journal
-of a Chapter 6 run rebuilds at ~5.5 MB/s, read, decode, CSV and Parquet); a larger journal
-is left for ``suscosim export``, so that a stopped run ends within seconds whatever its
-length (issue #18: under 3 s a container)."""
-
-
-RECORDER_WAIT_S = 1.5
-"""How long the orchestrator waits for the table of a recorder running elsewhere [s]."""
+"""[bytes] Largest journal rebuilt into a table on an interrupt (~0.7 s at ~5.5 MB/s on the
+2-core machine); a larger one is left for ``suscosim export``."""
+RECORDER_WAIT_S = 1.5  # [s] wait for the table of a recorder running elsewhere
 
 
 def recover_table(folder: Path, interrupted: bool = False, since: float | None = None,
                   recorder_elsewhere: bool = False, wait_s: float = RECORDER_WAIT_S
                   ) -> dict[str, Any]:
-    """After a failed run: whatever the journal holds, as a table, never put in place of a
-    larger one (:func:`cosim.table.export_target`); one that cannot be written is removed.
-    The recorder's own table, written ``since`` the run began [s, Unix time] and holding every
-    step the journal reached, is taken as it is (waited for up to ``wait_s`` when
-    ``recorder_elsewhere``). On an ``interrupted`` run, or a recorder elsewhere, a journal
-    above :data:`INTERRUPT_REBUILD_BYTES` is not rebuilt here: the summary says how."""
+    """After a failed run: the journal as a table, never in place of a larger one; the
+    recorder's own table taken when written ``since`` [Unix s] the start and complete."""
     journal = folder / "journal.msgpack"
     if not recorder_elsewhere:
         _remove_stale_tables(folder)
@@ -92,9 +81,7 @@ def recover_table(folder: Path, interrupted: bool = False, since: float | None =
 
 
 def _remove_stale_tables(folder: Path) -> None:
-    """The tables a killed recorder was writing beside their place (``.table.csv.PID.TID.tmp``,
-    as long as its run: up to hundreds of MB) are removed once that process is gone; the
-    journal is the record."""
+    """Remove the ``.table.*.PID.TID.tmp`` files of a recorder that is gone."""
     from cosim.run_folder import pid_alive
 
     for tmp in folder.glob(".table.*.tmp"):
@@ -108,7 +95,6 @@ def _remove_stale_tables(folder: Path) -> None:
 
 
 def _remove_tables(folder: Path, stem: str) -> None:
-    """A table that could not be written whole is not left half-written."""
     for suffix in (".csv", ".parquet"):
         try:
             (folder / f"{stem}{suffix}").unlink(missing_ok=True)
@@ -117,8 +103,6 @@ def _remove_tables(folder: Path, stem: str) -> None:
 
 
 def _recorders_table(folder: Path, journal: Path, since: float | None) -> dict[str, Any] | None:
-    """The recorder's table in ``folder``, when it was written ``since`` the run began and
-    holds every step the journal reached: its statistics, rows and files."""
     from cosim.journal import last_step
     from cosim.table import channel_stats, read_table, table_rows
 

@@ -1,17 +1,10 @@
-"""Run one scenario: resolve it, start the nodes, run the clock, write the run folder.
-
-Modes (``run.mode``):
-
-* ``distributed``: one process per node, real Zenoh sessions (embedded peer mode on
-  loopback, or through a router given with ``--connect``);
-* ``monolithic`` (= ``run.transport = "inprocess"``): the same node models stepped in one
-  process, one thread, no bus (:mod:`orchestrator.inprocess`; "purely multi-body" in the
-  thesis), its tables bit-identical to the distributed run's;
-* ``reference``: the lumped model solved by SciPy ``solve_ivp`` at tight tolerance ("purely
-  mathematical").
-
-The run folder holds ``scenario.json`` (as resolved), ``journal.msgpack``, ``table.csv``,
-``table.parquet``, ``summary.json`` and ``logs/``.
+"""Run one scenario: resolve it, start the nodes, run the clock, write the run folder
+(``scenario.json`` as resolved, ``journal.msgpack``, ``table.csv``/``.parquet``,
+``summary.json``, ``logs/``). ``run.mode``: ``distributed`` (a process per node on Zenoh,
+embedded peers on loopback or through ``--connect``'s router); ``monolithic`` (= ``run.transport
+= "inprocess"``: the node models stepped in one thread, no bus, :mod:`orchestrator.inprocess`,
+tables bit-identical to the distributed run's); ``reference`` (the lumped model by SciPy
+``solve_ivp`` at tight tolerance).
 """
 
 from __future__ import annotations
@@ -115,8 +108,7 @@ def _summary(scenario: dict[str, Any], result: ClockResult | None, wall_s: float
 
 
 def _relative(files: dict[str, str], folder: str) -> dict[str, str]:
-    """The run's table files named relative to its folder (#47: a run folder handed to a
-    colleague names no path of this machine); a file outside the folder keeps its path."""
+    """The table files relative to the run folder (a handed folder names no local path)."""
     base = Path(folder).resolve()
     out = {}
     for kind, name in files.items():
@@ -126,13 +118,11 @@ def _relative(files: dict[str, str], folder: str) -> dict[str, str]:
 
 
 RESIDUAL_WARNING = WARNING_THRESHOLD
-"""The coupling residual said after a run (:data:`cosim.coupling_energy.WARNING_THRESHOLD`)."""
 
 
 def _coupling_summary(scenario: dict[str, Any], rec: dict[str, Any],
                       status: str) -> dict[str, Any]:
-    """``coupling_energy_residual`` of a finished co-simulated run, from its table
-    (:mod:`cosim.coupling_energy`); nothing for the reference mode or a run without a table."""
+    """``coupling_energy_residual`` of a finished co-simulated run's table, else nothing."""
     run = scenario["run"]
     parquet = (rec.get("files") or {}).get("parquet")
     if status != "ok" or run["mode"] == "reference" or not parquet:
@@ -148,8 +138,7 @@ def _coupling_summary(scenario: dict[str, Any], rec: dict[str, Any],
 
 
 def _resume_summary(run: dict[str, Any]) -> dict[str, Any]:
-    """``resumed_from`` of a resumed or forked run: the checkpoint's step and time, the run
-    folder it came from, the nodes that started afresh (a fork's changed controller)."""
+    """``resumed_from`` of a resumed or forked run (checkpoint, source folder, fresh nodes)."""
     res = run.get("resume")
     if not res:
         return {}
@@ -159,8 +148,7 @@ def _resume_summary(run: dict[str, Any]) -> dict[str, Any]:
 
 
 def _adaptive_summary(scenario: dict[str, Any], rec: dict[str, Any]) -> dict[str, Any]:
-    """``adaptive_step`` of a run with ``run.h = "auto"``: its settings and the steps it
-    took (from the table's ``t``)."""
+    """``adaptive_step`` of a ``run.h = "auto"`` run: its settings and the steps taken."""
     run = scenario["run"]
     parquet = (rec.get("files") or {}).get("parquet")
     if not run.get("adaptive"):
@@ -183,8 +171,7 @@ def _adaptive_summary(scenario: dict[str, Any], rec: dict[str, Any]) -> dict[str
 
 
 def strict_json(obj: Any, key: str = "", nulled: list[str] | None = None) -> Any:
-    """``obj`` with every non-finite float (NaN, +-inf: not JSON) replaced by None; the dotted
-    keys replaced are appended to ``nulled``."""
+    """``obj`` with NaN/inf replaced by None, their dotted keys appended to ``nulled``."""
     if isinstance(obj, float) and not math.isfinite(obj):
         if nulled is not None:
             nulled.append(key)
@@ -197,8 +184,8 @@ def strict_json(obj: Any, key: str = "", nulled: list[str] | None = None) -> Any
 
 
 def write_summary(folder: Path, summary: dict[str, Any]) -> None:
-    """Write ``summary.json`` as strict JSON: a non-finite number (a channel that went NaN)
-    is written as null and its key listed in ``non_finite`` (also set in ``summary``)."""
+    """Write ``summary.json`` as strict JSON (non-finite numbers null, listed in
+    ``non_finite``), aside and renamed into place."""
     nulled: list[str] = []
     clean = strict_json(summary, nulled=nulled)
     if nulled:
@@ -208,7 +195,7 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> None:
               f"value(s) written as null: {shown}", file=sys.stderr)
     text = json.dumps(clean, indent=2, sort_keys=True, allow_nan=False)
     path, tmp = folder / "summary.json", folder / ".summary.json.tmp"
-    try:  # whole or not at all: a full disk leaves no truncated summary.json
+    try:
         tmp.write_text(text)
         os.replace(tmp, path)
         run_folder.mark_run_ended(folder, str(summary.get("status", "ended")))
@@ -236,12 +223,9 @@ def _folder_error(exc: OSError, folder: Path) -> InputFileError:
 
 
 def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes:
-    """The run's key (:mod:`cosim.auth`): derived from the secret of ``SUSCOSIM_KEY_FILE`` /
-    ``SUSCOSIM_KEY`` when one is set (nodes started elsewhere derive the same), else from a
-    fresh random secret; with nodes started elsewhere that secret is written to
-    ``RUN_DIR/run.key`` (mode 0600) for their ``--key-file``, and with checkpoints (their
-    MACs, :mod:`cosim.checkpoint`) for the resume; a run folder that has one (a resume) keeps
-    it."""
+    """The run's key (:mod:`cosim.auth`) from ``SUSCOSIM_KEY[_FILE]``'s secret, the run
+    folder's ``run.key`` (a resume), or a fresh one, written to ``run.key`` (0600) for nodes
+    started elsewhere (their ``--key-file``) and for checkpoints (their MACs)."""
     secret = au.secret_from_env()
     if secret is None and (folder / au.KEY_FILE_NAME).is_file():
         secret = au.read_secret_file(folder / au.KEY_FILE_NAME)
@@ -258,20 +242,11 @@ def run_key_for(run: dict[str, Any], folder: Path, external: list[str]) -> bytes
 
 
 LOWLATENCY_DEFAULT = True
-"""Whether the local nodes' sessions use Zenoh's low-latency transport when the command does
-not say (``suscosim run --lowlatency/--no-lowlatency``). The orchestrator's own session uses
-the universal transport in every case (:func:`orchestrator.run_modes.distributed`).
-
-On, since the local nodes link as an explicit mesh with gossip off
-(:mod:`orchestrator.local_mesh`). With gossip, the low-latency transport wedged the start of
-five peers about once in 700 (``python -m bench join-stress``), a Zenoh deadlock under
-peer churn: a receive thread holding the routing lock forwards gossip link states with a
-blocking low-latency send (eclipse-zenoh/zenoh#2581 family; stacks in docs/cosim.md "A wedged
-start"), and two Ch 6 sweeps lost a run to it on 2026-12-04 even with the orchestrator
-universal. Without gossip there are no link states to forward. Low-latency nodes give
-12-38 % more coupled steps per second than universal ones (interleaved pairs). With a Zenoh
-configuration file (``--zenoh-config``) the mesh is the file's, found by gossip, so the
-nodes are universal there unless ``--lowlatency`` is given."""
+"""The local nodes' sessions use Zenoh's low-latency transport unless told (``--no-lowlatency``;
+with ``--zenoh-config`` off unless ``--lowlatency``): 12-38 % more coupled steps/s than
+universal. Safe since they link as an explicit mesh with gossip off (:mod:`.local_mesh`); with
+gossip it wedged one start in ~700 (eclipse-zenoh/zenoh#2581 family, docs/cosim.md "A wedged
+start"). The orchestrator's own session is always universal."""
 
 
 def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
@@ -279,17 +254,9 @@ def run_scenario(scenario: dict[str, Any], connect: list[str] | None = None,
                  zenoh_config_file: str | None = None, listen: list[str] | None = None,
                  lowlatency: bool | None = None, pin_mode: str = "auto") -> dict[str, Any]:
     """Run a resolved scenario; write and return the summary. Raises SuscosimError on failure
-    (after writing a ``failed`` summary).
-
-    ``lowlatency``: Zenoh's low-latency transport for the local nodes (None:
-    :data:`LOWLATENCY_DEFAULT`, on; ~15-30 % off a lumped car's coupled step). The
-    orchestrator's own session is universal in every case. ``pin_mode`` (``auto``, ``on``,
-    ``off``) places the local node processes on cores (see :mod:`orchestrator.placement`).
-
-    The run folder is locked for the run (:class:`cosim.run_lock.RunLock`: a second run on
-    it is refused, exit 2); with ``connect``, a run id already live on the bus is refused too
-    (:func:`check_run_id_free`).
-    """
+    (after writing a ``failed`` summary). ``lowlatency`` None: :data:`LOWLATENCY_DEFAULT`;
+    ``pin_mode``: :mod:`orchestrator.placement`. The run folder is locked
+    (:class:`cosim.run_lock.RunLock`: a second run on it is exit 2)."""
     folder = Path(scenario["run"]["dir"])
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -307,15 +274,12 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
                 external: list[str] | None, quiet: bool, zenoh_config_file: str | None,
                 listen: list[str] | None, lowlatency: bool | None,
                 pin_mode: str) -> dict[str, Any]:
-    """:func:`run_scenario` once the run folder is locked."""
     if lowlatency is None:  # a config file's run gossips: low-latency there only if asked
         lowlatency = LOWLATENCY_DEFAULT and not zenoh_config_file
     run = scenario["run"]
     folder = Path(run["dir"])
     if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go
-        # Every node elsewhere, behind the router it connects to (compose, one machine per
-        # node): the orchestrator is a client of that router, as the nodes and taps are,
-        # not a peer (no mixed peer/client routing through one router).
+        # every node elsewhere behind a router (compose): the orchestrator is its client too
         as_client = bool(connect) and not listen and all(n in (external or [])
                                                          for n in run["nodes"])
         listen = [] if as_client else list(listen or [free_loopback_endpoint()])
@@ -342,7 +306,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         summary = _summary(scenario, None, time.monotonic() - t0, rec, "ok")
         write_summary(folder, summary)
         return summary
-    bar = ProgressBar(run["id"]) if not quiet else (lambda k, n: None)
+    bar = ProgressBar(run["id"], quiet=quiet)
     if run["mode"] == "monolithic":
         return _run_inprocess(scenario, bar, started, t0)
     nodes = run_modes.distributed(run, folder, connect, external, listen or [], lowlatency,
@@ -354,8 +318,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         result = clock.run()
     except BaseException as exc:
         _fail(exc, scenario, nodes, clock, bar, external, started, t0, lowlatency)
-    if hasattr(bar, "close"):
-        bar.close()
+    bar.close()
     nodes.stop()
     nodes.bus.close()
     rec = result.nodes[ch.RECORDER].result
@@ -372,9 +335,8 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
 
 
 def _sink_lags(result: ClockResult) -> dict[str, dict[str, float]]:
-    """Each sink's (recorder, fatigue) largest lag behind the coupled chain [steps] and how
-    long it worked on after the chain's last step [s]: its input is buffered, the chain never
-    waits for it (docs/cosim.md, "Sinks")."""
+    """Each sink's largest lag behind the coupled chain [steps] and how long it worked on
+    after the chain's last step [s] (docs/cosim.md, "Sinks")."""
     ends = [st.done_at for n, st in result.nodes.items()
             if n in ch.COUPLED and st.done_at is not None]
     end = max(ends) if ends else None
@@ -383,36 +345,47 @@ def _sink_lags(result: ClockResult) -> dict[str, dict[str, float]]:
             for n, st in result.nodes.items() if n not in ch.COUPLED}
 
 
-def _run_inprocess(scenario: dict[str, Any], bar: Any, started: float,
+def _error_text(exc: BaseException) -> str:
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted (Ctrl-C or SIGTERM)"
+    return str(exc) or type(exc).__name__
+
+
+def _raise_failure(exc: BaseException, unwritten: SummaryWriteError | None,
+                   where: str) -> NoReturn:
+    """Raise the error to report of a failed run: ``exc`` (a SuscosimError or the
+    KeyboardInterrupt), else a RunError; with ``unwritten`` (a full disk) both said."""
+    if unwritten is not None:
+        if isinstance(exc, KeyboardInterrupt):
+            print(f"suscosim: {unwritten}", file=sys.stderr)
+            raise exc
+        raise RunError(f"{_error_text(exc)}; and {unwritten}") from exc
+    if not isinstance(exc, SuscosimError | KeyboardInterrupt):
+        raise RunError(f"internal error in {where}: {type(exc).__name__}: {exc}") from exc
+    raise exc
+
+
+def _run_inprocess(scenario: dict[str, Any], bar: ProgressBar, started: float,
                    t0: float) -> dict[str, Any]:
-    """The one-process engine's run (:mod:`orchestrator.inprocess`); its summary as a
-    distributed run's (``transport``: ``inprocess``)."""
+    """The one-process engine's run (:mod:`orchestrator.inprocess`)."""
     from .inprocess import Engine
 
     folder = Path(scenario["run"]["dir"])
     try:
         res = Engine(scenario, on_progress=bar).execute()
     except BaseException as exc:
-        if hasattr(bar, "close"):
-            bar.close()
-        error = ("interrupted (Ctrl-C or SIGTERM)" if isinstance(exc, KeyboardInterrupt)
-                 else str(exc) or type(exc).__name__)
+        bar.close()
+        unwritten = None
         try:
             rec = recover_table(folder, interrupted=isinstance(exc, KeyboardInterrupt),
                                 since=started)
             write_summary(folder, _summary(scenario, None, time.monotonic() - t0, rec,
-                                           "failed", error) | {"transport": "inprocess"})
-        except SummaryWriteError as werr:  # a full disk: say both
-            if isinstance(exc, KeyboardInterrupt):
-                print(f"suscosim: {werr}", file=sys.stderr)
-                raise exc from None
-            raise RunError(f"{error}; and {werr}") from exc
-        if not isinstance(exc, SuscosimError | KeyboardInterrupt):
-            raise RunError(f"internal error in the in-process engine: {type(exc).__name__}: "
-                           f"{exc}") from exc
-        raise
-    if hasattr(bar, "close"):
-        bar.close()
+                                           "failed", _error_text(exc))
+                          | {"transport": "inprocess"})
+        except SummaryWriteError as werr:
+            unwritten = werr
+        _raise_failure(exc, unwritten, "the in-process engine")
+    bar.close()
     nodes = {ch.RECORDER: NodeStatus(done=True, result=res.recorder)}
     if res.fatigue is not None:
         nodes[ch.FATIGUE] = NodeStatus(done=True, result=res.fatigue)
@@ -430,24 +403,21 @@ def _run_inprocess(scenario: dict[str, Any], bar: Any, started: float,
 
 
 def _fail(exc: BaseException, scenario: dict[str, Any], nodes: run_modes.Nodes,
-          clock: Clock | None, bar: Any, external: list[str] | None, started: float,
+          clock: Clock | None, bar: ProgressBar, external: list[str] | None, started: float,
           t0: float, lowlatency: bool) -> NoReturn:
-    """A run that failed (or was interrupted): stop the nodes, close the bus, recover the
-    table from the journal, write the ``failed`` summary, then raise the error to report
-    (a :class:`SuscosimError`, or the KeyboardInterrupt)."""
+    """A failed or interrupted run: stop the nodes, close the bus, recover the table, write
+    the ``failed`` summary, raise the error to report."""
     folder = Path(scenario["run"]["dir"])
     if isinstance(exc, KeyboardInterrupt) and clock is not None:  # Ctrl-C or SIGTERM
         try:
             clock.announce_abort("the orchestrator was interrupted")
         except Exception:
             pass
-    error = ("interrupted (Ctrl-C or SIGTERM)" if isinstance(exc, KeyboardInterrupt)
-             else str(exc) or type(exc).__name__)
+    error = _error_text(exc)
     unwritten: SummaryWriteError | None = None
     bus_open = True
     try:
-        if hasattr(bar, "close"):
-            bar.close()
+        bar.close()
 
         def say_abort() -> None:  # to a node that joined after it was first said
             if clock is not None:
@@ -474,22 +444,13 @@ def _fail(exc: BaseException, scenario: dict[str, Any], nodes: run_modes.Nodes,
     finally:
         if bus_open:
             _close(nodes.bus)  # else the session's threads keep the orchestrator alive
-    if unwritten is not None:
-        if isinstance(exc, KeyboardInterrupt):
-            print(f"suscosim: {unwritten}", file=sys.stderr)
-            raise exc
-        raise RunError(f"{error}; and {unwritten}") from exc
-    if not isinstance(exc, SuscosimError | KeyboardInterrupt):
-        raise RunError(f"internal error in the orchestrator: {type(exc).__name__}: {exc}") \
-            from exc
-    raise exc
+    _raise_failure(exc, unwritten, "the orchestrator")
 
 
 _close = run_modes.close_quietly
 
 
 def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
-    """How a distributed run's local processes talked and where they ran (for summary.json)."""
     if local is None:
         return {}
     return {"lowlatency": bool(lowlatency), "cores": dict(local.cores),

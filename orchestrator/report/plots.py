@@ -21,7 +21,6 @@ MAX_PLOT_POINTS = 4000
 peak drawn, and a 35-minute run (4.2 million steps) drawn as fast as a 4-second one."""
 
 
-
 def new_figure(nrows: int, ncols: int = 1, width: float = 11.0, row_h: float = 2.6,
             sharex: bool = False):
     """A matplotlib Figure (no pyplot, Agg canvas) and its axes as a flat list."""

@@ -26,7 +26,6 @@ LAW_KEY = "controller.law"
 PASSIVE = "passive"
 
 
-
 @dataclass
 class Point:
     """A sweep point: its id, parameters, run folder and what it holds."""

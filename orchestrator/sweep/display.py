@@ -101,7 +101,6 @@ class Display:
         self._clear()
 
 
-
 def event_line(run_dir: Path, pid: str, status: str, err: str, i: int, n: int) -> str:
     """The line printed when a point finishes: its status and timing (and minimum life)."""
     head = f"[{i}/{n}] {status:<6} {pid}"

@@ -1,22 +1,14 @@
-"""``[sweep] fork_at = T``: the points of a sweep share their common prefix (docs/sweeps.md).
-
-Points whose resolved scenarios differ only in what a fork may change
-(:data:`orchestrator.resume.FORK_MAY_CHANGE`: the control, the report, the bookkeeping) form
-one group with ONE parent run (t = 0 to the end, ``run.checkpoint_every_s = T``) of the base's
-controller (the base with ``[sweep.set]`` and the group's other axis values, so the prefix does
-not depend on the order of the variants); every point is ``suscosim run --fork PARENT@T`` with
-its own controller: rows < k = T / h are the parent's, byte for byte, and **each law acts only
-from T on** (said at the start, in ``fork.json`` and in the results' ``fork_at``/``parent``).
-A group of one point still forks. Saved: ``plain`` (sum of n over the points) against
-``simulated`` (n over the parents + n - k over the points), and the run wall time against an
-estimate of the plain runs' (each as long as its parent's). Local executor only, without
-``--external``/``--serve``.
+"""``[sweep] fork_at = T``: the points share their common prefix (docs/sweeps.md). Points
+differing only in what a fork may change (:data:`orchestrator.resume.FORK_MAY_CHANGE`) form a
+group with ONE parent run of the base's controller (``run.checkpoint_every_s = T``); every point
+is ``suscosim run --fork PARENT@T``: rows < k = T / h are the parent's and **each law acts only
+from T on** (said at the start, in ``fork.json`` and the results). Saved steps and wall time are
+in ``fork.json``. Local executor only, without ``--external``/``--serve``.
 """
 
 from __future__ import annotations
 
 import copy
-import hashlib
 import json
 import math
 import os
@@ -31,35 +23,25 @@ from cosim.errors import SuscosimError
 from cosim.run_folder import read_json
 
 from ..resume import FORK_MAY_CHANGE, _changes, _get
-from .spec import Point, Sweep, SweepError, _absolute_paths, point_id, toml_value
+from .spec import Point, Sweep, SweepError, _absolute_paths, fingerprint, point_id, toml_value
 
-KEY = "fork_at"
-BOOKKEEPING = ("run.id", "run.dir", "run.resume")
-"""Keys a fork always differs in from its parent (its own id and folder, where it starts)."""
+BOOKKEEPING = ("run.id", "run.dir", "run.resume")  # a fork always differs in these
 SEMANTICS = ("each point's controller acts only from t = fork_at on; before, every point of "
              "a group ran its parent's (the base's) controller, and its rows < k = fork_at / h "
              "are the parent's")
 
 
 def fork_key(key: str) -> bool:
-    """A dotted scenario key a fork may change (as :func:`orchestrator.resume.fork_scenario`
-    judges it)."""
     return key.startswith(FORK_MAY_CHANGE)
 
 
 def _only_fork_changes(a: dict[str, Any], b: dict[str, Any]) -> list[str]:
-    """The keys in which resolved scenarios ``a`` and ``b`` differ that a fork may not change."""
     return [c for c in _changes(a, b) if not c.startswith(BOOKKEEPING) and not fork_key(c)]
-
-
-def _sha(doc: Any) -> str:
-    return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
 @dataclass
 class Parent:
-    """One group's parent run: its point-like record (id, base, overrides, n_steps,
-    fingerprint; for the display and the run folder) and the checkpoint the forks start from."""
+    """One group's parent run (as a Point) and the checkpoint k its forks start from."""
 
     point: Point
     k: int
@@ -74,14 +56,12 @@ class Parent:
 
     @property
     def t(self) -> float:
-        """The fork time as the checkpoint's manifest has it (k h)."""
         return self.k * self.h
 
 
 @dataclass
 class ForkPlan:
-    """The parents of a sweep with ``fork_at`` and, per point, its parent and its fork's
-    ``--set`` assignments (without the run id)."""
+    """The parents and, per point, its parent and its fork's ``--set`` (without the run id)."""
 
     at: float
     parents: list[Parent]
@@ -95,13 +75,11 @@ class ForkPlan:
         return [*self.fork_sets[p.id], f"run.id={toml_value(p.run_id)}"]
 
     def spec(self, out: Path, p: Point) -> str:
-        """``PARENT_DIR@T`` of the point's fork."""
         parent = self.parent_of[p.id]
         return f"{self.parent_dir(out, parent)}@{parent.t!r}"
 
 
 def parse_fork_at(value: Any) -> float | None:
-    """``[sweep] fork_at``: None (absent) or a time > 0 [s]; SweepError otherwise."""
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, int | float) or \
@@ -112,8 +90,7 @@ def parse_fork_at(value: Any) -> float | None:
 
 
 def _parent_overrides(sweep: Sweep, member: Point) -> dict[str, Any]:
-    """The member's overrides without the axes' fork-changeable ones (those of ``[sweep.set]``
-    stay): the group's scenario with the base's controller."""
+    """The member's overrides without the axes' fork-changeable ones (``[sweep.set]``'s stay)."""
     fixed = _absolute_paths(sweep.fixed, sweep.path.resolve().parent)
     out: dict[str, Any] = {}
     for key, value in member.overrides.items():
@@ -125,8 +102,7 @@ def _parent_overrides(sweep: Sweep, member: Point) -> dict[str, Any]:
 
 
 def _fork_sets(point: dict[str, Any], parent: dict[str, Any]) -> list[str]:
-    """The fork's ``--set`` assignments: every key a fork may change, as the point has it
-    (whole tables), but the run's id and folder."""
+    """The fork's ``--set``: every key a fork may change as the point has it, but id/folder."""
     sets: list[str] = []
     for key in FORK_MAY_CHANGE:
         if key.startswith(BOOKKEEPING):
@@ -144,8 +120,7 @@ def _fork_sets(point: dict[str, Any], parent: dict[str, Any]) -> list[str]:
 
 
 def _simulated_fork(parent: dict[str, Any], sets: list[str], out: Path) -> dict[str, Any]:
-    """What :func:`orchestrator.resume.fork_scenario` resolves for a fork of ``parent`` with
-    ``sets`` (the same steps, without the parent's run folder)."""
+    """What :func:`orchestrator.resume.fork_scenario` resolves for a fork of ``parent``."""
     from ..runner import resolve
 
     child = copy.deepcopy(parent)
@@ -158,9 +133,8 @@ def _simulated_fork(parent: dict[str, Any], sets: list[str], out: Path) -> dict[
 
 
 def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> ForkPlan:
-    """Group the validated points, make and preflight each group's parent, check that
-    ``fork_at`` is a checkpoint boundary of each and that every fork resolves to its point's
-    own scenario. SweepError (exit 2) naming ``[sweep] fork_at`` and the point."""
+    """Group the points, preflight each group's parent, check that ``fork_at`` is a step
+    boundary and every fork resolves to its point's scenario; SweepError (exit 2) else."""
     from ..runner import resolve
 
     at = sweep.fork_at
@@ -207,7 +181,7 @@ def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> 
         ppoint = Point(-1, pid, {"parent of": len(g)}, first.base, overrides)
         try:
             loaded = sc.load(ppoint.base, ppoint.fingerprint_args)
-            ppoint.fingerprint = _sha(loaded)
+            ppoint.fingerprint = fingerprint(loaded)
             presolved = resolve(copy.deepcopy(loaded), out / "parents" / pid)
         except SuscosimError as exc:
             raise SweepError(f"{where}: the parent run {pid} (the base's controller, "
@@ -235,7 +209,8 @@ def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> 
             if bad or differs:
                 raise SweepError(f"sweep point '{p.id}': {where}: its fork of {pid} would "
                                  f"not run its scenario ({(bad or differs)[0]} differs)")
-            p.fingerprint = _sha([p.fingerprint, at, ppoint.fingerprint])
+            p.fingerprint = fingerprint([p.fingerprint, at, ppoint.fingerprint])
+
             parent_of[p.id] = parent
             fork_sets[p.id] = sets
     return ForkPlan(at, parents, parent_of, fork_sets)
@@ -244,7 +219,7 @@ def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> 
 # --------------------------------------------------------------------------- run folders
 
 def parent_state(parent: Parent, run_dir: Path) -> str:
-    """``done`` (an ok run of this parent's scenario with its checkpoint at k) or ``todo``."""
+    """``done`` (an ok run of this parent with its checkpoint at k) or ``todo``."""
     meta = read_json(run_dir / "point.json")
     summary = read_json(run_dir / "summary.json")
     if not isinstance(meta, dict) or meta.get("fingerprint") != parent.point.fingerprint or \
@@ -255,8 +230,7 @@ def parent_state(parent: Parent, run_dir: Path) -> str:
 
 
 def keep_only_fork_checkpoint(parent: Parent, run_dir: Path) -> None:
-    """Remove the parent's checkpoints other than the one at k (every T it wrote one; the
-    forks need only the first)."""
+    """Remove the parent's checkpoints other than the one at k."""
     keep = step_folder(run_dir, parent.k).name
     root = run_dir / CHECKPOINTS_DIR
     for sub in sorted(root.glob("k*")) if root.is_dir() else []:
@@ -272,7 +246,7 @@ def _wall(run_dir: Path) -> float | None:
 
 
 def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
-    """The ``fork`` block (``fork.json``): the semantics, the parents, and what was saved."""
+    """``fork.json``: the semantics, the parents, the steps and wall time saved."""
     plain = simulated = prefix = n_ok = 0
     parents_doc = []
     wall_parents = wall_forks = wall_plain = 0.0
@@ -321,14 +295,12 @@ def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
 
 
 def write_fork_json(out: Path, doc: dict[str, Any]) -> None:
-    """``fork.json``, written aside and renamed into place."""
     tmp = out / "fork.json.tmp"
     tmp.write_text(json.dumps(doc, indent=2, default=str))
     os.replace(tmp, out / "fork.json")
 
 
 def fork_header(plan: ForkPlan) -> str:
-    """What the sweep prints before it starts: the semantics and the parents."""
     lines = [f"  fork_at = {plan.at:g} s: {len(plan.parents)} parent run(s) from t = 0 with "
              f"the base's controller, then every point forks at t = {plan.at:g} s: "
              "its own controller acts only from there on"]
@@ -341,7 +313,6 @@ def fork_header(plan: ForkPlan) -> str:
 
 
 def fork_text(doc: dict[str, Any]) -> str:
-    """What the sweep prints at the end: what forking saved."""
     st = doc["steps"]
     planned = "" if doc["points_ok"] == doc["points"] else \
         f" [as planned: {doc['points'] - doc['points_ok']} of {doc['points']} forks not ok]"

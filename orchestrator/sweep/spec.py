@@ -29,19 +29,15 @@ DEFAULT_CHANNELS = ("plant/response/a_b", "plant/response/a_w", "tyre_road/force
                     "controller/force/F_d", "plant/arm/ball_joint_z")
 FATIGUE_COLUMNS = ("life_repeats", "life_km", "max_damage", "critical_node")
 MAX_ID = 64
-INVOCATION = keys.invocation_token()
-"""The random part of this invocation's run ids (one per ``suscosim sweep`` process)."""
+INVOCATION = keys.invocation_token()  # the random part of this process's run ids
 RESERVED = ("base", "point", "status", "error", "wall_s", "steps_per_s", "n_steps", "run_dir",
             "worker", "sample", "fork_at", "parent", *FATIGUE_COLUMNS)
-"""Names a grid axis cannot have (result columns, the base axis)."""
-
 
 
 class SweepError(SuscosimError):
-    """A bad sweep file or point (exit code 2); the message names the key or the point."""
+    """A bad sweep file or point (exit code 2), naming the key or the point."""
 
     exit_code = 2
-
 
 
 # --------------------------------------------------------------------------- sweep file
@@ -71,25 +67,20 @@ class Point:
 
     @property
     def run_id(self) -> str:
-        """The run id of this point in this invocation: the point id and a random part
-        (:data:`INVOCATION`), so two people running one sweep through one router never share
-        a run id; the run folder stays ``runs/<point id>``."""
+        """The point id and :data:`INVOCATION` (two sweeps on one router never share ids)."""
         return keys.unique_run_id(self.id, INVOCATION)
 
     def _assignments(self, run_id: str) -> list[str]:
-        """The ``--set`` assignments of this point's overrides, then ``run.id``."""
         return [f"{k}={toml_value(v)}" for k, v in self.overrides.items()] + \
             [f"run.id={toml_value(run_id)}"]
 
     @property
     def set_args(self) -> list[str]:
-        """The ``--set`` assignments of this point (the run id last)."""
         return self._assignments(self.run_id)
 
     @property
     def fingerprint_args(self) -> list[str]:
-        """:attr:`set_args` with the point id as the run id: what the fingerprint (resume)
-        is computed from, the same in every invocation."""
+        """:attr:`set_args` with the point id as run id (the same in every invocation)."""
         return self._assignments(self.id)
 
 
@@ -113,12 +104,10 @@ class Sweep:
     fork: Any = None  # its plan (a .fork.ForkPlan), made by validate_points
 
     def run_dir(self, out: Path, p: Point) -> Path:
-        """Where a point's run folder is: ``<runs_dir>/<id>`` or ``<out>/runs/<id>``."""
         return (self.runs_dir if self.runs_dir is not None else out / "runs") / p.id
 
     def run_dir_text(self, p: Point) -> str:
-        """The run folder as the results and sweep.json give it (relative to the sweep
-        folder unless the sweep file names a shared ``runs_dir``)."""
+        """The run folder as results and sweep.json give it."""
         return str(self.runs_dir / p.id) if self.runs_dir is not None else f"runs/{p.id}"
 
 
@@ -156,8 +145,7 @@ def _slug(v: Any) -> str:
 
 
 def point_id(name: str, labels: list[Any]) -> str:
-    """``<name>-<value>-<value>...``: letters, digits, ``_ . -``, at most 64 characters
-    (longer ones are cut and end in a hash of the values)."""
+    """``<name>-<value>-...``: ``[A-Za-z0-9_.-]``, at most 64 (longer: cut, then a hash)."""
     pid = "-".join([name, *(_slug(v) for v in labels)])
     if len(pid) > MAX_ID:
         digest = hashlib.sha1(json.dumps([name, labels], sort_keys=True,
@@ -180,7 +168,6 @@ def _check_override_key(where: str, key: Any, value: Any) -> None:
 
 
 def _absolute_paths(overrides: dict[str, Any], folder: Path) -> dict[str, Any]:
-    """Relative file paths among the overrides, made absolute against ``folder``."""
     out = copy.deepcopy(overrides)
     path_keys = {f"{s}.{k}" for s, k in sc.PATH_KEYS}
     for key, value in out.items():
@@ -197,16 +184,13 @@ def _absolute_paths(overrides: dict[str, Any], folder: Path) -> dict[str, Any]:
     return out
 
 
-MAX_POINTS = 10_000
-"""Most points a sweep enumerates unless ``--max-points`` says more (a 30 kB file with a
-1000 x 1000 grid made ``sweep --list`` run for minutes, #46)."""
+MAX_POINTS = 10_000  # most points enumerated unless --max-points says more
 
 
 def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None = None,
                max_points: int = MAX_POINTS) -> Sweep:
-    """Read and check a sweep file and enumerate its points (scenarios not yet validated);
-    more than ``max_points`` points is a ScenarioError, counted before any is made."""
-
+    """Read and check a sweep file and enumerate its points (not yet validated); more than
+    ``max_points`` is a ScenarioError, counted before any is made."""
     path = Path(path)
     data = read_user_toml(path, "scenario", "sweep file")
     if not isinstance(data.get("sweep"), dict):
@@ -325,18 +309,16 @@ def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None =
 
 
 def validate_points(sweep: Sweep, out: Path) -> None:
-    """Load and preflight every point's scenario (``cosim.scenario.load`` with the point's
-    overrides, then the runner's model checks); fills n_steps and the fingerprint, and with
-    ``fork_at`` the plan of parents and forks (:func:`.fork.plan_forks`). Raises SweepError
-    naming the point and the key; starts nothing."""
+    """Load and preflight every point's scenario; fill n_steps, the fingerprint and the fork
+    plan. SweepError naming the point and the key; starts nothing."""
+
     from ..runner import resolve
 
     resolved_all: dict[str, dict[str, Any]] = {}
     for p in sweep.points:
         try:
             scenario = sc.load(p.base, p.fingerprint_args)
-            p.fingerprint = hashlib.sha256(json.dumps(scenario, sort_keys=True, default=str)
-                                           .encode()).hexdigest()[:16]
+            p.fingerprint = fingerprint(scenario)
             resolved = resolve(copy.deepcopy(scenario), out / "runs" / p.id)
             p.n_steps = int(resolved["run"]["n_steps"])
         except SuscosimError as exc:
@@ -348,6 +330,11 @@ def validate_points(sweep: Sweep, out: Path) -> None:
         sweep.fork = plan_forks(sweep, out, resolved_all)
 
 
+def fingerprint(doc: Any) -> str:
+    return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
 def _params_text(params: dict[str, Any]) -> str:
+
     return ", ".join(f"{k}={v}" for k, v in params.items()) or "no parameters"
 

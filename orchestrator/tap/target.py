@@ -18,8 +18,6 @@ DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 _CHUNK = re.compile(r"^(\*\*?|[A-Za-z0-9][A-Za-z0-9_.-]{0,63})$")
 
 
-
-
 class TapInputError(ValueError):
     """Bad tap input (run, pattern, file, endpoint): exit code 2 with this message."""
 
