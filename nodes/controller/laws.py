@@ -2,7 +2,7 @@
 ``[controller]`` table, and the laws that need a class.
 
 Most laws are one ``@control_law`` function beside their numerics (dampers.py, skyhook.py,
-groundhook.py, hybrid.py); those below need state or substeps and register a builder
+add.py); those below need state or substeps and register a builder
 (``@law_builder``); ``fmu`` is in fmu.py. ``python3 -m nodes.controller.registry`` lists them
 all; docs/control.md gives defaults and thesis sources. Every law also accepts ``velocity``
 (:mod:`nodes.controller.base`); the MR laws a ``damper`` table (:class:`.mr_damper.MRParams`).
@@ -20,12 +20,11 @@ from cosim.config import ConfigReader
 from cosim.errors import ScenarioError
 from nodes.controller.base import VELOCITY_SOURCES, Controller, ControlOutput, body_scalar
 from nodes.controller.dampers import PassiveCurve
-from nodes.controller.full_vehicle import pnr_select
-from nodes.controller.mr_damper import MRParams
-from nodes.controller.mr_laws import TSS2, TSS3, PassiveMR
+from nodes.controller.mr_damper import TSS2, TSS3, MRParams, PassiveMR
 from nodes.controller.registry import LAWS, PRESETS, discover, law_builder, lookup
 
 __all__ = ["LAWS", "PRESETS", "build_controller"]
+
 
 class PassiveCurveController(Controller):
     """Passive damper following a piecewise-linear force-velocity curve; ``c_eff`` is the
@@ -42,11 +41,47 @@ class PassiveCurveController(Controller):
         return ControlOutput(F_d=self.curve.force(v_rel), c_eff=self.curve.slope(v_rel))
 
 
+#: (16, 4) bool: row n-1 is MPn, True = hard, columns FL, FR, RL, RR (binary n-1, FL = MSB).
+COMBINATIONS = np.array([[(n >> (3 - i)) & 1 for i in range(4)] for n in range(16)], dtype=bool)
+
+
+def pnr_select(v_rel: np.ndarray, c_soft: float, c_hard: float, theta_dd: float,
+               phi_dd: float) -> tuple[int, np.ndarray, np.ndarray]:
+    """(index n of MP(n+1), forces (4,) on the body in N, coefficients (4,) in N·s/m) of the
+    minimum-product combination (:class:`PitchRoll`) from ``v_rel`` (m/s, FL, FR, RL, RR),
+    ``c_soft``/``c_hard`` (N·s/m, Table 5.2: 1500 / 2368), ``theta_dd`` nose-up and ``phi_dd``
+    left-up (rad/s²); ties: the lowest MP, so no angular acceleration: all soft."""
+    forces = np.where(COMBINATIONS, c_hard, c_soft) * np.asarray(v_rel, dtype=float).reshape(4)
+    fl, fr, rl, rr = forces.T
+    if abs(theta_dd) > abs(phi_dd):
+        products = (fl + fr - rl - rr) * theta_dd
+    else:
+        products = (fl + rl - fr - rr) * phi_dd
+    n = int(np.argmin(products))
+    return n, forces[n].copy(), np.where(COMBINATIONS[n], c_hard, c_soft).astype(float)
+
+
 class PitchRoll(Controller):
-    """TSS1 PnR on a full vehicle (thesis Sec 5.4.4, :mod:`nodes.controller.full_vehicle`).
-    ``angular_acc = "rates"`` differentiates ``w_pitch``/``w_roll`` over the call interval (0
-    at the first call); ``"corners"`` uses Eqs 5.4/5.5 with ``a_b`` (m/s²) and the
-    ``wheelbase``/``track`` (m)."""
+    """Full-vehicle pitch-and-roll two-state controller, TSS1 PnR (thesis Sec 5.4.4, Eqs
+    5.4-5.12, Table 5.2; after Nell & Steyn [20]).
+
+    Each step, for the 16 soft/hard combinations MP1..MP16 of the four dampers (FL, FR, RL,
+    RR), the corner forces ``F_i = c_i * v_rel_i`` are formed and the combination with the
+    minimum product (MP) of the damper moment and the body angular acceleration is chosen:
+    if ``|theta''| > |phi''|`` (pitch dominates, Eq 5.6/5.7) ``P_n = (F_FL + F_FR - F_RL -
+    F_RR)_n * theta''``, else (Eq 5.8) ``P_n = (F_FL + F_RL - F_FR - F_RR)_n * phi''``, with
+    ``theta''`` the nose-**up** pitch acceleration (Eq 5.4: ``(z_FL'' - z_RL'')/wheelbase``) and
+    ``phi''`` the left-**up** roll acceleration (Eq 5.5: ``(z_FL'' - z_FR'')/track``), rad/s².
+    ``F_i`` is the force on the body, upward positive, so the front-minus-rear sum is a nose-up
+    moment (per unit lever arm) and the minimum product is the combination whose damper moment
+    most *opposes* the angular acceleration — the intent of [20]. (With the thesis's ``d_i = C
+    v_rel`` as a force that acts on the body with the opposite sign, the same minimum would aid
+    the motion; see docs/control.md.)
+
+    ``angular_acc = "rates"`` differentiates the ISO 8855 rates (``w_pitch`` about +y, nose
+    down positive; ``w_roll`` about +x, left up positive: ``theta'' = -d(w_pitch)/dt``,
+    ``phi'' = +d(w_roll)/dt``) over the call interval (0 at the first call); ``"corners"``
+    uses Eqs 5.4/5.5 with ``a_b`` (m/s²) and the ``wheelbase``/``track`` (m)."""
 
     law = "pnr"
 

@@ -11,11 +11,15 @@ import numpy as np
 import pytest
 
 from cosim.errors import InputFileError, ScenarioError
-from nodes.controller.full_vehicle import COMBINATIONS, combination_label, pnr_select
-from nodes.controller.groundhook import groundhook_continuous, groundhook_on_off
-from nodes.controller.hybrid import hybrid
-from nodes.controller.laws import LAWS, build_controller
-from nodes.controller.skyhook import skyhook_continuous, skyhook_no_jerk, skyhook_on_off
+from nodes.controller.laws import COMBINATIONS, LAWS, build_controller, pnr_select
+from nodes.controller.skyhook import (
+    groundhook_continuous,
+    groundhook_on_off,
+    hybrid,
+    skyhook_continuous,
+    skyhook_no_jerk,
+    skyhook_on_off,
+)
 
 
 def state(v_b, v_w, **extra):
@@ -151,6 +155,11 @@ def brute_force_pnr(v_rel, c_soft, c_hard, theta, phi):
         if best is None or P < best[0]:
             best = (P, n, "".join(pattern))
     return best[1], best[2]
+
+
+def combination_label(index: int) -> str:
+    """Table 5.2 name of combination ``index`` (0-based), e.g. 8 -> ``"MP9 HSSS"``."""
+    return f"MP{index + 1} " + "".join("H" if h else "S" for h in COMBINATIONS[index])
 
 
 def test_table_5_2_combinations():
