@@ -1,13 +1,10 @@
-"""The shell of a node that only listens: takes its inputs as they come, not step by step.
+"""The shell of a node that only listens (the recorder, the live fatigue node): it takes each
+message as it arrives, before the run's ``start`` as after it.
 
-The recorder and the live fatigue node are not in the lock-step exchange: they take each
-message when it arrives, before the run's ``start`` as after it. A :class:`Listener` does for
-them what :meth:`Participant.handshake` and :meth:`Participant.wait` do for a coupled node:
 :meth:`Listener.feed` subscribes to an input; :meth:`Listener.poll` takes one message,
 verified, decoded and checked (else rejected and counted; ``hello`` is not returned), handles
 clock messages (abort: :class:`RunError`; a plausible ``start`` sets :attr:`Listener.start`)
-and, until the start, keeps the handshake going (``hello``, ``ready`` once every feed has
-been heard, else ``waiting``; :class:`RunError` after the start timeout).
+and, until the start, keeps the handshake going (:class:`cosim.participant.StartBarrier`).
 """
 
 from __future__ import annotations
@@ -20,15 +17,14 @@ from typing import Any
 
 from . import keys
 from .control import check_start
-from .errors import RunError, WireError
-from .participant import HELLO_PERIOD_S, WAITING_PERIOD_S, Channel, Participant
+from .errors import WireError
+from .participant import Channel, Participant, StartBarrier
 from .wire import Message
 
 
 @dataclass(frozen=True)
 class Received:
-    """One message of a feed: from ``node``, on ``channel`` (key ``key``), verified and
-    decoded."""
+    """One verified, decoded message of a feed: from ``node``, on ``channel`` (key ``key``)."""
 
     node: str
     channel: str
@@ -49,17 +45,10 @@ class Listener:
     def __init__(self, part: Participant, start_timeout_s: float,
                  info: Mapping[str, Any] | None = None) -> None:
         self.part = part
-        self.info = dict(info or {})
-        """Facts sent with ``ready`` (besides the node's outputs)."""
-        self.start: dict[str, Any] | None = None
-        """The ``start`` payload (``n_steps``, ``h``, ``info``), once it came."""
-        self.heard: set[Channel] = set()
-        """The feeds a valid message (``hello`` or data) came on."""
+        self.start: dict[str, Any] | None = None  # the start payload, once it came
+        self.heard: set[Channel] = set()  # feeds a valid message (hello or data) came on
         self.feeds: dict[Channel, _Feed] = {}
-        self.start_timeout_s = start_timeout_s
-        self._deadline = time.monotonic() + start_timeout_s
-        self._next_ready = 0.0
-        self._next_waiting = time.monotonic() + WAITING_PERIOD_S
+        self._barrier = StartBarrier(part, start_timeout_s, info or {})
 
     def feed(self, node: str, channel: str, kinds: Iterable[str] = ("data",),
              required: Iterable[str] = ()) -> Channel:
@@ -85,7 +74,7 @@ class Listener:
         part = self.part
         part.check_orchestrator()
         if self.start is None:
-            self._handshake()
+            self._barrier.tick(self.missing())
         try:
             tag, raw = part.inbox.get(timeout=timeout)
         except queue.Empty:
@@ -122,25 +111,6 @@ class Listener:
             return None
         self.heard.add(tag)
         return Received(tag[0], tag[1], feed.key, msg)
-
-    def _handshake(self) -> None:
-        """Before the start: hello, ready / waiting as they are due; the start timeout."""
-        part = self.part
-        now = time.monotonic()
-        if now >= self._deadline:
-            silent = self.missing()
-            raise RunError(f"{part.node}: not started within {self.start_timeout_s:.0f} s"
-                           + (f"; never heard {', '.join(silent)}" if silent else ""))
-        if now < self._next_ready:
-            return
-        self._next_ready = now + HELLO_PERIOD_S
-        part.publish_hello()
-        silent = self.missing()
-        if not silent:
-            part.ctl("ready", info={"outputs": part.outputs, **self.info})
-        elif now >= self._next_waiting:  # tell the orchestrator what holds this node up
-            self._next_waiting = now + WAITING_PERIOD_S
-            part.ctl("waiting", missing=silent)
 
     def drain(self, quiet_s: float = 0.3, limit_s: float = 1.5) -> list[Received]:
         """After an abort: the feeds' messages that still arrive, until the bus is quiet

@@ -1,24 +1,18 @@
-"""The lock-step participant: what every node does around its model.
-
-Life of a node (see DESIGN.md, "Lock-step co-simulation"):
+"""The lock-step participant: what every node does around its model (DESIGN.md, "Lock-step
+co-simulation").
 
 1. **Declare** a liveliness token ``suscosim/<run>/<node>/alive``; fetch the resolved scenario.
-2. **Handshake** (start barrier): ``hello`` on every output every 50 ms; once every input has
-   been heard (its data path is live), ``ready`` (with facts other nodes need) until the
-   orchestrator's ``start`` (carrying every node's facts) arrives.
-3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived;
-   :meth:`Participant.publish` adds an output to the node's step, published by
-   :meth:`Participant.send` (or the next ``wait``) as **one signed message per producer per
-   step** on ``<node>/step`` (:mod:`cosim.outbox`). Each producer has one FIFO
-   (:meth:`bus.feed`) read by the node's own thread (one wake-up per delivery). A watchdog
-   thread wakes a blocked node on stall timeout, a control message (abort), or when the
-   orchestrator is gone (:mod:`cosim.orchestrator_presence`). Progress: at most every 0.1 s.
+2. **Handshake**: ``hello`` on every output every 50 ms; once every input has been heard,
+   ``ready`` (with the node's facts) until the orchestrator's ``start`` arrives.
+3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived, read
+   from one FIFO per producer (:meth:`bus.feed`) by the node's own thread; the outputs go out
+   as one signed ``<node>/step`` message per step (:mod:`cosim.outbox`). A watchdog thread
+   wakes a blocked node on stall timeout, an abort, or when the orchestrator is gone.
 4. **End**: ``done`` after the last step; an ``abort``, or an input late by more than the
    stall timeout, ends the node with :class:`RunError`.
 
-A message that does not verify (:class:`cosim.auth.RunKey`), decode, fit the schema or its
-bounded mailbox (:mod:`cosim.mailbox`) is rejected: logged, counted, never a crash. A
-``start`` must be plausible (:func:`cosim.control.check_start`).
+A message that does not verify, decode, fit the schema or its bounded mailbox
+(:mod:`cosim.mailbox`) is rejected: logged, counted, never a crash.
 """
 
 from __future__ import annotations
@@ -64,19 +58,12 @@ class Participant:
     def __init__(self, bus: Bus, run: str, node: str, stall_timeout_s: float = 10.0,
                  spin_s: float = 0.0, auth: RunKey | None = None) -> None:
         self.bus, self.run, self.node = bus, keys.check_name("run", run), node
-        self.auth = auth
-        """The run's key: sign what is published, verify what is taken (None: neither, for
-        tests of the protocol alone)."""
-        self.expect_start: dict[str, Any] = {}
-        """What a plausible ``start`` holds (``n_steps``, ``h``, ``nodes``: see
-        :func:`cosim.control.check_start`); set from the scenario by the node's shell."""
+        self.auth = auth  # None: no signing nor verifying (tests of the protocol alone)
+        self.expect_start: dict[str, Any] = {}  # kwargs of control.check_start
         self.stall_timeout_s = stall_timeout_s
-        self.spin_s = spin_s
-        """How long :meth:`wait` polls an input (yielding the core) before it blocks [s]
-        (0: at once; for pinned nodes, docs/cosim.md)."""
+        self.spin_s = spin_s  # [s] wait polls an input this long before it blocks
         self.inbox: queue.SimpleQueue[tuple[Channel, bytes]] = queue.SimpleQueue()
-        self.feeds: dict[Channel, Any] = {}
-        """Each stepped input's FIFO: its producer's (one per producer, :attr:`_pfeeds`)."""
+        self.feeds: dict[Channel, Any] = {}  # stepped input -> its producer's FIFO
         self._pfeeds: dict[str, Any] = {}  # producer node -> the FIFO of its steps
         self._ptag: dict[Channel, Channel] = {}  # stepped input -> (producer, "step")
         self.inputs: dict[Channel, Mailbox] = {}
@@ -84,7 +71,6 @@ class Participant:
         self.rejected = 0
         self._codecs: dict[str, ChannelCodec | bool] = {}
         self.out = Outbox(self._publisher, run, node)
-        """What this node sends (its outputs, its step, its records batches)."""
         self._ctl = self._publisher(keys.key(run, node, keys.CTL))
         self._last_progress = 0.0
         self._token = bus.token(keys.key(run, node, keys.ALIVE))
@@ -92,9 +78,7 @@ class Participant:
         self.orchestrator = OrchestratorPresence(self.run, node, parent_from_env())
         bus.watch(keys.key(run, keys.ORCHESTRATOR, keys.ALIVE), self.orchestrator.on_token)
         self._blocked: tuple[Any, float] | None = None  # (feed, stall deadline) while waiting
-        self._awaited: tuple[Channel, int, float] | None = None
-        """(input, step, since when [monotonic s]) while :meth:`wait` is blocked on it (the
-        watchdog's ``waiting``: a stall is blamed on the node that stopped)."""
+        self._awaited: tuple[Channel, int, float] | None = None  # (input, k, since [s])
         self._last_waiting = 0.0
         self._wakes = 0  # wake-ups sent by the watchdog, not yet received
         self._wake_lock = threading.Lock()
@@ -107,14 +91,13 @@ class Participant:
         return {tag: mb.box for tag, mb in self.inputs.items()}
 
     def check_orchestrator(self) -> None:
-        """Raise RunError if the orchestrator is gone (:mod:`cosim.orchestrator_presence`)."""
+        """RunError if the orchestrator is gone (:mod:`cosim.orchestrator_presence`)."""
         why = self.orchestrator.why_gone()
         if why is not None:
             raise RunError(why)
 
     # ---- wiring -------------------------------------------------------------------------
     def _publisher(self, key: str) -> Any:
-        """A publisher on ``key`` that signs each message with the run's key."""
         pub = self.bus.publisher(key)
         if self.auth is None:
             return pub
@@ -123,8 +106,7 @@ class Participant:
 
     def open(self, key: str, raw: bytes) -> Message:
         """Verify and decode a message received on ``key`` (a data channel's against its
-        schema, :class:`cosim.wire.ChannelCodec`; a batch's or step's inner messages by whoever
-        takes them); raises :class:`WireError` (:class:`cosim.auth.AuthError`: signature)."""
+        schema); :class:`WireError` (:class:`cosim.auth.AuthError`: signature)."""
         body = self.auth.verify(key, raw) if self.auth is not None else raw
         dec = self._codecs.get(key)
         if dec is None:
@@ -134,7 +116,7 @@ class Participant:
         return dec.decode(body)
 
     def _codec_of(self, key: str) -> ChannelCodec | bool:
-        """The codec of the channel of ``key`` (False: a control key, decoded generically)."""
+        """The codec of ``key``'s channel (False: a control key, decoded generically)."""
         try:
             _, node, channel = keys.parse_key(key)
         except ValueError:
@@ -152,9 +134,8 @@ class Participant:
 
     def listen(self, node: str, channel: str, required: Iterable[str] = (),
                stepped: bool = True) -> Channel:
-        """Subscribe to an input; ``required`` fields must be present or the message is
-        rejected. A ``stepped`` input is read by :meth:`wait` from its producer's FIFO; others
-        come through :attr:`inbox` (filed by :meth:`handle`)."""
+        """Subscribe to an input (a message without the ``required`` fields is rejected); a
+        ``stepped`` one is read by :meth:`wait`, others come through :attr:`inbox`."""
         tag = (node, channel)
         if tag not in self.inputs:
             self.inputs[tag] = Mailbox(tuple(required), stepped)
@@ -174,17 +155,16 @@ class Participant:
         for mb in (mb for mb in self.inputs.values() if mb.stepped):
             mb.floor = max(k - 1, 0)
 
+    # Sending: :class:`cosim.outbox.Outbox`'s verbs.
     @property
     def outputs(self) -> list[str]:
-        """The output channels declared so far (:meth:`output`)."""
         return self.out.outputs
 
     def output(self, channel: str) -> None:
-        """Declare an output channel (:meth:`cosim.outbox.Outbox.output`)."""
         self.out.output(channel)
 
     def bind(self, nonce: bytes) -> None:
-        """Sign and verify from now on bound to the run instance's ``nonce`` (:mod:`cosim.auth`)."""
+        """Sign and verify bound to the run instance's ``nonce`` from now on."""
         if self.auth is None or self.auth.nonce == nonce:
             return
         self.auth = self.auth.bound(nonce)
@@ -192,8 +172,8 @@ class Participant:
         self.out.rebind(self._publisher)
 
     def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
-        """The resolved scenario from the orchestrator's queryable (retried): only a reply
-        signed with the run's key counts (others are rejected); binds to its nonce."""
+        """The resolved scenario from the orchestrator's queryable (retried); only a reply
+        signed with the run's key counts; binds to its nonce."""
         deadline = time.monotonic() + timeout_s
         key = keys.key(self.run, keys.ORCHESTRATOR, keys.SCENARIO)
         tag = (keys.ORCHESTRATOR, keys.SCENARIO)
@@ -215,19 +195,15 @@ class Participant:
     # ---- messages -----------------------------------------------------------------------
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
                 record: bool = True, hold: bool = False) -> None:
-        """One data message (:meth:`cosim.outbox.Outbox.publish`)."""
         self.out.publish(channel, k, t, data, record, hold)
 
     def send(self) -> None:
-        """Publish this step's data messages as one ``step`` message (nothing if none)."""
         self.out.send()
 
     def flush_records(self) -> None:
-        """Send this step and the kept data messages to the recorder."""
         self.out.flush()
 
     def publish_hello(self) -> None:
-        """``hello`` on every output and the records feed (the start handshake)."""
         self.out.hello()
 
     def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: Any) -> None:
@@ -242,9 +218,8 @@ class Participant:
             self.ctl("progress", k, t, rejected=self.rejected)
 
     def poll_control(self) -> None:
-        """Handle the control messages that came (RunError on an abort) and check that the
-        orchestrator is there: for a node waiting on something other than an input
-        (:class:`cosim.sink_window.SinkWindow`)."""
+        """Handle the control messages that came (RunError on an abort) and check the
+        orchestrator: for a node waiting on something other than an input."""
         self._drain_inbox()
         self.check_orchestrator()
 
@@ -256,7 +231,6 @@ class Participant:
                         self.node, self.rejected, tag[0], tag[1], why)
 
     def _take(self, timeout: float) -> Message | None:
-        """Move one inbox item into the mailbox; return it if it is a clock message."""
         return self.handle(*self.inbox.get(timeout=timeout))
 
     def _poll(self, feed: Feed) -> bytes | None:
@@ -267,13 +241,11 @@ class Participant:
         return raw
 
     def _drain_feeds(self) -> None:
-        """File whatever waits in the inputs' FIFOs (handshake: no blocking)."""
         for node, feed in self._pfeeds.items():
             while (raw := feed.try_recv()) is not None:
                 self._receive((node, keys.STEP), raw)
 
     def _drain_inbox(self) -> None:
-        """Handle every control message that came (raises on abort)."""
         while True:
             try:
                 self._take(timeout=0)
@@ -292,7 +264,7 @@ class Participant:
 
     def _watch(self) -> None:
         """Wake the node's thread blocked on an input when a control message came, the stall
-        timeout passed or the orchestrator is gone; every period while that holds."""
+        timeout passed or the orchestrator is gone."""
         while not self._closed.wait(WATCHDOG_PERIOD_S):
             blocked = self._blocked
             if blocked is None:
@@ -307,8 +279,8 @@ class Participant:
                 feed.wake()
 
     def _say_waiting(self, now: float) -> None:
-        """``waiting`` (the input and step this node is blocked on) to the orchestrator, every
-        :data:`WAITING_PERIOD_S` while it is blocked longer than that (the watchdog's)."""
+        """``waiting`` (the input and step this node is blocked on, so that a stall is blamed
+        on the node that stopped) every :data:`WAITING_PERIOD_S` while it is blocked."""
         awaited = self._awaited
         if awaited is None or now - awaited[2] < WAITING_PERIOD_S \
                 or now - self._last_waiting < WAITING_PERIOD_S:
@@ -321,8 +293,7 @@ class Participant:
             pass
 
     def _file_step(self, ptag: Channel, raw: bytes) -> None:
-        """Verify and decode a producer's step message (``ptag``: ``(producer, "step")``)
-        and file each inner message of a channel this node reads in its mailbox."""
+        """File a producer's step message (``ptag``: ``(producer, "step")``) in the mailboxes."""
         try:
             msg = self.open(self._keyof[ptag], raw)
         except WireError as exc:
@@ -355,11 +326,8 @@ class Participant:
         return None
 
     def wait(self, needs: Mapping[Channel, int]) -> dict[Channel, Message]:
-        """Block until every ``(input) -> step`` in ``needs`` has arrived (the step barrier).
-
-        Older messages of those inputs are dropped. Raises :class:`RunError` on abort or
-        when an input is late by more than the stall timeout (naming the input's node).
-        """
+        """Block until every ``(input) -> step`` in ``needs`` has arrived (older ones are
+        dropped); RunError on abort, :class:`InputLate` after the stall timeout."""
         self.send()  # this node's last step goes out before it waits for the next
         if self._watchdog is None:
             self._watchdog = threading.Thread(target=self._watch, daemon=True,
@@ -397,30 +365,14 @@ class Participant:
 
     def handshake(self, info: Mapping[str, Any] | None = None,
                   timeout_s: float = 60.0) -> dict[str, Any]:
-        """The start barrier. Returns the ``start`` payload (``n_steps``, ``h``, ``info``)."""
-        deadline = time.monotonic() + timeout_s
-        next_send = 0.0
-        next_waiting = time.monotonic() + WAITING_PERIOD_S
+        """The start barrier: the ``start`` payload (``n_steps``, ``h``, ``info``)."""
+        barrier = StartBarrier(self, timeout_s, info or {})
         while True:
-            now = time.monotonic()
-            if now >= deadline:
-                silent = [f"{n}/{c}" for (n, c), mb in self.inputs.items()
-                          if -1 not in mb.box]
-                raise RunError(f"{self.node}: not started within {timeout_s:.0f} s"
-                               + (f"; never heard {', '.join(silent)}" if silent else ""))
-            if now >= next_send:
-                next_send = now + HELLO_PERIOD_S
-                self.check_orchestrator()
-                self.publish_hello()
-                silent = [f"{n}/{c}" for (n, c), mb in self.inputs.items() if not mb.heard]
-                if not silent:
-                    self.ctl("ready", info={"outputs": self.outputs, **(info or {})})
-                elif now >= next_waiting:  # tell the orchestrator what holds this node up
-                    next_waiting = now + WAITING_PERIOD_S
-                    self.ctl("waiting", missing=silent)
+            due = barrier.tick([f"{n}/{c}" for (n, c), mb in self.inputs.items()
+                                if not mb.heard])
             self._drain_feeds()
             try:
-                msg = self._take(timeout=max(0.0, min(0.01, next_send - now)))
+                msg = self._take(timeout=min(0.01, due))
             except queue.Empty:
                 continue
             if msg is not None and msg.kind == "start":
@@ -433,8 +385,8 @@ class Participant:
                 return msg.d
 
     def finish(self, k: int, t: float, linger_s: float = 120.0, **extra: Any) -> None:
-        """Report ``done`` and stay until the orchestrator closes the run (or is gone): what is
-        still in flight is only delivered while the session is open."""
+        """``done``, then stay until the orchestrator closes the run (or is gone): what is in
+        flight is only delivered while the session is open."""
         self.flush_records()
         self.ctl("done", k, t, rejected=self.rejected, **extra)
         deadline = time.monotonic() + linger_s
@@ -458,3 +410,32 @@ class Participant:
             self._token.undeclare()
         except Exception:
             pass
+
+
+class StartBarrier:
+    """A node's side of the start handshake before the ``start``: ``hello`` every
+    :data:`HELLO_PERIOD_S`, then ``ready`` once every input was heard (else ``waiting``
+    naming the silent ones, every :data:`WAITING_PERIOD_S`); RunError after ``timeout_s``."""
+
+    def __init__(self, part: Participant, timeout_s: float, info: Mapping[str, Any]) -> None:
+        now = time.monotonic()
+        self.part, self.timeout_s, self.info = part, timeout_s, dict(info)
+        self.deadline, self.next_send = now + timeout_s, 0.0
+        self.next_waiting = now + WAITING_PERIOD_S
+
+    def tick(self, silent: list[str]) -> float:
+        """Send what is due (``silent``: the inputs not heard yet); the time to the next [s]."""
+        part, now = self.part, time.monotonic()
+        if now >= self.deadline:
+            raise RunError(f"{part.node}: not started within {self.timeout_s:.0f} s"
+                           + (f"; never heard {', '.join(silent)}" if silent else ""))
+        if now >= self.next_send:
+            self.next_send = now + HELLO_PERIOD_S
+            part.check_orchestrator()
+            part.publish_hello()
+            if not silent:
+                part.ctl("ready", info={"outputs": part.outputs, **self.info})
+            elif now >= self.next_waiting:  # tell the orchestrator what holds this node up
+                self.next_waiting = now + WAITING_PERIOD_S
+                part.ctl("waiting", missing=silent)
+        return max(0.0, self.next_send - now)
