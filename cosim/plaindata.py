@@ -59,7 +59,7 @@ CLASSES = frozenset({
     "nodes.fatigue.lib.counting.StreamingRainflow", "nodes.fatigue.lib.fkm.FKMSpec",
     "nodes.fatigue.lib.influence_set.InfluenceSet", "nodes.fatigue.lib.life_models.SNCurve",
     "nodes.fatigue.lib.material.ComponentSpec", "nodes.fatigue.lib.material.Material",
-    "nodes.fatigue.lib.screen_bound.NodeTables", "nodes.fatigue.lib.screening.Screening",
+    "nodes.fatigue.lib.screening.Screening",
     "nodes.fatigue.lib.screening.StressScreen", "nodes.fatigue.worker.LiveFatigue",
     "nodes.fatigue.worker._Engine", "nodes.fatigue.worker._Parked",
 })

@@ -23,7 +23,7 @@ from cosim.errors import ScenarioError
 
 from .config import BUILTIN_PART, FatigueConfig
 from .influence import import_influence
-from .lib import counting, screen_bound, superposition, turning_eq
+from .lib import counting, screening, superposition, turning_eq
 from .lib.counting import Cycles, StreamingRainflow
 from .lib.damage import cycle_damage
 from .lib.equivalent_stress import equivalent_of
@@ -61,7 +61,7 @@ def warm_up() -> None:
     counting.build()
     superposition.build()
     turning_eq.build()
-    screen_bound.build()
+    screening.build()
 
 
 def load_influence(cfg: FatigueConfig) -> InfluenceSet:

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from cosim import plaindata
 from nodes.fatigue import worker
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.lib import counting, screen_bound, turning_eq
+from nodes.fatigue.lib import counting, screening, turning_eq
 from nodes.fatigue.lib.counting import StreamingRainflow, turning_points
 from nodes.fatigue.lib.equivalent_stress import equivalent_of
 from nodes.fatigue.lib.superposition import components_buffer, superpose_components
@@ -279,16 +279,14 @@ def test_kernels_compiled_before_the_first_block_not_in_the_step_loop() -> None:
     specialisation (no compile later)."""
     worker.load_influence(FatigueConfig.from_dict(COARSE))
     kernels = (turning_eq._keep_gather, turning_eq._root1, counting._rainflow_packed,
-               screen_bound._bound_slots, screen_bound._bound_nodes)
+               screening._bound_slots)
     before = [len(k.signatures) for k in kernels]
-    assert before == [1, 1, 1, 1, 1]
+    assert before == [1, 1, 1, 1]
     comp = _random_tensors(np.random.default_rng(1), 8, 100)
     vals, counts = turning_eq.kept_equivalent(comp, 100, "abs_max_principal")
     StreamingRainflow(8).feed_packed(vals, counts, vals[np.cumsum(counts) - 1])
-    from nodes.fatigue.lib.screening import StressScreen
-
     inf = worker.load_influence(FatigueConfig.from_dict(COARSE))
-    scr = StressScreen(inf.coefficients, "abs_max_principal")
+    scr = screening.StressScreen(inf.coefficients, "abs_max_principal")
     F = np.random.default_rng(2).normal(size=(120, len(inf.case_names)))
     scr.block(F, np.arange(40), 25, probe=np.arange(40, 50))
     assert [len(k.signatures) for k in kernels] == before

@@ -28,7 +28,7 @@ def _cache(tmp_path_factory, monkeypatch):
 @pytest.mark.parametrize("kw", [{}, {"equivalent": "signed_von_mises", "mean_stress": "swt",
                                      "residue": "half_cycles"}])
 def test_the_bound_is_above_the_exact_envelope_variation_and_damage(kw):
-    """The compiled bound (screen_bound) against the exact history of every node."""
+    """The compiled bound against the exact history of every node."""
     cfg = FatigueConfig.from_dict({**COARSE, **kw})
     inf = load_influence(cfg)
     t, loads = pave_like_loads(1.5, seed=4, static_n=6000, rms_n=4000)
@@ -125,12 +125,12 @@ def test_screened_equals_unscreened_on_a_ch6_pave_run_of_the_cad_arm(tmp_path):
         assert np.all(ref.damage[out] < 0.01 * ref.max_damage)
 
 
-def test_compiled_bound_of_kept_slots_equals_the_gathered_one_as_the_set_changes():
-    """screen_bound.NodeTables.bounds_kept (the left-out nodes' columns kept in slots between
-    blocks, nodes leaving and joining) gives each node the bound bounds() gathers for it, bit
-    for bit (a node's lanes never mix with another's)."""
+def test_compiled_bound_of_kept_slots_equals_a_fresh_gather_as_the_set_changes():
+    """StressScreen.bounds_kept (the nodes' table columns kept in slots between blocks, nodes
+    leaving and joining) gives each node the bound a fresh screen, which gathers them anew,
+    gives it, bit for bit (a node's lanes never mix with another's)."""
     pytest.importorskip("numba")
-    from nodes.fatigue.lib.screen_bound import load_stats
+    from nodes.fatigue.lib.screening import load_stats
 
     cfg = FatigueConfig.from_dict(COARSE)
     inf = load_influence(cfg)
@@ -138,17 +138,18 @@ def test_compiled_bound_of_kept_slots_equals_the_gathered_one_as_the_set_changes
     F = np.stack([loads.get(f"plant/arm/{c}", np.zeros(t.size)) for c in inf.case_names], 1)
     scr = StressScreen(inf.coefficients, cfg.equivalent)
     scr.block(F[:100], np.arange(5), 25)  # axes set, tables built
-    tables = scr._tables
-    assert tables is not None and scr.V is not None
+    assert scr.V is not None
     rng = np.random.default_rng(7)
     idx = np.sort(rng.choice(inf.n_nodes, inf.n_nodes // 2, replace=False))
     for i in range(0, 300, 60):
         stats = load_stats(F[i:i + 61], scr.V, 25)
-        got = tables.bounds_kept(stats, idx, False)
-        ref = tables.bounds(stats, idx, False)
+        got = scr.bounds_kept(stats, idx, False)
+        fresh = StressScreen(inf.coefficients, cfg.equivalent)
+        fresh.set_axes(F[:100])
+        ref = fresh.bounds_kept(stats, idx, False)
         for a, b in zip(got, ref, strict=True):
             np.testing.assert_array_equal(a, b)
-        assert sorted(tables.slot_node.tolist()) == sorted(idx.tolist())
+        assert sorted(scr.slot_node.tolist()) == sorted(idx.tolist())
         keep = rng.random(idx.size) > 0.2  # some leave, others join (in any order)
         idx = np.union1d(idx[keep], rng.choice(inf.n_nodes, 40, replace=False))
         idx = rng.permutation(idx)

@@ -2,8 +2,8 @@
 
 Computing a node's damage exactly costs its stresses at every sample (superposition, the
 equivalent stress, rainflow). This module bounds it from what a block of load samples gives
-in a few matrix-vector products for all nodes at once, so that a node whose bound stays below
-a stated fraction of the damage already reached need not be computed (:mod:`.worker`).
+for all nodes at once, so that a node whose bound stays below a stated fraction of the
+damage already reached need not be computed (:mod:`.worker`).
 
 **The bound** (one node, equivalent-stress history e_k, k = 0..N-1, Pa). With the node's
 influence coefficients A_c (6 components per load case c) the stress is σ(t) = Σ_c A_c F_c(t).
@@ -22,11 +22,10 @@ Per block of loads (the previous block's last sample included):
    |Δe| <= N(Δσ) with N the Frobenius norm (>= the spectral norm, 1-Lipschitz for σ1, σ3) or
    vm. A step that changes the branch jumps by at most 2 N(Δσ) + J: J = 2 max min(|σ1|, |σ3|)
    (the jump's ends are both near the switching surface |σ1| = |σ3|), or 2 max vm for the
-   signed von Mises. Σ_k N(Δσ_k) over the block is at most the smaller of
-   Σ_m N(A v_m) Σ_k |z_mk| (the loads' increments in the principal axes v_m of their scatter
-   matrix S = Σ_k ΔF_k ΔF_kᵀ, z = Vᵀ ΔF) and sqrt(n Σ_m λ_m N(A v_m)²) (Cauchy-Schwarz,
-   Σ_k N(Δσ_k)² = tr(G S) for N² = ΔFᵀ G ΔF). A block where the branch can change counts
-   every step as a possible change.
+   signed von Mises. Σ_k N(Δσ_k) over the block is at most the smaller of Σ_c N(A_c) Σ_k |ΔF_ck|
+   and Σ_m N(A v_m) Σ_k |z_mk| (the loads' increments in the principal axes v_m of their
+   scatter matrix, z = Vᵀ ΔF). A block where the branch can change counts every step as a
+   possible change.
 3. *Damage.* The rainflow count removes pairs b, c from a, b, c, d with |b - c| <= |a - b|,
    |c - d|: the history's total variation drops by exactly 2|b - c|. So the full cycles' ranges
    sum to (TV - TV(residue)) / 2; half cycles of the residue sum to TV(residue) / 2, and the
@@ -37,45 +36,261 @@ Per block of loads (the previous block's last sample included):
    [LO, HI] has σm <= HI - a, so on a grid a_j = j A / K (A = (HI - LO) / 2) every cycle has
    d <= Δ · max_j d(a_(j+1), HI - a_j) / (2 a_(j+1)) =: Δ · g, and D <= g (TV + (HI - LO)/2).
 
-:meth:`StressScreen.block` computes steps 1-2 in numba (:mod:`.screen_bound`, the compiled
-kernels and their node tables; without the Cauchy-Schwarz sum: ~1.8 ns per node-sample for
-25-sample sub-blocks against 11-14 for the exact path); this module holds step 3 and the
-rule of which nodes are computed (:class:`Screening`). The bound is rigorous for every
-history (the tests check it against exact counts); it is not tight (it takes every cycle as
-large as the largest one can be), which only costs how many nodes are screened out, never a
-wrong result. Rounding: the bound is raised by :data:`ROUNDING_MARGIN` (relative), far above
-the float error of its few sums.
+Steps 1-2 are numba kernels (:meth:`StressScreen.block`, per :data:`SUB_SAMPLES`-sample
+sub-block: ~1.8 ns per node-sample against 11-14 for the exact path): the loads' statistics
+per sub-block once in numpy (:func:`load_stats`), then per node and sub-block ~550
+floating-point operations with the node's coefficients in cache (:attr:`StressScreen.T`),
+written for LLVM's vectoriser (flat scratch rows, inlined scalar helpers). The bound is
+rigorous for every history (the tests check it against exact counts); it is not tight,
+which only costs how many nodes are screened out, never a wrong result.
+
+**Rounding.** Principal stresses without transcendentals, proven: the largest root of
+4c³ - 3c = r is bracketed by :func:`.turning_eq._root1`. The bound must hold for the *true*
+principal stresses of the computed tensor, so the rounding of q, p, det and r is covered by a
+half-width ``BRACKET_REL`` x 2p + ``BRACKET_ABS`` x |q| (r's rounding, a few 1e-16, moves the
+root by at most ~sqrt(|Δr|) < 1e-7 at the double root r = -1; q's and the deviator's by a few
+ulp of |q|). The middle stress's own rounding (a sum of 15 products) is below
+1e-15 x max_c |F_c| x Σ|A|: the envelope is padded by :data:`ROUNDING_MARGIN` (1e-9) times
+that, |hi|, |lo| and Σ R; TV and the damage bound are raised by the same margin. A
+non-finite tensor gives the node (+inf, -inf, +inf): never left out.
 """
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
+from .counting import COMPILE_S, compile_kernels
 from .damage import cycle_reversals, sn_curve
 from .life_models import SNCurve
 from .material import Material
-from .screen_bound import NodeTables, load_stats
+from .turning_eq import _root1  # noqa: F401  (compiled with this module's kernels)
 
 SCREEN_FRACTION = 1e-2
 """Suggested screening fraction f (screening is off unless asked for: ``screen=`` of
 :func:`.worker.analyse` / :class:`.worker.LiveFatigue`; docs/live_fatigue.md): a node
 is left out while its damage bound is below f times the largest damage reached (and below
-the tenth largest, and its stress envelope inside the computed nodes' extremes); see
-:mod:`.worker` ``_Engine``."""
+the tenth largest, and its stress envelope inside the computed nodes' extremes)."""
 TOP_NODES = 10
 """The reported most damaged nodes (``summary.json`` ``top_nodes``): never screened out."""
 ROUNDING_MARGIN = 1e-9
 SUB_SAMPLES = 25
-"""Samples per sub-block of the envelope (:class:`StressScreen`)."""
 GRID = 8
 """Amplitude intervals of the damage-per-range bound g."""
-
+BRACKET_REL = 1e-6
+"""Half-width of a principal stress's bracket per unit of 2p (see the module docstring)."""
+BRACKET_ABS = 1e-12
+"""Half-width of a principal stress's bracket per unit of |q| (rounding of q, deviator)."""
+_LOCK = threading.Lock()
 _FROB = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
 """Frobenius norm² of a symmetric tensor from its 6 components (σx σy σz τxy τyz τzx)."""
 _VM = np.array([[1.0, -0.5, -0.5, 0, 0, 0], [-0.5, 1.0, -0.5, 0, 0, 0],
                 [-0.5, -0.5, 1.0, 0, 0, 0], [0, 0, 0, 3.0, 0, 0], [0, 0, 0, 0, 3.0, 0],
                 [0, 0, 0, 0, 0, 3.0]])
 """vm² = sᵀ Q s (von Mises, 6 components)."""
+
+
+def _principal(s0, s1, s2, s3, s4, s5):  # type: ignore[no-untyped-def]
+    """Proven brackets (σ1 lo, σ1 hi, σ3 lo, σ3 hi) (Pa) of the largest and smallest
+    principal stresses of the tensor (σx σy σz τxy τyz τzx)."""
+    q = (s0 + s1 + s2) / 3.0
+    a, b, c = s0 - q, s1 - q, s2 - q
+    p = np.sqrt((a * a + b * b + c * c + 2.0 * (s3 * s3 + s4 * s4 + s5 * s5)) / 6.0)
+    two_p = 2.0 * p
+    t = BRACKET_REL * two_p + BRACKET_ABS * abs(q)
+    det = a * b * c + 2.0 * s3 * s4 * s5 - a * s4 * s4 - b * s5 * s5 - c * s3 * s3
+    tiny = not (p > 1e-90)  # (or NaN): c in [-1, 1]
+    pp = _sel(tiny, 1.0, p)
+    r = det / (pp * pp * pp * 2.0)
+    r = _sel(r > 1.0, 1.0, _sel(r < -1.0, -1.0, r))
+    l1, h1 = _root1(r)
+    l3, h3 = _root1(-r)
+    l1, h1 = _sel(tiny, -1.0, l1), _sel(tiny, 1.0, h1)
+    l3, h3 = _sel(tiny, -1.0, l3), _sel(tiny, 1.0, h3)
+    return q + two_p * l1 - t, q + two_p * h1 + t, q - two_p * h3 - t, q - two_p * l3 + t
+
+
+def _sel(c, a, b):  # type: ignore[no-untyped-def]
+    """a where c else b (a select: keeps the node loops vectorisable)."""
+    return a if c else b
+
+
+CHUNK = 32
+"""Nodes bounded at a time (their gathered table 32 x ~3.5 kB stays in L2; measured best
+of 8-64). A compile-time constant of the kernels: the scratch rows are CHUNK apart, so
+LLVM sees their distances and vectorises the node loops without runtime alias checks."""
+_S, _HR, _ZR, _RH, _HB, _LB, _BAD, _JMP, _WT, _T1, _T2 = (
+    0, 6, 12, 18, 19, 20, 21, 22, 23, 24, 25)
+"""Rows of the flat scratch (x CHUNK): the middle stress (6), the two deviation bounds
+(6 + 6), the hydrostatic half range, the envelope, the non-finite flag, the sub-block's
+jumps and variation weight, the two triangle sums."""
+ROWS = 26
+
+
+def _bound_chunk(X, M, H, ZH, Mmax, tvF, tvZ, nin, vm, o, w, tv):  # type: ignore[no-untyped-def]  # noqa: C901, E501
+    """The CHUNK nodes of the gathered table X (width, CHUNK; offsets ``o`` of
+    :class:`StressScreen`) over every sub-block j: envelope into the rows _HB, _LB of the
+    flat scratch w (ROWS x CHUNK), TV into tv, non-finite into _BAD. Every inner loop
+    runs over the nodes (SIMD)."""
+    nc = M.shape[1]
+    C = CHUNK
+    oC, oA, oV, oNA, oNAV, oT, oS = o[0], o[1], o[2], o[3], o[4], o[5], o[6]
+    for b in range(CHUNK):
+        w[_HB * C + b] = -np.inf
+        w[_LB * C + b] = np.inf
+        w[_BAD * C + b] = 0.0
+        tv[b] = 0.0
+    for j in range(M.shape[0]):
+        for b in range(_RH * C + C):
+            w[b] = 0.0
+        for c in range(nc):
+            m = M[j, c]
+            h = H[j, c]
+            z = ZH[j, c]
+            for u in range(6):
+                xc = X[oC + 6 * c + u]
+                xa = X[oA + 6 * c + u]
+                xv = X[oV + 6 * c + u]
+                for b in range(CHUNK):
+                    w[(_S + u) * C + b] += m * xc[b]
+                    w[(_HR + u) * C + b] += h * xa[b]
+                    w[(_ZR + u) * C + b] += z * xv[b]
+            if vm != 0:  # the hydrostatic half range
+                xt = X[oT + c]
+                for b in range(CHUNK):
+                    w[_RH * C + b] += h * xt[b]
+        n_i = nin[j]
+        mm = Mmax[j]
+        xs = X[oS]
+        for b in range(CHUNK):
+            r0, r1, r2 = (min(w[6 * C + b], w[12 * C + b]), min(w[7 * C + b], w[13 * C + b]),
+                          min(w[8 * C + b], w[14 * C + b]))
+            r3, r4, r5 = (min(w[9 * C + b], w[15 * C + b]), min(w[10 * C + b], w[16 * C + b]),
+                          min(w[11 * C + b], w[17 * C + b]))
+            s0, s1, s2 = w[b], w[C + b], w[2 * C + b]
+            s3, s4, s5 = w[3 * C + b], w[4 * C + b], w[5 * C + b]
+            sum_r = r0 + r1 + r2 + r3 + r4 + r5
+            tot = s0 + s1 + s2 + s3 + s4 + s5 + sum_r
+            if vm == 0:  # abs-max principal: the branches σ1 (br1) and σ3 (br3)
+                a1l, a1h, a3l, a3h = _principal(s0, s1, s2, s3, s4, s5)
+                rho = max(_principal(r0, r1, r2, r3, r4, r5)[1], 0.0)
+                jump = 2.0 * (min(max(abs(a1l), abs(a1h)), max(abs(a3l), abs(a3h))) + rho)
+                br1, br3 = a1h + a3h + 2.0 * rho >= 0.0, a1l + a3l - 2.0 * rho < 0.0
+                hi1, lo1, hi3, lo3 = a1h + rho, max(a1l - rho, 0.0), min(a3h + rho, 0.0), a3l - rho
+            else:  # signed von Mises: vm² = sᵀ Q s, R |Q| R, the hydrostatic interval
+                d01, d12, d20 = s0 - s1, s1 - s2, s2 - s0
+                v = np.sqrt(max(0.5 * (d01 * d01 + d12 * d12 + d20 * d20)
+                                + 3.0 * (s3 * s3 + s4 * s4 + s5 * s5), 0.0))
+                rv = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r0 * r1 + r1 * r2 + r2 * r0
+                             + 3.0 * (r3 * r3 + r4 * r4 + r5 * r5))
+                hh = (s0 + s1 + s2) / 3.0
+                rh = w[_RH * C + b]
+                lo1 = max(v - rv, 0.0)
+                br1, br3, jump = hh + rh >= 0.0, hh - rh < 0.0, 2.0 * (v + rv)
+                hi1, hi3, lo3 = v + rv, -lo1, -(v + rv)
+            # the padded envelope, the non-finite flag, the jumps and variation weight
+            hi = max(_sel(br1, hi1, -np.inf), _sel(br3, hi3, -np.inf))
+            lo = min(_sel(br1, lo1, np.inf), _sel(br3, lo3, np.inf))
+            pad = ROUNDING_MARGIN * (abs(hi) + abs(lo) + sum_r + mm * xs[b])
+            both = br1 & br3
+            w[_HB * C + b] = max(w[_HB * C + b], hi + pad)
+            w[_LB * C + b] = min(w[_LB * C + b], lo - pad)
+            w[_BAD * C + b] = max(w[_BAD * C + b], _sel(tot - tot == 0.0, 0.0, 1.0))
+            w[_JMP * C + b] = _sel(both, n_i * jump, 0.0)
+            w[_WT * C + b] = _sel(both, 2.0, 1.0)
+        if n_i > 0.0:
+            for b in range(_T1 * C, (_T2 + 1) * C):
+                w[b] = 0.0
+            for c in range(nc):
+                f = tvF[j, c]
+                z = tvZ[j, c]
+                xa = X[oNA + c]
+                xv = X[oNAV + c]
+                for b in range(CHUNK):
+                    w[_T1 * C + b] += f * xa[b]
+                    w[_T2 * C + b] += z * xv[b]
+            for b in range(CHUNK):
+                sum_n = min(w[_T1 * C + b], w[_T2 * C + b])
+                tv[b] += w[_WT * C + b] * sum_n + w[_JMP * C + b]
+
+
+def _bound_slots(Xs, m, M, H, ZH, Mmax, tvF, tvZ, nin, vm, o, w, hi_out, lo_out,  # type: ignore[no-untyped-def]  # noqa: E501
+                 tv_out):
+    """Envelope and TV bound over the block (:func:`_bound_chunk`) of the nodes in the
+    first m slots of the chunks Xs (chunks, width, CHUNK), results by slot."""
+    C = CHUNK
+    tv = np.empty(C)
+    for ch in range((m + C - 1) // C):
+        B = min(C, m - ch * C)
+        _bound_chunk(Xs[ch], M, H, ZH, Mmax, tvF, tvZ, nin, vm, o, w, tv)
+        k0 = ch * C
+        for b in range(B):
+            hb = w[_HB * C + b]
+            lb = w[_LB * C + b]
+            ok = w[_BAD * C + b] == 0.0 and hb - hb == 0.0 and lb - lb == 0.0 \
+                and tv[b] - tv[b] == 0.0
+            hi_out[k0 + b] = hb if ok else np.inf
+            lo_out[k0 + b] = lb if ok else -np.inf
+            tv_out[k0 + b] = tv[b] * (1.0 + ROUNDING_MARGIN) if ok else np.inf
+
+
+_A2 = "f8[:, ::1]"
+_F1 = "f8[::1]"
+_STATS = f"{_A2}, {_A2}, {_A2}, {_F1}, {_A2}, {_A2}, {_F1}, i8, i8[::1]"
+"""M, H, ZH, Mmax, tvF, tvZ, nin (:func:`load_stats`), vm, offsets."""
+KERNELS = (("_bound_chunk", f"void({_A2}, {_STATS}, {_F1}, {_F1})"),
+           ("_bound_slots", f"void(f8[:, :, ::1], i8, {_STATS}, {_F1}, {_F1}, {_F1}, {_F1})"))
+INLINE = ("_sel", "_principal")
+"""Helpers inlined into the kernels (numba ``inline="always"``: the node loops stay
+straight-line code that LLVM vectorises; a call per node-sub-block would not)."""
+
+
+def build() -> None:
+    """Compile this module's kernels now (or load them from numba's cache; once)."""
+    from . import turning_eq
+
+    g = globals()
+    if __name__ not in COMPILE_S:
+        import numba
+
+        turning_eq.build()
+        with _LOCK:
+            if not hasattr(g["_sel"], "py_func"):
+                root = getattr(turning_eq._root1, "py_func", turning_eq._root1)
+                g["_root1"] = numba.njit(inline="always")(root)
+                for fn in INLINE:
+                    g[fn] = numba.njit(inline="always")(g[fn])
+    compile_kernels(g, KERNELS)
+
+
+def load_stats(Fe: np.ndarray, V: np.ndarray, sub_samples: int) -> dict[str, np.ndarray]:
+    """The loads' statistics per sub-block of ``sub_samples`` increments (N, N m): middle M,
+    half range H, the half range ZH along the principal axes V about M, max |M|, the
+    increments' absolute sums tvF and tvZ and the number of increments nin. ``Fe``
+    (n_e, cases): the block with the previous block's last sample first."""
+    n_e, nc = Fe.shape
+    L = max(1, int(sub_samples))
+    starts = np.arange(0, max(n_e - 1, 1), L)
+    stops = np.minimum(starts + L + 1, n_e)
+    J = starts.size
+    Z = Fe @ V
+    M, H, ZH = np.empty((J, nc)), np.empty((J, nc)), np.empty((J, nc))
+    for j, (a, b) in enumerate(zip(starts, stops, strict=True)):
+        lo, hi = Fe[a:b].min(axis=0), Fe[a:b].max(axis=0)
+        M[j] = 0.5 * (lo + hi)
+        H[j] = 0.5 * (hi - lo)
+        mz = M[j] @ V
+        ZH[j] = np.maximum(Z[a:b].max(axis=0) - mz, mz - Z[a:b].min(axis=0))
+    if n_e < 2:
+        tvF = tvZ = np.zeros((J, nc))
+        nin = np.zeros(J)
+    else:
+        tvF = np.add.reduceat(np.abs(np.diff(Fe, axis=0)), starts, axis=0)
+        tvZ = np.add.reduceat(np.abs(np.diff(Z, axis=0)), starts, axis=0)
+        nin = (stops - starts - 1).astype(float)
+    return {"M": M, "H": H, "ZH": np.ascontiguousarray(ZH), "Mmax": np.abs(M).max(axis=1),
+            "tvF": tvF, "tvZ": tvZ, "nin": nin}
 
 
 def unsupported(mat: Material, method: str, mean_stress: str) -> str | None:
@@ -128,57 +343,114 @@ def damage_per_range(hi: np.ndarray, lo: np.ndarray, mat: Material, method: str,
 
 class StressScreen:
     """Bounds of the equivalent stress of any set of nodes over a block of loads, from the
-    loads alone (module docstring): the envelope [lo, hi] and the total variation TV. Each
-    block is cut into sub-blocks of ``sub_samples``: the smaller a sub-block's load ranges,
-    the tighter its envelope, and only sub-blocks where the branch can change count their
-    steps as jumps; the cost grows with the number of sub-blocks."""
+    loads alone (module docstring): the envelope [lo, hi] and the total variation TV, per
+    sub-block of ``sub_samples`` (the smaller a sub-block's load ranges, the tighter its
+    envelope; the cost grows with their number). The kernels' per-node table :attr:`T`, one
+    row a node: A (cases x 6), |A|, |A V|, the norms N(A_c), N(A v_m), |tr A_c|/3 and Σ|A|
+    (316 doubles a node: read from memory once a block); :attr:`offsets` where each starts."""
 
     def __init__(self, coefficients: np.ndarray, equivalent: str) -> None:
         C = np.asarray(coefficients, dtype=float)
-        self.n_cases, self.n, _ = C.shape
+        nc, n, _ = C.shape
+        self.n = n
         self.C = C  # (cases, n, 6)
-        self.abs_tr3 = np.abs(C[:, :, 0] + C[:, :, 1] + C[:, :, 2]) / 3.0  # (cases, n)
         self.kind = equivalent
         self.Q = np.diag(_FROB) if equivalent == "abs_max_principal" else _VM
-        self.NA = self._norms(C)  # N(A_c) per case and node
         self.V: np.ndarray | None = None
-        self.CV = self.NAV = np.zeros(0)
-        self._tables = NodeTables(C, self.NA, self.abs_tr3)
+        Cn = C.transpose(1, 0, 2).reshape(n, -1)
+        widths = [6 * nc, 6 * nc, 6 * nc, nc, nc, nc, 1]
+        self.offsets = np.cumsum([0] + widths[:-1]).astype(np.int64)
+        o = self.offsets
+        self.T = np.empty((n, sum(widths)))
+        self.T[:, o[0]:o[1]] = Cn
+        np.abs(Cn, out=self.T[:, o[1]:o[2]])
+        self.T[:, o[3]:o[4]] = self._norms(C).T
+        self.T[:, o[5]:o[6]] = (np.abs(C[:, :, 0] + C[:, :, 1] + C[:, :, 2]) / 3.0).T
+        self.T[:, o[6]] = self.T[:, o[1]:o[2]].sum(axis=1)
+        self.T[:, o[2]:o[3]] = np.inf  # until set_axes: no tighter bound along them
+        self.T[:, o[4]:o[5]] = np.inf
+        self.slot_node = np.zeros(0, dtype=np.int64)
+        """The node in each kept slot (:meth:`bounds_kept`)."""
+        self.node_slot = np.full(n, -1, dtype=np.int64)
+        self.Xs = np.zeros((-(-n // CHUNK), self.T.shape[1], CHUNK))
+        """Kept nodes' table columns, CHUNK nodes a chunk (node-innermost; room for every
+        node, its pages touched only as nodes are kept)."""
 
     def block(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int,
               probe: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(hi, lo, tv) of nodes ``idx`` over the samples of ``Fe`` (n_e, cases): the block's
         loads with the previous block's last sample first (its increment counts; the
-        envelope covers it too; TV covers the n_e - 1 increments). By the numba kernel of
-        :mod:`.screen_bound` (per node ~22 floating-point operations per sample), the nodes
-        ``idx`` kept in its slots between calls (the left-out set); ``probe``: more nodes
-        (gathered for this call), their results after idx's."""
+        envelope covers it too; TV covers the n_e - 1 increments); the nodes ``idx`` kept in
+        slots between calls (the left-out set); ``probe``: more nodes (gathered for this
+        call), their results after idx's."""
         if self.V is None:
             self.set_axes(Fe)
         assert self.V is not None
         stats = load_stats(np.asarray(Fe, dtype=float), self.V, sub_samples)
         vm = self.kind != "abs_max_principal"
-        out = self._tables.bounds_kept(stats, idx, vm)
-        if probe is None or probe.size == 0:
-            return out
-        more = self._tables.bounds(stats, probe, vm)
-        return (np.concatenate([out[0], more[0]]), np.concatenate([out[1], more[1]]),
-                np.concatenate([out[2], more[2]]))
+        both = idx if probe is None else np.concatenate([idx, probe])
+        return self.bounds_kept(stats, both.astype(np.int64), vm)
 
     def _norms(self, C: np.ndarray) -> np.ndarray:
         """N of each case's stress tensor per node: (cases, n)."""
         return np.sqrt(np.maximum(((C @ self.Q) * C).sum(axis=2), 0.0))
 
     def set_axes(self, F: np.ndarray) -> None:
-        """Principal axes of a block of loads (the first): correlated loads (joint loads in
-        equilibrium) bound much tighter along them than channel by channel."""
+        """Principal axes V of a block of loads (the first): correlated loads (joint loads in
+        equilibrium) bound much tighter along them than channel by channel. Sets the
+        table's columns |A V| and N(A v_m)."""
         X = np.asarray(F, dtype=float)
         X = X - X.mean(axis=0)
         _, V = np.linalg.eigh(X.T @ X)
         self.V = V
-        self.CV = np.tensordot(V, self.C, axes=(0, 0))  # (axes, n, 6)
-        self.NAV = self._norms(self.CV)
-        self._tables.set_axes(self.CV, self.NAV)
+        CV = np.tensordot(V, self.C, axes=(0, 0))  # (axes, n, 6)
+        o, n = self.offsets, self.n
+        self.T[:, o[2]:o[3]] = np.abs(CV).transpose(1, 0, 2).reshape(n, -1)
+        self.T[:, o[4]:o[5]] = self._norms(CV).T
+        self.slot_node = np.zeros(0, dtype=np.int64)  # kept columns are stale now
+        self.node_slot[:] = -1
+
+    def _keep(self, idx: np.ndarray) -> None:
+        """Make the kept slots hold exactly the nodes ``idx`` (any order): a node that
+        left is replaced by one from the end, new nodes appended (their columns written
+        once, not gathered every block)."""
+        n = self.node_slot.size
+        want = np.zeros(n, dtype=bool)
+        want[idx] = True
+        gone = np.nonzero(~want[self.slot_node])[0]  # their slots
+        new = np.nonzero(want & (self.node_slot < 0))[0]
+        m = self.slot_node.size - gone.size
+        if gone.size:
+            tail = np.arange(m, self.slot_node.size)
+            movers = tail[want[self.slot_node[tail]]]  # kept nodes beyond the new end
+            holes = np.sort(gone)[:movers.size]  # gone slots below the new end
+            self.node_slot[self.slot_node[gone]] = -1
+            if movers.size:
+                self.Xs[holes // CHUNK, :, holes % CHUNK] = \
+                    self.Xs[movers // CHUNK, :, movers % CHUNK]
+                self.slot_node[holes] = self.slot_node[movers]
+                self.node_slot[self.slot_node[holes]] = holes
+            self.slot_node = self.slot_node[:m]
+        if new.size:
+            slots = np.arange(m, m + new.size)
+            self.Xs[slots // CHUNK, :, slots % CHUNK] = self.T[new]
+            self.slot_node = np.concatenate([self.slot_node, new])
+            self.node_slot[new] = slots
+
+    def bounds_kept(self, stats: dict[str, np.ndarray], idx: np.ndarray, von_mises: bool
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(hi, lo, tv) (Pa) of nodes ``idx`` (distinct) over the block of ``stats``, their
+        table rows kept in slots between calls (written once, not gathered every block)."""
+        build()
+        self._keep(idx)
+        m = self.slot_node.size
+        hi, lo, tv = np.empty(m), np.empty(m), np.empty(m)
+        s = stats
+        _bound_slots(self.Xs, m, s["M"], s["H"], s["ZH"], s["Mmax"], s["tvF"], s["tvZ"],
+                     s["nin"], int(von_mises), self.offsets, np.empty(ROWS * CHUNK),
+                     hi, lo, tv)
+        at = self.node_slot[idx]
+        return hi[at], lo[at], tv[at]
 
 
 def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, method: str,
@@ -203,15 +475,9 @@ def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, 
 
 
 DROP_MARGIN = 0.5
-"""A computed node is left out only when its bound is below this share of the threshold: its
-bound grows faster once it is no longer computed exactly (hysteresis: fewer catch-ups)."""
 PROJECTED_MARGIN = 0.3
-"""A candidate to leave out is left out only when its bound projected to the end of the run
-(its bound's variation per sample, :attr:`Screening.rate`, times the samples left) stays
-below this share of the threshold projected alike (grown in proportion to the samples)."""
 PROBE_SAMPLES = 2000
-"""A candidate computed node's bound is measured (:attr:`Screening.rate`) until it has
-seen this many samples; then its rate is taken as known."""
+"""A candidate's :attr:`Screening.rate` is measured until it has seen this many samples."""
 
 
 class Screening:
@@ -248,6 +514,7 @@ class Screening:
         self.history: list[np.ndarray] = []
         self._prev: np.ndarray | None = None
         self.caught_up = 0
+        """Nodes brought back so far (each recomputed from where it was left out)."""
         self.g = np.zeros(n)
         self.g_at = np.full((2, n), np.nan)
         """The envelopes (hi, lo) at which :attr:`g` was computed (NaN: not yet)."""
@@ -255,7 +522,6 @@ class Screening:
         self.rate_n = np.zeros(n)
         self.probe = np.arange(n)
         """Computed nodes whose :attr:`rate` the next block measures (the candidates)."""
-        """Nodes brought back so far (each recomputed from where it was left out)."""
 
     def bound(self, idx: np.ndarray | None = None, tv: np.ndarray | None = None
               ) -> np.ndarray:
@@ -303,16 +569,11 @@ class Screening:
             return
         hi, lo, tv = self.bounds.block(Fe, left_out, SUB_SAMPLES, probe)
         k = left_out.size
-        self._rate(probe, tv[k:], F.shape[0])
-        hi, lo, tv = hi[:k], lo[:k], tv[:k]
-        self._rate(left_out, tv, F.shape[0])
-        self.envelope(left_out, hi, lo)
-        self.tv_r[left_out] += tv
-
-    def _rate(self, idx: np.ndarray, tv: np.ndarray, samples: int) -> None:
-        """Add a block's variation bounds ``tv`` (Pa) of nodes ``idx`` to their rate."""
-        self.rate_tv[idx] += tv
-        self.rate_n[idx] += samples
+        for ids, part in ((probe, tv[k:]), (left_out, tv[:k])):  # their rates
+            self.rate_tv[ids] += part
+            self.rate_n[ids] += F.shape[0]
+        self.envelope(left_out, hi[:k], lo[:k])
+        self.tv_r[left_out] += tv[:k]
 
     @property
     def rate(self) -> np.ndarray:
@@ -334,9 +595,9 @@ class Screening:
         extremes are computed ones. A computed node is left out when it qualifies with
         U < DROP_MARGIN T (hysteresis: its bound grows faster once it is left out) and,
         projected to the end of the run with its measured :attr:`rate` (probed while it
-        is a candidate), stays below PROJECTED_MARGIN times T grown in proportion to the
-        samples: a node brought back costs the replay of every block since (efficiency
-        only; what keeps a node out is the first rule)."""
+        is a candidate, up to PROBE_SAMPLES), stays below PROJECTED_MARGIN times T grown in
+        proportion to the samples: a node brought back costs the replay of every block
+        since (efficiency only; what keeps a node out is the first rule)."""
         n = self.hi.size
         Da = self.d0[active]
         if Da.size >= TOP_NODES:
