@@ -1,10 +1,7 @@
-"""The bus: a thin layer over a Zenoh session (the tests have an in-memory twin with the same
-verbs, ``tests/memory_bus.py``; the one-process engine needs no bus, orchestrator/inprocess.py).
+"""The bus: a thin layer over a Zenoh session (the tests' in-memory twin: tests/memory_bus.py).
 
 Callbacks receive ``(key: str, payload: bytes)`` on the bus's own thread: they only hand the
-bytes over, never block. A feed (the lock-step inputs) is read by the node's own thread:
-``feed.recv()`` blocks, ``feed.wake()`` (any thread) makes it return ``b""``.
-
+bytes over, never block. A feed (the lock-step inputs) is read by the node's own thread.
 Default transport: Zenoh in peer mode, listening on loopback only, multicast scouting off;
 peers find each other by gossip, or link as an explicit mesh (``gossip=False``).
 """
@@ -25,16 +22,12 @@ LiveCallback = Callable[[str, bool], None]
 
 
 class Feed(Protocol):
-    """A lock-step input read by the node's own thread (:meth:`Bus.feed`)."""
+    """A lock-step input: ``recv`` blocks (``b""`` after ``wake``, from any thread),
+    ``try_recv`` gives None when nothing waits."""
 
-    def recv(self) -> bytes:
-        """The next message; blocks (``b""`` after :meth:`wake`)."""
-
-    def try_recv(self) -> bytes | None:
-        """The next message, or None if none is waiting."""
-
-    def wake(self) -> None:
-        """Make a blocked :meth:`recv` return ``b""``."""
+    def recv(self) -> bytes: ...
+    def try_recv(self) -> bytes | None: ...
+    def wake(self) -> None: ...
 
 
 class Bus(Protocol):
@@ -92,25 +85,16 @@ def zenoh_config(
     default_mode: str = "peer",
     gossip: bool = True,
 ) -> Any:
-    """A Zenoh configuration for a suscosim participant.
-
-    Args:
-        connect: endpoints to connect to (the orchestrator's, or a router's), e.g.
-            ``["tcp/192.168.1.10:7447"]``; added to the config file's own.
-        listen: endpoints to listen on; default the config file's, else loopback only on a
-            free port. Clients do not listen.
-        lowlatency: Zenoh's low-latency transport (a put writes to the socket from the calling
-            thread; negotiated per link). Peers then connect only from the greater Zenoh id:
-            two peers opening a low-latency link to each other at once both failed.
-        lease_ms: how long a silent peer is kept; bounds how fast a partitioned node is seen
-            as gone (Zenoh's default is 10 s).
-        config_file: a Zenoh JSON5 configuration file to start from (TLS, access control);
-            its mode, endpoints and scouting settings are kept unless given here.
-        mode: ``"peer"`` or ``"client"`` (everything through the router or peer it connects
-            to: a node on another machine; Zenoh >= 1.9 routers do not relay between peers).
-            Default: the config file's mode, else ``default_mode``.
-        gossip: False for a session of a run's explicit mesh
-            (:class:`orchestrator.local_mesh.LocalMesh`): no link states sent or forwarded.
+    """A Zenoh configuration for a suscosim participant. ``connect`` endpoints are added to
+    the ``config_file``'s own (a Zenoh JSON5 file: TLS, access control; its mode, endpoints and
+    scouting are kept unless given here); ``listen`` defaults to the file's, else a free
+    loopback port (clients do not listen). ``lowlatency``: Zenoh's low-latency transport (a
+    put writes to the socket from the calling thread); peers then connect only from the
+    greater Zenoh id (two peers opening such a link to each other at once both failed).
+    ``lease_ms`` bounds how fast a partitioned node is seen as gone (Zenoh's default: 10 s).
+    ``mode`` ``"client"``: everything through the router or peer it connects to (Zenoh >= 1.9
+    routers do not relay between peers); default the file's, else ``default_mode``.
+    ``gossip`` False: a session of a run's explicit mesh (no link states sent or forwarded).
     """
     import zenoh
 
@@ -236,25 +220,19 @@ class ZenohBus:
         return bool(info.peers_zid() or info.routers_zid())
 
     def wait_linked(self, timeout: float = 10.0) -> bool:
-        """Wait until this session has a link to a peer or a router [timeout in s]: a put,
-        subscription or query before then meets nobody. True when linked."""
-        import time
-
+        """Whether this session got a link within ``timeout`` [s] (before, a put meets nobody)."""
         deadline = time.monotonic() + timeout
-        while True:
-            if self.linked():
-                return True
+        while not self.linked():
             if time.monotonic() >= deadline:
                 return False
             time.sleep(0.02)
+        return True
 
     def flush(self, timeout: float = 1.0) -> int:
-        """Wait until every router this session is connected to has routed what we sent:
-        a query to ``@/<router zid>/router`` travels on the same FIFO link and lane as our
-        puts. Needs a router with ``adminspace`` read enabled that lets the query in and the
-        reply out (``suscosim router``; not the shipped ``deploy/zenoh/router.json5``);
-        without a reply the wait ends at ``timeout`` [s]. Returns the number of routers that
-        replied. :meth:`close` needs none: Zenoh's close drains its transmission queue."""
+        """Wait until every router this session is connected to has routed what we sent (a
+        query to ``@/<router zid>/router`` travels on the same FIFO link and lane as our puts;
+        needs a router with ``adminspace`` read, as ``suscosim router``'s; else the wait ends
+        at ``timeout`` [s]); the number of routers that replied."""
         answered = 0
         try:
             for zid in list(self.session.info.routers_zid()):
@@ -287,17 +265,14 @@ class _ZenohFeed:
         self._sub = bus.session.declare_subscriber(key, z.handlers.FifoChannel(capacity))
         self._session, self._key, self._local = bus.session, key, z.Locality.SESSION_LOCAL
 
-    def recv(self) -> bytes:
-        """The next message (blocks, without holding the GIL)."""
+    def recv(self) -> bytes:  # blocks without holding the GIL
         return self._sub.recv().payload.to_bytes()
 
     def try_recv(self) -> bytes | None:
-        """The next message, or None if none is waiting."""
         sample = self._sub.try_recv()
         return None if sample is None else sample.payload.to_bytes()
 
-    def wake(self) -> None:
-        """Make a blocked :meth:`recv` return ``b""`` (a put that never leaves this session)."""
+    def wake(self) -> None:  # a put that never leaves this session
         self._session.put(self._key, b"", allowed_destination=self._local)
 
     def undeclare(self) -> None:

@@ -1,15 +1,12 @@
 """The node registry: every kind of node a run can have, declared once.
 
-Each :class:`NodeKind` gives a node's name (also its key segment, log file and certificate
-name), implementation, role, channels, preflight check, path keys and core. ``suscosim
-node``, the run's node list and preflight, CPU placement, the recorder's producers, the
-plant's force sources and the deploy files (``python -m orchestrator.compose_gen``; a test
-fails when they are stale) derive from it. Adding a kind: docs/nodes.md. Entries are
-``package.module:attribute`` strings, imported when used (:func:`load`).
-
-A scenario picks an implementation per kind in ``[nodes]``: a named alternative
-(``controller = "fmu"``) or a user's ``"package.module:Class"`` / ``"...:function"``; a bad
-value is a :class:`ScenarioError` naming ``nodes.<kind>`` at preflight.
+A :class:`NodeKind` gives a node's name (also its key segment, log file and certificate
+name), implementation, role, channels, preflight check, path keys and core; ``suscosim
+node``, the run's node list and preflight, CPU placement and the deploy files derive from it
+(adding a kind: docs/nodes.md). Entries are ``package.module:attribute`` strings, imported
+when used (:func:`load`). A scenario picks an implementation per kind in ``[nodes]``: a named
+alternative (``controller = "fmu"``) or a user's ``"package.module:Class"`` /
+``"...:function"``; a bad value is a :class:`ScenarioError` naming ``nodes.<kind>``.
 """
 
 from __future__ import annotations
@@ -25,14 +22,11 @@ from . import schema
 from .errors import ScenarioError
 
 COUPLED, LISTENER, OPTIONAL = "coupled", "listener", "optional"
-"""Roles. *coupled*: in the lock-step exchange, one message per step on each output,
-recorded; *listener*: in every run, takes inputs as they come (the recorder); *optional*: a
-listener that joins a run when its check says so (the live fatigue node)."""
+"""Roles. *coupled*: in the lock-step exchange; *listener*: in every run, takes inputs as they
+come (the recorder); *optional*: a listener that joins when its check says so (fatigue)."""
 ROLES = (COUPLED, LISTENER, OPTIONAL)
-NATIVE = "native"
-"""The name of a kind's own implementation (``[nodes] controller = "native"``)."""
+NATIVE = "native"  # a kind's own implementation ([nodes] controller = "native")
 SECTION = "nodes"
-"""The scenario section that picks implementations."""
 
 
 @dataclass(frozen=True)
@@ -48,10 +42,8 @@ class Check:
 
 @dataclass(frozen=True)
 class Impl:
-    """One implementation of a kind: ``entry`` is ``package.module:function`` (called as
-    ``function(part, scenario)``, see :mod:`orchestrator.node_main`) or
-    ``package.module:Class`` (a stepped node, see :mod:`cosim.stepped`); ``check`` its
-    preflight."""
+    """One implementation of a kind: ``entry`` ``package.module:function`` (called as
+    ``function(part, scenario)``) or ``package.module:Class`` (:mod:`cosim.stepped`)."""
 
     entry: str
     check: Check | None = None
@@ -64,22 +56,14 @@ class NodeKind:
     name: str
     role: str
     impl: Impl
-    reads: tuple[tuple[str, str], ...] = ()
-    """(node, channel) inputs; node ``*``: every coupled kind that writes that channel."""
-    writes: tuple[str, ...] = ()
-    """Output channels (under ``suscosim/<run>/<name>/``): its schema channels, ``step``
-    and ``records``."""
-    provides: tuple[str, ...] = ()
-    """The coupling fields of its ``force`` output (:func:`cosim.schema.coupling`)."""
-    path_keys: tuple[str, ...] = ()
-    """Dotted scenario keys of its that hold file paths (relative: to the scenario file)."""
+    reads: tuple[tuple[str, str], ...] = ()  # (node, channel); node "*": every coupled writer
+    writes: tuple[str, ...] = ()  # its schema channels, "step" and "records"
+    provides: tuple[str, ...] = ()  # the coupling fields of its force output
+    path_keys: tuple[str, ...] = ()  # dotted scenario keys holding file paths
     cores: tuple[int, int, int] = (1, 0, 3)
-    """Its core with 2, 3 and >= 4 usable cores (index into the usable cores; see
-    :mod:`orchestrator.placement`)."""
-    run_folder: bool = False
-    """Writes into the run folder (its container mounts the runs volume)."""
-    alternatives: Mapping[str, Impl] = field(default_factory=dict)
-    """Named alternative implementations (``[nodes] <name> = "<alternative>"``)."""
+    """Its core with 2, 3 and >= 4 usable cores (index into the usable cores)."""
+    run_folder: bool = False  # writes into the run folder (its container mounts it)
+    alternatives: Mapping[str, Impl] = field(default_factory=dict)  # [nodes] <name> = "<alt>"
 
 
 _CONTROLLER_CHECK = Check("nodes.controller.node:static_check", takes=("n_corners",))
@@ -116,7 +100,6 @@ BY_NAME: dict[str, NodeKind] = {k.name: k for k in KINDS}
 
 
 def kind(name: str) -> NodeKind:
-    """The kind called ``name`` (KeyError if none)."""
     return BY_NAME[name]
 
 
@@ -166,26 +149,17 @@ def path_keys() -> tuple[tuple[str, str], ...]:
 
 
 def core_index(name: str, n_cores: int) -> int:
-    """The index (into the usable cores) of the core of node ``name`` with ``n_cores`` >= 2
-    usable cores; a name that is no kind is placed as a listener."""
+    """Node ``name``'s core (index into ``n_cores`` >= 2 usable ones); no kind: a listener's."""
     cores = BY_NAME[name].cores if name in BY_NAME else NodeKind.cores
     return cores[min(n_cores, 4) - 2]
 
 
 def off_critical_path(name: str) -> bool:
-    """Whether node ``name`` is off the coupled chain's critical path: every kind but the
-    coupled ones (and a name that is no kind); see :mod:`orchestrator.placement`."""
+    """Whether node ``name`` is off the coupled chain's critical path (not a coupled kind)."""
     return name not in BY_NAME or BY_NAME[name].role != COUPLED
 
 
 # ---- implementations ----------------------------------------------------------------------
-def _importable_here() -> None:
-    """A user's module is found as by ``python -m``: the working directory is on the path."""
-    cwd = os.getcwd()
-    if cwd not in sys.path and "" not in sys.path:
-        sys.path.append(cwd)
-
-
 def load(entry: str, key: str = "") -> Any:
     """The object named by ``package.module:attribute``; a ScenarioError naming ``key`` (the
     scenario key it came from) when the module cannot be imported or lacks the attribute."""
@@ -193,7 +167,8 @@ def load(entry: str, key: str = "") -> Any:
     module, sep, attr = entry.partition(":")
     if not sep or not module or not attr:
         raise ScenarioError(what, entry, "'package.module:Class' or 'package.module:function'")
-    _importable_here()
+    if os.getcwd() not in sys.path and "" not in sys.path:  # found as by python -m
+        sys.path.append(os.getcwd())
     try:
         mod = importlib.import_module(module)
     except ImportError as exc:
@@ -237,9 +212,8 @@ def _choices(k: NodeKind) -> str:
 
 
 def check_nodes_section(scenario: Mapping[str, Any]) -> dict[str, Impl]:
-    """Validate ``[nodes]``: every key a kind, every value one of its implementations,
-    importable (user entries are imported here). Returns kind -> implementation for every
-    kind."""
+    """Kind -> implementation of every kind, ``[nodes]`` checked: every key a kind, every
+    value one of its implementations, importable (user entries are imported here)."""
     section = scenario.get(SECTION)
     if section is None:
         section = {}
@@ -269,8 +243,7 @@ def user_check(impl: Impl, key: str) -> Any:
 
 def run_preflight(scenario: dict[str, Any]) -> tuple[list[str], dict[str, Any]]:
     """Every kind's check, in registry order, on ``scenario`` (changed in place where a check
-    fills a key). Returns the nodes of the run (in start order) and the facts gathered
-    (``n_corners``, ``load_channels``, ``duration_s``, ...)."""
+    fills a key): the run's nodes (in start order) and the facts (``n_corners``, ...)."""
     impls = check_nodes_section(scenario)
     facts: dict[str, Any] = {}
     nodes: list[str] = []

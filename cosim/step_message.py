@@ -3,12 +3,13 @@
 A reader that thinks in channels (a tap, the scope) subscribes to the logical key expression
 *and* its step key (:func:`step_keyexprs`) and expands each ``step`` message (:mod:`cosim.wire`)
 into ``(suscosim/<run>/<node>/<channel>, message)`` pairs (:func:`expand`), keeping those the
-logical expression matches (:func:`matches`).
+logical expression matches (:func:`matches`: Zenoh's ``*`` and ``**``).
 """
 
 from __future__ import annotations
 
 from . import keys
+from .bus import keyexpr_matches as matches
 from .errors import WireError
 from .wire import Message, decode, inner
 
@@ -22,21 +23,6 @@ def step_keyexprs(keyexpr: str) -> list[str]:
         return [keyexpr]  # already takes the step keys
     step = "/".join([*chunks[:-1], keys.STEP])
     return list(dict.fromkeys([keyexpr, step]))
-
-
-def _match(pattern: list[str], key: list[str]) -> bool:
-    if not pattern:
-        return not key
-    head, rest = pattern[0], pattern[1:]
-    if head == "**":
-        return any(_match(rest, key[i:]) for i in range(len(key) + 1))
-    return bool(key) and (head == "*" or head == key[0]) and _match(rest, key[1:])
-
-
-def matches(keyexpr: str, key: str) -> bool:
-    """Whether the key ``key`` is in the key expression ``keyexpr`` (Zenoh's ``*``: one
-    chunk, ``**``: any number of chunks; no other wildcards)."""
-    return _match(keyexpr.split("/"), key.split("/"))
 
 
 def expand(key: str, msg: Message) -> list[tuple[str, Message]]:

@@ -9,24 +9,18 @@ outputs (:attr:`cosim.node_kinds.NodeKind.writes`), listens to its inputs
     out = node.step(k, t, inputs)                 # every step k = 0..N, t = k h [s]
     node.close()                                  # at the end, if it has one
 
-The kind's own nodes are stepped classes too (the tyre/road node's ``TyreRoad``, the
-controller's ``Controller``): the shell is written once, here, and takes from the kind
-(:mod:`cosim.node_kinds`) what to listen to and publish, from :class:`cosim.run_settings.
-RunSettings` the step size, the exchange's lag and the timeouts. A class may have a
+The kind's own ``TyreRoad`` and ``Controller`` are stepped classes too. A class may have a
 ``FIELDS`` mapping of ``"node/channel"`` to the fields it needs of that input (default: the
 input's required fields of :mod:`cosim.schema`); a message without them is rejected.
 
 ``start`` is the orchestrator's start payload (``n_steps``, ``h``, ``info``: every node's
 facts, e.g. ``start["info"]["plant"]["n_corners"]``). ``inputs`` maps ``"node/channel"`` to
-that input's fields as numpy arrays (``inputs["plant/state"]["v_b"]``: a read-only
-mapping that converts a field when it is first read), the plant's state of
+that input's fields as numpy arrays (``inputs["plant/state"]["v_b"]``), the plant's state of
 step k (of step k - 1 in the parallel exchange). ``step`` returns the fields of its output:
-``{"F_d": ..., "c_eff": ...}`` for a kind with one output channel, or ``{channel: fields}``.
-The fields the plant couples through (:attr:`NodeKind.provides`: F_d and c_eff for the
-controller, F_t and k_t for the tyre/road node) must be there, else the run ends with a
-:class:`RunError` naming them. An optional ``preflight(scenario, facts)`` (a static or class
-method) is run by the orchestrator before any process starts (see
-:func:`cosim.node_kinds.run_preflight`).
+``{"F_d": ..., "c_eff": ...}`` for a kind with one output channel, or ``{channel: fields}``;
+the fields the plant couples through (:attr:`NodeKind.provides`) must be there, else a
+:class:`RunError` names them. An optional ``preflight(scenario, facts)`` (a static or class
+method) runs before any process starts (:func:`cosim.node_kinds.run_preflight`).
 """
 
 from __future__ import annotations
@@ -51,8 +45,7 @@ _STATE = ("plant", "state")
 
 
 class Fields(Mapping[str, np.ndarray]):
-    """The fields of one input message as float arrays, each converted when first read
-    (:meth:`cosim.wire.Message.array`; a node that reads one field of seven converts one)."""
+    """The fields of one input message as float arrays, each converted when first read."""
 
     __slots__ = ("_msg", "_cache")
 
@@ -108,7 +101,6 @@ class _Outputs:
 
 
 def outputs_of(kind: nk.NodeKind, out: Any, k: int) -> dict[str, Mapping[str, Any]]:
-    """``step``'s result as channel -> fields (see the module's docstring)."""
     return _Outputs(kind)(out, k)
 
 
@@ -163,9 +155,8 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
 
 
 def _check_can_checkpoint(node: Any, plan: NodeCheckpoints, name: str) -> None:
-    """A run that saves or resumes checkpoints needs a node that can: CheckpointError (exit
-    2) before the first step otherwise, naming why (never a run that fails at its first
-    checkpoint, or resumes wrong)."""
+    """CheckpointError (exit 2) before the first step when the run saves or resumes
+    checkpoints and the node cannot."""
     if not plan.due and not plan.resuming:
         return
     if not callable(getattr(node, "checkpoint_state", None)) \
