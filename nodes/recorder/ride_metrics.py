@@ -8,20 +8,18 @@ bands in Hz, never bin indices.
   to 500 Hz (an MR run's chatter above 250 Hz is not counted), MATLAB's default periodogram,
   ``sqrt(trapz)`` over the bins of ``[f1, f2]`` (0-20 Hz; 0-16 Hz for Tables 5.7-5.10).
 * ``% improvement`` (thesis Eq 5.13): ``(baseline - run) / baseline * 100``; positive = less.
-* ISO 2631-1:1997 Wk (vertical, Annex A Table A.1), applied exactly in the frequency domain.
+* ISO 2631-1:1997 Wk (vertical, Annex A Table A.1) by its impulse response (:mod:`.ride_stream`).
 
-:mod:`.ride_stream` computes the same metrics from row batches (to rounding; Wk to ~1e-7).
+One implementation: the estimators of :mod:`.ride_stream`, which read a table in row batches
+(a whole table is one batch); tests/unit/ride_oracle.py holds the whole-signal ones they are
+checked against.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
-from fractions import Fraction
-from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
-from scipy.integrate import trapezoid
-from scipy.signal import periodogram, resample_poly
 
 Table = Mapping[str, np.ndarray]
 
@@ -45,14 +43,9 @@ def rms(x: np.ndarray) -> float:
 
 def sample_rate(t: np.ndarray) -> float:
     """Sampling frequency (Hz) of a uniformly sampled time column ``t`` (s)."""
-    t = np.asarray(t, dtype=float)
-    if t.size < 2:
-        raise ValueError("need at least 2 samples to know the sampling rate")
-    dt = np.diff(t)
-    step = float(np.median(dt))
-    if step <= 0.0 or np.max(np.abs(dt - step)) > 0.01 * step:
-        raise ValueError("time column is not uniformly sampled (a run with missing steps?)")
-    return 1.0 / step
+    from .ride_stream import stream_rate
+
+    return stream_rate([{"t": t}])
 
 
 def _check_band(band_hz: tuple[float, float], fs: float) -> tuple[float, float]:
@@ -73,31 +66,18 @@ _AA_KAISER_BETA = 8.0
 
 
 def resample_to(t: np.ndarray, x: np.ndarray, fs_out: float = THESIS_FS) -> np.ndarray:
-    """``x`` at the uniform times ``t`` (s) resampled anti-aliased (polyphase, zero phase) to
-    ``fs_out`` (Hz); sample ``j`` at ``t[0] + j / fs_out``; a copy if already at ``fs_out``.
-    ValueError if ``t`` is not uniform or the ratio needs a denominator >= 10 000."""
+    """``x`` at the uniform times ``t`` (s) resampled anti-aliased (polyphase, zero phase, as
+    ``scipy.signal.resample_poly``) to ``fs_out`` (Hz); sample ``j`` at ``t[0] + j / fs_out``;
+    a copy if already at ``fs_out``. ValueError if ``t`` is not uniform or the ratio needs a
+    denominator >= 10 000."""
+    from .ride_stream import StreamResampler
+
     x = np.asarray(x, dtype=float)
     fs_in = sample_rate(t)
     if x.shape != np.shape(t):
         raise ValueError(f"signal has {x.size} samples but the time column {np.size(t)}")
-    if abs(fs_in - fs_out) <= 1e-6 * fs_out:
-        return x.copy()
-    ratio = Fraction(fs_out / fs_in).limit_denominator(10000)
-    if abs(float(ratio) - fs_out / fs_in) > 1e-6 * fs_out / fs_in:
-        raise ValueError(f"cannot resample {fs_in:g} Hz to {fs_out:g} Hz by a rational ratio")
-    return resample_poly(x, ratio.numerator, ratio.denominator,
-                         window=("kaiser", _AA_KAISER_BETA))
-
-
-def matlab_periodogram(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
-    """(f in Hz, P in unit²/Hz) as MATLAB's ``periodogram(x, [], [], fs)`` (thesis Eq 4.8):
-    rectangular window, no detrend, ``nfft = max(256, 2^nextpow2(N))``, one-sided density."""
-    x = np.asarray(x, dtype=float)
-    if x.size < 2:
-        raise ValueError("need at least 2 samples for a periodogram")
-    nfft = max(256, 1 << int(np.ceil(np.log2(x.size))))
-    return periodogram(x, fs=fs, window="boxcar", nfft=nfft, detrend=False,
-                       return_onesided=True, scaling="density")
+    rs = StreamResampler(x.size, fs_in, fs_out)
+    return np.concatenate([rs.add(x), rs.finish()])
 
 
 def thesis_band_rms(t: np.ndarray, x: np.ndarray, band: tuple[float, float] = THESIS_BAND,
@@ -108,14 +88,16 @@ def thesis_band_rms(t: np.ndarray, x: np.ndarray, band: tuple[float, float] = TH
 
 
 def periodogram_band_rms(x: np.ndarray, fs: float, band: tuple[float, float]) -> float:
-    """``sqrt(trapz)`` of the MATLAB-style periodogram of ``x`` (sampled at ``fs`` Hz) over the
-    bins with ``f1 <= f <= f2`` (Hz); unit of x. :func:`thesis_band_rms` without resampling."""
-    f, P = matlab_periodogram(x, fs)
-    f1, f2 = _check_band(band, fs)
-    keep = (f >= f1) & (f <= f2)
-    if np.count_nonzero(keep) < 2:
-        raise ValueError(f"band {band} Hz holds fewer than 2 frequency bins; record too short")
-    return float(np.sqrt(trapezoid(P[keep], f[keep])))
+    """``sqrt(trapz)`` of the MATLAB-style periodogram of ``x`` (sampled at ``fs`` Hz: MATLAB's
+    ``periodogram(x, [], [], fs)``, rectangular window, no detrend, ``nfft = max(256,
+    2^nextpow2(N))``, one-sided density) over the bins with ``f1 <= f <= f2`` (Hz); unit of x.
+    :func:`thesis_band_rms` without resampling."""
+    from .ride_stream import BandPeriodogram
+
+    x = np.asarray(x, dtype=float)
+    pg = BandPeriodogram(x.size, fs, float(band[1]))
+    pg.add(x)
+    return pg.band_rms(band)
 
 
 # --------------------------------------------------------------------- ISO 2631-1 Wk
@@ -131,46 +113,6 @@ def wk_response(f_hz: np.ndarray | float) -> np.ndarray:
     step = ((1 + s / (WK_Q5 * w5) + (s / w5) ** 2) / (1 + s / (WK_Q6 * w6) + (s / w6) ** 2)
             * (w5 / w6) ** 2)
     return high * low * transition * step
-
-
-def iso2631_wk(a: np.ndarray, fs: float) -> np.ndarray:
-    """``a`` (m/s²) at ``fs`` (Hz) weighted by Wk (m/s²), on a zero-padded FFT (no warping)."""
-    a = np.asarray(a, dtype=float)
-    n = a.size
-    nfft = 1 << int(np.ceil(np.log2(max(2 * n, 2))))
-    spectrum = np.fft.rfft(a, nfft)
-    f = np.fft.rfftfreq(nfft, 1.0 / fs)
-    return np.fft.irfft(spectrum * wk_response(f), nfft)[:n]
-
-
-def iso2631_wk_weighted_rms(a: np.ndarray, fs: float) -> float:
-    """Frequency-weighted RMS acceleration a_w (m/s²), ISO 2631-1 Wk (vertical)."""
-    return rms(iso2631_wk(a, fs))
-
-
-# --------------------------------------------------------------- suspension and tyre
-
-
-def suspension_deflection(z_b: np.ndarray, z_w: np.ndarray) -> np.ndarray:
-    """Suspension compression ``z_w - z_b`` (m), positive in bump, from static equilibrium."""
-    return np.asarray(z_w, dtype=float) - np.asarray(z_b, dtype=float)
-
-
-def working_space(z_b: np.ndarray, z_w: np.ndarray) -> float:
-    """Suspension working space used (m): max minus min of the deflection ``z_w - z_b``."""
-    d = suspension_deflection(z_b, z_w)
-    return float(np.max(d) - np.min(d))
-
-
-def dynamic_tyre_load(F_t: np.ndarray, F_static: float | None = None) -> np.ndarray:
-    """Dynamic tyre load ``F_t - F_static`` (N); the static load defaults to the mean of F_t."""
-    F_t = np.asarray(F_t, dtype=float)
-    return F_t - (float(np.mean(F_t)) if F_static is None else float(F_static))
-
-
-def jerk(a: np.ndarray, fs: float) -> np.ndarray:
-    """Jerk da/dt (m/s³) by central differences (one-sided at the ends)."""
-    return np.gradient(np.asarray(a, dtype=float), 1.0 / fs)
 
 
 # ------------------------------------------------------------------------ run tables
@@ -214,70 +156,13 @@ def metric_values(table: Table, band_hz: tuple[float, float] = THESIS_BAND,
     * ``sws``, ``defl_rms`` (mm), ``dtl_rms``, ``f_d_rms`` (N): working space, deflection,
       dynamic tyre load, damper force, at the run's own rate.
     """
+    from .ride_stream import streamed_metric_values
+
     t = np.asarray(table["t"], dtype=float)
     sample_rate(t)  # a non-uniform time column fails here, with its message
-    cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # the array kept: its id stays its
-
-    def a5(a: np.ndarray) -> np.ndarray:  # resampled once per signal
-        if id(a) not in cache:
-            cache[id(a)] = (a, resample_to(t, a, fs_out))
-        return cache[id(a)][1]
-
-    return assemble(lambda name: columns(table, name),
-                    lambda a, band: periodogram_band_rms(a5(a), fs_out, band), rms,
-                    lambda a: iso2631_wk_weighted_rms(a5(a), fs_out),
-                    lambda a: rms(jerk(a5(a), fs_out)),
-                    lambda b, w: (working_space(b, w), rms(suspension_deflection(b, w))),
-                    lambda F: rms(dynamic_tyre_load(F)), rms, band_hz)
-
-
-def assemble(series: Callable[[str], list[tuple[str, Any]]],
-             band_rms: Callable[[Any, tuple[float, float]], float],
-             full_rms: Callable[[Any], float], wk_rms: Callable[[Any], float],
-             jerk_rms: Callable[[Any], float],
-             deflection: Callable[[Any, Any], tuple[float, float]],
-             dtl_rms: Callable[[Any], float], f_d_rms: Callable[[Any], float],
-             band_hz: tuple[float, float]) -> dict[str, tuple[float, str, str]]:
-    """The keys, units and labels of :func:`metric_values` from the estimators of a signal
-    ``s`` of ``series(column base)`` = ``[(label, s)]`` (whole arrays here, streamed ones in
-    :mod:`.ride_stream`): ``deflection(z_b, z_w)`` = (working space, RMS) [m]."""
-    R = "plant/response/"
-    f1, f2 = (float(b) for b in band_hz)
-    m: dict[str, tuple[float, str, str]] = {}
-    for lab, a in series(f"{R}a_b"):
-        m[f"a_b{lab}_rms"] = (band_rms(a, (f1, f2)), "m/s2",
-                              f"a_b{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
-        if (f1, f2) != BAND_16:
-            m[f"a_b{lab}_rms_0_16"] = (band_rms(a, BAND_16), "m/s2",
-                                       f"a_b{lab} RMS 0-16 Hz [m/s2]")
-        m[f"a_b{lab}_rms_full"] = (full_rms(a), "m/s2", f"a_b{lab} RMS full band [m/s2]")
-        m[f"a_b{lab}_wk_rms"] = (wk_rms(a), "m/s2", f"a_b{lab} Wk RMS [m/s2]")
-        m[f"jerk_b{lab}_rms"] = (jerk_rms(a), "m/s3", f"jerk_b{lab} RMS [m/s3]")
-    for lab, a in series(f"{R}a_w"):
-        m[f"a_w{lab}_rms"] = (band_rms(a, (f1, f2)), "m/s2",
-                              f"a_w{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
-        m[f"a_w{lab}_rms_full"] = (full_rms(a), "m/s2", f"a_w{lab} RMS full band [m/s2]")
-    for name in ARM_ACCEL_FIELDS:
-        for lab, a in series(f"{R}{name}"):
-            m[f"{name}{lab}_rms"] = (band_rms(a, (f1, f2)), "m/s2",
-                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [m/s2]")
-    for name in ROTATION_FIELDS:
-        for lab, a in series(f"{R}{name}"):
-            m[f"{name}{lab}_rms"] = (band_rms(a, (f1, f2)), "rad/s2",
-                                     f"{name}{lab} RMS {f1:g}-{f2:g} Hz [rad/s2]")
-            if (f1, f2) != BAND_16:
-                m[f"{name}{lab}_rms_0_16"] = (band_rms(a, BAND_16), "rad/s2",
-                                              f"{name}{lab} RMS 0-16 Hz [rad/s2]")
-    zb, zw = series("plant/state/z_b"), series("plant/state/z_w")
-    for (lab, b), (_, w) in zip(zb, zw, strict=False):
-        sws, defl_rms = deflection(b, w)
-        m[f"sws{lab}"] = (1e3 * sws, "mm", f"SWS{lab} [mm]")
-        m[f"defl{lab}_rms"] = (1e3 * defl_rms, "mm", f"defl{lab} RMS [mm]")
-    for lab, F in series("tyre_road/force/F_t"):
-        m[f"dtl{lab}_rms"] = (dtl_rms(F), "N", f"DTL{lab} RMS [N]")
-    for lab, F in series("controller/force/F_d"):
-        m[f"f_d{lab}_rms"] = (f_d_rms(F), "N", f"F_d{lab} RMS [N]")
-    return m
+    return streamed_metric_values(
+        list(table), t.size, lambda cols: [{c: np.asarray(table[c], dtype=float)
+                                            for c in ("t", *cols)}], band_hz, fs_out)
 
 
 def run_metrics(table: Table, band_hz: tuple[float, float] = THESIS_BAND) -> dict[str, float]:

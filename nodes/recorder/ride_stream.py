@@ -1,6 +1,6 @@
-"""Ride metrics of a run's table read in row batches: :func:`.ride_metrics.metric_values`
-without holding whole columns. Each estimator is compared with the whole-signal one by
-``tests/unit/test_ride_stream.py``:
+"""The ride metrics' estimators (:func:`.ride_metrics.metric_values`), fed a run's table in
+row batches: memory does not grow with whole columns. Each is compared with the whole-signal
+one of ``tests/unit/ride_oracle.py`` by ``tests/unit/test_ride_stream.py``:
 
 * **Resampling to 500 Hz** (:class:`StreamResampler`): ``resample_poly``'s own FIR, padding
   and trimming, applied by ``upfirdn`` to windows holding each output's support: bit for bit.
@@ -9,10 +9,11 @@ without holding whole columns. Each estimator is compared with the whole-signal 
   ``X_k = sum over segments of e^{-2 pi i k n0 / nfft} DFT_segment(k)``, each by a Bluestein
   chirp-z with integer-reduced phases (to 1e-12). Memory ``16 B x nfft x f2 / fs`` per
   signal; a Welch average would be bounded but moves the Chapter 5 values.
-* **ISO 2631-1 Wk** (:class:`StreamWk`): overlap-save with the impulse response of H on the
-  whole-signal grid when it is at most :data:`WK_GRID` points (to 1e-13); longer records use
-  H on :data:`WK_GRID` points cut to +-:data:`WK_HALF` lags (65.5 s at 500 Hz; 2.5e-8 at
-  500 s, tested to 1e-7).
+* **ISO 2631-1 Wk** (:class:`StreamWk`): overlap-save with the impulse response of H
+  (:func:`.ride_metrics.wk_response`) on the grid of a zero-padded FFT of the whole signal
+  when it is at most :data:`WK_GRID` points (to 1e-13); longer records use H on
+  :data:`WK_GRID` points cut to +-:data:`WK_HALF` lags (65.5 s at 500 Hz; 2.5e-8 at 500 s,
+  tested to 1e-7).
 * **Jerk**: ``np.gradient``'s differences (bit for bit). **RMS**: batch sums of squares (to
   1e-12). **SWS**: max - min. **DTL**: Chan's combination of batch moments (to 1e-12).
 """
@@ -21,7 +22,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
-from typing import cast
 
 import numpy as np
 from scipy.fft import next_fast_len
@@ -327,52 +327,66 @@ class _Band:
             self.jerk.add(y)
 
 
+_R = "plant/response/"
+#: The band-RMS signals: (column base, unit, full-band RMS, Wk and jerk, 0-16 Hz band).
+_BANDED = (("a_b", "m/s2", True, True, True), ("a_w", "m/s2", True, False, False),
+           *((f, "m/s2", False, False, False) for f in rm.ARM_ACCEL_FIELDS),
+           *((f, "rad/s2", False, False, True) for f in rm.ROTATION_FIELDS))
+
+
 def streamed_metric_values(
     names: Sequence[str], n_rows: int, batches: Batches,
     band_hz: tuple[float, float] = rm.THESIS_BAND, fs_out: float = rm.THESIS_FS,
 ) -> dict[str, tuple[float, str, str]]:
-    """:func:`.ride_metrics.metric_values` (same keys, same order) of a table of ``n_rows``
-    rows and columns ``names`` read by ``batches`` (two passes: ``t``, then the ride columns)."""
-    R = "plant/response/"
-    bases = (*(f"{R}{f}" for f in ("a_b", "a_w", *rm.ARM_ACCEL_FIELDS, *rm.ROTATION_FIELDS)),
-             "plant/state/z_b", "tyre_road/force/F_t", "controller/force/F_d")
+    """:func:`.ride_metrics.metric_values` (its keys, units and labels) of a table of
+    ``n_rows`` rows and columns ``names`` read by ``batches`` (two passes: ``t``, then the
+    ride columns)."""
+    bases = (*(f"{_R}{b[0]}" for b in _BANDED), "plant/state/z_b", "tyre_road/force/F_t",
+             "controller/force/F_d")
     if not any(_series(names, b) for b in bases):
         return {}  # no ride channel: nothing to compute (and no rate needed)
     fs = stream_rate(batches(["t"]))
     f1, f2 = (float(b) for b in band_hz)
-    f_max = max(f2, rm.BAND_16[1])
-    band: dict[str, _Band] = {}
-    for base, body in ((f"{R}a_b", True), (f"{R}a_w", False),
-                       *((f"{R}{f}", False) for f in (*rm.ARM_ACCEL_FIELDS,
-                                                      *rm.ROTATION_FIELDS))):
-        for _lab, col in _series(names, base):
-            band[col] = _Band(n_rows, fs, fs_out, f_max, body)
+    band: dict[str, _Band] = {col: _Band(n_rows, fs, fs_out, max(f2, rm.BAND_16[1]), b[3])
+                              for b in _BANDED for _lab, col in _series(names, f"{_R}{b[0]}")}
     zb, zw = _series(names, "plant/state/z_b"), _series(names, "plant/state/z_w")
     pairs = list(zip(zb, zw, strict=False))
     defl = {cb: Moments() for (_l, cb), _w in pairs}
     plain = {col: Moments() for base in ("tyre_road/force/F_t", "controller/force/F_d")
              for _l, col in _series(names, base)}
-    wanted = [*band, *(c for p in pairs for _l, c in p), *plain]
     seen = 0
-    for b in batches(wanted):
+    for b in batches([*band, *(c for p in pairs for _l, c in p), *plain]):
         seen += b["t"].size
-        last = seen >= n_rows
         for col, sig in band.items():
-            sig.add(b[col], last)
+            sig.add(b[col], seen >= n_rows)
         for (_l, cb), (_l2, cw) in pairs:
-            defl[cb].add(rm.suspension_deflection(b[cb], b[cw]))
+            defl[cb].add(np.asarray(b[cw], dtype=float) - b[cb])  # compression z_w - z_b
         for col, mo in plain.items():
             mo.add(b[col])
     if seen != n_rows:
         raise ValueError(f"the table gave {seen} rows of the {n_rows} announced")
 
-    return rm.assemble(lambda name: _series(names, name),
-                       lambda col, b: band[col].pg.band_rms(b), lambda col: band[col].raw.rms(),
-                       lambda col: cast(StreamWk, band[col].wk).rms(),
-                       lambda col: cast(StreamJerk, band[col].jerk).rms(),
-                       lambda cb, _cw: (defl[cb].hi - defl[cb].lo, defl[cb].rms()),
-                       lambda col: plain[col].centred_rms(), lambda col: plain[col].rms(),
-                       band_hz)
+    m: dict[str, tuple[float, str, str]] = {}
+    for name, unit, full, _body, b16 in _BANDED:
+        for lab, col in _series(names, f"{_R}{name}"):
+            s, key, u = band[col], f"{name}{lab}", f"[{unit}]"
+            m[f"{key}_rms"] = (s.pg.band_rms((f1, f2)), unit, f"{key} RMS {f1:g}-{f2:g} Hz {u}")
+            if b16 and (f1, f2) != rm.BAND_16:
+                m[f"{key}_rms_0_16"] = (s.pg.band_rms(rm.BAND_16), unit, f"{key} RMS 0-16 Hz {u}")
+            if full:
+                m[f"{key}_rms_full"] = (s.raw.rms(), unit, f"{key} RMS full band {u}")
+            if s.wk is not None and s.jerk is not None:
+                m[f"{key}_wk_rms"] = (s.wk.rms(), unit, f"{key} Wk RMS {u}")
+                m[f"jerk_b{lab}_rms"] = (s.jerk.rms(), "m/s3", f"jerk_b{lab} RMS [m/s3]")
+    for (lab, cb), _w in pairs:
+        d = defl[cb]
+        m[f"sws{lab}"] = (1e3 * (d.hi - d.lo), "mm", f"SWS{lab} [mm]")
+        m[f"defl{lab}_rms"] = (1e3 * d.rms(), "mm", f"defl{lab} RMS [mm]")
+    for lab, col in _series(names, "tyre_road/force/F_t"):
+        m[f"dtl{lab}_rms"] = (plain[col].centred_rms(), "N", f"DTL{lab} RMS [N]")
+    for lab, col in _series(names, "controller/force/F_d"):
+        m[f"f_d{lab}_rms"] = (plain[col].rms(), "N", f"F_d{lab} RMS [N]")
+    return m
 
 
 def streamed_run_metrics(names: Sequence[str], n_rows: int, batches: Batches,

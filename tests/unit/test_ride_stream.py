@@ -1,8 +1,9 @@
-"""Ride metrics from row batches (#32, nodes/recorder/ride_stream.py) against the whole-signal
-ones of nodes/recorder/ride_metrics.py: the resampling and the jerk differences bit for bit,
-SWS exact, the periodogram band RMS, the other RMS and the DTL to 1e-12 relative, Wk to 1e-13
-up to 131 s of 500 Hz record (the same impulse response) and 1e-7 beyond; the report's ride
-section equal to run_metrics within those; traced memory of 5x the rows within 20 %."""
+"""Ride metrics from row batches (#32, nodes/recorder/ride_stream.py, the one implementation)
+against the whole-signal ones of tests/unit/ride_oracle.py: the resampling and the jerk
+differences bit for bit, SWS exact, the periodogram band RMS, the other RMS and the DTL to
+1e-12 relative, Wk to 1e-13 up to 131 s of 500 Hz record (the same impulse response) and 1e-7
+beyond; the report's ride section equal to run_metrics within those; traced memory of 5x the
+rows within 20 %."""
 
 from __future__ import annotations
 
@@ -19,6 +20,8 @@ from nodes.recorder.ride_stream import (
     StreamWk,
     streamed_metric_values,
 )
+
+from . import ride_oracle as oracle
 
 BAND_REL = 1e-12
 WK_SHORT_REL = 1e-13
@@ -48,11 +51,12 @@ def _rel(a: float, b: float) -> float:
 def test_resampler_equals_resample_poly_bit_for_bit(fs_in, n, rows):
     x = _signal(n, fs_in)
     t = np.arange(n) / fs_in
-    want = rm.resample_to(t, x)
+    want = oracle.resample_to(t, x)
     rs = StreamResampler(n, fs_in)
     got = np.concatenate([*(rs.add(p) for p in _pieces(x, rows)), rs.finish()])
     assert rs.n_out == want.size
     assert np.array_equal(got, want)
+    assert np.array_equal(rm.resample_to(t, x), want)  # the product's whole-record call
 
 
 @pytest.mark.parametrize("n,rows", [(1_501, 700), (50_001, 16_384), (300_000, 65_536)])
@@ -62,7 +66,9 @@ def test_band_periodogram_equals_whole_periodogram(n, rows):
     for p in _pieces(x, rows):
         pg.add(p)
     for band in ((0.0, 20.0), (0.0, 16.0), (5.0, 12.5)):
-        assert _rel(pg.band_rms(band), rm.periodogram_band_rms(x, 500.0, band)) < BAND_REL
+        want = oracle.periodogram_band_rms(x, 500.0, band)
+        assert _rel(pg.band_rms(band), want) < BAND_REL
+        assert _rel(rm.periodogram_band_rms(x, 500.0, band), want) < BAND_REL
     with pytest.raises(ValueError, match="0 <= f1 < f2"):
         pg.band_rms((3.0, 1.0))
 
@@ -82,7 +88,7 @@ def test_wk_equals_whole_fft_weighting(n, rows, rel):
     wk = StreamWk(n, 500.0)
     for p in _pieces(a, rows):
         wk.add(p)
-    assert _rel(wk.rms(), rm.iso2631_wk_weighted_rms(a, 500.0)) < rel
+    assert _rel(wk.rms(), oracle.iso2631_wk_weighted_rms(a, 500.0)) < rel
 
 
 def test_jerk_equals_gradient():
@@ -90,7 +96,7 @@ def test_jerk_equals_gradient():
     j = StreamJerk(500.0)
     for p in _pieces(a, 1):  # single samples: the ends' and the interior's differences
         j.add(p)
-    assert _rel(j.rms(), rm.rms(rm.jerk(a, 500.0))) < 1e-13
+    assert _rel(j.rms(), rm.rms(oracle.jerk(a, 500.0))) < 1e-13
 
 
 def _table(n: int, h: float, corners: int = 0, seed: int = 0) -> dict[str, np.ndarray]:
@@ -120,7 +126,7 @@ def _batches(tab: dict[str, np.ndarray], rows: int):
                                               (10_000, 2e-3, 0, 999)])
 def test_streamed_metric_values_equal_whole(n, h, corners, rows):
     tab = _table(n, h, corners)
-    want = rm.metric_values(tab)
+    want = oracle.metric_values(tab)
     got = streamed_metric_values(list(tab), n, _batches(tab, rows))
     assert list(got) == list(want)  # same keys, same order
     for key, (v, unit, label) in want.items():
