@@ -21,7 +21,7 @@ from cosim.errors import ScenarioError
 from nodes.controller.base import VELOCITY_SOURCES, Controller, ControlOutput, body_scalar
 from nodes.controller.dampers import PassiveCurve
 from nodes.controller.mr_damper import TSS2, TSS3, MRParams, PassiveMR
-from nodes.controller.registry import LAWS, PRESETS, discover, law_builder, lookup
+from nodes.controller.registry import LAWS, PRESETS, discover, law_builder, lookup, soft_hard
 
 __all__ = ["LAWS", "PRESETS", "build_controller"]
 
@@ -123,16 +123,6 @@ _MR_KEYS = ("damper",)
 _SH = ("preset", "c_soft", "c_hard")
 
 
-def _soft_hard(r: ConfigReader, soft: str = "c_soft", hard: str = "c_hard") -> tuple[float, float]:
-    preset = r.choice("preset", sorted(PRESETS), "lumped")
-    d_soft, d_hard = PRESETS[preset]
-    c_soft = r.number(soft, d_soft, lo=0.0, unit="N·s/m")
-    c_hard = r.number(hard, d_hard, lo=0.0, unit="N·s/m")
-    if c_hard < c_soft:
-        raise ScenarioError(r.key(hard), c_hard, f"a number >= {soft} ({c_soft:g}) N·s/m")
-    return c_soft, c_hard
-
-
 def _mr_params(r: ConfigReader) -> MRParams:
     return MRParams.from_config(r.table("damper"), r.key("damper"))
 
@@ -166,7 +156,7 @@ def _passive_mr(r: ConfigReader, n: int, h: float) -> Controller:
 @law_builder("tss2", (*_SH, "B", "G", *_MR_KEYS))
 def _tss2(r: ConfigReader, n: int, h: float) -> Controller:
     """MR damper tracking the TSS1 force by current feedback (thesis Sec 5.3.2)."""
-    c_soft, c_hard = _soft_hard(r)
+    c_soft, c_hard = soft_hard(r)
     B = r.number("B", 0.8, lo=0.0, unit="(-)")
     G = r.number("G", 0.001, lo=0.0, lo_open=True, unit="A/N")
     return TSS2(n, h, _mr_params(r), c_soft, c_hard, B, G)
@@ -187,7 +177,7 @@ def _pnr(r: ConfigReader, n: int, h: float) -> Controller:
     if n != 4:
         raise ScenarioError(r.key("law"), r.cfg.get("law"), f"a per-corner law: 'pnr' needs a "
                             f"full vehicle (4 corners), this model has {n}")
-    c_soft, c_hard = _soft_hard(r)
+    c_soft, c_hard = soft_hard(r)
     source = r.choice("angular_acc", ("rates", "corners"), "rates")
     wheelbase = track = float("nan")
     if source == "corners":

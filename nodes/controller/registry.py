@@ -74,18 +74,6 @@ class ParamInfo:
     def required(self) -> bool:
         return self.default is _REQUIRED and not self.preset
 
-    def example(self) -> Any:
-        """A valid value (the default, else inside the range): for generic tests and listings."""
-        if self.preset:
-            return PRESETS["lumped"][0 if self.preset == "soft" else 1]
-        if not self.required:
-            return self.default
-        if self.choices:
-            return self.choices[0]
-        if self.lo is not None and self.hi is not None:
-            return 0.5 * (self.lo + self.hi)
-        return (self.lo or 0.0) + 1.0
-
 
 def Param(default: Any = _REQUIRED, lo: float | None = None, hi: float | None = None,
           lo_open: bool = False, unit: str = "", choices: tuple[str, ...] = (),
@@ -152,8 +140,9 @@ def control_law(name: str, *, aliases: tuple[str, ...] = ()) -> Callable[[Callab
             raise TypeError(f"control law '{name}': 'law', 'velocity' and 'preset' are "
                             "reserved setting names")
         keys = tuple(params) + (("preset",) if any(q.preset for q in params.values()) else ())
-        spec = LawSpec(name=name, build=lambda r, n, h: _build_function_law(spec, r, n, h),
-                       keys=keys, doc=_first_line(fn.__doc__), module=fn.__module__, fn=fn,
+        spec = LawSpec(name=name, keys=keys,
+                       build=lambda r, n, h: FunctionLaw(n, h, spec, read_settings(params, r)),
+                       doc=_first_line(fn.__doc__), module=fn.__module__, fn=fn,
                        params=params, inputs=tuple(inputs))
         _register(spec, aliases)
         fn.__suscosim_law__ = spec  # type: ignore[attr-defined]
@@ -210,12 +199,12 @@ def lookup(name: Any, key: str = "controller.law") -> LawSpec:
     return spec
 
 
-def read_settings(spec: LawSpec, r: ConfigReader) -> dict[str, Any]:
-    """The law's settings from the scenario table, validated, defaults filled in."""
-    soft_hard = PRESETS[r.choice("preset", sorted(PRESETS), "lumped")] if "preset" in spec.keys \
-        else (0.0, 0.0)
+def read_settings(params: Mapping[str, ParamInfo], r: ConfigReader) -> dict[str, Any]:
+    """A law's settings ``params`` from the scenario table, validated, defaults filled in."""
+    soft_hard = PRESETS[r.choice("preset", sorted(PRESETS), "lumped")] \
+        if any(p.preset for p in params.values()) else (0.0, 0.0)
     values: dict[str, Any] = {}
-    for name, p in spec.params.items():
+    for name, p in params.items():
         if p.choices:
             values[name] = r.choice(name, p.choices, *(() if p.required else (p.default,)))
         elif isinstance(p.default, bool):
@@ -229,16 +218,19 @@ def read_settings(spec: LawSpec, r: ConfigReader) -> dict[str, Any]:
                 default = soft_hard[p.preset == "hard"] if p.preset else p.default
                 values[name] = r.number(name, default, lo=p.lo, hi=p.hi, lo_open=p.lo_open,
                                         unit=p.unit)
-    soft = [n for n, p in spec.params.items() if p.preset == "soft"]
-    hard = [n for n, p in spec.params.items() if p.preset == "hard"]
+    soft = [n for n, p in params.items() if p.preset == "soft"]
+    hard = [n for n, p in params.items() if p.preset == "hard"]
     if soft and hard and values[hard[0]] < values[soft[0]]:
         raise ScenarioError(r.key(hard[0]), values[hard[0]],
                             f"a number >= {soft[0]} ({values[soft[0]]:g}) N·s/m")
     return values
 
 
-def _build_function_law(spec: LawSpec, r: ConfigReader, n: int, h: float) -> Controller:
-    return FunctionLaw(n, h, spec, read_settings(spec, r))
+def soft_hard(r: ConfigReader) -> tuple[float, float]:
+    """(c_soft, c_hard) in N·s/m of a builder law, read as a law function's :data:`SOFT`,
+    :data:`HARD`."""
+    values = read_settings({"c_soft": SOFT, "c_hard": HARD}, r)
+    return values["c_soft"], values["c_hard"]
 
 
 class FunctionLaw(Controller):
@@ -286,13 +278,6 @@ class FunctionLaw(Controller):
             raise ValueError(f"control law '{self.law}' returned {what} of shape {arr.shape}, "
                              f"expected ({self.n},)")
         return arr
-
-
-def example_config(name: str) -> dict[str, Any]:
-    """A valid ``[controller]`` table of a function law (required settings at example
-    values); a builder law gets ``{"law": name}`` only."""
-    spec = lookup(name)
-    return {"law": name, **{k: p.example() for k, p in spec.params.items() if p.required}}
 
 
 def describe() -> list[tuple[str, str, str, str]]:

@@ -11,7 +11,7 @@ import pytest
 from cosim.errors import ScenarioError
 from nodes.controller import registry
 from nodes.controller.laws import LAWS, build_controller
-from nodes.controller.registry import FunctionLaw, example_config
+from nodes.controller.registry import PRESETS, FunctionLaw, ParamInfo, lookup
 
 
 def state(v_b, v_w, n=1):
@@ -111,6 +111,25 @@ def test_a_name_defined_twice_in_two_modules_is_refused():
     clash.__module__ = "somewhere.else"
     with pytest.raises(ValueError, match="defined twice"):
         registry.control_law("tss1")(clash)
+
+
+def example(p: ParamInfo):
+    """A valid value of a setting: its default, else inside its range."""
+    if p.preset:
+        return PRESETS["lumped"][0 if p.preset == "soft" else 1]
+    if not p.required:
+        return p.default
+    if p.choices:
+        return p.choices[0]
+    if p.lo is not None and p.hi is not None:
+        return 0.5 * (p.lo + p.hi)
+    return (p.lo or 0.0) + 1.0
+
+
+def example_config(name: str) -> dict:
+    """A valid ``[controller]`` table of a function law (required settings at examples)."""
+    return {"law": name, **{k: example(p) for k, p in lookup(name).params.items()
+                            if p.required}}
 
 
 def test_every_function_law_builds_from_its_example_and_returns_one_value_per_corner():
