@@ -30,6 +30,7 @@ from nodes.fatigue.lib.critical_plane import CRITICAL_PLANES
 from nodes.fatigue.lib.damage import METHODS
 from nodes.fatigue.lib.equivalent_stress import EQUIVALENTS
 from nodes.fatigue.lib.mean_stress import MEAN_STRESS_METHODS
+from orchestrator.cli_util import fail, parse_args
 
 
 def _value(text: str):
@@ -74,12 +75,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run and print a short summary; 0 on success, 2 for bad input (one-line message)."""
-    args = build_parser().parse_args(argv)
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     overrides: dict = {}
     for item in args.set:
         if "=" not in item:
-            print(f"error: --set expects KEY=VALUE, got {item!r}", file=sys.stderr)
-            return 2
+            return fail("suscosim fatigue", f"--set expects KEY=VALUE, got {item!r}")
         k, v = item.split("=", 1)
         k = k.strip()
         if k.startswith("fatigue."):
@@ -90,9 +92,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             overrides[k] = getattr(args, k)
     if args.part is not None:
         if not args.part.is_file():
-            print(f"suscosim: error: fatigue: --part {args.part}: no such part file",
-                  file=sys.stderr)
-            return 2
+            return fail("suscosim fatigue", f"--part {args.part}: no such part file")
         overrides["influence"] = str(args.part.resolve())
         overrides["parts"] = []  # that part alone (not the scenario's [fatigue] parts)
     from nodes.fatigue.load_file import parse_map
@@ -100,9 +100,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     is_file = args.run_dir.is_file()
     if not is_file and (args.scenario or args.map):
-        print(f"error: {args.run_dir}: --scenario and --map are for a load file",
-              file=sys.stderr)
-        return 2
+        return fail("suscosim fatigue", f"{args.run_dir}: --scenario and --map are for a "
+                    "load file")
 
     def progress(msg: str) -> None:
         if not args.quiet:
@@ -117,8 +116,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             r = fatigue_run_dir(args.run_dir, overrides, args.out, progress)
             out = getattr(r, "results_dir", results_folder(args.run_dir, overrides, args.out))
     except SuscosimError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return exc.exit_code if exc.exit_code else 2
+        return fail("suscosim fatigue", str(exc), exc.exit_code or 2)
     s = r.summary()
     xyz = r.critical_xyz
     where = "" if xyz is None else " at (" + ", ".join(f"{v * 1e3:.0f}" for v in xyz) + ") mm"
@@ -168,8 +166,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _life_from(config: dict) -> str:
-    """Which curve the headline life is from: ``" (S-N fkm at P = 0.5, mean stress fkm)"``
-    (the ``sn_methods`` entry it equals), or "" for a data curve or the material line."""
+    """``" (S-N fkm at P = 0.5, mean stress fkm)"``: the curve of the headline life, or ""."""
+
     comp = config.get("component") or {}
     if not comp.get("enabled") or config.get("sn_curve"):
         return ""

@@ -28,16 +28,12 @@ from cosim.errors import InputLate, RunError, SuscosimError
 from cosim.participant import Participant
 from cosim.stepped import run_stepped
 
-NODE_MODULES: dict[str, str] = nk.entries()
-"""Node kind -> the module of its own implementation (from the registry,
-:mod:`cosim.node_kinds`); the kinds are the names ``suscosim node`` takes."""
+NODE_MODULES: dict[str, str] = nk.entries()  # node kind -> its module (the names node takes)
 
 
 def node_callable(name: str, scenario: dict[str, Any]) -> Callable[[Participant], None]:
-    """What runs node ``name`` on a participant: the implementation the scenario's
-    ``[nodes]`` picks (the kind's own without one; :func:`cosim.node_kinds.implementation`).
-    A function entry is called as ``function(part, scenario)``; a class entry runs as a
-    stepped node (:func:`cosim.stepped.run_stepped`)."""
+    """The implementation ``[nodes]`` picks: a function called as ``function(part, scenario)``,
+    a class run as a stepped node (:func:`cosim.stepped.run_stepped`)."""
     impl = nk.implementation(name, scenario)
     obj = nk.load(impl.entry, f"{nk.SECTION}.{name}")
     if inspect.isclass(obj):
@@ -47,11 +43,9 @@ def node_callable(name: str, scenario: dict[str, Any]) -> Callable[[Participant]
 
 def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
              spin_s: float = 0.0, key: bytes | None = None, nonce: bytes = b"") -> int:
-    """Run node ``name`` on ``bus``; report errors to the orchestrator; return an exit code.
+    """Run node ``name`` on ``bus``, errors reported to the orchestrator; the exit code.
+    ``key`` default: the environment's; ``nonce``: the run instance's, with ``scenario``."""
 
-    ``key``: the run key (default: from the environment, see the module's docstring).
-    ``nonce``: the run instance's (:mod:`cosim.auth`) when ``scenario`` is given; else the
-    node learns it with the scenario it fetches."""
     log = logging.getLogger(f"suscosim.{name}")
     try:
         auth = RunKey(key if key is not None else run_key_from_env(run_id))

@@ -22,6 +22,8 @@ import numpy as np
 
 from cosim.errors import SuscosimError
 
+from .cli_util import fail, parse_args
+
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="suscosim pseudo-damage",
@@ -77,19 +79,16 @@ def compare(sources: Sequence[Path], k: float = 5.0, n_ref: float = 1e6) -> dict
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    ap = build_parser()
-    try:
-        args = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
-    except SystemExit as exc:
-        return 0 if exc.code == 0 else 2
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     if not (args.k > 0 and args.n_ref > 0):
-        print("suscosim: error: pseudo-damage: --k and --n-ref must be > 0", file=sys.stderr)
-        return 2
+        return fail("suscosim pseudo-damage", "--k and --n-ref must be > 0")
     try:
         res = compare(args.sources, args.k, args.n_ref)
     except SuscosimError as exc:
-        print(f"suscosim: error: pseudo-damage: {exc}", file=sys.stderr)
-        return 2
+        return fail("suscosim pseudo-damage", str(exc))
+
     if args.json:
         print(json.dumps(res, indent=1))
         return 0

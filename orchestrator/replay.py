@@ -15,6 +15,7 @@ import argparse
 import sys
 import time
 from collections.abc import Iterable, Iterator
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,8 @@ from cosim.wire import decode
 from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
 
 from .cli_util import add_pace_arguments, fail, pace_factor, parse_args
+
+_fail = partial(fail, "suscosim replay")
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 LINGER_S = 0.5
@@ -168,10 +171,6 @@ def build_parser() -> argparse.ArgumentParser:
         lowlatency_help="Zenoh low-latency transport (negotiated per link: peers without it "
                         "still connect)")
     return ap
-
-
-def _fail(message: str, code: int = 2) -> int:
-    return fail("suscosim replay", message, code)
 
 
 def main(argv: list[str] | None = None) -> int:

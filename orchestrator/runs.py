@@ -1,16 +1,11 @@
 """``suscosim runs [DIR] [--json]``: list run folders and their state, from the files alone.
 
-A run folder holds ``scenario.json``; ``DIR`` (default ``runs``) holds run folders, or folders
-of them one or two levels deeper (a sweep). Nothing is asked of a running orchestrator. States:
-``ok``/``failed`` (``summary.json``, the authority, with its ``error``); ``running`` (no summary,
-and ``run.json``'s orchestrator process is alive: same host, pid and start time); ``interrupted``
-(that process is gone); ``unknown`` (no ``run.json``, or another host). Steps are the last ``k``
-every journal channel reached (its last segments only), against ``run.n_steps``; the journal is
-walked (headers and CRCs) by the reader ``suscosim export`` uses, so a damaged or short journal
-is named in the NOTE column with what export will skip. ``run.json`` (runner): ``run_id``,
-``pid``, ``pid_start``, ``host``, ``started``, ``mode``, ``endpoints``, ``lowlatency``, ``state``.
-
-Exit codes: 0 listed (also when there is no run), 2 ``DIR`` is not a folder.
+A run folder holds ``scenario.json``; ``DIR`` (default ``runs``) holds them up to three levels
+down (a sweep). States: ``ok``/``failed`` (``summary.json``); ``running`` (``run.json``'s
+orchestrator process is alive: same host, pid, start time); ``interrupted`` (it is gone);
+``unknown`` (no ``run.json``, or another host). Steps: the last ``k`` every journal channel
+reached; a damaged journal is named in NOTE (:func:`cosim.run_folder.run_info`).
+Exit codes: 0 listed, 2 ``DIR`` is not a folder.
 """
 
 from __future__ import annotations
@@ -30,7 +25,6 @@ MAX_DEPTH = 3
 
 
 def find_runs(root: Path, depth: int = MAX_DEPTH) -> list[Path]:
-    """Run folders (holding ``scenario.json``) in ``root``, up to ``depth`` levels down."""
     if (root / SCENARIO_JSON).is_file():
         return [root]
     if depth <= 0:
@@ -46,7 +40,6 @@ def find_runs(root: Path, depth: int = MAX_DEPTH) -> list[Path]:
 
 
 def list_runs(root: Path) -> list[dict[str, Any]]:
-    """Every run under ``root``, oldest first."""
     host = socket.gethostname()
     runs = [run_info(p, host) for p in find_runs(Path(root))]
     return sorted(runs, key=lambda r: (r["started"] or "", r["dir"]))
@@ -59,7 +52,6 @@ def _steps_text(r: dict[str, Any]) -> str:
 
 
 def format_table(runs: list[dict[str, Any]]) -> str:
-    """A plain-text table of :func:`list_runs`' result."""
     rows = [("ID", "NAME", "MODE", "STATUS", "STEPS", "STARTED", "DIR", "NOTE")]
     for r in runs:
         note = r["error"]
@@ -73,7 +65,6 @@ def format_table(runs: list[dict[str, Any]]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """List the runs under DIR; return the exit code (0, or 2 for a bad DIR)."""
     ap = argparse.ArgumentParser(prog="suscosim runs",
                                  description="list runs and their state from the run folders")
     ap.add_argument("dir", nargs="?", default="runs",

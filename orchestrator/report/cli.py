@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from functools import partial
 from pathlib import Path
 
 from ..cli_util import fail, parse_args
@@ -11,6 +12,8 @@ from .duty_page import is_duty_dir, render_duty
 from .run_data import BadInput, is_run_dir, is_sweep_dir
 from .run_page import render_run
 from .sweep_page import render_sweep
+
+_fail = partial(fail, "suscosim report")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -25,10 +28,6 @@ def build_parser() -> argparse.ArgumentParser:
                     help="a sweep's shared runs folder (suscosim sweep --runs-dir): its run "
                          "folders are read too (by default only those inside the sweep folder)")
     return ap
-
-
-def _fail(message: str) -> int:
-    return fail("suscosim report", message)
 
 
 def render(d: Path, runs_dir: Path | None = None) -> tuple[str, str]:

@@ -1,8 +1,5 @@
-"""What a run folder holds, read for the report: scenario, summary, table (or one rebuilt
-from the journal), fatigue results and damage map; every piece optional, every problem named.
-
-Reads files only (no import of the sweep or the recorder node's internals beyond its table
-and journal readers)."""
+"""What a run folder holds, read for the report (scenario, summary, table or one rebuilt from
+the journal, fatigue results, damage map): every piece optional, every problem named."""
 
 from __future__ import annotations
 
@@ -29,8 +26,7 @@ class RunData:
     path: Path
     scenario: dict | None = None
     summary: dict | None = None
-    source: TableSource | None = None
-    """The table, read in batches (:mod:`.stream`): the run page never holds it whole."""
+    source: TableSource | None = None  # the table, read in batches
     table_note: str = ""
     fatigue: dict | None = None
     damage_map: Path | None = None
@@ -52,8 +48,7 @@ class RunData:
 
     @property
     def table(self) -> dict[str, np.ndarray] | None:
-        """Every column whole (8 B a row each), read on first use: for the sweep pages,
-        which chart short runs side by side; the run page reads :attr:`source` in batches."""
+        """Every column whole, read on first use (the sweep pages' short runs)."""
         if self.source is None:
             return None
         if self._whole is None:
@@ -87,8 +82,8 @@ def is_sweep_dir(d: Path) -> bool:
 
 
 def load_run(d: Path) -> RunData:
-    """Read every piece of a run folder that exists; never raises for a bad piece (a
-    Parquet table: its schema only, the columns are read in batches when used)."""
+    """Read every piece of a run folder that exists; never raises for a bad piece."""
+
     r = RunData(path=d)
     sc = _read_json(d / "scenario.json", r.problems)
     r.scenario = sc if isinstance(sc, dict) else None

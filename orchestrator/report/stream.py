@@ -1,10 +1,6 @@
-"""A run's table read in row batches for the report, so its memory does not grow with the run.
-
-:class:`TableSource` (``table.parquet`` :data:`BATCH_ROWS` rows at a time, or a table in
-memory), :class:`StreamDecimator` (the points of :func:`.plots.decimate` on the whole signal),
-:class:`StreamWelch` (``scipy.signal.welch``: Hann, 50 % overlap, mean removed, density,
-one-sided; at most :data:`PSD_MAX_NPERSEG` samples a segment), :func:`column_stats`
-(max/min/peak/mean/rms/std, the recorder's combiner).
+"""A run's table read in row batches for the report (memory does not grow with the run):
+:class:`TableSource`, :class:`StreamDecimator` (:func:`.plots.decimate`'s points),
+:class:`StreamWelch` (``scipy.signal.welch``'s result), :func:`column_stats`.
 """
 
 from __future__ import annotations
@@ -15,18 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
-BATCH_ROWS = 65_536
-"""Rows of the table read at a time (~0.5 MB a column)."""
+BATCH_ROWS = 65_536  # rows read at a time (~0.5 MB a column)
 PSD_MAX_NPERSEG = 32_768
-"""Largest Welch segment [samples]. The report took n/4 samples a segment (~8 averages);
-over an hour at 2 kHz that is a 1.8 million-sample segment (1/900 Hz resolution, memory
-that grows with the run). Capped at 2^15 (16 s at 2 kHz: 0.06 Hz resolution, well below the
-body's ~1 Hz and the wheel's ~10 Hz modes the PSD plot is read for; Welch 1967: more
-averages, a lower variance of each estimate). Runs up to 131 072 samples are unchanged."""
+"""Largest Welch segment [samples] (n/4 otherwise): 16 s at 2 kHz, 0.06 Hz resolution, well
+below the body's ~1 Hz and wheel's ~10 Hz modes; more averages, lower variance (Welch 1967)."""
 
 
 class TableSource:
-    """The columns of a run's table, read in batches (``names``, ``n_rows``, :meth:`batches`)."""
+    """The columns of a run's table (``names``, ``n_rows``), read in :meth:`batches`."""
 
     def __init__(self, path: Path | None = None,
                  table: dict[str, np.ndarray] | None = None) -> None:
@@ -42,13 +34,10 @@ class TableSource:
             self.names = [n for n in f.schema_arrow.names if n != "k"]
             self.n_rows = int(f.metadata.num_rows)
 
-    resample_h: float | None = None
-    """A run with a non-uniform time base (``run.h = "auto"``): the batches are the table
-    linearly interpolated onto a uniform grid of this step [s] (:meth:`set_uniform`)."""
+    resample_h: float | None = None  # [s] batches interpolated onto this uniform step
 
     def set_uniform(self, h: float) -> None:
-        """Read the table on the uniform grid of step ``h`` [s] from now on (PSDs and ride
-        metrics need one): :attr:`n_rows` becomes the grid's size."""
+        """Read the table linearly resampled on a uniform step ``h`` [s] from now on."""
         from cosim.table_batches import uniform_grid_size
 
         t0 = t1 = None
@@ -62,8 +51,7 @@ class TableSource:
 
     def batches(self, columns: Sequence[str] | None = None, rows: int = BATCH_ROWS
                 ) -> Iterator[dict[str, np.ndarray]]:
-        """``{column: float values}`` of ``columns`` (default all; ``t`` always), ``rows``
-        rows at a time (resampled: :attr:`resample_h`)."""
+        """``{column: values}`` of ``columns`` (default all; ``t`` always), ``rows`` at a time."""
         if self.resample_h is None:
             yield from self._raw_batches(columns, rows)
             return
@@ -73,7 +61,6 @@ class TableSource:
 
     def _raw_batches(self, columns: Sequence[str] | None = None, rows: int = BATCH_ROWS
                      ) -> Iterator[dict[str, np.ndarray]]:
-        """The table's own rows, ``rows`` at a time."""
         cols = list(dict.fromkeys(["t", *(self.names if columns is None else columns)]))
         cols = [c for c in cols if c in self.names]
         if self._table is not None:
@@ -87,8 +74,7 @@ class TableSource:
         yield from parquet_batches(self.path, cols, rows)
 
     def read(self, keep: Callable[[str], bool]) -> dict[str, np.ndarray]:
-        """The columns ``keep`` accepts (and ``t``), whole (:meth:`whole`; the ride metrics
-        read batches, :mod:`nodes.recorder.ride_stream`)."""
+        """The columns ``keep`` accepts (and ``t``), whole."""
         cols = [c for c in self.names if c == "t" or keep(c)]
         parts: dict[str, list[np.ndarray]] = {c: [] for c in cols}
         for b in self.batches(cols):
@@ -97,15 +83,12 @@ class TableSource:
         return {c: np.concatenate(v) if v else np.zeros(0) for c, v in parts.items()}
 
     def whole(self) -> dict[str, np.ndarray]:
-        """Every column whole (the sweep pages, which plot short runs side by side)."""
         return self.read(lambda _n: True)
 
 
 class StreamDecimator:
-    """:func:`.plots.decimate` of a signal of ``n`` samples fed in batches (module docstring):
-    whole buckets of ``b = ceil(n / (n_max // 2))`` samples reduced as they complete (the
-    samples of an incomplete one held, fewer than ``b``), the last one at :meth:`result`, by
-    ``decimate`` itself: the same points as ``decimate`` on the whole signal."""
+    """:func:`.plots.decimate` of ``n`` samples fed in batches: buckets of ``b`` reduced as they
+    complete, the last at :meth:`result`: the same points as on the whole signal."""
 
     def __init__(self, n: int, n_max: int) -> None:
         self.n, self.n_max = n, n_max
@@ -132,7 +115,6 @@ class StreamDecimator:
             self.held_t, self.held_x = self.held_t[cut:], self.held_x[cut:]
 
     def result(self) -> tuple[np.ndarray, np.ndarray]:
-        """(t, x) of the decimated line."""
         from .plots import decimate
 
         if self.whole:
@@ -146,14 +128,13 @@ class StreamDecimator:
 
 
 def psd_nperseg(n: int) -> int:
-    """Welch segment of an ``n``-sample signal: the report's n/4 (at least 256, at most n),
-    capped at :data:`PSD_MAX_NPERSEG`."""
+    """Welch segment of ``n`` samples: n/4 (256..n), at most :data:`PSD_MAX_NPERSEG`."""
     return int(min(n, max(256, n // 4), PSD_MAX_NPERSEG))
 
 
 class StreamWelch:
-    """``scipy.signal.welch(x, fs, nperseg, detrend="constant")`` of a signal fed in batches,
-    holding one segment (module docstring)."""
+    """``scipy.signal.welch(x, fs, nperseg, detrend="constant")`` of batches (Hann, 50 %)."""
+
 
     def __init__(self, fs: float, nperseg: int) -> None:
         from scipy.signal import get_window

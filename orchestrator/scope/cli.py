@@ -8,6 +8,7 @@ import signal
 import sys
 import threading
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +20,8 @@ from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_sess
 from ..cli_util import add_pace_arguments, fail, pace_factor, parse_args
 from .selection import DEFAULT_CHANNELS, ScopeInputError, Selection
 from .state import ScopeState
+
+_fail = partial(fail, "suscosim scope")
 
 DEFAULT_PORT = 8470
 
@@ -52,10 +55,6 @@ def build_parser() -> argparse.ArgumentParser:
                          "(default: the run folder's run.json, else tcp/127.0.0.1:7447)",
         lowlatency_help="Zenoh low-latency transport (default: as run.json says)")
     return ap
-
-
-def _fail(message: str, code: int = 2) -> int:
-    return fail("suscosim scope", message, code)
 
 
 def _read_scenario(folder: Path) -> dict[str, Any] | None:

@@ -1,10 +1,6 @@
-"""Where the scope's data come from: the bus of a live run, or the journal of a finished one.
-
-:class:`LiveSource` listens like ``suscosim tap`` (no token, nothing published, no query
-answered; callbacks only queue bytes, decoding happens on the source's thread).
-:class:`JournalSource` replays ``journal.msgpack`` at ``speed`` x the recorded pace, without a
-bus; the journal holds no ``recorder/coupling``, so the replay computes it again as the
-recorder did (:class:`ReplayResidual`): the same numbers as the live run's.
+"""The scope's data: :class:`LiveSource` listens to a live run like ``suscosim tap`` (nothing
+published); :class:`JournalSource` replays a finished run's journal without a bus, its coupling
+residual computed again as the recorder did (:class:`ReplayResidual`).
 """
 
 from __future__ import annotations
@@ -28,7 +24,6 @@ _CTL_STATES = {"ready": "ready", "waiting": "up", "progress": "stepping", "done"
 
 
 class _Router:
-    """Files one decoded message of ``node/channel`` in the state (and the map)."""
 
     def __init__(self, state: ScopeState, damage: DamageMap | None) -> None:
         self.state, self.damage = state, damage
@@ -68,8 +63,7 @@ class _Router:
 
 
 class LiveSource:
-    """Subscribe to a live run on ``bus``; :meth:`close` undeclares nothing itself (the bus
-    owns the subscribers) but stops the filing thread."""
+    """Subscribe to a live run on ``bus`` (the bus owns the subscribers)."""
 
     def __init__(self, bus: Any, state: ScopeState, damage: DamageMap | None = None) -> None:
         self.bus, self.state = bus, state
@@ -79,10 +73,7 @@ class LiveSource:
         self._thread = threading.Thread(target=self._loop, name="scope-source", daemon=True)
 
     def keyexprs(self) -> list[str]:
-        """Everything the scope subscribes to (no ``**``: the records batches stay away):
-        every producer's ``step`` (its per-step channels, :mod:`cosim.step_message`), the
-        selection's own keys (a replay publishes channel by channel), control and block
-        channels."""
+        """Every producer's ``step``, the selection's keys (a replay's), control (no ``**``)."""
         run = self.state.run_id
         exprs = [f"{keys.PREFIX}/{run}/*/{keys.STEP}"] + self.state.selection.keyexprs(run) + [
             f"{keys.PREFIX}/{run}/*/{keys.CTL}", keys.key(run, keys.ORCHESTRATOR, keys.CLOCK),
@@ -99,8 +90,7 @@ class LiveSource:
         self.bus.watch(f"{keys.PREFIX}/{self.state.run_id}/*/{keys.ALIVE}", self._on_alive)
 
     def attach(self, damage: DamageMap) -> None:
-        """Start the damage map later (a scope started by run id before its run: the
-        scenario came once the run's orchestrator answered)."""
+        """Start the damage map once the scenario came (a scope started before its run)."""
         self.router.damage = damage
         put, clock = self.inbox.put, time.monotonic
         self.bus.subscribe(keys.key(self.state.run_id, *ch.LOAD_CHANNEL),
@@ -144,9 +134,7 @@ class LiveSource:
 
 
 class ReplayResidual:
-    """``recorder/coupling`` again from a journal: its data messages, in journal order, into a
-    table of rows (:class:`cosim.table_writer.TableWriter`, nothing on disk) and a
-    :class:`cosim.coupling_stream.LiveResidual`, as the recorder does."""
+    """``recorder/coupling`` again from a journal's data messages, as the recorder does."""
 
     def __init__(self, channels: Any, run: dict[str, Any], state: ScopeState,
                  period_s: float = 0.1) -> None:
@@ -161,7 +149,6 @@ class ReplayResidual:
         self._last = 0.0
 
     def data(self, name: str, msg: Message) -> None:
-        """One journaled data message of ``name`` (``node/channel``)."""
         rows = self.table.rows
         if self.table.add(name, msg.k, msg.t, msg.d) is not None:
             return  # not taken by the table: the recorder would not have journaled it
@@ -179,10 +166,9 @@ class ReplayResidual:
 
 
 class JournalSource:
-    """Replay ``records`` ((node, channel, raw, t) in order: a list or a streamed
-    :class:`orchestrator.replay.Recorded`) into the state at ``speed`` x the recorded pace
-    (None: at once); with ``run`` (the scenario's ``[run]``) and a ``Recorded``, the coupling
-    residual too."""
+    """Replay ``records`` (node, channel, raw, t) at ``speed`` x the recorded pace (None: at
+    once); with ``run`` (``[run]``) and a ``Recorded``, the coupling residual too."""
+
 
     def __init__(self, records: Any, state: ScopeState,
                  speed: float | None = 1.0, damage: DamageMap | None = None,

@@ -1,8 +1,6 @@
-"""What the scope knows about a run: plotted samples, progress, node states, fatigue numbers,
-the damage map and the coupling residual. A source fills it on its thread, the web server's
-threads read it; every method holds one lock. Samples: step ``k``, time ``t`` [s], value in
-the line's SI unit. :meth:`ScopeState.snapshot` is the ``/data`` answer. The coupling residual
-has a cursor of its own: its messages come a little after the rows they sum.
+"""What the scope knows about a run (samples: step ``k``, time ``t`` [s], value in SI units;
+progress, node states, fatigue, damage map, coupling residual), behind one lock: a source fills
+it, the server's threads read it (:meth:`ScopeState.snapshot`: the ``/data`` answer).
 """
 
 from __future__ import annotations
@@ -18,11 +16,8 @@ from cosim.wire import Message
 
 from .selection import Line, Selection
 
-NODE_STATES = ("waiting", "up", "ready", "stepping", "done", "error", "gone")
-"""A node's states: not seen yet; its liveliness token is there; it answered ready; it steps
-(data or progress seen); done; it reported an error; its token dropped before it was done."""
-RATE_WINDOW_S = 2.0
-"""Steps/s is measured over this much wall time."""
+# a node's state: waiting (not seen), up (token), ready, stepping, done, error, gone (token lost)
+RATE_WINDOW_S = 2.0  # [s] of wall time steps/s is measured over
 
 
 class _Samples:
@@ -75,7 +70,6 @@ class ScopeState:
 
     # ---- filled by the source ---------------------------------------------------------
     def add_data(self, node: str, channel: str, msg: Message, now: float | None = None) -> None:
-        """A data message: its selected fields become samples; the progress advances."""
         if msg.k < 0:
             return
         with self._lock:
@@ -102,8 +96,6 @@ class ScopeState:
 
     def node_event(self, node: str, state: str, k: int = -1, t: float = 0.0,
                    info: str = "", now: float | None = None) -> None:
-        """A node's control message (ready, progress, done, error) or liveliness change
-        (``up``, ``gone``: only if it was not done)."""
         with self._lock:
             self._node(node, state, k, info)
             if state in ("stepping", "done") and k >= 0:
@@ -111,7 +103,6 @@ class ScopeState:
 
     def run_event(self, state: str, n_steps: int | None = None, h: float | None = None,
                   reason: str = "") -> None:
-        """The orchestrator's clock: ``stepping`` (start: n_steps, h), ``done``, ``failed``."""
         with self._lock:
             if n_steps is not None:
                 self.n_steps = int(n_steps)
@@ -122,7 +113,6 @@ class ScopeState:
             self.reason = reason or self.reason
 
     def set_scenario(self, n_steps: int | None, h: float | None, nodes: list[str]) -> None:
-        """What the run's scenario says (when it came after the scope started)."""
         with self._lock:
             self.n_steps = self.n_steps if n_steps is None else int(n_steps)
             self.h = self.h if h is None else float(h)
@@ -134,17 +124,14 @@ class ScopeState:
             self.undecodable += 1
 
     def set_fatigue(self, k: int, t: float, d: dict[str, Any]) -> None:
-        """The fatigue node's ``fatigue/damage`` message (minimum life so far)."""
         with self._lock:
             self.fatigue = {"k": k, "t": t, **{n: _finite(v) for n, v in d.items()}}
 
     def set_coupling(self, k: int, t: float, d: dict[str, Any]) -> None:
-        """A ``recorder/coupling`` message (the residual of the steps ``d["k0"]`` .. ``k``)."""
         with self._lock:
             self._coupling.add(k, t, d)
 
     def set_map(self, geometry: dict[str, Any] | None, damage: dict[str, Any]) -> None:
-        """The damage map: node geometry (once) and the damage per node so far."""
         with self._lock:
             if geometry is not None:
                 self.map_geometry = geometry
@@ -189,7 +176,6 @@ class ScopeState:
 
     # ---- read by the server -----------------------------------------------------------
     def meta(self) -> dict[str, Any]:
-        """What does not change often: run, lines and their plots, the map's geometry."""
         with self._lock:
             return {"run": self.run_id, "source": self.source, "n_steps": self.n_steps,
                     "h": self.h, "patterns": [p.text for p in self.selection.patterns],
@@ -198,9 +184,8 @@ class ScopeState:
 
     def snapshot(self, since: int = -1, now: float | None = None,
                  coupling_since: int = -1) -> dict[str, Any]:
-        """The ``/data?since=K&coupling_since=C`` answer (JSON-ready): the lines' samples of
-        steps k > K, the coupling residual's points of messages k > C; ``now``: the clock of
-        the steps/s (default ``time.monotonic()``, as the sources use)."""
+        """The ``/data?since=K&coupling_since=C`` answer: samples of steps k > K, coupling
+        points of messages k > C."""
         now = time.monotonic() if now is None else now
         with self._lock:
             n = self.n_steps
@@ -228,9 +213,8 @@ class ScopeState:
 
 
 class _Coupling:
-    """The ``recorder/coupling`` messages as the page plots them: per message its last step
-    ``k``, time ``t`` [s] and the running relative residual of each bond and the total [-]
-    (the last ``max_samples`` kept), and the last message's running totals [J]."""
+    """``recorder/coupling`` per message: step ``k``, ``t`` [s], running relative residual of
+    each bond and total [-] (last ``max_samples``), the last message's totals [J]."""
 
     def __init__(self, max_samples: int) -> None:
         self.max = max_samples
@@ -267,7 +251,6 @@ class _Coupling:
                 del ys[:-self.max]
 
     def since(self, k: int) -> dict[str, Any] | None:
-        """The points of messages k > ``k`` (None before the first message)."""
         if self.last is None:
             return None
         i = max(bisect_right(self.k, k), len(self.k) - self.max)
@@ -278,7 +261,6 @@ class _Coupling:
 
 
 def _finite(v: Any) -> Any:
-    """JSON-ready: a non-finite number as the text ``"inf"``/``"nan"``."""
     if isinstance(v, float) and not math.isfinite(v):
         return "inf" if v > 0 else "nan"
     return v

@@ -1,17 +1,11 @@
 """``suscosim arm``: the built-in lower arm's model card, from its shipped results.
 
-The built-in arm is the part file nodes/fatigue/parts/data/lower_arm.toml; this card reads the
-results shipped beside it (``lower_arm.influence.npz``: no meshing, no solve) and prints (or
-``--json``): mass, the first six free-free flexible modes, the hot-spot stress under the static
-wheel load (the plant's joint loads at static equilibrium, superposed on the unit cases with
-inertia relief) with its node and position, the largest stress under a 3 g vertical bump (the
-static load set times 3, quasi-static), the yield strength, the mesh, and the mode-stress floor
-(nodes/fatigue/lib/arm_bounds.py). ``suscosim part check`` meshes and solves a part (the full card:
-hot spots, mode shapes, convergence).
-
-The static loads come from the realistic corner itself (``nodes.plant.double_wishbone``: a
-few substeps at the static tyre load, where the joint sensors are valid), so the card and the
-runs see the same arm.
+Reads the results beside nodes/fatigue/parts/data/lower_arm.toml (no meshing, no solve) and
+prints (or ``--json``): mass, the first six free-free modes, the hot-spot stress under the
+static wheel load (the double-wishbone plant's joint loads at static equilibrium, so the card
+and the runs see the same arm; inertia relief) with its node, 3 g vertical (static x 3,
+quasi-static), yield, the mesh and the mode-stress floor (nodes/fatigue/lib/arm_bounds.py).
+``suscosim part`` meshes and solves a part.
 """
 
 from __future__ import annotations
@@ -25,15 +19,11 @@ import numpy as np
 from cosim import lower_arm as arm
 from cosim.errors import InputFileError, ScenarioError
 
-TABLE_6_1_M1_HZ = 362.3
-"""Table 6.1's first flexible mode of the thesis's arm (fundamental vertical bending) [Hz]."""
-LEG_LENGTH = 0.32
-"""Pivot to ball joint along the legs [m] (front 0.312, rear 0.332): the beam length of the
-mode-stress floor (nodes/fatigue/lib/arm_bounds.py)."""
+TABLE_6_1_M1_HZ = 362.3  # [Hz] Table 6.1's first flexible mode (vertical bending)
+LEG_LENGTH = 0.32  # [m] pivot to ball joint (front 0.312, rear 0.332): the floor's beam
 
 def static_plant_loads() -> dict[str, dict[str, float]]:
-    """Each plant load channel's fields at static ride height [N, N m] (``arm``: the lower
-    arm's, ``upper_arm``: the upper arm's), from the double-wishbone plant model."""
+    """Each plant load channel's fields at static ride height [N, N m] (double wishbone)."""
     from nodes.plant.double_wishbone import DoubleWishboneCorner
 
     corner = DoubleWishboneCorner()
@@ -47,15 +37,13 @@ def static_plant_loads() -> dict[str, dict[str, float]]:
 
 
 def static_arm_loads() -> dict[str, float]:
-    """Joint loads on the lower arm at static ride height [N, N m], from the plant model."""
     return static_plant_loads()["arm"]
 
 
 def stress_floor(moment: float, mass: float, mat) -> dict[str, float]:
-    """The least nominal bending stress [MPa] an arm of this mass can carry the torsion
-    spring's static moment at, if its first vertical bending mode is at Table 6.1's 362 Hz and
-    at its +15 % (nodes/fatigue/lib/arm_bounds.py, ideal section κ = 1): why a 5 kg arm with the
-    thesis's M1 cannot also keep its static hot spot under 250 MPa."""
+    """Least nominal bending stress [MPa] carrying the static torsion-bar moment with M1 at
+    Table 6.1's 362 Hz and +15 % (arm_bounds.py, ideal section κ = 1)."""
+
     from nodes.fatigue.lib.arm_bounds import nominal_bending_stress as sigma
 
     return {f"at_{f:.0f}_hz": sigma(moment, mass, LEG_LENGTH, f, mat.E, mat.rho) / 1e6

@@ -6,19 +6,23 @@ import argparse
 import os
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 from cosim.errors import SuscosimError
 from cosim.zenoh_options import add_connect_argument
 
+from ..cli_util import fail, parse_args
 from .dask_exec import DaskRunner
 from .fork import fork_header, fork_report, fork_text, parent_state, write_fork_json
 from .local import Runner
+from .phases import point_state
 from .results import result_rows, results_table, write_results, write_sweep_json
 from .sensitivity import sensitivity, sensitivity_table, write_sensitivity
 from .serve import serve
 from .spec import MAX_ID, MAX_POINTS, _params_text, load_sweep, validate_points
-from .state import point_state
+
+_fail = partial(fail, "suscosim sweep")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -52,25 +56,22 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     if args.jobs is not None and args.jobs < 1:
-        print("suscosim: error: sweep: --jobs must be >= 1", file=sys.stderr)
-        return 2
+        return _fail("--jobs must be >= 1")
     if args.executor == "dask" and not args.scheduler:
-        print("suscosim: error: sweep: --executor dask needs --scheduler tcp://HOST:8786 "
-              "(start one with 'suscosim cluster')", file=sys.stderr)
-        return 2
+        return _fail("--executor dask needs --scheduler tcp://HOST:8786 (start one with "
+                     "'suscosim cluster')")
     if args.executor == "dask" and (args.external or args.serve or args.connect):
-        print("suscosim: error: sweep: --executor dask runs every point whole on one worker; "
-              "--connect, --external and --serve are for the local executor", file=sys.stderr)
-        return 2
+        return _fail("--executor dask runs every point whole on one worker; --connect, "
+                     "--external and --serve are for the local executor")
     if args.scheduler and args.executor != "dask":
-        print("suscosim: error: sweep: --scheduler needs --executor dask", file=sys.stderr)
-        return 2
+        return _fail("--scheduler needs --executor dask")
     if (args.external or args.serve) and not args.connect:
-        print("suscosim: error: sweep: --external and --serve need --connect (a router "
-              "both machines reach)", file=sys.stderr)
-        return 2
+        return _fail("--external and --serve need --connect (a router both machines reach)")
+
     try:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
                            fatigue=False if args.no_fatigue else None, max_points=args.max_points)
@@ -85,27 +86,21 @@ def main(argv: list[str] | None = None) -> int:
               flush=True)
         validate_points(sweep, out)
     except SuscosimError as exc:
-        print(f"suscosim: error: sweep: {exc}", file=sys.stderr)
-        return exc.exit_code if exc.exit_code == 2 else 2
+        return _fail(str(exc))
     if sweep.fork is not None and (args.executor == "dask" or args.serve or args.external):
-        print("suscosim: error: sweep: [sweep] fork_at works with the local executor only, "
-              "without --external and --serve (a fork needs its parent's run folder and "
-              "checkpoint where its nodes run)", file=sys.stderr)
-        return 2
+        return _fail("[sweep] fork_at works with the local executor only, without --external "
+                     "and --serve (a fork needs its parent's run folder and checkpoint where "
+                     "its nodes run)")
     if args.serve:
         from ..node_main import NODE_MODULES
 
         bad = [n for n in args.serve if n not in NODE_MODULES]
         if bad:
-            print(f"suscosim: error: sweep: --serve {bad[0]}: expected one of "
-                  + ", ".join(sorted(NODE_MODULES)), file=sys.stderr)
-            return 2
+            return _fail(f"--serve {bad[0]}: expected one of " + ", ".join(sorted(NODE_MODULES)))
         if not (os.environ.get("SUSCOSIM_KEY") or os.environ.get("SUSCOSIM_KEY_FILE")):
-            print("suscosim: error: sweep: --serve needs the sweep's secret: set SUSCOSIM_KEY "
-                  "(or SUSCOSIM_KEY_FILE) to the same secret here and on the machine that runs "
-                  "the sweep (the messages of a run are signed; docs/reliability.md)",
-                  file=sys.stderr)
-            return 2
+            return _fail("--serve needs the sweep's secret: set SUSCOSIM_KEY (or "
+                         "SUSCOSIM_KEY_FILE) to the same secret here and on the machine that "
+                         "runs the sweep (the messages of a run are signed; docs/reliability.md)")
         return serve(sweep, args.serve, args.connect, out, sys.stdout)
     if args.external and not (os.environ.get("SUSCOSIM_KEY")
                               or os.environ.get("SUSCOSIM_KEY_FILE")):
@@ -137,8 +132,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             runner = DaskRunner(sweep, out, args.scheduler, sys.stderr)
         except SuscosimError as exc:
-            print(f"suscosim: error: sweep: {exc}", file=sys.stderr)
-            return 2
+            return _fail(str(exc))
+
         where = runner.workers_text()
     else:
         runner = Runner(sweep, out, args.connect, args.external, sys.stderr)

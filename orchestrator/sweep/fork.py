@@ -23,6 +23,7 @@ from cosim.errors import SuscosimError
 from cosim.run_folder import read_json
 
 from ..resume import FORK_MAY_CHANGE, _changes, _get
+from .phases import run_ok
 from .spec import Point, Sweep, SweepError, _absolute_paths, fingerprint, point_id, toml_value
 
 BOOKKEEPING = ("run.id", "run.dir", "run.resume")  # a fork always differs in these
@@ -220,13 +221,10 @@ def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> 
 
 def parent_state(parent: Parent, run_dir: Path) -> str:
     """``done`` (an ok run of this parent with its checkpoint at k) or ``todo``."""
-    meta = read_json(run_dir / "point.json")
-    summary = read_json(run_dir / "summary.json")
-    if not isinstance(meta, dict) or meta.get("fingerprint") != parent.point.fingerprint or \
-            not isinstance(summary, dict) or summary.get("status") != "ok" or \
-            not (step_folder(run_dir, parent.k) / MANIFEST).is_file():
-        return "todo"
-    return "done"
+    done = run_ok(run_dir, parent.point.fingerprint) and \
+        (step_folder(run_dir, parent.k) / MANIFEST).is_file()
+    return "done" if done else "todo"
+
 
 
 def keep_only_fork_checkpoint(parent: Parent, run_dir: Path) -> None:

@@ -16,16 +16,16 @@ from cosim.journal import last_step
 from .display import Display, event_line
 from .fork import Parent, keep_only_fork_checkpoint, parent_state
 from .phases import (
+    _kill_group,
+    _start,
     fatigue_command,
     fatigue_outcome,
-    fork_command,
     point_meta,
     prepare_run_dir,
     run_command,
     run_outcome,
     this_worker,
 )
-from .procs import _kill_group, _start
 from .spec import Point, Sweep
 
 
@@ -62,27 +62,19 @@ class Runner:
     def run_dir(self, p: Point) -> Path:
         return self.sweep.run_dir(self.out, p)
 
-    def _start_run(self, p: Point) -> Job:
-        d = self.run_dir(p)
+    def _start_run(self, p: Point, parent: Parent | None = None) -> Job:
+        """A point's run (a fork of its group's parent with fork_at), or a ``parent``'s."""
+        d = self.run_dir(p) if parent is None else self.plan.parent_dir(self.out, parent)
         prepare_run_dir(d, point_meta(self.sweep.name, p.id, p.params, str(p.base),
                                       p.overrides, p.fingerprint), this_worker("local"))
         log = d / "sweep.log"
-        if self.plan is not None:  # a fork of its group's parent at fork_at
-            cmd = fork_command(self.plan.spec(self.out, p), d, self.plan.fork_args(p),
-                               self.sweep.jobs > 1, self.connect)
+        if self.plan is not None and parent is None:
+            cmd = run_command(["--fork", self.plan.spec(self.out, p)], d,
+                              self.plan.fork_args(p), self.sweep.jobs > 1, self.connect)
         else:
-            cmd = run_command(str(p.base), d, p.set_args, self.sweep.jobs > 1, self.connect,
+            cmd = run_command([str(p.base)], d, p.set_args, self.sweep.jobs > 1, self.connect,
                               self.external)
-        return Job(p, d, "run", _start(cmd, log), time.monotonic(), log)
-
-    def _start_parent(self, parent: Parent) -> Job:
-        assert self.plan is not None
-        d, pp = self.plan.parent_dir(self.out, parent), parent.point
-        prepare_run_dir(d, point_meta(self.sweep.name, pp.id, pp.params, str(pp.base),
-                                      pp.overrides, pp.fingerprint), this_worker("local"))
-        log = d / "sweep.log"
-        cmd = run_command(str(pp.base), d, pp.set_args, self.sweep.jobs > 1, self.connect)
-        return Job(pp, d, "run", _start(cmd, log), time.monotonic(), log, parent=parent)
+        return Job(p, d, "run", _start(cmd, log), time.monotonic(), log, parent=parent)
 
     def _start_fatigue(self, p: Point) -> Job:
         d = self.run_dir(p)
@@ -154,7 +146,8 @@ class Runner:
                 while queue and len(jobs) < self.sweep.jobs:
                     p, state = queue.pop(0)
                     if state == "parent":
-                        job = self._start_parent(self.parents[p.id])
+                        job = self._start_run(p, self.parents[p.id])
+
                     else:
                         job = self._start_run(p) if state == "todo" else self._start_fatigue(p)
                     job.fresh = state != "fatigue"

@@ -10,8 +10,8 @@ from typing import Any
 
 from cosim.run_folder import read_json
 
+from .phases import point_state
 from .spec import Sweep
-from .state import point_state
 
 
 def _fmt(v: Any) -> str:

@@ -10,9 +10,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TextIO
 
-from .procs import _kill_group, _start
+from .phases import _kill_group, _start, point_state
 from .spec import Sweep
-from .state import point_state
 
 
 def point_of_run(run_id: str, point_ids: Iterable[str]) -> str | None:

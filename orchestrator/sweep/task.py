@@ -1,8 +1,7 @@
-"""One sweep point run whole on a Dask worker (:func:`run_point`): ``suscosim run`` on the
-worker (local processes, the point's own run id), then the fatigue worker if wanted; the run
-folder goes back as a tar.gz (or is written under a shared ``runs_dir``). The worker needs
-suscosim importable; the scenario travels whole (paths absolute, those under the client's
-project folder rewritten to the worker's), so only the data files it names must be there.
+"""One sweep point run whole on a Dask worker (:func:`run_point`): ``suscosim run`` there,
+then the fatigue worker if wanted; the run folder goes back as a tar.gz (or is written under a
+shared ``runs_dir``). The scenario travels whole (paths under the client's project folder
+rewritten to the worker's), so only the data files it names must be there.
 """
 
 from __future__ import annotations
@@ -22,6 +21,9 @@ from cosim.journal import last_step
 from cosim.run_folder import read_json
 
 from .phases import (
+    ROOT,
+    _kill_group,
+    _start,
     fatigue_command,
     fatigue_outcome,
     prepare_run_dir,
@@ -30,7 +32,6 @@ from .phases import (
     this_worker,
     write_point_json,
 )
-from .procs import ROOT, _child_env, _kill_group
 
 POLL_S = 0.5
 PROGRESS_S = 1.0
@@ -61,19 +62,11 @@ def _die_with_parent() -> None:  # runs in the child between fork and exec
         pass
 
 
-def _start(cmd: list[str], log: Path) -> subprocess.Popen:
-    with open(log, "ab") as fh:
-        return subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, env=_child_env(),
-                                start_new_session=True, preexec_fn=_die_with_parent)
-
-
 class _Cancelled(Exception):
     pass
 
 
 class _Context:
-    """The worker, the task's key and the progress topic; cancellation and progress."""
 
     def __init__(self, task: dict[str, Any]) -> None:
         from distributed import get_worker
@@ -85,7 +78,6 @@ class _Context:
         self.last = 0.0
 
     def cancelled(self) -> bool:
-        """The client cancelled the task (an interrupted sweep) or let it go."""
         ts = self.worker.state.tasks.get(self.key)
         return ts is None or ts.state in ("cancelled", "released", "forgotten")
 
@@ -116,20 +108,13 @@ class _Context:
 
 
 def _remap(text: str, root: str) -> str:
-    """A path (or ``--set`` assignment) under the client's project folder, on this worker."""
     return text.replace(root, str(ROOT)) if root and root != str(ROOT) else text
 
 
 def run_point(task: dict[str, Any]) -> dict[str, Any]:
-    """Run one sweep point on this Dask worker.
-
-    ``task``: ``point`` (point.json), ``scenario`` (the loaded scenario as TOML, paths
-    absolute), ``phase`` ("todo"|"fatigue"), ``fatigue``, ``runs_dir`` (shared folder or None),
-    ``archive`` (the run folder, fatigue phase without a shared folder), ``root`` (the client's
-    project folder), ``topic``. Returns ``id``, ``status`` (ok|failed|cancelled), ``error``,
-    ``worker``, ``archive`` (tar.gz bytes, None under a shared runs_dir). A failed run is a
-    result, not an exception: Dask retries only a point whose worker was lost.
-    """
+    """Run one sweep point (``task``: :func:`task_doc`) on this Dask worker: ``id``, ``status``
+    (ok|failed|cancelled), ``error``, ``worker``, ``archive`` (tar.gz bytes or None). A failed
+    run is a result, not an exception: Dask retries only a point whose worker was lost."""
     ctx = _Context(task)
     pid, root = ctx.id, task["root"]
     shared = task.get("runs_dir")
@@ -144,8 +129,9 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
             ctx.emit("run", force=True)
             scenario = scratch / f"{pid}.toml"  # the point's scenario, whole
             scenario.write_text(_remap(task["scenario"], root))
-            cmd = run_command(str(scenario), run_dir, [], pin_off=True)
-            code = ctx.wait(_start(cmd, run_dir / "sweep.log"), "run", run_dir)
+            cmd = run_command([str(scenario)], run_dir, [], pin_off=True)
+            code = ctx.wait(_start(cmd, run_dir / "sweep.log", _die_with_parent), "run",
+                            run_dir)
             st, err = run_outcome(code, run_dir, run_dir / "sweep.log", task["fatigue"])
             phase = "fatigue" if st == "fatigue" else "done"
         else:
@@ -158,7 +144,8 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
             ctx.emit("fatigue", force=True)
             shutil.rmtree(run_dir / "fatigue", ignore_errors=True)
             log = run_dir / "fatigue.log"
-            code = ctx.wait(_start(fatigue_command(run_dir), log), "fatigue", run_dir)
+            code = ctx.wait(_start(fatigue_command(run_dir), log, _die_with_parent), "fatigue",
+                            run_dir)
             st, err = fatigue_outcome(code, run_dir, log)
         result.update(status=st, error=err)
         if not shared:
@@ -179,7 +166,9 @@ def scenario_toml(scenario: dict[str, Any]) -> str:
 
 def task_doc(point_json: dict[str, Any], scenario: dict[str, Any], phase: str, fatigue: bool,
              runs_dir: Path | None, run_dir: Path, topic: str) -> dict[str, Any]:
-    """The task of one point for :func:`run_point` (the client side)."""
+    """The task of one point for :func:`run_point`: its point.json, scenario (TOML, paths
+    absolute), phase, fatigue, shared runs_dir, archive (fatigue phase), root, topic."""
+
     archive = None
     if phase == "fatigue" and runs_dir is None:
         archive = pack(run_dir)

@@ -8,6 +8,7 @@ import shutil
 import signal
 import sys
 import time
+from functools import partial
 from typing import Any
 
 from cosim.step_message import step_keyexprs
@@ -17,6 +18,8 @@ from ..cli_util import fail, parse_args
 from .csv_sink import CsvSink
 from .stats import Tap
 from .target import DEFAULT_ENDPOINT, TapInputError, Target, resolve_target
+
+_fail = partial(fail, "suscosim tap")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -39,10 +42,6 @@ def build_parser() -> argparse.ArgumentParser:
                         "when RUN is a run folder; negotiated per link, so a tap without it "
                         "still connects)")
     return ap
-
-
-def _fail(message: str, code: int = 2) -> int:
-    return fail("suscosim tap", message, code)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -12,8 +12,7 @@ from cosim.errors import WireError
 from cosim.step_message import expand, is_step_key, matches
 from cosim.wire import Message, decode
 
-from .csv_sink import CsvSink
-from .fmt import fmt_fields
+from .csv_sink import CsvSink, fmt_fields
 
 
 @dataclass
@@ -25,7 +24,6 @@ class RateWindow:
     rate: float = 0.0
 
     def close(self, now: float) -> None:
-        """End the window at ``now`` [s] (its rate, when it has a length) and open the next."""
         if now > self.start:
             self.rate = self.count / (now - self.start)
         self.count, self.start = 0, now
@@ -45,11 +43,9 @@ class KeyStats:
 
     @classmethod
     def starting(cls, now: float) -> KeyStats:
-        """The stats of a key first heard at ``now`` [s]."""
         return cls(first=now, window=RateWindow(start=now))
 
     def seen(self, now: float, msg: Message) -> None:
-        """One decoded message at ``now`` [s]."""
         self.count += 1
         self.window.count += 1
         self.last, self.msg = now, msg
@@ -76,10 +72,8 @@ class Tap:
     last_problem: str = ""
 
     def handle(self, key: str, raw: bytes, now: float) -> Message | None:
-        """Take one sample: decode, count, write to CSV. Never raises on bad bytes. A
-        producer's ``step`` (``<node>/step``) is taken as the data messages it carries, each
-        on its channel's key, those the tapped expression names (:mod:`cosim.step_message`);
-        the last of them is returned."""
+        """Take one sample: decode, count, write to CSV; never raises on bad bytes. A ``step``
+        is taken as the data messages it carries that the expression names (the last returned)."""
         if not is_step_key(key):
             return self._take(key, raw, now)
         msg = self._take(key, raw, now, count=False)
@@ -98,7 +92,6 @@ class Tap:
         return last
 
     def _take(self, key: str, raw: bytes, now: float, count: bool = True) -> Message | None:
-        """Decode ``raw`` (undecodable: counted on ``key``); ``count``: take it as seen."""
         try:
             msg = decode(raw)
         except WireError as exc:
@@ -121,7 +114,6 @@ class Tap:
         return st
 
     def _seen(self, key: str, msg: Message, now: float) -> Message:
-        """One decoded message on ``key``: counted, shown, in the CSV if data."""
         self._stats(key, now).seen(now, msg)
         if msg.kind == "data":
             self.data += 1
