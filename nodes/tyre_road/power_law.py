@@ -36,11 +36,6 @@ from .roads import SampledRoad
 DEFAULT_WAVINESS = 2.5
 """The thesis's exponent p (Eq. 4.10)."""
 
-G_SMOOTH_MOTORWAY = 1e-7
-G_ROUGH_MINOR_ROAD = 5e-6
-"""The thesis's range of G [m^(3-p)] (Sec. 4.4): smooth motorway ... rough minor road."""
-
-
 def power_law_psd(n: np.ndarray, G: float, p: float = DEFAULT_WAVINESS) -> np.ndarray:
     """S(n) = G n^-p [m^3/cycle] at spatial frequencies ``n`` [cycles/m] (> 0)."""
     return G * np.asarray(n, dtype=float) ** (-p)

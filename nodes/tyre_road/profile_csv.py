@@ -110,20 +110,16 @@ def _check_physical(path: str | Path, z: np.ndarray, column: int | str) -> None:
     """InputFileError naming the first sample beyond :data:`MAX_RELIEF_M` or
     :data:`MAX_STEP_M` (``column``: the file's column, 1-based, or an MDF channel's quoted
     name; the line is its data row)."""
-    relief = np.abs(z - z[0])
-    if (bad := np.flatnonzero(relief > MAX_RELIEF_M)).size:
-        i = int(bad[0])
-        raise InputFileError(str(path), f"column {column}: height {float(z[i])!r} m is "
-                                   f"{relief[i]:.4g} m from the first sample's (at most "
-                                   f"{MAX_RELIEF_M:g} m: not a road profile; heights are in "
-                                   "metres)")
-    steps = np.abs(np.diff(z))
-    if (bad := np.flatnonzero(steps > MAX_STEP_M)).size:
-        i = int(bad[0])
-        raise InputFileError(str(path), f"column {column}: the height changes by {steps[i]:.4g} m "
-                                   f"between data rows {i + 1} and {i + 2} (at most "
-                                   f"{MAX_STEP_M:g} m between samples: a kerb is 0.15 m; "
-                                   "heights are in metres)")
+    relief, steps = np.abs(z - z[0]), np.abs(np.diff(z))
+    for bad, what in (
+            (relief > MAX_RELIEF_M, lambda i: f"height {float(z[i])!r} m is {relief[i]:.4g} m "
+             f"from the first sample's (at most {MAX_RELIEF_M:g} m: not a road profile"),
+            (steps > MAX_STEP_M, lambda i: f"the height changes by {steps[i]:.4g} m between "
+             f"data rows {i + 1} and {i + 2} (at most {MAX_STEP_M:g} m between samples: a "
+             "kerb is 0.15 m")):
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise InputFileError(str(path), f"column {column}: {what(i)}; heights are in metres)")
 
 
 def csv_road(path: str | Path, speed: float, length: float | None = None,

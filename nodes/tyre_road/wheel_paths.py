@@ -35,27 +35,13 @@ import numpy as np
 from .roads import Road
 
 
-def contact_distances(t: float, speed: float, wheel_x: Sequence[float],
-                      contact_offsets: np.ndarray) -> np.ndarray:
-    """Distances s [m] of shape (n_corners, n_points) along the road at time ``t`` [s]."""
-    return speed * t + np.asarray(wheel_x, dtype=float)[:, None] + \
-        np.asarray(contact_offsets, dtype=float)[None, :]
-
-
 def road_heights(road: Road, t: float, wheel_x: Sequence[float], wheel_track: Sequence[int],
                  contact_offsets: np.ndarray | None = None,
                  corner_names: Sequence[str] | None = None) -> np.ndarray:
-    """Road heights z_g [m] under every contact point, shape (n_corners, n_points)."""
-    if contact_offsets is None:
-        contact_offsets = np.zeros(1)
-    s = contact_distances(t, road.speed, wheel_x, contact_offsets)
-    z = np.zeros(s.shape)
-    for i, track in enumerate(wheel_track):
-        if road.corners is not None and corner_names is not None \
-                and corner_names[i] not in road.corners:
-            continue
-        z[i] = road.height(s[i], int(track))
-    return z
+    """Road heights z_g [m] under every contact point at time ``t`` [s], shape (n_corners,
+    n_points): :func:`road_heights_at` the stations ``v t + wheel_x`` [m]."""
+    return road_heights_at(road, road.speed * t + np.asarray(wheel_x, dtype=float),
+                           wheel_track, contact_offsets, corner_names)
 
 
 def road_heights_at(road: Road, s: np.ndarray, wheel_track: Sequence[int],
@@ -63,15 +49,14 @@ def road_heights_at(road: Road, s: np.ndarray, wheel_track: Sequence[int],
                     corner_names: Sequence[str] | None = None) -> np.ndarray:
     """Road heights z_g [m] of shape (n_corners, n_points) for wheels whose contact centres
     are at stations ``s`` [m] along the road (a vehicle that moves itself, the four-corner
-    vehicle: s from :meth:`RoadPath.station` of its wheel centres, not v t)."""
+    vehicle: s from :meth:`RoadPath.station` of its wheel centres); the corners the road does
+    not name see a flat road."""
     offs = np.zeros(1) if contact_offsets is None else np.asarray(contact_offsets, dtype=float)
     d = np.asarray(s, dtype=float)[:, None] + offs[None, :]
     z = np.zeros(d.shape)
     for i, track in enumerate(wheel_track):
-        if road.corners is not None and corner_names is not None \
-                and corner_names[i] not in road.corners:
-            continue
-        z[i] = road.height(d[i], int(track))
+        if road.corners is None or corner_names is None or corner_names[i] in road.corners:
+            z[i] = road.height(d[i], int(track))
     return z
 
 
