@@ -56,7 +56,7 @@ class BondResidual:
 
 
 def _columns(table: Mapping[str, np.ndarray], name: str) -> np.ndarray:
-    """The column ``name`` as (n_steps, n_corners): ``name`` itself or ``name[0]``, ``name[1]``…"""
+    """The column ``name`` (or ``name[0]``, ``name[1]`` ...) as (n_steps, n_corners)."""
     if name in table:
         return np.asarray(table[name], dtype=np.float64)[:, None]
     cols: list[np.ndarray] = []
@@ -70,12 +70,11 @@ def _columns(table: Mapping[str, np.ndarray], name: str) -> np.ndarray:
 def applied_force(coupling: str, F: np.ndarray, dFdx: np.ndarray, x_seen: np.ndarray,
                   x_now: np.ndarray, F_before: np.ndarray, r: float | np.ndarray, clip: bool,
                   sign: float) -> np.ndarray:
-    """The force the plant applies within a step (as ``nodes/plant/coupling.py`` does):
-    ``coupling`` ``hold``, ``linear`` or ``jacobian``; ``F`` the step's force [N], ``dFdx`` its
-    derivative (k_t [N/m] or c_eff [N s/m]) about ``x_seen`` (z_w [m] or v_rel [m/s]),
-    ``x_now`` that variable now; ``F_before`` the previous step's force [N]; ``r`` time into
-    the step over h; ``clip``: the tyre's F >= 0; ``sign``: +1 if F grows with x (damper), -1
-    if it falls (tyre: F_t = F_t,k - k_t (z_w - z_w,k))."""
+    """The force the plant applies within a step (as ``nodes/plant/coupling.py``): ``F`` the
+    step's force [N], ``dFdx`` its derivative (k_t [N/m] or c_eff [N s/m]) about ``x_seen``
+    (z_w [m] or v_rel [m/s]), ``x_now`` that variable now, ``F_before`` the previous step's
+    force [N], ``r`` time into the step over h; ``clip``: F >= 0 (tyre); ``sign`` -1: F falls
+    with x (tyre: F_t = F_t,k - k_t (z_w - z_w,k))."""
     if coupling == "hold":
         out = F
     elif coupling == "linear":
@@ -89,11 +88,8 @@ def applied_force(coupling: str, F: np.ndarray, dFdx: np.ndarray, x_seen: np.nda
 
 def coupling_residual(table: Mapping[str, np.ndarray], h: float, coupling: str,
                       exchange: str) -> dict[str, BondResidual]:
-    """Both bonds' residuals from a run's whole table (columns as :mod:`cosim.table` names
-    them; :class:`cosim.coupling_stream.ResidualStream` fed it as one block). A bond whose
-    columns the table lacks (no controller, a plant without a wheel) is left out. ``h`` [s]
-    is the communication step; ``exchange``: ``sequential`` (lag 0) or ``parallel`` (lag 1).
-    """
+    """Both bonds' residuals of a run's whole table (one block of
+    :class:`cosim.coupling_stream.ResidualStream`; a bond whose columns it lacks left out)."""
     from .coupling_stream import ResidualStream
 
     try:
@@ -108,7 +104,7 @@ def coupling_residual(table: Mapping[str, np.ndarray], h: float, coupling: str,
 
 def summary(residuals: Mapping[str, BondResidual]) -> dict[str, float]:
     """``summary.json``'s ``coupling_energy_residual``: each bond's relative residual and the
-    total (all bonds' |dE| over all bonds' carried energy)."""
+    total (all bonds' |dE| over their carried energy)."""
     out = {name: r.relative for name, r in residuals.items()}
     carried = sum(r.carried for r in residuals.values())
     out["total"] = (sum(r.abs_residual for r in residuals.values()) / carried

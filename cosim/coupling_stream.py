@@ -1,18 +1,12 @@
-"""The coupling energy residual computed as the rows come, block by block.
+"""The coupling energy residual (:mod:`cosim.coupling_energy`) computed block by block.
 
-:func:`cosim.coupling_energy.coupling_residual` needs the whole table; a run of an hour has
-millions of rows. :class:`ResidualStream` takes the same columns in blocks of any size (the
-row groups of ``table.parquet``, or the steps a live node has just recorded), keeps only the
-few rows a step's residual reaches back to (``2 lag + 2``), and gives
-
-* per block, the residual of every step it completed, per bond, ``dE`` [J] (the series a
-  live view shows: the step ``k`` is complete once the force computed from the state at
-  ``t_k+1`` has arrived, ``1 + lag`` rows later);
-* at the end, the same :class:`~cosim.coupling_energy.BondResidual` totals as the whole-table
-  computation (equal to rounding: the sums are taken in another order).
-
-The columns are those :func:`~cosim.coupling_energy.coupling_residual` reads; a bond whose
-columns the first block lacks is left out, as there.
+:class:`ResidualStream` takes a run's table in blocks of any size (the row groups of
+``table.parquet``, or the steps a live node has just recorded), keeps only the rows a step's
+residual reaches back to (``2 lag + 2``), and gives per block each bond's ``dE`` [J] of the
+steps it completed (step ``k`` is complete ``1 + lag`` rows later, once the force computed
+from the state at ``t_k+1`` has arrived), and at the end the
+:class:`~cosim.coupling_energy.BondResidual` totals. A bond whose columns the first block
+lacks is left out.
 """
 
 from __future__ import annotations
@@ -30,8 +24,8 @@ from .coupling_energy import BondResidual, _columns, applied_force, summary
 
 @dataclass(frozen=True)
 class BondSpec:
-    """Which columns form a bond: ``force`` F [N] and ``slope`` dF/dx, ``seen`` the plant
-    variable the coupling linearises about, ``velocity`` [m/s]; ``a-b``: a difference."""
+    """A bond's columns: ``force`` F [N], ``slope`` dF/dx, ``seen`` the plant variable the
+    coupling linearises about, ``velocity`` [m/s] (``a-b``: a difference)."""
 
     force: str
     slope: str
@@ -68,7 +62,7 @@ class _BondState:
     carried: float = 0.0
 
     def rows(self, block: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The bond's columns F, J, x, v of the rows kept from before and ``block``'s."""
+        """F, J, x, v of the rows kept from before and ``block``'s."""
         s = self.spec
         new = {"F": _get(block, s.force), "J": _get(block, s.slope),
                "x": _get(block, s.seen), "v": _get(block, s.velocity)}
@@ -77,9 +71,8 @@ class _BondState:
 
 
 class ResidualStream:
-    """Feed blocks of a run's rows in order (:meth:`feed`); :meth:`result` gives the totals.
-    ``h`` [s], or None for an adaptive step (each step's length from the rows' ``t``);
-    ``coupling``: ``hold``, ``linear``, ``jacobian``; ``exchange``: ``sequential``/``parallel``."""
+    """Feed blocks of rows in order (:meth:`feed`); :meth:`result` gives the totals. ``h``
+    [s], or None for an adaptive step (each step's length from the rows' ``t``)."""
 
     def __init__(self, h: float | None, coupling: str, exchange: str) -> None:
         if h is not None and not h > 0:
@@ -105,8 +98,7 @@ class ResidualStream:
         return bonds
 
     def feed(self, block: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Take the next rows; return, per bond, ``dE`` [J] (summed over corners) of the steps
-        this block completed (in order; none for a block too short to complete one)."""
+        """Per bond, ``dE`` [J] (summed over corners) of the steps this block completed."""
         if self.bonds is None:
             self.bonds = self._start(block)
         n_new = len(next(iter(block.values()))) if block else 0
@@ -134,9 +126,8 @@ class ResidualStream:
 
     def _steps(self, st: _BondState, cur: Mapping[str, np.ndarray], k: np.ndarray, g0: int,
                h: float | np.ndarray, r_end: float | np.ndarray) -> np.ndarray:
-        """dE [J] (summed over corners) of the steps ``k`` (rows of ``cur``, the run's row 0
-        at ``-g0``), of length ``h`` [s] (one, or one per step as a column); ``r_end``: the
-        step's end in the linear extrapolation's units (1 for a fixed step)."""
+        """dE [J] of the steps ``k`` (rows of ``cur``; the run's row 0 at ``-g0``), of length
+        ``h`` [s] (one, or a column); ``r_end``: the step's end over the previous step's."""
         if not k.size:
             return np.zeros(0)
         s, lag = st.spec, self.lag
@@ -182,15 +173,14 @@ class ResidualStream:
         return out
 
     def result(self) -> dict[str, BondResidual]:
-        """The totals so far, per bond (``dE`` empty: the series came block by block)."""
+        """The totals so far, per bond (``dE`` empty)."""
         return {name: BondResidual(np.zeros(0), st.abs_residual, st.carried)
                 for name, st in (self.bonds or {}).items()}
 
 
 def residual_of_table_file(path: str | Path, h: float | None, coupling: str, exchange: str,
                            batch_rows: int = 65_536) -> dict[str, BondResidual]:
-    """Both bonds' residual totals of a ``table.parquet``, read a row group at a time
-    (memory independent of the run's length; :func:`cosim.table.iter_table`)."""
+    """Both bonds' residual totals of a ``table.parquet``, read a row group at a time."""
     from .table import iter_table
 
     stream = ResidualStream(h, coupling, exchange)
@@ -202,8 +192,7 @@ def residual_of_table_file(path: str | Path, h: float | None, coupling: str, exc
 
 def summary_of_table_file(path: str | Path, h: float | None, coupling: str, exchange: str
                           ) -> dict[str, float]:
-    """``summary.json``'s ``coupling_energy_residual`` of a ``table.parquet`` read in row
-    groups (:func:`cosim.coupling_energy.summary`); ``{}`` for a run without either bond."""
+    """``summary.json``'s ``coupling_energy_residual`` of a ``table.parquet`` ({}: no bond)."""
     res = residual_of_table_file(path, h, coupling, exchange)
     return summary(res) if res else {}
 
@@ -225,14 +214,9 @@ class LiveResidual:
     ``recorder/coupling`` channel (docs/coupling_residual.md, "The live channel").
 
     The recorder gives it each data message it tabulates (:meth:`add`) and says when the
-    table wrote a step's row (:meth:`row`): the rows fed to :class:`ResidualStream` are the
-    table's own, in its order, as float64 (a step the table drops is dropped too).
+    table wrote a step's row (:meth:`row`): the rows fed are the table's own, in its order.
     :meth:`take` feeds the rows complete since the last call, in blocks of at most
-    :data:`MAX_STEPS`, and returns one message per block that completed a step (a step is
-    complete ``1 + lag`` rows later, as in the whole-table residual).
-
-    ``h``, ``coupling``, ``exchange``: as :class:`ResidualStream`; ``channels``: the table's
-    (those of :data:`BOND_CHANNELS` are read).
+    :data:`MAX_STEPS`, and returns one message per block that completed a step.
     """
 
     def __init__(self, h: float | None, coupling: str, exchange: str,
@@ -269,7 +253,7 @@ class LiveResidual:
 
     @property
     def held(self) -> int:
-        """Steps held whose row is not written (yet, or ever: dropped at the next take)."""
+        """Steps held whose row is not written (yet, or ever)."""
         return len(self._held)
 
     @property
@@ -278,8 +262,8 @@ class LiveResidual:
         return len(self._rows)
 
     def take(self) -> list[tuple[int, float, dict[str, Any]]]:
-        """Feed the rows complete so far; the messages to publish as (``k``: the last step
-        they give, its ``t`` [s], payload: :func:`message`), in step order."""
+        """Feed the rows complete so far; the messages to publish as (last step ``k``, its
+        ``t`` [s], payload), in step order."""
         rows, self._rows = self._rows, []
         for j in [j for j in self._held if j < self._last_row]:  # never rows now: the
             del self._held[j]  # table dropped them (a channel's message came too late)
@@ -319,8 +303,7 @@ def _block(rows: list[tuple[int, float, dict[str, Mapping[str, Any]]]],
 def _messages(done: list[tuple[int, float]], dE: Mapping[str, np.ndarray],
               totals: Mapping[str, BondResidual], threshold: float
               ) -> list[tuple[int, float, dict[str, Any]]]:
-    """One message per run of consecutive steps in ``done`` (one in a run: its rows are
-    every step; a step the table dropped would cut it)."""
+    """One message per run of consecutive steps in ``done``."""
     ks = np.asarray([k for k, _ in done])
     cuts = [0, *(np.flatnonzero(np.diff(ks) != 1) + 1).tolist(), len(ks)]
     return [(int(ks[b - 1]), done[b - 1][1],
@@ -330,9 +313,8 @@ def _messages(done: list[tuple[int, float]], dE: Mapping[str, np.ndarray],
 
 def message(k0: int, dE: Mapping[str, np.ndarray], totals: Mapping[str, BondResidual],
             threshold: float) -> dict[str, Any]:
-    """The payload of one ``recorder/coupling`` message of the steps ``k0 .. k0 + n - 1``
-    (its fields and units: :mod:`cosim.schema`; ``rel_B`` = res_B / carried_B, ``rel_total``
-    as ``summary.json``'s ``total``)."""
+    """The payload of one ``recorder/coupling`` message of steps ``k0 ..`` (fields and units:
+    :mod:`cosim.schema`)."""
     d: dict[str, Any] = {"k0": int(k0)}
     for name, v in dE.items():
         d[f"dE_{name}"] = [float(x) for x in v]

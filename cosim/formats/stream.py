@@ -7,14 +7,14 @@ columns, values and units, written in row groups)."""
 from __future__ import annotations
 
 import csv
-import io
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from cosim.errors import InputFileError
+
+from .tables import write_chunks
 
 BATCH_ROWS = 65536
 
@@ -80,40 +80,8 @@ def _columns(rows: list[list[str]], names: list[str], src: str) -> dict[str, np.
 def write_stream(src: str | Path, path: str | Path, fmt: str, names: list[str],
                  units: dict[str, str], units_in_header: bool = True) -> int:
     """Write ``t`` and the channels ``names`` of the table ``src`` to ``path`` as ``fmt``
-    (``csv`` or ``parquet``); return the rows written."""
-    rows = 0
-    cols = ["t", *names]
-    if fmt == "csv":
-        def head(n: str) -> str:
-            u = units.get(n, "")
-            return f"{n} [{u}]" if units_in_header and u else n
-
-        with open(path, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow([head("t") if units_in_header else "t"] + [head(n) for n in names])
-            for chunk in iter_chunks(src, cols):
-                body = io.StringIO(newline="")
-                bw = csv.writer(body)
-                for row in zip(*(np.asarray(chunk[c], dtype=float).tolist() for c in cols),
-                               strict=True):
-                    bw.writerow(row)
-                fh.write(body.getvalue())
-                rows += len(chunk["t"])
-        return rows
-    if fmt != "parquet":
+    (``csv`` or ``parquet``, :func:`.tables.write_chunks`); return the rows written."""
+    if fmt not in ("csv", "parquet"):
         raise ValueError(f"streamed formats are csv and parquet, not {fmt!r}")
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    fields = [pa.field("t", pa.float64(), metadata={"unit": "s"})]
-    fields += [pa.field(n, pa.float64(), metadata={"unit": units.get(n, "")}) for n in names]
-    schema = pa.schema(fields)
-    writer: Any = pq.ParquetWriter(str(path), schema)
-    try:
-        for chunk in iter_chunks(src, cols):
-            arrays = [pa.array(np.asarray(chunk[c], dtype=float)) for c in cols]
-            writer.write_table(pa.Table.from_arrays(arrays, schema=schema))
-            rows += len(chunk["t"])
-    finally:
-        writer.close()
-    return rows
+    return write_chunks(path, fmt, names, units, iter_chunks(src, ["t", *names]),
+                        units_in_header)

@@ -9,9 +9,11 @@ unit in the field metadata under ``unit``.
 from __future__ import annotations
 
 import csv
+import io
 import math
 import re
 from array import array
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -120,36 +122,57 @@ def _read_csv_rows(path: str) -> ChannelSet:
                      hline)
 
 
+def write_chunks(path: str | Path, fmt: str, names: list[str], units: Mapping[str, str],
+                 chunks: Iterable[Mapping[str, np.ndarray]], units_in_header: bool = False
+                 ) -> int:
+    """Write ``t`` and the channels ``names`` of each chunk to ``path`` as ``fmt``: ``csv``
+    (numbers in full precision, repr; with ``units_in_header`` the header reads ``name
+    [unit]``) or ``parquet`` (float64, each field's unit in its metadata, ``unit``); return
+    the rows written."""
+    cols, rows = ["t", *names], 0
+    if fmt == "csv":
+        def head(n: str) -> str:
+            u = units.get(n, "")
+            return f"{n} [{u}]" if units_in_header and u else n
+
+        with open(path, "w", newline="") as fh:
+            csv.writer(fh).writerow([head(n) for n in cols])
+            for chunk in chunks:
+                body = io.StringIO(newline="")
+                csv.writer(body).writerows(zip(*(np.asarray(chunk[c], dtype=float).tolist()
+                                                 for c in cols), strict=True))
+                fh.write(body.getvalue())
+                rows += len(chunk["t"])
+        return rows
+    if fmt != "parquet":
+        raise ValueError(f"table formats are csv and parquet, not {fmt!r}")
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    schema = pa.schema([pa.field(n, pa.float64(), metadata={
+        "unit": "s" if n == "t" else units.get(n, "")}) for n in cols])
+    writer: Any = pq.ParquetWriter(str(path), schema)
+    try:
+        for chunk in chunks:
+            arrays = [pa.array(np.asarray(chunk[c], dtype=float)) for c in cols]
+            writer.write_table(pa.Table.from_arrays(arrays, schema=schema))
+            rows += len(chunk["t"])
+    finally:
+        writer.close()
+    return rows
+
+
 def write_csv(cs: ChannelSet, path: str | Path, units_in_header: bool = False
               ) -> dict[str, Any]:
-    """CSV with ``t`` first; numbers in full precision (repr). With ``units_in_header``
-    the header reads ``name [unit]``."""
-    def head(n: str) -> str:
-        u = cs.units.get(n, "")
-        return f"{n} [{u}]" if units_in_header and u else n
-
-    names = list(cs.channels)
-    cols = [np.asarray(cs.t, dtype=float).tolist()] + \
-        [np.asarray(cs.channels[n], dtype=float).tolist() for n in names]
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow([head("t") if units_in_header else "t"] + [head(n) for n in names])
-        for row in zip(*cols, strict=True):
-            w.writerow(row)
+    """CSV, ``t`` first (:func:`write_chunks`)."""
+    write_chunks(path, "csv", list(cs.channels), cs.units, [{"t": cs.t, **cs.channels}],
+                 units_in_header)
     return {}
 
 
 def write_parquet(cs: ChannelSet, path: str | Path) -> dict[str, Any]:
-    """Parquet, ``t`` first, each field's unit in its metadata (``unit``)."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    fields = [pa.field("t", pa.float64(), metadata={"unit": "s"})]
-    arrays = [pa.array(np.asarray(cs.t, dtype=float))]
-    for n, x in cs.channels.items():
-        fields.append(pa.field(n, pa.float64(), metadata={"unit": cs.units.get(n, "")}))
-        arrays.append(pa.array(np.asarray(x, dtype=float)))
-    pq.write_table(pa.Table.from_arrays(arrays, schema=pa.schema(fields)), path)
+    """Parquet, ``t`` first (:func:`write_chunks`)."""
+    write_chunks(path, "parquet", list(cs.channels), cs.units, [{"t": cs.t, **cs.channels}])
     return {}
 
 
