@@ -19,11 +19,9 @@ TABLE_3_3_SIGNALS = {
 
 def peak_errors(cosim: Table, reference: Table, signals: dict[str, str] | None = None,
                 t_from: float = 0.0) -> dict[str, dict[str, float]]:
-    """Per signal: % error of the maximum and of the minimum (after ``t_from`` s).
+    """Per signal: % error of the maximum and of the minimum (after ``t_from`` s); the
+    minimum is left out where the reference has no valley (its rest value 0)."""
 
-    The minimum is left out where the reference has no valley (its minimum is the rest value
-    0, e.g. the body displacement over a step up).
-    """
     out: dict[str, dict[str, float]] = {}
     for label, col in (signals or TABLE_3_3_SIGNALS).items():
         a = cosim[col][cosim["t"] >= t_from]

@@ -1,11 +1,9 @@
-"""Reference mode: the lumped quarter car solved by SciPy ``solve_ivp`` at tight tolerance.
-
-The thesis's "purely mathematical" model (Simulink ode113, tolerance 1e-10): Eq. 3.1 with the
-same road, tyre and passive damper as the co-simulation, integrated by DOP853 with the
-integration restarted at every road discontinuity (event start and end), so a step input is
-resolved exactly. The output has the same columns as a co-simulation table, so the two can be
-compared directly (Table 3.3).
+"""Reference mode: the thesis's "purely mathematical" model (Simulink ode113, tolerance 1e-10):
+Eq. 3.1 with the co-simulation's road, tyre and passive damper, by SciPy ``solve_ivp`` (DOP853)
+restarted at every road discontinuity (a step input resolved exactly); a co-simulation table's
+columns, so the two compare directly (Table 3.3).
 """
+
 
 from __future__ import annotations
 

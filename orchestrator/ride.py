@@ -1,20 +1,15 @@
 """``suscosim ride RUN_DIR [RUN_DIR ...] [--baseline NAME] [--band LO HI] [--json]``: ride
-metrics of finished runs, side by side (thesis Tables 5.3-5.6; docs/ch5_control_comparison.md).
-
-Prints :func:`nodes.recorder.ride_metrics.ride_table` of each run's table (body RMS
-acceleration [m/s²] in band ``LO``-``HI`` Hz, default 0-20, the units of every metric there),
-every run after the baseline with its % change (thesis Eq 5.13, positive = reduction; null
-against a zero baseline). ``--json``: :func:`~nodes.recorder.ride_metrics.ride_summary` plus
-each run's ``path``. A run is named by its folder name; ``--baseline`` takes such a name
-(default: the first). Exit codes: 0 printed, 2 bad input (a missing folder or table, an
-unknown baseline, a bad band).
+metrics of finished runs, side by side (thesis Tables 5.3-5.6; docs/ch5_control_comparison.md):
+:func:`nodes.recorder.ride_metrics.ride_table` (body RMS acceleration [m/s²] in band LO-HI Hz),
+every run after the baseline (a folder name; default the first) with its % change (Eq 5.13,
+positive = reduction). ``--json``: ``ride_summary`` plus each run's ``path``. Exit codes: 0
+printed, 2 bad input.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -45,19 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
-def _finite_or_none(obj):
-    """``obj`` with every non-finite float replaced by None (JSON has no NaN)."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite_or_none(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_finite_or_none(v) for v in obj]
-    return obj
-
-
 def _adaptive_h(d: Path) -> float | None:
-    """h_min [s] of a run whose step was adaptive (its scenario.json), else None."""
     try:
         run = json.loads((d / "scenario.json").read_text()).get("run", {})
     except (OSError, ValueError, AttributeError):
@@ -71,7 +54,6 @@ def _fail(message: str) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print the ride table of the run folders in ``argv``; return the exit code (0 or 2)."""
     ap = build_parser()
     try:
         args = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
@@ -116,7 +98,10 @@ def main(argv: list[str] | None = None) -> int:
             summary["runs"] = [
                 {"name": e["name"], "path": str(d), "metrics": e["metrics"],
                  "change_pct": e["change_pct"]} for e, d in zip(summary["runs"], dirs, strict=True)]
-            text = json.dumps(_finite_or_none(summary), indent=1)
+            from .runner import strict_json
+
+            text = json.dumps(strict_json(summary), indent=1)
+
         else:
             text = ride_table(runs, baseline=args.baseline, band_hz=(lo, hi))
     except (ValueError, KeyError) as exc:

@@ -1,11 +1,7 @@
-"""The damage map on the scope's page, filled in block by block.
-
-The live fatigue node publishes only the minimum life; the map is computed here from the same
-``plant/arm`` loads with the node's own engine (:class:`nodes.fatigue.worker.LiveFatigue`, the
-run's ``[fatigue]``, its cached influence coefficients), so at the last step its largest
-damage is the run's ``max_damage_per_pass``. A scope that joins late takes the missed steps
-from the journal first. Damage per node [-] (Miner, per pass so far, residue closed as at the
-end of a run), sent as log10; node positions [mm] in the arm frame.
+"""The scope's damage map, computed from the ``plant/arm`` loads with the live fatigue node's
+own engine (:class:`nodes.fatigue.worker.LiveFatigue`), so its last step's largest damage is the
+run's ``max_damage_per_pass``; a scope that joins late reads the missed steps from the journal.
+Damage per node [-] (Miner, per pass so far, residue closed) sent as log10; positions [mm].
 """
 
 from __future__ import annotations
@@ -21,15 +17,11 @@ from cosim.wire import Message
 
 from .state import ScopeState
 
-UPDATE_PERIOD_S = 0.5
-"""At most this often (wall time) the map is recomputed (it closes every node's residue)."""
-BACKFILL_TRIES = 20
-"""A scope that joined a live run late reads the steps it missed from the run's journal; it
-tries this many times (one per update period) before drawing the map from where it joined."""
+UPDATE_PERIOD_S = 0.5  # [s] of wall time between recomputations of the map
+BACKFILL_TRIES = 20  # reads of the journal for missed steps before drawing from the join
 
 
 def wants_map(scenario: dict[str, Any] | None) -> bool:
-    """Whether the run has the live fatigue node (then its arm loads make a map)."""
     run = (scenario or {}).get("run") or {}
     return "fatigue" in (run.get("nodes") or [])
 
@@ -62,8 +54,6 @@ class DamageMap:
         self.backfilled = 0
 
     def push(self, msg: Message, now: float | None = None) -> None:
-        """One ``plant/arm`` message (k >= 0); recomputes the map at most every period and
-        at the last step."""
         if msg.k < 0 or self.problem:
             return
         if self.k0 is None:
@@ -85,7 +75,6 @@ class DamageMap:
             self.flush()
 
     def flush(self) -> None:
-        """Push the buffered samples to the engine and publish the map so far."""
         if not self._rows:
             return
         if self.k0 and self._backfill_tries < BACKFILL_TRIES and not self._backfill():
@@ -120,8 +109,7 @@ class DamageMap:
         })
 
     def _backfill(self) -> bool:
-        """The steps before the scope joined, from the run's journal (the recorder writes it
-        as the run goes): True when they are in (or when giving up after a few tries)."""
+        """The steps before the scope joined, from the journal: True when in (or given up)."""
         from cosim.errors import WireError
         from cosim.journal import iter_records
         from cosim.wire import decode
@@ -149,8 +137,8 @@ class DamageMap:
         return True
 
     def _geometry(self) -> dict[str, Any]:
-        """Node positions [mm] in the arm frame (x forward, y outboard, z up) and the
-        hardpoints: the page draws a plan view (x-y) and a side view (x-z)."""
+        """Node positions and hardpoints [mm] in the arm frame (x forward, y outboard, z up)."""
+
         from cosim import lower_arm as geo
 
         inf = self._live.inf

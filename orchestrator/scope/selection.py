@@ -1,11 +1,6 @@
-"""Which signals the scope plots: ``--channels`` patterns, the Zenoh key expressions they
-subscribe to, and the plotted lines (with their SI units) a message gives.
-
-A pattern is ``NODE/CHANNEL[/FIELD]``; every part a name or a shell-style wildcard (``*``,
-``?``): ``plant/state`` (every field of the channel), ``plant/state/z_*``, ``*/force/F_*``.
-A field that is a list (a full vehicle's four corners) gives one line per corner (FL, FR, RL,
-RR). Control channels (``ctl``, ``records``, ``alive``, ``clock``, ``scenario``) are never
-plotted.
+"""Which signals the scope plots: ``--channels`` patterns ``NODE/CHANNEL[/FIELD]`` (names or
+shell wildcards: ``plant/state``, ``*/force/F_*``), their key expressions, and the lines (SI
+units) a message gives; a list field gives a line per corner. Control channels never plot.
 """
 
 from __future__ import annotations
@@ -22,7 +17,6 @@ from ..report.signals import unit_of
 
 DEFAULT_CHANNELS = ("plant/state/z_b", "plant/state/z_w", "plant/response/a_b",
                     "tyre_road/force/F_t", "controller/force/F_d")
-"""Plotted when ``--channels`` is not given: body and wheel, body acceleration, the forces."""
 CONTROL_CHANNELS = frozenset({keys.CTL, keys.RECORDS, keys.ALIVE, keys.CLOCK, keys.SCENARIO})
 _PART = re.compile(r"^[A-Za-z0-9_.*?\[\]-]{1,64}$")
 
@@ -35,7 +29,6 @@ class ScopeInputError(SuscosimError):
 
 @dataclass(frozen=True)
 class Pattern:
-    """One ``--channels`` pattern, split in its parts (``field`` None: every field)."""
 
     node: str
     channel: str
@@ -46,7 +39,6 @@ class Pattern:
         return "/".join(p for p in (self.node, self.channel, self.field) if p is not None)
 
     def keyexpr(self, run: str) -> str:
-        """The Zenoh key expression to subscribe to (a part with a wildcard becomes ``*``)."""
         def part(p: str) -> str:
             return "*" if any(c in p for c in "*?[") else p
 
@@ -60,7 +52,6 @@ class Pattern:
 
 
 def parse_pattern(text: str) -> Pattern:
-    """``plant/state/z_b`` -> Pattern; raises :class:`ScopeInputError` naming what is wrong."""
     parts = text.strip().strip("/").split("/")
     if len(parts) not in (2, 3) or not all(_PART.match(p) for p in parts):
         raise ScopeInputError(f"--channels {text!r}: expected NODE/CHANNEL[/FIELD], each a "
@@ -73,8 +64,7 @@ def parse_pattern(text: str) -> Pattern:
 
 @dataclass(frozen=True)
 class Line:
-    """One plotted line: ``key`` (``plant/state/z_b`` or ``...z_b[0]``), the plot it is drawn
-    in (``group``: node/channel/field), its legend label and SI unit."""
+    """One plotted line: ``key`` (``plant/state/z_b[0]``), its plot (``group``), label, unit."""
 
     key: str
     group: str
@@ -84,14 +74,12 @@ class Line:
 
 
 class Selection:
-    """The patterns, and the lines each channel's fields give (cached per channel/field)."""
 
     def __init__(self, patterns: list[str] | None = None) -> None:
         self.patterns = [parse_pattern(p) for p in (patterns or DEFAULT_CHANNELS)]
         self._lines: dict[tuple[str, str, str, int], list[Line]] = {}
 
     def keyexprs(self, run: str) -> list[str]:
-        """The distinct key expressions to subscribe to."""
         return list(dict.fromkeys(p.keyexpr(run) for p in self.patterns))
 
     def wants(self, node: str, channel: str) -> bool:
@@ -99,8 +87,8 @@ class Selection:
             any(p.matches(node, channel) for p in self.patterns)
 
     def lines(self, node: str, channel: str, fld: str, n: int) -> list[Line]:
-        """The lines of field ``fld`` (``n`` values: 0 for a number, else a list's length),
-        or ``[]`` when no pattern takes it."""
+        """The lines of field ``fld`` (``n``: 0 for a number, else a list's length)."""
+
         memo = (node, channel, fld, n)
         if memo not in self._lines:
             out: list[Line] = []

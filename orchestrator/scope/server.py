@@ -1,11 +1,7 @@
-"""The scope's web server (stdlib ``http.server``, one thread per request, in a thread).
-
-``GET /`` the page; ``GET /data?since=K&coupling_since=C`` the JSON of
-:meth:`ScopeState.snapshot` (default -1: everything kept); ``GET /meta`` run id, lines and
-units, the damage map's geometry; ``GET /<file>`` the page's script, style and vendored uPlot.
-Loopback only unless ``--host``. A request whose ``Host`` header names the server by no name
-it answers to (:func:`allowed_hosts`) gets 403, so a DNS-rebinding page cannot read the run's
-data through the browser.
+"""The scope's web server (stdlib ``http.server``, in a thread): ``GET /`` the page, ``/data?
+since=K&coupling_since=C`` :meth:`ScopeState.snapshot`, ``/meta``, the page's files. A request
+whose ``Host`` header names the server by no name it answers to (:func:`allowed_hosts`) gets
+403, so a DNS-rebinding page cannot read the run's data through the browser.
 """
 
 from __future__ import annotations
@@ -30,8 +26,7 @@ FILES = {"/": ("scope.html", "text/html; charset=utf-8"),
          "/uPlot.LICENSE": ("uPlot.LICENSE", "text/plain; charset=utf-8")}
 
 
-LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
-"""The host names a loopback-only scope answers to (with its port)."""
+LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")  # a loopback scope's names
 
 
 def _is_loopback(host: str) -> bool:
@@ -48,9 +43,8 @@ def _is_wildcard(host: str) -> bool:
 
 
 def allowed_hosts(host: str) -> tuple[set[str], bool]:
-    """The names a scope served on ``host`` answers to in a ``Host`` header (lower case,
-    without the port), and whether any IP address literal is accepted too (``host`` a
-    wildcard: every address of the machine is served)."""
+    """The names (lower case, no port) a scope on ``host`` answers to in a ``Host`` header,
+    and whether any IP literal is accepted too (``host`` a wildcard)."""
     names = set(LOOPBACK_NAMES)
     if _is_loopback(host):
         return names, False
@@ -64,8 +58,8 @@ def allowed_hosts(host: str) -> tuple[set[str], bool]:
 
 
 def host_header_ok(value: str | None, names: set[str], any_ip: bool, port: int) -> bool:
-    """Whether a request's ``Host`` header ``value`` names this server: one of ``names`` (or
-    an IP literal when ``any_ip``) with ``port`` (or without one when the port is 80)."""
+    """Whether a ``Host`` header names this server: one of ``names`` (or an IP literal when
+    ``any_ip``) with ``port`` (or none when it is 80)."""
     if not value:
         return False
     value = value.strip().lower()
@@ -98,8 +92,7 @@ def host_header_ok(value: str | None, names: set[str], any_ip: bool, port: int) 
 
 def _handler(state: ScopeState, names: set[str] | None = None,
              any_ip: bool = False) -> type[BaseHTTPRequestHandler]:
-    """The request handler; ``names`` (None: every Host accepted) and ``any_ip`` as
-    :func:`allowed_hosts` gives them."""
+    """The request handler (``names`` None: every Host accepted)."""
     class Handler(BaseHTTPRequestHandler):
         server_version = "suscosim-scope"
 
@@ -154,7 +147,6 @@ def _handler(state: ScopeState, names: set[str] | None = None,
 
 
 class ScopeServer:
-    """The HTTP server on ``host:port`` (port 0: a free one), serving in a thread."""
 
     def __init__(self, state: ScopeState, host: str = "127.0.0.1", port: int = 0) -> None:
         self.allowed_names, any_ip = allowed_hosts(host)

@@ -1,9 +1,7 @@
-"""The Dask executor (``--executor dask --scheduler tcp://HOST:8786``): every point is one task,
-:func:`orchestrator.sweep.task.run_point`, run whole on a worker of an existing cluster; Dask
-schedules and retries a point whose worker was lost, we submit, follow and collect. A finished
-point's folder comes back in the result and is unpacked under ``<out>/runs/<id>`` (or the
-workers wrote it under the shared ``runs_dir``). Progress: each task's step as a Dask event
-(``Worker.log_event``) on this session's topic; a restarted point is announced.
+"""The Dask executor (``--executor dask --scheduler tcp://HOST:8786``): every point is one task
+(:func:`.task.run_point`) run whole on a worker; Dask schedules and retries a point whose worker
+was lost. A finished point's folder comes back in the result (or is in the shared
+``runs_dir``); progress comes as Dask events on this session's topic.
 """
 
 from __future__ import annotations
@@ -34,7 +32,6 @@ class DaskError(SuscosimError):
 
 @dataclass
 class RemoteJob:
-    """A point running on a worker, as its progress events tell: phase, step, worker."""
 
     point: Point
     phase: str
@@ -48,7 +45,6 @@ class RemoteJob:
 
 
 ADDRESS = re.compile(r"((tcp|tls|ws|wss|ucx)://)?(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9_.-]+)(:\d{1,5})?")
-"""A scheduler address as Dask takes it: ``tcp://HOST:PORT`` (scheme and port optional)."""
 
 
 def connect(address: str, timeout_s: float = 20.0) -> Any:
@@ -72,8 +68,7 @@ def connect(address: str, timeout_s: float = 20.0) -> Any:
 
 
 class DaskRunner:
-    """Runs the points of a validated sweep as Dask tasks; the same interface as
-    :class:`orchestrator.sweep.local.Runner` (``status``, ``execute``)."""
+    """Runs the points as Dask tasks (the interface of :class:`.local.Runner`)."""
 
     def __init__(self, sweep: Sweep, out: Path, scheduler: str, stream: TextIO) -> None:
         self.sweep, self.out, self.scheduler = sweep, out, scheduler
@@ -102,7 +97,6 @@ class DaskRunner:
         return f"{len(ws)} Dask workers ({threads} threads) at {self.scheduler}"
 
     def execute(self, todo: list[tuple[Point, str]]) -> bool:
-        """Run the given points (``todo`` or ``fatigue`` phase); False if interrupted."""
         token = uuid.uuid4().hex[:8]
         topic = f"suscosim-sweep-{self.sweep.name}-{token}"
         self.client.subscribe_topic(topic, self._on_event)
@@ -158,7 +152,6 @@ class DaskRunner:
         return not interrupted
 
     def _drain(self, running: dict[str, RemoteJob], display: Display) -> None:
-        """Apply the progress events: a point started (again), its step."""
         with self._lock:
             events, self._events = self._events, []
         for ev in events:
@@ -182,7 +175,6 @@ class DaskRunner:
                 job.k = int(ev["k"])
 
     def _collect(self, fut: Any, p: Point) -> tuple[str, str]:
-        """A finished future: its run folder into place, its (status, error)."""
         if fut.status != "finished":
             exc = fut.exception()
             return "failed", f"dask task {fut.status}: {type(exc).__name__}: {exc}"

@@ -1,9 +1,7 @@
-"""Sampled designs of experiments over parameter ranges (``[sweep.design]``, docs/sweeps.md):
-Latin hypercube, Sobol' sequence (``scipy.stats.qmc``) and Saltelli's design (SALib), seeded.
-
-The design is one sweep axis, ``sample`` (``s000``, ``s001``, ...), whose points also carry
-each ranged key's value as a parameter; grid axes multiply it. Values are rounded to 6
-significant digits (the run gets exactly the value in its point id's parameters).
+"""Sampled designs over parameter ranges (``[sweep.design]``, docs/sweeps.md): Latin
+hypercube, Sobol' sequence (``scipy.stats.qmc``), Saltelli's (SALib), seeded. The design is one
+sweep axis, ``sample`` (``s000``, ...), each point carrying its ranged keys' values as
+parameters (rounded to 6 significant digits: the run gets exactly those).
 """
 
 from __future__ import annotations
@@ -23,7 +21,6 @@ AXIS = "sample"
 
 @dataclass
 class Range:
-    """One sampled parameter: a dotted scenario key over [low, high], linear or log."""
 
     key: str
     low: float
@@ -33,7 +30,6 @@ class Range:
 
 @dataclass
 class Design:
-    """A parsed ``[sweep.design]``: method, size, seed, ranges; ``values`` rows of samples."""
 
     method: str
     n: int
@@ -44,11 +40,6 @@ class Design:
     @property
     def keys(self) -> list[str]:
         return [r.key for r in self.ranges]
-
-    def problem(self) -> dict[str, Any]:
-        """SALib's problem dict (bounds in the sampled space: log10 for log ranges)."""
-        return {"num_vars": len(self.ranges), "names": self.keys,
-                "bounds": [_space(r) for r in self.ranges]}
 
 
 def _space(r: Range) -> list[float]:
@@ -88,8 +79,8 @@ def _round(v: float) -> float:
 
 
 def parse_design(spec: Any, check_key: Any) -> Design:
-    """Read and sample ``[sweep.design]``. ``check_key(where, key, value)`` checks a dotted
-    scenario key (the sweep file's own check). Raises ScenarioError naming the key."""
+    """Read and sample ``[sweep.design]`` (``check_key(where, key, value)``: the sweep file's
+    key check); ScenarioError naming the key."""
     where = "sweep.design"
     if not isinstance(spec, dict):
         raise ScenarioError(where, spec, "a table with method, n, seed and ranges")
@@ -124,7 +115,6 @@ def parse_design(spec: Any, check_key: Any) -> Design:
 
 
 def _unit_samples(method: str, n: int, seed: int, d: int, ranges: list[Range]) -> np.ndarray:
-    """Samples in [0, 1)^d (Saltelli's: in the unit cube of its problem's bounds)."""
     from scipy.stats import qmc
 
     if method == "lhs":
@@ -138,7 +128,6 @@ def _unit_samples(method: str, n: int, seed: int, d: int, ranges: list[Range]) -
 
 
 def design_axis(design: Design) -> tuple[list[str], list[dict[str, Any]]]:
-    """The ``sample`` axis: its labels and, per sample, the overrides (= its parameters)."""
     width = max(3, len(str(len(design.values) - 1)))
     labels = [f"s{i:0{width}d}" for i in range(len(design.values))]
     overrides = [{k: float(v) for k, v in zip(design.keys, row, strict=True)}

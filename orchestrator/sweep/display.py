@@ -1,5 +1,4 @@
-"""One progress display for the whole sweep (stderr): a line per running point on a
-terminal, a line per event and a status line now and then on a pipe."""
+"""One progress display for the whole sweep on stderr."""
 
 from __future__ import annotations
 
@@ -17,7 +16,7 @@ if TYPE_CHECKING:
 
 
 class Job(Protocol):
-    """What the display needs of a point being worked on (a local process or a Dask task)."""
+    """A point being worked on (a local process or a Dask task)."""
 
     point: Point
     phase: str
@@ -25,7 +24,7 @@ class Job(Protocol):
     fresh: bool
 
     def step(self) -> int | None:
-        """The step its run has reached, or None."""
+        ...
 
 
 class Display:
@@ -55,7 +54,7 @@ class Display:
         elapsed = time.monotonic() - self.t0
         if not self.tty and time.monotonic() - self.last_status < 30.0:
             return
-        steps = steps_done + sum((self._k(j) or 0) if j.phase == "run" else j.point.n_steps
+        steps = steps_done + sum((j.step() or 0) if j.phase == "run" else j.point.n_steps
                                  for j in jobs if j.phase == "run" or j.fresh)
         head = (f"sweep: {done}/{self.total} finished ({failed} failed), {len(jobs)} running, "
                 f"{pending} waiting; {100 * min(1.0, steps / self.n_steps_total):3.0f}% of "
@@ -75,21 +74,17 @@ class Display:
         self.stream.flush()
         self.lines = len(rows)
 
-    @staticmethod
-    def _k(j: Job) -> int | None:
-        return j.step()
-
     def _frac(self, j: Job) -> str:
         if j.phase != "run":
             return j.phase
-        k = self._k(j)
+        k = j.step()
         return "starting" if k is None else f"{100 * k / max(1, j.point.n_steps):.0f}%"
 
     def _bar(self, j: Job) -> str:
         t = time.monotonic() - j.t0
         if j.phase != "run":
             return f"{j.phase:<8} {t:6.0f} s"
-        k = self._k(j)
+        k = j.step()
         if k is None:
             return f"starting {t:6.0f} s"
         n = max(1, j.point.n_steps)
@@ -102,7 +97,6 @@ class Display:
 
 
 def event_line(run_dir: Path, pid: str, status: str, err: str, i: int, n: int) -> str:
-    """The line printed when a point finishes: its status and timing (and minimum life)."""
     head = f"[{i}/{n}] {status:<6} {pid}"
     if status != "ok":
         return f"{head}: {err}"

@@ -1,5 +1,4 @@
-"""Results of a sweep: one row per point from the run folders, ``results.csv`` /
-``results.json``, the printed table, and ``sweep.json``."""
+"""A sweep's results: a row per point from the run folders, results.csv/.json, sweep.json."""
 
 from __future__ import annotations
 
@@ -23,7 +22,6 @@ def _fmt(v: Any) -> str:
 
 
 def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> list[dict]:
-    """One row per point, from the run folders (points of earlier sessions included)."""
     rows = []
     for p in sweep.points:
         d = sweep.run_dir(out, p)
@@ -67,12 +65,11 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
 
 
 RIDE_KEYS = ("a_b_rms", "a_b_wk_rms", "a_w_rms", "sws", "defl_rms", "dtl_rms", "f_d_rms")
-"""The ride metrics of :func:`nodes.recorder.ride_metrics.metric_values` a sampled design's
-results carry (as ``ride <key>``; per corner ``ride a_b[2]_rms`` for a full vehicle)."""
+"""The ride metrics (:func:`nodes.recorder.ride_metrics.metric_values`) a design's results carry
+as ``ride <key>`` (per corner ``ride a_b[2]_rms``)."""
 
 
 def ride_columns(run_dir: Path) -> dict[str, float]:
-    """``{"ride <key>": value}`` of a finished run's table (empty if it has none)."""
     table_path = run_dir / "table.parquet"
     if not table_path.is_file():
         return {}
@@ -88,7 +85,6 @@ def ride_columns(run_dir: Path) -> dict[str, float]:
 
 
 def _worker_text(w: dict[str, Any]) -> str:
-    """A worker as the results give it: a Dask worker's name (or address), else the host."""
     if w.get("executor") == "dask":
         return str(w.get("name") or w.get("address"))
     return str(w.get("host", ""))
@@ -110,7 +106,6 @@ def write_results(out: Path, rows: list[dict]) -> None:
 
 
 def results_table(sweep: Sweep, rows: list[dict]) -> str:
-    """The printed table: id, params, status, timing, the first channel's RMS, fatigue."""
     cols = ["point", *(a.name for a in sweep.axes), "status", "wall_s", "steps_per_s"]
     metrics = [c for c in (rows[0] if rows else {}) if c.endswith((" peak", " rms"))]
     extra = [c for c in metrics if any(r.get(c) is not None for r in rows)][:3]

@@ -1,11 +1,7 @@
-"""The sensitivity table of a sampled design (``sensitivity.csv``/``.json``): how much each
-output (the arm's minimum life, the ride metrics) depends on each sampled parameter, per grid
-point (``group``) when there are grid axes.
-
-* Spearman rank correlation rho (with p-value) and partial rank correlation (PRCC): valid
-  for any space-filling design; monotonic association in [-1, 1], not variance shares.
-* Sobol' indices S1, ST with 95 % bootstrap confidence (SALib's Saltelli/Jansen): only for
-  ``method = "saltelli"`` and only when every point of the group succeeded.
+"""The sensitivity table of a sampled design (``sensitivity.csv``/``.json``): per grid point
+(``group``), each output (minimum life, ride metrics) against each sampled parameter: Spearman
+rho (p-value) and PRCC (any design; monotonic association, not variance shares); Sobol' S1, ST
+with 95 % bootstrap confidence (SALib) for ``method = "saltelli"`` when the group all succeeded.
 """
 
 from __future__ import annotations
@@ -35,7 +31,6 @@ VALIDITY = {
 
 
 def outputs_of(sweep: Sweep, rows: list[dict]) -> list[str]:
-    """The result columns the table covers: minimum life (with fatigue), ride metrics."""
     outs = ["life_km"] if sweep.fatigue else []
     for r in rows:
         outs += [c for c in r if c.startswith("ride ") and c not in outs]
@@ -47,8 +42,8 @@ def _finite(v: Any) -> bool:
 
 
 def rank_correlations(x: np.ndarray, y: np.ndarray) -> list[tuple[float, float, float]]:
-    """Per column of ``x`` (n, d): (Spearman rho, its p-value, PRCC) with ``y`` (n,).
-    NaN where undefined (a constant column or output, too few points)."""
+    """Per column of ``x`` (n, d): (Spearman rho, p-value, PRCC) with ``y`` (n,); NaN where
+    undefined."""
     from scipy.stats import rankdata, spearmanr
 
     n, d = x.shape
@@ -75,7 +70,6 @@ def rank_correlations(x: np.ndarray, y: np.ndarray) -> list[tuple[float, float, 
 
 
 def sobol_indices(problem: dict[str, Any], y: np.ndarray, seed: int) -> dict[str, np.ndarray]:
-    """S1, S1_conf, ST, ST_conf of Saltelli's design (SALib, no second order)."""
     from SALib.analyze import sobol
 
     res = sobol.analyze(problem, y, calc_second_order=False, print_to_console=False, seed=seed)
@@ -83,7 +77,6 @@ def sobol_indices(problem: dict[str, Any], y: np.ndarray, seed: int) -> dict[str
 
 
 def sensitivity(sweep: Sweep, rows: list[dict]) -> dict[str, Any]:
-    """The sensitivity table of a design sweep's result rows (see the module's docstring)."""
     design = sweep.design
     assert design is not None
     params = design.keys
@@ -124,7 +117,6 @@ def _clean(v: Any) -> Any:
 
 
 def write_sensitivity(out: Path, sens: dict[str, Any]) -> None:
-    """``sensitivity.json`` (strict JSON: NaN as null) and ``sensitivity.csv``."""
     rows = [{k: _clean(v) for k, v in r.items()} for r in sens["rows"]]
     (out / "sensitivity.json").write_text(json.dumps({**sens, "rows": rows}, indent=2))
     columns = [*sens["group_axes"], *COLUMNS]
@@ -136,7 +128,6 @@ def write_sensitivity(out: Path, sens: dict[str, Any]) -> None:
 
 
 def sensitivity_table(sens: dict[str, Any]) -> str:
-    """The printed table: per (group,) output and parameter, rho, PRCC (and S1, ST)."""
     sobol = sens["method"] == "saltelli"
     head = [*sens["group_axes"], "output", "parameter", "n", "spearman", "prcc"]
     head += ["S1", "ST"] if sobol else []

@@ -15,8 +15,7 @@ from .spec import Sweep
 
 
 def point_of_run(run_id: str, point_ids: Iterable[str]) -> str | None:
-    """The point whose run this is: a sweep's run ids are ``<point id>-<invocation token>``
-    (:attr:`.spec.Point.run_id`); a bare point id (a sweep of an older version) is taken too."""
+    """The point whose run this is (run ids: ``<point id>-<invocation token>``, or the id)."""
     from cosim import keys
 
     ids = set(point_ids)
@@ -33,12 +32,10 @@ def point_of_run(run_id: str, point_ids: Iterable[str]) -> str | None:
 
 def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
           stream: TextIO, poll_s: float = 1.0) -> int:
-    """The other machine's side of a sweep: start ``suscosim node NODE --run <id>`` for each
-    point of the sweep as soon as that point's orchestrator answers on the router, until every
-    point has been served to the end (or is done in ``out``, when the folder is shared).
+    """Start ``suscosim node NODE --run <id>`` for each point as soon as its orchestrator
+    answers on the router, until every point is served (or done in a shared ``out``): 0, or
+    130 when interrupted."""
 
-    Returns 0 when every point was served (or found done), 130 when interrupted.
-    """
     from cosim import keys
     from cosim.bus import ZenohBus, zenoh_config
 
