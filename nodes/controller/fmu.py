@@ -14,6 +14,7 @@ run's first step.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import shutil
 import tempfile
 import zipfile
@@ -46,10 +47,6 @@ class FmuPlan:
     inputs: dict[str, str]  # FMU input name -> our signal
     outputs: dict[str, str]  # FMU output name -> our channel
     parameters: dict[str, Any]  # FMU parameter name -> value
-
-    @property
-    def version(self) -> str:
-        return str(self.md.fmiVersion)
 
     def checkpoint_refusal(self) -> str | None:
         """Why this FMU's state cannot be checkpointed (None when it can): a checkpoint needs
@@ -162,12 +159,6 @@ def check_fmu(r: ConfigReader, n_corners: int) -> FmuPlan:
     return FmuPlan(path=path, md=md, inputs=inputs, outputs=outputs, parameters=parameters)
 
 
-def _check_real(r: ConfigReader, key: str, var: Any) -> None:
-    if var.type not in REAL_TYPES:
-        raise ScenarioError(r.key(key), var.name, f"a real (Float64) variable; "
-                            f"'{var.name}' is {var.type}")
-
-
 def _map_table(r: ConfigReader, variables: Mapping[str, Any], causality: str,
                value_ok: Callable[[Any], bool], expected: str) -> dict[str, str]:
     """The ``[controller.<causality>s]`` table (FMU variable -> our signal or channel), each
@@ -182,7 +173,9 @@ def _map_table(r: ConfigReader, variables: Mapping[str, Any], causality: str,
                                 f"'{name}' is not one (its {causality}s: {names or 'none'})")
         if not value_ok(value):
             raise ScenarioError(r.key(key), value, expected)
-        _check_real(r, key, variables[name])
+        if variables[name].type not in REAL_TYPES:
+            raise ScenarioError(r.key(key), name, f"a real (Float64) variable; '{name}' is "
+                                f"{variables[name].type}")
         out[str(name)] = str(value)
     return out
 
@@ -251,16 +244,13 @@ class FmuController(Controller):
         self._in = [(variables[n].valueReference, s) for n, s in plan.inputs.items()]
         self._out = [(variables[n].valueReference, c) for n, c in plan.outputs.items()]
         self._params = [(variables[n], v) for n, v in plan.parameters.items()]
-        self._fmi3 = plan.version.startswith("3.")
+        self._fmi3 = str(plan.md.fmiVersion).startswith("3.")
         self._messages: deque[str] = deque(maxlen=5)
         self._broken = self._fatal = False
 
     # ------------------------------------------------------------------ FMI calls
     def _set_real(self, fmu: Any, vrs: list[int], values: list[float]) -> None:
         (fmu.setFloat64 if self._fmi3 else fmu.setReal)(vrs, values)
-
-    def _get_real(self, fmu: Any, vrs: list[int]) -> list[float]:
-        return (fmu.getFloat64 if self._fmi3 else fmu.getReal)(vrs)
 
     def _set_param(self, fmu: Any, var: Any, value: Any) -> None:
         vr = [var.valueReference]
@@ -322,37 +312,36 @@ class FmuController(Controller):
             instances = []
         for fmu in instances:
             if not self._broken:  # after an error FMI allows only freeing the instance
-                try:
+                with contextlib.suppress(Exception):  # best effort at shutdown
                     fmu.terminate()
-                except Exception:  # noqa: S110 - best effort at shutdown
-                    pass
-            try:  # free the instance but keep the library loaded: a PythonFMU binary leaves
-                # Python objects that point into it (unloading it made the GC crash later)
+            # free the instance but keep the library loaded: a PythonFMU binary leaves Python
+            # objects that point into it (unloading it made the GC crash later)
+            with contextlib.suppress(Exception):
                 (fmu.fmi3FreeInstance if self._fmi3 else fmu.fmi2FreeInstance)(fmu.component)
-            except Exception:  # noqa: S110
-                pass
         if self._unzipdir:
             shutil.rmtree(self._unzipdir, ignore_errors=True)
             self._unzipdir = None
 
     # ------------------------------------------------------------------ checkpoints
+    def _refuse_checkpoint(self) -> None:
+        from cosim.checkpoint import CheckpointError
+
+        if why := self.plan.checkpoint_refusal():
+            raise CheckpointError(why)
+
     def checkpoint_state(self) -> dict[str, Any]:
         """Every corner's FMU state, serialised by the FMU itself (FMI get + serialize FMU
         state), for a checkpoint. Raises :class:`cosim.checkpoint.
         CheckpointError` (exit 2) naming the FMU when it cannot, never a partial state."""
-        from cosim.checkpoint import CheckpointError
-
-        why = self.plan.checkpoint_refusal()
-        if why:
-            raise CheckpointError(why)
         blobs: list[bytes] = []
+        self._refuse_checkpoint()
         s = "State" if self._fmi3 else "state"  # FMI 3 getFMUState, FMI 2 getFMUstate
         for fmu in self._instances:
             st = getattr(fmu, f"getFMU{s}")()
             blobs.append(bytes(getattr(fmu, f"serializeFMU{s}")(st)))
             getattr(fmu, f"freeFMU{s}")(st)
-        return {"fmu": self.plan.path.name, "fmi": self.plan.version, "started": bool(blobs),
-                "states": blobs}
+        return {"fmu": self.plan.path.name, "fmi": str(self.plan.md.fmiVersion),
+                "started": bool(blobs), "states": blobs}
 
     def restore_state(self, state: dict[str, Any], t: float,
                       state_inputs: Mapping[str, np.ndarray]) -> None:
@@ -360,9 +349,7 @@ class FmuController(Controller):
         and ``state_inputs`` (the plant's state at the checkpoint) start the instances first."""
         from cosim.checkpoint import CheckpointError
 
-        why = self.plan.checkpoint_refusal()
-        if why:
-            raise CheckpointError(why)
+        self._refuse_checkpoint()
         n_saved = len(state.get("states", ()))
         if state.get("fmu") != self.plan.path.name or n_saved not in (0, self.n):
             raise CheckpointError(f"the checkpoint holds the state of {state.get('fmu')!r} for "
@@ -422,7 +409,7 @@ class FmuController(Controller):
                 if self._fmi3 and result[1]:  # terminateSimulation
                     raise RunError(f"the FMU {self.plan.path.name} asked to terminate at "
                                    f"t = {t + (j + 1) * dt:g} s")
-            values[i] = self._get_real(fmu, vrs_out)
+            values[i] = (fmu.getFloat64 if self._fmi3 else fmu.getReal)(vrs_out)
         cols = {ch: values[:, k].copy() for k, (_, ch) in enumerate(self._out)}
         F_d = cols.pop("F_d")
         c_eff = cols.pop("c_eff", np.full(self.n, self.c_eff_default))
