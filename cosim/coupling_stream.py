@@ -181,11 +181,11 @@ class ResidualStream:
 def residual_of_table_file(path: str | Path, h: float | None, coupling: str, exchange: str,
                            batch_rows: int = 65_536) -> dict[str, BondResidual]:
     """Both bonds' residual totals of a ``table.parquet``, read a row group at a time."""
-    from .table import iter_table
+    from .formats.stream import iter_chunks, table_columns
 
     stream = ResidualStream(h, coupling, exchange)
-    for block in iter_table(path, keep=lambda c: c == "t" or c.split("[")[0] in COLUMNS,
-                            batch_rows=batch_rows):
+    names = [c for c in table_columns(path) if c in ("k", "t") or c.split("[")[0] in COLUMNS]
+    for block in iter_chunks(path, names, batch_rows):
         stream.feed(block)
     return stream.result()
 

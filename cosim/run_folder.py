@@ -74,18 +74,20 @@ def write_json(obj: object, path: str | Path) -> None:
 
 
 # ---- run.json (written by the runner) ------------------------------------------------------
-def _proc_start(pid: int) -> int | None:
-    """Start time of process ``pid`` in clock ticks since boot (Linux ``/proc``), or None."""
+def _proc_stat(pid: int) -> list[str]:
+    """Fields 3.. of ``/proc/<pid>/stat`` (Linux; [] if unreadable): after comm, which may
+    hold spaces and parentheses."""
     try:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
-        return None
-    # Field 2 (comm) may hold spaces and parentheses: split after its closing one.
-    fields = stat[stat.rfind(")") + 2:].split()
-    try:
-        return int(fields[19])  # field 22 of the whole line
-    except (IndexError, ValueError):
-        return None
+        return []
+    return stat[stat.rfind(")") + 2:].split()
+
+
+def _proc_start(pid: int) -> int | None:
+    """Start time of process ``pid`` in clock ticks since boot, or None."""
+    fields = _proc_stat(pid)
+    return int(fields[19]) if len(fields) > 19 and fields[19].isdigit() else None
 
 
 def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
@@ -102,9 +104,8 @@ def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
         "endpoints": {"listen": list(listen or []), "connect": list(connect or [])},
         "lowlatency": bool(lowlatency), "state": "started",
     }
-    write_json(info, Path(folder) / RUN_JSON)  # atomic: a reader never sees it half-written
+    write_json(info, Path(folder) / RUN_JSON)
     return info
-
 
 
 def mark_run_ended(folder: Path, status: str) -> None:
@@ -131,12 +132,8 @@ def pid_alive(pid: int, pid_start: int | None = None) -> bool:
         return False
     except PermissionError:  # someone else's process: it exists
         pass
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-        if stat[stat.rfind(")") + 2:].split()[0] == "Z":
-            return False
-    except (OSError, IndexError):
-        pass
+    if _proc_stat(pid)[:1] == ["Z"]:
+        return False
     if pid_start is not None:
         now = _proc_start(pid)
         if now is not None and now != pid_start:
@@ -146,9 +143,8 @@ def pid_alive(pid: int, pid_start: int | None = None) -> bool:
 
 def journal_integrity(path: Path) -> dict[str, Any]:
     """What ``suscosim export`` would find in the journal: intact ``records``,
-    ``skipped_records`` (damaged, stepped over), ``torn`` and ``problem`` (one line). The
-    segments' CRCs are checked and their records counted, nothing decompressed: memory and
-    time by the segment, not the journal."""
+    ``skipped_records`` (damaged), ``torn`` and ``problem`` (one line), from the segments'
+    CRCs (nothing decompressed)."""
     try:
         c = scan_journal(path)
     except (OSError, ValueError) as exc:

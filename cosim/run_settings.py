@@ -1,5 +1,5 @@
 """The run's settings, typed and read once: :class:`RunSettings` from the resolved scenario's
-``[run]`` table, and the lag rule of the exchange in one place (:meth:`RunSettings.step_of`).
+``[run]`` table, and the lag rule of the exchange in one place (:meth:`RunSettings.needs`).
 
 The exchange (``run.exchange``, DESIGN.md "Lock-step co-simulation"):
 
@@ -83,12 +83,8 @@ class RunSettings:
         """Steps a lagged input is behind: 0 sequential, 1 parallel."""
         return 0 if self.exchange == "sequential" else 1
 
-    def step_of(self, tag: tuple[str, str], k: int) -> int:
-        """The step of input ``tag`` (node, channel) that step ``k`` is computed from."""
-        return max(k - self.lag, 0) if tag in LAGGED else k
-
     def needs(self, tags: list[tuple[str, str]], k: int) -> dict[tuple[str, str], int]:
-        """``{input: step}`` for :meth:`cosim.participant.Participant.wait` at step ``k``."""
+        """``{input: step}`` that step ``k`` is computed from (for ``Participant.wait``)."""
         lag = self.lag
         if not lag:
             return {tag: k for tag in tags}

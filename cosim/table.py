@@ -8,12 +8,13 @@ import csv
 import math
 import os
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.table_batches import parquet_errors
 
 Table = dict[str, np.ndarray]
 
@@ -48,16 +49,10 @@ def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> T
     if path.suffix == ".parquet":
         import pyarrow.parquet as pq
 
-        try:
+        with parquet_errors(path, pass_missing=True):
             names = [n for n in pq.ParquetFile(path).schema_arrow.names if wanted(n)]
             t = pq.read_table(path, columns=names)
             return {c: t.column(c).to_numpy() for c in t.column_names}
-        except OSError as exc:
-            if not path.is_file():
-                raise
-            raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
-        except Exception as exc:  # pyarrow raises several types for a bad file
-            raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
     if not rows or not rows[0]:
@@ -77,30 +72,6 @@ def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> T
                 raise InputFileError(str(path), "non-numeric value", lineno) from None
         raise
     return {cols[i]: arr[:, i] for i in cut}
-
-
-def iter_table(path: str | Path, keep: Callable[[str], bool] | None = None,
-               batch_rows: int = 65_536) -> Iterator[Table]:
-    """The rows of a ``table.parquet`` in blocks of at most ``batch_rows`` (columns as
-    :func:`read_table` selects them, as float), one row group at a time; InputFileError for a
-    file that is not such a table."""
-    import pyarrow.parquet as pq
-
-    from cosim.table_batches import parquet_batches
-
-    path = Path(path)
-    try:
-        f = pq.ParquetFile(path)
-        names = [n for n in f.schema_arrow.names if keep is None or n in ("k", "t") or keep(n)]
-        yield from parquet_batches(path, names, batch_rows)
-    except OSError as exc:
-        if not path.is_file():
-            raise
-        raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
-    except InputFileError:
-        raise
-    except Exception as exc:  # pyarrow raises several types for a bad file
-        raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
 
 
 def channel_stats(table: Table) -> dict[str, dict[str, float]]:

@@ -4,12 +4,29 @@ fatigue and the bench read a run's table without holding it whole)."""
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from .errors import InputFileError
+
 BATCH_ROWS = 65_536
 """Rows yielded at a time at most (~0.5 MB a column)."""
+
+
+@contextmanager
+def parquet_errors(path: str | Path, pass_missing: bool = False) -> Iterator[None]:
+    """pyarrow's errors on a file that is not a readable Parquet table as an InputFileError
+    naming it (``pass_missing``: a missing file's OSError passes as it is)."""
+    try:
+        yield
+    except InputFileError:
+        raise
+    except Exception as exc:  # pyarrow raises several types for a bad file
+        if pass_missing and isinstance(exc, OSError) and not Path(path).is_file():
+            raise
+        raise InputFileError(str(path), f"not a readable Parquet file ({exc})") from None
 
 
 def parquet_batches(path: Path, columns: Sequence[str], rows: int = BATCH_ROWS

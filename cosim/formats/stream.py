@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
+from cosim.table_batches import parquet_batches, parquet_errors
 
 from .tables import write_chunks
 
@@ -25,10 +26,8 @@ def table_columns(src: str | Path) -> list[str]:
     if src.suffix == ".parquet":
         import pyarrow.parquet as pq
 
-        try:
+        with parquet_errors(src):
             return list(pq.ParquetFile(src).schema_arrow.names)
-        except Exception as exc:  # pyarrow raises several types for a bad file
-            raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
     with open(src, newline="") as fh:
         head = next(csv.reader(fh), None)
     if not head:
@@ -43,14 +42,8 @@ def iter_chunks(src: str | Path, names: list[str], rows: int | None = None
     src = Path(src)
     rows = BATCH_ROWS if rows is None else rows
     if src.suffix == ".parquet":
-        from cosim.table_batches import parquet_batches
-
-        try:
+        with parquet_errors(src):
             yield from parquet_batches(src, names, rows)  # a row group at a time
-        except InputFileError:
-            raise
-        except Exception as exc:
-            raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
         return
     with open(src, newline="") as fh:
         reader = csv.reader(fh)

@@ -21,6 +21,7 @@ import numpy as np
 
 from cosim.errors import InputFileError
 from cosim.safe_open import open_user_text
+from cosim.table_batches import parquet_errors
 
 from .channel_set import ChannelSet
 
@@ -181,10 +182,8 @@ def read_parquet(path: str | Path) -> ChannelSet:
     import pyarrow.parquet as pq
 
     path = str(path)
-    try:
+    with parquet_errors(path):
         tab = pq.read_table(path)
-    except Exception as exc:  # pyarrow raises several types for a bad file
-        raise InputFileError(path, f"not a readable Parquet file ({exc})") from None
     names = tab.column_names
     it = _time_column(names, path)
     chans: dict[str, np.ndarray] = {}
