@@ -3,35 +3,20 @@ into the run's table.
 
 It subscribes to the records feed of every producer node of the run
 (``suscosim/<run>/<node>/records``: the node's data messages exactly as it published them, in
-batches of a few steps), appends each valid data message to the append-only journal as it
-arrives (:mod:`cosim.journal`: the durable record) and gives it to the table
-(:class:`cosim.table_writer.TableWriter`: ``table.csv`` / ``table.parquet`` written as rows
-complete, in place when the run ends: #28 item 5, the table comes from what the recorder
-holds, not from re-reading the journal). Once every channel has delivered every step 0..N it
-reports per-channel statistics to the orchestrator. On an abort it flushes, puts the rows
-that are complete in place, and stops. Its memory does not grow with the run (#32): the steps
-each channel delivered are kept as ranges (:class:`~nodes.recorder.steps.StepSet`), the table
-holds only the steps not yet complete.
+batches of a few steps, signed with the run's key: :meth:`Participant.open`) and gives each
+message to :class:`.recording.Recording` (what is rejected, the append-only journal of
+:mod:`cosim.journal`, the table of :class:`cosim.table_writer.TableWriter` written as rows
+complete). Once every channel has delivered every step 0..N it puts the table in place and
+reports per-channel statistics to the orchestrator; on an abort it flushes, puts the rows that
+are complete in place, and stops. Its memory does not grow with the run: the steps each
+channel delivered are ranges (:class:`.steps.StepSet`), the table holds only the steps not yet
+complete.
 
-As the table's rows complete, the recorder also publishes the run's coupling energy residual
-per step and bond on ``recorder/coupling`` (#29 item 1; :class:`cosim.coupling_stream.
-LiveResidual`, one message per :data:`LIVE_PERIOD_S` at most and at the end, signed as its
-other messages): computed from the table's own rows, it is what ``summary.json``'s
-``coupling_energy_residual`` sums, step by step, while the run goes. It is not journaled:
-a journal's table gives it again (docs/coupling_residual.md, "The live channel").
-
-A live fatigue node takes the load channel (``plant/arm``) straight from the plant's stream
-(#28 item 4); the recorder no longer relays it as blocks on ``recorder/loads``.
-
-A batch must be signed with the run's key (:meth:`Participant.open`); each data message in
-it must decode, be on a channel its node declared, and keep the layout of its channel (the
-same fields, each a number or a list of one length, as in the channel's first message).
-Anything else is rejected and counted, never journaled: one ragged batch cannot make a
-complete journal unexportable. A second message for a step a channel already gave (a
-duplicate: a records batch replayed into the run, #30 item 12) is counted (``duplicates``,
-and as rejected), not journaled: a replay cannot fill the disk. A hole in a channel's steps
-(a batch lost on the bus, or rejected, with later ones come) ends the run at once naming the
-steps and the producer (:func:`lost_steps`), not at the stall timeout.
+It also publishes the run's coupling energy residual per step and bond on
+``recorder/coupling`` (:class:`cosim.coupling_stream.LiveResidual`, at most once per
+:data:`LIVE_PERIOD_S` and at the end, signed as its other messages), computed from the
+table's rows: what ``summary.json``'s ``coupling_energy_residual`` sums, step by step. It is
+not journaled: a journal's table gives it again (docs/coupling_residual.md).
 """
 
 from __future__ import annotations
@@ -80,13 +65,8 @@ def finalize(journal_path: Path, folder: Path) -> dict[str, Any]:
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
-    """Record the run until every channel is complete (or the run is aborted).
-
-    Producers (the coupled kinds of the registry, :func:`cosim.node_kinds.producers`) send
-    their data messages, exactly as they published them, in batches on ``<node>/records``
-    (see cosim.participant); each one is validated, journaled and put in the table
-    (:class:`.recording.Recording`).
-    """
+    """Record the run until every channel is complete (or the run is aborted); the producers
+    are the coupled kinds of the registry (:func:`cosim.node_kinds.producers`)."""
     run_cfg = scenario["run"]
     folder = Path(run_cfg["dir"])
     journal_path = folder / "journal.msgpack"

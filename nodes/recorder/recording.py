@@ -159,13 +159,10 @@ class Recording:
 
 
 def lost_steps(node: str, name: str, steps: StepSet) -> str:
-    """The run's error for the first hole in the steps channel ``name`` delivered.
-
-    A producer sends its records batches in step order on one publisher and Zenoh delivers
-    them reliably and in order, so steps missing below one that came were lost on the bus (a
-    whole batch: issue #28's dask sweep once lost plant steps 65-96) or rejected here (a
-    batch or message that did not verify or decode). Nothing sends them again; waiting for
-    the stall timeout would only hide which steps and whose batch."""
+    """The run's error for the first hole in the steps channel ``name`` delivered: a producer
+    sends its batches in step order and Zenoh delivers them reliably and in order, so steps
+    missing below one that came were lost on the bus or rejected here, and nothing sends them
+    again (waiting for the stall timeout would only hide which steps and whose batch)."""
     lo, hi = steps.hi[0], steps.lo[1] - 1
     return (f"recorder: {name} steps {lo}-{hi} never arrived (a records batch of {node!r} "
             f"was lost on the bus or rejected; its step {steps.lo[1]} came): the journal "
