@@ -105,11 +105,11 @@ class JournalWriter:
 
 @dataclass
 class Skipped:
-    """A damaged stretch of a journal that the reader stepped over."""
+    """A damaged stretch the reader stepped over: byte offset, length [bytes], records lost."""
 
-    offset: int  # byte offset of its start
-    length: int  # bytes
-    records: int  # records lost in it
+    offset: int
+    length: int
+    records: int
 
 
 @dataclass
@@ -131,8 +131,7 @@ class JournalContents:
         return sum(s.records for s in self.skipped)
 
     @property
-    def damaged(self) -> bool:
-        """Records were lost in the middle of the journal (not just a torn tail)."""
+    def damaged(self) -> bool:  # records lost in the middle, not just a torn tail
         return bool(self.skipped)
 
 
@@ -212,8 +211,8 @@ def _next_head(win: _Window, pos: int) -> int:
 
 def _body_records(body: bytes, rawlen: int, nrec: int, dctx: Any) -> list[tuple[str, bytes]]:
     """The records of a segment body whose CRC matched; ValueError if it does not decode.
-    A stream reader stops one byte past ``rawlen`` (<= :data:`MAX_SEGMENT_BYTES`): zstd's
-    ``decompress`` would inflate whatever size a forged frame states."""
+    Read by a stream that stops one byte past ``rawlen`` (zstd's ``decompress`` would inflate
+    whatever size a forged frame states)."""
     if rawlen > MAX_SEGMENT_BYTES:
         raise ValueError(f"declares {rawlen} raw bytes, more than {MAX_SEGMENT_BYTES}")
     parts: list[bytes] = []
@@ -246,12 +245,10 @@ def _body_records(body: bytes, rawlen: int, nrec: int, dctx: Any) -> list[tuple[
 
 class JournalReader:
     """Stream a journal's intact records (``for channel, payload in reader``) in bounded
-    memory; after the iteration, :meth:`contents` says what was skipped or torn.
-
-    With ``tail_bytes``, reading starts at the first intact segment of the file's last
-    ``tail_bytes`` (doubled until a whole segment is found). With ``decode=False`` only the
-    CRCs are checked and records counted (nothing is yielded).
-    """
+    memory; after the iteration, :meth:`contents` says what was skipped or torn. With
+    ``tail_bytes``, reading starts at the first intact segment of the file's last
+    ``tail_bytes`` (doubled until a whole segment is found); with ``decode=False`` only the
+    CRCs are checked and records counted (nothing is yielded)."""
 
     def __init__(self, path: str | Path, tail_bytes: int | None = None,
                  decode: bool = True) -> None:
@@ -263,7 +260,7 @@ class JournalReader:
         self._result: JournalContents | None = None
 
     def contents(self) -> JournalContents:
-        """What the iteration found (it must have run to its end)."""
+        """What the iteration (run to its end) found."""
         if self._result is None:
             raise RuntimeError("JournalReader.contents() before the records were read")
         return self._result
@@ -361,8 +358,8 @@ class JournalReader:
 
 def _lost(bad: list[tuple[int, int, int | None]], lost: int, pos: int) -> list[Skipped]:
     """The damaged stretches since the last good segment, with the ``lost`` records the
-    segment numbers say they held: those whose header survived hold theirs, the rest the
-    remainder (together: a stretch whose headers are all gone counts it whole)."""
+    segment numbers say they held: those whose header survived hold theirs, the first
+    headless one the remainder."""
     if lost <= 0 and not bad:
         return []
     if not bad:  # records missing with no damage seen (bytes cut out)
@@ -388,13 +385,11 @@ def read_journal(path: str | Path, tail_bytes: int | None = None) -> JournalCont
 
 
 def iter_records(path: str | Path) -> Iterator[tuple[str, bytes]]:
-    """The intact (channel, payload) records of a journal, streamed."""
     yield from JournalReader(path)
 
 
 def scan_journal(path: str | Path) -> JournalContents:
-    """The journal's integrity without its records: CRCs checked, records counted, nothing
-    decompressed -- what :func:`cosim.run_folder.run_info` shows."""
+    """The journal's integrity without its records (CRCs checked, nothing decompressed)."""
     reader = JournalReader(path, decode=False)
     for _ in reader:
         pass
@@ -416,13 +411,12 @@ def segment_index(path: str | Path) -> list[tuple[int, int, int, int]]:
     return out
 
 
-TAIL_BYTES = 64 * 1024
-"""How much of a journal's end :func:`last_step` reads (at least)."""
+TAIL_BYTES = 64 * 1024  # how much of a journal's end last_step reads (at least)
 
 
 def last_step(path: str | Path, tail_bytes: int = TAIL_BYTES) -> int | None:
     """The last step ``k`` every channel in the journal's tail has reached, or None (no
-    journal, no data record in the tail); reads only the header and the last segments."""
+    journal, no data record in the tail)."""
     try:
         contents = read_journal(path, tail_bytes=tail_bytes)
     except (OSError, ValueError):

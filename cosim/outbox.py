@@ -9,9 +9,9 @@ would reject is never sent: a diverged model ends the run naming the field). The
 * a **block channel** of the schema (``stepped=False``: ``fatigue/damage``,
   ``recorder/coupling``) goes out at once on its own key ``suscosim/<run>/<node>/<channel>``;
 * every data message is also kept, as encoded, for the recorder, which gets them in batches
-  on ``<node>/records`` (:mod:`cosim.record_batch`). A batch that falls due with a per-step
-  message goes out right after the step (:meth:`Outbox.send`): never between a step's last
-  input and its output, which the coupled chain waits for.
+  on ``<node>/records`` (:class:`RecordBatch`: at most :data:`RECORD_BATCH` messages or
+  :data:`RECORD_PERIOD_S` old, in one message). A batch that falls due with a per-step message
+  goes out right after the step: never between a step's last input and its output.
 
 A message published with ``hold=True`` (the plant's response and loads of the step before,
 encoded while it waits for this step's forces) joins the *next* step message, ahead of that
@@ -20,18 +20,49 @@ step's own; :meth:`Outbox.flush` sends it at once.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
 from . import keys, schema
 from .errors import RunError, WireError
-from .record_batch import RecordBatch
 from .wire import MAX_MESSAGE_BYTES, ChannelCodec, codec, encode, encode_step
 
 Publisher = Callable[[bytes], None]
 
-_STEP_HEADROOM = 1024
-"""Bytes a step message leaves free of :data:`cosim.wire.MAX_MESSAGE_BYTES` for its envelope."""
+_HEADROOM = 1024  # bytes a step or records message leaves free for its envelope
+RECORD_BATCH = 64  # messages a records batch holds at most
+RECORD_PERIOD_S = 0.05  # how old a batch may grow before it is sent [s]
+
+
+class RecordBatch:
+    """The messages kept since the last batch went out (``channel``, raw bytes)."""
+
+    def __init__(self) -> None:
+        self.items: list[tuple[str, bytes]] = []
+        self.bytes = 0
+        self.k, self.t = -1, 0.0  # the last kept message's step and time [s]
+        self.since = time.monotonic()
+
+    def fits(self, raw: bytes) -> bool:
+        """Whether ``raw`` still fits this batch's one message."""
+        return self.bytes + len(raw) <= MAX_MESSAGE_BYTES - _HEADROOM
+
+    def add(self, channel: str, raw: bytes, k: int, t: float) -> bool:
+        """Keep one message; True when the batch is due (full, or old enough)."""
+        self.items.append((channel, raw))
+        self.bytes += len(raw) + 8
+        self.k, self.t = k, t
+        return len(self.items) >= RECORD_BATCH or \
+            time.monotonic() - self.since >= RECORD_PERIOD_S
+
+    def take(self) -> bytes | None:
+        """The batch as one ``records`` message (None if empty); a new batch starts."""
+        self.since = time.monotonic()
+        if not self.items:
+            return None
+        batch, self.items, self.bytes = self.items, [], 0
+        return encode("records", self.k, self.t, {"records": batch})
 
 
 class Outbox:
@@ -99,7 +130,7 @@ class Outbox:
         pub = self._outputs[channel]
         if pub is None:
             if (self._step or self._held) and \
-                    self._step_bytes + len(raw) > MAX_MESSAGE_BYTES - _STEP_HEADROOM:
+                    self._step_bytes + len(raw) > MAX_MESSAGE_BYTES - _HEADROOM:
                 self.send(held=True)  # one message must carry it: the step goes in two
             (self._held if hold else self._step).append((channel, raw))
             self._step_bytes += len(raw) + 8

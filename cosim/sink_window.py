@@ -23,7 +23,7 @@ from typing import Any
 
 from . import keys
 from .errors import RunError, WireError
-from .record_batch import RECORD_BATCH
+from .outbox import RECORD_BATCH
 
 DONE = 1 << 62
 """A sink's step once it is done: never behind."""

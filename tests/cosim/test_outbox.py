@@ -3,9 +3,8 @@ next step, and records batches sent after the step they fell due with (issue #28
 
 from __future__ import annotations
 
-from cosim import keys, record_batch
-from cosim.outbox import Outbox
-from cosim.record_batch import RECORD_BATCH
+from cosim import keys, outbox
+from cosim.outbox import RECORD_BATCH, Outbox
 from cosim.wire import decode, inner
 from tests.memory_bus import MemoryBus
 
@@ -49,7 +48,7 @@ def test_held_messages_go_with_the_next_step_oldest_first() -> None:
 
 
 def test_a_records_batch_that_falls_due_goes_after_the_step_not_before(monkeypatch) -> None:
-    monkeypatch.setattr(record_batch, "RECORD_PERIOD_S", 1e9)  # due by count only, here
+    monkeypatch.setattr(outbox, "RECORD_PERIOD_S", 1e9)  # due by count only, here
     sent, out = _plant()
     for k in range(RECORD_BATCH):  # the batch's last message is a state's
         out.publish("state", k, k * 1e-3, STATE)

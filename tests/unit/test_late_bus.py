@@ -7,8 +7,7 @@ import threading
 import time
 
 from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
-from cosim.late_bus import LateBus
-from cosim.zenoh_options import open_bus
+from cosim.zenoh_options import LateBus, open_bus
 
 
 def test_a_subscription_made_before_the_endpoint_answers_hears_it_after() -> None:
