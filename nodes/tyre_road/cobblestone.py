@@ -14,7 +14,7 @@ Profile of one wheel track, height z [m] against distance x [m]::
 a crowned stone, a smooth (cosine) joint of depth d below the chord of the two stone edges,
 the next stone a step h_(i+1) - h_i higher. Lengths L_i are Gamma (mean L, std s_L), heights
 h_i independent normal (0, s_h^2), the first stone at a random phase. The long waves z_lw(x)
-are a thesis Eq. 4.10 road, S(n) = G n^-p (:mod:`nodes.tyre_road.power_law`); the track is
+are a thesis Eq. 4.10 road, S(n) = G n^-p (:mod:`nodes.tyre_road.iso8608`); the track is
 z_lw + z_stones, shifted to z(0) = 0; left and right have their own stones and long waves
 with the power-law road's ``correlation``.
 
@@ -38,8 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN
-from .power_law import DEFAULT_WAVINESS, power_law_profile
+from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, DEFAULT_WAVINESS, power_law_psd, random_profile
 from .roads import SampledRoad
 
 DX = 0.002
@@ -48,7 +47,8 @@ DX = 0.002
 
 @dataclass(frozen=True)
 class PaveParameters:
-    """Geometry of the synthetic pavé (SI units). Defaults and their reasoning:
+    """Geometry of the synthetic pavé (SI units; checked by the ``[road]`` reader,
+    :mod:`.config`). Defaults and their reasoning:
 
     Attributes:
         stone_length: mean length L [m] of a stone's top along the wheel path. Belgian block
@@ -89,16 +89,6 @@ class PaveParameters:
     waviness: float = DEFAULT_WAVINESS
     band: tuple[float, float] = (DEFAULT_N_MIN, DEFAULT_N_MAX)
     correlation: str | float = "independent"
-
-    def __post_init__(self) -> None:
-        for name in ("stone_length", "joint_width", "G", "waviness"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
-        for name in ("stone_length_std", "joint_depth", "stone_height_std", "crown"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
-        if not 0 < self.band[0] < self.band[1]:
-            raise ValueError(f"band must be 0 < n_min < n_max, got {self.band}")
 
 
 DEFAULTS = PaveParameters()
@@ -158,10 +148,8 @@ def pave_profile(length: float, seed: int, p: PaveParameters = DEFAULTS
     checks. ``seed`` draws the long waves (as the power-law road of that seed) and, from
     independent streams, the stones of each track. z(0) = 0 on both tracks.
     """
-    if not length > 0:
-        raise ValueError(f"length must be > 0, got {length}")
-    x_lw, lw_l, lw_r = power_law_profile(p.G, length, seed, p.waviness, p.correlation,
-                                         p.band[0], p.band[1])
+    x_lw, lw_l, lw_r = random_profile(power_law_psd(p.G, p.waviness), length, seed,
+                                      p.correlation, p.band[0], p.band[1])
     x = np.arange(int(np.ceil(length / DX)) + 1) * DX
     tracks, layouts = [], {}
     for name, lw, stream in (("left", lw_l, 1), ("right", lw_r, 2)):

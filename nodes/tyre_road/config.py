@@ -42,11 +42,11 @@ from typing import Any
 from cosim.channels import CORNERS as _CORNERS
 from cosim.config import ConfigReader
 
+from . import iso8608 as rr
 from .cobblestone import DEFAULTS as PAVE_DEFAULTS
 from .cobblestone import PaveParameters, pave_road
-from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, GD_N0, iso8608_road
+from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, DEFAULT_WAVINESS, GD_N0, random_road
 from .opencrg import VEHICLE_TRACK_M, opencrg_road
-from .power_law import DEFAULT_WAVINESS, power_law_road
 from .profile_csv import csv_road
 from .profile_mdf import mdf_road
 from .roads import KMH, EventRoad, Road, RoadEvent
@@ -148,13 +148,15 @@ def build_road(cfg: Mapping[str, Any], key_prefix: str = "road") -> Road:
             raise r.error("n_max", n_max, f"a number > n_min ({n_min})")
         if length is None:
             raise r.error("length_m", None, "a number > 0 (needed for iso8608)")
-        road = iso8608_road(cls, length, speed, seed, corr, n_min, n_max)
+        road = random_road(rr.iso8608_psd(cls), length, speed, seed, corr, n_min, n_max,
+                           f"iso8608_{cls}")
     elif kind == "power_law":
         r.only(_COMMON | _POWER_LAW_KEYS)
         G, waviness, seed, corr, (n_min, n_max) = _power_law_keys(r)
         if length is None:
             raise r.error("length_m", None, "a number > 0 (needed for power_law)")
-        road = power_law_road(G, length, speed, seed, waviness, corr, n_min, n_max)
+        road = random_road(rr.power_law_psd(G, waviness), length, speed, seed, corr, n_min, n_max,
+                           "power_law")
     elif kind == "pave":
         r.only(_COMMON | _POWER_LAW_KEYS | set(PAVE_KEYS))
         seed, corr = _seed(r), _correlation(r)

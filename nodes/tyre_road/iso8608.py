@@ -1,5 +1,6 @@
-"""Random road profiles of the ISO 8608 roughness classes A-H (a substitute for the thesis's
-proprietary MIRA and LTC pavé measurements, Ch. 4 Sec. 4.5; flagged as a deviation).
+"""Random road profiles (substitutes for the thesis's proprietary MIRA and LTC pavé
+measurements, Ch. 4 Sec. 4.5; flagged as a deviation): the ISO 8608 roughness classes A-H and
+the thesis's power law (Eq. 4.10), by one generator.
 
 ISO 8608 describes a road by the one-sided displacement PSD in spatial frequency n [cycles/m]
 
@@ -24,6 +25,29 @@ Left/right tracks (``correlation``):
 * ``"independent"`` the right track has its own phases (coherence 0);
 * a number rho in [0, 1]: z_R = rho z_L + sqrt(1 - rho^2) z_indep. Each track keeps the class
   PSD (in expectation) and the left/right coherence is rho^2 at every n.
+
+The thesis's power law (Ch. 4 Sec. 4.4, after its ref. [30], ``type = "power_law"``):
+
+    S(n) = G n^(-p),   n [cycles/m],  S [m^3/cycle] = [m^2 / (cycles/m)],
+
+with p = 2.5 and G from 1e-7 m^1.5 (smooth motorway) to 5e-6 m^1.5 (rough minor road); G is
+the PSD at n = 1 cycle/m, so its unit is m^(3-p) (m^0.5 for p = 2.5; written "G" here with the
+exponent understood). The thesis does not use it to generate roads (its roads were measured);
+here it is the substitute for the MIRA smooth track and the long-wave part of the LTC pavé
+substitute (:mod:`nodes.tyre_road.cobblestone`). Choices the thesis does not fix, made here:
+
+* **S is one-sided** (the variance is the integral of S over n > 0), as in ISO 8608 and in
+  Wong, *Theory of Ground Vehicles*, whose table of road spectra the G range matches.
+* **Band** default [0.011, 2.83] cycles/m, the ISO 8608 classification band (0.1-26.7 Hz at
+  34 km/h, covering the 0-25 Hz ride band of Sec. 4.5). A power law with p > 1 has infinite
+  variance towards n -> 0, so the band's lower end fixes the road's amplitude of long waves:
+  keep it unless the length of the run calls for longer waves.
+* **Generator** the one above, with the same ``correlation`` options.
+
+Checks: ``tests/roads/test_iso8608.py`` (the class PSD) and ``tests/roads/test_power_law.py``
+(the Welch PSD of a 2000 m track, integrated over octave bands, matches the integral of G n^-p
+within 5 %). The band, the correlation and the class are checked by the ``[road]`` reader
+(:mod:`.config`).
 """
 
 from __future__ import annotations
@@ -49,9 +73,18 @@ DEFAULT_N_MAX = 2.83
 """ISO 8608 classification band [cycles/m] (at 34 km/h: 0.1-26.7 Hz, the ride band)."""
 
 
-def iso8608_psd(n: np.ndarray, road_class: str) -> np.ndarray:
-    """G_d(n) [m^3] of the class's geometric mean at spatial frequencies ``n`` [cycles/m]."""
-    return GD_N0[road_class] * (np.asarray(n, dtype=float) / N0) ** (-WAVINESS)
+DEFAULT_WAVINESS = 2.5
+"""The thesis's exponent p (Eq. 4.10)."""
+
+
+def iso8608_psd(road_class: str) -> Callable[[np.ndarray], np.ndarray]:
+    """G_d(n) [m^3] of the class's geometric mean, a function of n [cycles/m]."""
+    return lambda n: GD_N0[road_class] * (np.asarray(n, dtype=float) / N0) ** (-WAVINESS)
+
+
+def power_law_psd(G: float, p: float = DEFAULT_WAVINESS) -> Callable[[np.ndarray], np.ndarray]:
+    """S(n) = G n^-p [m^3/cycle] (thesis Eq. 4.10), a function of n [cycles/m] (> 0)."""
+    return lambda n: G * np.asarray(n, dtype=float) ** (-p)
 
 
 def _random_track(gd: np.ndarray, rng: np.random.Generator, n_grid: int) -> np.ndarray:
@@ -72,11 +105,8 @@ def random_profile(psd: Callable[[np.ndarray], np.ndarray], length: float, seed:
 
     The sum-of-sinusoids method of the module docstring; the generated length
     L_gen >= max(length, 2 / n_min) so that the lowest frequency of the band is represented by at
-    least two spectral lines. Used by the ISO 8608 classes here and by the thesis's Eq. 4.10
-    power law (:mod:`nodes.tyre_road.power_law`).
+    least two spectral lines.
     """
-    if not 0 < n_min < n_max:
-        raise ValueError(f"need 0 < n_min < n_max, got {n_min}, {n_max}")
     dx = 1.0 / (20.0 * n_max)
     l_gen = max(float(length), 2.0 / n_min)
     n_grid = int(2 ** np.ceil(np.log2(l_gen / dx)))
@@ -94,29 +124,14 @@ def random_profile(psd: Callable[[np.ndarray], np.ndarray], length: float, seed:
             z_r = z_ind
         else:
             rho = float(correlation)
-            if not 0.0 <= rho <= 1.0:
-                raise ValueError(f"correlation must be in [0, 1], got {rho}")
             z_r = rho * z_l + np.sqrt(1.0 - rho * rho) * z_ind
     x = np.arange(n_grid) * dx
     return x, z_l - z_l[0], z_r - z_r[0]
 
 
-def iso8608_profile(road_class: str, length: float, seed: int,
-                    correlation: str | float = "independent",
-                    n_min: float = DEFAULT_N_MIN, n_max: float = DEFAULT_N_MAX,
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Heights (x, z_left, z_right) [m] of a random ISO 8608 road at least ``length`` m long
-    (:func:`random_profile` with the class's PSD)."""
-    if road_class not in GD_N0:
-        raise ValueError(f"ISO 8608 class must be one of A-H, got {road_class!r}")
-    return random_profile(lambda n: iso8608_psd(n, road_class), length, seed, correlation,
-                          n_min, n_max)
-
-
-def iso8608_road(road_class: str, length: float, speed: float, seed: int,
-                 correlation: str | float = "independent",
-                 n_min: float = DEFAULT_N_MIN, n_max: float = DEFAULT_N_MAX) -> SampledRoad:
-    """A :class:`SampledRoad` of class ``road_class`` (A-H), ``length`` m, driven at ``speed``."""
-    x, zl, zr = iso8608_profile(road_class, length, seed, correlation, n_min, n_max)
-    return SampledRoad(x=x, z_left=zl, z_right=zr, speed=speed, length=length,
-                       name=f"iso8608_{road_class}")
+def random_road(psd: Callable[[np.ndarray], np.ndarray], length: float, speed: float,
+                seed: int, correlation: str | float, n_min: float, n_max: float,
+                name: str) -> SampledRoad:
+    """A :class:`SampledRoad` of :func:`random_profile`, ``length`` m, driven at ``speed`` m/s."""
+    x, zl, zr = random_profile(psd, length, seed, correlation, n_min, n_max)
+    return SampledRoad(x=x, z_left=zl, z_right=zr, speed=speed, length=length, name=name)
