@@ -3,13 +3,13 @@ from PyBullet's joint sensors and the forces the corner applied (the ``arm`` cha
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .double_wishbone_geometry import HUB, LOWER_ARM
-from .point_kinematics import cross3
-from .quarter_car_lumped import quat_matrix as _rot
+from .double_wishbone_geometry import HUB
+from .point_kinematics import cross3, to_frame, transpose_times
 from .quiet_pybullet import p
 
 if TYPE_CHECKING:
@@ -61,45 +61,48 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
       F_rear,y = F_y/2 - M_z/d; the axial force F_x is shared equally (statically
       indeterminate between two bushes of equal stiffness). M_x is the torsion-bar moment.
     """
-    return arm_loads_at(model.client, model.body, LOWER_ARM, HUB, model.geom.arm_rotation,
-                        model._applied_pose, model._arm_r_com, model._F_d,
-                        np.array([0.0, 0.0, -model._F_bs]), model.geom.bush_spacing)
+    return arm_loads_at(model._w_pivot,
+                        p.getJointStateMultiDof(model.body, HUB, physicsClientId=model.client)[2],
+                        model.geom.arm_rotation, model._applied_pose, model._arm_r_com,
+                        model._F_d, (0.0, 0.0, -model._F_bs), model.geom.bush_spacing)
 
 
-def bush_split(w: tuple, r_com: np.ndarray, R_f: np.ndarray, d: float
+def bush_split(w: Sequence[float], r_com: Sequence[float], R_f: Sequence[Sequence[float]],
+               d: float
                ) -> tuple[float, tuple[float, float, float], tuple[float, float, float]]:
     """(M_x, front bush force, rear bush force) in an arm frame with axes ``R_f`` (in the
-    link frame) from a pivot sensor wrench ``w`` (about the centre of mass ``r_com`` [m]):
-    moved to the frame origin, split between bushes ``d`` [m] apart (:func:`arm_loads`)."""
+    link frame, by rows) from a pivot sensor wrench ``w`` (about the centre of mass ``r_com``
+    [m]): moved to the frame origin, split between bushes ``d`` [m] apart (:func:`arm_loads`).
+    Floats, the bits of the numpy expressions (:mod:`.point_kinematics`)."""
     rxF = cross3(r_com, w[:3])
     M_link = [w[3] + rxF[0], w[4] + rxF[1], w[5] + rxF[2]]  # about the link origin = O
-    F0, F1, F2 = (R_f.T @ np.array(w[:3])).tolist()
-    M0, M1, M2 = (R_f.T @ np.array(M_link)).tolist()
+    F0, F1, F2 = transpose_times(R_f, w[:3])
+    M0, M1, M2 = transpose_times(R_f, M_link)
     return (M0, (F0 / 2, F1 / 2 + M2 / d, F2 / 2 - M1 / d),
             (F0 / 2, F1 / 2 - M2 / d, F2 / 2 + M1 / d))
 
 
-def arm_loads_at(c: int, b: int, arm_link: int, hub_link: int, R_af: np.ndarray,
-                 applied_pose: tuple, r_com: np.ndarray, F_d_axial: float,
-                 bump_on_arm: np.ndarray, d: float) -> dict[str, float]:
-    """:func:`arm_loads` of one corner of any model: PyBullet client ``c`` and body ``b``,
-    the lower arm's and hub's link indices, the arm frame's axes in the arm link's frame
-    ``R_af``, the pose the substep's forces were applied in (the arm link's world rotation,
-    the hub's world quaternion, the damper's unit vector arm -> body), the arm's centre of
-    mass in its link frame [m], the damper's axial force F_d [N] (compression-positive on the
-    body), the bumper's force on the arm (world vector) [N] and the bush spacing d [m]."""
+def arm_loads_at(w_pivot: Sequence[float], w_hub: Sequence[float], R_af: np.ndarray,
+                 applied_pose: tuple, r_com: Sequence[float], F_d_axial: float,
+                 bump_on_arm: Sequence[float], d: float) -> dict[str, float]:
+    """:func:`arm_loads` of one corner of any model, from the lower-arm pivot's and the ball
+    joint's sensor wrenches (``getJointState(..)[2]``, ``getJointStateMultiDof(..)[2]``), the
+    arm frame's axes in the arm link's frame ``R_af``, the pose the substep's forces were
+    applied in (the arm link's world rotation, the hub's world quaternion, the damper's unit
+    vector arm -> body), the arm's centre of mass in its link frame [m], the damper's axial
+    force F_d [N] (compression-positive on the body), the bumper's force on the arm (world
+    vector) [N] and the bush spacing d [m]. Floats (:mod:`.point_kinematics`)."""
     R_arm, hub_quat, u = applied_pose  # the pose at the start of the substep
-    to_arm = R_af.T @ R_arm.T  # world -> arm frame
-
-    M0, front, rear = bush_split(p.getJointState(b, arm_link, physicsClientId=c)[2], r_com,
-                                 R_af, d)
-
-    w_bj = np.array(p.getJointStateMultiDof(b, hub_link, physicsClientId=c)[2][:3])
-    ball = (to_arm @ (-(_rot(hub_quat) @ w_bj))).tolist()
+    R_f, R_link = R_af.tolist(), R_arm.ravel().tolist()
+    M0, front, rear = bush_split(w_pivot, r_com, R_f, d)
+    H = p.getMatrixFromQuaternion(hub_quat)  # the hub's rotation, row-major
+    w0, w1, w2 = w_hub[0], w_hub[1], w_hub[2]
+    on_arm = [-(H[0] * w0 + H[1] * w1 + H[2] * w2), -(H[3] * w0 + H[4] * w1 + H[5] * w2),
+              -(H[6] * w0 + H[7] * w1 + H[8] * w2)]  # minus the hub's, in world axes
     F_d = -F_d_axial
-    damper = (to_arm @ np.array([F_d * u[0], F_d * u[1], F_d * u[2]])).tolist()
-    bump = (to_arm @ bump_on_arm).tolist()
-
+    ball = to_frame(R_f, R_link, on_arm)
+    damper = to_frame(R_f, R_link, (F_d * u[0], F_d * u[1], F_d * u[2]))
+    bump = to_frame(R_f, R_link, bump_on_arm)
     out: dict[str, float] = {}
     for names, f in ((_BALL, ball), (_DAMPER, damper), (_FRONT, front), (_REAR, rear)):
         out[names[0]], out[names[1]], out[names[2]] = f

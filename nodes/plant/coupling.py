@@ -16,6 +16,7 @@ grows with the step h and is what Table 3.3 measures. Two better options:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,25 +36,11 @@ class StepInputs:
     v_rel: np.ndarray
 
 
-def substep_forces(
-    mode: str,
-    now: StepInputs,
-    before: StepInputs | None,
-    s: float,
-    h: float,
-    z_w: np.ndarray,
-    v_rel: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Tyre and damper force to apply at time t_k + s within the step.
-
-    Args:
-        mode: ``hold``, ``linear`` or ``jacobian``.
-        now: inputs of step k; ``before``: of step k-1 (``None`` at k = 0).
-        s: time since t_k [s]; h: communication step [s].
-        z_w: wheel displacement now [m]; v_rel: v_w - v_b now [m/s].
-    Returns:
-        (F_t [N], F_d [N]).
-    """
+def substep_forces(mode: str, now: StepInputs, before: StepInputs | None, s: float, h: float,
+                   state: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(F_t, F_d) [N] to apply at t_k + s [s] within a step of h [s]: ``now`` the inputs of
+    step k, ``before`` of step k-1 (None at k = 0), ``state`` the plant's now (``jacobian``
+    reads its z_w [m] and v_w - v_b [m/s])."""
     if mode == "hold" or (mode == "linear" and before is None):
         return now.F_t, now.F_d
     if mode == "linear" and before is not None:
@@ -61,6 +48,6 @@ def substep_forces(
         F_t = np.maximum(0.0, now.F_t + (now.F_t - before.F_t) * r)
         return F_t, now.F_d + (now.F_d - before.F_d) * r
     if mode == "jacobian":
-        F_t = np.maximum(0.0, now.F_t - now.k_t * (z_w - now.z_w))
-        return F_t, now.F_d + now.c_eff * (v_rel - now.v_rel)
+        F_t = np.maximum(0.0, now.F_t - now.k_t * (state["z_w"] - now.z_w))
+        return F_t, now.F_d + now.c_eff * (state["v_w"] - state["v_b"] - now.v_rel)
     raise ValueError(f"unknown coupling mode {mode!r}; expected one of {MODES}")

@@ -84,7 +84,7 @@ from .double_wishbone_geometry import (  # the corner's geometry, re-exported
     to_arm_frame,
 )
 from .model import GRAVITY, PlantModel
-from .point_kinematics import point_velocity, world_point
+from .point_kinematics import point_velocity
 from .quarter_car_lumped import load_urdf_text, new_direct_client, release_joint
 from .quarter_car_lumped import quat_matrix as _rot
 from .quiet_pybullet import p
@@ -188,6 +188,7 @@ class DoubleWishboneCorner(PlantModel):
         if pr.bump_stop and g.bump_stop_pad is None:
             raise ValueError(f"{cf.source}: a bump stop needs hardpoints.bump_stop_pad")
         self.bump_stop = pr.bump_stop_params
+        self._k_theta = pr.k_theta  # [N m/rad]
         self.client = c = new_direct_client()
         p.setPhysicsEngineParameter(numSolverIterations=200, erp=0.2,
                                     solverResidualThreshold=1e-12, physicsClientId=c)
@@ -197,13 +198,12 @@ class DoubleWishboneCorner(PlantModel):
             release_joint(b, j, c)
             p.changeDynamics(b, j, linearDamping=0, angularDamping=0, jointDamping=0,
                              physicsClientId=c)
-        self._arm_r_com = np.array(p.getLinkState(b, LOWER_ARM, physicsClientId=c)[2])
+        self._arm_r_com = p.getLinkState(b, LOWER_ARM, physicsClientId=c)[2]
         # the upper arm's loads (nodes/plant/upper_arm_loads.py): its centre of mass in its
-        # link frame, its frame's axes in the link frame (link axes = corner axes at rest),
-        # the bush spacing
-        self._ua_link = UPPER_ARM
-        self._ua_r_com = np.array(p.getLinkState(b, UPPER_ARM, physicsClientId=c)[2])
-        self._ua_frame_R = upper_arm_frame(cf)[1]
+        # link frame, its frame's axes in the link frame (link axes = corner axes at rest; by
+        # rows too), the bush spacing
+        self._ua_r_com = p.getLinkState(b, UPPER_ARM, physicsClientId=c)[2]
+        self._ua_frame_rows = upper_arm_frame(cf)[1].tolist()
         self._ua_spacing = float(np.linalg.norm(g.upper_bush_front - g.upper_bush_rear))
         ua_o = 0.5 * (g.upper_bush_front + g.upper_bush_rear)
         self._c_upper = p.createConstraint(
@@ -219,13 +219,17 @@ class DoubleWishboneCorner(PlantModel):
         # hardpoints in their links' frames (fixed): the damper mounts, the bumper pad, the
         # points whose accelerations plant/response carries
         self._loc_top = self._local_point(BODY, g.damper_upper)
-        self._loc_bot = self._local_point(LOWER_ARM, g.damper_lower)
-        # no pad (a corner without a bumper): the pad's place is the ball joint's (unused)
-        self._loc_pad = self._local_point(LOWER_ARM, g.lower_ball_joint
-                                          if g.bump_stop_pad is None else g.bump_stop_pad)
-        self._loc_accel = [(name, self._local_point(LOWER_ARM, g.to_corner(pt)),
-                            tuple(f"a_arm_{name}_{axis}" for axis in "xyz"))
-                           for name, pt in g.arm_accel_points.items()]
+        self._body_quat: tuple[float, ...] | None = None  # the body's, at the last read
+        # on the arm (one batched product a read): the damper's seat, the pad (no bumper:
+        # the ball joint's place, unused), then the points whose rates plant/response carries
+        self._arm_locals = np.array([
+            self._local_point(LOWER_ARM, g.damper_lower),
+            self._local_point(LOWER_ARM, g.lower_ball_joint if g.bump_stop_pad is None
+                              else g.bump_stop_pad),
+            *(self._local_point(LOWER_ARM, g.to_corner(pt))
+              for pt in g.arm_accel_points.values())]).reshape(-1, 3, 1)
+        self._accel_names = [tuple(f"a_arm_{name}_{axis}" for axis in "xyz")
+                             for name in g.arm_accel_points]
         self._dt: float | None = None
         self._F_t = 0.0
         self._F_d = 0.0
@@ -242,32 +246,37 @@ class DoubleWishboneCorner(PlantModel):
 
     # --- helpers ---
     def _read(self) -> None:
-        """Read the links' states after a substep (plain floats where elementwise; rotations
-        and the dot product stay numpy calls, for the same bits)."""
+        """Read the links' states after a substep (:mod:`.point_kinematics`: plain floats
+        where the bits allow; the arm's points in one batched rotation)."""
         c, b = self.client, self.body
         js = p.getJointStates(b, [BODY, LOWER_ARM], physicsClientId=c)
         self._zb_abs, self._vb = js[0][0], js[0][1]
         self._theta, self._omega = js[1][0], js[1][1]
+        self._w_pivot = js[1][2]  # the arm pivot's sensor wrench: the arm loads
         # one call for the links: the forward kinematics computed once
         hub, body, arm, ua = p.getLinkStates(b, _READ_LINKS, computeLinkVelocity=1,
                                              computeForwardKinematics=1, physicsClientId=c)
         self._ua_quat = ua[5]  # the upper arm's rotation: for its loads
         self._zw_abs, self._vw = hub[0][2], hub[6][2]
-        self._hub_pos = list(hub[0])
+        self._hub_pos = hub[0]
         self._hub_quat = hub[5]  # its rotation only when the arm loads need it
         self._R_arm = R_arm = _rot(arm[5])
         self._arm_state = arm
-        top = world_point(body[4], _rot(body[5]), self._loc_top)
-        bot = world_point(arm[4], R_arm, self._loc_bot)
-        self._pad = world_point(arm[4], R_arm, self._loc_pad)
-        d = [top[0] - bot[0], top[1] - bot[1], top[2] - bot[2]]
-        dd = np.array(d)
-        self._damper_len = L = math.sqrt(dd.dot(dd))  # np.linalg.norm(d), the same bits
-        self._u = [d[0] / L, d[1] / L, d[2] / L]  # unit vector arm mount -> body mount
+        if body[5] != self._body_quat:  # the body only slides: its rotation stays
+            self._body_quat = body[5]
+            self._top_offset = (_rot(body[5]) @ self._loc_top).tolist()
+        top = [body[4][i] + self._top_offset[i] for i in range(3)]
+        self._arm_offsets = w = np.matmul(R_arm, self._arm_locals).reshape(-1, 3).tolist()
+        x, y, z = arm[4]
+        bot = [x + w[0][0], y + w[0][1], z + w[0][2]]
+        self._pad = [x + w[1][0], y + w[1][1], z + w[1][2]]
+        d0, d1, d2 = top[0] - bot[0], top[1] - bot[1], top[2] - bot[2]
+        self._damper_len = L = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        self._u = u = [d0 / L, d1 / L, d2 / L]  # unit vector arm mount -> body mount
         v_top = point_velocity(body, top)
         v_bot = point_velocity(arm, bot)
-        dv = np.array([v_top[0] - v_bot[0], v_top[1] - v_bot[1], v_top[2] - v_bot[2]])
-        self._v_damper = -float(np.array(self._u) @ dv)  # compression rate
+        self._v_damper = -(0.0 + u[0] * (v_top[0] - v_bot[0]) + u[1] * (v_top[1] - v_bot[1])
+                           + u[2] * (v_top[2] - v_bot[2]))  # compression rate (numpy's dot)
         self._top, self._bot = top, bot
 
     def _local_point(self, link: int, corner_point: np.ndarray) -> np.ndarray:
@@ -360,7 +369,7 @@ class DoubleWishboneCorner(PlantModel):
         K_theta (theta - theta_0) / L with L the corner's ball-joint lever
         (:func:`cosim.lower_arm.lever_ball_joint`, 0.294 m, for the built-in corner), upward
         on the body [N]."""
-        return np.array([self.params.k_theta * (self._theta - self._theta0)
+        return np.array([self._k_theta * (self._theta - self._theta0)
                          / self.geom.lever_ball_joint])
 
     def extra_response(self) -> dict[str, np.ndarray]:
@@ -372,11 +381,12 @@ class DoubleWishboneCorner(PlantModel):
         :data:`ARM_ACCEL_POINTS`, keyed by the fields the node derives from them,
         ``a_arm_{loc1,cg,loc2}_{x,y,z}`` (kinematic, no gravity): v_com + omega x (r - r_com)
         from the link state :meth:`_read` fetched; plain floats."""
-        arm, R_arm = self._arm_state, self._R_arm
+        arm = self._arm_state
+        x, y, z = arm[4]
         out: dict[str, float] = {}
-        for _name, loc, names in self._loc_accel:
-            v = point_velocity(arm, world_point(arm[4], R_arm, loc))
-            out[names[0]], out[names[1]], out[names[2]] = v
+        for names, w in zip(self._accel_names, self._arm_offsets[2:], strict=True):
+            out[names[0]], out[names[1]], out[names[2]] = point_velocity(
+                arm, (x + w[0], y + w[1], z + w[2]))
         return out
 
     def substep(self, dt: float, F_t: np.ndarray, F_d: np.ndarray) -> None:
@@ -384,7 +394,7 @@ class DoubleWishboneCorner(PlantModel):
             p.setTimeStep(dt, physicsClientId=self.client)
             self._dt = dt
         self._F_t, self._F_d = float(F_t[0]), float(F_d[0])
-        self._tau = self.tau0 - self.params.k_theta * (self._theta - self._theta0)
+        self._tau = self.tau0 - self._k_theta * (self._theta - self._theta0)
         self._F_bs = self.bump_stop_force()
         # the pose the forces of this substep are applied (and the joint sensors evaluated) in
         self._applied_pose = (self._R_arm, self._hub_quat, self._u)

@@ -131,7 +131,7 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                                          [0, 0, 0], self._local(lk[parent], wc + pt),
                                          self._local(lk[child], wc + pt), physicsClientId=cl)
                 p.changeConstraint(cid, maxForce=1e9, physicsClientId=cl)
-        self._arm_r_com = [np.array(p.getLinkState(bd, lk["lower_arm"], physicsClientId=cl)[2])
+        self._arm_r_com = [p.getLinkState(bd, lk["lower_arm"], physicsClientId=cl)[2]
                            for lk in self.link]
         self._pad_body = [None if g.bump_stop_pad is None else self.wheel_centres[i]
                           + g.bump_stop_pad for i, g in enumerate(self.geoms)]
@@ -429,9 +429,11 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         out: dict[str, dict[str, float]] = {}
         for i, (g, lk, name) in enumerate(zip(self.geoms, self.link, CORNERS, strict=True)):
             R_arm, hub_q, u, F_d, bump = self._applied[i]
-            loads = arm_loads_at(self.client, self.body, lk["lower_arm"], lk["hub"],
-                                 g.arm_rotation, (R_arm, hub_q, u), self._arm_r_com[i], F_d,
-                                 bump, g.bush_spacing)
+            loads = arm_loads_at(
+                p.getJointState(self.body, lk["lower_arm"], physicsClientId=self.client)[2],
+                p.getJointStateMultiDof(self.body, lk["hub"], physicsClientId=self.client)[2],
+                g.arm_rotation, (R_arm, hub_q, u), self._arm_r_com[i], F_d, bump,
+                g.bush_spacing)
             if self.side[i] < 0:  # proper frame (x, y out, z down) -> mirrored (z up)
                 loads = {k: (-v if k.endswith("_z") or k == "torsion_bar_mx" else v)
                          for k, v in loads.items()}

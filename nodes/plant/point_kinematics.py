@@ -1,10 +1,14 @@
-"""Points fixed to a rigid link, in plain floats: where they are and how fast they move.
+"""Points fixed to a rigid link, and small rotations, in plain floats.
 
 The double-wishbone corner (:mod:`nodes.plant.double_wishbone`) reads its hardpoints this way
 every substep: elementwise sums and products in Python floats (a few 3-vectors a call, where
-numpy's per-call overhead was most of the cost), the 3x3 rotation left to numpy (OpenBLAS uses
-fused multiply-adds there, which Python floats cannot reproduce bit for bit). Vectors [m],
-velocities [m/s], angular velocities [rad/s], in the world frame.
+numpy's per-call overhead was most of the cost). What feeds the dynamics keeps numpy's bits: a
+row-major product ``R @ v`` stays numpy's (OpenBLAS computes fma(r2, v2, fma(r0, v0, r1 v1)),
+which Python floats cannot reproduce; several points under one rotation are one batched
+``np.matmul``, the same bits per point); ``R.T @ v``, a dot product and a cross product are
+plain sums, left to right, as numpy's (:func:`transpose_times`, :func:`cross3`). The arm loads
+(outputs only) rotate in floats (:func:`to_frame`): within an ulp or two of numpy's products.
+Vectors [m], velocities [m/s], angular velocities [rad/s].
 """
 
 from __future__ import annotations
@@ -12,14 +16,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-
-
-def world_point(pos: Sequence[float], R: np.ndarray, local: np.ndarray) -> list[float]:
-    """World position of a point fixed to a link whose frame is at ``pos`` with rotation
-    ``R`` (getLinkState's [4], and [5] as a matrix), at ``local`` in that frame [m]:
-    pos + R @ local (the rotation a numpy product, the sum in floats)."""
-    w = (R @ local).tolist()
-    return [pos[0] + w[0], pos[1] + w[1], pos[2] + w[2]]
 
 
 def point_velocity(link_state: Sequence[Sequence[float]], point: Sequence[float]) -> list[float]:
@@ -36,3 +32,21 @@ def cross3(a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray) -> 
     a0, a1, a2 = a
     b0, b1, b2 = b
     return [a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0]
+
+
+def transpose_times(R: Sequence[Sequence[float]], v: Sequence[float]) -> list[float]:
+    """R.T @ v in floats for ``R`` given by its rows (``ndarray.tolist()``): the same bits as
+    numpy's ``R.T @ v`` (tests/vehicles/test_double_wishbone_floats.py)."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
+    v0, v1, v2 = v
+    # from +0.0, as OpenBLAS accumulates (a sum of -0.0 products is +0.0 there)
+    return [0.0 + r00 * v0 + r10 * v1 + r20 * v2, 0.0 + r01 * v0 + r11 * v1 + r21 * v2,
+            0.0 + r02 * v0 + r12 * v1 + r22 * v2]
+
+
+def to_frame(R_f: Sequence[Sequence[float]], R_link: Sequence[float],
+             v: Sequence[float]) -> list[float]:
+    """R_f.T @ R_link.T @ v in floats: a world vector in a frame whose axes are ``R_f`` (by
+    rows) in a link whose world rotation is ``R_link`` (row-major, 9 values, as
+    ``getMatrixFromQuaternion`` gives it)."""
+    return transpose_times(R_f, transpose_times((R_link[0:3], R_link[3:6], R_link[6:9]), v))

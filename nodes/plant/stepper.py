@@ -101,8 +101,7 @@ class PlantStepper:
             if not self.is_last():  # (the last step's one substep: a_b, a_w)
                 self.h_k = ctrl.clamp_to_end(self.h_k, self.t, self.settings.t_end)
         dt = self._dt = self.h_k / self.settings.substeps
-        F_t, F_d = substep_forces(self.settings.coupling, now, self.before, 0.0, self.h_lin,
-                                  st["z_w"], st["v_w"] - st["v_b"])
+        F_t, F_d = substep_forces(self.settings.coupling, now, self.before, 0.0, self.h_lin, st)
         F_s = model.spring_force()
         extra = model.extra_response()
         vel0 = model.response_velocities()
@@ -122,13 +121,11 @@ class PlantStepper:
         assert now is not None and cur is not None, "advance before couple"
         mode, dt, model = self.settings.coupling, self._dt, self.model
         for j in range(1, self.settings.substeps):
-            F_t, F_d = substep_forces(mode, now, self.before, j * dt, self.h_lin,
-                                      cur["z_w"], cur["v_w"] - cur["v_b"])
+            F_t, F_d = substep_forces(mode, now, self.before, j * dt, self.h_lin, cur)
             model.substep(dt, F_t, F_d)
             cur = model.state()
         if self.ctrl is not None:  # what the coupling applies at the step's end, and t_k+1
-            self.app_end = substep_forces(mode, now, self.before, self.h_k, self.h_lin,
-                                          cur["z_w"], cur["v_w"] - cur["v_b"])
+            self.app_end = substep_forces(mode, now, self.before, self.h_k, self.h_lin, cur)
             self.h_lin, self.t = self.h_k, self.t + self.h_k
         self.before, self.prev, self.st = now, self.st, cur  # cur: the state at t_{k+1}
         self._now = self._after = None

@@ -24,7 +24,8 @@ from cosim import lower_arm as la
 from cosim.corner import Corner
 
 from .arm_loads import bush_split
-from .quarter_car_lumped import quat_matrix
+from .double_wishbone_geometry import UPPER_ARM
+from .point_kinematics import to_frame
 from .quiet_pybullet import p
 
 if TYPE_CHECKING:
@@ -77,15 +78,12 @@ def upper_arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     With the arm's weight they balance its inertia: sum F + m g = m a_com and the moments
     (tested in tests/vehicles/test_double_wishbone.py)."""
     c, b = model.client, model.body
-    # the arm link's world rotation at the start of the substep
-    R_link = quat_matrix(model._ua_quat_applied)
-    R_f = model._ua_frame_R  # the frame's axes in the link frame
-    to_frame = R_f.T @ R_link.T  # world -> upper-arm frame
-    d = model._ua_spacing
-    w = p.getJointState(b, model._ua_link, physicsClientId=c)[2]
-    _M0, front, rear = bush_split(w, model._ua_r_com, R_f, d)
-    on_hub = np.array(p.getConstraintState(model._c_upper, physicsClientId=c)[:3])
-    ball = (to_frame @ -on_hub).tolist()
+    w = p.getJointState(b, UPPER_ARM, physicsClientId=c)[2]
+    _M0, front, rear = bush_split(w, model._ua_r_com, model._ua_frame_rows, model._ua_spacing)
+    h = p.getConstraintState(model._c_upper, physicsClientId=c)  # on the hub, world axes
+    # in the frame at the start of the substep (the arm link's rotation then)
+    ball = to_frame(model._ua_frame_rows, p.getMatrixFromQuaternion(model._ua_quat_applied),
+                    (-h[0], -h[1], -h[2]))
     out: dict[str, float] = {}
     for i, f in enumerate((ball, front, rear)):
         out[FIELDS[3 * i]], out[FIELDS[3 * i + 1]], out[FIELDS[3 * i + 2]] = f

@@ -43,15 +43,15 @@ def _inputs(F_t=1000.0, F_d=100.0):
 
 def test_coupling_modes():
     now, before = _inputs(), _inputs(F_t=900.0, F_d=80.0)
-    z, v = np.array([0.001]), np.array([0.2])
-    assert substep_forces("hold", now, before, 5e-4, 1e-3, z, v)[0][0] == 1000.0
-    F_t, F_d = substep_forces("linear", now, before, 5e-4, 1e-3, z, v)
+    st = {"z_w": np.array([0.001]), "v_w": np.array([0.2]), "v_b": np.array([0.0])}
+    assert substep_forces("hold", now, before, 5e-4, 1e-3, st)[0][0] == 1000.0
+    F_t, F_d = substep_forces("linear", now, before, 5e-4, 1e-3, st)
     assert F_t[0] == pytest.approx(1050.0) and F_d[0] == pytest.approx(110.0)
-    F_t, F_d = substep_forces("jacobian", now, before, 5e-4, 1e-3, z, v)
+    F_t, F_d = substep_forces("jacobian", now, before, 5e-4, 1e-3, st)
     assert F_t[0] == pytest.approx(1000.0 - 2e5 * 0.001)
     assert F_d[0] == pytest.approx(100.0 + 1500.0 * 0.1)
     # lift-off within the step: the tyre cannot pull
-    F_t, _ = substep_forces("jacobian", now, None, 5e-4, 1e-3, np.array([0.01]), v)
+    F_t, _ = substep_forces("jacobian", now, None, 5e-4, 1e-3, dict(st, z_w=np.array([0.01])))
     assert F_t[0] == 0.0
 
 

@@ -38,14 +38,35 @@ def test_point_velocity_is_the_numpy_expression_bit_for_bit():
         assert _bits(pk.point_velocity(state, r[i].tolist())) == _bits(want)
 
 
-def test_world_point_is_the_numpy_expression_bit_for_bit():
-    rng = np.random.default_rng(7)
-    pos, local = _vectors(500, 8), _vectors(500, 9)
-    for i in range(len(pos)):
+def test_transpose_times_is_numpy_bit_for_bit():
+    R, v = _vectors(1500, 10), _vectors(500, 11)
+    for i in range(len(v)):
+        M = R[3 * i:3 * i + 3]
+        assert _bits(pk.transpose_times(M.tolist(), v[i].tolist())) == _bits(M.T @ v[i])
+
+
+def test_batched_rotation_is_each_product_bit_for_bit():
+    """The corner rotates its arm points in one ``np.matmul``: each point's bits are those of
+    ``R @ p`` alone (what the dynamics read)."""
+    rng = np.random.default_rng(12)
+    for _ in range(300):
         q = rng.standard_normal(4)
         R = np.array(dw.p.getMatrixFromQuaternion((q / np.linalg.norm(q)).tolist())).reshape(3, 3)
-        want = pos[i] + R @ local[i]
-        assert _bits(pk.world_point(tuple(pos[i]), R, local[i])) == _bits(want)
+        pts = _vectors(5, int(rng.integers(1 << 30)))
+        got = np.matmul(R, pts.reshape(-1, 3, 1)).reshape(-1, 3)
+        for k in range(5):
+            assert _bits(got[k]) == _bits(R @ pts[k])
+
+
+def test_to_frame_is_the_numpy_product_within_an_ulp():
+    """The arm loads' rotation in floats: numpy's products use fused multiply-adds, so a few
+    ulps of the vector's size apart, never more."""
+    rng = np.random.default_rng(13)
+    for v in rng.standard_normal((500, 3)) * 10.0 ** rng.integers(-3, 6, size=(500, 1)):
+        Rf, Rl = (np.linalg.qr(rng.standard_normal((3, 3)))[0] for _ in range(2))
+        want = Rf.T @ Rl.T @ v
+        got = pk.to_frame(Rf.tolist(), Rl.ravel().tolist(), v.tolist())
+        assert np.abs(np.array(got) - want).max() <= 4e-16 * np.linalg.norm(v)
 
 
 def _arm_loads_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
@@ -90,9 +111,10 @@ def _rates_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     return out
 
 
-def test_arm_loads_and_rates_are_the_array_versions_bit_for_bit():
-    """Through a stroke into the bumper and back (F_bs > 0 on the way): every arm load and
-    arm-point velocity the floats give is the array code's, bit for bit."""
+def test_arm_loads_and_rates_are_the_array_versions():
+    """Through a stroke into the bumper and back (F_bs > 0 on the way): every arm-point
+    velocity the floats give is the array code's, bit for bit; every arm load within 1e-15
+    of the largest (the floats' rotations, test_to_frame_is_the_numpy_product_within_an_ulp)."""
     m = dw.DoubleWishboneCorner()
     try:
         W = m.static_tyre_load()
@@ -103,7 +125,8 @@ def test_arm_loads_and_rates_are_the_array_versions_bit_for_bit():
             bumped += m._F_bs > 0.0
             got, want = dw.arm_loads(m), _arm_loads_numpy(m)
             assert got.keys() == want.keys()
-            assert _bits(list(got.values())) == _bits(list(want.values())), i
+            g, w = np.array(list(got.values())), np.array(list(want.values()))
+            assert np.abs(g - w).max() <= 1e-15 * np.abs(w).max(), i
             rates = m.response_velocities()
             assert _bits(list(rates.values())) == _bits(list(_rates_numpy(m).values())), i
         assert bumped > 10  # the bumper path was taken
