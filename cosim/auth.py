@@ -9,22 +9,20 @@ expression it is published on and of ``F``::
                                                 digest_size=16)(keyexpr + b"\0" + F)
 
 A reader without the key (a tap, ``suscosim replay``) reads it with one more field to ignore;
-a receiver with the key checks the bytes as they came (:meth:`RunKey.verify`). The key
-expression is in the MAC: no replay on another channel or run. An unsigned or badly signed
-message is rejected (:class:`AuthError`, counted) before it is decoded. BLAKE2b: keyed
-natively, the fastest keyed hash of :mod:`hashlib` (~1 us a message).
+a receiver with the key checks the bytes as they came (:meth:`RunKey.verify`); an unsigned or
+badly signed message is rejected (:class:`AuthError`, counted) before it is decoded. The key
+expression is in the MAC: no replay on another channel or run. BLAKE2b: keyed natively, the
+fastest keyed hash of :mod:`hashlib` (~1 us a message).
 
 **A run instance's nonce.** One secret and run id can serve two runs (a sweep's ids repeat),
-so a keyless tap could replay run 1's signed ``ready``/``done`` into run 2. The orchestrator
-draws a 16-byte nonce per run (:func:`new_nonce`) and every message is signed bound to it
+so the orchestrator draws a 16-byte nonce per run and every message is signed bound to it
 (person ``suscosim-msg-v2`` over ``nonce + keyexpr + "\0" + F``), except the served scenario
-(key alone), which announces the nonce (field ``session``, hex) for the nodes to bind to
-(:meth:`cosim.participant.Participant.bind`).
+(key alone), which announces the nonce (field ``session``, hex) for the nodes to bind to.
 
 Where the key comes from (:func:`run_key_from_env`), in this order: ``SUSCOSIM_RUN_KEY`` (the
 run key, hex, set by the orchestrator for the nodes it starts); ``SUSCOSIM_KEY_FILE`` (a
-secret file, mode 0600, e.g. the orchestrator's ``RUN/run.key`` for nodes started elsewhere;
-the key is derived from it and the run id); ``SUSCOSIM_KEY`` (a secret, derived the same way).
+secret file, mode 0600, e.g. ``RUN/run.key``; the key is derived from it and the run id);
+``SUSCOSIM_KEY`` (a secret, derived the same way).
 """
 
 from __future__ import annotations
@@ -40,10 +38,8 @@ from typing import Any
 from .errors import InputFileError, WireError
 
 TAG_BYTES = 16
-UNSIGNED_HEAD, SIGNED_HEAD = 0x85, 0x86
-"""msgpack fixmap headers of a message of five fields, and of a signed one (six)."""
-SIG_FIELD = b"\xa1s\xc4\x10"
-"""The key ``"s"`` (fixstr) and the header of a 16-byte ``bin 8`` value."""
+UNSIGNED_HEAD, SIGNED_HEAD = 0x85, 0x86  # msgpack fixmap of five fields, of six
+SIG_FIELD = b"\xa1s\xc4\x10"  # the key "s" (fixstr) and the header of a 16-byte bin 8
 SIG_BYTES = len(SIG_FIELD) + TAG_BYTES
 KEY_BYTES = 32
 ENV_RUN_KEY = "SUSCOSIM_RUN_KEY"
@@ -53,8 +49,7 @@ KEY_FILE_NAME = "run.key"
 _PERSON = b"suscosim-msg-v1"
 _PERSON_BOUND = b"suscosim-msg-v2"
 NONCE_BYTES = 16
-SESSION_FIELD = "session"
-"""The field of the served scenario that announces the run instance's nonce (hex)."""
+SESSION_FIELD = "session"  # the served scenario's field announcing the nonce (hex)
 _CACHE_MAX = 256
 
 
@@ -67,7 +62,6 @@ class NoKeyError(InputFileError):
 
 
 def new_secret() -> bytes:
-    """A fresh random secret [32 bytes]."""
     return secrets.token_bytes(KEY_BYTES)
 
 
@@ -79,7 +73,6 @@ def derive_run_key(secret: bytes, run_id: str) -> bytes:
 
 
 def new_nonce() -> bytes:
-    """A fresh nonce for one run instance [16 bytes]."""
     return secrets.token_bytes(NONCE_BYTES)
 
 
@@ -98,12 +91,10 @@ class RunKey:
             self._base.update(nonce)
         self._per: dict[str, Any] = {}
 
-    def unbound(self) -> RunKey:
-        """The key without the nonce (what the served scenario is signed with)."""
+    def unbound(self) -> RunKey:  # what the served scenario is signed with
         return RunKey(self.key) if self.nonce else self
 
     def bound(self, nonce: bytes) -> RunKey:
-        """The key bound to the run instance's ``nonce``."""
         return RunKey(self.key, nonce)
 
     def _hasher(self, keyexpr: str) -> Any:
@@ -119,16 +110,14 @@ class RunKey:
         """``body`` (a message of :func:`cosim.wire.encode`) signed for ``keyexpr``."""
         return _sign(self._hasher(keyexpr), body)
 
-    def signer(self, keyexpr: str) -> Callable[[bytes], bytes]:
-        """``sign`` for one key expression (the hasher prepared once)."""
+    def signer(self, keyexpr: str) -> Callable[[bytes], bytes]:  # its hasher prepared once
         base = self._base.copy()
         base.update(keyexpr.encode() + b"\0")
         return lambda body: _sign(base, body)
 
     def verify(self, keyexpr: str, raw: bytes) -> bytes:
-        """``raw`` if it is signed with the run's key for ``keyexpr`` (decode it as it is:
-        the ``s`` field is ignored); raises :class:`AuthError` when it is unsigned or badly
-        signed."""
+        """``raw`` if it is signed with the run's key for ``keyexpr`` (decoded as it is: the
+        ``s`` field is ignored); :class:`AuthError` otherwise."""
         if len(raw) <= SIG_BYTES or raw[0] != SIGNED_HEAD or \
                 raw[-SIG_BYTES:-TAG_BYTES] != SIG_FIELD:
             raise AuthError("unsigned message (no signature field)")
@@ -140,8 +129,7 @@ class RunKey:
 
 
 def _sign(base: Any, body: bytes) -> bytes:
-    """``body`` as a signed message, the MAC from a copy of ``base`` (key and key expression
-    already in it)."""
+    """``body`` signed, the MAC from a copy of ``base`` (key and key expression in it)."""
     if not body or body[0] != UNSIGNED_HEAD:
         raise ValueError("not a message of five fields (cosim.wire.encode)")
     fields = memoryview(body)[1:]
@@ -171,8 +159,7 @@ def read_secret_file(path: str | Path) -> bytes:
 
 
 def write_secret_file(path: str | Path, secret: bytes) -> Path:
-    """Write ``secret`` (hex) to ``path`` with mode 0600, created that way (never readable
-    by others, not even for an instant)."""
+    """Write ``secret`` (hex) to ``path``, created with mode 0600 (never readable by others)."""
     p = Path(path)
     fd = os.open(p, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     try:
@@ -219,10 +206,9 @@ def run_key_from_env(run_id: str, environ: Mapping[str, str] | None = None) -> b
 
 def served_scenario(key: str, raw: bytes, auth: RunKey | None
                     ) -> tuple[dict[str, Any], bytes | None]:
-    """The resolved scenario a node fetched from the orchestrator's queryable on ``key``, and
-    the run instance's nonce it announces (None without a run key). Only a reply signed with
-    the run's key (unbound: the node does not know the nonce yet) counts. Raises
-    :class:`WireError` naming what is wrong: a bad signature, not a scenario, no nonce."""
+    """The resolved scenario a node fetched on ``key``, and the nonce it announces (None
+    without a run key). Only a reply signed with the run's (unbound) key counts; WireError
+    naming what is wrong: a bad signature, not a scenario, no nonce."""
     from .wire import decode
 
     msg = decode(auth.unbound().verify(key, raw) if auth else raw)

@@ -8,13 +8,13 @@ Layout inside a run folder::
                                         file is in place: {"k", "t", "scenario_sha256",
                                         "nodes": {node: {"file", "sha256", "bytes"}}}
 
-A node file is ``MAGIC`` + the 32-byte SHA-256 of the payload + a 32-byte MAC (zeros when the
-run has no key) + the payload: the node's state dict as plain data (:mod:`cosim.plaindata`;
-never a pickle). Every file is written aside, fsynced and renamed into place; a checkpoint
-without a manifest is incomplete and ignored. With the run's key each node file carries an
-HMAC-SHA256 of its step, node name and payload, and the manifest one of its canonical JSON
-(field ``mac``), with :func:`checkpoint_key`. Whatever is wrong is a :class:`CheckpointError`
-(exit code 2) naming the node, the file and the fault. Pure file I/O with no bus.
+A node file is ``MAGIC`` + the 32-byte SHA-256 of the payload + a 32-byte MAC (zeros without
+a run key) + the payload: the node's state dict as plain data (:mod:`cosim.plaindata`; never
+a pickle). With the run's key the MAC is an HMAC-SHA256 of its step, node name and payload,
+and the manifest carries one of its canonical JSON (``mac``; key: :func:`checkpoint_key`).
+Every file is written aside, fsynced and renamed into place; a checkpoint without a manifest
+is incomplete and ignored. Whatever is wrong is a :class:`CheckpointError` (exit code 2)
+naming the node, the file and the fault.
 """
 
 from __future__ import annotations
@@ -34,8 +34,7 @@ from .errors import SuscosimError
 
 CHECKPOINTS_DIR = "checkpoints"
 MANIFEST = "manifest.json"
-MAGIC = b"SUSCKPT2"
-"""The header of a node file: version 2, plain data (version 1, a pickle, is refused)."""
+MAGIC = b"SUSCKPT2"  # version 2, plain data (version 1, a pickle, is refused)
 MAC_BYTES = 32
 _HEAD = len(MAGIC) + 32 + MAC_BYTES
 _NODE = re.compile(r"^[A-Za-z0-9_.-]+$")
@@ -44,16 +43,14 @@ _STEP_DIR = re.compile(r"^k(\d{6,})$")
 
 
 class CheckpointError(SuscosimError):
-    """A checkpoint that cannot be used or made; ``exit_code`` is what ``suscosim run
-    --resume`` exits (and a node that cannot checkpoint what the scenario asks)."""
+    """A checkpoint that cannot be used or made (exit 2)."""
 
     exit_code = EXIT_CODE
 
 
 @dataclass(frozen=True)
 class Checkpoint:
-    """A complete checkpoint at step boundary ``k`` (the start of step k: steps 0..k-1 done),
-    time ``t`` = k h [s], its folder."""
+    """A complete checkpoint at step boundary ``k`` (steps 0..k-1 done), t = k h [s]."""
 
     k: int
     t: float
@@ -61,14 +58,11 @@ class Checkpoint:
     manifest: dict[str, Any]
 
 
-RESUME_KEY = "resume"
-"""``run.resume``: where a resumed or forked run starts (set by the orchestrator, never by a
-user: :mod:`cosim.run_checkpoint`); not part of what a checkpoint's scenario hash covers."""
+RESUME_KEY = "resume"  # run.resume (cosim.run_checkpoint): not in the scenario hash
 
 
 def scenario_sha256(scenario: dict[str, Any]) -> str:
-    """The SHA-256 of the resolved scenario's canonical JSON (sorted keys, no spaces), without
-    ``run.resume`` (a resumed run is the same scenario as the run it continues)."""
+    """The SHA-256 of the resolved scenario's canonical JSON, without ``run.resume``."""
     run = scenario.get("run")
     if isinstance(run, dict) and RESUME_KEY in run:
         scenario = {**scenario, "run": {k: v for k, v in run.items() if k != RESUME_KEY}}
@@ -77,7 +71,6 @@ def scenario_sha256(scenario: dict[str, Any]) -> str:
 
 
 def step_folder(run_dir: Path, k: int) -> Path:
-    """The folder of the checkpoint at step boundary ``k``."""
     return Path(run_dir) / CHECKPOINTS_DIR / f"k{k:06d}"
 
 
@@ -98,16 +91,14 @@ def _write_atomic(path: Path, data: bytes) -> None:
 
 
 def checkpoint_key(run_key: bytes | None) -> bytes | None:
-    """The key of a run's checkpoint MACs, derived from its run key (:mod:`cosim.auth`; a use
-    of its own, so a checkpoint MAC is never a valid message signature); None without one."""
+    """The key of a run's checkpoint MACs, derived from its run key (so a checkpoint MAC is
+    never a valid message signature); None without one."""
     if not run_key:
         return None
     return hmac.new(run_key, b"suscosim-checkpoint-v2", hashlib.sha256).digest()
 
 
 def _node_mac(key: bytes, k: int, node: str, payload: bytes) -> bytes:
-    """A node file's MAC: its step, node name and payload (a file cannot stand in for another
-    node's or step's)."""
     return hmac.new(key, f"{k}\0{node}\0".encode() + payload, hashlib.sha256).digest()
 
 
@@ -119,9 +110,8 @@ def _manifest_mac(key: bytes, doc: dict[str, Any]) -> str:
 
 def write_node_state(run_dir: Path, k: int, node: str, state: dict[str, Any],
                      key: bytes | None = None) -> dict[str, Any]:
-    """Save ``node``'s whole ``state`` at step boundary ``k`` as plain data, with the MAC of
-    ``key`` (:func:`checkpoint_key`) if given; return its manifest entry. CheckpointError
-    when the state is not plain data (naming what is not)."""
+    """Save ``node``'s ``state`` at boundary ``k`` (MAC with ``key``); its manifest entry.
+    CheckpointError when the state is not plain data (naming what is not)."""
     if not _NODE.match(node):
         raise ValueError(f"checkpoint node name {node!r}: letters, digits, _ . - only")
     try:
@@ -138,8 +128,7 @@ def write_node_state(run_dir: Path, k: int, node: str, state: dict[str, Any],
 
 def write_manifest(run_dir: Path, k: int, t: float, scenario: dict[str, Any],
                    entries: dict[str, dict[str, Any]], key: bytes | None = None) -> Path:
-    """Write the manifest LAST (with its MAC when ``key`` is given): the checkpoint is complete.
-    Raises :class:`CheckpointError` when a listed node file is not there."""
+    """Write the manifest LAST (MAC with ``key``): the checkpoint is complete."""
     folder = step_folder(run_dir, k)
     for node, entry in entries.items():
         if not (folder / entry["file"]).is_file():
@@ -158,8 +147,7 @@ def _hex(v: Any, n: int) -> bool:
 
 
 def _checked(doc: dict[str, Any], path: Path) -> Checkpoint:
-    """The checkpoint a parsed manifest describes; CheckpointError naming the manifest and
-    the field when it is not one (wrong types, a node file other than ``<node>.ckpt``)."""
+    """The checkpoint a parsed manifest describes; CheckpointError naming the field."""
     def bad(what: str) -> CheckpointError:
         return CheckpointError(f"{path}: not a checkpoint manifest: {what}")
 
@@ -188,9 +176,8 @@ def _checked(doc: dict[str, Any], path: Path) -> Checkpoint:
 
 
 def complete_checkpoints(run_dir: Path) -> list[Checkpoint]:
-    """The complete checkpoints of ``run_dir`` (a readable manifest), oldest first. A
-    manifest that is not JSON is an incomplete checkpoint (skipped); one whose fields are
-    wrong is refused (CheckpointError naming it)."""
+    """The complete checkpoints of ``run_dir``, oldest first (a manifest that is not JSON:
+    incomplete, skipped; one whose fields are wrong: CheckpointError)."""
     root = Path(run_dir) / CHECKPOINTS_DIR
     found: list[Checkpoint] = []
     if not root.is_dir():
@@ -211,8 +198,8 @@ def complete_checkpoints(run_dir: Path) -> list[Checkpoint]:
 
 def read_node_state(ckpt: Checkpoint, node: str, key: bytes | None = None,
                     sha256: str | None = None, lenient: bool = False) -> dict[str, Any]:
-    """``node``'s state from ``ckpt``, its hash checked (against the manifest and ``sha256``
-    when given) and its MAC with ``key`` when given; CheckpointError naming what is wrong."""
+    """``node``'s state from ``ckpt``, its hash checked (and against ``sha256``, its MAC with
+    ``key``, when given); CheckpointError naming what is wrong."""
     entry = ckpt.manifest.get("nodes", {}).get(node)
     if entry is None:
         raise CheckpointError(f"checkpoint k={ckpt.k} has no state for node {node!r}")
@@ -248,10 +235,9 @@ def read_node_state(ckpt: Checkpoint, node: str, key: bytes | None = None,
 
 def load_for_resume(run_dir: Path, scenario: dict[str, Any], at_t: float | None = None,
                     key: bytes | None = None) -> Checkpoint:
-    """The checkpoint to resume (the last complete one) or fork (the one at ``at_t`` [s]).
-    ``scenario`` (a fork's parent's, or the one to resume) must hash equal to the
-    checkpoint's; every node file is checked, with ``key`` every MAC (without one a signed
-    checkpoint is refused). Raises :class:`CheckpointError` naming what is wrong."""
+    """The checkpoint to resume (the last complete one) or fork (the one at ``at_t`` [s]):
+    ``scenario`` hashes equal to its own, every node file checked, with ``key`` every MAC
+    (without one a signed checkpoint is refused); CheckpointError naming what is wrong."""
     cks = complete_checkpoints(run_dir)
     if not cks:
         raise CheckpointError(f"{run_dir}: no complete checkpoint (no {CHECKPOINTS_DIR}/k*/"
@@ -283,8 +269,8 @@ def load_for_resume(run_dir: Path, scenario: dict[str, Any], at_t: float | None 
 
 
 def prune_checkpoints(run_dir: Path, keep: int) -> list[int]:
-    """Delete every complete checkpoint of ``run_dir`` but the ``keep`` newest: the manifest
-    first (never half a complete one), then its folder. Returns the k deleted."""
+    """Delete every complete checkpoint but the ``keep`` newest (its manifest first, then its
+    folder); the k deleted."""
     import shutil
 
     gone: list[int] = []
@@ -299,7 +285,7 @@ def prune_checkpoints(run_dir: Path, keep: int) -> list[int]:
 
 
 def read_checkpoint(folder: Path) -> Checkpoint:
-    """The complete checkpoint in ``folder`` (its manifest read); CheckpointError if none."""
+    """The complete checkpoint in ``folder``; CheckpointError if none."""
     folder = Path(folder)
     try:
         doc = json.loads((folder / MANIFEST).read_text())
@@ -311,9 +297,8 @@ def read_checkpoint(folder: Path) -> Checkpoint:
 
 
 def checkpoint_steps(every_s: float, h: float, n_steps: int) -> list[int]:
-    """The step boundaries k (t = k h [s]) of ``run.checkpoint_every_s`` = ``every_s`` [s]:
-    every round(every_s / h) steps, the last step excluded. Every node computes the same list
-    from the scenario alone (no negotiation)."""
+    """The step boundaries k of ``run.checkpoint_every_s`` = ``every_s`` [s]: every
+    round(every_s / h) steps, the last excluded (every node computes them alike)."""
     if not every_s > 0 or not h > 0:
         raise ValueError(f"run.checkpoint_every_s = {every_s!r}: a positive number of seconds")
     every = round(every_s / h)

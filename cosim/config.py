@@ -1,19 +1,12 @@
 """One reader for every configuration table: typed values, checked, named by dotted key.
 
-Every model factory reads its scenario table through a :class:`ConfigReader`. A bad value, a
-missing required key or an unknown key raises :class:`cosim.errors.ScenarioError` naming the
-full dotted key (``road.events[1].height``), the value and what was expected (exit code 2).
-
-Example::
-
-    r = ConfigReader(cfg, "tyre", ("model", "stiffness", "n", "contact_length"))
-    k_t = r.number("stiffness", positive=True, unit="N/m")     # required, > 0
-    n = r.integer("n", 4, lo=1)                                  # optional, >= 1
-    model = r.choice("model", ("point_contact", "fixed_footprint"), "point_contact")
-
-Unknown keys (typos) are refused by :meth:`ConfigReader.only` (or the constructor's ``keys``)
-or :meth:`ConfigReader.finish`, with the closest accepted key suggested. ``bool`` is not a
-number; ``inf`` / ``nan`` are refused.
+Every model factory reads its scenario table through a :class:`ConfigReader`, e.g.
+``ConfigReader(cfg, "tyre", KEYS).number("stiffness", positive=True, unit="N/m")``. A bad
+value, a missing required key or an unknown key (refused by :meth:`ConfigReader.only` or
+:meth:`ConfigReader.finish`, the closest accepted key suggested) raises
+:class:`cosim.errors.ScenarioError` naming the dotted key (``road.events[1].height``), the
+value and what was expected (exit code 2). ``bool`` is not a number; ``inf`` / ``nan`` are
+refused.
 """
 
 from __future__ import annotations
@@ -29,8 +22,6 @@ __all__ = ["REQUIRED", "ConfigReader", "describe_range"]
 
 
 class _Required:
-    """Type of :data:`REQUIRED`: the default of a key that must be given."""
-
     def __repr__(self) -> str:
         return "REQUIRED"
 
@@ -64,11 +55,8 @@ def _in_range(x: float, lo: float | None, hi: float | None, lo_open: bool,
 
 
 class ConfigReader:
-    """Reads one configuration table, naming the dotted key in every error.
-
-    ``name``: the table's dotted name (``""``: top level); ``keys``: see :meth:`only`.
-    ScenarioError when ``cfg`` is not a table or has an unknown key.
-    """
+    """Reads one configuration table ``name`` (dotted; ``""``: top level); ``keys``: see
+    :meth:`only`. ScenarioError when ``cfg`` is not a table or has an unknown key."""
 
     def __init__(self, cfg: object, name: str, keys: Iterable[str] | None = None) -> None:
         if not isinstance(cfg, Mapping):
@@ -80,22 +68,16 @@ class ConfigReader:
         if keys is not None:
             self.only(keys)
 
-    # ------------------------------------------------------------------ names and errors
-
-    def key(self, name: str) -> str:
-        """The dotted name of the key ``name`` of this table (``"controller.c_sky"``)."""
+    def key(self, name: str) -> str:  # "controller.c_sky"
         return f"{self.name}.{name}" if self.name else name
 
     def error(self, name: str, value: object, expected: str) -> ScenarioError:
-        """The :class:`ScenarioError` for key ``name`` (to ``raise``)."""
         return ScenarioError(self.key(name), value, expected)
 
     def has(self, name: str) -> bool:
-        """Whether the table gives the key ``name``."""
         return name in self.cfg
 
     def names(self) -> list[str]:
-        """The keys the table gives, in its order."""
         return [str(k) for k in self.cfg]
 
     def _get(self, name: str, default: Any, expected: str) -> Any:
@@ -105,8 +87,6 @@ class ConfigReader:
         if default is REQUIRED:
             raise self.error(name, None, f"{expected} (missing)")
         return default
-
-    # ------------------------------------------------------------------ unknown keys
 
     def only(self, keys: Iterable[str], *, unlisted: Iterable[str] = ()) -> None:
         """Refuse every key outside ``keys`` (and ``unlisted``: accepted, not listed in the
@@ -130,8 +110,6 @@ class ConfigReader:
         hint = f" (did you mean '{close[0]}'?)" if close else ""
         return UnknownKeyError(self.key(name), self.cfg[name], known, hint)
 
-    # ------------------------------------------------------------------ values
-
     def value(self, name: str, default: Any = None) -> Any:
         """The raw value of ``name`` (``default`` when absent), unchecked."""
         return self._get(name, default, "a value")
@@ -139,9 +117,8 @@ class ConfigReader:
     def number(self, name: str, default: Any = REQUIRED, *, lo: float | None = None,
                hi: float | None = None, lo_open: bool = False, hi_open: bool = False,
                positive: bool = False, unit: str = "", expected: str | None = None) -> float:
-        """A finite number as ``float`` in [lo, hi] (open with ``lo_open``/``hi_open``;
-        ``positive``: > 0); ``default`` is returned unchecked; ``unit`` and ``expected``
-        are for the message."""
+        """A finite number in [lo, hi] (open with ``lo_open``/``hi_open``; ``positive``: > 0);
+        ``default`` is returned unchecked; ``unit`` and ``expected`` are for the message."""
         if positive and lo is None:
             lo, lo_open = 0.0, True
         what = expected or "a number" + describe_range(lo, hi, lo_open=lo_open,

@@ -1,15 +1,13 @@
 """What a node's shell does about checkpoints in one run: when to save, where it starts, and
 the state it starts from. The storage is :mod:`cosim.checkpoint`.
 
-A checkpoint ``k`` is the run's state at the **start of step k** (t = k h [s]): every step < k
-is done, published and recorded; a resumed (or forked) run starts with step k. At each
-boundary (:func:`cosim.checkpoint.checkpoint_steps`) a node sends what it still holds for the
-steps < k, writes its whole state to ``RUN_DIR/checkpoints/k<k>/<node>.ckpt`` and tells the
-clock (``checkpoint``: file, SHA-256, size) without waiting; the clock writes the manifest
-once every node has (:class:`orchestrator.clock.Clock`). Every node needs the run folder (a
-remote node: mounted at the same path). The recorder saves once every channel has every step
-< k in its journal, fsynced (its state is the journal, replayed on resume); the fatigue node
-once it has taken load step k - 1.
+A checkpoint ``k`` is the run's state at the **start of step k** (t = k h [s]); a resumed (or
+forked) run starts with step k. At each boundary a node sends what it still holds for the
+steps < k, writes its whole state to ``RUN_DIR/checkpoints/k<k>/<node>.ckpt`` (a remote node:
+the run folder mounted at the same path) and tells the clock (``checkpoint``: file, SHA-256,
+size) without waiting; the clock writes the manifest once every node has. The recorder saves
+once every step < k is in its journal, fsynced (its state is the journal, replayed on
+resume); the fatigue node once it has taken load step k - 1.
 
 ``run.resume`` (set by ``suscosim run --resume`` / ``--fork``, never by a user):
 ``{"k", "t", "folder", "journal": the journal holding the steps < k, "fresh": nodes that start
@@ -47,19 +45,13 @@ class NodeCheckpoints:
 
     node: str
     run_dir: Path
-    h: float
-    """Communication step [s]."""
-    due: frozenset[int]
-    """The boundaries k at which this run saves (none: checkpoints off)."""
-    start_k: int = 0
-    """The step this run starts with (0, or the checkpoint's k of a resume or fork)."""
+    h: float  # communication step [s]
+    due: frozenset[int]  # the boundaries k at which this run saves (none: off)
+    start_k: int = 0  # 0, or the checkpoint's k of a resume or fork
     resume_folder: Path | None = None
-    journal: Path | None = None
-    """The journal that holds the steps < :attr:`start_k` (the recorder's, on a resume)."""
-    fresh: bool = False
-    """This node starts afresh at :attr:`start_k` (a fork changed its settings)."""
-    sha256: str | None = None
-    """The SHA-256 of this node's file the orchestrator checked (``run.resume.sha256``)."""
+    journal: Path | None = None  # the journal holding the steps < start_k (the recorder's)
+    fresh: bool = False  # this node starts afresh at start_k (a fork changed its settings)
+    sha256: str | None = None  # its file's SHA-256 as the orchestrator checked it
 
     @classmethod
     def of(cls, scenario: dict[str, Any], node: str) -> NodeCheckpoints:
@@ -88,12 +80,10 @@ class NodeCheckpoints:
 
     @property
     def resuming(self) -> bool:
-        """This run continues from a checkpoint (a resume or a fork)."""
         return self.resume_folder is not None
 
     def restored(self) -> dict[str, Any] | None:
-        """This node's state at :attr:`start_k` (hash checked), or None: a fresh start (no
-        resume, or a node the fork starts afresh)."""
+        """This node's state at :attr:`start_k` (hash checked), or None: a fresh start."""
         if self.resume_folder is None or self.fresh:
             return None
         ckpt = read_checkpoint(self.resume_folder)
@@ -104,8 +94,7 @@ class NodeCheckpoints:
 
     @contextmanager
     def restoring(self) -> Iterator[None]:
-        """Around putting the restored state into the node: a state that does not fit it is a
-        CheckpointError (exit 2) naming the node and the checkpoint."""
+        """Around restoring the node: a state that does not fit it is a CheckpointError."""
         try:
             yield
         except CheckpointError:
@@ -116,8 +105,8 @@ class NodeCheckpoints:
                                   f"{type(exc).__name__}: {exc}") from None
 
     def save(self, part: _Ctl, k: int, state: dict[str, Any]) -> None:
-        """Write this node's ``state`` at boundary ``k`` (signed with the run's key, when
-        ``part`` has one: :func:`cosim.checkpoint.checkpoint_key`) and tell the clock."""
+        """Write this node's ``state`` at boundary ``k`` (signed with ``part``'s run key, if
+        any) and tell the clock."""
         auth = getattr(part, "auth", None)
         try:
             entry = write_node_state(self.run_dir, k, self.node, state,

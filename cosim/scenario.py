@@ -1,27 +1,9 @@
-"""Scenario files: one TOML file, validated before anything starts.
+"""Scenario files: one TOML file (e.g. scenarios/ch3_step_quarter_car.toml), validated before
+anything starts.
 
 The common sections are checked here, the model sections by the model factories of the nodes
 that own them (at preflight). An error names the dotted key, the value and what was expected
 (exit code 2). Every number of every section must be finite (:func:`check_finite`).
-
-Example (Chapter 3 step)::
-
-    [run]
-    t_end = 4.0            # s
-    h = 0.001              # communication step [s]
-    exchange = "sequential"
-    [vehicle]
-    model = "quarter_car_lumped"
-    [tyre]
-    model = "point_contact"
-    stiffness = 192000.0   # N/m
-    [road]
-    type = "step"
-    height = 0.02          # m
-    t_start = 0.5          # s
-    [controller]
-    law = "passive"
-    c = 1500.0             # N s/m
 """
 
 from __future__ import annotations
@@ -53,9 +35,8 @@ class Key:
     choices: tuple[Any, ...] | None = None
     positive: bool = False
     doc: str = ""
-    low: float | None = None
+    low: float | None = None  # physical range (inclusive); positive: a strict 0
     high: float | None = None
-    """Physical range (inclusive) of a number, with :attr:`positive` for a strict 0."""
 
 
 RUN_KEYS: dict[str, Key] = {
@@ -115,11 +96,10 @@ RUN_KEYS: dict[str, Key] = {
 
 
 RESOLVED_RUN_KEYS = ("dir", "n_steps", "nodes", "t_end_source", "resume", "adaptive")
-"""Keys the orchestrator adds when it resolves a scenario (not for users to set)."""
+"""Keys the orchestrator adds when it resolves a scenario."""
 
 
 def _read_key(r: ConfigReader, name: str, spec: Key) -> Any:
-    """The value of the common key ``name`` by its :class:`Key` spec (defaults filled)."""
     if spec.choices is not None:
         return r.choice(name, spec.choices, spec.default)
     if spec.kind is float:
@@ -157,7 +137,6 @@ models check more; this catches what no model would run sensibly (a 1e30 kg body
 
 
 def check_ranges(scenario: dict[str, Any]) -> None:
-    """Apply :data:`PHYSICAL_RANGES` to the model sections of ``scenario``."""
     from fnmatch import fnmatchcase
 
     def walk(section: str, value: Any, key: str) -> None:
@@ -191,8 +170,8 @@ def check_finite(value: Any, key: str = "") -> None:
 
 
 def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
-    """Check the section names, that every number is finite, and the ``run`` section; fill
-    defaults. Returns a new dict."""
+    """A copy of ``scenario`` with its section names, numbers and ``run`` section checked and
+    the defaults filled."""
     out = copy.deepcopy(scenario)
     check_finite(out)
     check_ranges(out)
@@ -230,8 +209,7 @@ def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
 
 def _coupling_step(run: dict[str, Any]) -> None:
     """Resolve ``run.coupling_h`` (multi-rate, DESIGN.md) in place: run.h becomes the
-    coupling step, run.substeps x coupling_h / h the plant's substeps in it (its own step
-    unchanged), coupling_h = h (idempotent)."""
+    coupling step, run.substeps x coupling_h / h the plant's substeps in it (idempotent)."""
     every = run["coupling_h"]
     if not every:
         return
@@ -286,14 +264,14 @@ def apply_override(scenario: dict[str, Any], assignment: str) -> None:
     node[parts[-1]] = value  # a table replaces the whole table at that key
 
 
-def _override_key(assignment: str) -> str:
+def _override_key(assignment: str) -> str:  # the KEY of KEY=VALUE
     return assignment.split("=", 1)[0].strip()
 
 
 def override_hint(exc: ScenarioError, overrides: list[str] | tuple[str, ...]) -> ScenarioError:
     """``exc`` with a hint when ``--set`` changed single keys of a table that now has an
     unknown key left over from the file (``controller.law`` set, ``controller.c`` kept): how
-    to give the table whole instead. Other errors are returned as they are."""
+    to give the table whole instead."""
     if not isinstance(exc, UnknownKeyError):
         return exc
     table, _, leaf = exc.key.rpartition(".")
@@ -323,8 +301,7 @@ def _toml_key(key: str) -> str:
 
 
 def _toml_value(value: Any) -> str:
-    """One TOML value: strings as basic strings, floats with their exact ``repr``, tables
-    inline."""
+    """One TOML value: floats with their exact ``repr``, tables inline."""
     import json
 
     if isinstance(value, bool):
@@ -364,9 +341,7 @@ def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> dict[
     return validate_common(scenario)
 
 
-PATH_KEYS = node_kinds.path_keys()
-"""Keys holding file paths, as the node kinds declare them (:mod:`cosim.node_kinds`):
-relative ones are relative to the scenario file's folder."""
+PATH_KEYS = node_kinds.path_keys()  # (section, key) of file paths: relative to the file
 
 
 def absolute_path(value: Any, folder: Path) -> Any:
@@ -382,7 +357,7 @@ def absolute_path(value: Any, folder: Path) -> Any:
 
 
 def absolute_paths(scenario: dict[str, Any], folder: Path) -> None:
-    """Make the relative file paths of a scenario absolute against ``folder``, in place."""
+    """Make the relative file paths of ``scenario`` absolute against ``folder``, in place."""
     for section, key in PATH_KEYS:
         sec = scenario.get(section)
         if isinstance(sec, dict) and key in sec:
