@@ -68,10 +68,6 @@ _EVENT_KEYS = {
 _TRACKS = {"both": (0, 1), "left": (0,), "right": (1,)}
 
 
-def _seed(r: ConfigReader, key: str = "seed") -> int:
-    return r.integer(key, 0, lo=0)
-
-
 def _correlation(r: ConfigReader) -> str | float:
     corr = r.value("correlation", "independent")
     if isinstance(corr, bool) or not (
@@ -90,14 +86,6 @@ def _band(r: ConfigReader, key: str = "band") -> tuple[float, float]:
 
 
 _POWER_LAW_KEYS = {"G", "waviness", "seed", "correlation", "band"}
-
-
-def _power_law_keys(r: ConfigReader
-                    ) -> tuple[float, float, int, str | float, tuple[float, float]]:
-    """(G, waviness, seed, correlation, (n_min, n_max)) of an Eq. 4.10 road section."""
-    G = r.number("G", positive=True)
-    waviness = r.number("waviness", DEFAULT_WAVINESS, positive=True)
-    return G, waviness, _seed(r), _correlation(r), _band(r)
 
 
 def _event(r: ConfigReader, kind: str, speed: float) -> RoadEvent:
@@ -140,8 +128,7 @@ def build_road(cfg: Mapping[str, Any], key_prefix: str = "road") -> Road:
     elif kind == "iso8608":
         r.only(_COMMON | {"class", "seed", "correlation", "n_min", "n_max"})
         cls = r.choice("class", GD_N0, expected="an ISO 8608 class letter A-H")
-        seed = _seed(r)
-        corr = _correlation(r)
+        seed, corr = r.integer("seed", 0, lo=0), _correlation(r)
         n_min = r.number("n_min", DEFAULT_N_MIN, positive=True)
         n_max = r.number("n_max", DEFAULT_N_MAX, positive=True)
         if n_max <= n_min:
@@ -152,14 +139,16 @@ def build_road(cfg: Mapping[str, Any], key_prefix: str = "road") -> Road:
                            f"iso8608_{cls}")
     elif kind == "power_law":
         r.only(_COMMON | _POWER_LAW_KEYS)
-        G, waviness, seed, corr, (n_min, n_max) = _power_law_keys(r)
+        G = r.number("G", positive=True)
+        waviness = r.number("waviness", DEFAULT_WAVINESS, positive=True)
+        seed, corr, (n_min, n_max) = r.integer("seed", 0, lo=0), _correlation(r), _band(r)
         if length is None:
             raise r.error("length_m", None, "a number > 0 (needed for power_law)")
         road = random_road(rr.power_law_psd(G, waviness), length, speed, seed, corr, n_min, n_max,
                            "power_law")
     elif kind == "pave":
         r.only(_COMMON | _POWER_LAW_KEYS | set(PAVE_KEYS))
-        seed, corr = _seed(r), _correlation(r)
+        seed, corr = r.integer("seed", 0, lo=0), _correlation(r)
         band = _band(r) if r.has("band") else PAVE_DEFAULTS.band
         vals = {k: r.number(k, getattr(PAVE_DEFAULTS, k), lo=0.0,
                             lo_open=k in ("stone_length", "joint_width", "G", "waviness"))

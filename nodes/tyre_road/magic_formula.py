@@ -88,17 +88,12 @@ class MagicFormula:
         return steady_state(self, Fz, kappa, alpha, gamma, Vx, p)
 
 
-def _mf(B: np.ndarray, C: Any, D: Any, E: Any, x: np.ndarray) -> np.ndarray:  # noqa: N803
-    """The Magic Formula y = D sin(C atan(B x - E (B x - atan(B x))))."""
-    bx = B * x
-    return D * np.sin(C * np.arctan(bx - E * (bx - np.arctan(bx))))
-
-
-def _shape_g(b: Any, c: float, e: Any, x: Any) -> np.ndarray:
-    """The weighting function of combined slip, G = cos(C atan(B x - E (B x - atan(B x))))
-    (Eqs. 4.E56, 4.E64; divided by its value at the shift x = S_H it is 1 at zero slip)."""
+def _arg(b: Any, c: Any, e: Any, x: Any) -> np.ndarray:
+    """C atan(B x - E (B x - atan(B x))): the Magic Formula is D sin of it, the weighting
+    function of combined slip G cos of it (Eqs. 4.E56, 4.E64; divided by its value at the
+    shift x = S_H it is 1 at zero slip), the pneumatic trail D cos of it (4.E33)."""
     bx = np.asarray(b) * x
-    return np.asarray(np.cos(c * np.arctan(bx - e * (bx - np.arctan(bx)))))
+    return np.asarray(c * np.arctan(bx - e * (bx - np.arctan(bx))))
 
 
 def _clip(x: np.ndarray, m: MagicFormula, lo: str, hi: str) -> np.ndarray:
@@ -152,7 +147,7 @@ def steady_state(m: MagicFormula, Fz: Any, kappa: Any, alpha: Any, gamma: Any = 
            * (1 + g("PPX1") * dpi + g("PPX2") * dpi**2) * g("LKX"))
     Bx = Kxk / (Cx * Dx + EPS)  # noqa: N806
     SVx = Fz * (g("PVX1") + g("PVX2") * dfz) * g("LVX") * lmux_p  # noqa: N806
-    Fx0 = _mf(Bx, Cx, Dx, Ex, kx) + SVx  # noqa: N806
+    Fx0 = Dx * np.sin(_arg(Bx, Cx, Ex, kx)) + SVx  # noqa: N806
 
     # ---- pure lateral slip (4.E19-4.E30)
     Kya = (g("PKY1") * Fz0p * (1 + g("PPY1") * dpi) * (1 - g("PKY3") * np.abs(g_star))  # noqa: N806
@@ -173,7 +168,7 @@ def steady_state(m: MagicFormula, Fz: Any, kappa: Any, alpha: Any, gamma: Any = 
                     * (1 + g("PEY5") * g_star**2 - (g("PEY3") + g("PEY4") * g_star)
                        * np.sign(ay)) * g("LEY"), 1.0)
     By = Kya / (Cy * Dy + EPS)  # noqa: N806
-    Fy0 = _mf(By, Cy, Dy, Ey, ay) + SVy  # noqa: N806
+    Fy0 = Dy * np.sin(_arg(By, Cy, Ey, ay)) + SVy  # noqa: N806
 
     # ---- pure aligning moment (4.E31-4.E49)
     SHt = g("QHZ1") + g("QHZ2") * dfz + (g("QHZ3") + g("QHZ4") * dfz) * g_star  # noqa: N806
@@ -201,8 +196,7 @@ def steady_state(m: MagicFormula, Fz: Any, kappa: Any, alpha: Any, gamma: Any = 
     cos_a = np.cos(alpha)
 
     def trail(a: np.ndarray) -> np.ndarray:  # 4.E33 / 4.E73: t(alpha_t) with cos(alpha)
-        bt = Bt * a
-        return Dt * np.cos(Ct * np.arctan(bt - Et * (bt - np.arctan(bt)))) * cos_a
+        return Dt * np.cos(_arg(Bt, Ct, Et, a)) * cos_a
 
     t0 = trail(at)
     Mzr0 = Dr * np.cos(Cr * np.arctan(Br * ar))  # noqa: N806
@@ -215,7 +209,7 @@ def steady_state(m: MagicFormula, Fz: Any, kappa: Any, alpha: Any, gamma: Any = 
     Exa = np.minimum(g("REX1") + g("REX2") * dfz, 1.0)  # noqa: N806
     SHxa = g("RHX1")  # noqa: N806
     a_s = a_star + SHxa
-    Gxa = _shape_g(Bxa, Cxa, Exa, a_s) / _shape_g(Bxa, Cxa, Exa, SHxa)  # noqa: N806
+    Gxa = np.cos(_arg(Bxa, Cxa, Exa, a_s)) / np.cos(_arg(Bxa, Cxa, Exa, SHxa))  # noqa: N806
     Fx = Gxa * Fx0  # noqa: N806
 
     # ---- combined slip: Fy (4.E58-4.E67)
@@ -229,7 +223,7 @@ def steady_state(m: MagicFormula, Fz: Any, kappa: Any, alpha: Any, gamma: Any = 
     Cyk = g("RCY1")  # noqa: N806
     Eyk = np.minimum(g("REY1") + g("REY2") * dfz, 1.0)  # noqa: N806
 
-    Gyk = _shape_g(Byk, Cyk, Eyk, ks) / _shape_g(Byk, Cyk, Eyk, SHyk)  # noqa: N806
+    Gyk = np.cos(_arg(Byk, Cyk, Eyk, ks)) / np.cos(_arg(Byk, Cyk, Eyk, SHyk))  # noqa: N806
     Fy = Gyk * Fy0 + SVyk  # noqa: N806
 
     # ---- combined slip: Mz (4.E71-4.E78). The equivalent slip angles and the arm s of Fx are

@@ -84,11 +84,6 @@ class Tyre3D:
         return {"Fx": out["Fx"], "Fy": out["Fy"], "Mz": out["Mz"], "kappa": kappa,
                 "alpha": alpha, "Kxk": out["Kxk"], "Kya": out["Kya"]}
 
-    def checkpoint(self) -> dict[str, list[float] | None]:
-        """The transient slips (the node's state between steps), for a checkpoint."""
-        return {"kappa": None if self.kappa is None else self.kappa.tolist(),
-                "alpha": None if self.alpha is None else self.alpha.tolist()}
-
 
 MF_KEYS = ("model", "stiffness", "tir", "transient")
 KIN_FIELDS = ("vx_wc", "vy_wc", "omega_w", "gamma", "x_wc", "y_wc", "r_l")

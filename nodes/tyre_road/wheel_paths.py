@@ -1,27 +1,13 @@
-"""Wheel paths: where on the road each tyre contact point is at time t.
+"""Wheel paths: where on the road each tyre contact point is (docs/vehicles_roads.md).
 
-The plant's ``info()`` gives, per corner (order FL, FR, RL, RR, or one corner):
-
-* ``wheel_x``  [m]: longitudinal offset of the wheel centre from the front axle, x forward
-  (0 for front wheels, -wheelbase for rear wheels);
-* ``wheel_track``: 0 for a left wheel, 1 for a right wheel;
-* ``corner_names``: e.g. ["FL", "FR", "RL", "RR"] (["FR"] for a quarter car).
-
-At time t the vehicle's front axle has travelled v t, so contact point j of corner i (tyre
-offset dx_j, from :attr:`Tyre.contact_offsets`) is at distance
-
-    s_ij(t) = v t + wheel_x[i] + dx_j
-
-on track ``wheel_track[i]``. A rear wheel therefore sees what the front wheel on its track saw
-a time wheelbase / v earlier (thesis Eq. 4.11, t_d = d_wb / v), and sees a flat road while
-s < 0. If the road names ``corners``, the corners not named see a flat road.
-
-A vehicle that moves itself (the four-corner vehicle) gives its wheel centres' world (x, y);
-the road is laid along the path its driver follows (:class:`RoadPath`: from the front axle's
-centre at t = 0, heading +x, straight or the ``vehicle.driver`` circle of radius R) and a
-point is read at its station u, the arc length of its foot on that line (as OpenCRG's
-reference line). The tracks (0 left, 1 right) lie at +-t/2 beside the line, so an outer track
-meets the profile over (R + t/2) / R of the line's distance, cross sections square to it.
+From the plant's ``info()`` per corner: ``wheel_x`` [m], the wheel centre's offset from the
+front axle (x forward: 0 front, -wheelbase rear), ``wheel_track`` (0 left, 1 right) and
+``corner_names``. Contact point j of corner i (tyre offset dx_j,
+:attr:`Tyre.contact_offsets`) is at distance s_ij(t) = v t + wheel_x[i] + dx_j on its track,
+so a rear wheel sees what the front wheel saw wheelbase / v earlier (thesis Eq. 4.11) and a
+flat road while s < 0. A vehicle that moves itself (the four-corner vehicle) gives its wheel
+centres' world (x, y) instead, read at their stations along the path its driver follows
+(:class:`RoadPath`).
 """
 
 from __future__ import annotations
