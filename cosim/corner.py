@@ -54,37 +54,28 @@ class Corner:
     """A corner file, read and checked. Points in the corner frame [m] (module docstring)."""
 
     name: str
-    source: str
-    """Where it was read from (a path)."""
+    source: str  # the path it was read from
     points: dict[str, np.ndarray]
-    half_track: float
-    """Wheel centre's distance from the vehicle centreline [m]."""
-    tyre_loaded_radius: float
-    """Static wheel centre height above the ground [m]."""
+    half_track: float  # wheel centre from the vehicle centreline [m]
+    tyre_loaded_radius: float  # static wheel centre height above the ground [m]
     masses: dict[str, float]
     """body, hub, lower_arm, upper_arm, tie_rod [kg]; ``wheel`` (the spinning part of the
     hub: wheel, tyre, disc) when the file gives it."""
-    torsion_bar_nm_per_deg: float
-    """K_theta about the lower arm's pivot axis [N m/deg] (0: none)."""
-    coil_n_per_m: float
-    """Coil spring rate between ``spring_lower`` and ``spring_upper`` [N/m] (0: none)."""
-    damper_c_nominal: float
-    """Nominal damper rate along its axis [N s/m] (the check's equivalent quarter car)."""
+    torsion_bar_nm_per_deg: float  # K_theta about the lower arm's pivot axis (0: none)
+    coil_n_per_m: float  # coil rate between spring_lower and spring_upper (0: none)
+    damper_c_nominal: float  # along its axis [N s/m] (the check's equivalent quarter car)
     bump_stop: dict[str, float] | None
     """clearance [m], initial_rate [N/m], stroke [m], transition [-]; None: no bumper."""
     bushes: dict[str, Bush] = field(default_factory=dict)
     description: str = ""
 
-    def point(self, name: str) -> np.ndarray:
-        """A hardpoint in the corner frame [m] (a copy)."""
+    def point(self, name: str) -> np.ndarray:  # a copy [m]
         return self.points[name].copy()
 
     def mirrored(self) -> Corner:
-        """The right-hand corner: every point mirrored in the vehicle's xz plane,
-        (x, y, z) -> (x, -y, z) (a full vehicle's FR and RR from the left corner's file).
-        Its lower-arm frame (:func:`cosim.lower_arm.arm_frame_of`: x forward, y outboard, so
-        z down) is the left arm's frame mirrored: the arm's points and loads in it are the
-        left part's."""
+        """The right-hand corner: every point mirrored, (x, y, z) -> (x, -y, z). Its lower-arm
+        frame (:func:`cosim.lower_arm.arm_frame_of`: x forward, y outboard, so z down) is the
+        left arm's mirrored: the arm's points and loads in it are the left part's."""
         m = np.array([1.0, -1.0, 1.0])
         return replace(self, points={k: v * m for k, v in self.points.items()},
                        name=f"{self.name} (mirrored)")
@@ -105,9 +96,8 @@ def load(path: str | Path, key: str = "vehicle.corner") -> Corner:
 
 
 MAX_COORDINATE_M = 10.0
-"""Largest hardpoint coordinate or half track [m]: a road vehicle is < 20 m long and < 3 m
-wide, a corner's points within ~1 m of its wheel; more is millimetres, or not a number a
-model can take."""
+"""Largest hardpoint coordinate or half track [m]: a corner's points are within ~1 m of its
+wheel; more is millimetres, or not a number a model can take."""
 
 
 def _vec(r: ConfigReader, name: str) -> np.ndarray:
@@ -196,7 +186,7 @@ def from_dict(data: dict[str, Any], source: str = "<corner>") -> Corner:
 
 def check_geometry(c: Corner, hp: ConfigReader) -> None:
     """Refuse geometry no double wishbone has: coincident bushes, a ball joint on its arm's
-    pivot axis, a right-hand corner (the file is the left one), a zero-length link."""
+    pivot axis, a right-hand corner, a zero-length link."""
     P = c.points
     for arm in ("lower", "upper"):
         f, r, bj = P[f"{arm}_bush_front"], P[f"{arm}_bush_rear"], P[f"{arm}_ball_joint"]
@@ -226,7 +216,7 @@ _builtin: Corner | None = None
 
 
 def builtin() -> Corner:
-    """The built-in corner (:data:`BUILTIN`), read once."""
+    """The built-in corner, read once."""
     global _builtin
     if _builtin is None:
         _builtin = load(BUILTIN)

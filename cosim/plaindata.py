@@ -1,24 +1,16 @@
 """Plain data on disk: how a checkpoint holds a node's state without holding code (issue #43).
 
 A state is encoded with msgpack: ``None``, ``bool``, ``int``, ``float``, ``str``, ``bytes``,
-``list`` and ``dict`` as themselves, and through msgpack extension types
-
-* a NumPy array: its dtype (one of :data:`NUMERIC_DTYPES`, by name), shape and raw bytes
-  (C order); a NumPy scalar the same with no shape;
-* a ``tuple``, ``set``, ``frozenset``, ``complex``, an ``int`` beyond 64 bits (decimal);
-* an object of a class in the whitelist (:data:`CLASSES`): the class's registered name and
-  its fields as a dict. A dataclass's fields are its declared fields; another class's are its
-  ``__dict__`` (or ``__slots__``). Decoding looks the name up in the whitelist :data:`CLASSES`
-  and the class in the modules this process has loaded (never imports anything a file
-  names), and rebuilds the object with :func:`_rebuild`: a bare instance
-  (``object.__new__``) whose fields are set one by one; a dataclass must have exactly its
-  declared fields. No method of the class runs (no ``__init__``, ``__setstate__`` or
-  ``__reduce__``): the bytes can give wrong numbers, never run code.
-
-A ``numpy.random.Generator`` is its bit generator's name (whitelisted) and state dict.
-
-Anything else is refused when encoding (:class:`PlainDataError` naming where in the state it
-is) and any malformed input when decoding (the same error, never another exception).
+``list`` and ``dict`` as themselves, and as msgpack extension types a NumPy array or scalar
+(dtype of :data:`NUMERIC_DTYPES` by name, shape, raw bytes in C order), a ``tuple``, ``set``,
+``frozenset``, ``complex``, an ``int`` beyond 64 bits (decimal), a
+``numpy.random.Generator`` (its bit generator's name and state), and an object of a class in
+the whitelist :data:`CLASSES` (its name and fields: a dataclass's declared fields, another's
+``__dict__`` or ``__slots__``). Decoding finds the class in the modules this process has
+loaded (never imports what a file names) and sets the fields of a bare instance
+(``object.__new__``) one by one: no method of the class runs, so the bytes can give wrong
+numbers, never run code. Anything else is refused when encoding, and any malformed input when
+decoding, with a :class:`PlainDataError` (never another exception).
 """
 
 from __future__ import annotations
@@ -40,8 +32,7 @@ NUMERIC_DTYPES = frozenset(
     for kind in ("b1", "i1", "u1", "i2", "u2", "i4", "u4", "i8", "u8", "f2", "f4", "f8",
                  "c8", "c16")
     for order in ("<", ">"))
-"""The dtypes an array or scalar may have (booleans, integers, floats, complex; either byte
-order): never an object, string, structured or datetime dtype."""
+"""Booleans, integers, floats, complex, either byte order: never object, string, datetime."""
 
 CLASSES = frozenset({
     "cosim.corner.Bush", "cosim.corner.Corner",
@@ -63,9 +54,7 @@ CLASSES = frozenset({
     "nodes.fatigue.lib.screening.StressScreen", "nodes.fatigue.worker.LiveFatigue",
     "nodes.fatigue.worker._Engine", "nodes.fatigue.worker._Parked",
 })
-"""The whitelist: the classes (``module.QualName``) whose objects a node's state may hold.
-Each is found in the module the node has already imported (:func:`_class`), never imported
-because a file names it."""
+"""The classes (``module.QualName``) whose objects a node's state may hold."""
 _BIT_GENERATORS = {"PCG64": np.random.PCG64, "PCG64DXSM": np.random.PCG64DXSM,
                    "MT19937": np.random.MT19937, "Philox": np.random.Philox,
                    "SFC64": np.random.SFC64}
@@ -76,7 +65,6 @@ class PlainDataError(ValueError):
 
 
 def class_name(cls: type) -> str:
-    """The name a class is whitelisted and written under: ``module.QualName``."""
     return f"{cls.__module__}.{cls.__qualname__}"
 
 
@@ -96,7 +84,6 @@ def _class(name: Any) -> type | None:
 
 
 def _fields(obj: Any) -> dict[str, Any]:
-    """The fields an object of a whitelisted class is written with."""
     if dataclasses.is_dataclass(obj):
         out = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
         extra = getattr(obj, "__dict__", {})
@@ -165,7 +152,7 @@ def _dtype(name: Any) -> np.dtype[Any]:
 
 def _rebuild(name: Any, fields: Any, lenient: bool) -> Any:
     """An object of the whitelisted class ``name`` with ``fields``, no code of it run (with
-    ``lenient``, a class this process has not registered is a dict of its name and fields)."""
+    ``lenient``, a class not loaded here is a dict of its name and fields)."""
     cls = _class(name)
     if cls is None and lenient and name in CLASSES and isinstance(fields, dict):
         return {"class": name, "fields": fields}

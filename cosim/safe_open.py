@@ -1,13 +1,12 @@
-"""Opening a file a user names: a regular file only, read within a stated bound.
+"""Opening a file a user names (every reader does it here): a regular file only, read within
+a stated bound.
 
-Every reader of a path a user names opens it here. :func:`open_user_file` opens with
-``O_NONBLOCK`` (a pipe with no writer does not hang), refuses what is not a regular file (a
-device, FIFO, socket, folder) and reads at most :func:`limit` bytes, *counting* them
-(``st_size`` is not trusted). ``inside`` refuses a path whose real location leaves the folder
-a reader was handed. Libraries that open a path themselves get it only after
-:func:`check_user_file`. Limits per kind: :data:`LIMITS` (``SUSCOSIM_MAX_<KIND>_MB`` overrides
-one; docs/reliability.md). Every refusal is an :class:`~cosim.errors.InputFileError` (exit 2)
-naming the file as written and, when given, the key that named it.
+:func:`open_user_file` opens with ``O_NONBLOCK`` (a pipe with no writer does not hang),
+refuses what is not a regular file and reads at most :func:`limit` bytes, *counting* them
+(``st_size`` is not trusted); ``inside`` refuses a path whose real location leaves the folder
+a reader was handed. Libraries that open a path themselves get it after
+:func:`check_user_file`. Every refusal is an :class:`~cosim.errors.InputFileError` (exit 2)
+naming the file and, when given, the key that named it.
 """
 
 from __future__ import annotations
@@ -44,7 +43,6 @@ _KIND_OF_MODE = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"
 
 
 def limit(kind: str) -> int:
-    """The byte limit of ``kind`` (:data:`LIMITS`, or ``SUSCOSIM_MAX_<KIND>_MB``)."""
     env = f"SUSCOSIM_MAX_{kind.upper()}_MB"
     raw = os.environ.get(env)
     if raw is None:
@@ -71,7 +69,6 @@ def _check_inside(path: Path, inside: str | Path, key: str) -> None:
 
 
 def _open_fd(path: str | Path, kind: str, key: str, inside: str | Path | None) -> int:
-    """A read-only descriptor of ``path``, checked to be a regular file."""
     if inside is not None:
         _check_inside(Path(path), inside, key)
     flags = os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | getattr(os, "O_CLOEXEC", 0)
@@ -96,7 +93,7 @@ def _too_big(path: str | Path, kind: str, key: str, cap: int) -> InputFileError:
 
 
 class _Bounded(io.RawIOBase):
-    """A raw read-only stream over ``fd`` that raises once more than ``cap`` bytes are read."""
+    """A raw stream over ``fd`` that raises once more than ``cap`` bytes are read."""
 
     def __init__(self, fd: int, path: str | Path, kind: str, key: str, cap: int) -> None:
         self._fd, self._path, self._kind, self._key, self._cap = fd, path, kind, key, cap
@@ -125,8 +122,7 @@ class _Bounded(io.RawIOBase):
 
 def open_user_file(path: str | Path, kind: str, key: str = "",
                    inside: str | Path | None = None) -> BinaryIO:
-    """A buffered binary stream of the regular file ``path`` that raises
-    :class:`InputFileError` once more than :func:`limit` (``kind``) bytes have been read."""
+    """A buffered binary stream of the regular file ``path`` (InputFileError past the limit)."""
     fd = _open_fd(path, kind, key, inside)
     return io.BufferedReader(_Bounded(fd, path, kind, key, limit(kind)))
 
@@ -140,7 +136,7 @@ def open_user_text(path: str | Path, kind: str, key: str = "", encoding: str = "
 
 def read_user_file(path: str | Path, kind: str, key: str = "",
                    inside: str | Path | None = None) -> bytes:
-    """The bytes of the regular file ``path``, at most :func:`limit` (``kind``) of them."""
+    """The bytes of the regular file ``path``, at most :func:`limit` of them."""
     with open_user_file(path, kind, key, inside) as fh:
         return fh.read()
 
@@ -157,13 +153,10 @@ def read_user_text(path: str | Path, kind: str, key: str = "", encoding: str = "
                                         f"{exc.start} is 0x{data[exc.start]:02x}") from None
 
 
-MAX_TOML_DEPTH = 64
-"""Deepest nesting of tables and arrays a TOML file a user names may have (a scenario is ~4
-deep); deeper is refused before any reader walks it (a RecursionError otherwise)."""
+MAX_TOML_DEPTH = 64  # nesting a user's TOML may have (a scenario: ~4; more: RecursionError)
 
 
 def read_user_toml(path: str | Path, kind: str, key: str = "") -> dict[str, Any]:
-    """:func:`read_user_text` parsed by :func:`parse_user_toml`."""
     return parse_user_toml(read_user_text(path, kind, key), path, key)
 
 
@@ -185,8 +178,7 @@ def parse_user_toml(text: str, path: str | Path, key: str = "") -> dict[str, Any
 
 
 def _depth(value: object) -> int:
-    """The nesting depth of dicts and lists in ``value``, walked without recursion (stops
-    counting past :data:`MAX_TOML_DEPTH`)."""
+    """The nesting depth of dicts and lists in ``value`` (no recursion; capped past the max)."""
     deepest, todo = 0, [(value, 1)]
     while todo:
         v, d = todo.pop()
@@ -199,8 +191,8 @@ def _depth(value: object) -> int:
 
 def check_user_file(path: str | Path, kind: str, key: str = "",
                     inside: str | Path | None = None) -> int:
-    """Check ``path`` before a library opens it itself: a regular file (opened without
-    blocking and ``fstat``\\ ed), within :func:`limit` (``kind``) by its size. Returns the size."""
+    """The size of ``path``, checked before a library opens it: a regular file, within
+    :func:`limit` by its size."""
     fd = _open_fd(path, kind, key, inside)
     try:
         size = os.fstat(fd).st_size

@@ -1,11 +1,8 @@
 """The typed channel schema, declared once: every data channel's fields, units and bounds.
 
-From :data:`CHANNELS` derive: the wire codec's plausibility checks (:mod:`cosim.wire`: a
-producer refuses to publish what a consumer would reject, so a diverged model ends the run
-naming the field), the fields a consumer requires (:func:`required`), a force node's coupling
-fields (:func:`coupling`), a node's outputs (:func:`writes`), the docs' channel table
-(:func:`doc_table`, docs/cosim.md; a test keeps them equal) and the table's column names
-(:func:`columns`).
+From :data:`CHANNELS` derive the wire codec's plausibility checks (:mod:`cosim.wire`), the
+fields a consumer requires, a node's outputs, the docs' channel table (:func:`doc_table`,
+docs/cosim.md; a test keeps them equal) and the table's column names.
 
 Bounds. The thesis fixes none: they are plausibility limits far outside anything a road
 vehicle's suspension produces. The channel limit is ``|x| <= 1e9`` in SI units (the Chapter 6
@@ -15,7 +12,7 @@ Undeclared fields (a law's extras, a user's node's outputs) are type-checked onl
 extra may be NaN by design (TSS3's ``F_demand`` where it demands nothing).
 
 Per-corner fields are a number for a quarter car and a list of 4 (FL, FR, RL, RR) for a
-full vehicle (:data:`cosim.channels.CORNERS`).
+full vehicle.
 """
 
 from __future__ import annotations
@@ -27,18 +24,14 @@ from typing import Annotated, Any
 
 import msgspec
 
-LIMIT = 1e9
-"""The bound of every number of a vehicle channel [SI units] (see the module's docstring)."""
-DEFAULT_LIMIT = LIMIT
-"""The bound of the compiled decoder of a channel this schema does not declare (its fields
-are undeclared: out of it, they take the slow path and are type-checked only)."""
+LIMIT = 1e9  # the bound of every number of a vehicle channel [SI units]
+DEFAULT_LIMIT = LIMIT  # an undeclared channel's (out of it: the slow path, type-checked only)
 
 
 @dataclass(frozen=True)
 class Field:
-    """One field of a channel: ``name``, SI ``unit``, ``meaning``; ``nonneg``: >= 0;
-    ``required``: by the consumers that couple through it; ``models``: who publishes it
-    ("": all)."""
+    """One field of a channel; ``required`` by the consumers that couple through it;
+    ``models``: who publishes it ("": all)."""
 
     name: str
     unit: str
@@ -56,10 +49,8 @@ class Channel:
     channel: str
     fields: tuple[Field, ...]
     meaning: str
-    limit: float = LIMIT
-    """Every number of a message is within ``[-limit, limit]`` (inf: only NaN is refused)."""
-    stepped: bool = True
-    """One message per communication step (else a block channel: not recorded in the table)."""
+    limit: float = LIMIT  # every number within [-limit, limit] (inf: only NaN refused)
+    stepped: bool = True  # one message a step (else a block channel: not in the table)
 
     @property
     def name(self) -> str:
@@ -76,8 +67,7 @@ _MF = "magic_formula tyre"
 _ARM_CORNERS = ("FL", "FR", "RL", "RR")
 
 
-def _arm_fields() -> tuple[Field, ...]:
-    """The lower arm's load fields (``plant/arm`` and the per-corner ``plant/arm_<C>``)."""
+def _arm_fields() -> tuple[Field, ...]:  # plant/arm and the per-corner plant/arm_<C>
     return (
         *(Field(f"{p}_{ax}", "N", f"load ON the lower arm at {p}, arm-frame {ax} axis "
                 "(cosim/lower_arm.py)", models=_DW)
@@ -206,19 +196,17 @@ BY_NAME: dict[str, Channel] = {c.name: c for c in CHANNELS}
 
 
 def channel(node: str, name: str) -> Channel | None:
-    """The declared channel ``node/name`` (None: not declared)."""
     return BY_NAME.get(f"{node}/{name}")
 
 
 def required(node: str, name: str) -> tuple[str, ...]:
-    """The fields a message of ``node/name`` must have for the consumers that couple
-    through it."""
+    """The fields a message of ``node/name`` must have."""
     c = channel(node, name)
     return tuple(f.name for f in c.fields if f.required) if c else ()
 
 
 def coupling(node: str) -> tuple[str, ...]:
-    """The coupling fields of ``node``'s ``force`` (the registry's ``provides``)."""
+    """The coupling fields of ``node``'s ``force``."""
     return required(node, "force")
 
 
@@ -228,8 +216,7 @@ def writes(node: str) -> tuple[str, ...]:
 
 
 def columns(node: str, name: str, fields: Iterable[str] | None = None) -> list[str]:
-    """The table's column names of ``node/name``: ``node/name/field`` (the declared fields,
-    or ``fields``)."""
+    """The table's columns ``node/name/field`` (the declared fields, or ``fields``)."""
     c = channel(node, name)
     names = list(fields) if fields is not None else [f.name for f in c.fields] if c else []
     return [f"{node}/{name}/{f}" for f in names]
@@ -250,8 +237,7 @@ def doc_table() -> str:
 
 # ---- the compiled decoders ------------------------------------------------------------------
 def _number(limit: float) -> Any:
-    """int | float within [-limit, limit] (NaN fails any bound: comparisons with it are
-    false); a bool is not a number."""
+    """int | float within [-limit, limit] (NaN fails any bound); a bool is not a number."""
     if limit == math.inf:  # msgspec bounds are finite: NaN is refused by the codec's check
         return int | float
     return Annotated[int, msgspec.Meta(ge=-int(limit), le=int(limit))] | \
@@ -265,7 +251,6 @@ def payload_type(limit: float) -> Any:
 
 
 def nonneg_fields(node: str, name: str) -> tuple[str, ...]:
-    """The fields of ``node/name`` that must be >= 0."""
     c = channel(node, name)
     return tuple(f.name for f in c.fields if f.nonneg) if c else ()
 

@@ -9,16 +9,13 @@ Schema (version 1)::
      "t": 0.042,        # time t_k of that step [s]
      "d": {...}}        # payload
 
-For ``kind == "data"`` the payload maps field names to a number or a list of numbers (one per
-corner for per-corner quantities; a quarter car sends plain numbers). Field names and units of
-each channel are listed in :mod:`cosim.channels`. Control kinds carry a free msgpack map.
-
-Two kinds carry other data messages, each exactly as it would be on its own (unsigned: the
-bundle's signature covers it), ``d = {FIELD: [[channel, raw message bytes], ...]}``, ``k``/``t``
-the newest inner message's: ``records`` (``<node>/records``, the recorder's feed of a node's
-last few steps) and ``step`` (``<node>/step``, ``d["msgs"]``: one producer's messages of one
-communication step, sent as ONE bus message). A consumer decodes only the inner messages of
-the channels it reads (:func:`inner`).
+For ``kind == "data"`` the payload maps field names (:mod:`cosim.schema`) to a number or a
+list of numbers (one per corner; a quarter car sends plain numbers). Control kinds carry a
+free msgpack map. ``records`` (``<node>/records``, the recorder's feed) and ``step``
+(``<node>/step``: one producer's messages of one step as ONE bus message) carry other data
+messages, each as it would be on its own (unsigned: the bundle's signature covers it),
+``d = {FIELD: [[channel, raw message bytes], ...]}``, ``k``/``t`` the newest inner message's;
+a consumer decodes only the inner messages of the channels it reads (:func:`inner`).
 
 Encoding and decoding are msgspec's (compiled; the bytes are msgpack's): with ``channel`` the
 numbers are bounded by that channel's limit of :mod:`cosim.schema` (NaN, +-inf, 1e308
@@ -45,17 +42,16 @@ from .errors import WireError
 SCHEMA_VERSION = 1
 MAX_MESSAGE_BYTES = 48 * 1024
 """Largest message a node publishes [bytes]: Zenoh's low-latency transport does not fragment
-(a message must fit one 64 KiB batch with its headers); batches are cut to fit."""
+(a message must fit one 64 KiB batch with its headers)."""
 CONTROL_KINDS = ("hello", "ready", "waiting", "start", "progress", "done", "abort", "error",
                  "checkpoint")
 KINDS = frozenset({"data", "records", "step", *CONTROL_KINDS})
-BUNDLE_KINDS = ("records", "step")
-"""Kinds that carry other messages: ``d[BUNDLE_FIELD[kind]]`` = [[channel, raw], ...]."""
+BUNDLE_KINDS = ("records", "step")  # d[BUNDLE_FIELD[kind]] = [[channel, raw], ...]
 BUNDLE_FIELD = {"records": "records", "step": "msgs"}
 
 
 class Message(NamedTuple):
-    """A decoded bus message (a named tuple: made for every message, so it must be cheap)."""
+    """A decoded bus message (a named tuple: cheap, made for every message)."""
 
     kind: str
     k: int
@@ -71,26 +67,15 @@ class Message(NamedTuple):
         return np.array(value if type(value) is list else (value,), dtype=float)
 
 
-def _plain(value: Any) -> Any:
-    """numpy -> msgpack-able; a length-1 array becomes a plain float."""
-    if type(value) is np.ndarray:
-        if value.dtype.kind != "f":
-            value = value.astype(float)
-        return value.item() if value.size == 1 else value.ravel().tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 def _enc_hook(obj: Any) -> Any:
-    """numpy values as :func:`_plain` makes them (called by the compiled encoder for the
-    types it does not know: no Python loop over the fields of a message)."""
+    """numpy values for the compiled encoder (called for the types it does not know): an
+    array as floats, a length-1 one as a plain float."""
     if type(obj) is np.ndarray:
-        if obj.size == 1 and obj.dtype.kind == "f":  # a quarter car's field: the common case
-            return obj.item()
-        return _plain(obj)
+        if obj.dtype.kind != "f":
+            obj = obj.astype(float)
+        return obj.item() if obj.size == 1 else obj.ravel().tolist()
     if isinstance(obj, np.generic):
-        return _plain(obj)
+        return obj.item()
     raise TypeError(f"can not serialize {type(obj).__name__!r} object")
 
 
@@ -193,7 +178,6 @@ class ChannelCodec:
                                 "negative (the schema says >= 0)")
         return Message(kind, m.k, m.t, d)
 
-
     def _undeclared(self, raw: bytes) -> Any:
         """The slow path: ``raw`` failed the bounded decoder. It is taken if only undeclared
         fields are out of bounds (a law's extras may be NaN), else WireError saying why."""
@@ -240,11 +224,8 @@ def encode_step(k: int, t: float, msgs: list[tuple[str, bytes]]) -> bytes:
 
 
 def decode(raw: bytes, channel: str | None = None) -> Message:
-    """Decode and validate one message; raise :class:`WireError` saying what is wrong.
-
-    ``channel`` (``node/channel``): also check the data against that channel's schema
-    (:class:`ChannelCodec`); without it the numbers are only type-checked (a tap, a journal
-    of any run)."""
+    """Decode and validate one message (WireError saying what is wrong); with ``channel``
+    (``node/channel``) against that channel's schema, else the numbers only type-checked."""
     if channel is not None:
         return codec(channel).decode(raw)
     try:
@@ -265,7 +246,7 @@ def _version(version: Any) -> str:
 
 
 def _explain(raw: bytes, chan: ChannelCodec | None) -> str:
-    """Why ``raw`` does not decode (as the field-by-field decoder of version 1 said it)."""
+    """Why ``raw`` does not decode, field by field."""
     try:
         obj = msgpack.unpackb(raw, raw=False, strict_map_key=True)
     except Exception as exc:  # msgpack raises several unrelated types
