@@ -30,7 +30,8 @@ is the thesis's damper; a law on v_w - v_b needs an equivalent c_s (Table 4.3: 1
 body and down on the pad, from the state at the start of the step.
 
 **Arm accelerations** ``a_arm_{loc1,cg,loc2}_{x,y,z}`` [m/s^2] (in ``plant/response``, via
-:meth:`response_velocities`): vehicle axes, of the lower arm's points :data:`ARM_ACCEL_POINTS`
+:meth:`response_velocities`): vehicle axes, of the lower arm's points
+:data:`.double_wishbone_geometry.ARM_ACCEL_POINTS`
 (thesis Table 5.4's Loc1, CG, Loc2), derived by the node as a_b and a_w are.
 
 **Arm loads** (``loads()["arm"]``): the loads ON the lower arm in the arm frame (origin at the
@@ -52,53 +53,13 @@ from cosim.corner import Corner
 
 from .arm_loads import arm_loads
 from .bump_stop import BumpStopParams, bump_stop_force, compression
-from .double_wishbone_geometry import (  # the corner's geometry, re-exported
-    ARM_ACCEL_POINTS,
-    ARM_ORIGIN,
-    ARM_POINTS,
-    ARM_ROTATION,
-    BODY,
-    BUMP_STOP_PAD,
-    BUSH_SPACING,
-    DAMPER_LOWER,
-    DAMPER_UPPER,
-    HALF_TRACK,
-    HUB,
-    LOWER_ARM,
-    LOWER_ARM_COM,
-    LOWER_BALL_JOINT,
-    LOWER_BUSH_FRONT,
-    LOWER_BUSH_REAR,
-    TIE_ROD,
-    TIE_ROD_INNER,
-    TIE_ROD_OUTER,
-    UPPER_ARM,
-    UPPER_BALL_JOINT,
-    UPPER_BUSH_FRONT,
-    UPPER_BUSH_REAR,
-    WHEEL_CENTRE,
-    CornerGeometry,
-    arm_frame,
-    corner_urdf,
-    lower_arm_inertia,
-    to_arm_frame,
-)
+from .double_wishbone_geometry import BODY, HUB, LOWER_ARM, TIE_ROD, UPPER_ARM, CornerGeometry
 from .model import GRAVITY, PlantModel
 from .point_kinematics import point_velocity
 from .quarter_car_lumped import load_urdf_text, new_direct_client, release_joint
 from .quarter_car_lumped import quat_matrix as _rot
 from .quiet_pybullet import p
 from .upper_arm_loads import upper_arm_frame, upper_arm_loads
-
-__all__ = [
-    "ARM_ACCEL_POINTS", "ARM_ORIGIN", "ARM_POINTS", "ARM_ROTATION", "BODY", "BUMP_STOP_PAD",
-    "BUSH_SPACING", "DAMPER_LOWER", "DAMPER_UPPER", "DoubleWishboneCorner",
-    "DoubleWishboneParams", "HALF_TRACK", "HUB", "LOWER_ARM", "LOWER_ARM_COM",
-    "LOWER_BALL_JOINT", "LOWER_BUSH_FRONT", "LOWER_BUSH_REAR", "TIE_ROD", "TIE_ROD_INNER",
-    "TIE_ROD_OUTER", "UPPER_ARM", "UPPER_BALL_JOINT", "UPPER_BUSH_FRONT", "UPPER_BUSH_REAR",
-    "WHEEL_CENTRE", "arm_frame", "arm_loads", "corner_urdf", "lower_arm_inertia",
-    "to_arm_frame",
-]
 
 _BS = BumpStopParams()
 _READ_LINKS = [HUB, BODY, LOWER_ARM, UPPER_ARM]
@@ -377,10 +338,9 @@ class DoubleWishboneCorner(PlantModel):
         return {"F_bs": np.array([self.bump_stop_force()])}
 
     def response_velocities(self) -> dict[str, float]:
-        """Vehicle-axes velocities [m/s] (x forward, y left, z up) of the lower arm's points
-        :data:`ARM_ACCEL_POINTS`, keyed by the fields the node derives from them,
-        ``a_arm_{loc1,cg,loc2}_{x,y,z}`` (kinematic, no gravity): v_com + omega x (r - r_com)
-        from the link state :meth:`_read` fetched; plain floats."""
+        """Vehicle-axes velocities [m/s] of the lower arm's points (module docstring), keyed
+        by the fields the node derives from them, ``a_arm_{loc1,cg,loc2}_{x,y,z}`` (kinematic,
+        no gravity): v_com + omega x (r - r_com) from the link state :meth:`_read` fetched."""
         arm = self._arm_state
         x, y, z = arm[4]
         out: dict[str, float] = {}
@@ -420,10 +380,6 @@ class DoubleWishboneCorner(PlantModel):
                       "clearance_m": bs.clearance, "initial_rate_n_per_m": bs.initial_rate,
                       "stroke_m": bs.stroke}})
         return d
-
-    def close(self) -> None:
-        if p.isConnected(self.client):
-            p.disconnect(self.client)
 
 
 def _local(body: int, link: int, offset_from_link_origin: np.ndarray, client: int) -> list:

@@ -234,12 +234,14 @@ def arm_frame() -> tuple[np.ndarray, np.ndarray]:
     return la.arm_frame_of(_G.corner)
 
 
-def to_arm_frame(point: np.ndarray) -> np.ndarray:
-    """A corner-frame point in the arm frame [m]."""
-    o, R = arm_frame()
-    out: np.ndarray = R.T @ (np.asarray(point, dtype=float) - o)
-    return out
-
+to_arm_frame = _G.to_arm_frame
+"""A corner-frame point in the built-in corner's arm frame [m]."""
+lower_arm_inertia = _G.lower_arm_inertia
+"""(I_xx, I_yy, I_zz) of the built-in lower arm [kg m^2] for a mass [kg]: the FE arm's tensor
+(:data:`cosim.lower_arm.MASS_PROPERTIES`) scaled, its product of inertia (I_xy, 6 % of
+I_xx) dropped (the URDF link is axis-aligned)."""
+corner_urdf = _G.urdf
+"""URDF of the built-in corner for the given masses."""
 
 ARM_POINTS = _G.arm_points
 """The lower arm's load points (corner frame); :func:`to_arm_frame` gives them in the arm frame
@@ -257,7 +259,7 @@ in the arm frame [m]. The thesis names them only "Loc1" (near the hub), "CG" and
 A point's vertical acceleration is the body's plus the arm's angular acceleration times its
 distance from the pivot axis, so it falls from Loc1 to the CG to Loc2, as in Table 5.4."""
 
-ARM_ROTATION = arm_frame()[1]
+ARM_ROTATION = _G.arm_rotation
 """The arm frame's axes in the corner frame at static ride height (columns x, y, z)."""
 BUSH_SPACING = _G.bush_spacing
 """Distance between the two lower bush centres, d [m]."""
@@ -277,15 +279,3 @@ def _joint(name, kind, parent, child, origin, axis="1 0 0"):
     return (f' <joint name="{name}" type="{kind}"><parent link="{parent}"/>'
             f'<child link="{child}"/><origin xyz="{_fmt(origin)}"/><axis xyz="{axis}"/>'
             f'<limit lower="-3" upper="3" effort="1e12" velocity="1e6"/></joint>\n')
-
-
-def lower_arm_inertia(mass: float) -> np.ndarray:
-    """(I_xx, I_yy, I_zz) of the built-in lower arm about its centre of mass [kg m^2]: the FE
-    arm's inertia tensor (:data:`cosim.lower_arm.MASS_PROPERTIES`) scaled to ``mass``; its one
-    product of inertia (I_xy, 6 % of I_xx) is dropped (the URDF link is axis-aligned)."""
-    return _G.lower_arm_inertia(mass)
-
-
-def corner_urdf(pr: CornerMasses) -> str:
-    """URDF of the built-in corner (links, inertias, joints) for the given masses."""
-    return _G.urdf(pr)

@@ -232,7 +232,3 @@ class FullVehicle7DOF(PlantModel):
                   "dynamic_index": pr.dynamic_index, "unsprung_mass": [pr.unsprung_mass] * 4,
                   "spring_stiffness": [pr.spring_stiffness] * 4})
         return d
-
-    def close(self) -> None:
-        if p.isConnected(self.client):
-            p.disconnect(self.client)

@@ -461,7 +461,3 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                   "anti_roll_bar_nm_per_rad": [0.0 if b is None else b.roll_stiffness
                                                for b in self.bars]})
         return d
-
-    def close(self) -> None:
-        if p.isConnected(self.client):
-            p.disconnect(self.client)

@@ -132,5 +132,8 @@ class PlantModel(ABC):
         for k, v in state["attrs"].items():
             setattr(self, k, copy.deepcopy(v))
 
-    def close(self) -> None:  # noqa: B027 - optional hook
-        """Release the PyBullet client."""
+    def close(self) -> None:
+        """Release the PyBullet client (``client``), if the model has one."""
+        client = getattr(self, "client", None)
+        if client is not None and p.isConnected(client):
+            p.disconnect(client)

@@ -158,7 +158,3 @@ class LumpedQuarterCar(PlantModel):
             "spring_stiffness": [pr.spring_stiffness],
         })
         return d
-
-    def close(self) -> None:
-        if p.isConnected(self.client):
-            p.disconnect(self.client)

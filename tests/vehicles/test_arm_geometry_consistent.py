@@ -7,17 +7,18 @@ import pytest
 
 from cosim import lower_arm as la
 from nodes.plant import double_wishbone as dw
+from nodes.plant import double_wishbone_geometry as geo
 
 
 @pytest.mark.parametrize("name", sorted(la.HARDPOINTS))
 def test_plant_arm_points_in_the_arm_frame_are_cosim_lower_arm(name):
-    assert np.allclose(dw.to_arm_frame(dw.ARM_POINTS[name]), la.HARDPOINTS[name], atol=1e-12)
+    assert np.allclose(geo.to_arm_frame(geo.ARM_POINTS[name]), la.HARDPOINTS[name], atol=1e-12)
 
 
 def test_the_plant_has_every_load_point_of_the_arm():
-    assert set(dw.ARM_POINTS) == set(la.HARDPOINTS)
+    assert set(geo.ARM_POINTS) == set(la.HARDPOINTS)
     # the arm frame of the plant is cosim.lower_arm's: origin ARM_ORIGIN, axes parallel
-    o, R = dw.arm_frame()
+    o, R = geo.arm_frame()
     assert np.allclose(o, la.ARM_ORIGIN) and np.allclose(R, np.eye(3))
 
 
@@ -35,7 +36,7 @@ def test_pybullet_places_the_arm_where_cosim_lower_arm_says(corner):
     # the body starts at z = 0 of the world = the static corner frame
     assert np.allclose(arm[4], la.ARM_ORIGIN, atol=1e-9)          # pivot-axis midpoint
     assert np.allclose(hub[4], la.to_corner(la.BALL_JOINT), atol=1e-9)  # hub on the ball joint
-    assert np.allclose(hub[0], dw.WHEEL_CENTRE, atol=1e-9)          # hub mass at the wheel
+    assert np.allclose(hub[0], geo.WHEEL_CENTRE, atol=1e-9)          # hub mass at the wheel
     info = corner.info()
     for name, pt in la.HARDPOINTS.items():
         assert np.allclose(info["arm_points"][name], pt, atol=1e-12), name

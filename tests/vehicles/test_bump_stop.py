@@ -9,6 +9,7 @@ import pytest
 from cosim import lower_arm as la
 from cosim.errors import ScenarioError
 from nodes.plant import double_wishbone as dw
+from nodes.plant import double_wishbone_geometry as geo
 from nodes.plant.bump_stop import BumpStopParams, bump_stop_force, bump_stop_rate
 from nodes.plant.models import build_plant_model
 
@@ -67,9 +68,9 @@ def four_bar_wheel_rise(theta: float) -> float:
     the front-view (y, z) four-bar: both arms turn about x, so their ball joints move in y-z
     planes and the front-view distance between them is constant. The upright's steer is
     ignored."""
-    A = 0.5 * (dw.LOWER_BUSH_FRONT + dw.LOWER_BUSH_REAR)[1:]
-    C = 0.5 * (dw.UPPER_BUSH_FRONT + dw.UPPER_BUSH_REAR)[1:]
-    B0, D0, W0 = dw.LOWER_BALL_JOINT[1:], dw.UPPER_BALL_JOINT[1:], dw.WHEEL_CENTRE[1:]
+    A = 0.5 * (geo.LOWER_BUSH_FRONT + geo.LOWER_BUSH_REAR)[1:]
+    C = 0.5 * (geo.UPPER_BUSH_FRONT + geo.UPPER_BUSH_REAR)[1:]
+    B0, D0, W0 = geo.LOWER_BALL_JOINT[1:], geo.UPPER_BALL_JOINT[1:], geo.WHEEL_CENTRE[1:]
     B = A + _rot(theta) @ (B0 - A)
     r1, r2 = np.linalg.norm(D0 - C), np.linalg.norm(D0 - B0)
     d = np.linalg.norm(B - C)

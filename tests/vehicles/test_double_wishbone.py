@@ -4,11 +4,11 @@
 import numpy as np
 import pytest
 
-from nodes.plant.double_wishbone import (
+from nodes.plant.double_wishbone import DoubleWishboneCorner
+from nodes.plant.double_wishbone_geometry import (
     ARM_POINTS,
     LOWER_ARM_COM,
     LOWER_BUSH_FRONT,
-    DoubleWishboneCorner,
     arm_frame,
     to_arm_frame,
 )

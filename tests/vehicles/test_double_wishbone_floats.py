@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from nodes.plant import double_wishbone as dw
+from nodes.plant import double_wishbone_geometry as geo
 from nodes.plant import point_kinematics as pk
 
 
@@ -72,7 +73,7 @@ def test_to_frame_is_the_numpy_product_within_an_ulp():
 def _arm_loads_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     """arm_loads as it was written with small arrays (before issue #16's floats)."""
     c, b = model.client, model.body
-    R_af = dw.ARM_ROTATION
+    R_af = geo.ARM_ROTATION
     R_arm, hub_quat, u_list = model._applied_pose
     R_hub = np.array(dw.p.getMatrixFromQuaternion(hub_quat)).reshape(3, 3)
     u = np.array(u_list)
@@ -81,7 +82,7 @@ def _arm_loads_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     F_link = w_pivot[:3]
     M_link = w_pivot[3:] + np.cross(model._arm_r_com, F_link)
     F, M = R_af.T @ F_link, R_af.T @ M_link
-    d = dw.BUSH_SPACING
+    d = geo.BUSH_SPACING
     front = np.array([F[0] / 2, F[1] / 2 + M[2] / d, F[2] / 2 - M[1] / d])
     rear = np.array([F[0] / 2, F[1] / 2 - M[2] / d, F[2] / 2 + M[1] / d])
     w_bj = np.array(dw.p.getJointStateMultiDof(b, dw.HUB, physicsClientId=c)[2])
@@ -103,7 +104,7 @@ def _rates_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     arm = model._arm_state
     pos, R = np.array(arm[4]), model._R_arm
     out = {}
-    for name, pt in dw.ARM_ACCEL_POINTS.items():
+    for name, pt in geo.ARM_ACCEL_POINTS.items():
         r = pos + R @ model._local_point(dw.LOWER_ARM, dw.la.to_corner(pt))
         v = np.array(arm[6]) + np.cross(np.array(arm[7]), r - np.array(arm[0]))
         for axis, val in zip("xyz", v, strict=True):
