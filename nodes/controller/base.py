@@ -1,8 +1,5 @@
 """What every controller shares: the output record and the base class.
 
-The ``[controller]`` table is read with :class:`cosim.config.ConfigReader` (re-exported here
-for the law modules that import it from this module).
-
 Sign convention (whole package), per corner:
 
 * ``v_rel = v_w - v_b`` (m/s), positive in compression (wheel moving up toward the body);
@@ -31,7 +28,6 @@ from typing import Any
 import numpy as np
 
 from cosim import plaindata
-from cosim.config import ConfigReader as ConfigReader  # re-exported (fmu.py imports it here)
 
 #: Values of the generic ``velocity`` key: which velocity the laws use as ``v_rel``.
 VELOCITY_SOURCES = ("relative", "damper")

@@ -11,9 +11,6 @@ positive); ``F_d`` is the force on the body, upward positive (N).
 * :func:`semi_active_force` — realise a demanded force with a variable damper whose
   coefficient lies in ``[c_min, c_max]``: the result is always ``c * v_rel`` with ``c`` in that
   range, so ``F_d * v_rel >= 0`` (no energy input) whatever is demanded.
-
-A law function returns ``(F_d, c_eff, extras)`` (:data:`LawOutput`): a two-state law records
-``state`` (1 hard, 0 soft), a variable-damper law ``c`` (its coefficient, N·s/m).
 """
 
 from __future__ import annotations
@@ -47,20 +44,6 @@ def two_state_force(
     """Two-state damper: ``c = c_hard`` where ``hard`` else ``c_soft``; (F_d = c v_rel in N, c)."""
     c = np.where(hard, c_hard, c_soft)
     return c * np.asarray(v_rel, dtype=float), c
-
-
-LawOutput = tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]
-"""(F_d in N, c_eff in N·s/m, extra channels): see :mod:`nodes.controller.registry`."""
-
-
-def recording_state(F_d: np.ndarray, c: np.ndarray, hard: np.ndarray) -> LawOutput:
-    """A two-state law's output, ``state`` = the hard flag as 1.0/0.0."""
-    return F_d, c, {"state": np.asarray(hard).astype(float)}
-
-
-def recording_c(F_d: np.ndarray, c: np.ndarray) -> LawOutput:
-    """A variable-damper law's output, its coefficient recorded as ``c``."""
-    return F_d, c, {"c": c}
 
 
 def semi_active_force(

@@ -26,9 +26,10 @@ from typing import Any
 
 import numpy as np
 
+from cosim.config import ConfigReader
 from cosim.errors import InputFileError, RunError, ScenarioError
 from cosim.safe_open import check_user_file
-from nodes.controller.base import BODY_KEYS, ConfigReader, Controller, ControlOutput, corner_array
+from nodes.controller.base import BODY_KEYS, Controller, ControlOutput, corner_array
 from nodes.controller.registry import law_builder
 
 #: Our signals an FMU input can be mapped to.

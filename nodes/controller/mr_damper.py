@@ -31,24 +31,16 @@ Motion ratio ``r``: ``x_d' = r v_rel``, ``F_d = r F`` at the wheel; ``r = 1`` (d
 vertical damper. The thesis's lumped models scale its oblique damper by 1500/3800 = 0.395
 (r ~ 0.628) and do not say whether the MR force was scaled.
 
-The laws that drive it through its current (thesis Sec 5.3):
-
-* ``passive_mr`` — constant current (the thesis's "passive MR" benchmark at 0 A, Fig 5.7a).
-* TSS3 — Karnopp switching of the current: ``I_hard`` (0.6 A) where ``v_b * v_rel < 0``,
-  ``I_soft`` (0 A) elsewhere (thesis Sec 5.3.3).
-* TSS2 — the MR force tracks the TSS1 force ``F* = c_{soft|hard} * v_rel`` by feedback on the
-  current (thesis Sec 5.3.2, Fig 5.6, after Sims et al. [118]; the block diagram is withheld
-  in the thesis). Chosen form, with the published gains B = 0.8, G = 0.001 A/N::
-
-      I = sat_[0, I_max]( G * (|F*| - B * |F_MR|) )
-
-  ``F_MR`` is the damper's (fluid-spring) force. For a Bingham damper ``F = c v + a I`` and
-  ``F* = K v`` the loop gives ``F = (c + a G K) v / (1 + a G B)``: viscous-like ("feedback
-  linearisation"), B < 1 making up the droop. It is evaluated every internal substep (the
-  thesis's Simulink block ran at its own fine rate); without fluid dynamics, solved exactly.
-
-The MR model is integrated from the previous call to ``t``, the velocities interpolated
-linearly, so the force returned is the damper's at ``t``; ``c_eff`` = ``r^2 c_post(I)``.
+The laws that drive it through its current (thesis Sec 5.3; docs/control.md): ``passive_mr``
+a constant current (the thesis's "passive MR" at 0 A, Fig 5.7a); TSS3 Karnopp switching,
+``I_hard`` (0.6 A) where ``v_b * v_rel < 0``, else ``I_soft`` (0 A) (Sec 5.3.3); TSS2 the MR
+force tracking the TSS1 force ``F* = c_{soft|hard} * v_rel`` by feedback on the current (Sec
+5.3.2, Fig 5.6, after Sims et al. [118]; the loop is withheld in the thesis), chosen form with
+the published gains B = 0.8, G = 0.001 A/N: ``I = sat_[0, I_max](G (|F*| - B |F_MR|))``,
+``F_MR`` the damper's (fluid-spring) force, evaluated every substep (without fluid dynamics:
+solved exactly). The model is integrated from the previous call to ``t``, the velocities
+interpolated linearly, so the force returned is the damper's at ``t``; ``c_eff = r^2
+c_post(I)``.
 """
 
 from __future__ import annotations

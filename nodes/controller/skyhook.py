@@ -26,14 +26,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodes.controller.dampers import (
-    LawOutput,
-    recording_c,
-    recording_state,
-    semi_active_force,
-    two_state_force,
-)
+from nodes.controller.dampers import semi_active_force, two_state_force
 from nodes.controller.registry import HARD, SOFT, Param, control_law
+
+LawOutput = tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]
+"""(F_d in N, c_eff in N·s/m, extras): a two-state law records ``state`` (1 hard, 0 soft), a
+variable-damper law ``c`` (its coefficient, N·s/m)."""
+
+
+def recording_state(F_d: np.ndarray, c: np.ndarray, hard: np.ndarray) -> LawOutput:
+    return F_d, c, {"state": np.asarray(hard).astype(float)}
+
+
+def recording_c(F_d: np.ndarray, c: np.ndarray) -> LawOutput:
+    return F_d, c, {"c": c}
 
 
 def skyhook_condition(v_b: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
