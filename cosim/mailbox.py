@@ -1,11 +1,10 @@
 """An input's mailbox: the decoded messages of one input channel a node has not used yet.
 
-A node's :class:`cosim.participant.Participant` keeps one per input; it files a verified
-message or rejects it with a reason, and is bounded whatever a producer sends: a **stepped**
-input holds only the steps from the one last waited for up to :data:`MAILBOX_WINDOW` ahead;
-any other input at most :data:`MAILBOX_MAX` messages. ``hello`` (step -1) is kept once; a
-second message for a filed step, a kind other than ``data`` or a message lacking a needed
-field is rejected. :func:`file_step` files a producer's ``step`` message, inner by inner.
+It files a verified message or rejects it with a reason, bounded whatever a producer sends: a
+**stepped** input holds only the steps from the one last waited for up to
+:data:`MAILBOX_WINDOW` ahead, any other input at most :data:`MAILBOX_MAX` messages. ``hello``
+(step -1) is kept once; a second message for a filed step, a kind other than ``data`` or a
+message lacking a needed field is rejected.
 """
 
 from __future__ import annotations
@@ -16,23 +15,18 @@ from . import keys
 from .errors import WireError
 from .wire import Message, codec, inner
 
-MAILBOX_WINDOW = 64
-"""Steps ahead of the one a node waits for that a stepped input's mailbox accepts."""
-MAILBOX_MAX = 256
-"""Messages an input that is not stepped (load blocks) may hold before they are taken."""
+MAILBOX_WINDOW = 64  # steps ahead of the one waited for that a stepped input accepts
+MAILBOX_MAX = 256  # messages an input that is not stepped may hold
 
 
 @dataclass
 class Mailbox:
     """The messages of one input by step ``k`` (``-1``: the handshake's ``hello``)."""
 
-    required: tuple[str, ...] = ()
-    """Fields every data message must carry."""
+    required: tuple[str, ...] = ()  # fields every data message must carry
     stepped: bool = True
     box: dict[int, Message] = field(default_factory=dict)
-    floor: int = 0
-    """The step last taken (:meth:`take`): a stepped input accepts ``floor`` ...
-    ``floor + MAILBOX_WINDOW``."""
+    floor: int = 0  # the step last taken: a stepped input accepts floor .. + MAILBOX_WINDOW
 
     def file(self, msg: Message) -> str | None:
         """File ``msg``; return why it is rejected instead (None: filed or kept)."""
@@ -58,13 +52,11 @@ class Mailbox:
         return None
 
     @property
-    def heard(self) -> bool:
-        """Anything came (a ``hello`` or data): the producer's data path is live."""
+    def heard(self) -> bool:  # a hello or data came: the producer's data path is live
         return bool(self.box)
 
     def take(self, k: int) -> Message:
-        """The message of step ``k`` (it must be there); older steps are dropped and the
-        window moves on to ``k``. At most ``MAILBOX_WINDOW + 2`` entries remain."""
+        """The message of step ``k`` (it must be there); older steps are dropped."""
         msg = self.box[k]
         self.floor = k
         if len(self.box) > 1:
@@ -75,9 +67,9 @@ class Mailbox:
 
 def file_step(inputs: dict[tuple[str, str], Mailbox], node: str, msg: Message
               ) -> list[tuple[tuple[str, str], str]]:
-    """File producer ``node``'s verified step message into ``inputs``: each inner message of
-    a stepped input decoded against its channel's schema (others skipped unread); a ``hello``
-    proves every stepped input from ``node`` live. Returns the rejections, ``(input, why)``."""
+    """File producer ``node``'s verified step message into ``inputs`` (each inner message of
+    a stepped input decoded against its channel's schema, others unread; a ``hello`` proves
+    every stepped input from ``node`` live); the rejections, ``(input, why)``."""
     rejected: list[tuple[tuple[str, str], str]] = []
     if msg.kind == "hello":
         for (n, _), each in inputs.items():

@@ -1,13 +1,8 @@
-"""Whether a run's orchestrator is still there, as one node sees it.
-
-Without its orchestrator nobody would end the run, and the nodes would step on for nothing.
-A node knows it is gone in two ways, whichever comes first (:class:`OrchestratorPresence`):
-
-* **its liveliness token dropped** (any node, here or elsewhere) and stayed dropped for
-  :data:`ORCHESTRATOR_GONE_S`: the orchestrator was killed, or the network to it failed;
-* **the process that started the node ended** (a local node only: the orchestrator puts its
-  PID in its children's environment, :data:`ENV_PARENT_PID`; an orphan's ``os.getppid()``
-  changes at once, even before the token was ever seen). Remote nodes go by the token alone.
+"""Whether a run's orchestrator is still there, as one node sees it (without it nobody would
+end the run). It is gone when its liveliness token dropped and stayed dropped for
+:data:`ORCHESTRATOR_GONE_S`, or (a local node) when the process that started the node ended:
+the orchestrator puts its PID in its children's environment (:data:`ENV_PARENT_PID`), and an
+orphan's ``os.getppid()`` changes at once.
 """
 
 from __future__ import annotations
@@ -17,15 +12,13 @@ import time
 from collections.abc import Mapping
 
 ENV_PARENT_PID = "SUSCOSIM_PARENT_PID"
-"""The PID of the orchestrator that started this node as its child (decimal)."""
 ORCHESTRATOR_GONE_S = 2.0
 """The orchestrator's liveliness token must stay dropped this long before a node gives up
 (Zenoh can drop and re-declare a token while links reorganise under heavy CPU load) [s]."""
 
 
 def parent_from_env(environ: Mapping[str, str] | None = None) -> int | None:
-    """The orchestrator's PID if this process is a local node that it started, else None
-    (unset or not a PID); :func:`parent_gone` checks it."""
+    """The orchestrator's PID if this process is a local node that it started, else None."""
     raw = (os.environ if environ is None else environ).get(ENV_PARENT_PID, "")
     try:
         pid = int(raw)
@@ -35,7 +28,7 @@ def parent_from_env(environ: Mapping[str, str] | None = None) -> int | None:
 
 
 def parent_gone(pid: int | None) -> bool:
-    """True when ``pid`` (from :func:`parent_from_env`) is no longer this process's parent."""
+    """``pid`` (:func:`parent_from_env`) is no longer this process's parent."""
     return pid is not None and os.getppid() != pid
 
 
@@ -49,15 +42,13 @@ class OrchestratorPresence:
         self._gone: float | None = None  # when the token dropped [monotonic s]
 
     def on_token(self, _key: str, alive: bool) -> None:
-        """The token was declared (``alive``) or dropped."""
         if alive:
             self._seen, self._gone = True, None
         elif self._seen and self._gone is None:
             self._gone = time.monotonic()
 
     def why_gone(self) -> str | None:
-        """Why the orchestrator counts as gone (the error a node ends with), or None while
-        it is there."""
+        """Why the orchestrator counts as gone (the node's error), or None."""
         if parent_gone(self.parent):
             return (f"{self.node}: the orchestrator of run '{self.run}' is gone (its process "
                     f"{self.parent}, which started this node, ended)")

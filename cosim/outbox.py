@@ -36,7 +36,7 @@ RECORD_PERIOD_S = 0.05  # how old a batch may grow before it is sent [s]
 
 
 class RecordBatch:
-    """The messages kept since the last batch went out (``channel``, raw bytes)."""
+    """The messages (``channel``, raw bytes) kept since the last batch went out."""
 
     def __init__(self) -> None:
         self.items: list[tuple[str, bytes]] = []
@@ -45,7 +45,6 @@ class RecordBatch:
         self.since = time.monotonic()
 
     def fits(self, raw: bytes) -> bool:
-        """Whether ``raw`` still fits this batch's one message."""
         return self.bytes + len(raw) <= MAX_MESSAGE_BYTES - _HEADROOM
 
     def add(self, channel: str, raw: bytes, k: int, t: float) -> bool:
@@ -71,8 +70,7 @@ class Outbox:
 
     def __init__(self, publisher: Callable[[str], Publisher], run: str, node: str) -> None:
         self._publisher, self.run, self.node = publisher, run, node
-        self._outputs: dict[str, Publisher | None] = {}
-        """Output channel -> its own publisher (a block channel), or None (in the step)."""
+        self._outputs: dict[str, Publisher | None] = {}  # None: in the step message
         self._codecs: dict[str, ChannelCodec] = {}
         self._step: list[tuple[str, bytes]] = []  # this step's data messages, not sent yet
         self._held: list[tuple[str, bytes]] = []  # for the next step message (``hold``)
@@ -85,20 +83,17 @@ class Outbox:
 
     @property
     def outputs(self) -> list[str]:
-        """The output channels declared so far (:meth:`output`)."""
         return list(self._outputs)
 
     def output(self, channel: str) -> None:
-        """Declare an output channel: a per-step channel goes out in the node's step
-        message, a block channel of the schema on its own key."""
+        """Declare an output channel."""
         self._outputs[channel] = self._channel_publisher(channel)
         self._codecs[channel] = codec(f"{self.node}/{channel}")
         if self._records_pub is None:
             self._records_pub = self._publisher(keys.key(self.run, self.node, keys.RECORDS))
 
     def _channel_publisher(self, channel: str) -> Publisher | None:
-        """A block channel's own publisher, or None for a per-step channel (whose messages
-        go in the step: the step's publisher is made here once)."""
+        """A block channel's own publisher, or None for a per-step channel."""
         spec = schema.channel(self.node, channel)
         if spec is not None and not spec.stepped:
             return self._publisher(keys.key(self.run, self.node, channel))
@@ -116,8 +111,8 @@ class Outbox:
 
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
                 record: bool = True, hold: bool = False) -> None:
-        """One data message (see the module's docstring); kept for the recorder unless
-        ``record`` is false; a per-step channel's in the next step message with ``hold``."""
+        """One data message (see the module's docstring), kept for the recorder unless
+        ``record`` is false."""
         raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "
@@ -148,9 +143,8 @@ class Outbox:
                     self._send_records()
 
     def send(self, held: bool = False) -> None:
-        """Publish this step's data messages as one ``step`` message, the held ones of the
-        step before first (nothing if there are none of this step, unless ``held``); then a
-        records batch that fell due."""
+        """Publish this step's data messages as one ``step`` message, the held ones first
+        (nothing if there are none of this step, unless ``held``); then a due records batch."""
         if (self._step or (held and self._held)) and self._step_pub is not None:
             msgs = self._held + self._step if self._held else self._step
             kt, self._step, self._held, self._step_bytes = self._step_kt, [], [], 0
@@ -166,14 +160,12 @@ class Outbox:
             self._records_pub(raw)
 
     def flush(self) -> None:
-        """Send this step (and what is held for the next) and the kept data messages to
-        the recorder."""
+        """Send this step, what is held for the next and the records batch."""
         self.send(held=True)
         self._send_records()
 
     def hello(self) -> None:
-        """``hello`` on every output key and the records feed (the start handshake's proof
-        that a data path is live)."""
+        """``hello`` on every output key and the records feed (a data path is live)."""
         raw = encode("hello", -1, 0.0, {})
         for pub in (*self._outputs.values(), self._step_pub, self._records_pub):
             if pub is not None:

@@ -1,17 +1,12 @@
-"""The sinks' bounded window (DESIGN.md "Multi-rate"; issue #41 item 3).
+"""The sinks' bounded window (DESIGN.md "Multi-rate").
 
-The recorder and the live fatigue node (the *sinks*: every node off the coupled chain,
-:func:`cosim.node_kinds.off_critical_path`) take the producers' data as it comes; no coupled
-node waits for them. A sink that lags is buffered (in its own input queue) up to
-``run.sink_window_s`` of simulated time (as steps: ``window``); beyond that the plant holds
-the chain before its next step until the sink is back inside the window, so a sink that
-cannot keep up costs time, never unbounded memory. ``window = 0``: unbounded.
-
-A sink's progress is what it tells the orchestrator (``progress`` and ``done`` on its control
-key, signed with the run's key); the plant listens to those keys too. Before it waits it
-sends what it holds for the sinks (its records batch), so that they can catch up. A sink that
-makes no progress for the stall timeout while the chain waits for it ends the run with a
-:class:`RunError` naming it.
+The *sinks* (the recorder, the live fatigue node: every node off the coupled chain) take the
+producers' data as it comes. A sink that lags is buffered up to ``run.sink_window_s`` of
+simulated time (as steps: ``window``; 0: unbounded); beyond that the plant holds the chain
+before its next step until the sink is back inside the window: a sink that cannot keep up
+costs time, never unbounded memory. A sink's progress is what it tells the orchestrator on
+its control key (the plant listens too); one that makes no progress for the stall timeout
+while the chain waits ends the run with a :class:`RunError` naming it.
 """
 
 from __future__ import annotations
@@ -25,11 +20,9 @@ from . import keys
 from .errors import RunError, WireError
 from .outbox import RECORD_BATCH
 
-DONE = 1 << 62
-"""A sink's step once it is done: never behind."""
+DONE = 1 << 62  # a sink's step once it is done: never behind
 MIN_WINDOW = 2 * RECORD_BATCH
-"""The narrowest window [steps]: a force node's records batch (one message a step) goes out
-when it is full, so the recorder may be up to a batch behind a step the chain has done."""
+"""The narrowest window [steps]: the recorder may be a records batch behind the chain."""
 
 
 def window_steps(window_s: float, h: float) -> int:
@@ -38,21 +31,19 @@ def window_steps(window_s: float, h: float) -> int:
 
 
 class SinkWindow:
-    """The window of the sinks ``sinks`` for the node on ``part`` (a
-    :class:`cosim.participant.Participant`), ``window`` steps wide, from step ``start_k``."""
+    """The window of ``sinks`` for the node on ``part``, ``window`` steps wide."""
 
     def __init__(self, part: Any, sinks: Iterable[str], window: int, start_k: int = 0) -> None:
         self.part, self.window = part, int(window)
         self.k: dict[str, int] = {s: start_k - 1 for s in sinks} if self.window > 0 else {}
-        self.held_s = 0.0
-        """How long the chain waited for the sinks [s] (wall)."""
+        self.held_s = 0.0  # how long the chain waited for the sinks [s] (wall)
         self._cond = threading.Condition()
         self._changed = time.monotonic()
         for s in self.k:
             part.bus.subscribe(keys.key(part.run, s, keys.CTL), self._on_ctl)
 
     def _on_ctl(self, key: str, raw: bytes) -> None:
-        """A sink's control message (on the bus's thread): its step, if it says one."""
+        """A sink's control message (on the bus's thread)."""
         node = key.rsplit("/", 2)[-2]
         try:
             msg = self.part.open(key, raw)
@@ -71,7 +62,8 @@ class SinkWindow:
         return node, self.k[node]
 
     def hold(self, k: int) -> None:
-        """Before step ``k``: wait while a sink is more than the window behind."""
+        """Before step ``k``: wait while a sink is more than the window behind (sending the
+        records batch first, so that it can catch up)."""
         if not self.k or min(self.k.values()) >= k - self.window:
             return
         self.part.flush_records()  # what the sinks need to catch up

@@ -1,14 +1,11 @@
 """The Zenoh session options of a command, and how its session is opened: in one place.
 
 A command adds ``--connect``, ``--listen``, ``--lowlatency``, ``--mode auto|peer|client`` and
-``--zenoh-config`` with :func:`add_zenoh_arguments` (``tap``, ``replay``, ``scope``) or one at a
-time with its own defaults (``run``, ``sweep``, ``router``, ``node``), and opens its session
-with :func:`open_session` (:func:`resolve_mode`, then :func:`open_bus`).
-
-A *client* gets everything through the one router or peer it connects to (a run's
-orchestrator routes for its clients). A *peer* only gets what is sent to it directly: a run's
-local nodes form an explicit mesh with gossip off (:mod:`orchestrator.local_mesh`), so a peer
-connected to the orchestrator hears none of them. A session that listens (a replay) is a peer.
+``--zenoh-config`` with :func:`add_zenoh_arguments` or one at a time with its own defaults,
+and opens its session with :func:`open_session`. A *client* gets everything through the one
+router or peer it connects to (a run's orchestrator routes for its clients); a *peer* only
+what is sent to it directly (a run's local nodes are an explicit mesh with gossip off, so a
+peer connected to the orchestrator hears none of them). A session that listens is a peer.
 """
 
 from __future__ import annotations
@@ -21,46 +18,43 @@ from typing import Any
 from .bus import Callback, LiveCallback
 
 MODES = ("auto", "peer", "client")
-CLIENT_CONNECT_TIMEOUT_MS = 10000
-"""How long a tap/replay/scope client keeps trying to reach its endpoint [ms]."""
+CLIENT_CONNECT_TIMEOUT_MS = 10000  # how long a tap/replay/scope client tries [ms]
 
 
 class SessionOpenError(Exception):
-    """The session could not be opened: ``reason`` (one line) and the exit ``code`` (1: the
-    endpoint cannot be reached, 2: bad input such as a bad endpoint or a port in use)."""
+    """The session could not be opened: ``reason`` (one line), exit ``code`` (1: endpoint
+    unreachable, 2: bad input such as a bad endpoint or a port in use)."""
 
     def __init__(self, reason: str, code: int, mode: str) -> None:
         super().__init__(reason)
         self.reason, self.code, self.mode = reason, code, mode
 
     def message(self, where: str) -> str:
-        """The command's error line: ``cannot open a Zenoh MODE session (WHERE): REASON``."""
         return f"cannot open a Zenoh {self.mode} session ({where}): {self.reason}"
 
 
 MODE_HELP = ("Zenoh session mode; auto: peer when listening, client otherwise (through the "
              "run's orchestrator or a router: a run's nodes are an explicit mesh that a peer "
              "connecting to the orchestrator does not join)")
-"""The help of ``--mode`` for the commands that follow :func:`session_mode`."""
 LISTEN_HELP = "endpoint to listen on (default: a free loopback port)"
 CONFIG_HELP = "Zenoh JSON5 config file (TLS, access control)"
 
 
 def add_connect_argument(ap: argparse.ArgumentParser, help: str, *, metavar: str | None = "EP",
                          default: list[str] | None = None) -> None:
-    """``--connect EP`` (repeatable); absent gives ``default``; ``metavar`` None: argparse's."""
+    """``--connect EP`` (repeatable; absent: ``default``)."""
     ap.add_argument("--connect", action="append", metavar=metavar, default=default, help=help)
 
 
 def add_listen_argument(ap: argparse.ArgumentParser, help: str = LISTEN_HELP, *,
                         metavar: str | None = "EP") -> None:
-    """``--listen EP`` (repeatable): the endpoints the session listens on (absent: None)."""
+    """``--listen EP`` (repeatable; absent: None)."""
     ap.add_argument("--listen", action="append", metavar=metavar, help=help)
 
 
 def add_lowlatency_argument(ap: argparse.ArgumentParser, help: str, *,
                             negatable: bool = False) -> None:
-    """``--lowlatency``: a flag, or with ``negatable`` ``--[no-]lowlatency`` (absent: None)."""
+    """``--lowlatency`` (``negatable``: ``--[no-]lowlatency``, absent: None)."""
     if negatable:
         ap.add_argument("--lowlatency", action=argparse.BooleanOptionalAction, default=None,
                         help=help)
@@ -70,12 +64,11 @@ def add_lowlatency_argument(ap: argparse.ArgumentParser, help: str, *,
 
 def add_mode_argument(ap: argparse.ArgumentParser, help: str = MODE_HELP, *,
                       choices: tuple[str, ...] = MODES, default: str | None = "auto") -> None:
-    """``--mode``: the session mode, one of ``choices`` (see :func:`resolve_mode`)."""
+    """``--mode``: the session mode (:func:`resolve_mode`)."""
     ap.add_argument("--mode", choices=list(choices), default=default, help=help)
 
 
 def add_config_argument(ap: argparse.ArgumentParser) -> None:
-    """``--zenoh-config FILE``: a Zenoh JSON5 configuration file (TLS, access control)."""
     ap.add_argument("--zenoh-config", help=CONFIG_HELP)
 
 
@@ -97,8 +90,7 @@ def is_loopback(ep: str) -> bool:
 
 
 def session_mode(mode: str, connect: list[str], listen: list[str] | None) -> str:
-    """``auto``: a peer when the session listens, else a client (see the module docstring;
-    the endpoints in ``connect`` do not decide)."""
+    """``auto``: a peer when the session listens, else a client."""
     if mode != "auto":
         return mode
     return "peer" if listen else "client"
@@ -106,8 +98,7 @@ def session_mode(mode: str, connect: list[str], listen: list[str] | None) -> str
 
 def resolve_mode(mode: str, config_file: str | None, connect: list[str],
                  listen: list[str] | None) -> str:
-    """The session mode: ``configured`` (the configuration file's own) for ``auto`` with a
-    config file, else :func:`session_mode`."""
+    """The session mode: ``configured`` (the config file's own) for ``auto`` with one."""
     if config_file and mode == "auto":
         return "configured"
     return session_mode(mode, connect, listen)
@@ -115,9 +106,9 @@ def resolve_mode(mode: str, config_file: str | None, connect: list[str],
 
 def apply_mode(conf: Any, mode: str, connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS
                ) -> Any:
-    """Make a :func:`cosim.bus.zenoh_config` a client's (no listening; keep trying to reach
-    the endpoint for ``connect_timeout_ms``), or leave it a peer's; either retries at
-    :data:`cosim.bus.CONNECT_RETRY`, overriding a config file's own."""
+    """Make a :func:`cosim.bus.zenoh_config` a client's (no listening; trying to reach the
+    endpoint for ``connect_timeout_ms``) or leave it a peer's; either retries at
+    :data:`cosim.bus.CONNECT_RETRY`."""
     import json
 
     from cosim.bus import CONNECT_RETRY
@@ -138,8 +129,8 @@ def _reason(exc: Exception) -> str:
 def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
              lowlatency: bool = False, config_file: str | None = None,
              connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS) -> Any:
-    """A :class:`cosim.bus.ZenohBus` in ``mode``; raises :class:`SessionOpenError` with
-    Zenoh's reason in one line (bad endpoint, port in use, unreachable router)."""
+    """A :class:`cosim.bus.ZenohBus` in ``mode``; :class:`SessionOpenError` with Zenoh's
+    reason in one line."""
     from cosim.bus import ZenohBus, zenoh_config
 
     try:
@@ -155,10 +146,8 @@ def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
 def open_session(args: argparse.Namespace, connect: list[str], listen: list[str] | None, *,
                  lowlatency: bool = False, wait: bool = False) -> tuple[Any, str]:
     """The bus ``args`` (:func:`add_zenoh_arguments`) ask for on ``connect``/``listen``, and
-    its mode; low-latency when ``args.lowlatency`` or ``lowlatency``. ``wait`` (a tap, a scope
-    that may start before its run): a client chosen by ``--mode auto`` is a
-    :class:`LateBus`, opened when its endpoint answers. Raises
-    :class:`SessionOpenError`."""
+    its mode. ``wait`` (a tap, a scope that may start before its run): a client chosen by
+    ``--mode auto`` is a :class:`LateBus`. Raises :class:`SessionOpenError`."""
     mode = resolve_mode(args.mode, args.zenoh_config, connect, listen)
     ll = args.lowlatency or lowlatency
     if wait and mode == "client" and args.mode == "auto":
@@ -219,25 +208,20 @@ class LateBus:
                 self._handles.append(declare(self._bus))
 
     def subscribe(self, keyexpr: str, callback: Callback) -> None:
-        """Subscribe now, or as soon as the session is open."""
         self._declare(lambda bus: bus.subscribe(keyexpr, callback))
 
     def watch(self, keyexpr: str, callback: LiveCallback) -> None:
-        """Watch liveliness tokens now, or as soon as the session is open."""
         self._declare(lambda bus: bus.watch(keyexpr, callback))
 
     def query(self, key: str, timeout: float = 1.0) -> bytes | None:
-        """The first reply to a get of ``key``; None while the session is not open."""
         bus = self._bus
         return None if bus is None else bus.query(key, timeout)
 
     def query_all(self, key: str, timeout: float = 1.0) -> list[bytes]:
-        """Every reply to a get of ``key``; none while the session is not open."""
         bus = self._bus
         return [] if bus is None else bus.query_all(key, timeout)
 
     def linked(self) -> bool:
-        """Whether the session is open and linked to a peer or a router."""
         bus = self._bus
         return bus is not None and bool(bus.linked())
 
