@@ -57,12 +57,12 @@ def _print_summary(summary: dict) -> None:
                   f"{si_unit(name) or '-'}")
     res = summary.get("coupling_energy_residual")
     if res:
-        from .runner import RESIDUAL_WARNING
+        from cosim.coupling_energy import WARNING_THRESHOLD
 
         bonds = ", ".join(f"{b} {100 * v:.3g} %" for b, v in res.items() if b != "total")
         print(f"  coupling energy residual {100 * res['total']:.3g} % ({bonds})")
-        if res["total"] > RESIDUAL_WARNING:
-            print(f"  warning: the coupling residual is above {100 * RESIDUAL_WARNING:g} % "
+        if res["total"] > WARNING_THRESHOLD:
+            print(f"  warning: the coupling residual is above {100 * WARNING_THRESHOLD:g} % "
                   "(about 1 % peak error, docs/coupling_residual.md): a smaller run.h or "
                   "the jacobian coupling would be more accurate")
     fat = summary.get("fatigue")
@@ -105,8 +105,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _continued(args: argparse.Namespace) -> dict:
-    """The scenario of ``run --resume RUN_DIR`` or ``run --fork RUN_DIR@T`` (issue #29,
-    :mod:`orchestrator.resume`)."""
+    """The scenario of ``run --resume RUN_DIR`` or ``--fork RUN_DIR@T`` (:mod:`.resume`)."""
     from cosim.errors import ScenarioError
 
     from . import resume as rs
@@ -138,8 +137,7 @@ def _continued(args: argparse.Namespace) -> dict:
 
 
 def _resolved(args: argparse.Namespace) -> dict:
-    """The scenario of ``run`` / ``check``: read, ``--set`` applied, every node kind's
-    preflight run and the run keys filled (:func:`orchestrator.runner.resolve`); a
+    """The scenario of ``run`` / ``check``: read, ``--set`` applied, resolved (preflight); a
     ScenarioError says how to replace a whole table when ``--set`` left a key behind."""
     from cosim.errors import ScenarioError
 
@@ -153,11 +151,8 @@ def _resolved(args: argparse.Namespace) -> dict:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    """Validate and resolve a scenario without running it: the same reading, ``--set`` and
-    preflight as ``run`` (every model section, the implementations ``[nodes]`` picks, files
-    named), no node started and nothing written. Prints the resolved scenario (as TOML, a
-    scenario file itself; ``--json``: as the run's scenario.json) and exits 0; a bad key is
-    exit 2 naming it."""
+    """Resolve a scenario as ``run`` does, start and write nothing; print it as TOML (a
+    scenario file itself; ``--json``: as the run's scenario.json); a bad key is exit 2."""
     scenario = _resolved(args)
     run = scenario["run"]
     if args.json:
@@ -175,45 +170,42 @@ def _delegate(module: str, argv: list[str]) -> int:
     return int(importlib.import_module(module).main(argv) or 0)
 
 
-DELEGATED: tuple[tuple[str, str, str], ...] = (
-    ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
-    ("export", "orchestrator.export",
-     "a run's table from its journal, or as MDF 4 / RPC III / CSV / Parquet (streamed)"),
-    ("pseudo-damage", "orchestrator.pseudo_damage_cli",
-     "pseudo-damage of every load channel of runs or load files, side by side"),
-    ("fatigue", "orchestrator.fatigue_cli",
-     "fatigue life of the lower arm from a finished run or a load file"),
-    ("equivalent-lumped", "orchestrator.studies.equivalent_lumped",
-     "equivalent lumped quarter car of the realistic corner (log decrement)"),
-    ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
-    ("arm", "orchestrator.studies.arm_card",
-     "the lower arm's model card (mass, modes, stresses)"),
-    ("part", "orchestrator.studies.part_check",
-     "a part file's model card: mass, modes, stresses, hot spots, mesh convergence"),
-    ("corner", "orchestrator.studies.corner_check",
-     "a corner file's kinematic and compliance curves and equivalent quarter car"),
-    ("tap", "orchestrator.tap", "print the messages of a running run, live"),
-    ("replay", "orchestrator.replay", "republish a recorded journal on the bus"),
-    ("runs", "orchestrator.runs", "list runs and their state from the run folders"),
-    ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
-    ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
-    ("duty", "orchestrator.duty", "damage and life over a proving-ground schedule of events"),
-    ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
-    ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
-    ("export-fmu", "orchestrator.export_fmu", "the scenario's control law as an FMI FMU"),
-    ("scope", "orchestrator.scope", "watch a run live in the browser (plots, damage map)"),
+COMMANDS: tuple[tuple[str, tuple[tuple[str, str, str], ...]], ...] = (
+    ("everyday commands", (
+        ("run", "", "run a scenario"),
+        ("check", "", "validate a scenario as run does, without running it; print it resolved"),
+        ("sweep", "orchestrator.sweep", "a grid of scenarios, several runs at once"),
+        ("report", "orchestrator.report", "a self-contained HTML report of a run or sweep"),
+        ("fatigue", "orchestrator.fatigue_cli",
+         "fatigue life of the lower arm from a finished run or a load file"),
+        ("duty", "orchestrator.duty", "damage and life over a proving-ground schedule of events"),
+        ("scope", "orchestrator.scope", "watch a run live in the browser (plots, damage map)"),
+        ("part", "orchestrator.studies.part_check",
+         "a part file's model card: mass, modes, stresses, hot spots, mesh convergence"),
+        ("corner", "orchestrator.studies.corner_check",
+         "a corner file's kinematic and compliance curves and equivalent quarter car"))),
+    ("results and model cards", (
+        ("runs", "orchestrator.runs", "list runs and their state from the run folders"),
+        ("ride", "orchestrator.ride", "ride metrics of runs, side by side"),
+        ("export", "orchestrator.export",
+         "a run's table from its journal, or as MDF 4 / RPC III / CSV / Parquet (streamed)"),
+        ("pseudo-damage", "orchestrator.pseudo_damage_cli",
+         "pseudo-damage of every load channel of runs or load files, side by side"),
+        ("arm", "orchestrator.studies.arm_card",
+         "the lower arm's model card (mass, modes, stresses)"),
+        ("equivalent-lumped", "orchestrator.studies.equivalent_lumped",
+         "equivalent lumped quarter car of the realistic corner (log decrement)"))),
+    ("plumbing (several machines, the bus, other tools)", (
+        ("node", "orchestrator.node_main", "start one node (it may run on another machine)"),
+        ("router", "orchestrator.router", "a Zenoh router (for multi-machine runs)"),
+        ("cluster", "orchestrator.cluster", "a local Dask scheduler and workers for sweeps"),
+        ("tap", "orchestrator.tap", "print the messages of a running run, live"),
+        ("replay", "orchestrator.replay", "republish a recorded journal on the bus"),
+        ("export-fmu", "orchestrator.export_fmu", "the scenario's control law as an FMI FMU"))),
 )
-"""The subcommands whose module parses its own arguments: (name, module, one-line help)."""
-
-COMMAND_GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("everyday commands", ("run", "check", "sweep", "report", "fatigue", "duty", "scope",
-                           "part", "corner")),
-    ("results and model cards", ("runs", "ride", "export", "pseudo-damage", "arm",
-                                  "equivalent-lumped")),
-    ("plumbing (several machines, the bus, other tools)",
-     ("node", "router", "cluster", "tap", "replay", "export-fmu")),
-)
-"""How ``suscosim --help`` lists the subcommands: every one of them in one group."""
+"""The subcommands by ``--help`` group: (name, the module that parses its own arguments ("":
+run and check, parsed here), one-line help)."""
+COMMAND_GROUPS = tuple((title, tuple(c[0] for c in cmds)) for title, cmds in COMMANDS)
 
 
 def _version() -> str:
@@ -225,17 +217,13 @@ def _version() -> str:
         return "unknown (not installed)"
 
 
-def _grouped_help(helps: dict[str, str]) -> str:
-    """The ``--help`` epilog: the subcommands by :data:`COMMAND_GROUPS`."""
-    listed = [n for _, names in COMMAND_GROUPS for n in names]
-    missing = sorted(set(helps) - set(listed))
-    if missing:  # a new subcommand must be put in a group
-        raise AssertionError(f"subcommands in no group of COMMAND_GROUPS: {missing}")
-    width = max(len(n) for n in helps) + 2
+def _grouped_help() -> str:
+    """The ``--help`` epilog: the subcommands by :data:`COMMANDS` group."""
+    width = max(len(c[0]) for _, cmds in COMMANDS for c in cmds) + 2
     out = []
-    for title, names in COMMAND_GROUPS:
+    for title, cmds in COMMANDS:
         out.append(f"{title}:")
-        out += [f"  {n:<{width}}{helps[n]}" for n in names]
+        out += [f"  {name:<{width}}{text}" for name, _m, text in cmds]
         out.append("")
     out.append("'suscosim COMMAND --help' for a command's options. Exit codes: 0 done, 1 the "
                "run failed, 2 bad input.")
@@ -243,7 +231,6 @@ def _grouped_help(helps: dict[str, str]) -> str:
 
 
 def _add_scenario_arguments(p: argparse.ArgumentParser, optional: bool = False) -> None:
-    """``run``'s and ``check``'s: the scenario, ``--set`` and ``--mode``."""
     if optional:  # run --resume / --fork take the run folder's scenario
         p.add_argument("scenario", nargs="?", help="scenario TOML file (none with --resume "
                                                    "or --fork)")
@@ -261,7 +248,6 @@ def _add_scenario_arguments(p: argparse.ArgumentParser, optional: bool = False) 
 
 
 def _mode_overrides(args: argparse.Namespace) -> list[str]:
-    """The ``--set`` equivalents of ``--mode`` and ``--inprocess``."""
     out = [f'run.mode="{args.mode}"'] if args.mode else []
     if args.mode == "distributed":
         out.append('run.transport="zenoh"')
@@ -277,13 +263,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--version", action="version", version=f"suscosim {_version()}")
     sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND",
                             help="one of the commands below")
-    helps: dict[str, str] = {}
-
-    def add(name: str, text: str, **kw: object) -> argparse.ArgumentParser:
-        helps[name] = text
-        return sub.add_parser(name, description=text, **kw)  # type: ignore[arg-type]
-
-    r = add("run", "run a scenario")
+    helps = {name: text for _, cmds in COMMANDS for name, _m, text in cmds}
+    r = sub.add_parser("run", description=helps["run"])
     _add_scenario_arguments(r, optional=True)
     r.add_argument("--out", help="run folder (default runs/<run id>)")
     r.add_argument("--resume", metavar="RUN_DIR",
@@ -312,16 +293,17 @@ def build_parser() -> argparse.ArgumentParser:
     zo.add_config_argument(r)
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
-    c = add("check", "validate a scenario as run does, without running it; print it resolved")
+    c = sub.add_parser("check", description=helps["check"])
     _add_scenario_arguments(c)
     c.add_argument("--json", action="store_true",
                    help="print the resolved scenario as JSON (as a run's scenario.json)")
     c.set_defaults(func=cmd_check)
-    for name, module, text in DELEGATED:
-        p = add(name, text, add_help=False)
+    for name, module, text in (c for _, cmds in COMMANDS for c in cmds if c[1]):
+        p = sub.add_parser(name, description=text, add_help=False)
         p.add_argument("rest", nargs=argparse.REMAINDER)
         p.set_defaults(func=None, module=module)
-    ap.epilog = _grouped_help(helps)
+    ap.epilog = _grouped_help()
+
     return ap
 
 
@@ -354,7 +336,3 @@ def main(argv: list[str] | None = None) -> int:
         if os.environ.get("SUSCOSIM_DEBUG"):
             traceback.print_exc()
         return 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -12,11 +12,9 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 ERROR_PREFIX = "suscosim: error: "
-"""How every command's error line starts (a usage error of argparse too)."""
 
 
 def _command(prog: str) -> str:
-    """``"replay"`` of ``"suscosim replay"``; ``""`` of ``"suscosim"``."""
     return prog.removeprefix("suscosim").strip()
 
 
@@ -27,8 +25,7 @@ def error_line(prog: str, message: str) -> str:
 
 
 class ArgumentParser(argparse.ArgumentParser):
-    """An ``argparse.ArgumentParser`` whose usage errors start with :data:`ERROR_PREFIX`
-    (argparse's own: ``suscosim run: error: ...``), then exit 2 as argparse does."""
+    """An ``argparse.ArgumentParser`` whose usage errors start with :data:`ERROR_PREFIX`."""
 
     def error(self, message: str) -> NoReturn:
         self.print_usage(sys.stderr)
@@ -36,8 +33,7 @@ class ArgumentParser(argparse.ArgumentParser):
 
 
 def unify_errors(ap: argparse.ArgumentParser) -> None:
-    """Make ``ap`` (and its subcommands' parsers) print usage errors as
-    :class:`ArgumentParser` does, for a parser built as a plain ``argparse.ArgumentParser``."""
+    """Make a plain ``ap`` (and its subparsers) an :class:`ArgumentParser`."""
     parsers = [ap]
     while parsers:
         p = parsers.pop()
@@ -59,8 +55,7 @@ def parse_args(ap: argparse.ArgumentParser, argv: Sequence[str] | None) -> argpa
 
 
 def fail(prog: str, message: str, code: int = 2) -> int:
-    """Print ``suscosim: error: <command>: message`` on stderr (``prog``: ``"suscosim
-    replay"``); return ``code`` (default 2, bad input)."""
+    """Print :func:`error_line` on stderr; return ``code`` (default 2, bad input)."""
     print(error_line(prog, message), file=sys.stderr)
     return code
 
@@ -84,6 +79,6 @@ def add_pace_arguments(ap: argparse.ArgumentParser, *, speed_help: str, fast_hel
 
 
 def pace_factor(args: argparse.Namespace) -> float | None:
-    """The pace factor of :func:`add_pace_arguments`' options: None (as fast as possible) with
-    ``--fast``, else ``--speed``."""
+    """None (as fast as possible) with ``--fast``, else ``--speed``."""
+
     return None if args.fast else float(args.speed)

@@ -1,24 +1,23 @@
-"""``suscosim cluster [--workers N] [--threads T]``: a local Dask cluster to try
-``suscosim sweep --executor dask`` (several machines, dask-jobqueue: docs/sweeps.md).
-
-Starts a Dask scheduler and N workers of T threads (= T points at once; default 1: a point is
-already 4-5 processes) with this checkout on their ``PYTHONPATH``, prints the scheduler's
-address and waits for Ctrl-C/SIGTERM. Exit codes: 0 stopped, 1 the scheduler died (or did not
-start), 2 bad arguments or ``distributed`` missing.
+"""``suscosim cluster [--workers N] [--threads T]``: a local Dask scheduler and N workers of T
+threads (T points at once) to try ``suscosim sweep --executor dask`` (docs/sweeps.md), until
+Ctrl-C/SIGTERM. Exit codes: 0 stopped, 1 the scheduler died, 2 bad arguments or no
+``distributed``.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import signal
 import socket
 import subprocess
 import sys
 import time
-from pathlib import Path
+from functools import partial
 
-ROOT = Path(__file__).resolve().parents[1]
+from .cli_util import fail, parse_args
+from .sweep.phases import child_env
+
+_fail = partial(fail, "suscosim cluster")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -41,12 +40,6 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
-def _env() -> dict[str, str]:
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), *filter(None, [env.get("PYTHONPATH")])])
-    return env
-
-
 def _wait_port(host: str, port: int, proc: subprocess.Popen, timeout_s: float) -> bool:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline and proc.poll() is None:
@@ -59,7 +52,6 @@ def _wait_port(host: str, port: int, proc: subprocess.Popen, timeout_s: float) -
 
 
 def _stop(procs: list[subprocess.Popen]) -> None:
-    """SIGTERM the workers, then the scheduler (procs[0]); SIGKILL what is left after 10 s."""
     for group in (procs[1:], procs[:1]):
         for p in group:
             if p.poll() is None:
@@ -74,20 +66,19 @@ def _stop(procs: list[subprocess.Popen]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args = parse_args(build_parser(), argv)
+    if isinstance(args, int):
+        return args
     for name in ("workers", "threads"):
         if getattr(args, name) < 1:
-            print(f"suscosim: error: cluster: --{name} must be >= 1", file=sys.stderr)
-            return 2
+            return _fail(f"--{name} must be >= 1")
     if not 0 < args.port < 65536:
-        print("suscosim: error: cluster: --port must be in 1-65535", file=sys.stderr)
-        return 2
+        return _fail("--port must be in 1-65535")
     try:
         import distributed  # noqa: F401
     except ImportError:
-        print("suscosim: error: cluster: needs the 'distributed' package (python3 -m pip "
-              "install 'dask[distributed]')", file=sys.stderr)
-        return 2
+        return _fail("needs the 'distributed' package (python3 -m pip install "
+                     "'dask[distributed]')")
     address = f"tcp://{args.host}:{args.port}"
     py = sys.executable
     sched_cmd = [py, "-m", "distributed.cli.dask_scheduler", "--host", args.host,
@@ -102,14 +93,12 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # one point per worker thread at a time: with Dask's default saturation (1.1) a
         # 1-thread worker is sent 2 points and runs them in turn while another worker idles
-        sched_env = dict(_env(), DASK_DISTRIBUTED__SCHEDULER__WORKER_SATURATION="1.0")
+        sched_env = dict(child_env(), DASK_DISTRIBUTED__SCHEDULER__WORKER_SATURATION="1.0")
         sched = subprocess.Popen(sched_cmd, env=sched_env, stdin=subprocess.DEVNULL)
         procs.append(sched)
         connect_host = "127.0.0.1" if args.host in ("0.0.0.0", "") else args.host
         if not _wait_port(connect_host, args.port, sched, 30.0):
-            print(f"suscosim: error: cluster: the scheduler did not start on {address} (port "
-                  "in use?)", file=sys.stderr)
-            return 1
+            return _fail(f"the scheduler did not start on {address} (port in use?)", 1)
         for i in range(args.workers):
             cmd = [py, "-m", "distributed.cli.dask_worker", f"tcp://{connect_host}:"
                    f"{args.port}", "--nthreads", str(args.threads), "--name", f"w{i}",
@@ -117,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
                    "--no-dashboard", "--nanny" if not args.no_nanny else "--no-nanny"]
             if args.local_directory:
                 cmd += ["--local-directory", args.local_directory]
-            procs.append(subprocess.Popen(cmd, env=_env(), stdin=subprocess.DEVNULL))
+            procs.append(subprocess.Popen(cmd, env=child_env(), stdin=subprocess.DEVNULL))
         print(f"suscosim cluster: scheduler {address}, {args.workers} workers x "
               f"{args.threads} threads (Ctrl-C stops them)\n"
               f"  suscosim sweep SWEEP.toml --executor dask --scheduler {address}", flush=True)
@@ -132,7 +121,3 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         signal.signal(signal.SIGTERM, old)
         _stop(procs)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,12 +1,7 @@
-"""The per-node parts of the deployment files, generated from the node registry.
-
-``python -m orchestrator.compose_gen`` rewrites, from :mod:`cosim.node_kinds`: the node and
-orchestrator services of ``docker-compose.yml`` and ``deploy/compose/{nodes,orchestrator}.yml``;
-each kind's publish rule, certificate subject and policy in ``deploy/zenoh/router.json5`` and
-``acl_per_run.json5.template``; ``deploy/zenoh/clients/<kind>.json5`` (whole files); the
-certificate names of ``deploy/zenoh/make_certs.sh``. Only the regions between the
-``>>> generated``/``<<< generated`` lines (and the client files) are written. ``--check`` writes
-nothing and exits 1 naming the stale files (tests/registry/test_compose_gen.py runs it).
+"""``python -m orchestrator.compose_gen``: the per-node parts of the deployment files from
+:mod:`cosim.node_kinds` (compose services, router ACL rules, subjects and policies, client
+configurations, certificate names): only the regions between ``>>> generated``/``<<<
+generated`` lines (and the client files). ``--check``: write nothing, exit 1 naming stale files.
 """
 
 from __future__ import annotations
@@ -25,7 +20,6 @@ SCENARIO = "scenarios/ch3_step_quarter_car.toml"
 
 
 def _externals(indent: str) -> list[str]:
-    """The orchestrator's ``--external NODE`` arguments, two nodes a line."""
     args = [f'"--external", "{n}"' for n in nk.always()]
     return [indent + ", ".join(args[i:i + 2]) + "," for i in range(0, len(args), 2)]
 
@@ -33,16 +27,9 @@ def _externals(indent: str) -> list[str]:
 def compose_services() -> str:
     """docker-compose.yml: the node services and the orchestrator."""
     run = "${RUN_ID:-ch3-compose}"
-    out: list[str] = []
-    for name in nk.always():
-        out += [f"  {name}:", "    <<: *suscosim",
-                f'    command: ["node", "{name}", "--run", "{run}",',
-                '              "--connect", "tls/router:7447",',
-                f'              "--zenoh-config", "deploy/zenoh/clients/{name}.json5"]']
-        if nk.kind(name).run_folder:
-            out += ["    volumes:  # writes the journal and the tables into the run folder",
-                    "      - certs:/etc/suscosim/certs:ro", "      - runs:/runs"]
-        out.append("")
+    out = _node_services("suscosim", run, "tls/router:7447", [
+        "    volumes:  # writes the journal and the tables into the run folder",
+        "      - certs:/etc/suscosim/certs:ro", "      - runs:/runs"])
     out += ["  orchestrator:", "    <<: *suscosim",
             f'    command: ["run", "{SCENARIO}",',
             '              "--connect", "tls/router:7447",',
@@ -66,18 +53,25 @@ _CERTS = "${SUSCOSIM_CERTS:-/etc/suscosim/certs}:/etc/suscosim/certs:ro"
 _RUNS = "${SUSCOSIM_RUNS:-./runs}:/runs"
 
 
-def machine_nodes() -> str:
-    """deploy/compose/nodes.yml: one service per node of every run."""
+def _node_services(anchor: str, run: str, router: str, volumes: list[str]) -> list[str]:
+    """A service per node kind (``volumes`` for those writing into the run folder)."""
     out: list[str] = []
     for name in nk.always():
-        out += [f"  {name}:", "    <<: *node",
-                f'    command: ["node", "{name}", "--run", "{_RUN_ID}",',
-                f'              "--connect", "{_ROUTER}",',
+        out += [f"  {name}:", f"    <<: *{anchor}",
+                f'    command: ["node", "{name}", "--run", "{run}",',
+                f'              "--connect", "{router}",',
                 f'              "--zenoh-config", "deploy/zenoh/clients/{name}.json5"]']
-        if nk.kind(name).run_folder:
-            out += ["    volumes:", f"      - {_CERTS}", f"      - {_RUNS}"]
+        out += volumes if nk.kind(name).run_folder else []
         out.append("")
+    return out
+
+
+def machine_nodes() -> str:
+    """deploy/compose/nodes.yml: one service per node of every run."""
+    out = _node_services("node", _RUN_ID, _ROUTER, ["    volumes:", f"      - {_CERTS}",
+                                                    f"      - {_RUNS}"])
     return "\n".join(out[:-1]) + "\n"
+
 
 
 def machine_orchestrator() -> str:
@@ -114,7 +108,6 @@ def acl_subjects(prefix: str) -> str:
 
 
 def acl_members() -> str:
-    """The per-run template's members: every certificate of the run."""
     names = ", ".join(f'"@RUN@.{n}"' for n in ("orchestrator", *nk.names(), "observer"))
     return f'      {{ id: "members", cert_common_names: [{names}] }},\n'
 

@@ -1,13 +1,10 @@
-"""``suscosim duty DUTY.toml``: damage and life of the lower arm over a proving-ground schedule.
-
-The duty file format and the outputs are in docs/data_formats.md ("duty cycles"). Each
-``[[events]]`` entry is a scenario (run once into ``<out>/runs/<event>``, reused unless
-``--rerun``) or a finished run folder, with ``repeats`` or ``distance_km`` per schedule; the
-optional ``[[laws]]`` run every scenario event once per damper law (``runs/<law>/<event>``,
-``laws/<law>/``; the first law is the reference, also written to ``<out>/``) and compare the
-laws at the reference's critical node (``laws.csv``, duty.json ``laws``). All events must share
-the fatigue settings and node set; the sum: ``duty_cycle.schedule_damage``. Exit 2 for a bad
-duty file (key named), 1 if a run fails.
+"""``suscosim duty DUTY.toml``: damage and life of the lower arm over a proving-ground schedule
+(docs/data_formats.md "duty cycles"). Each ``[[events]]`` entry is a scenario (run once into
+``<out>/runs/<event>``, reused unless ``--rerun``) or a finished run folder, with ``repeats`` or
+``distance_km`` per schedule; ``[[laws]]`` run every event under each damper law
+(``runs/<law>/<event>``, ``laws/<law>/``; the first is the reference, also in ``<out>/``) and
+compare them at the reference's critical node (``laws.csv``). Exit 2 for a bad duty file (key
+named), 1 if a run fails.
 """
 
 from __future__ import annotations
@@ -16,7 +13,6 @@ import argparse
 import csv
 import json
 import math
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -26,16 +22,14 @@ from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
 from cosim.safe_open import open_user_text, read_user_text, read_user_toml
 
+from .cli_util import fail
+
 DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
 EVENT_KEYS = ("name", "scenario", "run", "set", "repeats", "distance_km")
 LAW_KEYS = ("name", "set")
 SAME_CONFIG_SKIP = ("track_length_m", "repeats_basis_m", "block_samples", "live")
 """Fatigue keys that may differ between events (they do not change a pass's damage)."""
-
-
-MAX_DUTY_NUMBER = 1e9
-"""Largest repeats, distance [km] or scatter figure a duty file takes (a vehicle's life is
-~3e5 km)."""
+MAX_DUTY_NUMBER = 1e9  # largest repeats, distance [km] or scatter figure (a life: ~3e5 km)
 
 
 def _number(v: Any, key: str, expected: str, lo: float = 0.0, lo_open: bool = False) -> float:
@@ -109,9 +103,7 @@ def load_duty(path: str | Path) -> dict[str, Any]:
         if name_e in seen:
             raise ScenarioError(f"{q}.name", name_e, "a unique event name")
         seen.add(name_e)
-        sets = ev.get("set", [])
-        if not isinstance(sets, list) or not all(isinstance(s, str) for s in sets):
-            raise ScenarioError(f"{q}.set", sets, "a list of 'KEY=VALUE' strings")
+        sets = _sets(ev, q)
         if sets and src_key == "run":
             raise ScenarioError(f"{q}.set", sets, "no overrides for a finished run")
         if ("repeats" in ev) == ("distance_km" in ev):
@@ -129,9 +121,15 @@ def load_duty(path: str | Path) -> dict[str, Any]:
     return out
 
 
+def _sets(table: dict[str, Any], q: str) -> list[str]:
+    sets = table.get("set", [])
+    if not isinstance(sets, list) or not all(isinstance(s, str) for s in sets):
+        raise ScenarioError(f"{q}.set", sets, "a list of 'KEY=VALUE' strings")
+    return sets
+
+
 def _load_laws(laws: Any, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The ``[[laws]]`` tables: unique names, ``set`` a list of overrides; every event a
-    scenario (a finished run cannot be run again under another law)."""
+    """The ``[[laws]]`` tables; every event must be a scenario (a run cannot run again)."""
     if not isinstance(laws, list) or not laws:
         raise ScenarioError("laws", laws, "a non-empty list of [[laws]] tables")
     for i, ev in enumerate(events):
@@ -145,17 +143,14 @@ def _load_laws(laws: Any, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
         name = law.get("name")
         if check_name(f"{q}.name", name) in {x["name"] for x in out}:
             raise ScenarioError(f"{q}.name", name, "a unique law name")
-        sets = law.get("set", [])
-        if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
-            raise ScenarioError(f"{q}.set", sets, "a list of 'KEY=VALUE' strings")
-        out.append({"name": name, "set": sets})
+        out.append({"name": name, "set": _sets(law, q)})
     return out
 
 
 def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
                sets: Sequence[str] = (), law_sets: Sequence[str] = ()) -> Path:
-    """Run a scenario event into ``folder`` (reused when a finished run with fatigue is
-    there and ``rerun`` is false); ``law_sets`` after the event's own overrides."""
+    """Run a scenario event into ``folder`` (a finished run with fatigue reused unless
+    ``rerun``); ``law_sets`` after the event's own overrides."""
     done = folder / "summary.json"
     if not rerun and done.is_file() and (folder / "fatigue" / "damage_per_node.csv").is_file():
         try:
@@ -177,9 +172,8 @@ def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
 
 
 def _event_fatigue(run_dir: Path, batch_into: Path) -> dict[str, Any]:
-    """The fatigue result of a run folder: its ``fatigue/`` files, read inside it; when
-    absent, computed by the batch into ``batch_into`` (a run folder a duty file points at is
-    read, never written: its batch goes under the duty's ``out``)."""
+    """A run folder's ``fatigue/`` results; when absent, computed into ``batch_into`` (a run
+    folder a duty file names is read, never written)."""
     fat = run_dir / "fatigue"
     if not (fat / "damage_per_node.csv").is_file() or not (fat / "summary.json").is_file():
         from nodes.fatigue.run_dir import fatigue_run_dir
@@ -205,9 +199,8 @@ def _same_config(a: dict, b: dict) -> bool:
 
 def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
              rerun: bool = False, sets: Sequence[str] = ()) -> dict[str, Any]:
-    """Run/collect every event (under every law of ``duty["laws"]``, if any), sum the
-    damage, write ``out/``; return duty.json's content. ``sets``: overrides for every
-    scenario event (before the event's own ``set``)."""
+    """Run/collect every event (under every law, if any), sum the damage, write ``out/``;
+    duty.json's content. ``sets``: before every scenario event's own ``set``."""
     laws = duty.get("laws")
     if not laws:
         return _schedule(duty, out, out / "runs", mode, rerun, sets)[0]
@@ -223,7 +216,7 @@ def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
 
 def _compare_laws(done: list, first: dict) -> dict[str, Any]:
     """duty.json's ``laws``: each law's damage per schedule of every event at the reference
-    (first) law's critical node, its ratio to the reference's, each law's own totals."""
+    law's critical node, its ratio to the reference's, each law's own totals."""
     from nodes.fatigue.lib.duty_cycle import law_matrix
 
     for name, _, _, fat in done[1:]:
@@ -251,7 +244,6 @@ def _compare_laws(done: list, first: dict) -> dict[str, Any]:
 
 
 def _write_laws(out: Path, laws: dict[str, Any]) -> None:
-    """laws.csv: one row per law and event (the comparison of :func:`_compare_laws`)."""
     with open(out / "laws.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["law", "event", "max_damage_per_pass", "damage_per_schedule_at_node",
@@ -265,8 +257,8 @@ def _write_laws(out: Path, laws: dict[str, Any]) -> None:
 
 def _schedule(duty: dict[str, Any], out: Path, runs: Path, mode: str | None, rerun: bool,
               sets: Sequence[str], law_sets: Sequence[str] = ()) -> tuple[dict, Any, dict]:
-    """One schedule: run/collect every event into ``runs/<event>``, sum, write ``out/``;
-    (duty.json's content, the DutyResult, the first event's fatigue)."""
+    """One schedule into ``runs/<event>`` and ``out/``: (duty.json, DutyResult, first fatigue)."""
+
     import numpy as np
 
     from nodes.fatigue.lib.duty_cycle import Event, life_factor, schedule_damage
@@ -418,19 +410,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         duty = load_duty(args.duty)
         out = args.out or Path(duty.get("out") or Path("duty") / duty["name"])
         result = run_duty(duty, out, args.mode, args.rerun, args.set)
-    except SuscosimError as exc:
-        print(f"suscosim: error: duty: {exc}", file=sys.stderr)
-        return exc.exit_code
-    except OSError as exc:
-        print(f"suscosim: error: duty: {exc}", file=sys.stderr)
-        return 2
+    except (SuscosimError, OSError) as exc:
+        return fail("suscosim duty", str(exc), getattr(exc, "exit_code", 2))
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         _print(result)
         print(f"  results in {out}")
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -1,15 +1,8 @@
-"""``suscosim export JOURNAL|RUN_DIR``: a run's table rebuilt from its journal, or written in
-another format, in bounded memory (docs/data_formats.md).
-
-``export JOURNAL`` (or a run folder without ``--format``) streams the journal twice (fields by
-majority, then rows: :mod:`cosim.table_writer`).
-Exit 0: every record intact (a torn last segment is only noted). Exit 2 naming the journal: not
-one, no complete step, records lost, or the folder's table is larger; in the last two cases
-the table goes to ``table.recovered.*`` beside it. ``--format mdf4|rpc3`` also writes
-``<stem>.mf4``/``.rsp``. ``export RUN_DIR --format ...``: the table as
-``RUN_DIR/export/table.<ext>`` (or ``--out``), named by the ``--channels`` selection
-(``table.plant_arm_x.rsp``) so exports of other channels do not replace each other. CSV and
-Parquet are streamed in chunks; MDF 4 and RPC III read only the selected columns.
+"""``suscosim export JOURNAL|RUN_DIR``: a run's table rebuilt from its journal (streamed twice:
+:mod:`cosim.table_writer`), or written in another format, in bounded memory
+(docs/data_formats.md). Exit 2 naming the journal: not one, no complete step, records lost, or
+the folder's table is larger (the last two: written as ``table.recovered.*``). ``export RUN_DIR
+--format ...``: ``RUN_DIR/export/table.<ext>``, named by the ``--channels`` selection.
 """
 
 from __future__ import annotations
@@ -50,8 +43,7 @@ def _err(text: str) -> int:
 
 
 def selection_stem(patterns: list[str] | None) -> str:
-    """The file stem of an export of the columns ``patterns`` select: ``table`` for all,
-    else ``table.<patterns, '/' as '_' and '*' as 'x'>``."""
+    """``table``, or ``table.<patterns, '/' as '_' and '*' as 'x'>``."""
     if not patterns:
         return "table"
     slug = "+".join(re.sub(r"[^A-Za-z0-9_.\-\[\]]", "_", p.replace("*", "x")) for p in patterns)
@@ -69,8 +61,8 @@ def _names(columns: list[str], patterns: list[str] | None) -> list[str]:
 
 def write_format(src: Path, fmt: str, path: Path, patterns: list[str] | None,
                  rpc3_type: str = "int") -> dict[str, Any]:
-    """The table ``src`` in ``fmt`` at ``path`` (written aside, then renamed over it); what
-    the format reports (channels, RPC III resolution)."""
+    """The table ``src`` in ``fmt`` at ``path`` (written aside, renamed); what the format
+    reports (channels, RPC III resolution)."""
     import os
 
     from cosim.formats import ChannelSet, si_unit, write_channels
@@ -135,8 +127,7 @@ def _rows(src: Path) -> int:
 def export_journal(journal: Path, out: Path, fmt: str | None = None,
                    patterns: list[str] | None = None, rpc3_type: str = "int"
                    ) -> tuple[dict[str, Any], str, Any]:
-    """Rebuild ``journal``'s table into ``out`` (streamed); (result, why alongside, the
-    journal's contents: problem, torn, skipped)."""
+    """Rebuild ``journal``'s table into ``out``: (result, why alongside, journal contents)."""
     from cosim.journal import JournalReader
     from cosim.table import export_target
     from cosim.table_writer import table_of_journal
@@ -175,7 +166,6 @@ def export_journal(journal: Path, out: Path, fmt: str | None = None,
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Export; return the exit code (0, or 2 with a message naming what is wrong)."""
     args = parse_args(build_parser(), argv)
     if isinstance(args, int):
         return args

@@ -1,12 +1,9 @@
 """``suscosim export-fmu SCENARIO.toml --out LAW.fmu [--fmi 2|3]``: the scenario's control law
-as an FMI co-simulation FMU for one corner (2.0 with PythonFMU, 3.0 with pythonfmu3; docs/fmi.md).
-
-Inputs ``z_b``, ``v_b``, ``z_w``, ``v_w`` [m, m/s] (and ``v_damper`` with ``velocity =
-"damper"``); outputs ``F_d`` [N on the body, upward positive], ``c_eff`` [N·s/m] and the law's
-extras; parameters: the law's resolved numeric settings. ``doStep(t, dt)`` evaluates the law at
-t (orchestrator/fmu_slave.py). The FMU carries the law's Python source and needs a Python 3
-with numpy on the host. Exit 2 on a bad scenario, a law not of one corner (``pnr``),
-``law = "fmu"``, or an output path not ending in ``.fmu``.
+as an FMI co-simulation FMU for one corner (docs/fmi.md). Inputs ``z_b``, ``v_b``, ``z_w``,
+``v_w`` [m, m/s] (and ``v_damper``); outputs ``F_d`` [N on the body, upward +], ``c_eff``
+[N·s/m] and the law's extras; parameters: its numeric settings. The FMU carries the law's
+Python source (needs Python 3 with numpy). Exit 2 on a bad scenario, a law not of one corner,
+``law = "fmu"``, or an output not ending in ``.fmu``.
 """
 
 from __future__ import annotations
@@ -31,7 +28,6 @@ SPEC_FILE = "suscosim_law.json"  # = fmu_slave.SPEC_FILE (not imported: it needs
 
 
 def _law_module_file(law: str) -> Path | None:
-    """The source file of a user's ``module:function`` law outside the package, if any."""
     if ":" not in law:
         return None
     module = importlib.import_module(law.partition(":")[0])
@@ -45,8 +41,8 @@ def _law_module_file(law: str) -> Path | None:
 
 
 def law_interface(scenario: dict[str, Any]) -> dict[str, Any]:
-    """The FMU's interface for the scenario's law: controller table, h, inputs, outputs and
-    parameters (raises ScenarioError when the law cannot be exported)."""
+    """The FMU's interface: controller table, h, inputs, outputs, parameters (ScenarioError
+    when the law cannot be exported)."""
     import numpy as np
 
     from nodes.controller.laws import PassiveCurveController, build_controller
@@ -81,7 +77,6 @@ def law_interface(scenario: dict[str, Any]) -> dict[str, Any]:
 
 def _stage(folder: Path, spec: dict[str, Any], module: str, fmi: int, user_file: Path | None,
            ) -> list[Path]:
-    """Write the slave, its JSON and the law's source into ``folder``; the project files."""
     text = SLAVE_TEMPLATE.read_text()
     text = text.replace("FMI_VERSION = 2  #", f"FMI_VERSION = {fmi}  #", 1)
     if fmi == 3:  # pythonfmu3 finds the slave by the text 'class X(Fmi3Slave)'
@@ -107,7 +102,6 @@ def _stage(folder: Path, spec: dict[str, Any], module: str, fmi: int, user_file:
 
 def export_fmu(scenario: dict[str, Any], out: Path | str, fmi: int = 2,
                name: str | None = None) -> dict[str, Any]:
-    """Build the FMU of ``scenario``'s law at ``out``; returns its interface (as written)."""
     out = Path(out)
     if out.suffix != ".fmu":
         raise InputFileError(str(out), "the FMU to write must end in .fmu")
@@ -175,7 +169,3 @@ def main(argv: list[str] | None = None) -> int:
     if spec["velocity"] == "damper":
         print("  velocity = 'damper': run it with velocity = \"damper\" (c_eff is per v_damper)")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,10 +1,9 @@
-"""The slave inside an FMU made by ``suscosim export-fmu`` (copied into it as suscosim_law.py;
-suscosim never imports it). Its ``resources/`` also hold ``suscosim_law.json`` (the
-``[controller]`` table, the step, the variables) and copies of ``nodes/controller`` and
-``cosim/errors.py``. The law is built (``build_controller``, one corner) when the FMU leaves
-initialisation; each ``doStep(t, dt)`` calls ``law.step(t, state)``: force [N], slope
-dF_d/dv_rel [N·s/m] and extras at t, as in the controller node.
+"""The slave inside an FMU made by ``suscosim export-fmu`` (never imported by suscosim), beside
+``suscosim_law.json`` and copies of ``nodes/controller`` and ``cosim/errors.py``. The law is
+built when the FMU leaves initialisation; each ``doStep(t, dt)`` calls ``law.step(t, state)``:
+force [N], slope dF_d/dv_rel [N·s/m] and extras at t, as in the controller node.
 """
+
 
 from __future__ import annotations
 

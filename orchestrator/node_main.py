@@ -138,7 +138,3 @@ def main(argv: list[str] | None = None) -> int:
         return run_node(bus, args.run, args.name, spin_s=args.spin_us * 1e-6)
     finally:
         bus.close()
-
-
-if __name__ == "__main__":
-    sys.exit(main())

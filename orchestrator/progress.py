@@ -39,8 +39,7 @@ class ProgressBar:
         self._first: tuple[float, int] | None = None  # (wall time, k) of the first step shown
         self._done_at: float | None = None  # wall time the last step was first shown
         self._width_written = 0
-        self.phases: list[tuple[str, float]] = []
-        """The start-up phases shown, with their start (s after the bar was made)."""
+        self.phases: list[tuple[str, float]] = []  # start-up phases shown, their start [s]
         if start_phase:
             self.phase(start_phase)
 
@@ -51,8 +50,7 @@ class ProgressBar:
         self._width_written = len(text)
 
     def phase(self, name: str, detail: str = "") -> None:
-        """Show a start-up phase (``"starting nodes"``, ``"handshake"``), with ``detail``
-        (e.g. ``"3/4 nodes ready"``); a new name is recorded in :attr:`phases`."""
+        """Show a start-up phase (``"handshake"``) with ``detail`` (``"3/4 nodes ready"``)."""
         if not self.phases or self.phases[-1][0] != name:
             self.phases.append((name, time.monotonic() - self.t0))
         if self.enabled:
@@ -60,7 +58,6 @@ class ProgressBar:
             self._write(f"{self.label} {name}{': ' + detail if detail else ''} ... {elapsed:.1f} s")
 
     def line(self, k: int, n: int, now: float) -> str:
-        """The bar's text at step ``k`` of ``n`` (wall time ``now``, monotonic)."""
         k = max(k, 0)
         if self._first is None:
             self._first = (now, k)

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -107,7 +106,3 @@ def main(argv: Sequence[str] | None = None) -> int:
                 cells.append(f"{e['pseudo_damage']:>14.4e} ({e['ratio_to_first']:6.3g}x)")
         print(f"{n[-28:]:<28}" + "".join(cells))
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -1,12 +1,9 @@
-"""``suscosim replay JOURNAL``: republish a recorded journal on the bus, as if the run were live.
-
-Every record (a journal, or a run folder's) is published on ``suscosim/<run>/<node>/<channel>``
-with the bytes the recorder received, in order, at the recorded pace (``--speed X``) or at once
-(``--fast``); run id ``<original>-replay`` by default. Only data messages: no clock, liveliness
-or handshake. Without ``--connect``/``--listen`` it listens on ``tcp/127.0.0.1:7447``, and waits
-up to ``--wait`` s for a subscriber before the first message. docs/tap_replay.md has the rest.
-Exit codes: 0 replayed, 1 the endpoint cannot be reached (client mode), 2 bad input (no such
-file, not a journal, bad run id, bad endpoint, port in use), 130 interrupted.
+"""``suscosim replay JOURNAL``: republish a recorded journal on the bus, as if the run were live
+(docs/tap_replay.md): every data record on ``suscosim/<run>/<node>/<channel>`` with the bytes
+the recorder received, in order, at the recorded pace (``--speed X``) or at once (``--fast``);
+run id ``<original>-replay`` by default. Without ``--connect``/``--listen`` it listens on
+``tcp/127.0.0.1:7447``. Exit codes: 0 replayed, 1 the endpoint cannot be reached (client
+mode), 2 bad input, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -14,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -29,8 +26,7 @@ from .cli_util import add_pace_arguments, fail, pace_factor, parse_args
 _fail = partial(fail, "suscosim replay")
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
-LINGER_S = 0.5
-"""Kept open this long after the last message, so Zenoh sends what it still holds."""
+LINGER_S = 0.5  # [s] open after the last message, so Zenoh sends what it still holds
 
 
 class ReplayInputError(ValueError):
@@ -51,9 +47,8 @@ def _journal_path(path: str | Path) -> Path:
 
 
 def _records(p: Path, counts: dict[str, Any] | None = None) -> Iterator[Record]:
-    """The journal's data records as (node, channel, raw, t), streamed; ``counts`` gets the
-    records skipped (undecodable, or a channel that is not ``node/channel``) and the
-    reader's problem line."""
+    """The journal's data records (node, channel, raw, t), streamed; ``counts`` gets the run
+    id, the records skipped and the reader's problem line."""
     from cosim.journal import JournalReader
 
     try:
@@ -78,9 +73,8 @@ def _records(p: Path, counts: dict[str, Any] | None = None) -> Iterator[Record]:
 
 
 class Recorded:
-    """A journal's records for a replay, streamed from the file each time it is iterated
-    (memory by the segment, not the run). A first pass counts them: ``count``,
-    ``channels``, ``t_first``/``t_last`` [s], ``skipped``, ``problem``, ``run_id``."""
+    """A journal's records, streamed from the file at each iteration; a first pass counts
+    them: ``count``, ``channels``, ``t_first``/``t_last`` [s], ``skipped``, ``problem``."""
 
     def __init__(self, path: str | Path) -> None:
         self.path = _journal_path(path)
@@ -104,16 +98,7 @@ class Recorded:
         return self.count
 
 
-def load(path: str | Path) -> tuple[str, list[Record], int, str]:
-    """Read a journal (or a run folder's) whole: (run id, [(node, channel, raw, t)], skipped,
-    problem), as :func:`_records`; :class:`Recorded` streams it instead."""
-    counts: dict[str, Any] = {}
-    records = list(_records(_journal_path(path), counts))
-    return counts["run_id"], records, counts["skipped"], counts["problem"]
-
-
 def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
-    """Wait until one of the publishers has a matching subscriber (or ``wait_s`` passes)."""
     owners = [getattr(put, "__self__", None) for put in pubs]
     objs = [o for o in owners if o is not None and hasattr(o, "matching_status")]
     deadline = time.monotonic() + wait_s
@@ -128,15 +113,14 @@ def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
     return False
 
 
-def replay(bus: Any, run_id: str, records: Iterable[Record], speed: float | None,
+def replay(bus: Any, run_id: str, records: Recorded, speed: float | None,
            wait_s: float = 5.0, log: Any = None) -> tuple[int, float]:
-    """Publish ``records`` (a list, or a streamed :class:`Recorded`) under ``run_id`` on
-    ``bus`` (``speed`` None: at once); (messages published, wall s from the first to the last)."""
+    """Publish ``records`` under ``run_id`` on ``bus`` (``speed`` None: at once); (messages
+    published, wall s from the first to the last)."""
     log = log or (lambda text: None)
     pubs: dict[tuple[str, str], Any] = {}
-    channels = records.channels if isinstance(records, Recorded) else \
-        dict.fromkeys((n, c) for n, c, _r, _t in records)
-    for node, channel in sorted(channels):
+    for node, channel in sorted(records.channels):
+
         pubs[node, channel] = bus.publisher(keys.key(run_id, node, channel))
     if wait_s > 0 and not _wait_for_subscriber(list(pubs.values()), wait_s):
         log(f"no subscriber after {wait_s:g} s: publishing anyway")
@@ -225,7 +209,3 @@ def main(argv: list[str] | None = None) -> int:
     print(f"replayed {sent} messages as run {run_id}: {t_span:.4g} s of run time in "
           f"{wall:.3g} s wall")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -108,7 +108,3 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(str(exc))
     print(text)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

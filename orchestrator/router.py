@@ -1,10 +1,7 @@
-"""``suscosim router``: a Zenoh router in a Python process, until SIGTERM or Ctrl-C.
-
-The pip package ships no ``zenohd``; this is the same router (a session in ``router`` mode).
-Without ``--listen`` (or one in ``--config``) it listens on loopback only; multicast scouting
-is off unless the file turns it on; ``deploy/zenoh/router.json5`` is the TLS configuration.
-Exit codes: 0 stopped by a signal, 1 could not start (e.g. port in use), 2 bad arguments or
-configuration file.
+"""``suscosim router``: a Zenoh router in a Python process (the pip package ships no
+``zenohd``), until SIGTERM or Ctrl-C. Loopback only without ``--listen`` (or one in
+``--config``: ``deploy/zenoh/router.json5`` for TLS); multicast scouting off unless the file
+turns it on. Exit codes: 0 stopped, 1 could not start (port in use), 2 bad arguments or file.
 """
 
 from __future__ import annotations
@@ -26,23 +23,20 @@ DEFAULT_LEASE_MS = 2000
 
 
 def _one_line(exc: BaseException) -> str:
-    """Zenoh's error text on one line, without the Rust source locations it appends."""
     text = " ".join(str(exc).split())
     return re.sub(r" at /\S+\.rs:\d+\.?", "", text).strip()
 
 
 def _is_unset(conf: Any, key: str) -> bool:
-    """True when ``key`` of a Zenoh config still holds Zenoh's own default (null / mode map)."""
     value = json.loads(conf.get_json(key))
     return value is None or isinstance(value, dict)
 
 
 def router_config(listen: list[str] | None = None, config_file: str | None = None,
                   lease_ms: int = DEFAULT_LEASE_MS) -> tuple[Any, list[str]]:
-    """The Zenoh configuration of a router and the endpoints it listens on. ``listen``
-    replaces the file's endpoints (default: the file's, else :data:`DEFAULT_LISTEN`);
-    ``config_file``: JSON5 to start from; ``lease_ms``: link lease [ms]. ValueError: the file
-    does not load, or an endpoint is malformed."""
+    """A router's Zenoh configuration and endpoints (``listen``, else the file's, else
+    :data:`DEFAULT_LISTEN`); ValueError: the file does not load or an endpoint is malformed."""
+
     import zenoh
 
     try:

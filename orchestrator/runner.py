@@ -26,7 +26,6 @@ from cosim import node_kinds as nk
 from cosim import run_folder
 from cosim import scenario as sc
 from cosim.bus import free_loopback_endpoint
-from cosim.coupling_energy import WARNING_THRESHOLD
 from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 from cosim.run_lock import RunLock
 
@@ -115,9 +114,6 @@ def _relative(files: dict[str, str], folder: str) -> dict[str, str]:
         path = Path(name).resolve()
         out[kind] = str(path.relative_to(base)) if path.is_relative_to(base) else name
     return out
-
-
-RESIDUAL_WARNING = WARNING_THRESHOLD
 
 
 def _coupling_summary(scenario: dict[str, Any], rec: dict[str, Any],

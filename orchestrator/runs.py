@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import json
 import socket
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -84,7 +83,3 @@ def main(argv: list[str] | None = None) -> int:
     else:
         print(format_table(runs))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

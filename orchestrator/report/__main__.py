@@ -1,7 +1,4 @@
 """``python -m orchestrator.report``: the same as ``suscosim report``."""
-
-import sys
-
 from .cli import main
 
-sys.exit(main())
+raise SystemExit(main())

@@ -1,7 +1,5 @@
-"""The duty-cycle page (``suscosim report duty/<name>``): the schedule's events, each one's
-share of the critical node's damage, totals, life at a survival probability, the events under
-each damper law (when the duty file has [[laws]]) and the damage map of one schedule, from the
-folder ``suscosim duty`` writes (duty.json, events.csv, damage_per_node.csv)."""
+"""The duty-cycle page (``suscosim report duty/<name>``) from duty.json and damage_per_node.csv:
+events and their shares of the critical node's damage, totals, certainty, laws, damage map."""
 
 from __future__ import annotations
 
@@ -22,12 +20,10 @@ from .run_data import BadInput
 
 
 def is_duty_dir(d: Path) -> bool:
-    """A folder written by ``suscosim duty``."""
     return (d / "duty.json").is_file()
 
 
 def _load(d: Path) -> tuple[dict[str, Any], dict[str, np.ndarray] | None, str]:
-    """(duty.json, columns of damage_per_node.csv or None, a problem with the CSV or "")."""
     try:
         duty = json.loads(read_user_text(d / "duty.json", "report", inside=d))
     except (OSError, ValueError) as exc:
@@ -76,9 +72,7 @@ def events_section(duty: dict[str, Any]) -> str:
 
 
 def laws_section(duty: dict[str, Any]) -> str:
-    """The schedule under each damper law (duty.json's ``laws``): each event's damage per
-    schedule at the reference law's critical node, its ratio to the reference, each law's
-    own life; empty when the duty file had no [[laws]]."""
+    """The schedule under each damper law (duty.json's ``laws``), or ""."""
     laws = duty.get("laws")
     if not isinstance(laws, dict) or not laws.get("laws"):
         return ""
@@ -141,8 +135,7 @@ def totals_section(duty: dict[str, Any]) -> str:
 
 
 def map_section(duty: dict[str, Any], cols: dict[str, np.ndarray] | None, problem: str) -> str:
-    """The damage of one schedule on the arm, drawn by the one map renderer
-    (nodes/fatigue/map_render.py: all nodes projected, plan and side views)."""
+    """The damage of one schedule, drawn by nodes/fatigue/map_render.py."""
     if cols is None:
         return section("map", "Damage map", note(esc(problem or "no damage_per_node.csv")))
     d = cols["damage_per_schedule"]
@@ -163,7 +156,6 @@ def map_section(duty: dict[str, Any], cols: dict[str, np.ndarray] | None, proble
 
 
 def render_duty(d: Path) -> str:
-    """The HTML page of a duty folder."""
     duty, cols, problem = _load(d)
     name = str(duty.get("name") or d.name)
     head = [f"<h1>Duty cycle {esc(name)}</h1>",

@@ -40,7 +40,6 @@ figure{margin:0}figcaption{font-size:.88em;color:#4a5568}
 
 
 def esc(x: Any) -> str:
-    """HTML-escaped text of ``x``."""
     return html.escape(str(x), quote=True)
 
 
@@ -71,8 +70,7 @@ def is_num(v: Any) -> TypeGuard[int | float]:
 
 def table_html(header: Sequence[str], rows: Iterable[Sequence[Any]], cls: str = "",
                raw_cols: Sequence[int] = ()) -> str:
-    """An HTML table; cells are formatted with :func:`fmt` and escaped, except the columns in
-    ``raw_cols`` (already HTML)."""
+    """An HTML table; cells :func:`fmt`-ed and escaped, but the columns ``raw_cols`` (HTML)."""
     out = [f'<div class="scroll"><table class="{cls}"><tr>']
     out += [f"<th>{esc(h)}</th>" for h in header]
     out.append("</tr>")
@@ -90,13 +88,11 @@ def table_html(header: Sequence[str], rows: Iterable[Sequence[Any]], cls: str = 
 
 
 def kv_table(pairs: Iterable[tuple[str, Any]], title: str = "", cls: str = "kv") -> str:
-    """A two-column key/value table, with an optional ``<h3>`` title above it."""
     head = f"<h3>{esc(title)}</h3>" if title else ""
     return f"<div>{head}" + table_html(["key", "value"], list(pairs), cls=cls) + "</div>"
 
 
 def row(*blocks: str) -> str:
-    """Blocks side by side (wrapping on a narrow page)."""
     return '<div class="row">' + "".join(blocks) + "</div>"
 
 
@@ -131,7 +127,6 @@ def badge(status: str) -> str:
 
 
 def anchor_id(text: str) -> str:
-    """An HTML id from free text (letters, digits, ``-_.`` kept)."""
     return "point-" + (re.sub(r"[^A-Za-z0-9_.-]+", "-", str(text)).strip("-") or "x")
 
 

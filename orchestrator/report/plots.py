@@ -16,14 +16,13 @@ from cosim.safe_open import read_user_file
 from .markup import esc
 
 MAX_PLOT_POINTS = 4000
-"""Longer signals are decimated (min/max per bucket) before plotting: a panel is 11 in at
-90 dpi, ~990 pixel columns, so 4000 points are two buckets' min and max a column -- every
-peak drawn, and a 35-minute run (4.2 million steps) drawn as fast as a 4-second one."""
+"""Longer signals are decimated (min/max per bucket): a panel is ~990 pixel columns (11 in at
+90 dpi), so every peak is drawn and a 35-minute run as fast as a 4-second one."""
 
 
 def new_figure(nrows: int, ncols: int = 1, width: float = 11.0, row_h: float = 2.6,
             sharex: bool = False):
-    """A matplotlib Figure (no pyplot, Agg canvas) and its axes as a flat list."""
+    """A matplotlib Figure (no pyplot) and its axes as a flat list."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(width, max(2.4, row_h * nrows)), layout="constrained")
@@ -32,7 +31,6 @@ def new_figure(nrows: int, ncols: int = 1, width: float = 11.0, row_h: float = 2
 
 
 def fig_uri(fig, dpi: int = 90) -> str:
-    """The figure as a ``data:image/png;base64,...`` URI."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
@@ -56,11 +54,9 @@ def img(uri: str, alt: str) -> str:
 
 def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS,
              bucket: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """At most ~n_max points for a line plot, keeping each bucket's min and max in their
-    order (peaks stay; the last, shorter bucket too). NaN samples do not hide a bucket's
-    extremes (they are left out of it; an all-NaN bucket stays a gap). ``bucket``: the
-    bucket's samples (default ``ceil(n / (n_max // 2))``; :class:`.stream.StreamDecimator`
-    gives the whole signal's)."""
+    """At most ~n_max points, each bucket's min and max in their order (NaN left out of a
+    bucket; an all-NaN one stays a gap). ``bucket`` default: ``ceil(n / (n_max // 2))``."""
+
     n = x.size
     if n <= n_max and bucket is None:
         return t, x

@@ -89,8 +89,7 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
 
 
 def coupling_residual_rows(s: dict) -> list[tuple[str, Any]]:
-    """``summary.json``'s coupling energy residual as rows [%]: the total and
-    each power bond's (:mod:`cosim.coupling_energy`); none for a run without it."""
+    """``summary.json``'s coupling energy residual rows [%]: the total and each bond's."""
     res = s.get("coupling_energy_residual") or {}
     if "total" not in res:
         return []
@@ -104,7 +103,6 @@ def _scn(r: RunData, sec: str, key: str) -> Any:
 
 
 def at_a_glance(r: RunData) -> list[tuple[str, Any]]:
-    """The few facts a reader wants first: what was simulated and what came out."""
     pairs: list[tuple[str, Any]] = []
     if r.scenario is not None:
         pairs += [("vehicle", _scn(r, "vehicle", "model")),
@@ -135,8 +133,7 @@ def at_a_glance(r: RunData) -> list[tuple[str, Any]]:
 
 
 def _idle_run_keys(run: dict) -> set[str]:
-    """``run`` keys that do nothing in this run (the adaptive step's without ``run.h =
-    "auto"``, the checkpoints' without checkpoints): not shown."""
+    """``run`` keys that do nothing in this run (not shown)."""
     idle = set()
     if not run.get("adaptive"):
         idle |= {"h_min", "h_max", "h_tol"}
@@ -167,15 +164,13 @@ def scenario_section(r: RunData) -> str:
 
 
 def _source(r: RunData) -> TableSource:
-    """The run's table, for the sections that :func:`run_body` shows only when there is one."""
     assert r.source is not None, "a table section of a run without a table"
     return r.source
 
 
 def streamed_panels(src: TableSource, build: Callable[[dict], tuple[list[tuple], list[str]]]
                     ) -> tuple[list[tuple], list[str], tuple[float, float]]:
-    """``build(batch)``'s panels with each line decimated as the batches pass
-    (:class:`.stream.StreamDecimator`: lines ``(label, (t, y))``), the titles it misses, and
+    """``build(batch)``'s panels, each line decimated as the batches pass, the missing titles,
     the table's first and last time [s]."""
     decs: list[list[StreamDecimator]] | None = None
     shape: list[tuple] = []
@@ -210,8 +205,7 @@ def time_section(r: RunData) -> str:
 
 
 def _stream_rate(src: TableSource) -> float | None:
-    """The table's sampling rate [Hz] (the first batch's median step), None if any step is
-    more than 1 % off it (:func:`nodes.recorder.ride_metrics.sample_rate`'s rule)."""
+    """Sampling rate [Hz] (median step), None if a step is > 1 % off (ride_metrics' rule)."""
     step = None
     last = None
     for b in src.batches(["t"]):
@@ -298,17 +292,14 @@ def stats_section(r: RunData) -> str:
 
 
 def streamed_ride_metrics(src: TableSource) -> dict[str, float]:
-    """:func:`nodes.recorder.ride_metrics.run_metrics` of the table read a batch at a time
-    (:mod:`nodes.recorder.ride_stream`: the thesis's whole-record periodogram kept, only its
-    in-band bins held; the resampling, jerk, SWS bit for bit, the other RMS to rounding, Wk
-    to ~1e-7 beyond 131 s of record): ``{label: value}`` in ``run_metrics``' order."""
+    """:func:`nodes.recorder.ride_metrics.run_metrics` of the table read in batches
+    (:mod:`nodes.recorder.ride_stream`): ``{label: value}``."""
     from nodes.recorder.ride_stream import streamed_run_metrics
 
     return streamed_run_metrics(src.names, src.n_rows, lambda cols: src.batches(cols))
 
 
 def ride_section(r: RunData) -> str:
-
     try:
         m = streamed_ride_metrics(_source(r))
     except (ValueError, KeyError) as exc:
@@ -354,7 +345,6 @@ def loads_section(r: RunData) -> str:
 
 
 def logs_section(r: RunData) -> str:
-    """Tails of the node logs that say something (only for a run that did not end ok)."""
     logs = sorted((r.path / "logs").glob("*.log")) if (r.path / "logs").is_dir() else []
     parts = []
     for p in logs:
@@ -372,9 +362,7 @@ def logs_section(r: RunData) -> str:
 
 
 def run_body(r: RunData) -> str:
-    """The sections of a run page (without the page frame): the results first (time
-    histories, spectra, statistics, ride, loads, fatigue), then the scenario that made them
-    (its tables are long: every key of every section) and the logs of a failed run."""
+    """The sections of a run page: the results, then the scenario, the logs of a failed run."""
     parts: list[str] = []
     if r.source is None:
         j = r.path / "journal.msgpack"
@@ -403,7 +391,6 @@ RUN_NAV = (("scenario", "Scenario"), ("time", "Time histories"), ("psd", "PSDs")
 
 
 def render_run(d: Path) -> str:
-    """The HTML page of a run folder."""
     r = load_run(d)
     body = run_header(r) + nav(RUN_NAV) + run_body(r)
     return page(f"suscosim run {r.run_id}", body)

@@ -1,5 +1,4 @@
-"""Which signals the report shows: SI units of table columns, per-corner columns, the
-time-history panels a table allows, the arm's load groups, Welch PSDs."""
+"""Which signals the report shows: units, per-corner columns, panels, arm loads, PSDs."""
 
 from __future__ import annotations
 
@@ -10,8 +9,7 @@ import numpy as np
 
 from cosim.channels import CORNERS
 
-PSD_F_MAX_HZ = 50.0
-"""Upper end of the PSD plots [Hz] (or Nyquist, if lower)."""
+PSD_F_MAX_HZ = 50.0  # [Hz] upper end of the PSD plots (or Nyquist, if lower)
 
 
 UNITS = {"z": "m", "v": "m/s", "a": "m/s²", "F": "N", "k_t": "N/m", "c_eff": "N·s/m",
@@ -20,7 +18,6 @@ UNITS = {"z": "m", "v": "m/s", "a": "m/s²", "F": "N", "k_t": "N/m", "c_eff": "N
 
 
 def unit_of(column: str) -> str:
-    """SI unit of a table column from its field name (``""`` if unknown)."""
     parts = column.split("/")
     fld = re.sub(r"\[\d+\]$", "", parts[-1])
     if len(parts) >= 2 and parts[-2] == "arm":
@@ -31,7 +28,6 @@ def unit_of(column: str) -> str:
 
 
 def corner_cols(table: dict[str, np.ndarray], base: str) -> list[tuple[str, np.ndarray]]:
-    """``[(corner label, values)]`` of a per-corner column (``""`` label for a quarter car)."""
     from nodes.recorder.ride_metrics import columns
 
     out = columns(table, base)
@@ -58,8 +54,7 @@ def corner_label(name: str, corner: str) -> str:
 
 
 def time_history_panels(table: dict[str, np.ndarray]) -> tuple[list[tuple], list[str]]:
-    """The time-history panels a table allows: ``[(title, unit, [(label, y)])]``, and the
-    titles of those it does not."""
+    """The panels ``[(title, unit, [(label, y)])]`` a table allows, and the missing titles."""
     panels: list[tuple] = []
     missing: list[str] = []
 
@@ -110,7 +105,6 @@ def sample_rate(t: np.ndarray) -> float | None:
 
 
 def arm_groups(table: dict[str, np.ndarray]) -> dict[str, list[tuple[str, np.ndarray]]]:
-    """``plant/arm/<point>_<axis>`` columns grouped by point: ``{point: [(axis, values)]}``."""
     groups: dict[str, list[tuple[str, np.ndarray]]] = {}
     for name in sorted(table):
         if not name.startswith("plant/arm/"):

@@ -1,6 +1,5 @@
-"""The sweep page's charts: minimum life and body-acceleration bars per point, changes
-against passive grouped by grid cell, overlaid PSDs and time histories, damage maps side by
-side."""
+"""The sweep page's charts: life and body acceleration per point and against passive,
+overlaid PSDs and time histories, damage maps side by side."""
 
 from __future__ import annotations
 
@@ -14,8 +13,7 @@ from .sweep_data import LAW_KEY, Point, is_passive, law_axis, rms_of, vs_passive
 
 def _bars(ax, labels: list[str], values: list[float | None], title: str, ylabel: str,
           log: bool = False, colors: list[str] | None = None) -> None:
-    """One bar per point; ``log`` uses a log axis only when the values span > 50x (a log
-    axis cut at its lowest value would exaggerate small differences)."""
+    """One bar per point; ``log``: a log axis only when the values span > 50x."""
     x = np.arange(len(labels))
     vals = [v if v is not None else np.nan for v in values]
     colors = colors or [f"C{i % 10}" for i in range(len(labels))]
@@ -38,7 +36,6 @@ def _bars(ax, labels: list[str], values: list[float | None], title: str, ylabel:
 
 
 def law_colours(points: list[Point], axis: str) -> dict[str, str]:
-    """A colour per value of the law axis (passive first, C0), the same in every chart."""
     vals = [fmt(x) for x in dict.fromkeys(p.params.get(axis) for p in points)]
     passive = {fmt(p.params.get(axis)) for p in points if is_passive(p, axis)}
     vals.sort(key=lambda v: v not in passive)
@@ -59,8 +56,7 @@ def _cell_label(p: Point, others: list[str]) -> str:
 
 def _grouped_change(ax, points: list[Point], keys: list[str], change: dict[str, float],
                     title: str) -> None:
-    """Bars of ``change`` [%] per law (without passive), grouped by the grid cell of the other
-    parameters (a single cell: one bar per law)."""
+    """Bars of ``change`` [%] per law, grouped by the grid cell of the other parameters."""
     axis = law_axis(points, keys) or LAW_KEY
     others = [k for k in keys if k != axis]
     colour = law_colours(points, axis)
@@ -100,18 +96,20 @@ def sweep_compare_section(points: list[Point], keys: list[str]) -> str:
     life_change = vs_passive(points, keys, lambda p: p.life_km)
     acc_change = vs_passive(points, keys, lambda p: rms_of(p, BODY_ACC))
     colours = _point_colours(points, keys)
+
+    def chart(values: list, change: dict[str, float], title: str, unit: str, change_title: str,
+              row_h: float, log: bool = False) -> str:
+        fig, axes = new_figure(1, 2 if change else 1, row_h=row_h)
+        _bars(axes[0], labels, values, title, unit, log=log, colors=colours)
+        if change:
+            _grouped_change(axes[1], points, keys, change, change_title)
+        return fig_uri(fig)
+
     body = ""
     if any(v is not None for v in lives):
-        if life_change:
-            fig, axes = new_figure(1, 2, row_h=3.8)
-            _bars(axes[0], labels, lives, "Minimum life of the lower arm", "km", log=True,
-                  colors=colours)
-            _grouped_change(axes[1], points, keys, life_change, "Life change vs passive")
-        else:
-            fig, axes = new_figure(1, 1, row_h=3.8)
-            _bars(axes[0], labels, lives, "Minimum life of the lower arm", "km", log=True,
-                  colors=colours)
-        body += "<h3>Fatigue</h3>" + img(fig_uri(fig), "minimum life per point")
+        body += "<h3>Fatigue</h3>" + img(chart(lives, life_change, "Minimum life of the lower "
+                                               "arm", "km", "Life change vs passive", 3.8,
+                                               log=True), "minimum life per point")
         if life_change:
             body += '<p class="meta">life change vs passive = (life / life of the passive ' \
                     "point with the same other grid parameters − 1) × 100 %.</p>"
@@ -120,22 +118,17 @@ def sweep_compare_section(points: list[Point], keys: list[str]) -> str:
                      "SWEEP/runs/&lt;id&gt;</code> for each point (or give the sweep a "
                      "realistic corner, whose runs carry arm loads).")
     if any(v is not None for v in accs):
-        if acc_change:
-            fig, axes = new_figure(1, 2, row_h=3.4)
-            _bars(axes[0], labels, accs, "Body acceleration RMS", "m/s²", colors=colours)
-            _grouped_change(axes[1], points, keys, acc_change, "Body acceleration RMS change")
-        else:
-            fig, axes = new_figure(1, 1, row_h=3.4)
-            _bars(axes[0], labels, accs, "Body acceleration RMS", "m/s²", colors=colours)
-        body += "<h3>Ride</h3>" + img(fig_uri(fig), "body acceleration RMS per point")
+        body += "<h3>Ride</h3>" + img(chart(accs, acc_change, "Body acceleration RMS", "m/s²",
+                                            "Body acceleration RMS change", 3.4),
+                                      "body acceleration RMS per point")
+
     return section("compare", "Comparison", body)
 
 
 def overlay_groups(points: list[Point], keys: list[str]
                    ) -> list[tuple[str, list[tuple[Point, str, str]]]]:
-    """Points to overlay: ``[(group title, [(point, legend label, colour)])]``. With a law
-    axis, one group per cell of the other axes (e.g. per road), coloured by law as in the
-    charts; without one, every point in one group."""
+    """``[(group title, [(point, label, colour)])]``: with a law axis, a group per cell of the
+    other axes, coloured by law; else one group."""
     axis = law_axis(points, keys)
     if axis is None:
         return [("", [(p, p.short, f"C{j % 10}") for j, p in enumerate(points)])]
@@ -149,13 +142,11 @@ def overlay_groups(points: list[Point], keys: list[str]
 
 
 def _table_of(p: Point) -> dict[str, np.ndarray]:
-    """The table of a point that has one (the overlay keeps only those)."""
     assert p.run is not None and p.run.table is not None, f"point {p.id} has no table"
     return p.run.table
 
 
 def _overlay_figures(members: list[tuple[Point, str, str]], ci: int) -> str:
-    """PSD and time-history overlays of one group of points (corner index ``ci``)."""
     out = ""
     fig, axes = new_figure(1, 1, row_h=3.4)
     ax = axes[0]

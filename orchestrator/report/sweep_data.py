@@ -1,7 +1,5 @@
-"""The sweep as the report sees it, read from the sweep folder on disk (``sweep.json``,
-``runs/<id>/``, ``results.json``/``results.csv``): its points, grid axes, the law axis and
-changes against the passive point of each grid cell. Reads files only: it does not import
-:mod:`orchestrator.sweep`, whose internals may move."""
+"""The sweep as the report reads it from its folder (sweep.json, runs/<id>/, results): points,
+grid axes, the law axis, changes against passive. Files only, no :mod:`orchestrator.sweep`."""
 
 from __future__ import annotations
 
@@ -28,7 +26,6 @@ PASSIVE = "passive"
 
 @dataclass
 class Point:
-    """A sweep point: its id, parameters, run folder and what it holds."""
 
     id: str
     params: dict[str, Any]
@@ -38,8 +35,7 @@ class Point:
 
     @property
     def law(self) -> str | None:
-        """The controller law: a ``controller.law`` parameter, else the point's overrides in
-        sweep.json (a variant axis such as ``strategy``), else the run's resolved scenario."""
+        """A ``controller.law`` parameter, else the point's overrides, else its scenario's."""
         if LAW_KEY in self.params:
             return str(self.params[LAW_KEY])
         ov = self.overrides
@@ -52,7 +48,6 @@ class Point:
 
     @property
     def short(self) -> str:
-        """The point's grid values joined by '/' (its id if it has none)."""
         return "/".join(fmt(v) for v in self.params.values()) or self.id
 
     @property
@@ -73,9 +68,8 @@ class Point:
 
 
 def load_sweep(d: Path, runs_dir: Path | None = None) -> tuple[dict, list[Point]]:
-    """sweep.json and its points (raises BadInput for an unreadable sweep.json). A point's
-    run folder is read inside the sweep folder, or inside ``runs_dir`` when the user names
-    one on the command line (a shared runs folder, ``suscosim sweep --runs-dir``)."""
+    """sweep.json and its points (BadInput if unreadable); run folders are read inside the
+    sweep folder or the ``runs_dir`` named on the command line."""
     p = d / "sweep.json"
     try:
         spec = json.loads(read_user_text(p, "scenario", inside=d))
@@ -103,8 +97,6 @@ def load_sweep(d: Path, runs_dir: Path | None = None) -> tuple[dict, list[Point]
 
 
 def _inside(path: Path, top: Path) -> bool:
-    """Whether ``path`` resolves inside ``top`` (a handed folder's references stay inside
-    it, #46)."""
     real = os.path.realpath(top)
     return os.path.commonpath([os.path.realpath(path), real]) == real
 
@@ -140,7 +132,6 @@ def grid_keys(spec: dict, points: list[Point]) -> list[str]:
 
 
 def rms_of(p: Point, bases: Sequence[str]) -> float | None:
-    """RMS of the first corner of the first of ``bases`` in the point's summary (or table)."""
     if p.run is None:
         return None
     chans = (p.run.summary or {}).get("channels") or {}
@@ -157,8 +148,7 @@ def rms_of(p: Point, bases: Sequence[str]) -> float | None:
 
 
 def law_axis(points: list[Point], keys: list[str]) -> str | None:
-    """The grid axis that sets the controller law: ``controller.law``, or an axis of named
-    variants (e.g. ``strategy``) whose every value gives one law, passive among them."""
+    """``controller.law``, or an axis whose every value gives one law, passive among them."""
     if LAW_KEY in keys:
         return LAW_KEY
     for k in keys:
@@ -179,8 +169,8 @@ def is_passive(p: Point, axis: str) -> bool:
 
 
 def vs_passive(points: list[Point], keys: list[str], value) -> dict[str, float]:
-    """``{point id: (value / value of the passive point of its grid cell - 1) * 100}``, the
-    grid cell being the values of every axis but the law axis (empty without one)."""
+    """``{id: (value / the passive point's of its grid cell - 1) * 100}`` (no law axis: {})."""
+
     axis = law_axis(points, keys)
     if axis is None:
         return {}

@@ -96,7 +96,6 @@ def point_section(p: Point, d: Path) -> str:
 
 
 def render_sweep(d: Path, runs_dir: Path | None = None) -> str:
-    """The HTML page of a sweep folder."""
     spec, points = load_sweep(d, runs_dir)
     keys = grid_keys(spec, points)
     name = str(spec.get("name") or d.name)

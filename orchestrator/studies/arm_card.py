@@ -118,7 +118,3 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  mesh {c['mesh_size_m'] * 1e3:.0f} mm: {c['n_elements']} elements, {c['n_nodes']} "
           f"nodes ({c['n_nodes_assessed']} assessed), {c['element']}; {c['supports']}")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,11 +1,7 @@
 """``suscosim corner check FILE [--json]``: a corner file's kinematic and compliance curves
-(camber, toe, damper motion ratio, wheel rate and wheel load against wheel travel), its gains
-at ride height, its lateral compliance and the equivalent lumped quarter car
-(:mod:`nodes.plant.corner_kinematics`; the file: :mod:`cosim.corner`, docs/corners.md).
-
-``--identify`` also builds the PyBullet corner from the file and identifies its lumped
-quarter car by the log decrement (:mod:`nodes.plant.equivalent_lumped`, a few seconds): the
-same file through the dynamic model, beside the linkage's numbers.
+(camber, toe, damper motion ratio, wheel rate and load against wheel travel), its gains at ride
+height, lateral compliance and equivalent lumped quarter car (:mod:`nodes.plant.corner_kinematics`;
+docs/corners.md). ``--identify``: also the PyBullet corner's log-decrement quarter car.
 """
 
 from __future__ import annotations
@@ -13,12 +9,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 
 import numpy as np
 
 from cosim import corner as corner_file
 from cosim.errors import InputFileError, SuscosimError
+
+from ..cli_util import fail
 
 DEG = 180.0 / math.pi
 
@@ -42,8 +39,8 @@ def _parser() -> argparse.ArgumentParser:
 
 def check(corner: corner_file.Corner, travel: tuple[float, float], n: int, k_t: float,
           identify: bool = False) -> dict[str, object]:
-    """Everything ``corner check`` prints, SI units (curves: lists over the travels; a travel
-    the linkage cannot reach is left out and listed in ``unreachable``)."""
+    """Everything ``corner check`` prints, SI (a travel the linkage cannot reach: listed in
+    ``unreachable``)."""
     from nodes.plant import corner_kinematics as ck
 
     rows: dict[str, list[float]] = {}
@@ -138,17 +135,11 @@ def main(argv: list[str] | None = None) -> int:
             raise InputFileError("--travel", "REBOUND < JOUNCE")
         r = check(corner, tuple(args.travel), args.points, args.tyre_stiffness, args.identify)
     except SuscosimError as exc:
-        print(f"suscosim: error: corner: {exc}", file=sys.stderr)
-        return exc.exit_code
+        return fail("suscosim corner", str(exc), exc.exit_code)
     except ValueError as exc:  # the linkage does not close at ride height
-        print(f"suscosim: error: corner: {args.file}: {exc}", file=sys.stderr)
-        return 2
+        return fail("suscosim corner", f"{args.file}: {exc}")
     if args.json:
         print(json.dumps(r, indent=1))
     else:
         _print(r)
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

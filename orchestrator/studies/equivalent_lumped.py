@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 
 from cosim import corner as corner_file
 from cosim.errors import SuscosimError
 from nodes.plant.equivalent_lumped import TABLE_4_3, compare_on_road, identify
+
+from ..cli_util import fail
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -27,8 +28,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             corner = corner_file.load(args.corner)
         except SuscosimError as exc:
-            print(f"suscosim: error: equivalent-lumped: {exc}", file=sys.stderr)
-            return exc.exit_code
+            return fail("suscosim equivalent-lumped", str(exc), exc.exit_code)
     eq = identify(args.step, args.dt, corner=corner)
     cmp = None if args.no_compare else compare_on_road(eq, args.dt, corner=corner)
     if args.json:
@@ -68,7 +68,3 @@ def main(argv: list[str] | None = None) -> int:
                   f"({cmp[f'{key}_peak_diff_pct']:+.1f} %), RMS difference "
                   f"{cmp[f'{key}_rms_diff_pct_of_peak']:.1f} % of the peak")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,18 +1,13 @@
 """``suscosim part check PART.toml [--json] [--mesh-size M] [--convergence] [--calculix]``:
-a part file's model card (nodes/fatigue/parts/card.py; schema docs/parts.md).
-
-Static loads: the plant's joint loads at static ride height (``arm_card.static_arm_loads``)
-for the part's channels that the plant publishes (``plant/arm/*``); 3 g = 3 x static. A part
-whose channels the plant does not publish gets mass, modes and mesh only. ``--calculix``
-solves the unit cases with ccx on the same mesh and prints the largest difference at the ten
-hot spots. Exit 2 on a bad part file (the message names the key).
+a part file's model card (nodes/fatigue/parts/card.py; docs/parts.md) under the plant's static
+joint loads (3 g = 3 x static; without loads: mass, modes, mesh); ``--calculix``: the largest
+difference to ccx at the ten hot spots. ``part solve``: its results file. Exit 2: a bad file.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
 import tempfile
 from pathlib import Path
 
@@ -20,11 +15,10 @@ import numpy as np
 
 from cosim.errors import InputFileError, ScenarioError
 
+from ..cli_util import fail
+
 
 def _static_loads(channels: list[str]) -> dict[str, float]:
-    """The plant's static joint loads for those of ``channels`` it publishes, on any of its
-    load channels (the lower arm's ``ball_joint_z``, the upper arm's ``upper_ball_joint_z``;
-    empty when none)."""
     from .arm_card import static_plant_loads
 
     out: dict[str, float] = {}
@@ -116,7 +110,6 @@ def check(args: argparse.Namespace) -> int:
 
 
 def solve(args: argparse.Namespace) -> int:
-    """``suscosim part solve``: mesh, solve every unit case, write the results file."""
     import time
 
     from nodes.fatigue.parts import load_part
@@ -139,31 +132,28 @@ def solve(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="suscosim part", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
-    ck = sub.add_parser("check", help="print a part's model card")
-    ck.add_argument("part", help="part file (TOML)")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("part", help="part file (TOML)")
+    common.add_argument("--mesh-size", type=float, default=None, metavar="M",
+                        help="element size [m] (default: the part file's mesh.size)")
+    ck = sub.add_parser("check", help="print a part's model card", parents=[common])
     ck.add_argument("--json", action="store_true", help="print the card as JSON")
-    ck.add_argument("--mesh-size", type=float, default=None, metavar="M",
-                    help="element size [m] (default: the part file's mesh.size)")
     ck.add_argument("--convergence", action="store_true",
                     help="also solve the part file's mesh.convergence sizes (slow)")
     ck.add_argument("--calculix", action="store_true",
                     help="also solve the unit cases with CalculiX (ccx) and compare")
     sv = sub.add_parser("solve", help="solve a part's unit cases and write its results file "
-                                      "beside it (PART.influence.npz), which runs then use")
-    sv.add_argument("part", help="part file (TOML)")
-    sv.add_argument("--mesh-size", type=float, default=None, metavar="M",
-                    help="element size [m] (default: the part file's mesh.size)")
+                                      "beside it (PART.influence.npz), which runs then use",
+                        parents=[common])
     sv.add_argument("--out", type=Path, default=None,
                     help="results file (default: beside the part file)")
     args = ap.parse_args(argv)
     if args.mesh_size is not None and not 1e-4 <= args.mesh_size <= 1.0:
-        print(f"error: --mesh-size {args.mesh_size}: expected 0.0001-1 m", file=sys.stderr)
-        return 2
+        return fail("suscosim part", f"--mesh-size {args.mesh_size}: expected 0.0001-1 m")
     try:
         return solve(args) if args.cmd == "solve" else check(args)
     except (InputFileError, ScenarioError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return fail("suscosim part", str(exc))
 
 
 if __name__ == "__main__":

@@ -166,7 +166,3 @@ def main(argv: list[str] | None = None) -> int:
         print("suscosim sweep: interrupted (rerun the same command to resume)", file=sys.stderr)
         return 130
     return 1 if n_failed else 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

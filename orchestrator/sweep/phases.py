@@ -24,7 +24,7 @@ from .spec import Point
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _child_env() -> dict[str, str]:
+def child_env() -> dict[str, str]:
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), *filter(None, [env.get("PYTHONPATH")])])
     return env
@@ -34,7 +34,7 @@ def _start(cmd: list[str], log: Path,
            preexec_fn: Callable[[], None] | None = None) -> subprocess.Popen:
     with open(log, "ab") as fh:
         return subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL, env=_child_env(),
+                                stdin=subprocess.DEVNULL, env=child_env(),
                                 start_new_session=True, preexec_fn=preexec_fn)
 
 

@@ -1,7 +1,4 @@
 """``python -m orchestrator.tap``: the same as ``suscosim tap``."""
-
-import sys
-
 from .cli import main
 
-sys.exit(main())
+raise SystemExit(main())

@@ -50,7 +50,6 @@ def tap_keyexpr(run: str | None, pattern: str | None) -> str:
 
 @dataclass
 class Target:
-    """What to tap and where: resolved from the RUN and PATTERN arguments."""
 
     keyexpr: str
     endpoints: list[str]
@@ -60,7 +59,6 @@ class Target:
 
 
 def _local(ep: str) -> str:
-    """A listen endpoint on every interface is reached on loopback from this machine."""
     for anyaddr in ("0.0.0.0", "[::]"):
         ep = ep.replace(f"/{anyaddr}:", "/127.0.0.1:")
     return ep

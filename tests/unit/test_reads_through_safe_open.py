@@ -40,7 +40,7 @@ ALLOWED: dict[str, dict[str, str]] = {
     "orchestrator/fmu_slave.py": {"read_text()": "the exported FMU's own resources"},
     "orchestrator/duty.py": {"done.read_text()": "a duty run's summary.json (under --out)"},
     "orchestrator/compose_gen.py": {"read_text()": "the repository's compose templates"},
-    "orchestrator/sweep/procs.py": {"log.read_text(": "a sweep point's log it wrote"},
+    "orchestrator/sweep/phases.py": {"log.read_text(": "a sweep point's log it wrote"},
     "orchestrator/fatigue_cli.py": {"read_text()": "the summary.json it just wrote"},
     "orchestrator/scope/cli.py": {"read_text()": "a run folder's scenario.json"},
     "orchestrator/scope/server.py": {"(STATIC / name).read_bytes()": "shipped static files"},

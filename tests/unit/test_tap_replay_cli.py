@@ -134,8 +134,10 @@ def _journal(path: Path, run_id: str, n: int) -> None:
 def test_replay_loads_a_journal_or_a_run_folder(tmp_path: Path) -> None:
     _journal(tmp_path / "journal.msgpack", "orig", 5)
     for where in (tmp_path, tmp_path / "journal.msgpack"):
-        run_id, records, skipped, problem = replay.load(where)
-        assert run_id == "orig" and skipped == 0 and problem == ""
+        rec = replay.Recorded(where)
+        records = list(rec)
+        assert rec.run_id == "orig" and rec.skipped == 0 and rec.problem == ""
+        assert len(rec) == 10 and rec.channels == {("plant", "state"), ("tyre_road", "force")}
         assert [(n, c) for n, c, _r, _t in records[:2]] == [("plant", "state"),
                                                              ("tyre_road", "force")]
         assert [t for *_x, t in records[::2]] == [k * 1e-3 for k in range(5)]
@@ -154,9 +156,11 @@ class _FakeBus:
 
 def test_replay_publishes_every_record_under_the_new_run_id(tmp_path: Path) -> None:
     _journal(tmp_path / "journal.msgpack", "orig", 4)
-    _run_id, records, _s, _p = replay.load(tmp_path)
+    recorded = replay.Recorded(tmp_path)
+    records = list(recorded)
     bus = _FakeBus()
-    sent, _wall = replay.replay(bus, "orig-replay", records, speed=None, wait_s=0)
+    sent, _wall = replay.replay(bus, "orig-replay", recorded, speed=None, wait_s=0)
+
     assert sent == 8 == len(bus.sent)
     assert [k for k, _ in bus.sent[:2]] == ["suscosim/orig-replay/plant/state",
                                             "suscosim/orig-replay/tyre_road/force"]
