@@ -39,17 +39,10 @@ import numpy as np
 
 from cosim.config import ConfigReader
 from cosim.errors import ScenarioError
-from nodes.controller.base import (
-    BODY_KEYS,
-    Controller,
-    ControlOutput,
-    body_scalar,
-    corner_array,
-)
+from nodes.controller.base import BODY_KEYS, Controller, ControlOutput, body_scalar, corner_array
 
 #: (c_soft, c_hard) in N·s/m of thesis Table 5.2 (``preset`` key).
-PRESETS: dict[str, tuple[float, float]] = {"lumped": (1500.0, 2368.0),
-                                           "realistic": (3800.0, 6000.0)}
+PRESETS = {"lumped": (1500.0, 2368.0), "realistic": (3800.0, 6000.0)}
 
 _REQUIRED = object()
 
@@ -243,25 +236,12 @@ class FunctionLaw(Controller):
         self.memory: dict[str, Any] = {}
         self.fixed_step = "h" in spec.inputs or "memory" in spec.inputs
 
-    def _input(self, name: str, t: float, state: Mapping[str, Any],
-               velocities: tuple[np.ndarray, np.ndarray, np.ndarray]) -> Any:
-        if name in ("v_b", "v_w", "v_rel"):
-            return velocities[("v_b", "v_w", "v_rel").index(name)]
-        if name == "t":
-            return float(t)
-        if name == "h":
-            return self.h
-        if name == "n":
-            return self.n
-        if name == "memory":
-            return self.memory
-        if name in BODY_KEYS:
-            return body_scalar(state, name)
-        return corner_array(state, name, self.n)
-
     def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
-        velocities = self.corners(state)
-        args = [self._input(name, t, state, velocities) for name in self.spec.inputs]
+        v_b, v_w, v_rel = self.corners(state)
+        known = {"v_b": v_b, "v_w": v_w, "v_rel": v_rel, "t": float(t), "h": self.h, "n": self.n,
+                 "memory": self.memory}
+        args = [known[k] if k in known else body_scalar(state, k) if k in BODY_KEYS
+                else corner_array(state, k, self.n) for k in self.spec.inputs]
         out = self.spec.fn(*args, **self.settings)  # type: ignore[misc]
         if not isinstance(out, tuple) or len(out) not in (2, 3):
             raise TypeError(f"control law '{self.law}' must return (F_d, c_eff) or "
