@@ -118,17 +118,21 @@ def wk_response(f_hz: np.ndarray | float) -> np.ndarray:
 # ------------------------------------------------------------------------ run tables
 
 
-def columns(table: Table, name: str) -> list[tuple[str, np.ndarray]]:
-    """The per-corner columns of ``name`` (e.g. ``plant/response/a_b``): ``[(label, array)]``
-    with label ``""`` for a scalar field and ``"[i]"`` for list fields; empty if absent."""
-    if name in table:
-        return [("", np.asarray(table[name], dtype=float))]
-    out = []
-    i = 0
-    while f"{name}[{i}]" in table:
-        out.append((f"[{i}]", np.asarray(table[f"{name}[{i}]"], dtype=float)))
-        i += 1
+def column_names(names: Sequence[str] | Table, name: str) -> list[tuple[str, str]]:
+    """The per-corner columns of ``name`` (e.g. ``plant/response/a_b``) among ``names``:
+    ``[(label, column)]`` with label ``""`` for a scalar field and ``"[i]"`` for list fields
+    (column ``name[i]``); empty if absent."""
+    if name in names:
+        return [("", name)]
+    out: list[tuple[str, str]] = []
+    while f"{name}[{len(out)}]" in names:
+        out.append((f"[{len(out)}]", f"{name}[{len(out)}]"))
     return out
+
+
+def columns(table: Table, name: str) -> list[tuple[str, np.ndarray]]:
+    """:func:`column_names` of a table with their values, ``[(label, array)]``."""
+    return [(lab, np.asarray(table[c], dtype=float)) for lab, c in column_names(table, name)]
 
 
 BAND_16 = (0.0, 16.0)  # Hz, the band of thesis Tables 5.7-5.10

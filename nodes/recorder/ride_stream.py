@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from fractions import Fraction
+from functools import partial
 
 import numpy as np
 from scipy.fft import next_fast_len
@@ -296,16 +297,6 @@ class Moments:
         return float(np.sqrt(self.m2 / self.n))
 
 
-def _series(names: Sequence[str], name: str) -> list[tuple[str, str]]:
-    """``[(label, column)]`` of a base as :func:`.ride_metrics.columns` finds them."""
-    if name in names:
-        return [("", name)]
-    out: list[tuple[str, str]] = []
-    while f"{name}[{len(out)}]" in names:
-        out.append((f"[{len(out)}]", f"{name}[{len(out)}]"))
-    return out
-
-
 class _Band:
     """A signal's resampler and in-band periodogram (and, for the body, Wk and jerk)."""
 
@@ -341,19 +332,20 @@ def streamed_metric_values(
     """:func:`.ride_metrics.metric_values` (its keys, units and labels) of a table of
     ``n_rows`` rows and columns ``names`` read by ``batches`` (two passes: ``t``, then the
     ride columns)."""
+    series = partial(rm.column_names, names)
     bases = (*(f"{_R}{b[0]}" for b in _BANDED), "plant/state/z_b", "tyre_road/force/F_t",
              "controller/force/F_d")
-    if not any(_series(names, b) for b in bases):
+    if not any(series(b) for b in bases):
         return {}  # no ride channel: nothing to compute (and no rate needed)
     fs = stream_rate(batches(["t"]))
     f1, f2 = (float(b) for b in band_hz)
     band: dict[str, _Band] = {col: _Band(n_rows, fs, fs_out, max(f2, rm.BAND_16[1]), b[3])
-                              for b in _BANDED for _lab, col in _series(names, f"{_R}{b[0]}")}
-    zb, zw = _series(names, "plant/state/z_b"), _series(names, "plant/state/z_w")
+                              for b in _BANDED for _lab, col in series(f"{_R}{b[0]}")}
+    zb, zw = series("plant/state/z_b"), series("plant/state/z_w")
     pairs = list(zip(zb, zw, strict=False))
     defl = {cb: Moments() for (_l, cb), _w in pairs}
     plain = {col: Moments() for base in ("tyre_road/force/F_t", "controller/force/F_d")
-             for _l, col in _series(names, base)}
+             for _l, col in series(base)}
     seen = 0
     for b in batches([*band, *(c for p in pairs for _l, c in p), *plain]):
         seen += b["t"].size
@@ -368,7 +360,7 @@ def streamed_metric_values(
 
     m: dict[str, tuple[float, str, str]] = {}
     for name, unit, full, _body, b16 in _BANDED:
-        for lab, col in _series(names, f"{_R}{name}"):
+        for lab, col in series(f"{_R}{name}"):
             s, key, u = band[col], f"{name}{lab}", f"[{unit}]"
             m[f"{key}_rms"] = (s.pg.band_rms((f1, f2)), unit, f"{key} RMS {f1:g}-{f2:g} Hz {u}")
             if b16 and (f1, f2) != rm.BAND_16:
@@ -382,9 +374,9 @@ def streamed_metric_values(
         d = defl[cb]
         m[f"sws{lab}"] = (1e3 * (d.hi - d.lo), "mm", f"SWS{lab} [mm]")
         m[f"defl{lab}_rms"] = (1e3 * d.rms(), "mm", f"defl{lab} RMS [mm]")
-    for lab, col in _series(names, "tyre_road/force/F_t"):
+    for lab, col in series("tyre_road/force/F_t"):
         m[f"dtl{lab}_rms"] = (plain[col].centred_rms(), "N", f"DTL{lab} RMS [N]")
-    for lab, col in _series(names, "controller/force/F_d"):
+    for lab, col in series("controller/force/F_d"):
         m[f"f_d{lab}_rms"] = (plain[col].rms(), "N", f"F_d{lab} RMS [N]")
     return m
 
