@@ -92,17 +92,6 @@ def bump_stop_force(compression: float, params: BumpStopParams | None = None) ->
     return f_t + pr.initial_rate / (1.0 - pr.transition) ** 2 * (d - d_t)
 
 
-def bump_stop_rate(compression: float, params: BumpStopParams | None = None) -> float:
-    """dF/d(delta) [N/m] at the bumper compression delta [m]: 0 while free, k_0 at contact,
-    k_0 / (1 - delta/s_b)^2 on the hyperbolic part, k_0 / (1 - r)^2 beyond r s_b."""
-    pr = params or BumpStopParams()
-    d = float(compression)
-    if d <= 0.0:
-        return 0.0
-    u = min(d / pr.stroke, pr.transition)
-    return pr.initial_rate / (1.0 - u) ** 2
-
-
 def compression(pad_rise: float, body_rise: float, params: BumpStopParams | None = None
                 ) -> float:
     """Bumper compression delta [m] from the pad's rise and the bumper mounting's rise (both

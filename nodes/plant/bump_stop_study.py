@@ -15,7 +15,7 @@ Run: ``python -m orchestrator.studies.bump_stop [--dt 0.001] [--json]``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TypedDict
+from typing import Any
 
 import numpy as np
 
@@ -67,22 +67,12 @@ def large_bump(s: float, height: float = 0.10, length: float = 1.0, x0: float = 
     return 0.5 * height * (1.0 - np.cos(2.0 * np.pi * u)) if 0.0 <= u <= 1.0 else 0.0
 
 
-class BumpStopStudy(TypedDict):
-    """What :func:`study` finds (SI units; :func:`first_contact`, :func:`road_run`)."""
-
-    first_contact: dict[str, float]
-    ch4_bump_pothole: dict[str, dict[str, float]]
-    """Damping coefficient [N s/m] as text -> the run's peaks."""
-    bump_100mm: dict[str, float]
-
-
-def study(dt: float = 1e-3) -> BumpStopStudy:
-    """Steps 1-3 of the module docstring."""
-    out: BumpStopStudy = {
-        "first_contact": first_contact(dt),
-        "ch4_bump_pothole": {
-            str(int(c)): road_run(lambda t: float(ch4_bump_pothole(SPEED * t)), c, dt=dt)
-            for c in (3800.0, 2000.0, 1000.0)},
-        "bump_100mm": road_run(lambda t: large_bump(SPEED * t), 3800.0, t_end=1.0, dt=dt),
-    }
-    return out
+def study(dt: float = 1e-3) -> dict[str, Any]:
+    """Steps 1-3 of the module docstring: ``first_contact`` (:func:`first_contact`),
+    ``ch4_bump_pothole`` (damping coefficient [N s/m] as text -> :func:`road_run`'s peaks)
+    and ``bump_100mm`` (:func:`road_run`'s peaks)."""
+    return {"first_contact": first_contact(dt),
+            "ch4_bump_pothole": {
+                str(int(c)): road_run(lambda t: float(ch4_bump_pothole(SPEED * t)), c, dt=dt)
+                for c in (3800.0, 2000.0, 1000.0)},
+            "bump_100mm": road_run(lambda t: large_bump(SPEED * t), 3800.0, t_end=1.0, dt=dt)}

@@ -43,7 +43,7 @@ joint in the arm plane, z = x cross y; the frame turns with the arm), in N; see
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -96,17 +96,11 @@ class DoubleWishboneParams:
     @classmethod
     def from_corner(cls, c: Corner) -> DoubleWishboneParams:
         """The parameters a corner file gives (masses, torsion bar, bumper)."""
-        m, bs = c.masses, c.bump_stop
-        kw: dict[str, float | bool] = {
-            "body_mass": m["body"], "hub_mass": m["hub"], "lower_arm_mass": m["lower_arm"],
-            "upper_arm_mass": m["upper_arm"], "tie_rod_mass": m["tie_rod"],
-            "torsion_stiffness_nm_per_deg": c.torsion_bar_nm_per_deg,
-            "bump_stop": bs is not None}
-        if bs is not None:
-            kw.update(bump_stop_clearance=bs["clearance"],
-                      bump_stop_initial_rate=bs["initial_rate"], bump_stop_stroke=bs["stroke"],
-                      bump_stop_transition=bs["transition"])
-        return cls(**kw)  # type: ignore[arg-type]
+        kw = {f"{k}_mass": c.masses[k] for k in ("body", "hub", "lower_arm", "upper_arm",
+                                                  "tie_rod")}
+        kw.update({f"bump_stop_{k}": v for k, v in (c.bump_stop or {}).items()})
+        return cls(torsion_stiffness_nm_per_deg=c.torsion_bar_nm_per_deg,
+                   bump_stop=c.bump_stop is not None, **kw)
 
     @property
     def k_theta(self) -> float:
@@ -123,10 +117,8 @@ class DoubleWishboneParams:
         """The bumper's parameters, or None without a bumper."""
         if not self.bump_stop:
             return None
-        return BumpStopParams(clearance=self.bump_stop_clearance,
-                              initial_rate=self.bump_stop_initial_rate,
-                              stroke=self.bump_stop_stroke,
-                              transition=self.bump_stop_transition)
+        return BumpStopParams(**{f.name: getattr(self, f"bump_stop_{f.name}")
+                                 for f in fields(BumpStopParams)})
 
 
 class DoubleWishboneCorner(PlantModel):
@@ -179,16 +171,14 @@ class DoubleWishboneCorner(PlantModel):
             p.changeConstraint(cid, maxForce=1e9, physicsClientId=c)
         # hardpoints in their links' frames (fixed): the damper mounts, the bumper pad, the
         # points whose accelerations plant/response carries
-        self._loc_top = self._local_point(BODY, g.damper_upper)
+        self._loc_top = _link_point(np.zeros(3), g.damper_upper)  # on the body
         self._body_quat: tuple[float, ...] | None = None  # the body's, at the last read
         # on the arm (one batched product a read): the damper's seat, the pad (no bumper:
         # the ball joint's place, unused), then the points whose rates plant/response carries
-        self._arm_locals = np.array([
-            self._local_point(LOWER_ARM, g.damper_lower),
-            self._local_point(LOWER_ARM, g.lower_ball_joint if g.bump_stop_pad is None
-                              else g.bump_stop_pad),
-            *(self._local_point(LOWER_ARM, g.to_corner(pt))
-              for pt in g.arm_accel_points.values())]).reshape(-1, 3, 1)
+        o = 0.5 * (g.lower_bush_front + g.lower_bush_rear)
+        self._arm_locals = np.array([_link_point(o, pt) for pt in (
+            g.damper_lower, g.lower_ball_joint if g.bump_stop_pad is None else g.bump_stop_pad,
+            *(g.to_corner(q) for q in g.arm_accel_points.values()))]).reshape(-1, 3, 1)
         self._accel_names = [tuple(f"a_arm_{name}_{axis}" for axis in "xyz")
                              for name in g.arm_accel_points]
         self._dt: float | None = None
@@ -212,7 +202,7 @@ class DoubleWishboneCorner(PlantModel):
         c, b = self.client, self.body
         js = p.getJointStates(b, [BODY, LOWER_ARM], physicsClientId=c)
         self._zb_abs, self._vb = js[0][0], js[0][1]
-        self._theta, self._omega = js[1][0], js[1][1]
+        self._theta = js[1][0]
         self._w_pivot = js[1][2]  # the arm pivot's sensor wrench: the arm loads
         # one call for the links: the forward kinematics computed once
         hub, body, arm, ua = p.getLinkStates(b, _READ_LINKS, computeLinkVelocity=1,
@@ -239,24 +229,6 @@ class DoubleWishboneCorner(PlantModel):
         self._v_damper = -(0.0 + u[0] * (v_top[0] - v_bot[0]) + u[1] * (v_top[1] - v_bot[1])
                            + u[2] * (v_top[2] - v_bot[2]))  # compression rate (numpy's dot)
         self._top, self._bot = top, bot
-
-    def _local_point(self, link: int, corner_point: np.ndarray) -> np.ndarray:
-        """A hardpoint (static corner frame) in ``link``'s frame [m]: fixed, so computed once
-        per point (:meth:`__init__`)."""
-        return self._link_local[link] @ np.append(corner_point, 1.0)
-
-    @property
-    def _link_local(self) -> dict[int, np.ndarray]:
-        # link frame origins in the static corner frame (all link frames axis-aligned at t=0)
-        if not hasattr(self, "_ll"):
-            g = self.geom
-            origins = {BODY: np.zeros(3),
-                       LOWER_ARM: 0.5 * (g.lower_bush_front + g.lower_bush_rear),
-                       HUB: g.lower_ball_joint,
-                       UPPER_ARM: 0.5 * (g.upper_bush_front + g.upper_bush_rear),
-                       TIE_ROD: g.tie_rod_inner}
-            self._ll = {k: np.hstack([np.eye(3), -o[:, None]]) for k, o in origins.items()}
-        return self._ll
 
     def bump_stop_compression(self) -> float:
         """Bumper compression delta [m] in the current state (< 0: clearance still open):
@@ -387,3 +359,9 @@ def _local(body: int, link: int, offset_from_link_origin: np.ndarray, client: in
     ls = p.getLinkState(body, link, physicsClientId=client)
     local_inertial_pos = np.array(ls[2])
     return (np.asarray(offset_from_link_origin) - local_inertial_pos).tolist()
+
+
+def _link_point(origin: np.ndarray, corner_point: np.ndarray) -> np.ndarray:
+    """A hardpoint (static corner frame) in the frame of a link at ``origin`` [m] (at rest
+    the link frames have the corner's axes): [I | -origin] @ (point, 1)."""
+    return np.hstack([np.eye(3), -origin[:, None]]) @ np.append(corner_point, 1.0)

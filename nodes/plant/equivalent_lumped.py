@@ -82,6 +82,14 @@ def simulate(model: PlantModel, t_end: float, dt: float, z_g: Callable[[float], 
     return {"t": t, "z_b": zb, "z_w": zw}
 
 
+def _corner_run(dw: DoubleWishboneCorner, t_end: float, dt: float,
+                z_g: Callable[[float], float]) -> dict[str, np.ndarray]:
+    """:func:`simulate` of the realistic corner with its corner file's nominal damper (the
+    built-in's: :data:`C_DAMPER`) on the damper's velocity."""
+    c_d = dw.corner.damper_c_nominal
+    return simulate(dw, t_end, dt, z_g, lambda st: c_d * float(st["v_damper"][0]))
+
+
 def log_decrement(t: np.ndarray, x: np.ndarray) -> dict[str, float]:
     """Appendix II on a decaying response x(t) (about zero): delta, zeta, T, omega_n."""
     # turning points of |x|, rising strictly into them: a constant stretch before the input
@@ -147,10 +155,8 @@ def identify(step: float = 0.01, dt: float = 1e-3, t_end: float = 4.0,
     ``m_b``, ``m_w`` [kg], ``k_t``, the log decrement's ``delta``, ``zeta``, ``T`` [s],
     ``omega_n`` [rad/s], ``f_n`` [Hz], and the geometric estimates."""
     dw = DoubleWishboneCorner(corner=corner)
-    c_d = C_DAMPER if corner is None else corner.damper_c_nominal
     try:
-        r = simulate(dw, t_end, dt, lambda t: step if t >= 0.05 else 0.0,
-                     lambda st: c_d * float(st["v_damper"][0]))
+        r = _corner_run(dw, t_end, dt, lambda t: step if t >= 0.05 else 0.0)
         m_b, m_w = dw.params.body_mass, dw.params.unsprung_mass
         geo = geometric_estimates(dw)
     finally:
@@ -175,9 +181,8 @@ def compare_on_road(eq: dict[str, float], dt: float = 1e-3,
         return float(ch4_bump_pothole(SPEED * t))
 
     dw = DoubleWishboneCorner(corner=corner)
-    c_d = C_DAMPER if corner is None else corner.damper_c_nominal
     try:
-        r1 = simulate(dw, t_end, dt, road, lambda st: c_d * float(st["v_damper"][0]))
+        r1 = _corner_run(dw, t_end, dt, road)
     finally:
         dw.close()
     lq = LumpedQuarterCar(LumpedQuarterCarParams(eq["m_b"], eq["m_w"], eq[k_s_key]))

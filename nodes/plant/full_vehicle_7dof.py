@@ -154,9 +154,7 @@ class FullVehicle7DOF(PlantModel):
     name = "full_vehicle_7dof"
 
     def __init__(self, params: FullVehicleParams | None = None) -> None:
-        self.params = pr = params or FullVehicleParams()
-        if pr.mass_basis not in ("corner", "axle"):
-            raise ValueError(f"mass_basis must be 'corner' or 'axle', got {pr.mass_basis!r}")
+        self.params = pr = params or FullVehicleParams()  # (mass_basis checked there)
         self.client = new_direct_client()
         self.body = load_urdf_text(_urdf(pr), self.client, useFixedBase=True,
                                    flags=p.URDF_USE_INERTIA_FROM_FILE)

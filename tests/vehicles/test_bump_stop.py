@@ -10,12 +10,20 @@ from cosim import lower_arm as la
 from cosim.errors import ScenarioError
 from nodes.plant import double_wishbone as dw
 from nodes.plant import double_wishbone_geometry as geo
-from nodes.plant.bump_stop import BumpStopParams, bump_stop_force, bump_stop_rate
+from nodes.plant.bump_stop import BumpStopParams, bump_stop_force
 from nodes.plant.models import build_plant_model
 
 from ._sim import big_bump_run
 
 BS = BumpStopParams()
+
+
+def bump_stop_rate(d: float) -> float:
+    """The closed-form rate dF/d(delta) [N/m] of the default bumper (the module docstring's
+    law): 0 while free, k_0 / (1 - delta/s_b)^2, k_0 / (1 - r)^2 beyond r s_b (an oracle)."""
+    if d <= 0.0:
+        return 0.0
+    return BS.initial_rate / (1.0 - min(d / BS.stroke, BS.transition)) ** 2
 
 
 # ------------------------------------------------------------------ the force law
