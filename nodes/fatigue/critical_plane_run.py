@@ -21,10 +21,10 @@ import numpy as np
 from .config import FatigueConfig
 from .lib import critical_plane as cp
 from .lib.damage import cycle_reversals
-from .lib.influence_set import InfluenceSet, short_channel
+from .lib.influence_set import InfluenceSet
 from .lib.result import FatigueResult
 from .lib.superposition import stress_history
-from .worker import load_influence
+from .worker import case_matrix, load_influence
 
 N_HOT_SPOTS = 50
 """Nodes assessed on critical planes: the most damaged of the equivalent-stress pass (a 30 m
@@ -43,17 +43,7 @@ def critical_plane_pass(loads: Iterable[Mapping[str, np.ndarray]], cfg: FatigueC
     over the load batches ``loads`` (channel -> values, as the engine took them)."""
     top = np.argsort(result.damage, kind="stable")[::-1][:N_HOT_SPOTS]
     coef = inf.coefficients[:, top]
-    cases = list(inf.case_names)
-    parts = []
-    for batch in loads:
-        by_short = {short_channel(c): np.asarray(v, dtype=float) for c, v in batch.items()}
-        n = next(iter(by_short.values())).size if by_short else 0
-        F = np.zeros((n, len(cases)))
-        for j, c in enumerate(cases):
-            if c in by_short:
-                F[:, j] = by_short[c]
-        parts.append(stress_history(F, coef))
-    S = np.concatenate(parts)
+    S = np.concatenate([stress_history(case_matrix(inf.case_names, b), coef) for b in loads])
     mat = cfg.material
 
     def reversals(s: np.ndarray) -> np.ndarray:

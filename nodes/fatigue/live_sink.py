@@ -30,9 +30,8 @@ from .more_parts import (
     load_channel,
     more_parts,
     part_channels,
-    primary_name,
 )
-from .run_dir import part_entry, track_length, with_parts, write_results
+from .run_dir import part_entry, parts_summary, track_length, with_parts, write_results
 from .worker import FatigueResult, LiveFatigue, load_influence
 
 
@@ -145,12 +144,7 @@ class LiveLoads:
             r.source = "live"
             more.append((tr.name, r, {}, None))
             entries.append(part_entry(tr.name, tr.name, tr.channel, r, tr.cfg.influence))
-        extra = None
-        if more:
-            cfg = self.cfg
-            extra = {"parts": [part_entry(primary_name(cfg), ".", main.channel, result,
-                                          None if cfg.influence.startswith("builtin")
-                                          else cfg.influence), *entries]}
+        extra = {"parts": parts_summary(self.cfg, result, None, entries)} if more else None
         write_results(result, out, extra, with_parts(None, more))
         info: dict[str, Any] = {}
         if more:

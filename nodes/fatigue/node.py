@@ -1,23 +1,12 @@
 """The fatigue node: damage of the lower arm computed while the run goes on.
 
-It takes the plant's load stream itself, from the plant's records batches
-(``plant/records``: the plant's data messages as published, a batch every 64 messages or
-50 ms, so one delivery and one signature check per batch instead of per step; it decodes only
-the messages of its load channel, ``plant/arm`` (:data:`cosim.channels.LOAD_CHANNEL`), each
-against its channel's schema; Zenoh delivers a publisher's messages reliably and in order,
-and a step missing or out of order is an error, never skipped),
-gathers the steps into blocks of ``fatigue.block_samples`` counted from step 0, feeds each
-block to :class:`LiveFatigue` (which screens: :mod:`.screening`), and publishes the damage so
-far on ``fatigue/damage`` (any tap can follow the arm's projected life live). After the
-run's last step it writes ``<run dir>/fatigue/`` (damage per node CSV, summary.json, damage
-map PNG) — the same files, and the same numbers, as the batch ``suscosim fatigue RUN_DIR``
-on the recorded table (the batch cuts the same blocks). docs/live_fatigue.md.
-
-With ``[fatigue] parts`` (:mod:`.more_parts`) it also subscribes to each more part's load
-channel (the upper arm's ``plant/upper_arm``), runs an engine per part on the same blocks,
-and writes each part's files to ``<run dir>/fatigue/<part name>/`` inside the same folder
-(renamed into place with it), the primary ``summary.json``'s ``parts`` naming them all.
-Checkpoints with more parts are refused (not supported yet).
+It takes the plant's load stream from its records batches (``plant/records``), decodes only
+the messages of its parts' load channels (``plant/arm``, :data:`cosim.channels.LOAD_CHANNEL`;
+with ``[fatigue] parts`` also e.g. ``plant/upper_arm``), each against its channel's schema, and
+hands them to :class:`.live_sink.LiveLoads` (blocks, engines, results: docs/live_fatigue.md).
+Zenoh delivers a publisher's messages reliably and in order; a step missing or out of order is
+an error, never skipped. The damage so far goes out on ``fatigue/damage``. Checkpoints with
+more parts are refused (not supported yet).
 """
 
 from __future__ import annotations
@@ -51,9 +40,8 @@ HEARTBEAT_S = 1.0
 """While a block is computed, ``progress`` goes to the orchestrator this often [s] (wall)."""
 NICE = 10
 """The node lowers its scheduling priority by this much (``os.nice``): it is off the coupled
-chain's critical path (it takes the plant's steps as they come, in arrears), so on a 2-core
-machine the plant, tyre/road and controller take the cores first and the fatigue node works in their
-idle time; its numbers do not depend on when it runs."""
+chain's critical path (it takes the plant's steps in arrears), so the other nodes take the
+cores first; its numbers do not depend on when it runs."""
 
 
 def restore(tr: Track, saved: dict[str, Any], plan: NodeCheckpoints) -> None:
@@ -152,11 +140,9 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
 def alive_while_busy(part: Participant, k: int, t: float,
                      period_s: float = HEARTBEAT_S) -> Iterator[None]:
     """Tell the orchestrator every ``period_s`` that this node is working on load step ``k``
-    while the block inside runs. A block of the CAD arm that starts at rest keeps nearly every
-    sample (a constant history cannot be proven monotone: ~4 ms a step, measured on a 0.4 s
-    run), so at nice +10 on a loaded machine its computation can outlast a short run's stall
-    timeout (5 s by default) and the clock would blame a node that is computing. Only while
-    the block runs: a node stuck anywhere else is still seen as stalled."""
+    while the block inside runs: a block can outlast a short run's stall timeout (5 s) at
+    nice +10 on a loaded machine (a CAD-arm block that starts at rest keeps nearly every
+    sample: ~4 ms a step). Only then: a node stuck anywhere else is still seen as stalled."""
     done = threading.Event()
 
     def beat() -> None:

@@ -1,4 +1,5 @@
-"""The batch outputs beside the damage (``suscosim fatigue``; files in the results folder).
+"""The batch outputs beside the damage (``suscosim fatigue``; files in the results folder,
+computed as the batches pass by :mod:`.run_stream`).
 
 * ``sn_methods`` (summary): the minimum life under both named component S-N methods,
   Shigley/Marin (with the scenario's mean-stress correction) and FKM (its own Haigh diagram,
@@ -26,21 +27,16 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from .config import SN_METHODS, FatigueConfig
-from .lib.counting import Cycles, count_series
+from .lib.counting import Cycles
 from .lib.damage import sn_curve
-from .lib.equivalent_stress import equivalent
 from .lib.fkm import T_RANGE_C
-from .lib.influence_set import short_channel
 from .lib.mean_stress import equivalent_amplitude
-from .lib.pseudo_damage import K_REF, channel_pseudo_damage, matrix_rows, rainflow_matrix
-from .lib.superposition import stress_history
-from .worker import FatigueResult, analyse, load_influence
+from .worker import FatigueResult
 
 
 def method_table(cfg: FatigueConfig) -> tuple[list[tuple[str, float, FatigueConfig]],
@@ -79,40 +75,6 @@ def methods_summary(rows: list[tuple[str, float, FatigueConfig, FatigueResult]],
     lives = [r.life_km for *_, r in rows]
     return {"methods": out, "life_range_km": [min(lives), max(lives)],
             **({"left_out": left} if left else {})}
-
-
-def method_lives(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
-                 primary: FatigueResult, say: Callable[[str], None]) -> dict | None:
-    """``sn_methods`` (:func:`methods_summary`) of a whole history; the primary's own entry
-    is ``primary``."""
-    table, left = method_table(cfg)
-    if not table:
-        return None
-    rows = []
-    for m, P, c in table:
-        if c != cfg:
-            say(f"fatigue: S-N method {m} at P = {P:g}")
-        rows.append((m, P, c, primary if c == cfg else analyse(t, loads, c, L)))
-    return methods_summary(rows, left)
-
-
-def _case_matrix(loads: dict, cases: list[str], n: int) -> np.ndarray:
-    F = np.zeros((n, len(cases)))
-    by_short = {short_channel(k): np.asarray(v, dtype=float) for k, v in loads.items()}
-    for j, c in enumerate(cases):
-        if c in by_short:
-            F[:, j] = by_short[c]
-    return F
-
-
-def critical_history(t: np.ndarray, loads: dict, cfg: FatigueConfig,
-                     result: FatigueResult) -> tuple[np.ndarray, np.ndarray]:
-    """(stress (n, 6) Pa, equivalent stress (n,) Pa) at the critical node."""
-    inf = load_influence(cfg)
-    c = result.critical_node
-    F = _case_matrix(loads, list(inf.case_names), len(t))
-    s = stress_history(F, inf.coefficients[:, c:c + 1, :])
-    return s[:, 0, :], equivalent(s, cfg.equivalent)[:, 0]
 
 
 SN_LEVELS = 400
@@ -243,43 +205,3 @@ def write_pseudo_damage(path: Path, pd: list) -> None:
         for p in pd:
             w.writerow([p.channel, p.k, p.ref_range, p.n_ref, p.cycles, p.max_range,
                         f"{p.pseudo_damage:.6e}", f"{p.equivalent_range:.6e}"])
-
-
-def batch_outputs(t: np.ndarray, loads: dict, cfg: FatigueConfig, L: float,
-                  result: FatigueResult, say: Callable[[str], None]
-                  ) -> tuple[Callable[[Path], None], dict]:
-    """(a writer of the output files into a folder, the summary keys) for one analysis."""
-    methods = method_lives(t, loads, cfg, L, result, say)
-    say("fatigue: critical-node history, rainflow matrices, pseudo-damage")
-    s6, eq = critical_history(t, loads, cfg, result)
-    pd = channel_pseudo_damage(loads, K_REF, cfg.residue)
-    extra = {"sn_methods": methods,
-             "pseudo_damage": {"k": K_REF, "channels": [p.as_dict() for p in pd]},
-             "outputs": ["critical_stress.csv", "rainflow_matrix.csv", "pseudo_damage.csv",
-                         "sn_plot.png", "sn_plot.json", "damage.vtu"]}
-
-    def write(folder: Path) -> None:
-        with open(folder / "critical_stress.csv", "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["t_s", "sxx_pa", "syy_pa", "szz_pa", "sxy_pa", "syz_pa", "szx_pa",
-                        f"eq_{cfg.equivalent}_pa"])
-            for i in range(len(t)):
-                w.writerow([f"{t[i]:.9g}", *(f"{v:.6e}" for v in s6[i]), f"{eq[i]:.6e}"])
-        with open(folder / "rainflow_matrix.csv", "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["series", "unit", "range_lo", "range_hi", "mean_lo", "mean_hi",
-                        "cycles"])
-            cyc = count_series(eq, cfg.residue)
-            w.writerows(matrix_rows(f"node_{result.critical_node_id}", "Pa",
-                                    rainflow_matrix(cyc)))
-            for name, v in loads.items():
-                unit = "N m" if short_channel(name).endswith("_mx") else "N"
-                w.writerows(matrix_rows(name, unit, rainflow_matrix(
-                    count_series(np.asarray(v, dtype=float), cfg.residue))))
-        write_pseudo_damage(folder / "pseudo_damage.csv", pd)
-        spectrum = SnSpectrum(cfg)
-        spectrum.add(cyc)
-        sn_plot(folder / "sn_plot.png", cfg, spectrum, result, methods)
-        write_vtu(folder / "damage.vtu", result)
-
-    return write, extra

@@ -23,24 +23,20 @@ from .critical_plane_run import with_critical_planes
 from .damage_map import plot_damage_map
 from .lib.damage import SPECTRAL_METHODS
 from .lib.influence_set import short_channel
-from .worker import FatigueResult, analyse, load_influence
+from .more_parts import load_channel, more_parts, part_channels, primary_name
+from .run_stream import Batches, Scan
+from .worker import FatigueResult, load_influence
 
 
 def read_table(run_dir: Path) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """(t, {column: values}) from ``table.parquet`` or else ``table.csv`` (only load columns
-    ``plant/arm/...`` are kept; :func:`cosim.table.read_table` reads them)."""
-    from cosim.table import read_table as read_run_table
+    """(t, {column: values}) of the ``plant/arm/...`` load columns of ``table.parquet`` or
+    else ``table.csv`` (:func:`.run_stream.table_batches`), whole."""
+    from .run_stream import table_batches, table_source
 
-    src = next((p for p in (run_dir / "table.parquet", run_dir / "table.csv") if p.is_file()),
-               None)
-    if src is None:
-        raise InputFileError(str(run_dir), "no table.parquet or table.csv in the run folder")
-    cols = {n: np.asarray(v, dtype=float)
-            for n, v in read_run_table(src, keep=lambda n: n.startswith("plant/arm/")).items()}
-    cols.pop("k", None)
-    if "t" not in cols:
-        raise InputFileError(str(src), "no column 't'", 1 if src.suffix == ".csv" else None)
-    t = cols.pop("t")
+    src = table_source(run_dir)
+    got = list(table_batches(src)())
+    t = np.concatenate([b[0] for b in got]) if got else np.zeros(0)
+    cols = {c: np.concatenate([b[1][c] for b in got]) for c in (got[0][1] if got else {})}
     if t.size < 2:
         raise InputFileError(str(src), "fewer than 2 samples")
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
@@ -196,6 +192,14 @@ def part_entry(name: str, folder: str, channel: str, result: FatigueResult,
             "critical_node_id": result.critical_node_id, "life_range_km": rng}
 
 
+def parts_summary(cfg: FatigueConfig, result: FatigueResult, methods: dict | None,
+                  entries: list[dict]) -> list[dict]:
+    """The primary summary's ``parts``: the primary part's entry, then the more parts'."""
+    return [part_entry(primary_name(cfg), ".", load_channel(cfg), result,
+                       None if cfg.influence.startswith("builtin") else cfg.influence, methods),
+            *entries]
+
+
 def with_parts(files: Callable[[Path], None] | None,
                parts: Sequence[tuple[str, FatigueResult, dict, Callable[[Path], None] | None]]
                ) -> Callable[[Path], None] | None:
@@ -218,18 +222,6 @@ def settings_hash(overrides: dict) -> str:
     """8 hex digits of the SHA-256 of the what-if settings (sorted JSON)."""
     text = json.dumps(strict_json(overrides), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:8]
-
-
-def unmapped_channels(loads: dict[str, np.ndarray], cases: list[str]) -> list[dict]:
-    """Load channels that no influence case answers to (their load is not in the stresses):
-    ``[{"channel", "peak_abs"}]`` (N or N m)."""
-    out = []
-    for name, v in loads.items():
-        if short_channel(name) not in cases:
-            a = np.asarray(v, dtype=float)
-            out.append({"channel": name, "peak_abs": float(np.max(np.abs(a))) if a.size
-                        else 0.0})
-    return out
 
 
 def _scenario_json(sc_path: Path) -> dict:
@@ -263,33 +255,32 @@ def settings_source(source: Path | None) -> tuple[dict, Path]:
     return sc.load(source), source.parent
 
 
-def _analyse_and_write(t: np.ndarray, loads: dict[str, np.ndarray], cfg: FatigueConfig,
-                       L: float, out: Path, source: str, what_if: dict | None,
-                       progress: Callable[[str], None] | None) -> FatigueResult:
-    """Check the loads, analyse, compute the batch outputs and write ``out`` whole."""
-    from .load_file import check_loads
-    from .outputs import batch_outputs
-
-    check_loads(loads, t, source)
-    say = progress or (lambda _msg: None)
-    say(f"fatigue: {len(t)} samples x {len(loads)} channels, primary S-N curve")
-    spectral = cfg.method in SPECTRAL_METHODS
-    if spectral:  # the PSD of the whole history (:mod:`.spectral_life`): no rainflow outputs
-        from .spectral_life import spectral_analyse
-        result, more = spectral_analyse(t, loads, cfg, L)
-    else:
-        result = analyse(t, loads, cfg, L)
-    extra: dict = {"unmapped_channels": unmapped_channels(loads,
-                                                          list(load_influence(cfg).case_names))}
+def _extra(peaks: dict[str, float], cfg: FatigueConfig, what_if: dict | None) -> dict:
+    """The summary keys of a batch analysis: ``unmapped_channels``, the load channels no
+    influence case answers to (their load is not in the stresses) with their peak |load| (N
+    or N m), and ``what_if`` (the settings and their :func:`settings_hash`)."""
+    cases = list(load_influence(cfg).case_names)
+    extra: dict = {"unmapped_channels": [{"channel": c, "peak_abs": p} for c, p in peaks.items()
+                                         if short_channel(c) not in cases]}
     if what_if:
         extra["what_if"] = {"settings": what_if, "hash": settings_hash(what_if)}
-    if spectral:
-        write_results(result, out, {**extra, **more})
-        return result
-    files, more = batch_outputs(t, loads, cfg, L, result, say)
-    extra.update(more)
-    files = with_critical_planes([loads], cfg, result, extra, files, say)
-    write_results(result, out, extra, files)
+    return extra
+
+
+def _spectral_and_write(t: np.ndarray, loads: dict[str, np.ndarray], cfg: FatigueConfig,
+                        L: float, out: Path, source: str, what_if: dict | None,
+                        progress: Callable[[str], None] | None) -> FatigueResult:
+    """A spectral method (:mod:`.spectral_life`: the PSD of the whole history, no rainflow
+    outputs): check the loads, analyse, write ``out`` whole."""
+    from .load_file import check_loads
+    from .spectral_life import spectral_analyse
+
+    check_loads(loads, t, source)
+    (progress or (lambda _msg: None))(f"fatigue: {len(t)} samples x {len(loads)} channels, "
+                                      "primary S-N curve")
+    result, more = spectral_analyse(t, loads, cfg, L)
+    peaks = {c: float(np.max(np.abs(v))) if np.size(v) else 0.0 for c, v in loads.items()}
+    write_results(result, out, {**_extra(peaks, cfg, what_if), **more})
     return result
 
 
@@ -327,83 +318,32 @@ def fatigue_load_file(path: Path, overrides: dict | None = None,
                             f"the length of road {path.name} covers (m): --set "
                             "track_length_m=... or --scenario RUN_DIR|SCENARIO.toml")
     out = Path(out) if out is not None else path.with_name(path.name + ".fatigue")
-    result = _analyse_and_write(np.asarray(cs.t, dtype=float), loads, cfg, L, out,
-                                str(path), None, progress)
+    t = np.asarray(cs.t, dtype=float)
+    if cfg.method in SPECTRAL_METHODS:
+        result = _spectral_and_write(t, loads, cfg, L, out, str(path), None, progress)
+    else:
+        result, extra, files, _m = _stream(lambda: iter([(t, loads)]), str(path), str(path),
+                                           cfg, lambda _s: L, None, progress)
+        write_results(result, out, extra, files)
     result.source = f"file:{path.name}"
     return result
 
 
-def part_batches(src: Path, channel: str, cases: list[str],
-                 rows: int | None = None) -> Callable:
-    """Batches of ``t`` and the ``plant/<channel>/...`` columns of a run's table, each named
-    as the part's cases name it (:func:`.more_parts.column_names`); the lower arm's:
-    :func:`.run_stream.table_batches` (``plant/arm/...``), as before."""
-    from . import run_stream as rs
-    from .more_parts import UPPER_ARM, column_names
-
-    rows = rs.BATCH_ROWS if rows is None else rows
-    if channel != UPPER_ARM:
-        return rs.table_batches(src, rows)
-    prefix = f"plant/{channel}/"
-    if src.suffix == ".parquet":
-        import pyarrow.parquet as pq
-
-        try:
-            names = pq.ParquetFile(src).schema_arrow.names
-        except Exception as exc:  # pyarrow raises several types for a bad file
-            raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
-        cols = [n for n in names if n.startswith(prefix)]
-        keys = column_names(channel, [c[len(prefix):] for c in cols], cases)
-
-        def parquet():
-            from cosim.table_batches import parquet_batches
-
-            try:
-                for b in parquet_batches(src, ["t", *cols], rows):
-                    yield b["t"], {k: b[c] for k, c in zip(keys, cols, strict=True)}
-            except (OSError, ValueError) as exc:
-                raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
-        return parquet
-    from cosim.table import read_table as read_run_table
-
-    whole = {n: np.asarray(v, dtype=float)
-             for n, v in read_run_table(src, keep=lambda n: n.startswith(prefix)).items()}
-    whole.pop("k", None)
-    if "t" not in whole:
-        raise InputFileError(str(src), "no column 't'", 1)
-    t_all = whole.pop("t")
-    keys = column_names(channel, [c[len(prefix):] for c in whole], cases)
-    data = dict(zip(keys, whole.values(), strict=True))
-
-    def from_csv():
-        for i in range(0, t_all.size, rows):
-            yield t_all[i:i + rows], {c: v[i:i + rows] for c, v in data.items()}
-    return from_csv
-
-
-def _stream(run_dir: Path, scenario: dict, cfg: FatigueConfig, channel: str, what_if: dict | None,
-            say: Callable[[str], None]
+def _stream(batches: Batches, src: str, source: str, cfg: FatigueConfig,
+            length: Callable[[Scan], float], what_if: dict | None,
+            progress: Callable[[str], None] | None
             ) -> tuple[FatigueResult, dict, Callable[[Path], None], dict | None]:
-    """One part's batch analysis of a run's table (:mod:`.run_stream`): (result, summary
-    keys, writer of its batch files, its ``sn_methods``)."""
+    """One part's batch analysis of a load history in row batches (:mod:`.run_stream`; the
+    table file ``src``, the loads named as ``source``; ``length``: the track length (m) from
+    the scan): (result, summary keys, writer of its batch files, its ``sn_methods``)."""
     from . import run_stream as rs
-    from .more_parts import part_channels
 
-    src = rs.table_source(run_dir)
-    batches = part_batches(src, channel, part_channels(cfg))
-    source = str(run_dir / "table")
-    s = rs.scan(batches, str(src), cfg.residue, source)
+    say = progress or (lambda _msg: None)
+    s = rs.scan(batches, src, cfg.residue, source)
     if not s.channels:
-        raise InputFileError(source, f"no plant/{channel}/... load columns")
-    L = cfg.track_length_m if cfg.track_length_m is not None else \
-        track_length(scenario, np.array([s.t0, s.t_last]))
-    result, methods, matrices = rs.analyse_streamed(batches, cfg, L, s, say)
-    cases = list(load_influence(cfg).case_names)
-    extra: dict = {"unmapped_channels": [
-        {"channel": c, "peak_abs": ch.peak_abs} for c, ch in s.channels.items()
-        if short_channel(c) not in cases]}
-    if what_if:
-        extra["what_if"] = {"settings": what_if, "hash": settings_hash(what_if)}
+        raise InputFileError(source, f"no plant/{load_channel(cfg)}/... load columns")
+    result, methods, matrices = rs.analyse_streamed(batches, cfg, length(s), s, say)
+    extra = _extra({c: ch.peak_abs for c, ch in s.channels.items()}, cfg, what_if)
     files, more = rs.outputs_streamed(batches, cfg, s, result, methods, matrices, say)
     extra.update(more)
     files = with_critical_planes((b for _t, b in batches()), cfg, result, extra, files, say)
@@ -417,23 +357,28 @@ def _stream_and_write(run_dir: Path, scenario: dict, cfg: FatigueConfig, out: Pa
     with the run), analysed by the live node's block engine, the batch outputs computed as the
     batches pass, ``out`` written whole; with ``[fatigue] parts`` each more part the same way,
     into ``out/<name>/``, and the primary summary's ``parts`` naming them all."""
-    from .more_parts import load_channel, more_parts, primary_name
+    from .run_stream import table_batches, table_source
 
-    say = progress or (lambda _msg: None)
-    channel = load_channel(cfg)
-    result, extra, files, methods = _stream(run_dir, scenario, cfg, channel, what_if, say)
+    src = table_source(run_dir)
+
+    def one(c: FatigueConfig, channel: str
+            ) -> tuple[FatigueResult, dict, Callable[[Path], None], dict | None]:
+        def length(s: Scan) -> float:
+            return c.track_length_m if c.track_length_m is not None else \
+                track_length(scenario, np.array([s.t0, s.t_last]))
+        return _stream(table_batches(src, channel=channel, cases=part_channels(c)), str(src),
+                       str(run_dir / "table"), c, length, what_if, progress)
+
+    result, extra, files, methods = one(cfg, load_channel(cfg))
     parts = []
     entries = []
     for mp in more_parts(cfg):
-        say(f"fatigue: part {mp.name} (plant/{mp.channel})")
-        r, e, f, m = _stream(run_dir, scenario, mp.cfg, mp.channel, what_if, say)
-        r.source = "batch"
+        (progress or (lambda _msg: None))(f"fatigue: part {mp.name} (plant/{mp.channel})")
+        r, e, f, m = one(mp.cfg, mp.channel)
         parts.append((mp.name, r, e, f))
         entries.append(part_entry(mp.name, mp.name, mp.channel, r, mp.cfg.influence, m))
     if parts:
-        extra["parts"] = [part_entry(primary_name(cfg), ".", channel, result,
-                                     None if cfg.influence.startswith("builtin")
-                                     else cfg.influence, methods), *entries]
+        extra["parts"] = parts_summary(cfg, result, methods, entries)
     write_results(result, out, extra, with_parts(files, parts))
     return result
 
@@ -482,8 +427,8 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None, out: Path | No
         t, loads = read_table(run_dir)
         L = cfg.track_length_m if cfg.track_length_m is not None else \
             track_length(scenario, t)
-        result = _analyse_and_write(t, loads, cfg, L, folder, str(run_dir / "table"),
-                                    overrides or None, progress)
+        result = _spectral_and_write(t, loads, cfg, L, folder, str(run_dir / "table"),
+                                     overrides or None, progress)
     else:
         result = _stream_and_write(run_dir, scenario, cfg, folder, overrides or None, progress)
     result.results_dir = folder  # type: ignore[attr-defined]  # where it went, for the CLI

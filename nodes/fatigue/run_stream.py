@@ -10,7 +10,7 @@ sample, so the damage is :func:`.worker.analyse`'s bit for bit). Three passes ov
    from the table's first row), the peak of every load channel, and each load channel's
    rainflow cycles counted streamed (their count, largest range and mean extremes: the
    rainflow matrix's axes) and their pseudo-damage terms summed;
-2. **damage**: the primary analysis and every S-N method of :func:`.outputs.method_lives`
+2. **damage**: the primary analysis and every S-N method of :func:`.outputs.method_table`
    (each its own engine, all fed the same batches), and each load channel's range-mean
    matrix accumulated batch by batch on the axes of pass 1;
 3. **critical node**: its six stress components and equivalent stress by superposition,
@@ -24,9 +24,10 @@ Memory: a batch of the arm's columns (~16 columns x 65 536 rows x 8 B = 8 MB), t
 per-node state, the rainflow residues and the fixed-size spectrum and matrices: nothing
 grows with the run.
 
-Bit-identity with the whole-table path (``analyse`` and ``outputs.batch_outputs``): the
-damage, lives, extremes, cycles, S-N method lives, the critical-node files and the rainflow
-matrices' counts (sums of 0.5 and 1) are identical; a channel's pseudo-damage is the sum of
+Bit-identity with the whole history at once (``analyse``; the outputs' oracle is
+tests/fatigue/whole_outputs.py): the damage, lives, extremes, cycles, S-N method lives, the
+critical-node files and the rainflow matrices' counts (sums of 0.5 and 1) are identical; a
+load file is one batch. A channel's pseudo-damage is the sum of
 its cycles' terms accumulated batch by batch instead of one ``np.sum`` (pairwise) over all
 of them, so it can differ in the last digit (a few 1e-16 relative): unavoidable without
 holding every cycle of every channel, which grows with the run.
@@ -35,7 +36,7 @@ holding every cycle of every channel, which grows with the run.
 from __future__ import annotations
 
 import csv
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -58,6 +59,7 @@ from .lib.pseudo_damage import (
 )
 from .lib.superposition import stress_history
 from .load_file import MAX_FORCE_N, MAX_MOMENT_NM
+from .more_parts import UPPER_ARM, column_names
 from .outputs import (
     SnSpectrum,
     method_table,
@@ -66,7 +68,7 @@ from .outputs import (
     write_pseudo_damage,
     write_vtu,
 )
-from .worker import FatigueResult, LiveFatigue, load_influence
+from .worker import FatigueResult, LiveFatigue, case_matrix, load_influence
 
 BATCH_ROWS = 65_536
 """Rows of the table read at a time (a multiple of any ``block_samples`` it is rechunked to)."""
@@ -86,12 +88,21 @@ def table_source(run_dir: Path) -> Path:
     return src
 
 
-def table_batches(src: Path, rows: int = BATCH_ROWS) -> Batches:
-    """Batches of ``t`` and the ``plant/arm/...`` columns of a run's table.
+def table_batches(src: Path, rows: int = BATCH_ROWS, channel: str = "arm",
+                  cases: Sequence[str] = ()) -> Batches:
+    """Batches of ``t`` and the ``plant/<channel>/...`` columns of a run's table, named as a
+    part's ``cases`` name them (:func:`.more_parts.column_names`; any channel but the upper
+    arm's is the lower arm's ``plant/arm/...``, names as in the table).
 
     Parquet: a row group at a time (:func:`cosim.table_batches.parquet_batches`). CSV (a
     run that left no Parquet table): read whole by :func:`cosim.table.read_table`, then cut
     (bounded only for Parquet)."""
+    channel = channel if channel == UPPER_ARM else "arm"
+    prefix = f"plant/{channel}/"
+
+    def named(cols: list[str]) -> list[str]:
+        return column_names(channel, [c[len(prefix):] for c in cols], list(cases))
+
     if src.suffix == ".parquet":
         import pyarrow.parquet as pq
 
@@ -101,14 +112,15 @@ def table_batches(src: Path, rows: int = BATCH_ROWS) -> Batches:
             raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
         if "t" not in names:
             raise InputFileError(str(src), "no column 't'")
-        cols = [n for n in names if n.startswith("plant/arm/")]
+        cols = [n for n in names if n.startswith(prefix)]
+        keys = named(cols)
 
         def parquet() -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
             from cosim.table_batches import parquet_batches
 
             try:
                 for b in parquet_batches(src, ["t", *cols], rows):
-                    yield b["t"], {c: b[c] for c in cols}
+                    yield b["t"], {k: b[c] for k, c in zip(keys, cols, strict=True)}
             except (OSError, ValueError) as exc:
                 raise InputFileError(str(src), f"not a readable Parquet file ({exc})") from None
         return parquet
@@ -116,15 +128,16 @@ def table_batches(src: Path, rows: int = BATCH_ROWS) -> Batches:
     from cosim.table import read_table
 
     whole = {n: np.asarray(v, dtype=float)
-             for n, v in read_table(src, keep=lambda n: n.startswith("plant/arm/")).items()}
+             for n, v in read_table(src, keep=lambda n: n.startswith(prefix)).items()}
     whole.pop("k", None)
     if "t" not in whole:
         raise InputFileError(str(src), "no column 't'", 1)
     t_all = whole.pop("t")
+    data = dict(zip(named(list(whole)), whole.values(), strict=True))
 
     def from_csv() -> Iterator[tuple[np.ndarray, dict[str, np.ndarray]]]:
         for i in range(0, t_all.size, rows):
-            yield t_all[i:i + rows], {c: v[i:i + rows] for c, v in whole.items()}
+            yield t_all[i:i + rows], {c: v[i:i + rows] for c, v in data.items()}
     return from_csv
 
 
@@ -273,7 +286,7 @@ def _hist_add(H: np.ndarray | None, cyc: Cycles, axes: tuple[float, float, float
 def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
                      say: Callable[[str], None]
                      ) -> tuple[FatigueResult, dict | None, dict[str, dict]]:
-    """Pass 2: (primary result, ``sn_methods`` as :func:`.outputs.method_lives`, every load
+    """Pass 2: (primary result, ``sn_methods`` (:func:`.outputs.methods_summary`), every load
     channel's :func:`rainflow_matrix` dict)."""
     names = list(s.channels)
     primary = LiveFatigue(cfg, names, L)
@@ -341,7 +354,7 @@ def pseudo_damage_of(s: Scan, n_ref: float = N_REF) -> list[ChannelPseudoDamage]
 def outputs_streamed(batches: Batches, cfg: FatigueConfig, s: Scan, result: FatigueResult,
                      methods: dict | None, matrices: dict[str, dict],
                      say: Callable[[str], None]) -> tuple[Callable[[Path], None], dict]:
-    """As :func:`.outputs.batch_outputs`: (writer of the files into a folder, summary keys);
+    """(writer of the batch output files (:mod:`.outputs`) into a folder, summary keys);
     the writer runs pass 3 (the critical node's history)."""
     pd = pseudo_damage_of(s)
     extra = {"sn_methods": methods,
@@ -356,12 +369,7 @@ def outputs_streamed(batches: Batches, cfg: FatigueConfig, s: Scan, result: Fati
         """(t, the six stress components, the equivalent stress) at the critical node [Pa],
         a batch at a time."""
         for t, loads in batches():
-            F = np.zeros((t.size, len(cases)))
-            by_short = {short_channel(k): v for k, v in loads.items()}
-            for j, c in enumerate(cases):
-                if c in by_short:
-                    F[:, j] = by_short[c]
-            st = stress_history(F, coef)
+            st = stress_history(case_matrix(cases, loads), coef)
             yield t, st[:, 0, :], equivalent(st, cfg.equivalent)[:, 0]
 
     def write(folder: Path) -> None:

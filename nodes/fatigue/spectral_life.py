@@ -89,11 +89,5 @@ def spectral_analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: Fatigu
             **({k: coef[k] for k in ("D1", "D2", "D3", "Q", "R")} if cfg.method == "dirlik"
                else {"b": spectral.tovo_benasciutti_b(mc)})},
     }
-    return result, {"spectral": {k: _plain(v) for k, v in entry.items()}}
+    return result, {"spectral": entry}  # numpy scalars: made plain by run_dir.strict_json
 
-
-def _plain(v):
-    """numpy scalars as floats, recursively (for summary.json)."""
-    if isinstance(v, dict):
-        return {k: _plain(x) for k, x in v.items()}
-    return float(v) if isinstance(v, np.floating | np.integer) else v

@@ -330,34 +330,32 @@ def _matrix(cols: list, data: Sequence[np.ndarray], n: int) -> np.ndarray:
     return F
 
 
+def case_matrix(cases: Sequence[str], loads: Mapping[str, np.ndarray]) -> np.ndarray:
+    """(n, cases) loads in case order from channel -> (n,) values (N, N m; a case without a
+    channel: zero)."""
+    names = list(loads)
+    data = [np.asarray(loads[k], dtype=float) for k in names]
+    return _matrix(_case_columns(cases, names)[0], data, data[0].size if data else 0)
+
+
 def analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: FatigueConfig,
             track_length_m: float, screen: float | None = None) -> FatigueResult:
-    """Fatigue of the arm for one pass of recorded loads.
-
-    Args:
-        t: (n,) sample times (s).
-        loads: channel -> (n,) load history in N (``plant/arm/<point>_<axis>`` or short
-            ``<point>_<axis>``); channels without a load case are ignored, cases without a
-            channel get zero load (listed in ``missing_channels``).
-        cfg: validated configuration.
-        track_length_m: length of road covered by the history (m), for life in km.
-        screen: screening fraction f (:mod:`.screening`; None: every node computed). The
-            lives of the nodes that can reach f of the largest damage, the critical node,
-            the ten most damaged nodes and the extremes of the equivalent stress are the
-            unscreened ones bit for bit; a node left out reports upper bounds.
-    """
+    """Fatigue of the arm for one pass of recorded loads: :class:`LiveFatigue` fed the whole
+    history. ``t`` (n,) sample times (s); ``loads``: channel -> (n,) load history in N or N m
+    (``plant/arm/<point>_<axis>`` or short ``<point>_<axis>``; channels without a load case
+    are ignored, cases without a channel get zero load, listed in ``missing_channels``);
+    ``track_length_m``: the road the history covers (m), for life in km; ``screen``: the
+    screening fraction f (:mod:`.screening`; None: every node computed): the lives of the
+    nodes that can reach f of the largest damage, the critical node, the ten most damaged
+    nodes and the extremes of the equivalent stress are the unscreened ones bit for bit; a
+    node left out reports upper bounds."""
     t = np.asarray(t, dtype=float)
-    inf = load_influence(cfg)
-    names = list(loads)
-    cols, missing = _case_columns(inf.case_names, names)
-    data = [np.asarray(loads[k], dtype=float) for k in names]
-    for k, a in zip(names, data, strict=True):
-        if a.shape != t.shape:
-            raise ScenarioError(f"loads.{k}", a.shape, f"an array of shape {t.shape} like t")
-    eng = _Engine(cfg, inf, screen, t.size)
-    eng.push(_matrix(cols, data, t.size))
-    duration = float(t[-1] - t[0] + (t[1] - t[0])) if t.size > 1 else 0.0
-    return eng.result(track_length_m, duration, missing)
+    for k, a in loads.items():
+        if np.shape(a) != t.shape:
+            raise ScenarioError(f"loads.{k}", np.shape(a), f"an array of shape {t.shape} like t")
+    lf = LiveFatigue(cfg, list(loads), track_length_m, screen, t.size)
+    lf.update(t, loads)
+    return lf.result()
 
 
 class LiveFatigue:

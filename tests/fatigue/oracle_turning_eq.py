@@ -7,12 +7,15 @@ feed_packed`. Here, for the bit-equality tests only:
 
 * :func:`turning_equivalent`: the bracket in numpy (float32 cosines; the proof below), the
   kept-sample test and the exact values at the kept samples, packed per node as
-  :func:`nodes.fatigue.lib.counting.turning_points` packs them;
+  :func:`turning_points` packs them;
 * :func:`exact_numpy` / :func:`exact_block`: drop-in replacements of the worker's
   ``_Engine._exact_compiled`` (monkeypatched by the tests): in chunks of samples over all
   nodes, the numpy turning points, or the equivalent stress of every sample (the reference),
   counted by the lock-step counter;
-* :func:`repeated_lock_step`: the repeated residue by the lock-step counter.
+* :func:`repeated_lock_step`: the repeated residue by the lock-step counter;
+* :func:`turning_points`, :func:`lock_step`, :func:`feed_lock_step`: the lock-step counter
+  (every history advanced together in numpy over a block's possible turning points), the
+  plain form of the product's compiled counter.
 
 The numpy bracket. The stress invariants q, p, det are computed in float64 by the
 same code as the exact path (the same bits); r = det / (2 p p p) differs from the exact
@@ -31,10 +34,103 @@ from __future__ import annotations
 
 import numpy as np
 
-from nodes.fatigue.lib.counting import Cycles, StreamingRainflow, turning_points
+from nodes.fatigue.lib.counting import Cycles, StreamingRainflow
 from nodes.fatigue.lib.equivalent_stress import TILE_NODES, equivalent_of, invariants_of
 from nodes.fatigue.lib.superposition import ROWS, superpose_components
 from nodes.fatigue.lib.turning_eq import ROUND_TOL
+
+
+def turning_points(block: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+    """Keep only the samples of a block that can be turning points, packed per column.
+
+    Args:
+        block: (n_samples, n_series) consecutive samples of every history.
+        previous: (n_series,) last sample fed before this block, or None at the start.
+
+    Returns:
+        (m, n_series) array, m <= n_samples: each column holds that history's candidate
+        turning points in order (plus the block's last sample), padded at the end by
+        repeating the block's last sample. Feeding the padded rows is a no-op for the
+        counter (equal samples are skipped), so the count is unchanged.
+    """
+    x = np.asarray(block, dtype=float)
+    n, _ = x.shape
+    if n <= 2:
+        return x
+    if previous is None:
+        prev = x[:1]
+    else:
+        prev = np.asarray(previous, dtype=float)[None, :]
+    ext = np.vstack([prev, x])
+    d = np.diff(ext, axis=0)  # d[j] = x[j] - x[j-1]
+    keep = np.empty(x.shape, dtype=bool)
+    keep[:-1] = d[:-1] * d[1:] <= 0.0
+    keep[-1] = True
+    if previous is None:
+        keep[0] = True
+    counts = keep.sum(axis=0)
+    m = int(counts.max())
+    if m >= n:
+        return x
+    order = np.argsort(~keep, axis=0, kind="stable")[:m]
+    packed = np.take_along_axis(x, order, axis=0)
+    rows = np.arange(m)[:, None]
+    return np.where(rows < counts[None, :], packed, x[-1][None, :])
+
+
+def lock_step(self: StreamingRainflow, rows_in: np.ndarray) -> Cycles:
+    """The lock-step counter: every history of ``self`` advanced by the rows (n, n_series)
+    together, in numpy (the product's kernel runs history by history)."""
+    out_i: list[np.ndarray] = []
+    out_b: list[np.ndarray] = []
+    out_c: list[np.ndarray] = []
+    rows = np.arange(self.n)
+    for x in rows_in:
+        if int(self._depth.max()) + 1 >= self._cap:
+            self._grow()
+        S, d = self._stack, self._depth
+        empty = d == 0
+        top = S[rows, np.maximum(d - 1, 0)]
+        prev = S[rows, np.maximum(d - 2, 0)]
+        dx = x - top
+        extend = (d >= 2) & (dx * (top - prev) > 0.0)
+        push = empty | ((dx != 0.0) & ~extend)
+        idx = np.maximum(d - 1, 0) + (push & ~empty)
+        S[rows, idx] = np.where(push | extend, x, top)
+        d += push
+        cand = rows[d >= 4]
+        while cand.size:
+            dc = d[cand]
+            a = S[cand, dc - 4]
+            b = S[cand, dc - 3]
+            c = S[cand, dc - 2]
+            e = S[cand, dc - 1]
+            r = np.abs(b - c)
+            hit = (r <= np.abs(a - b)) & (r <= np.abs(c - e))
+            if not hit.any():
+                break
+            h = cand[hit]
+            out_i.append(h)
+            out_b.append(b[hit])
+            out_c.append(c[hit])
+            S[h, dc[hit] - 3] = e[hit]
+            d[h] -= 2
+            cand = h[d[h] >= 4]
+    if not out_i:
+        return Cycles.empty()
+    s = np.concatenate(out_i)
+    return Cycles(s, np.concatenate(out_b), np.concatenate(out_c), np.ones(s.size))
+
+
+def feed_lock_step(rf: StreamingRainflow, block: np.ndarray) -> Cycles:
+    """``rf.feed(block)`` by the lock-step counter over the block's turning points."""
+    x = np.asarray(block, dtype=float)
+    if x.shape[0] == 0:
+        return Cycles.empty()
+    rows_in = turning_points(x, rf._last)
+    rf._last = x[-1].copy()
+    return lock_step(rf, rows_in)
+
 
 COS_TOL = 4e-6
 """Bracket half-width per unit of 2p (the cosine term; see the module docstring)."""
@@ -143,7 +239,7 @@ def feed_points(rf: StreamingRainflow, rows: np.ndarray, last: np.ndarray) -> Cy
     if x.shape[0] == 0:
         return Cycles.empty()
     rf._last = np.array(last, dtype=float)
-    return rf._feed_rows(x)
+    return lock_step(rf, x)
 
 
 def _exact_chunks(engine, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow,
@@ -158,7 +254,7 @@ def _exact_chunks(engine, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow,
         if block:
             eq = equivalent_of(comp, engine.cfg.equivalent)
             bhi, blo = eq.max(axis=0), eq.min(axis=0)
-            parts.append(rf.feed(eq))
+            parts.append(feed_lock_step(rf, eq))
         else:
             pts, last, bhi, blo = turning_equivalent(comp, engine.cfg.equivalent, rf.last)
             parts.append(feed_points(rf, pts, last))
@@ -190,4 +286,4 @@ def repeated_lock_step(rf: StreamingRainflow) -> Cycles:
     other = rf.copy()
     cols = np.arange(int(d.max()))
     take = np.minimum(cols[None, :], np.maximum(d - 1, 0)[:, None])
-    return other._feed_rows(rf._stack[rf._rows[:, None], take].T)
+    return lock_step(other, rf._stack[np.arange(rf.n)[:, None], take].T)

@@ -10,10 +10,10 @@ import pytest
 from cosim.errors import InputFileError
 from nodes.fatigue import run_stream as rs
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.outputs import batch_outputs
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import analyse
 from tests.conftest import COARSE_ARM
+from tests.fatigue.whole_outputs import batch_outputs
 
 COARSE = {"influence": str(COARSE_ARM),  # a cheap arm, results shipped
           "component": {"surface": "machined"}}
@@ -82,6 +82,7 @@ def test_scan_names_the_bad_sample():
                 "repeated")
 
 
+@pytest.mark.long  # memory growth: 2 and 20 passes under tracemalloc
 def test_scan_memory_does_not_grow_with_the_history():
     """Pass 1 over 10x the samples: traced peak within 20 % (a batch and the residues)."""
     t, loads = pave_like_loads(4.0, seed=4)
@@ -132,6 +133,7 @@ def test_sn_spectrum_counts_the_cycles_at_or_above_each_level():
                                                     strict=True))
 
 
+@pytest.mark.long  # memory growth: 1, 8 and 40 repeats under tracemalloc
 def test_critical_node_passes_memory_does_not_grow(tmp_path):
     """Passes 3 and 4 (critical_stress.csv, the S-N spectrum, the node's matrix) over 5x the
     samples (12 000 to 60 000): traced peak within 20 % (the equivalent stress not kept)."""

@@ -11,12 +11,12 @@ import rainflow
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nodes.fatigue.lib.counting import Cycles, StreamingRainflow, turning_points
+from nodes.fatigue.lib.counting import Cycles, StreamingRainflow
 from nodes.fatigue.lib.equivalent_stress import equivalent_of
 from nodes.fatigue.lib.superposition import superpose_components
 from nodes.fatigue.lib.turning_eq import kept_equivalent
 
-from .oracle_turning_eq import feed_points, turning_equivalent
+from .oracle_turning_eq import feed_lock_step, feed_points, turning_equivalent, turning_points
 
 
 def _both(comp_blocks: list[np.ndarray], kind: str = "abs_max_principal"
@@ -26,7 +26,7 @@ def _both(comp_blocks: list[np.ndarray], kind: str = "abs_max_principal"
     out_r, out_n = [], []
     for comp in comp_blocks:
         eq = equivalent_of(comp, kind)
-        out_r.append(ref.feed(eq))
+        out_r.append(feed_lock_step(ref, eq))
         rows, last, hi, lo = turning_equivalent(comp, kind, new.last)
         assert np.array_equal(last, eq[-1])
         assert np.array_equal(hi, eq.max(axis=0)) and np.array_equal(lo, eq.min(axis=0))

@@ -31,13 +31,6 @@ BETA_L_FREE_FREE = 4.730041
 """First root of cos(βL) cosh(βL) = 1: the uniform free-free beam's first bending mode [-]."""
 
 
-def bending_frequency(EI: float, mass: float, length: float,
-                      beta_l: float = BETA_L_FREE_FREE) -> float:
-    """First free-free bending frequency of a uniform beam [Hz] (EI [N m²], mass [kg],
-    length [m])."""
-    return beta_l ** 2 * math.sqrt(EI / (mass * length ** 3)) / (2.0 * math.pi)
-
-
 def nominal_bending_stress(moment: float, mass: float, length: float, frequency_hz: float,
                            E: float, rho: float, kappa: float = 1.0,
                            beta_l: float = BETA_L_FREE_FREE) -> float:
@@ -48,13 +41,3 @@ def nominal_bending_stress(moment: float, mass: float, length: float, frequency_
         raise ValueError("mass, length, frequency, E, rho must be > 0 and 0 < kappa <= 1")
     omega = 2.0 * math.pi * frequency_hz
     return abs(moment) * beta_l ** 2 * math.sqrt(rho * E) / (kappa * omega * mass * length)
-
-
-def lowest_bending_frequency(moment: float, mass: float, length: float, stress_limit: float,
-                      E: float, rho: float, kappa: float = 1.0,
-                      beta_l: float = BETA_L_FREE_FREE) -> float:
-    """The lowest first bending frequency [Hz] at which a uniform beam of that mass and length
-    can carry ``moment`` at no more than ``stress_limit`` [Pa] nominal (the inverse of
-    :func:`nominal_bending_stress`)."""
-    sigma_at_1hz = nominal_bending_stress(moment, mass, length, 1.0, E, rho, kappa, beta_l)
-    return sigma_at_1hz / stress_limit

@@ -15,20 +15,15 @@ Residue handling (the only place the four-point rule and ASTM's three-point rule
   "start at the highest peak" rearrangement of ASTM §5.4.4.1). Life in repeats of the track
   is then exact for the periodic history.
 
-All histories (one per FE node) are advanced in lock-step with NumPy, so the cost per sample
-is a handful of vector operations over nodes, not a Python loop over nodes. Only turning
-points of a block are fed (`turning_points`), which leaves the count unchanged.
-
 Because the state (the stack of unclosed turning points per history) is kept between calls,
 feeding a history in blocks of any size gives exactly the same cycles as feeding it at once.
 
-**Compiled:** :meth:`StreamingRainflow.feed_packed` runs the same rule history by history
-in compiled code (:func:`_rainflow_packed`, numba): comparisons and copies only, so the same
-cycles with the same bits, each history's in the order they close (the order across histories
-differs from the lock-step loop's, which no result depends on: a node's damage sums its own
-cycles in order). numba is a dependency: the compiled kernels are the one implementation
-(the lock-step loop's packed and repeated-residue forms are test oracles,
-``tests/fatigue/oracle_turning_eq.py``).
+**Compiled:** the rule runs history by history in compiled code (:func:`_rainflow_packed`,
+numba; :meth:`StreamingRainflow.feed_packed` takes a block's possible turning points packed,
+:meth:`StreamingRainflow.feed` every sample): comparisons and copies only, each history's
+cycles in the order they close (a node's damage sums its own cycles in order). numba is a
+dependency: the kernel is the one implementation (the lock-step numpy counter over all
+histories at once is the test oracle, ``tests/fatigue/oracle_turning_eq.py``).
 The kernels are compiled when first needed or ahead (:func:`nodes.fatigue.worker.warm_up`,
 which the worker's influence loading calls: the live node does it before it says ready), not
 at import (numba's import and start cost ~1 s, and every run's preflight imports this).
@@ -70,6 +65,9 @@ def compile_kernels(g: dict, kernels: tuple[tuple[str, str], ...]) -> None:
         COMPILE_S[name] = time.perf_counter() - t0
 
 RESIDUE_MODES = ("half_cycles", "repeated")
+FEED_ROWS = 4096
+"""Rows :meth:`StreamingRainflow.feed` passes to the kernel at a time (the stack needs room
+for them: 32 kB a history)."""
 
 
 @dataclass
@@ -117,44 +115,6 @@ class Cycles:
         )
 
 
-def turning_points(block: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
-    """Keep only the samples of a block that can be turning points, packed per column.
-
-    Args:
-        block: (n_samples, n_series) consecutive samples of every history.
-        previous: (n_series,) last sample fed before this block, or None at the start.
-
-    Returns:
-        (m, n_series) array, m <= n_samples: each column holds that history's candidate
-        turning points in order (plus the block's last sample), padded at the end by
-        repeating the block's last sample. Feeding the padded rows is a no-op for the
-        counter (equal samples are skipped), so the count is unchanged.
-    """
-    x = np.asarray(block, dtype=float)
-    n, _ = x.shape
-    if n <= 2:
-        return x
-    if previous is None:
-        prev = x[:1]
-    else:
-        prev = np.asarray(previous, dtype=float)[None, :]
-    ext = np.vstack([prev, x])
-    d = np.diff(ext, axis=0)  # d[j] = x[j] - x[j-1]
-    keep = np.empty(x.shape, dtype=bool)
-    keep[:-1] = d[:-1] * d[1:] <= 0.0
-    keep[-1] = True
-    if previous is None:
-        keep[0] = True
-    counts = keep.sum(axis=0)
-    m = int(counts.max())
-    if m >= n:
-        return x
-    order = np.argsort(~keep, axis=0, kind="stable")[:m]
-    packed = np.take_along_axis(x, order, axis=0)
-    rows = np.arange(m)[:, None]
-    return np.where(rows < counts[None, :], packed, x[-1][None, :])
-
-
 class StreamingRainflow:
     """Four-point rainflow counter over ``n_series`` histories advanced together.
 
@@ -168,7 +128,6 @@ class StreamingRainflow:
         self._cap = int(capacity)
         self._stack = np.zeros((self.n, self._cap))
         self._depth = np.zeros(self.n, dtype=np.int64)
-        self._rows = np.arange(self.n)
         self._last: np.ndarray | None = None
 
     # -- state ---------------------------------------------------------------------------
@@ -200,7 +159,6 @@ class StreamingRainflow:
         other.n, other._cap = self.n, self._cap
         other._stack = self._stack.copy()
         other._depth = self._depth.copy()
-        other._rows = self._rows
         other._last = None if self._last is None else self._last.copy()
         return other
 
@@ -237,21 +195,18 @@ class StreamingRainflow:
         self._stack, self._cap = new, 2 * self._cap
 
     # -- counting ------------------------------------------------------------------------
-    def feed(self, block: np.ndarray, *, reduce: bool = True) -> Cycles:
-        """Advance every history by a block of samples; return the full cycles closed.
-
-        Args:
-            block: (n_samples, n_series) array (n_series must equal the counter's).
-            reduce: feed only turning points (same result, faster); False feeds every row.
-        """
+    def feed(self, block: np.ndarray) -> Cycles:
+        """Advance every history by a block of samples (n_samples, n_series); return the full
+        cycles closed: :meth:`feed_packed` of every sample, :data:`FEED_ROWS` rows at a time
+        (each history's cycles in the order they close)."""
         x = np.asarray(block, dtype=float)
         if x.ndim != 2 or x.shape[1] != self.n:
             raise ValueError(f"block must have shape (n_samples, {self.n}), got {x.shape}")
-        if x.shape[0] == 0:
-            return Cycles.empty()
-        rows_in = turning_points(x, self._last) if reduce else x
-        self._last = x[-1].copy()
-        return self._feed_rows(rows_in)
+        return Cycles.concat([
+            self.feed_packed(x[i:i + FEED_ROWS].T.copy().ravel(),
+                             np.full(self.n, min(FEED_ROWS, x.shape[0] - i)),
+                             x[min(i + FEED_ROWS, x.shape[0]) - 1])
+            for i in range(0, x.shape[0], FEED_ROWS)])
 
     def feed_packed(self, vals: np.ndarray, counts: np.ndarray, last: np.ndarray,
                     start: int = 0) -> Cycles:
@@ -288,47 +243,6 @@ class StreamingRainflow:
         nc = _rainflow_packed(vals, counts, start, self._stack, self._depth, s, b, c)
         return Cycles(s[:nc], b[:nc], c[:nc], np.ones(nc))
 
-    def _feed_rows(self, rows_in: np.ndarray) -> Cycles:
-        out_i: list[np.ndarray] = []
-        out_b: list[np.ndarray] = []
-        out_c: list[np.ndarray] = []
-        rows = self._rows
-        for x in rows_in:
-            if int(self._depth.max()) + 1 >= self._cap:
-                self._grow()
-            S, d = self._stack, self._depth
-            empty = d == 0
-            top = S[rows, np.maximum(d - 1, 0)]
-            prev = S[rows, np.maximum(d - 2, 0)]
-            dx = x - top
-            extend = (d >= 2) & (dx * (top - prev) > 0.0)
-            push = empty | ((dx != 0.0) & ~extend)
-            idx = np.maximum(d - 1, 0) + (push & ~empty)
-            S[rows, idx] = np.where(push | extend, x, top)
-            d += push
-            cand = rows[d >= 4]
-            while cand.size:
-                dc = d[cand]
-                a = S[cand, dc - 4]
-                b = S[cand, dc - 3]
-                c = S[cand, dc - 2]
-                e = S[cand, dc - 1]
-                r = np.abs(b - c)
-                hit = (r <= np.abs(a - b)) & (r <= np.abs(c - e))
-                if not hit.any():
-                    break
-                h = cand[hit]
-                out_i.append(h)
-                out_b.append(b[hit])
-                out_c.append(c[hit])
-                S[h, dc[hit] - 3] = e[hit]
-                d[h] -= 2
-                cand = h[d[h] >= 4]
-        if not out_i:
-            return Cycles.empty()
-        s = np.concatenate(out_i)
-        return Cycles(s, np.concatenate(out_b), np.concatenate(out_c), np.ones(s.size))
-
     def residue_cycles(self, mode: str = "half_cycles") -> Cycles:
         """Cycles of the residue, without changing this counter.
 
@@ -354,7 +268,7 @@ class StreamingRainflow:
 
 
 def _rainflow_packed(vals, counts, start, stack, depth, out_s, out_b, out_c):  # type: ignore[no-untyped-def]  # noqa: E501
-    """:meth:`StreamingRainflow._feed_rows`' rule, history by history: histories ``start +
+    """The four-point rule (module docstring), history by history: histories ``start +
     i`` fed ``counts[i]`` values of ``vals`` in order (the stack has room for them); the
     closed cycles (history, b, c) appended to ``out_*``. Returns their number."""
     pos = 0

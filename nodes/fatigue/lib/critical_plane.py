@@ -240,8 +240,8 @@ def count_shear(x: np.ndarray, p: np.ndarray, residue: str = "repeated") -> Shea
 
 def _feed(X: np.ndarray, PS: np.ndarray, PN: np.ndarray, S: np.ndarray, G: np.ndarray,
           N: np.ndarray, d: np.ndarray, out: list) -> None:
-    """Lock-step four-point rainflow over the columns (:meth:`.counting.StreamingRainflow.
-    _feed_rows`' rule) carrying the payloads G, N (module docstring); appends closed cycles
+    """Lock-step four-point rainflow over the columns (:mod:`.counting`'s rule) carrying the
+    payloads G, N (module docstring); appends closed cycles
     (series, τa, σn,max, 1) to ``out``."""
     rows = np.arange(S.shape[0])
     for x, ps, pn in zip(X, PS, PN, strict=True):

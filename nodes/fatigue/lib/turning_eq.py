@@ -1,20 +1,20 @@
 """The equivalent stress computed exactly only where rainflow needs it: compiled.
 
-Rainflow counting needs a history's turning points only (:func:`.counting.turning_points`),
-and the extremes of a block are turning points or its first or last sample. On the Ch 6 arm
-2.5 % of the node-samples are turning points, and the two float64 cosines of the principal
-stress (:func:`.equivalent_stress.principal_extremes_of`) were half of the fatigue node's CPU.
-So each node's abs-max principal stress is *bracketed* at every sample (lo <= exact <= hi,
-proven below; where |σ1| and |σ3| may be equal the bracket spans both signs); a sample is left
-out only when the brackets prove the exact history strictly monotone through it (both
-differences to its neighbours of one sign); the block's first and last samples are always
-kept. The exact equivalent stress (:func:`.equivalent_stress.equivalent_of`, elementwise, so
-the same bits as over the whole block) is computed at the kept samples only: a superset of
-the turning points, which leaves the rainflow count, and the order in which a node's cycles
-close, unchanged. ``signed_von_mises`` has no transcendental beyond a square root: it is
-computed at every sample. This is the product's one implementation (numba is a dependency);
-the same idea in numpy (float32 cosines, another bracket: other samples kept) is the tests'
-oracle, ``tests/fatigue/oracle_turning_eq.py``: both give the same cycles, bit for bit.
+Rainflow counting needs a history's turning points only, and the extremes of a block are turning
+points or its first or last sample. On the Ch 6 arm 2.5 % of the node-samples are turning points,
+and the two float64 cosines of the principal stress
+(:func:`.equivalent_stress.principal_extremes_of`) were half of the fatigue node's CPU. So each
+node's abs-max principal stress is *bracketed* at every sample (lo <= exact <= hi, proven below;
+where |σ1| and |σ3| may be equal the bracket spans both signs); a sample is left out only when the
+brackets prove the exact history strictly monotone through it (both differences to its neighbours of
+one sign); the block's first and last samples are always kept. The exact equivalent stress
+(:func:`.equivalent_stress.equivalent_of`, elementwise, so the same bits as over the whole block) is
+computed at the kept samples only: a superset of the turning points, which leaves the rainflow
+count, and the order in which a node's cycles close, unchanged. ``signed_von_mises`` has no
+transcendental beyond a square root: it is computed at every sample. This is the product's one
+implementation (numba is a dependency); the same idea in numpy (float32 cosines, another bracket:
+other samples kept) is the tests' oracle, ``tests/fatigue/oracle_turning_eq.py``: both give the same
+cycles, bit for bit.
 
 **No transcendentals:** :func:`kept_equivalent` does the bracket, the kept-sample test and
 the gathering in one pass per node (:func:`_keep_gather`, no temporaries), with a bracket that

@@ -319,23 +319,3 @@ def _fillet_faces(vol: int, sharp_pts: np.ndarray) -> list[int]:
         if d < 0.006:
             out.append(s)
     return out
-
-
-def write_step(path: Path, params: dict[str, Any] | None = None) -> dict[str, list[int]]:
-    """Build the arm and write it as STEP (metres)."""
-    import gmsh  # type: ignore[import-untyped]
-
-    own = not gmsh.isInitialized()
-    if own:
-        gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("lower_arm")
-        tags = build(load_params() if params is None else params)
-        gmsh.option.setString("Geometry.OCCTargetUnit", "M")
-        gmsh.write(str(path))
-        gmsh.model.remove()
-        return tags
-    finally:
-        if own:
-            gmsh.finalize()
