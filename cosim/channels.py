@@ -1,11 +1,8 @@
-"""The data channels of a run and their fields (SI units). Schema version: see cosim.wire.
+"""The names of a run's nodes and channels (fields, units and bounds: :mod:`cosim.schema`).
 
-Fields, units and bounds are declared once, in :mod:`cosim.schema` (its ``doc_table`` is the
-channel table of docs/cosim.md); this module names the channels and derives field tuples.
-Per-corner fields are a number for a quarter car and a list of 4 (:data:`CORNERS`) for a full
-vehicle. A stepped channel carries one message per communication step k = 0..N (N = t_end / h);
-the block channels (``recorder/loads``, ``recorder/coupling``, ``fatigue/damage``) are not
-recorded in the table nor journaled: they repeat or summarise recorded data.
+A stepped channel carries one message per communication step k = 0..N (N = t_end / h); the
+block channels (``recorder/loads``, ``recorder/coupling``, ``fatigue/damage``) are neither in
+the table nor journaled: they repeat or summarise recorded data.
 """
 
 from __future__ import annotations
@@ -21,11 +18,9 @@ COUPLING_CHANNEL = (RECORDER, COUPLING)
 
 
 def __getattr__(name: str) -> tuple[str, ...]:
-    """``NODES`` (the nodes of every run, in start order), ``COUPLED`` (the nodes of the
-    lock-step exchange; the recorder and the fatigue worker only listen) and
-    ``OPTIONAL_NODES`` (nodes a run may add: the live fatigue worker), from the node
-    registry (:mod:`cosim.node_kinds`, imported here when first asked: it imports this
-    module)."""
+    """``NODES`` (of every run, in start order), ``COUPLED`` (of the lock-step exchange) and
+    ``OPTIONAL_NODES`` (the live fatigue worker), from :mod:`cosim.node_kinds` (imported when
+    first asked: it imports this module)."""
     from . import node_kinds as nk
 
     roles = {"NODES": (nk.COUPLED, nk.LISTENER), "COUPLED": (nk.COUPLED,),
@@ -36,14 +31,11 @@ def __getattr__(name: str) -> tuple[str, ...]:
     globals()[name] = value
     return value
 
-LOAD_CHANNEL = (PLANT, ARM)
-"""The channel the recorder streams to the fatigue node in blocks."""
-UPPER_ARM = "upper_arm"
-"""The upper arm's load channel ``plant/upper_arm`` (the double-wishbone quarter car)."""
+LOAD_CHANNEL = (PLANT, ARM)  # the fatigue node's load channel
+UPPER_ARM = "upper_arm"  # plant/upper_arm (the double-wishbone quarter car)
 
 CORNERS = ("FL", "FR", "RL", "RR")
 """The corners of a full vehicle, in the order of every per-corner list field (front left,
 front right, rear left, rear right); a quarter car is the front-left corner."""
-CORNER_ARMS = tuple(f"{ARM}_{c}" for c in CORNERS)
-"""The four-corner vehicle's lower-arm channels ``plant/arm_FL`` .. ``arm_RR`` (see schema)."""
+CORNER_ARMS = tuple(f"{ARM}_{c}" for c in CORNERS)  # plant/arm_FL .. arm_RR
 STATE_FIELDS = _schema.required(PLANT, STATE)  # z_b, v_b, z_w, v_w

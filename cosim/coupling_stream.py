@@ -105,21 +105,29 @@ class ResidualStream:
         # the rows kept from before: every bond keeps as many; cur starts at global row g0
         g0 = self.rows - min((len(st.tail.get("F", ())) for st in self.bonds.values()),
                              default=0)
+        lag, h, n_all = self.lag, self.h, self.rows + n_new
+        # carried energy: rows j >= lag of this block, |F[j] v[j - lag]|; steps k completed:
+        # lag <= k, k + 1 + lag < n_all, not done before
+        j = np.arange(max(self.rows, lag), n_all) - g0
+        k = np.arange(max(lag, self.rows - 1 - lag), n_all - 1 - lag) - g0
+        if h is None:  # an adaptive step: each step's length from the rows' t
+            tt = np.concatenate([self._t_tail, np.asarray(block["t"], dtype=np.float64)])
+            back = np.where(j + g0 > 0, j - 1, j + 1)  # the step that ends at row j
+            hj = np.abs(tt[j] - tt[np.clip(back, 0, len(tt) - 1)])[:, None]
+            hk = (tt[k + 1] - tt[k])[:, None]
+            hprev = np.where(k + g0 > 0, tt[k] - tt[np.maximum(k - 1, 0)], hk[:, 0])
+            r_end = hk / np.where(hprev > 0, hprev, hk[:, 0])[:, None]
+            self._t_tail = tt[-self._keep:]
         out: dict[str, np.ndarray] = {}
-        lag, h = self.lag, self.h
-        if h is None:
-            return self._feed_adaptive(block, g0, n_new)
         for name, st in self.bonds.items():
             cur = st.rows(block)
             F, v = cur["F"], cur["v"]
-            n_all = self.rows + n_new  # rows in the run so far
-            # carried energy: rows j >= lag of this block, |F[j] v[j - lag]|
-            j = np.arange(max(self.rows, lag), n_all) - g0
-            st.carried += float(h * np.abs(F[j] * v[j - lag]).sum())
-            # steps k completed: lag <= k, k + 1 + lag < n_all, not done before
-            k_first = max(lag, self.rows - 1 - lag)
-            k = np.arange(k_first, n_all - 1 - lag) - g0
-            out[name] = self._steps(st, cur, k, g0, h, 1.0)
+            if h is None:
+                st.carried += float((hj * np.abs(F[j] * v[j - lag])).sum())
+                out[name] = self._steps(st, cur, k, g0, hk, r_end)
+            else:
+                st.carried += float(h * np.abs(F[j] * v[j - lag]).sum())
+                out[name] = self._steps(st, cur, k, g0, h, 1.0)
             st.tail = {key: a[-self._keep:] for key, a in cur.items()}
         self.rows += n_new
         return out
@@ -142,35 +150,6 @@ class ResidualStream:
         dE = 0.5 * h * ((app_start - F[k + lag]) * v[k] + (app_end - F[k + 1 + lag]) * v[k + 1])
         st.abs_residual += float(np.abs(dE).sum())
         return np.asarray(dE.sum(axis=1))
-
-    def _feed_adaptive(self, block: Mapping[str, np.ndarray], g0: int,
-                       n_new: int) -> dict[str, np.ndarray]:
-        """:meth:`feed` for a non-uniform time base (the rows' ``t``)."""
-        assert self.bonds is not None
-        lag = self.lag
-        tt = np.concatenate([self._t_tail, np.asarray(block["t"], dtype=np.float64)])
-        n_all = self.rows + n_new
-        out: dict[str, np.ndarray] = {}
-        for name, st in self.bonds.items():
-            cur = st.rows(block)
-            F, v = cur["F"], cur["v"]
-            j = np.arange(max(self.rows, lag), n_all) - g0
-            back = np.where(j + g0 > 0, j - 1, j + 1)  # the step that ends at row j
-            hj = np.abs(tt[j] - tt[np.clip(back, 0, len(tt) - 1)])
-            st.carried += float((hj[:, None] * np.abs(F[j] * v[j - lag])).sum())
-            k_first = max(lag, self.rows - 1 - lag)
-            k = np.arange(k_first, n_all - 1 - lag) - g0
-            if k.size:
-                hk = (tt[k + 1] - tt[k])[:, None]
-                hprev = np.where(k + g0 > 0, tt[k] - tt[np.maximum(k - 1, 0)], hk[:, 0])
-                r_end = hk / np.where(hprev > 0, hprev, hk[:, 0])[:, None]
-                out[name] = self._steps(st, cur, k, g0, hk, r_end)
-            else:
-                out[name] = np.zeros(0)
-            st.tail = {key: a[-self._keep:] for key, a in cur.items()}
-        self._t_tail = tt[-self._keep:]
-        self.rows += n_new
-        return out
 
     def result(self) -> dict[str, BondResidual]:
         """The totals so far, per bond (``dE`` empty)."""

@@ -1,15 +1,11 @@
-"""Errors every suscosim component raises for bad input.
-
-A `ScenarioError` names the key, the value and what was expected; the CLI turns it into a
-one-line message and exit code 2. A `WireError` is a message on the bus that does not decode
-or does not fit the schema; nodes count and log it and carry on.
-"""
+"""Errors every suscosim component raises for bad input; the CLI turns a
+:class:`SuscosimError` into a one-line message and its ``exit_code``."""
 
 from __future__ import annotations
 
 
 class SuscosimError(Exception):
-    """Base of every error that should reach the user as a clear message, not a traceback."""
+    """An error that reaches the user as a clear message, not a traceback."""
 
     exit_code = 1
 
@@ -25,8 +21,7 @@ class ScenarioError(SuscosimError, ValueError):
         super().__init__(f"scenario key '{key}': got {value!r}, expected {expected}")
 
     def with_hint(self, hint: str) -> ScenarioError:
-        """The same error with ``hint`` appended to its message (a new error of the same
-        class; the key, value and expected text kept)."""
+        """A copy of this error with ``hint`` appended to its message."""
         new = type(self).__new__(type(self))
         new.__dict__.update(self.__dict__)
         new.args = (f"{self.args[0]}; {hint}",)
@@ -34,8 +29,8 @@ class ScenarioError(SuscosimError, ValueError):
 
 
 class UnknownKeyError(ScenarioError):
-    """A key a table does not take (almost always a typo, or a key left over from another
-    model when ``--set`` changed one key of a table). ``accepted``: the keys it takes."""
+    """A key a table does not take (a typo, or a key left over from another model when
+    ``--set`` changed one key of a table); ``accepted``: the keys it takes."""
 
     def __init__(self, key: str, value: object, accepted: list[str], hint: str = "") -> None:
         self.accepted = list(accepted)
@@ -43,8 +38,8 @@ class UnknownKeyError(ScenarioError):
 
 
 class InputFileError(SuscosimError, ValueError):
-    """A user-supplied file is malformed: the message names the file, the line (1-based,
-    when known) and what is wrong."""
+    """A user's file is malformed: the message names the file, the line (1-based, when
+    known) and what is wrong."""
 
     exit_code = 2
 
@@ -55,7 +50,7 @@ class InputFileError(SuscosimError, ValueError):
 
 
 class WireError(SuscosimError):
-    """A bus message that does not decode or does not fit the schema."""
+    """A bus message that does not decode or fit the schema (counted, logged, not fatal)."""
 
 
 class RunError(SuscosimError):
@@ -64,7 +59,7 @@ class RunError(SuscosimError):
 
 class InputLate(RunError):
     """A node's input did not come within the stall timeout: ``late`` names the nodes it
-    waited for, so the orchestrator blames them and not the node that noticed."""
+    waited for (the ones to blame)."""
 
     def __init__(self, message: str, late: list[str]) -> None:
         super().__init__(message)

@@ -1,10 +1,7 @@
-"""Key expressions: every key is ``suscosim/<run>/<node>/<channel>``.
-
-So runs on one network never mix: a node only ever subscribes under its own run id.
-Control traffic uses the same scheme: ``<node>/ctl`` (ready, progress, done, error from a
-node), ``orchestrator/clock`` (start, abort), ``orchestrator/scenario`` (queryable),
-``<node>/alive`` (liveliness token). ``<node>/records`` carries a node's data messages to the
-recorder in batches (see cosim.wire).
+"""Key expressions: every key is ``suscosim/<run>/<node>/<channel>`` (runs on one network
+never mix). Control traffic too: ``<node>/ctl`` (ready, progress, done, error from a node),
+``orchestrator/clock`` (start, abort), ``orchestrator/scenario`` (queryable), ``<node>/alive``
+(liveliness token); ``<node>/records`` and ``<node>/step`` carry data messages in bundles.
 """
 
 from __future__ import annotations
@@ -15,8 +12,7 @@ import secrets
 from .errors import ScenarioError
 
 PREFIX = "suscosim"
-NAME = _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
-"""A valid run id, node or channel name."""
+NAME = _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")  # a run id, node, channel
 
 
 def check_name(what: str, name: str) -> str:
@@ -30,21 +26,18 @@ MAX_NAME = 64
 
 
 def invocation_token() -> str:
-    """A random part for the run ids of one invocation (e.g. one ``suscosim sweep``): 6 hex
-    digits, so that two people running the same sweep through one router never share a run
-    id."""
+    """6 random hex digits for the run ids of one invocation (two people running the same
+    sweep through one router never share a run id)."""
     return secrets.token_hex(3)
 
 
 def unique_run_id(base: str, token: str) -> str:
-    """``<base>-<token>``, cut to a valid run id of at most 64 characters (``base`` is
-    shortened, the token kept whole)."""
+    """``<base>-<token>``, ``base`` cut to make a valid run id of at most 64 characters."""
     keep = MAX_NAME - len(token) - 1
     return check_name("run id", f"{base[:keep].rstrip('-_.') or 'run'}-{token}")
 
 
 def key(run: str, node: str, channel: str) -> str:
-    """The key of one channel of one node of one run."""
     return f"{PREFIX}/{run}/{node}/{channel}"
 
 
@@ -61,6 +54,5 @@ CLOCK = "clock"
 SCENARIO = "scenario"
 ALIVE = "alive"
 RECORDS = "records"
-STEP = "step"
-"""A producer's per-step bundle of its data messages (:func:`cosim.wire.encode_step`)."""
+STEP = "step"  # a producer's per-step bundle of its data messages
 ORCHESTRATOR = "orchestrator"

@@ -4,14 +4,9 @@ A *channel set* is what every reader returns and every writer takes: a time vect
 [s] and named channels ``{name: values}`` of the same length, with their SI ``units``
 (``{name: unit}``; "" when unknown). The formats:
 
-* :mod:`.mdf4`  ASAM MDF 4 (``.mf4``) via ``asammdf``: float64, exact; names and units.
-* :mod:`.rpc3`  MTS RPC III (``.rsp``/``.tim``/``.rpc``) via ``rpc3-file``: one uniform time
-  step; 16-bit integers (resolution max|x| / 32752 per channel) or 32-bit floats.
-* :mod:`.tables` CSV (header row; ``name [unit]`` headers understood) and Parquet (units in
-  the field metadata).
-
-:func:`read_channels` picks the reader from the file's suffix (:data:`SUFFIXES`).
-Every problem with a file raises :class:`cosim.errors.InputFileError` naming the file.
+:mod:`.mdf4` (ASAM MDF 4, float64, exact), :mod:`.rpc3` (MTS RPC III, one uniform time
+step, 16-bit integers or 32-bit floats), :mod:`.tables` (CSV, Parquet). :func:`read_channels`
+picks the reader from the file's suffix; a bad file is an InputFileError naming it.
 """
 
 from __future__ import annotations
