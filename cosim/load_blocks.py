@@ -1,7 +1,5 @@
-"""Load blocks: the live fatigue node's blocks of consecutive plant steps of the load channel
-(``plant/arm``, :data:`cosim.channels.LOAD_CHANNEL`), in N (forces) and N·m (the
-torsion-spring moment), as the plant publishes them.
-"""
+"""The live fatigue node's blocks of consecutive plant steps of the load channel
+(``plant/arm``), in N (forces) and N·m (the torsion-spring moment)."""
 
 from __future__ import annotations
 
@@ -9,18 +7,12 @@ from typing import Any
 
 import numpy as np
 
-META = ("k0", "t")
-"""The keys of a block that are not load fields."""
+META = ("k0", "t")  # the keys of a block that are not load fields
 
 
 class StepBlocks:
-    """Consecutive steps of the load channel gathered into blocks of ``block_steps`` rows.
-
-    :meth:`add` takes one step's time [s] and fields (the message's payload: every number
-    field is a load column, in the first step's order; a later step must have them all);
-    :attr:`full` says a block is complete; :meth:`take` returns (t (n,), loads (n, fields))
-    and starts the next block. Steps are taken in the order given (the caller checks it).
-    """
+    """Consecutive steps gathered into blocks of ``block_steps`` rows: every number field of
+    the first step is a load column, in its order (a later step must have them all)."""
 
     def __init__(self, block_steps: int) -> None:
         self.block_steps = max(1, int(block_steps))

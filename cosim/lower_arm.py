@@ -50,10 +50,6 @@ import numpy as np
 from . import corner as corner_file
 from .corner import Corner
 
-# ------------------------------------------------------------------ hardpoints, arm frame [m]
-# The points are the built-in corner file's (cosim/corners/mpv_front.toml, corner frame), put
-# in the arm frame here: one definition of each hardpoint, read by the plant and by the FE.
-
 
 def arm_frame_of(c: Corner) -> tuple[np.ndarray, np.ndarray]:
     """(origin, R) of a corner's lower-arm frame in its corner frame at static ride height:
@@ -129,11 +125,9 @@ MASS_PROPERTIES: MassProperties = {
     "inertia_kg_m2": ((0.0547, -0.0034, 0.0), (-0.0034, 0.0516, 0.0), (0.0, 0.0, 0.1050)),
 }
 """The lower arm's mass, centre of mass (arm frame) and inertia tensor about it (arm axes),
-as the plant's rigid lower arm takes them (the centre of mass, and the inertia scaled to its
-Table 4.2 mass). Their source is the hand-meshed forged arm this project had before the CAD
-arm (its 15 mm mesh; removed from the product on 2026-12-06, kept as the test oracle
-tests/fatigue/oracle_hex_arm.py, which recomputes these numbers); the CAD arm's own
-(nodes/fatigue/parts/data/lower_arm.influence.npz) differ: CHANGELOG.md 2026-12-06."""
+as the plant's rigid lower arm takes them (the inertia scaled to its Table 4.2 mass). Source:
+the hand-meshed forged arm's 15 mm mesh, recomputed by the test oracle
+tests/fatigue/oracle_hex_arm.py (the CAD arm's differ: CHANGELOG.md 2026-12-06)."""
 
 
 def to_corner(point_arm: np.ndarray) -> np.ndarray:

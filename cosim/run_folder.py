@@ -1,7 +1,4 @@
-"""The run folder: what a run writes where, and reading it back (with :mod:`cosim.journal`
-and :mod:`cosim.table`).
-
-A run folder holds, in the order they are written:
+"""The run folder: what a run writes where, and reading it back. In the order written:
 
 ==================  ==========================================================================
 ``scenario.json``   the scenario as resolved (written before anything starts)
@@ -15,17 +12,12 @@ A run folder holds, in the order they are written:
 ``fatigue/``        the lower arm's damage (``summary.json``, ``damage_per_node.csv``, map)
 ==================  ==========================================================================
 
-The state of a run (:func:`run_info`) is read from the files alone:
-
-* ``ok`` / ``failed``: ``summary.json`` says so (written at the end of every run, also a
-  failed one; its ``error`` is shown);
-* ``running``: no ``summary.json`` yet, and the orchestrator process recorded in ``run.json``
-  is alive (same host, same pid, same process start time: a reused pid is not taken for it);
-* ``interrupted``: no ``summary.json`` and that process is gone (killed, machine rebooted);
-* ``unknown``: no ``summary.json`` and no way to tell (no ``run.json``, or another host).
-
-Steps: the last step every channel of the journal has reached (:func:`cosim.journal.last_step`),
-against ``run.n_steps``; ``records`` and ``skipped_records`` from a CRC-only scan.
+The state of a run (:func:`run_info`) is read from the files alone: ``ok`` / ``failed`` as
+``summary.json`` says (written at the end of every run); without one, ``running`` while the
+orchestrator process of ``run.json`` is alive (same host, pid and process start time: a
+reused pid is not taken for it), ``interrupted`` once it is gone, ``unknown`` when there is no
+way to tell (no ``run.json``, or another host). Steps: the last step every channel of the
+journal has reached, against ``run.n_steps``.
 """
 
 from __future__ import annotations
@@ -47,7 +39,7 @@ STATUSES = ("ok", "failed", "running", "interrupted", "unknown")
 
 
 def read_json(path: Path) -> Any:
-    """The JSON document in ``path``, or None when it is missing, unreadable or not JSON."""
+    """The JSON document in ``path``, or None (missing, unreadable, not JSON)."""
     try:
         return json.loads(Path(path).read_text())
     except (OSError, UnicodeDecodeError, ValueError):
@@ -59,9 +51,8 @@ def _dict(obj: Any) -> dict[str, Any] | None:
 
 
 def write_json(obj: object, path: str | Path) -> None:
-    """Write ``obj`` as strict JSON (no NaN or Infinity: a ValueError names the problem),
-    atomically: to a temporary file beside ``path``, then renamed over it, so that a reader
-    sees the old file or the new one, never half of one."""
+    """Write ``obj`` as strict JSON (NaN: a ValueError) to a file beside ``path``, then
+    renamed over it: a reader sees the old file or the new one, never half of one."""
     path = Path(path)
     text = json.dumps(obj, indent=2, sort_keys=True, allow_nan=False) + "\n"
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
@@ -92,7 +83,7 @@ def _proc_start(pid: int) -> int | None:
 
 def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
                    connect: list[str] | None, lowlatency: bool = False) -> dict[str, Any]:
-    """Record who runs ``folder`` and where its bus is (for ``suscosim runs`` and ``tap``)."""
+    """Record who runs ``folder`` and where its bus is (``suscosim runs``, ``tap``)."""
     scenario = read_json(Path(folder) / SCENARIO_JSON)
     run = scenario.get("run") if isinstance(scenario, dict) else None
     scenario_mode = str(run.get("mode", "")) if isinstance(run, dict) else ""
@@ -109,8 +100,7 @@ def write_run_json(folder: Path, run_id: str, listen: list[str] | None,
 
 
 def mark_run_ended(folder: Path, status: str) -> None:
-    """Say in ``run.json`` that the run has ended (``"state": status``, ``"ended"``): written
-    after ``summary.json``."""
+    """Say in ``run.json`` that the run has ended (after ``summary.json``)."""
     path = Path(folder) / RUN_JSON
     info = _dict(read_json(path))
     if info is None:
@@ -122,8 +112,8 @@ def mark_run_ended(folder: Path, status: str) -> None:
 
 # ---- reading a run folder ----------------------------------------------------------------
 def pid_alive(pid: int, pid_start: int | None = None) -> bool:
-    """Whether process ``pid`` exists (and is not a zombie), and is the one that started at
-    ``pid_start`` (clock ticks since boot) when that is given and ``/proc`` can tell."""
+    """Whether process ``pid`` exists (not a zombie) and, when ``pid_start`` (clock ticks
+    since boot) is given and ``/proc`` can tell, started then."""
     if not isinstance(pid, int) or pid <= 0:
         return False
     try:
@@ -154,7 +144,7 @@ def journal_integrity(path: Path) -> dict[str, Any]:
 
 
 def run_info(folder: Path, host: str | None = None) -> dict[str, Any]:
-    """What the files of one run folder say about it (see the module docstring)."""
+    """What the files of one run folder say about it."""
     host = host or socket.gethostname()
     scenario = _dict(read_json(folder / SCENARIO_JSON)) or {}
     run: dict[str, Any] = _dict(scenario.get("run")) or {}

@@ -23,14 +23,10 @@ LOCK_NAME = ".run.lock"
 
 
 class FolderInUseError(SuscosimError):
-    """The run folder is held by another live run (exit 2)."""
-
     exit_code = 2
 
 
-class RunIdInUseError(SuscosimError):
-    """The run id is live on the bus already (another run's orchestrator or nodes; exit 2)."""
-
+class RunIdInUseError(SuscosimError):  # live on the bus already
     exit_code = 2
 
 
@@ -76,18 +72,14 @@ class RunLock:
 
 SETTLE_S = 1.0
 """How long :func:`live_nodes` looks for a run's liveliness tokens on a session just opened
-[s]: a first query through a router can answer ``[]`` before the router has told the session
-of the tokens it knows (up to ~0.3 s under load)."""
-
-POLL_S = 0.05
-"""Time between two liveliness queries within :data:`SETTLE_S` [s]."""
+[s]: a first query through a router can answer ``[]`` (up to ~0.3 s under load)."""
+POLL_S = 0.05  # between two liveliness queries [s]
 
 
 def live_nodes(bus: Bus, run_id: str, settle_s: float = SETTLE_S, poll_s: float = POLL_S,
                stop_at: set[str] | None = None) -> set[str]:
     """The nodes (``orchestrator`` included) of run ``run_id`` whose liveliness token is on
-    the bus, looked for over ``settle_s`` [s] (a subscriber with history and a query every
-    ``poll_s``); early once a node outside ``stop_at`` (None: any) is found."""
+    the bus, looked for over ``settle_s`` [s]; early once a node outside ``stop_at`` is."""
     found: set[str] = set()
     pattern = keys.key(run_id, "*", keys.ALIVE)
 
@@ -125,8 +117,7 @@ def live_nodes(bus: Bus, run_id: str, settle_s: float = SETTLE_S, poll_s: float 
 
 def check_run_id_free(bus: Bus, run_id: str, external: list[str],
                       settle_s: float = SETTLE_S) -> None:
-    """Refuse (exit 2) a run id that is live on the bus already (another run's orchestrator,
-    or a node it is about to start; ``--external`` nodes are expected), over ``settle_s``."""
+    """Refuse (exit 2) a run id live on the bus already (``--external`` nodes are expected)."""
     taken = sorted(live_nodes(bus, run_id, settle_s, stop_at=set(external)) - set(external))
     if taken:
         raise RunIdInUseError(f"run id '{run_id}' is already live on the bus (live there "
