@@ -184,12 +184,7 @@ def _cycles_done(ch: _Channel, cyc: Cycles) -> None:
     ch.max_range = max(ch.max_range, float(r.max()))
     ch.r_hi = max(ch.r_hi, float(r.max()))
     ch.m_lo, ch.m_hi = min(ch.m_lo, float(m.min())), max(ch.m_hi, float(m.max()))
-    ch.pd_sum += float(np.sum(cyc.count * (r / ch_ref(ch)) ** K_REF))
-
-
-def ch_ref(_ch: _Channel) -> float:
-    """ΔF_ref of a channel (:func:`.pseudo_damage.reference_range`: 1 kN or 1 kN m)."""
-    return reference_range("")
+    ch.pd_sum += float(np.sum(cyc.count * (r / reference_range("")) ** K_REF))  # 1 kN (m)
 
 
 def scan(batches: Batches, source: str, residue: str, loads_source: str | None = None) -> Scan:
@@ -264,23 +259,39 @@ def _rechunk(batches: Batches, block: int
         yield tt, {c: np.concatenate([h[c] for h in held]) for c in held[0]}
 
 
-def _matrix_axes(ch: _Channel) -> tuple[float, float, float] | None:
-    """(r_hi, m_lo, m_hi) of a channel's matrix as :func:`rainflow_matrix` sets them."""
-    if ch.n_cyc == 0:
-        return None
-    r_hi = ch.r_hi or 1.0
-    m_lo, m_hi = ch.m_lo, ch.m_hi
-    if m_hi <= m_lo:
-        m_lo, m_hi = m_lo - 0.5, m_hi + 0.5
-    return r_hi, m_lo, m_hi
+class _Matrix:
+    """A range-mean rainflow matrix of one history binned as its cycles close, on the axes
+    its pass-1 (or pass-3) totals ``ch`` give, as :func:`rainflow_matrix` sets them."""
 
+    def __init__(self, ch: _Channel, residue: str) -> None:
+        self.axes = None if ch.n_cyc == 0 else (
+            ch.r_hi or 1.0, *((ch.m_lo, ch.m_hi) if ch.m_hi > ch.m_lo
+                              else (ch.m_lo - 0.5, ch.m_hi + 0.5)))
+        self.residue = residue
+        self.rf = StreamingRainflow(1)
+        self.H: np.ndarray | None = None
+        self.edges: tuple[list, list] = ([], [])
 
-def _hist_add(H: np.ndarray | None, cyc: Cycles, axes: tuple[float, float, float]
-              ) -> tuple[np.ndarray | None, list, list]:
-    r_hi, m_lo, m_hi = axes
-    h, re, me = np.histogram2d(cyc.range, cyc.mean, bins=N_BINS,
-                               range=[[0.0, r_hi], [m_lo, m_hi]], weights=cyc.count)
-    return (h if H is None else H + h), re.tolist(), me.tolist()
+    def feed(self, v: np.ndarray) -> None:
+        if self.axes is not None:
+            self._add(self.rf.feed(v.reshape(-1, 1)))
+
+    def _add(self, cyc: Cycles) -> None:
+        if len(cyc) and self.axes is not None:
+            r_hi, m_lo, m_hi = self.axes
+            h, re, me = np.histogram2d(cyc.range, cyc.mean, bins=N_BINS,
+                                       range=[[0.0, r_hi], [m_lo, m_hi]], weights=cyc.count)
+            self.H = h if self.H is None else self.H + h
+            self.edges = (re.tolist(), me.tolist())
+
+    def result(self) -> dict:
+        """The matrix (:func:`rainflow_matrix`'s dict), the residue's cycles added."""
+        if self.axes is None:
+            return rainflow_matrix(Cycles.empty())
+        self._add(self.rf.residue_cycles(self.residue))
+        assert self.H is not None
+        return {"range_edges": self.edges[0], "mean_edges": self.edges[1],
+                "counts": self.H.tolist()}
 
 
 def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
@@ -292,10 +303,7 @@ def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
     primary = LiveFatigue(cfg, names, L)
     table, left = method_table(cfg)
     others = {(m, P): LiveFatigue(c, names, L) for m, P, c in table if c != cfg}
-    axes = {c: _matrix_axes(ch) for c, ch in s.channels.items()}
-    rfs = {c: StreamingRainflow(1) for c in names}
-    H: dict[str, np.ndarray | None] = dict.fromkeys(names)
-    edges: dict[str, tuple[list, list]] = {}
+    mats = {c: _Matrix(ch, cfg.residue) for c, ch in s.channels.items()}
     say(f"fatigue: {s.n} samples x {len(names)} channels, primary S-N curve"
         + (f" and {len(others)} more" if others else "") + " (streamed)")
     for t, loads in _rechunk(batches, max(1, cfg.block_samples)):
@@ -303,26 +311,8 @@ def analyse_streamed(batches: Batches, cfg: FatigueConfig, L: float, s: Scan,
         for lf in others.values():
             lf.update(t, loads)
         for c, v in loads.items():
-            ax = axes[c]
-            if ax is not None:
-                cyc = rfs[c].feed(v.reshape(-1, 1))
-                if len(cyc):
-                    H[c], *e = _hist_add(H[c], cyc, ax)
-                    edges[c] = (e[0], e[1])
-    matrices: dict[str, dict] = {}
-    for c in names:
-        ax = axes[c]
-        if ax is None:
-            matrices[c] = rainflow_matrix(Cycles.empty())
-            continue
-        cyc = rfs[c].residue_cycles(cfg.residue)
-        if len(cyc):
-            H[c], *e = _hist_add(H[c], cyc, ax)
-            edges[c] = (e[0], e[1])
-        h = H[c]
-        assert h is not None
-        matrices[c] = {"range_edges": edges[c][0], "mean_edges": edges[c][1],
-                       "counts": h.tolist()}
+            mats[c].feed(v)
+    matrices = {c: m.result() for c, m in mats.items()}
     result = _finish(primary, s)
     methods = None
     if table:  # the primary's own entry is the primary (the same config: the same result)
@@ -392,25 +382,10 @@ def outputs_streamed(batches: Batches, cfg: FatigueConfig, s: Scan, result: Fati
         _cycles_done(crit, cyc)
         spectrum.add(cyc)
         # pass 4: the critical node's range-mean matrix on the axes pass 3 found
-        axes = _matrix_axes(crit)
-        if axes is None:
-            node_matrix = rainflow_matrix(Cycles.empty())
-        else:
-            H: np.ndarray | None = None
-            edges: tuple[list, list] = ([], [])
-            rf = StreamingRainflow(1)
-            for _t, _s6, eq in eq_batches():
-                cyc = rf.feed(eq.reshape(-1, 1))
-                if len(cyc):
-                    H, *e = _hist_add(H, cyc, axes)
-                    edges = (e[0], e[1])
-            cyc = rf.residue_cycles(cfg.residue)
-            if len(cyc):
-                H, *e = _hist_add(H, cyc, axes)
-                edges = (e[0], e[1])
-            assert H is not None
-            node_matrix = {"range_edges": edges[0], "mean_edges": edges[1],
-                           "counts": H.tolist()}
+        node = _Matrix(crit, cfg.residue)
+        for _t, _s6, eq in (eq_batches() if node.axes is not None else ()):
+            node.feed(eq)
+        node_matrix = node.result()
         with open(folder / "rainflow_matrix.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["series", "unit", "range_lo", "range_hi", "mean_lo", "mean_hi",
