@@ -74,6 +74,10 @@ class FullVehicleDWParams:
     at v / r_l (free rolling on the tyre of :mod:`nodes.tyre_road.tyre_3d`)."""
 
 
+_ST = ("theta", "hub", "vhub", "top", "bot", "vtop", "vbot", "pad", "R_arm", "hub_q", "wc",
+       "vwc", "axis", "spin", "L_d", "u")
+"""What :meth:`FullVehicleDoubleWishbone._read` keeps per corner (world axes, SI units)."""
+
 RACK_MASS = 2.0
 """The steering rack's mass [kg], taken from ``sprung_mass`` (the rack is body) and placed at
 the CG, so the vehicle's mass and CG do not move (ours: a small car's rack and pinion)."""
@@ -135,6 +139,12 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                            for lk in self.link]
         self._pad_body = [None if g.bump_stop_pad is None else self.wheel_centres[i]
                           + g.bump_stop_pad for i, g in enumerate(self.geoms)]
+        # per corner: the damper's top (body frame), its seat and the pad (arm link frame)
+        self._damper_pad = []
+        for wc, g, pad in zip(self.wheel_centres, self.geoms, self._pad_body, strict=True):
+            la_o = wc + 0.5 * (g.lower_bush_front + g.lower_bush_rear)
+            self._damper_pad.append((wc + g.damper_upper, wc + g.damper_lower - la_o,
+                                     None if pad is None else pad - la_o))
         self._F_t = np.zeros(4)
         self._F_d = np.zeros(4)
         self._tau = np.zeros(4)
@@ -248,48 +258,35 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         cl, bd = self.client, self.body
         pos, quat = p.getBasePositionAndOrientation(bd, physicsClientId=cl)
         v, w = p.getBaseVelocity(bd, physicsClientId=cl)
-        self._base = (np.array(pos), _rot(quat), np.array(v), np.array(w), quat)
-        st: dict[str, list] = {k: [] for k in ("theta", "omega", "hub", "vhub", "top", "bot",
-                                                "vtop", "vbot", "pad", "R_arm", "hub_q",
-                                                "wc", "vwc", "axis", "spin")}
-        R, P, V, Wb = self._base[1], self._base[0], self._base[2], self._base[3]
-        for i, (g, lk) in enumerate(zip(self.geoms, self.link, strict=True)):
-            js = p.getJointState(bd, lk["lower_arm"], physicsClientId=cl)
-            st["theta"].append(js[0])
-            st["omega"].append(js[1])
-            hub = p.getLinkState(bd, lk["hub"], computeLinkVelocity=1,
-                                 computeForwardKinematics=1, physicsClientId=cl)
-            st["hub"].append(np.array(hub[0]))
-            st["hub_q"].append(hub[5])
-            st["vhub"].append(np.array(hub[6]))
-            arm = p.getLinkState(bd, lk["lower_arm"], computeLinkVelocity=1,
-                                 computeForwardKinematics=1, physicsClientId=cl)
+        self._base = P, R, V, Wb, _ = (np.array(pos), _rot(quat), np.array(v), np.array(w),
+                                       quat)
+        st: dict[str, list] = {k: [] for k in _ST}
+        for lk, (top_b, bot_a, pad_a) in zip(self.link, self._damper_pad, strict=True):
+            theta = p.getJointState(bd, lk["lower_arm"], physicsClientId=cl)[0]
+            hub, arm, wh = (p.getLinkState(bd, lk[k], computeLinkVelocity=1,
+                                           computeForwardKinematics=1, physicsClientId=cl)
+                            for k in ("hub", "lower_arm", "wheel"))
             Ra = _rot(arm[5])
-            st["R_arm"].append(Ra)
-            la_o = self.wheel_centres[i] + 0.5 * (g.lower_bush_front + g.lower_bush_rear)
-            bot = np.array(arm[4]) + Ra @ (self.wheel_centres[i] + g.damper_lower - la_o)
-            top = P + R @ (self.wheel_centres[i] + g.damper_upper)
-            st["top"].append(top)
-            st["bot"].append(bot)
-            st["vtop"].append(V + np.cross(Wb, top - P))
-            st["vbot"].append(np.array(arm[6]) + np.cross(arm[7], bot - np.array(arm[0])))
-            pad = self._pad_body[i]
-            st["pad"].append(None if pad is None else np.array(arm[4]) + Ra @ (pad - la_o))
-            wh = p.getLinkState(bd, lk["wheel"], computeLinkVelocity=1,
-                                computeForwardKinematics=1, physicsClientId=cl)
+            bot = np.array(arm[4]) + Ra @ bot_a
+            top = P + R @ top_b
+            d = top - bot
+            L = np.linalg.norm(d)
             ax = _rot(wh[5])[:, 1]
-            st["wc"].append(np.array(wh[0]))
-            st["vwc"].append(np.array(wh[6]))
-            st["axis"].append(ax)
-            st["spin"].append(float(np.dot(wh[7], ax)))
+            for k, x in zip(_ST, (
+                    theta, np.array(hub[0]), np.array(hub[6]), top, bot,
+                    V + np.cross(Wb, top - P),
+                    np.array(arm[6]) + np.cross(arm[7], bot - np.array(arm[0])),
+                    None if pad_a is None else np.array(arm[4]) + Ra @ pad_a, Ra, hub[5],
+                    np.array(wh[0]), np.array(wh[6]), ax, float(np.dot(wh[7], ax)), L, d / L),
+                    strict=True):
+                st[k].append(x)
         self._st = st
 
     def _snapshot(self) -> dict[str, np.ndarray]:
         """Positions at build time (static): wheel centres, damper lengths, pads, body."""
         st = self._st
         return {"hub_z": np.array([h[2] for h in st["hub"]]),
-                "L_d": np.array([np.linalg.norm(t - b) for t, b in
-                                 zip(st["top"], st["bot"], strict=True)]),
+                "L_d": np.array(st["L_d"]),
                 "theta": np.array(st["theta"]), "base": self._base[0].copy(),
                 "pad_z": np.array([np.nan if q is None else q[2] for q in st["pad"]]),
                 "bumper_z": np.array([np.nan if q is None else
@@ -328,10 +325,8 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         ez = self._base[1][:, 2]
         st = self._st
         # the pose and forces of this substep, for the arm loads (:meth:`corner_arm_loads`)
-        self._applied = [(st["R_arm"][i], st["hub_q"][i],
-                          (st["top"][i] - st["bot"][i]) / np.linalg.norm(st["top"][i]
-                                                                         - st["bot"][i]),
-                          float(self._F_d[i]), -bump[i] * ez) for i in range(4)]
+        self._applied = [(st["R_arm"][i], st["hub_q"][i], st["u"][i], float(self._F_d[i]),
+                          -bump[i] * ez) for i in range(4)]
         for i, lk in enumerate(self.link):
             p.setJointMotorControl2(bd, lk["lower_arm"], p.TORQUE_CONTROL,
                                     force=float(self._tau[i]), physicsClientId=cl)
@@ -350,8 +345,7 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
             p.setJointMotorControl2(bd, lk["wheel"], p.TORQUE_CONTROL,
                                     force=float(self._T_wheel[i]), physicsClientId=cl)
             top, bot = self._st["top"][i], self._st["bot"][i]
-            u = (top - bot) / np.linalg.norm(top - bot)
-            f = self._F_d[i] * u
+            f = self._F_d[i] * st["u"][i]
             p.applyExternalForce(bd, -1, f.tolist(), top.tolist(), p.WORLD_FRAME,
                                  physicsClientId=cl)
             p.applyExternalForce(bd, lk["lower_arm"], (-f).tolist(), bot.tolist(),
@@ -370,12 +364,8 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
     def state(self) -> dict[str, np.ndarray]:
         st, s0 = self._st, self._s0
         zb, vb = self._corner_body_points()
-        L_d = np.array([np.linalg.norm(t - b) for t, b in zip(st["top"], st["bot"],
-                                                              strict=True)])
-        u = [(t - b) / np.linalg.norm(t - b) for t, b in zip(st["top"], st["bot"],
-                                                              strict=True)]
         v_d = np.array([-float(ui @ (vt - vbt)) for ui, vt, vbt in
-                        zip(u, st["vtop"], st["vbot"], strict=True)])
+                        zip(st["u"], st["vtop"], st["vbot"], strict=True)])
         R = self._base[1]
         roll, pitch = float(np.arctan2(R[2, 1], R[2, 2])), float(np.arcsin(-R[2, 0]))
         w_body = R.T @ self._base[3]
@@ -384,7 +374,7 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
                 "z_b": zb - (zc + self.wheel_centres[:, 2]), "v_b": vb,
                 "z_w": np.array([h[2] for h in st["hub"]]) - s0["hub_z"],
                 "v_w": np.array([v[2] for v in st["vhub"]]),
-                "z_damper": s0["L_d"] - L_d, "v_damper": v_d,
+                "z_damper": s0["L_d"] - np.array(st["L_d"]), "v_damper": v_d,
                 "arm_angle": self.side * (np.array(st["theta"]) - s0["theta"]),
                 "heave": np.array([self._base[0][2] - zc]), "pitch": np.array([pitch]),
                 "roll": np.array([roll]), "v_heave": np.array([self._base[2][2]]),
