@@ -44,6 +44,3 @@ class StepSet:
     def __contains__(self, k: int) -> bool:
         i = bisect_right(self.lo, k) - 1
         return i >= 0 and k < self.hi[i]
-
-    def __len__(self) -> int:
-        return self.count

@@ -50,33 +50,25 @@ class PaveParameters:
     """Geometry of the synthetic pavé (SI units; checked by the ``[road]`` reader,
     :mod:`.config`). Defaults and their reasoning:
 
-    Attributes:
-        stone_length: mean length L [m] of a stone's top along the wheel path. Belgian block
-            setts are about 0.10-0.20 m (the brief; 100 x 100 ... 150 x 200 mm setts): 0.15 m.
-        stone_length_std: scatter s_L [m] of the lengths. Hand-laid setts of one size class
-            differ by some 10-20 % (and a wheel path crosses the courses at slightly varying
-            angles): 0.03 m (20 %), Gamma distributed.
-        joint_width: width w [m] of the gap between two stones: the brief's 10-20 mm range,
-            middle value 0.015 m.
-        joint_depth: depth d [m] of the dip as the contact point follows it: a worn joint is
-            10-20 mm deep but filled with grit and bridged by the tyre (a rigid ring of
-            R = 0.3 m sinks w^2 / (8 R) = 0.1 mm into 15 mm, the tread a few mm): 0.005 m.
-        stone_height_std: scatter s_h [m] of the height of a stone's top about the base road:
-            set (settled, tilted, worn stones) so that the step between neighbours,
-            sqrt(2) s_h in standard deviation, is a few mm to 15 mm. CALIBRATED (hub 0-20 Hz
-            RMS, Table 4.5): 0.0095 m, so steps of 13 mm standard deviation, the top of the
-            Belgian block range (see :data:`DEFAULTS`).
-        crown: height c [m] of the convex top of a stone above its edges (parabolic).
-            Cobbles are domed or worn round at their edges; 0.003 m (3 mm over 0.15 m).
-        G: level of the long waves, S(n) = G n^-p [m^(3-p)] at n = 1 cycle/m. CALIBRATED
-            (body 0-20 Hz RMS, Table 4.5): 1.5e-5, three times the thesis's "rough minor
-            road" 5e-6 (see :data:`DEFAULTS`).
-        waviness: p of the long waves, the thesis's 2.5 (Eq. 4.10).
-        band: (n_min, n_max) of the long waves [cycles/m], the ISO 8608 band as the
-            power-law road's default.
-        correlation: left/right correlation of the long waves ("identical", "independent" or
-            rho in [0, 1]); the stones are always independent. Default "independent" (the
-            LTC tracks are distinct, so the body bounces, pitches and rolls, Sec. 4.5).
+    * ``stone_length`` L [m], mean top length along the wheel path: Belgian block setts are
+      0.10-0.20 m (100 x 100 ... 150 x 200 mm): 0.15 m; ``stone_length_std`` s_L [m], Gamma
+      distributed: hand-laid setts of one size class differ by 10-20 % (and a wheel path
+      crosses the courses at slightly varying angles): 0.03 m (20 %).
+    * ``joint_width`` w [m], the gap between two stones: the 10-20 mm range, middle 0.015 m;
+      ``joint_depth`` d [m], the dip the contact point follows: a worn joint is 10-20 mm deep
+      but filled with grit and bridged by the tyre (a rigid ring of R = 0.3 m sinks w^2 /
+      (8 R) = 0.1 mm into 15 mm, the tread a few mm): 0.005 m.
+    * ``stone_height_std`` s_h [m], of a stone's top about the base road (settled, tilted,
+      worn stones; the step between neighbours is sqrt(2) s_h): CALIBRATED (hub 0-20 Hz RMS,
+      Table 4.5) 0.0095 m, steps of 13 mm standard deviation, the top of the Belgian block
+      range (:data:`DEFAULTS`); ``crown`` c [m], the parabolic dome of a stone's top above its
+      edges: 0.003 m over 0.15 m.
+    * long waves: ``G`` [m^(3-p)], S(n) = G n^-p at n = 1 cycle/m, CALIBRATED (body 0-20 Hz
+      RMS, Table 4.5) 1.5e-5, three times the thesis's "rough minor road" 5e-6;
+      ``waviness`` p, the thesis's 2.5 (Eq. 4.10); ``band`` (n_min, n_max) [cycles/m], the ISO
+      8608 band as the power-law road's; ``correlation`` of left and right ("identical",
+      "independent" or rho in [0, 1]; the stones are always independent), "independent" (the
+      LTC tracks are distinct, so the body bounces, pitches and rolls, Sec. 4.5).
     """
 
     stone_length: float = 0.15

@@ -20,13 +20,8 @@ Road keys (``[road]``):
   optional, defaults the calibrated pavé): ``seed``, ``stone_length``, ``stone_length_std``,
   ``joint_width``, ``joint_depth``, ``stone_height_std``, ``crown`` [m]; long waves ``G``,
   ``waviness``, ``band``, ``correlation`` (as power_law)
-* csv: ``path``, ``zero_start`` (bool, default true)
-* opencrg (measured surface, :mod:`nodes.tyre_road.opencrg`): ``path`` (.crg), ``track_width``
-  [m] (default the vehicle's 1.411), ``v_offset`` [m], ``u_start`` [m], ``reference`` ("grid" |
-  "full"), ``zero_start``
-* mdf4 (measured profile, :mod:`nodes.tyre_road.profile_mdf`): ``path`` (.mf4), ``left``
-  (channel), ``right`` (channel, default left), ``distance`` (channel [m]) or
-  ``recorded_speed_kmh``, ``zero_start``
+* measured (csv, opencrg :mod:`.opencrg`, mdf4 :mod:`.profile_mdf`): ``path``, ``zero_start``
+  (default true) and the format's keys (docs/data_formats.md)
 
 Tyre keys (``[tyre]``): ``model`` (point_contact | fixed_footprint), ``stiffness`` [N/m],
 fixed footprint: ``n`` (>= 1), ``contact_length`` [m].

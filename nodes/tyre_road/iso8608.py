@@ -19,12 +19,9 @@ with n_k = k dn, dn = 1 / L_gen, phases phi_k uniform on [0, 2 pi) from a seeded
 a grid dx <= 1 / (20 n_max), linearly interpolated (< 1 % PSD loss at n_max); each track
 shifted to z(0) = 0.
 
-Left/right tracks (``correlation``):
-
-* ``"identical"``  the right track is the left track (pure heave/pitch input);
-* ``"independent"`` the right track has its own phases (coherence 0);
-* a number rho in [0, 1]: z_R = rho z_L + sqrt(1 - rho^2) z_indep. Each track keeps the class
-  PSD (in expectation) and the left/right coherence is rho^2 at every n.
+Left/right tracks (``correlation``): ``"identical"`` (pure heave/pitch input),
+``"independent"`` (own phases, coherence 0) or rho in [0, 1]: z_R = rho z_L + sqrt(1 - rho^2)
+z_indep, each track keeping the PSD (in expectation), the coherence rho^2 at every n.
 
 The thesis's power law (Ch. 4 Sec. 4.4, after its ref. [30], ``type = "power_law"``):
 
@@ -42,7 +39,6 @@ substitute (:mod:`nodes.tyre_road.cobblestone`). Choices the thesis does not fix
   34 km/h, covering the 0-25 Hz ride band of Sec. 4.5). A power law with p > 1 has infinite
   variance towards n -> 0, so the band's lower end fixes the road's amplitude of long waves:
   keep it unless the length of the run calls for longer waves.
-* **Generator** the one above, with the same ``correlation`` options.
 
 Checks: ``tests/roads/test_iso8608.py`` (the class PSD) and ``tests/roads/test_power_law.py``
 (the Welch PSD of a 2000 m track, integrated over octave bands, matches the integral of G n^-p

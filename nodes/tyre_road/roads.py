@@ -105,15 +105,12 @@ class RoadEvent:
     tracks: tuple[int, ...] = (0, 1)
 
     def height_at(self, s: np.ndarray) -> np.ndarray:
-        if self.kind == "step":
-            return step_height(s, self.x_start, self.height)
-        if self.kind == "ramp":
-            return ramp_height(s, self.x_start, self.height, self.length)
-        if self.kind == "bump":
-            return bump_height(s, self.x_start, self.height, self.length)
         if self.kind == "pothole":
             return pothole_height(s, self.x_start, self.height, self.length, self.shape)
-        raise ValueError(f"unknown road event {self.kind!r}")
+        if self.kind == "step":
+            return step_height(s, self.x_start, self.height)
+        shape = {"ramp": ramp_height, "bump": bump_height}[self.kind]
+        return shape(s, self.x_start, self.height, self.length)
 
 
 @dataclass
