@@ -134,8 +134,7 @@ def check_fmu(r: ConfigReader, n_corners: int) -> FmuPlan:
     """Preflight of ``law = "fmu"``: open the FMU, check it and the variable maps."""
     from fmpy import platform, supported_platforms
 
-    raw = r.string("fmu")
-    path = Path(raw)
+    path = Path(r.string("fmu"))
     md = _read_description(path)
     if md.fmiVersion not in ("2.0",) and not str(md.fmiVersion).startswith("3."):
         raise InputFileError(str(path), f"FMI {md.fmiVersion} FMU: suscosim runs FMI 2.0 and "
@@ -154,10 +153,8 @@ def check_fmu(r: ConfigReader, n_corners: int) -> FmuPlan:
         raise InputFileError(str(path), f"canBeInstantiatedOnlyOncePerProcess, but this vehicle "
                              f"needs one instance per corner ({n_corners})")
     variables = _variables(md)
-    inputs = _map_inputs(r, variables)
-    outputs = _map_outputs(r, variables)
-    parameters = _map_parameters(r, variables)
-    return FmuPlan(path=path, md=md, inputs=inputs, outputs=outputs, parameters=parameters)
+    return FmuPlan(path, md, _map_inputs(r, variables), _map_outputs(r, variables),
+                   _map_parameters(r, variables))
 
 
 def _map_table(r: ConfigReader, variables: Mapping[str, Any], causality: str,

@@ -203,13 +203,6 @@ class MRDamper:
 # ------------------------------------------------------------------ the MR laws
 
 
-def tss2_current(F_star: np.ndarray, F_mr: np.ndarray, B: float, G: float,
-                 I_max: float) -> np.ndarray:
-    """TSS2 current ``sat_[0, I_max](G (|F*| - B |F_MR|))`` (A): F* the TSS1 demand and F_MR
-    the damper's force (N), B (-) and G (A/N) the gains (thesis 0.8, 0.001), I_max (A)."""
-    return np.clip(G * (np.abs(F_star) - B * np.abs(F_mr)), 0.0, I_max)
-
-
 class MRController(Controller):
     """Base of the MR laws: owns an :class:`MRDamper` per corner and the interpolation of the
     inputs between calls. Subclasses give the current rule."""
@@ -229,8 +222,7 @@ class MRController(Controller):
 
     def demand(self, v_b: np.ndarray, v_rel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(force demand in N, hard flag) recorded with the output."""
-        hard = skyhook_condition(v_b, v_rel)
-        return np.full(self.n, np.nan), hard
+        return np.full(self.n, np.nan), skyhook_condition(v_b, v_rel)
 
     def _first_current(self, v_b: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
         return self.current(v_b, v_rel, np.zeros(self.n))
@@ -303,10 +295,12 @@ class TSS2(MRController):
         return np.where(skyhook_condition(v_b, v_rel), self.c_hard, self.c_soft) * v_rel
 
     def current(self, v_b: np.ndarray, v_rel: np.ndarray, F_mr: np.ndarray) -> np.ndarray:
+        """``sat_[0, I_max](G (|F*| - B |F_MR|))`` (A), F_MR the damper's force (N)."""
         F_star = self.f_star(v_b, v_rel)
         if not self.damper.p.dynamics:
             return self._solve_static(F_star, v_rel)
-        return tss2_current(F_star, F_mr, self.B, self.G, self.damper.p.I_max)
+        return np.clip(self.G * (np.abs(F_star) - self.B * np.abs(F_mr)), 0.0,
+                       self.damper.p.I_max)
 
     def _first_current(self, v_b: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
         return self._solve_static(self.f_star(v_b, v_rel), v_rel)
