@@ -303,7 +303,6 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("rest", nargs=argparse.REMAINDER)
         p.set_defaults(func=None, module=module)
     ap.epilog = _grouped_help()
-
     return ap
 
 

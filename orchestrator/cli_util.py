@@ -80,5 +80,4 @@ def add_pace_arguments(ap: argparse.ArgumentParser, *, speed_help: str, fast_hel
 
 def pace_factor(args: argparse.Namespace) -> float | None:
     """None (as fast as possible) with ``--fast``, else ``--speed``."""
-
     return None if args.fast else float(args.speed)

@@ -73,7 +73,6 @@ def machine_nodes() -> str:
     return "\n".join(out[:-1]) + "\n"
 
 
-
 def machine_orchestrator() -> str:
     """deploy/compose/orchestrator.yml: the orchestrator's service."""
     out = ["  orchestrator:", "    image: ${SUSCOSIM_IMAGE:-suscosim:latest}", "    init: true",

@@ -258,7 +258,6 @@ def _write_laws(out: Path, laws: dict[str, Any]) -> None:
 def _schedule(duty: dict[str, Any], out: Path, runs: Path, mode: str | None, rerun: bool,
               sets: Sequence[str], law_sets: Sequence[str] = ()) -> tuple[dict, Any, dict]:
     """One schedule into ``runs/<event>`` and ``out/``: (duty.json, DutyResult, first fatigue)."""
-
     import numpy as np
 
     from nodes.fatigue.lib.duty_cycle import Event, life_factor, schedule_damage

@@ -167,7 +167,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _life_from(config: dict) -> str:
     """``" (S-N fkm at P = 0.5, mean stress fkm)"``: the curve of the headline life, or ""."""
-
     comp = config.get("component") or {}
     if not comp.get("enabled") or config.get("sn_curve"):
         return ""

@@ -4,7 +4,6 @@ built when the FMU leaves initialisation; each ``doStep(t, dt)`` calls ``law.ste
 force [N], slope dF_d/dv_rel [N·s/m] and extras at t, as in the controller node.
 """
 
-
 from __future__ import annotations
 
 import json

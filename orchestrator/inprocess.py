@@ -106,7 +106,6 @@ class Engine:
     def emit(self, node: str, channel: str, k: int, t: float, data: Any) -> Message:
         """One data message encoded and checked as a node's outbox does, decoded as its
         consumers take it, given to the sinks."""
-
         raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{node}/{channel}: a message of {len(raw)} bytes at step {k} "

@@ -98,7 +98,6 @@ class LocalNodes:
              tick_period_s: float = 0.25) -> None:
         """Wait ``grace_s`` for the nodes to end (``tick`` every ``tick_period_s``), then
         SIGTERM, SIGKILL 2 s later; remove the mesh folder."""
-
         deadline = time.monotonic() + grace_s
         for p in self.procs.values():
             while True:

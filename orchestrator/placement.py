@@ -143,7 +143,6 @@ class BackgroundGuard:
 
 def pin(pid: int, core: int) -> bool:
     """Pin ``pid`` to ``core`` (later threads inherit it); False if refused."""
-
     try:
         os.sched_setaffinity(pid, {core})
         return True

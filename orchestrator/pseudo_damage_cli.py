@@ -87,7 +87,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         res = compare(args.sources, args.k, args.n_ref)
     except SuscosimError as exc:
         return fail("suscosim pseudo-damage", str(exc))
-
     if args.json:
         print(json.dumps(res, indent=1))
         return 0

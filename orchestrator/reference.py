@@ -4,7 +4,6 @@ restarted at every road discontinuity (a step input resolved exactly); a co-simu
 columns, so the two compare directly (Table 3.3).
 """
 
-
 from __future__ import annotations
 
 from pathlib import Path

@@ -24,7 +24,6 @@ from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_sess
 from .cli_util import add_pace_arguments, fail, pace_factor, parse_args
 
 _fail = partial(fail, "suscosim replay")
-
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 LINGER_S = 0.5  # [s] open after the last message, so Zenoh sends what it still holds
 
@@ -120,7 +119,6 @@ def replay(bus: Any, run_id: str, records: Recorded, speed: float | None,
     log = log or (lambda text: None)
     pubs: dict[tuple[str, str], Any] = {}
     for node, channel in sorted(records.channels):
-
         pubs[node, channel] = bus.publisher(keys.key(run_id, node, channel))
     if wait_s > 0 and not _wait_for_subscriber(list(pubs.values()), wait_s):
         log(f"no subscriber after {wait_s:g} s: publishing anyway")

@@ -170,7 +170,6 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
 
 def _changes(a: Any, b: Any, key: str = "") -> list[str]:
     """Dotted keys differing between ``a`` and ``b`` (a new ``run`` key at its default: none)."""
-
     if isinstance(a, dict) and isinstance(b, dict):
         out: list[str] = []
         for k in sorted(set(a) | set(b)):

@@ -101,7 +101,6 @@ def main(argv: list[str] | None = None) -> int:
             from .runner import strict_json
 
             text = json.dumps(strict_json(summary), indent=1)
-
         else:
             text = ride_table(runs, baseline=args.baseline, band_hz=(lo, hi))
     except (ValueError, KeyError) as exc:

@@ -36,7 +36,6 @@ def router_config(listen: list[str] | None = None, config_file: str | None = Non
                   lease_ms: int = DEFAULT_LEASE_MS) -> tuple[Any, list[str]]:
     """A router's Zenoh configuration and endpoints (``listen``, else the file's, else
     :data:`DEFAULT_LISTEN`); ValueError: the file does not load or an endpoint is malformed."""
-
     import zenoh
 
     try:

@@ -56,7 +56,6 @@ def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS,
              bucket: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """At most ~n_max points, each bucket's min and max in their order (NaN left out of a
     bucket; an all-NaN one stays a gap). ``bucket`` default: ``ceil(n / (n_max // 2))``."""
-
     n = x.size
     if n <= n_max and bucket is None:
         return t, x

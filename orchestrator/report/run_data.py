@@ -83,7 +83,6 @@ def is_sweep_dir(d: Path) -> bool:
 
 def load_run(d: Path) -> RunData:
     """Read every piece of a run folder that exists; never raises for a bad piece."""
-
     r = RunData(path=d)
     sc = _read_json(d / "scenario.json", r.problems)
     r.scenario = sc if isinstance(sc, dict) else None

@@ -135,7 +135,6 @@ def psd_nperseg(n: int) -> int:
 class StreamWelch:
     """``scipy.signal.welch(x, fs, nperseg, detrend="constant")`` of batches (Hann, 50 %)."""
 
-
     def __init__(self, fs: float, nperseg: int) -> None:
         from scipy.signal import get_window
 

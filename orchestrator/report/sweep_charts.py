@@ -104,7 +104,6 @@ def sweep_compare_section(points: list[Point], keys: list[str]) -> str:
         if change:
             _grouped_change(axes[1], points, keys, change, change_title)
         return fig_uri(fig)
-
     body = ""
     if any(v is not None for v in lives):
         body += "<h3>Fatigue</h3>" + img(chart(lives, life_change, "Minimum life of the lower "
@@ -121,7 +120,6 @@ def sweep_compare_section(points: list[Point], keys: list[str]) -> str:
         body += "<h3>Ride</h3>" + img(chart(accs, acc_change, "Body acceleration RMS", "m/s²",
                                             "Body acceleration RMS change", 3.4),
                                       "body acceleration RMS per point")
-
     return section("compare", "Comparison", body)
 
 

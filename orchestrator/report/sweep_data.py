@@ -170,7 +170,6 @@ def is_passive(p: Point, axis: str) -> bool:
 
 def vs_passive(points: list[Point], keys: list[str], value) -> dict[str, float]:
     """``{id: (value / the passive point's of its grid cell - 1) * 100}`` (no law axis: {})."""
-
     axis = law_axis(points, keys)
     if axis is None:
         return {}

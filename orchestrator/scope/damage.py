@@ -138,7 +138,6 @@ class DamageMap:
 
     def _geometry(self) -> dict[str, Any]:
         """Node positions and hardpoints [mm] in the arm frame (x forward, y outboard, z up)."""
-
         from cosim import lower_arm as geo
 
         inf = self._live.inf

@@ -88,7 +88,6 @@ class Selection:
 
     def lines(self, node: str, channel: str, fld: str, n: int) -> list[Line]:
         """The lines of field ``fld`` (``n``: 0 for a number, else a list's length)."""
-
         memo = (node, channel, fld, n)
         if memo not in self._lines:
             out: list[Line] = []

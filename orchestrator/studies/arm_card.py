@@ -22,6 +22,7 @@ from cosim.errors import InputFileError, ScenarioError
 TABLE_6_1_M1_HZ = 362.3  # [Hz] Table 6.1's first flexible mode (vertical bending)
 LEG_LENGTH = 0.32  # [m] pivot to ball joint (front 0.312, rear 0.332): the floor's beam
 
+
 def static_plant_loads() -> dict[str, dict[str, float]]:
     """Each plant load channel's fields at static ride height [N, N m] (double wishbone)."""
     from nodes.plant.double_wishbone import DoubleWishboneCorner
@@ -43,7 +44,6 @@ def static_arm_loads() -> dict[str, float]:
 def stress_floor(moment: float, mass: float, mat) -> dict[str, float]:
     """Least nominal bending stress [MPa] carrying the static torsion-bar moment with M1 at
     Table 6.1's 362 Hz and +15 % (arm_bounds.py, ideal section κ = 1)."""
-
     from nodes.fatigue.lib.arm_bounds import nominal_bending_stress as sigma
 
     return {f"at_{f:.0f}_hz": sigma(moment, mass, LEG_LENGTH, f, mat.E, mat.rho) / 1e6

@@ -71,7 +71,6 @@ def main(argv: list[str] | None = None) -> int:
         return _fail("--scheduler needs --executor dask")
     if (args.external or args.serve) and not args.connect:
         return _fail("--external and --serve need --connect (a router both machines reach)")
-
     try:
         sweep = load_sweep(args.sweep_file, jobs=args.jobs,
                            fatigue=False if args.no_fatigue else None, max_points=args.max_points)
@@ -91,19 +90,19 @@ def main(argv: list[str] | None = None) -> int:
         return _fail("[sweep] fork_at works with the local executor only, without --external "
                      "and --serve (a fork needs its parent's run folder and checkpoint where "
                      "its nodes run)")
+    keyed = os.environ.get("SUSCOSIM_KEY") or os.environ.get("SUSCOSIM_KEY_FILE")
     if args.serve:
         from ..node_main import NODE_MODULES
 
         bad = [n for n in args.serve if n not in NODE_MODULES]
         if bad:
             return _fail(f"--serve {bad[0]}: expected one of " + ", ".join(sorted(NODE_MODULES)))
-        if not (os.environ.get("SUSCOSIM_KEY") or os.environ.get("SUSCOSIM_KEY_FILE")):
+        if not keyed:
             return _fail("--serve needs the sweep's secret: set SUSCOSIM_KEY (or "
                          "SUSCOSIM_KEY_FILE) to the same secret here and on the machine that "
                          "runs the sweep (the messages of a run are signed; docs/reliability.md)")
         return serve(sweep, args.serve, args.connect, out, sys.stdout)
-    if args.external and not (os.environ.get("SUSCOSIM_KEY")
-                              or os.environ.get("SUSCOSIM_KEY_FILE")):
+    if args.external and not keyed:
         print("suscosim sweep: warning: --external without SUSCOSIM_KEY / SUSCOSIM_KEY_FILE: "
               "each run draws its own secret (RUN/run.key), which 'suscosim sweep --serve' on "
               "another machine cannot know; set the same SUSCOSIM_KEY on both sides",
@@ -126,19 +125,17 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     write_sweep_json(sweep, out)
     todo = [(p, states[p.id]) for p in sweep.points if states[p.id] != "done"]
-    n_done = len(sweep.points) - len(todo)
     runner: Runner | DaskRunner
     if args.executor == "dask":
         try:
             runner = DaskRunner(sweep, out, args.scheduler, sys.stderr)
         except SuscosimError as exc:
             return _fail(str(exc))
-
         where = runner.workers_text()
     else:
         runner = Runner(sweep, out, args.connect, args.external, sys.stderr)
         where = f"{sweep.jobs} at once"
-    print(f"  -> {out}: {len(todo)} to run ({n_done} already done), {where}"
+    print(f"  -> {out}: {len(todo)} to run ({len(sweep.points) - len(todo)} already done), {where}"
           + (", fatigue on" if sweep.fatigue else ""), flush=True)
     t0 = time.monotonic()
     if todo:

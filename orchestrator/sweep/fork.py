@@ -211,7 +211,6 @@ def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> 
                 raise SweepError(f"sweep point '{p.id}': {where}: its fork of {pid} would "
                                  f"not run its scenario ({(bad or differs)[0]} differs)")
             p.fingerprint = fingerprint([p.fingerprint, at, ppoint.fingerprint])
-
             parent_of[p.id] = parent
             fork_sets[p.id] = sets
     return ForkPlan(at, parents, parent_of, fork_sets)
@@ -224,7 +223,6 @@ def parent_state(parent: Parent, run_dir: Path) -> str:
     done = run_ok(run_dir, parent.point.fingerprint) and \
         (step_folder(run_dir, parent.k) / MANIFEST).is_file()
     return "done" if done else "todo"
-
 
 
 def keep_only_fork_checkpoint(parent: Parent, run_dir: Path) -> None:

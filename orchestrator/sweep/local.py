@@ -147,7 +147,6 @@ class Runner:
                     p, state = queue.pop(0)
                     if state == "parent":
                         job = self._start_run(p, self.parents[p.id])
-
                     else:
                         job = self._start_run(p) if state == "todo" else self._start_fatigue(p)
                     job.fresh = state != "fatigue"

@@ -40,8 +40,6 @@ class SweepError(SuscosimError):
     exit_code = 2
 
 
-# --------------------------------------------------------------------------- sweep file
-
 @dataclass
 class Axis:
     """One grid axis: a parameter name and, per value, its label and overrides."""
@@ -169,18 +167,10 @@ def _check_override_key(where: str, key: Any, value: Any) -> None:
 
 def _absolute_paths(overrides: dict[str, Any], folder: Path) -> dict[str, Any]:
     out = copy.deepcopy(overrides)
-    path_keys = {f"{s}.{k}" for s, k in sc.PATH_KEYS}
-    for key, value in out.items():
-        candidates: list[tuple[dict, str]] = []
-        if key in path_keys:
-            candidates.append((out, key))
-        elif isinstance(value, dict):
-            for s, k in sc.PATH_KEYS:
-                if key == s:
-                    candidates.append((value, k))
-        for holder, k in candidates:
-            if k in holder:
-                holder[k] = sc.absolute_path(holder[k], folder)
+    for s, k in sc.PATH_KEYS:  # as a dotted key, or inside a whole table
+        for holder, key in ((out, f"{s}.{k}"), (out.get(s), k)):
+            if isinstance(holder, dict) and key in holder:
+                holder[key] = sc.absolute_path(holder[key], folder)
     return out
 
 
@@ -213,8 +203,7 @@ def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None =
             raise sw.error("base", raw_base, "a scenario file or a list of them")
         bases = []
         for b in items:
-            p = Path(b)  # as written: no ~ or $VARIABLE expansion (#46)
-            p = p if p.is_absolute() else folder / p
+            p = folder / b  # as written (an absolute path stays): no ~ or $VARIABLE expansion
             if not p.is_file():
                 raise InputFileError(str(p), "base scenario not found (sweep.base is "
                                      "relative to the sweep file)")
@@ -240,11 +229,8 @@ def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None =
             if k in RESERVED or k in grid:
                 raise ScenarioError(f"sweep.design.ranges.{k}", None, "a key that is neither "
                                     "a grid axis nor one of " + ", ".join(RESERVED))
-    runs_dir = None
     given_runs_dir = sw.optional_string("runs_dir")
-    if given_runs_dir is not None:
-        runs_dir = Path(given_runs_dir)
-        runs_dir = (runs_dir if runs_dir.is_absolute() else folder / runs_dir).resolve()
+    runs_dir = None if given_runs_dir is None else (folder / given_runs_dir).resolve()
     sw.value("description")  # free text
     from .fork import parse_fork_at
 
@@ -263,17 +249,13 @@ def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None =
         elif isinstance(spec, dict):
             if not spec:
                 raise ScenarioError(where, spec, "a non-empty table of named variants")
-            names: list[Any] = []
-            variants: list[dict[str, Any]] = []
             for vname, ov in spec.items():
                 if not isinstance(ov, dict) or not ov:
                     raise ScenarioError(f"{where}.{vname}", ov,
                                         "a table of overrides, e.g. { \"run.h\" = 0.001 }")
                 for k, v in ov.items():
                     _check_override_key(f"{where}.{vname}", k, v)
-                names.append(vname)
-                variants.append(ov)
-            axes.append(Axis(key, names, variants))
+            axes.append(Axis(key, list(spec), list(spec.values())))
         else:
             raise ScenarioError(where, spec, "a list of values or a table of named variants")
     if design is not None:
@@ -303,15 +285,13 @@ def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None =
         if pid in seen:  # two values with the same slug (e.g. "a b" and "a_b")
             pid = point_id(name, [*(params[a.name] for a in axes), index])
         seen[pid] = index
-        sweep.points.append(Point(index, pid, params, base,
-                                  _absolute_paths(overrides, path.resolve().parent)))
+        sweep.points.append(Point(index, pid, params, base, _absolute_paths(overrides, folder)))
     return sweep
 
 
 def validate_points(sweep: Sweep, out: Path) -> None:
     """Load and preflight every point's scenario; fill n_steps, the fingerprint and the fork
     plan. SweepError naming the point and the key; starts nothing."""
-
     from ..runner import resolve
 
     resolved_all: dict[str, dict[str, Any]] = {}
@@ -335,6 +315,5 @@ def fingerprint(doc: Any) -> str:
 
 
 def _params_text(params: dict[str, Any]) -> str:
-
     return ", ".join(f"{k}={v}" for k, v in params.items()) or "no parameters"
 

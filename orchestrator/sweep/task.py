@@ -168,7 +168,6 @@ def task_doc(point_json: dict[str, Any], scenario: dict[str, Any], phase: str, f
              runs_dir: Path | None, run_dir: Path, topic: str) -> dict[str, Any]:
     """The task of one point for :func:`run_point`: its point.json, scenario (TOML, paths
     absolute), phase, fatigue, shared runs_dir, archive (fatigue phase), root, topic."""
-
     archive = None
     if phase == "fatigue" and runs_dir is None:
         archive = pack(run_dir)

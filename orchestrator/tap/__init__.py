@@ -5,7 +5,6 @@ messages are counted, never fatal. Exit codes: 0 done, 1 the endpoint cannot be 
 (client mode, after 10 s), 2 bad input.
 """
 
-
 from __future__ import annotations
 
 from cosim.zenoh_options import is_loopback, session_mode
