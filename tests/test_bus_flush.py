@@ -14,6 +14,8 @@ import sys
 import textwrap
 import time
 
+import pytest
+
 from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
 
 SUB = textwrap.dedent("""
@@ -55,6 +57,7 @@ def test_flush_answers_through_router() -> None:
         router.wait(10)
 
 
+@pytest.mark.long  # a load test: busy subscriber processes, 3 x 2000 puts
 def test_last_put_before_close_is_delivered_under_load() -> None:
     ep = free_loopback_endpoint()
     router = _router(ep)

@@ -118,6 +118,7 @@ def test_a_missing_router_or_run_id_is_refused_naming_it(missing):
 
 
 @pytest.mark.docker
+@pytest.mark.long
 def test_three_machines_as_three_compose_projects_run_the_default_scenario(tmp_path):
     """Router, nodes and orchestrator from their own files, as three projects that share
     only a network (a LAN): the nodes reach the router by its name on that network, over

@@ -37,7 +37,7 @@ from cosim.table_writer import journal_table
 from ..conftest import CH3_STEP, ROOT, suscosim
 from . import docker_env as de
 
-pytestmark = [pytest.mark.docker]
+pytestmark = [pytest.mark.docker, pytest.mark.long]
 
 COMPOSE = ROOT / "docker-compose.yml"
 ROUTER_OVERRIDE = ROOT / "docker-compose.suscosim-router.yml"

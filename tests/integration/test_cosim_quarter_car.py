@@ -306,6 +306,7 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
     assert summary["cores"] == want and summary["background"] == ["recorder"]
 
 
+@pytest.mark.long  # a load test: a busy loop on every core for the whole run
 def test_on_a_machine_kept_busy_the_starved_recorder_leaves_sched_idle_and_the_run_ends_ok(
         tmp_path, ch3_step):
     """A busy loop in the normal class on every usable core: the pinned recorder, in

@@ -27,6 +27,8 @@ SCRIPT = "<script>document.documentElement.setAttribute('data-pwned','script')</
 IMG = "\"><img src=x onerror=\"document.documentElement.setAttribute('data-pwned','img')\">"
 EVIL = f"x{SCRIPT}{IMG}"
 
+pytestmark = pytest.mark.long  # every test loads its page in headless Chromium
+
 
 def _dom(url: str, tmp: Path, budget_ms: int = 3000) -> str:
     assert CHROMIUM, "headless Chromium not installed (Debian: apt-get install -y chromium)"

@@ -25,7 +25,7 @@ from cosim.table_writer import journal_table
 from ..conftest import CH3_STEP, ROOT, suscosim
 from .netns import ADDR, MAIN, PLANT, ROUTER, ROUTER_ADDR, Topology, unavailable
 
-pytestmark = [pytest.mark.netns, pytest.mark.integration,
+pytestmark = [pytest.mark.netns, pytest.mark.long, pytest.mark.integration,
               pytest.mark.usefixtures("shared_run_secret")]
 
 PORT = 7447

@@ -279,6 +279,7 @@ def _near(img: np.ndarray, rgb: tuple[int, int, int], tol: int = 12) -> int:
     return int(np.all(np.abs(img - np.asarray(rgb)) <= tol, axis=-1).sum())
 
 
+@pytest.mark.long  # headless Chromium
 @pytest.mark.skipif(_chromium() is None,
                     reason="headless Chromium not installed (Debian: apt-get install -y "
                            "chromium); the HTML report is not screenshot-tested")

@@ -309,6 +309,7 @@ def test_dask_executor_bad_arguments_exit_2(tmp_path):
 # ------------------------------------------------------------------ network namespaces
 
 @pytest.mark.netns
+@pytest.mark.long
 def test_scheduler_and_worker_in_different_namespaces(tmp_path):
     """Scheduler in namespace A, one worker in B, the sweep in C (the topology of
     tests/integration/netns.py: B and C reach each other only through A's two links)."""
