@@ -87,15 +87,10 @@ def read_case_csv(path: Path) -> tuple[np.ndarray, np.ndarray | None, np.ndarray
 
 def import_influence(base: Path, mapping: Mapping[str, str | Mapping[str, Any]],
                      stress_scale: float = 1.0) -> InfluenceSet:
-    """Influence coefficients from per-case CSV files.
-
-    Args:
-        base: directory holding the case files (or one of them: its folder is used).
-        mapping: load channel -> file name, or -> {"file": name, "scale": s}; the channel's
-            load multiplies ``s`` times the file's stresses (s = -1 flips an axis).
-            Channel names may be full columns (``plant/arm/ball_joint_y``) or short.
-        stress_scale: multiplies every stress (e.g. 1e6 for tables in MPa per N).
-    """
+    """Influence coefficients from per-case CSV (or PRNSOL) files in the folder ``base`` (or
+    ``base``'s folder): ``mapping`` load channel (full column or short) -> file name, or
+    {"file": name, "scale": s}, the channel's load multiplying s times the file's stresses
+    (s = -1 flips an axis); ``stress_scale`` multiplies every stress (1e6: MPa per N)."""
     base = Path(base)
     folder = base if base.is_dir() else base.parent
     names: list[str] = []

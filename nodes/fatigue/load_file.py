@@ -49,16 +49,28 @@ def check_loads(loads: dict[str, np.ndarray], t: np.ndarray | None, path: str) -
                                        "times must be finite")
     for name, v in loads.items():
         v = np.asarray(v, dtype=float)
-        moment = short_channel(name).endswith("_mx")
-        limit = MAX_MOMENT_NM if moment else MAX_FORCE_N
-        bad = np.flatnonzero(~np.isfinite(v) | (np.abs(v) > limit))
+        bad = bad_samples(name, v)
         if bad.size:
             i = int(bad[0])
-            when = "" if t is None or i >= len(t) else f" (t = {float(t[i]):.6g} s)"
-            what = "not finite" if not np.isfinite(v[i]) else \
-                f"beyond the plausible {limit:.0e} {'N m' if moment else 'N'}"
-            raise InputFileError(path, f"channel {name!r} sample {i}{when} is {v[i]!r}: "
-                                       f"{what}; {bad.size} such sample(s) in the channel")
+            when = None if t is None or i >= len(t) else float(t[i])
+            raise InputFileError(path, bad_sample(name, i, v[i], when, bad.size))
+
+
+def bad_samples(name: str, v: np.ndarray) -> np.ndarray:
+    """Indices of channel ``name``'s samples ``v`` that are not finite or not plausible."""
+    limit = MAX_MOMENT_NM if short_channel(name).endswith("_mx") else MAX_FORCE_N
+    return np.flatnonzero(~np.isfinite(v) | (np.abs(v) > limit))
+
+
+def bad_sample(name: str, i: int, x: float, t: float | None, n_bad: int) -> str:
+    """What is wrong with channel ``name``'s sample ``i`` (value ``x``, at time ``t`` [s])."""
+    moment = short_channel(name).endswith("_mx")
+    what = "not finite" if not np.isfinite(x) else \
+        f"beyond the plausible {MAX_MOMENT_NM if moment else MAX_FORCE_N:.0e} " \
+        f"{'N m' if moment else 'N'}"
+    when = "" if t is None else f" (t = {t:.6g} s)"
+    return f"channel {name!r} sample {i}{when} is {x!r}: {what}; {n_bad} such sample(s) in " \
+           "the channel"
 
 
 def parse_map(entries: Iterable[str]) -> dict[str, tuple[str, float]]:

@@ -58,7 +58,7 @@ from .lib.pseudo_damage import (
     reference_range,
 )
 from .lib.superposition import stress_history
-from .load_file import MAX_FORCE_N, MAX_MOMENT_NM
+from .load_file import bad_sample, bad_samples
 from .more_parts import UPPER_ARM, column_names
 from .outputs import (
     SnSpectrum,
@@ -208,8 +208,7 @@ def scan(batches: Batches, source: str, residue: str, loads_source: str | None =
             s.t_last = t_prev = float(t[-1])
         for name, v in loads.items():
             ch = s.channels[name]
-            limit = MAX_MOMENT_NM if short_channel(name).endswith("_mx") else MAX_FORCE_N
-            bad = np.flatnonzero(~np.isfinite(v) | (np.abs(v) > limit))
+            bad = bad_samples(name, v)
             if bad.size:
                 if ch.first_bad is None:
                     i = int(bad[0])
@@ -224,13 +223,7 @@ def scan(batches: Batches, source: str, residue: str, loads_source: str | None =
     for name, ch in s.channels.items():
         if ch.first_bad is not None:
             i, x, when = ch.first_bad
-            moment = short_channel(name).endswith("_mx")
-            limit = MAX_MOMENT_NM if moment else MAX_FORCE_N
-            what = "not finite" if not np.isfinite(x) else \
-                f"beyond the plausible {limit:.0e} {'N m' if moment else 'N'}"
-            raise InputFileError(where, f"channel {name!r} sample {i} (t = {when:.6g} s) is "
-                                         f"{x!r}: {what}; {ch.n_bad} such sample(s) in the "
-                                         "channel")
+            raise InputFileError(where, bad_sample(name, i, x, when, ch.n_bad))
         _cycles_done(ch, ch.rf.residue_cycles(residue))
     return s
 

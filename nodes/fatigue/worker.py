@@ -55,9 +55,8 @@ _INFLUENCE_MEMO: dict[tuple, InfluenceSet] = {}
 
 def warm_up() -> None:
     """Compile the engine's numba kernels now, or load them from numba's disk cache (once
-    per process). :func:`load_influence` calls it, so the live
-    node has them before it says ready and no compile lands in a run's step loop: cold
-    ~3 s, from the cache ~1 s (numba's own start; ``python -m bench fatigue --run`` prints it)."""
+    per process; cold ~3 s, cached ~1 s): :func:`load_influence` calls it, so the live node
+    has them before it says ready, never in a run's step loop."""
     counting.build()
     superposition.build()
     turning_eq.build()
@@ -170,14 +169,11 @@ class _Engine:
 
     def _exact_compiled(self, F: np.ndarray, idx: np.ndarray, rf: StreamingRainflow
                         ) -> tuple[np.ndarray, np.ndarray, Cycles]:
-        """The whole block node by node: the products (:mod:`.superposition`'s sum in case
-        order) and the components of the samples that may be turning points (and the
-        block's ends) gathered, fused per node so its stresses stay in cache
-        (:func:`.turning_eq.superpose_gather`); then their exact equivalent stress at once
-        and the counter fed those (each node's cycles in order). Returns the block's
-        extremes and cycles. Signed von Mises (every sample) goes by tiles of nodes. The one
-        path (numba is a dependency); the tests swap in numpy oracles of it and compare the
-        bits (``tests/fatigue/oracle_turning_eq.py``)."""
+        """The block's extremes and cycles, node by node: the products (:mod:`.superposition`'s
+        sum in case order) and the components of the samples that may be turning points
+        gathered, fused per node (:func:`.turning_eq.superpose_gather`), then their exact
+        equivalent stress and the counter fed those. Signed von Mises (every sample) goes by
+        tiles of nodes. The tests swap in numpy oracles (``tests/fatigue/oracle_turning_eq.py``)."""
         n = F.shape[0]
         kind = self.cfg.equivalent
         whole = idx.size == self.per_node.shape[0] and bool(
@@ -359,16 +355,13 @@ def analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: FatigueConfig,
 
 
 class LiveFatigue:
-    """Damage updated block by block while a run streams loads in.
-
-    ``channels`` names the load columns of the blocks (recorder column names). ``update`` takes
-    consecutive blocks: ``t_block`` (n,) and ``loads_block`` either (n, len(channels)) array
-    or a mapping channel -> (n,) array. ``result()`` may be called at any time; at the end it
-    equals `analyse` on the concatenated loads, bit for bit when the blocks are those
-    `analyse` cuts (``block_samples`` samples from the first; the live node's). ``screen``:
-    the screening fraction (None: every node computed); ``total_samples``: the history's
-    length when known (the run's steps), which lets screening leave nodes out sooner.
-    """
+    """Damage updated block by block while a run streams loads in: :meth:`update` takes consecutive
+    blocks (``t_block`` (n,), ``loads_block`` (n, len(channels)) or channel -> (n,); ``channels``:
+    the load columns' names), :meth:`result` may be called at any time. At the end it equals
+    :func:`analyse` on the concatenated loads, bit for bit when the blocks are those analyse cuts
+    (``block_samples`` from the first). ``screen``: the screening fraction (None: every node
+    computed); ``total_samples``: the history's length when known (screening leaves nodes out
+    sooner)."""
 
     def __init__(self, cfg: FatigueConfig, channels: Sequence[str],
                  track_length_m: float | None = None, screen: float | None = None,

@@ -72,14 +72,9 @@ for them: 32 kB a history)."""
 
 @dataclass
 class Cycles:
-    """Counted cycles of many histories, as flat arrays (one entry per cycle).
-
-    Attributes:
-        series: index of the history (FE node) the cycle belongs to.
-        s1, s2: the two turning points that bound the cycle (Pa for stress histories);
-            range = |s1 - s2|, mean = (s1 + s2) / 2.
-        count: 1.0 for a full cycle, 0.5 for a half cycle.
-    """
+    """Counted cycles of many histories, one entry per cycle: ``series`` the history (FE
+    node), ``s1``, ``s2`` its two turning points (Pa for stresses; range |s1 - s2|, mean
+    (s1 + s2)/2), ``count`` 1.0 for a full cycle, 0.5 for a half cycle."""
 
     series: np.ndarray
     s1: np.ndarray
@@ -210,17 +205,12 @@ class StreamingRainflow:
 
     def feed_packed(self, vals: np.ndarray, counts: np.ndarray, last: np.ndarray,
                     start: int = 0) -> Cycles:
-        """Advance histories ``start .. start + len(counts)`` by a block given packed.
-
-        Args:
-            vals: (K,) history by history, the block's samples that may be turning points,
-                in order (any sample left out must lie strictly between its neighbours;
-                e.g. :func:`.turning_eq.kept_equivalent`'s); ``counts`` (k,) how many each.
-            last: (k,) those histories' last sample of the block.
-
-        Returns the full cycles closed (each history's in the order they close; histories
-        in order), the same cycles as :meth:`feed` of the whole block.
-        """
+        """Advance histories ``start .. start + len(counts)`` by a block given packed:
+        ``vals`` (K,) history by history, the block's samples that may be turning points in
+        order (one left out must lie strictly between its neighbours, as
+        :func:`.turning_eq.kept_equivalent`'s), ``counts`` (k,) how many each, ``last`` (k,)
+        their last samples. The full cycles closed (each history's in the order they close;
+        histories in order), as :meth:`feed` of the whole block gives them."""
         vals = np.ascontiguousarray(vals, dtype=float)
         counts = np.ascontiguousarray(counts, dtype=np.int64)
         k = counts.size

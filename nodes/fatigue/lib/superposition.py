@@ -94,15 +94,9 @@ def superpose_components(loads: np.ndarray, per_node: np.ndarray) -> np.ndarray:
 
 
 def stress_history(loads: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
-    """Stress components of every node over time.
-
-    Args:
-        loads: (n_samples, n_cases) load histories F_i(t), columns in case order.
-        coefficients: (n_cases, n_nodes, 6) influence coefficients c_i.
-
-    Returns:
-        (n_samples, n_nodes, 6) stresses in Pa (:func:`superpose`, per node).
-    """
+    """Stresses (n_samples, n_nodes, 6) [Pa] of every node over time from the load
+    histories F_i(t) (n_samples, n_cases), columns in case order, and the influence
+    coefficients c_i (n_cases, n_nodes, 6) (:func:`superpose`, per node)."""
     F = np.asarray(loads, dtype=float)
     C = np.asarray(coefficients, dtype=float)
     if F.ndim != 2 or C.ndim != 3 or F.shape[1] != C.shape[0]:

@@ -319,20 +319,12 @@ def build() -> None:
 
 def kept_equivalent(buf: np.ndarray, n: int, kind: str, scratch: np.ndarray | None = None
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """The exact equivalent stress of each node's candidate turning points, packed.
-
-    Args:
-        buf: (6, k, >= n) stress components (Pa), C-contiguous (component, node, sample):
-            :func:`.superposition.components_buffer`.
-        n: the block's samples (the rest of ``buf`` is padding).
-        kind: the equivalent stress.
-        scratch: a flat float64 array the kept components are gathered into (6 x its
-            length / 6 samples; a larger one is allocated when the kept samples do not fit).
-
-    Returns:
-        ``vals`` (K,): node by node, its kept samples' exact equivalent stress in order (a
-        superset of the turning points with the block's first and last samples), ``counts``
-        (k,) per node.
+    """(``vals`` (K,), ``counts`` (k,)): node by node, the exact equivalent stress ``kind``
+    of its kept samples in order (a superset of the turning points with the block's first
+    and last samples), and how many per node. ``buf`` (6, k, >= n): stress components [Pa],
+    C-contiguous (component, node, sample), of the block's ``n`` samples (the rest is
+    padding; :func:`.superposition.components_buffer`); ``scratch``: a flat float64 array
+    the kept components are gathered into (a larger one is allocated when they do not fit).
     """
     k = buf.shape[1]
     if kind != "abs_max_principal" or n <= 2:
