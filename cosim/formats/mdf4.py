@@ -1,10 +1,8 @@
 """ASAM MDF 4 (``.mf4``) through ``asammdf``: every channel float64 on one time master.
 
-Written: one data group, master ``time`` [s], one channel per column with its name (the
-table's ``<node>/<channel>/<field>``) and SI unit, and the file comment saying what it is.
-Read: every non-master channel of every group; all must share one time base (a measurement
-with groups at different rates must be resampled first: the message says which channel
-differs). Values are float64 both ways, so a table round-trips exactly.
+Written: one data group, master ``time`` [s], one channel per column with its name and SI
+unit. Read: every non-master channel of every group, all on one time base (else the message
+names the channel that differs). A table round-trips exactly.
 """
 
 from __future__ import annotations
@@ -44,9 +42,8 @@ def write_mdf4(cs: ChannelSet, path: str | Path, comment: str = "suscosim load h
 
 
 def _collect_half_built() -> None:
-    """asammdf leaves a half-built MDF object behind a file it refuses, whose ``__del__``
-    raises; collected later, inside unrelated code (even the compiler), that error can do
-    harm. Collect it now, with its ignored exception silenced."""
+    """Collect now, silenced, the half-built MDF object asammdf leaves behind a file it
+    refuses (its ``__del__`` raises: collected later, inside unrelated code, that can harm)."""
     import gc
     import sys
 
@@ -59,8 +56,7 @@ def _collect_half_built() -> None:
 
 
 def read_mdf4(path: str | Path) -> ChannelSet:
-    """Every channel of an MDF 3/4 file on its (common) time master (the file checked by
-    :func:`cosim.safe_open.check_user_file` before asammdf opens it)."""
+    """Every channel of an MDF 3/4 file on its (common) time master."""
     from asammdf import MDF
 
     path = str(path)

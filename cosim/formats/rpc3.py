@@ -1,20 +1,17 @@
 """MTS RPC III time histories (``.rsp``, ``.tim``, ``.rpc``, ``.drv``) through ``rpc3-file``.
 
-RPC III is the rig's and nCode's format: a 512-byte-record header of keyword/value pairs
-(``DESC.CHAN_n`` the channel name, ``UNITS.CHAN_n`` its unit, ``DELTA_T`` the one time step
-of the file), then demultiplexed data in groups of ``PTS_PER_GROUP`` points.
+The rig's and nCode's format: a header of keyword/value pairs (``DESC.CHAN_n`` the channel
+name, ``UNITS.CHAN_n`` its unit, ``DELTA_T`` the file's one time step), then demultiplexed data.
 
-* ``SHORT_INTEGER`` (default, what rigs exchange): every channel is stored as 16-bit counts,
-  value = count x ``SCALE.CHAN_n``, with ``SCALE.CHAN_n = max|x| / 32752`` (rpc3-file's
-  choice, the 16-count margin MTS keeps below 2^15). The **resolution** of a channel is one
-  count, ``max|x| / 32752``: 3.05e-5 of its peak; a value read back is within half a count
-  (``resolution / 2``) of the one written. We write ``INT_FULL_SCALE = 32768``: readers
-  either scale by ``SCALE.CHAN_n`` alone or by ``SCALE.CHAN_n x INT_FULL_SCALE / 32768``
-  (``rpc-reader``); with 32768 both give the same numbers.
+* ``SHORT_INTEGER`` (default, what rigs exchange): 16-bit counts, value = count x
+  ``SCALE.CHAN_n`` with ``SCALE.CHAN_n = max|x| / 32752`` (rpc3-file's choice, the 16-count
+  margin MTS keeps below 2^15): the **resolution** is one count, 3.05e-5 of the peak, a value
+  read back within half a count. We write ``INT_FULL_SCALE = 32768``: readers that scale by
+  ``SCALE.CHAN_n x INT_FULL_SCALE / 32768`` (``rpc-reader``) give the same numbers.
 * ``FLOATING_POINT``: 32-bit IEEE floats (relative spacing 1.2e-7, rounding within 6e-8).
 
-A file has one uniform step: the table's ``t`` must be uniform (a run's is: t_k = k h); its
-first time is kept in the header as ``SUSCOSIM_T0_S`` (RPC III starts at 0).
+The table's ``t`` must be uniform (a run's is: t_k = k h); its first time is kept in the
+header as ``SUSCOSIM_T0_S`` (RPC III starts at 0).
 """
 
 from __future__ import annotations
@@ -28,8 +25,7 @@ from cosim.errors import InputFileError
 
 from .channel_set import ChannelSet
 
-COUNTS = 32752
-"""Largest count rpc3-file writes: the resolution of a channel is max|x| / COUNTS."""
+COUNTS = 32752  # largest count rpc3-file writes: a channel's resolution is max|x| / COUNTS
 T0_KEY = "SUSCOSIM_T0_S"
 
 
@@ -45,17 +41,14 @@ def uniform_step(t: np.ndarray, what: str = "the table") -> float:
 
 
 def resolution(x: np.ndarray) -> float:
-    """Resolution (one count) of a channel written as 16-bit integers [its unit]."""
+    """One count of a channel written as 16-bit integers [its unit]."""
     peak = float(np.max(np.abs(x))) if np.size(x) else 0.0
     return peak / COUNTS if peak > 0 else 1.0
 
 
 def write_rpc3(cs: ChannelSet, path: str | Path, datatype: str = "int") -> dict[str, Any]:
-    """Write ``cs`` as RPC III (``datatype`` "int": SHORT_INTEGER, "float": FLOATING_POINT).
-
-    Returns ``{"resolution": {name: one count}}`` for "int" (absolute, in the channel's
-    unit), ``{"resolution": {name: relative float32 resolution}}`` for "float".
-    """
+    """Write ``cs`` as RPC III (``datatype`` "int": SHORT_INTEGER, "float": FLOATING_POINT);
+    ``{"resolution": {name: ...}}``: one count (its unit), or float32's relative spacing."""
     import rpc3.rpc3 as lib
 
     if datatype not in ("int", "float"):

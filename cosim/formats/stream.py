@@ -1,8 +1,6 @@
-"""A run's table written as CSV or Parquet of the formats' layout (:mod:`.tables`) chunk by
-chunk, read from ``table.parquet`` in record batches (or ``table.csv`` line by line): memory
-by the chunk, not the run. The output is that of :func:`.tables.write_csv` /
-:func:`.tables.write_parquet` on the whole table (CSV byte for byte; Parquet the same
-columns, values and units, written in row groups)."""
+"""A run's table read in chunks (``table.parquet`` a row group at a time, ``table.csv`` line
+by line) and written as CSV or Parquet of the formats' layout (:mod:`.tables`): memory by
+the chunk, not the run."""
 
 from __future__ import annotations
 
@@ -37,8 +35,7 @@ def table_columns(src: str | Path) -> list[str]:
 
 def iter_chunks(src: str | Path, names: list[str], rows: int | None = None
                 ) -> Iterator[dict[str, np.ndarray]]:
-    """The columns ``names`` of a run's table in chunks of up to ``rows`` rows (default
-    :data:`BATCH_ROWS`)."""
+    """The columns ``names`` of a run's table in chunks of up to ``rows`` rows."""
     src = Path(src)
     rows = BATCH_ROWS if rows is None else rows
     if src.suffix == ".parquet":

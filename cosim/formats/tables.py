@@ -42,16 +42,14 @@ def _time_column(names: list[str], path: str) -> int:
 
 
 MAX_CSV_VALUES = 50_000_000
-"""Most numbers a load CSV may hold (rows x columns; 400 MB as float64): 1e7 rows of 5
-columns, a 10 kHz rig file of 1000 s with 4 channels. A longer history: Parquet or MDF 4,
-or split it."""
+"""Most numbers a load CSV may hold (rows x columns; 400 MB as float64): a 10 kHz rig file of
+1000 s with 4 channels."""
 
 
 def read_csv(path: str | Path) -> ChannelSet:
-    """A CSV table (see the module docstring); ``k`` (a step index) is dropped. Read by
-    NumPy's parser into one float64 array (1e7 rows of 2 columns: 2 s, 0.35 GB), at most
-    :data:`MAX_CSV_VALUES` numbers; a file it does not take is read again row by row by
-    :func:`_read_csv_rows`, which names the line of the problem."""
+    """A CSV table (``k``, a step index, dropped), read by NumPy's parser into one float64
+    array (1e7 rows of 2 columns: 2 s, 0.35 GB); a file it does not take is read again row
+    by row by :func:`_read_csv_rows`, which names the line of the problem."""
     import warnings
 
     path = str(path)
@@ -86,7 +84,7 @@ def _channels(path: str, header: list[str], a: np.ndarray, hline: int) -> Channe
 
 
 def _read_csv_rows(path: str) -> ChannelSet:
-    """:func:`read_csv` row by row into a typed array, naming the line of a problem."""
+    """:func:`read_csv` row by row, naming the line of a problem."""
     header: list[str] | None = None
     buf = array("d")
     lineno = hline = 0

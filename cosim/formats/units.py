@@ -1,9 +1,5 @@
-"""SI units of the columns of a run's table (the channel schema of :mod:`cosim.channels`).
-
-Column names are ``<node>/<channel>/<field>`` (``[i]`` appended for a corner of a full
-vehicle), plus ``t`` [s] and ``k`` (step index). :func:`si_unit` gives the unit string the
-exporters write (MDF 4 channel unit, RPC III ``UNITS.CHAN_n``, Parquet field metadata).
-"""
+"""SI units of the columns of a run's table (``<node>/<channel>/<field>``, ``[i]`` for a
+corner, ``t`` [s], ``k``): what the exporters write, and factors from a file's units to SI."""
 
 from __future__ import annotations
 
@@ -47,9 +43,8 @@ _LENGTH = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "um": 1e-6, "µm": 1e-6}
 
 
 def to_si_factor(unit: str, quantity: str) -> float | None:
-    """Factor that turns values in ``unit`` into SI for ``quantity`` ("force" [N], "moment"
-    [N m] or "length" [m]); 1 for an empty unit (taken as SI); None when ``unit`` is not one
-    of that quantity's units."""
+    """Factor from ``unit`` to SI for ``quantity`` ("force" [N], "moment" [N m], "length"
+    [m]); 1 for an empty unit; None when ``unit`` is not one of that quantity's."""
     u = unit.strip().lower()
     if not u:
         return 1.0
