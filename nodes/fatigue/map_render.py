@@ -1,6 +1,6 @@
 """The one damage-map renderer: a projection of ALL assessed nodes, for any mesh.
 
-Used by the run's ``fatigue/damage_map.png`` (:mod:`damage_map`), the run report, the sweep
+Used by the run's ``fatigue/damage_map.png`` (:func:`plot_damage_map`), the run report, the sweep
 report (which embeds each run's PNG) and the duty report. It needs node positions only
 (``xyz`` in m, the arm frame: x forward, y outboard, z up), so it works for the mapped hex
 mesh, a tetrahedral mesh or an imported node table alike.
@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -160,3 +161,37 @@ def draw(fig: Any, xyz: np.ndarray, damage: np.ndarray, *,
         fig.colorbar(mesh, ax=fig.axes, label=label, shrink=0.8,
                      extend="max" if n_inf else "neither")
     return out
+
+
+def plot_damage_map(result: Any, path: Path, title: str = "") -> Path:
+    """Write a PNG of a :class:`.lib.result.FatigueResult`'s damage per pass (:func:`draw`:
+    plan and side views, the arm's outline and the critical node); without node coordinates
+    (imported tables without x, y, z), or with no damage at all, a bar chart of the 30 most
+    damaged nodes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from cosim import lower_arm as geo
+
+    path = Path(path)
+    D = np.asarray(result.damage, dtype=float)
+    fig = plt.figure(figsize=(12, 5.2))
+    if result.node_xyz is None or not np.any(D > 0):
+        ax = fig.add_subplot(111)
+        top = np.argsort(D)[::-1][:30]
+        ax.bar([str(result.node_ids[i]) for i in top], np.where(np.isfinite(D[top]),
+                                                                D[top], 0.0))
+        ax.set_xlabel("node")
+        ax.set_ylabel("damage per pass")
+        ax.tick_params(axis="x", rotation=90)
+    else:
+        draw(fig, result.node_xyz, D, node_ids=result.node_ids, hardpoints=geo.HARDPOINTS)
+    life = "fails on the first cycle (life 0 km)" if np.isinf(D).any() else \
+        f"min life {result.life_km:.4g} km ({result.life_repeats:.4g} repeats)"
+    fig.suptitle(title or f"Lower arm fatigue damage - {life}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -20,9 +20,9 @@ from cosim.safe_open import read_user_text
 
 from .config import FatigueConfig
 from .critical_plane_run import with_critical_planes
-from .damage_map import plot_damage_map
 from .lib.damage import SPECTRAL_METHODS
 from .lib.influence_set import short_channel
+from .map_render import plot_damage_map
 from .more_parts import load_channel, more_parts, part_channels, primary_name
 from .run_stream import Batches, Scan
 from .worker import FatigueResult, load_influence
