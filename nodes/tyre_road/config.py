@@ -20,7 +20,7 @@ Road keys (``[road]``):
   optional, defaults the calibrated pavé): ``seed``, ``stone_length``, ``stone_length_std``,
   ``joint_width``, ``joint_depth``, ``stone_height_std``, ``crown`` [m]; long waves ``G``,
   ``waviness``, ``band``, ``correlation`` (as power_law)
-* measured (csv, opencrg :mod:`.opencrg`, mdf4 :mod:`.profile_mdf`): ``path``, ``zero_start``
+* measured (csv, opencrg, mdf4: :mod:`.measured`): ``path``, ``zero_start``
   (default true) and the format's keys (docs/data_formats.md)
 
 Tyre keys (``[tyre]``): ``model`` (point_contact | fixed_footprint), ``stiffness`` [N/m],
@@ -41,9 +41,7 @@ from . import iso8608 as rr
 from .cobblestone import DEFAULTS as PAVE_DEFAULTS
 from .cobblestone import PaveParameters, pave_road
 from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, DEFAULT_WAVINESS, GD_N0, random_road
-from .opencrg import VEHICLE_TRACK_M, opencrg_road
-from .profile_csv import csv_road
-from .profile_mdf import mdf_road
+from .measured import VEHICLE_TRACK_M, csv_road, mdf_road, opencrg_road
 from .roads import KMH, EventRoad, Road, RoadEvent
 from .tyres import FixedFootprint, PointContact, Tyre
 

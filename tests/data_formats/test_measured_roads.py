@@ -11,7 +11,7 @@ import pytest
 
 from cosim.errors import InputFileError, ScenarioError
 from nodes.tyre_road.config import build_road
-from nodes.tyre_road.opencrg import VEHICLE_TRACK_M
+from nodes.tyre_road.measured import VEHICLE_TRACK_M
 
 from ..conftest import CH3_STEP
 from .conftest import cli

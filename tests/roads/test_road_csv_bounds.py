@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cosim.errors import InputFileError
-from nodes.tyre_road.profile_csv import MAX_STEP_M, csv_road, read_profile_csv
+from nodes.tyre_road.measured import MAX_STEP_M, csv_road, read_profile_csv
 
 
 def _write(tmp_path: Path, z: np.ndarray) -> Path:

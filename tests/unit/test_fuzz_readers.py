@@ -153,7 +153,7 @@ def test_fuzz_part_toml(tmp_path, monkeypatch):
 
 
 def test_fuzz_road_csv(tmp_path, monkeypatch):
-    from nodes.tyre_road.profile_csv import read_profile_csv
+    from nodes.tyre_road.measured import read_profile_csv
 
     monkeypatch.chdir(tmp_path)
     sample = b"# x, left, right\nx,z_l,z_r\n" + b"".join(
@@ -201,7 +201,7 @@ def test_fuzz_load_files(tmp_path, monkeypatch, fmt, suffix):
 def test_fuzz_opencrg(tmp_path, monkeypatch, fmt):
     import pyopencrg
 
-    from nodes.tyre_road.opencrg import read_crg
+    from nodes.tyre_road.measured import read_crg
 
     monkeypatch.chdir(tmp_path)
     u, v = np.arange(0, 4.0, 0.1), np.array([-1.0, 0.0, 1.0])

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from cosim.errors import InputFileError
-from nodes.tyre_road.opencrg import read_crg
+from nodes.tyre_road.measured import read_crg
 from tests.conftest import ROOT, suscosim
 
 SECRET = "s3cr3t-do-not-print"

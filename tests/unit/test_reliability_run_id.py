@@ -14,7 +14,7 @@ from cosim import keys, safe_open
 from cosim import scenario as sc
 from cosim.errors import InputFileError, ScenarioError
 from cosim.run_lock import FolderInUseError, RunIdInUseError, RunLock, check_run_id_free
-from nodes.tyre_road import profile_csv
+from nodes.tyre_road import measured
 from tests.conftest import CH3_STEP, ROOT, node_pids, suscosim
 from tests.memory_bus import MemoryBus
 
@@ -131,9 +131,9 @@ def test_a_huge_road_csv_is_refused_with_a_clear_message_without_reading_it(tmp_
     with open(big, "wb") as f:
         f.truncate(safe_open.limit("profile") + 1)
     with pytest.raises(InputFileError, match="larger than the 256 MiB"):
-        profile_csv.read_profile_csv(big)
+        measured.read_profile_csv(big)
     ok = tmp_path / "ok.csv"
     ok.write_text("s,z\n" + "".join(f"{i * 0.01},{(i % 7) * 1e-3}\n" for i in range(20000)))
-    x, zl, zr = profile_csv.read_profile_csv(ok)
+    x, zl, zr = measured.read_profile_csv(ok)
     assert x.dtype == float and len(x) == 20000 and zl[6] == pytest.approx(6e-3)
     assert (zl == zr).all() and zr is not zl
