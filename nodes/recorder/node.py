@@ -9,7 +9,7 @@ message to :class:`.recording.Recording` (what is rejected, the append-only jour
 complete). Once every channel has delivered every step 0..N it puts the table in place and
 reports per-channel statistics to the orchestrator; on an abort it flushes, puts the rows that
 are complete in place, and stops. Its memory does not grow with the run: the steps each
-channel delivered are ranges (:class:`.steps.StepSet`), the table holds only the steps not yet
+channel delivered are ranges (:class:`.recording.StepSet`), the table holds only the steps not yet
 complete.
 
 It also publishes the run's coupling energy residual per step and bond on

@@ -8,12 +8,20 @@ channel (the same fields, each a number or a list of one length, as in the chann
 message); anything else is rejected (``reject``) and never journaled. A second message for a
 step a channel already gave (a duplicate) is counted in ``duplicates`` and rejected. A hole in
 a channel's steps sets :attr:`Recording.gap` (:func:`lost_steps`).
+
+A fork with another law (``suscosim run --fork RUN@T --set controller.law=...``) records the
+parent's steps < k and its own steps >= k in one table, but the two laws may publish other
+fields on ``controller/force`` (skyhook's ``c``, an MR law's current): the table's columns of
+such a channel are the union of both, a field one law does not publish NaN in its rows. The
+new law's fields are known only at its first message (step k), so the parent's records of that
+channel are held until then (:class:`ForkLayouts`; the other channels' rows wait in the table).
 """
 
 from __future__ import annotations
 
 import errno
-from collections.abc import Callable, Iterable
+from bisect import bisect_right
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -24,9 +32,6 @@ from cosim.journal import JournalWriter
 from cosim.run_settings import RunSettings
 from cosim.table_writer import TableWriter
 from cosim.wire import Message, codec
-
-from .fork_layout import ForkLayouts
-from .steps import StepSet
 
 EARLY_MAX = 100_000
 """Data messages held before the clock's start says which channels the run has."""
@@ -183,3 +188,88 @@ def write_error(exc: OSError, folder: Any) -> RunError:
     full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
     return RunError(f"recorder: cannot write the run's journal or table in {folder}: "
                     f"{exc.strerror or exc}{full}")
+
+
+class StepSet:
+    """Steps ``k`` >= 0 received, as half-open ranges ``[lo, hi)``; ``count`` of them."""
+
+    __slots__ = ("lo", "hi", "count")
+
+    def __init__(self) -> None:
+        self.lo: list[int] = []
+        self.hi: list[int] = []
+        self.count = 0
+
+    def add(self, k: int) -> bool:
+        """Add step ``k``; False when it was already there (a duplicate)."""
+        lo, hi = self.lo, self.hi
+        if hi and k == hi[-1]:  # the usual case: the next step in order
+            hi[-1] += 1
+            self.count += 1
+            return True
+        i = bisect_right(lo, k) - 1  # the range starting at or before k
+        if i >= 0 and k < hi[i]:
+            return False
+        joins_left = i >= 0 and hi[i] == k
+        joins_right = i + 1 < len(lo) and lo[i + 1] == k + 1
+        if joins_left and joins_right:
+            hi[i] = hi[i + 1]
+            del lo[i + 1], hi[i + 1]
+        elif joins_left:
+            hi[i] = k + 1
+        elif joins_right:
+            lo[i + 1] = k
+        else:
+            lo.insert(i + 1, k)
+            hi.insert(i + 1, k + 1)
+        self.count += 1
+        return True
+
+    def __contains__(self, k: int) -> bool:
+        i = bisect_right(self.lo, k) - 1
+        return i >= 0 and k < self.hi[i]
+
+
+class ForkLayouts:
+    """Which records a fork holds back, and the NaN-padded union layout of their channels."""
+
+    def __init__(self, fresh_nodes: Iterable[str], start_k: int) -> None:
+        self.fresh = frozenset(fresh_nodes)
+        self.start_k = int(start_k)
+        self.held: dict[str, list[tuple[int, float, Mapping[str, Any]]]] = {}
+        self._fill: dict[str, dict[str, Any]] = {}
+
+    def holds(self, node: str, k: int) -> bool:
+        """A record of the parent's prefix (k < start) of a node that starts afresh."""
+        return k < self.start_k and node in self.fresh
+
+    def hold(self, name: str, k: int, t: float, d: Mapping[str, Any]) -> None:
+        self.held.setdefault(name, []).append((k, t, d))
+
+    def release(self, name: str, first: Mapping[str, Any]
+                ) -> list[tuple[int, float, Mapping[str, Any]]]:
+        """The held records of ``name`` padded to the union of their fields and those of the
+        new node's ``first`` message (which :meth:`pad` pads from then on); ValueError when a
+        field is a number in one and a list (or another length) in the other."""
+        held = self.held.pop(name, [])
+        shapes: dict[str, int | None] = {}
+        for d in (*(d for _k, _t, d in held), first):
+            for f, v in d.items():
+                n = len(v) if type(v) is list else None
+                if shapes.setdefault(f, n) != n:
+                    raise ValueError(f"{name}: field {f!r} is {_shape(shapes[f])} in the parent "
+                                     f"and {_shape(n)} in the fork")
+        self._fill[name] = {f: float("nan") if n is None else [float("nan")] * n
+                            for f, n in shapes.items()}
+        return [(k, t, self.pad(name, d)) for k, t, d in held]
+
+    def pad(self, name: str, d: Mapping[str, Any]) -> Mapping[str, Any]:
+        """``d`` with the union's missing fields as NaN (``d`` itself for other channels)."""
+        fill = self._fill.get(name)
+        if fill is None or len(d) == len(fill):
+            return d
+        return {**fill, **d}
+
+
+def _shape(n: int | None) -> str:
+    return "a number" if n is None else f"a list of {n}"

@@ -1,4 +1,4 @@
-"""The table's layout across a fork whose controller starts afresh (recorder/fork_layout.py)."""
+"""The table's layout across a fork whose controller starts afresh (nodes/recorder/recording.py)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from nodes.recorder.fork_layout import ForkLayouts
+from nodes.recorder.recording import ForkLayouts
 
 
 def test_held_records_padded_to_the_union_of_both_laws():
