@@ -66,7 +66,6 @@ class JournalWriter:
         self._buf_bytes = 0
         self._first = 0
         self.records = 0
-        self.segments = 0
 
     def append(self, channel: str, payload: bytes) -> None:
         self.records += 1
@@ -86,7 +85,6 @@ class JournalWriter:
         os.write(self._fd, b"".join((head, struct.pack("<I", zlib.crc32(head)), body,
                                      struct.pack("<I", zlib.crc32(body)))))
         self._first += len(self._buf)
-        self.segments += 1
         self._buf.clear()
         self._buf_bytes = 0
 

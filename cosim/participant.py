@@ -85,11 +85,6 @@ class Participant:
         self._closed = threading.Event()
         self._watchdog: threading.Thread | None = None
 
-    @property
-    def mailbox(self) -> dict[Channel, dict[int, Message]]:
-        """Each input's filed messages by step (a view for inspection)."""
-        return {tag: mb.box for tag, mb in self.inputs.items()}
-
     def check_orchestrator(self) -> None:
         """RunError if the orchestrator is gone (:mod:`cosim.orchestrator_presence`)."""
         why = self.orchestrator.why_gone()

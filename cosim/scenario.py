@@ -44,52 +44,40 @@ RUN_KEYS: dict[str, Key] = {
     "id": Key(str, "", doc="explicit run id (letters, digits, _ . -)"),
     "t_end": Key(float, 0.0, doc="simulated time [s]; 0 = from road length / speed"),
     "h": Key(float, 0.001, positive=True, low=1e-6, high=0.1,
-             doc="communication step [s], or \"auto\": chosen each step from the coupling's "
-                 "energy residual between h_min and h_max (cosim/step_size.py)"),
+             doc="communication step [s], or \"auto\" (cosim/step_size.py)"),
     "h_min": Key(float, 1e-4, positive=True, low=1e-6, high=0.1,
                  doc="run.h = \"auto\": the smallest step [s]"),
     "h_max": Key(float, 4e-3, positive=True, low=1e-6, high=0.1,
                  doc="run.h = \"auto\": the largest step [s]"),
     "h_tol": Key(float, 1e-3, positive=True, low=1e-9, high=1.0,
-                 doc="run.h = \"auto\": the step's energy residual allowed, relative to "
-                     "the energy its bonds carry over the step"),
+                 doc="run.h = \"auto\": a step's energy residual over its bonds' energy"),
     "exchange": Key(str, "sequential", ("sequential", "parallel"),
-                    doc="sequential: thesis scheme (plant, then forces at the same t_k); "
-                        "parallel: Jacobi, everybody on the previous step's inputs"),
+                    doc="parallel: Jacobi, on the previous step's inputs (run_settings.py)"),
     "coupling": Key(str, "jacobian", ("hold", "linear", "jacobian"),
-                    doc="how the plant treats the force inputs between two communication "
-                        "steps: hold (zero-order hold, the thesis), linear (extrapolate from "
-                        "the last two steps), jacobian (linearise with dF/dz, dF/dv sent by "
-                        "the force nodes)"),
+                    doc="the force inputs between two steps: zero-order hold (the thesis), "
+                        "linear extrapolation, or linearised with the sent dF/dz, dF/dv"),
     "substeps": Key(int, 4, positive=True, high=10000,
                     doc="plant integration substeps per step"),
     "coupling_h": Key(float, 0.0, low=0.0, high=0.1,
-                      doc="coupling (communication) step [s]: a whole multiple of run.h; the "
-                          "nodes exchange once per coupling step, the plant takes its run.h "
-                          "steps between on the coupling's extrapolated inputs; 0 = run.h"),
+                      doc="multi-rate: the exchange's step [s], a whole multiple of run.h "
+                          "(the plant's); 0 = run.h"),
     "sink_window_s": Key(float, 10.0, low=0.0, high=1e6,
-                         doc="how far (simulated s) a sink (recorder, live fatigue) may lag "
-                             "behind the coupled chain before the chain waits for it; "
-                             "0 = unbounded"),
+                         doc="how far (simulated s) a sink may lag behind; 0 = unbounded"),
     "mode": Key(str, "distributed", ("distributed", "monolithic", "reference"),
-                doc="distributed: the node models co-simulated (run.transport says how; "
-                    "monolithic: the same as run.transport = \"inprocess\"); reference: "
-                    "SciPy solve_ivp of the lumped model"),
+                doc="monolithic: run.transport = \"inprocess\"; reference: SciPy solve_ivp "
+                    "of the lumped model"),
     "transport": Key(str, "zenoh", ("zenoh", "inprocess"),
-                     doc="zenoh: one process per node over Zenoh; inprocess: the same node "
-                         "models stepped in one process, no bus (orchestrator/inprocess.py; "
-                         "bit-identical tables)"),
+                     doc="inprocess: the node models stepped in one process, no bus "
+                         "(bit-identical tables)"),
     "stall_timeout_s": Key(float, 5.0, positive=True, high=3600.0,
                            doc="a node that makes no progress this long ends the run [s]"),
     "start_timeout_s": Key(float, 60.0, positive=True, high=3600.0,
                            doc="how long to wait for every node to be ready [s]"),
     "checkpoint_every_s": Key(float, 0.0, low=0.0, high=1e6,
-                              doc="save every node's whole state this often (simulated s; "
-                                  "a whole number of steps) for suscosim run --resume / "
-                                  "--fork; 0 = never"),
+                              doc="checkpoint period (simulated s) for --resume / --fork; "
+                                  "0 = never"),
     "checkpoint_keep": Key(int, 2, low=0, high=1_000_000,
-                           doc="complete checkpoints kept (the newest; older ones are deleted "
-                               "as new ones complete); 0 = keep every one (to fork at any T)"),
+                           doc="newest complete checkpoints kept; 0 = every one"),
     "rtol": Key(float, 1e-10, positive=True, low=1e-14, high=1e-2,
                 doc="reference mode: solve_ivp relative tolerance"),
 }

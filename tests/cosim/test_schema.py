@@ -104,5 +104,5 @@ def test_a_validly_signed_insider_step_loses_its_implausible_messages() -> None:
     bus.put(k, key.sign(k, encode_step(3, 0.003, inner)))
     assert part.wait({state: 0})[state].d == {"z_b": 0.1}
     assert part.rejected == 3
-    assert sorted(part.mailbox[state]) == [0]
+    assert sorted(part.inputs[state].box) == [0]
     part.close()

@@ -42,7 +42,7 @@ def test_wait_returns_the_step_asked_for_and_drops_older_ones() -> None:
     for k in (0, 1, 2):
         _put(bus, "tyre_road", "force", encode("data", k, k * 1e-3, {"F_t": 10.0 * k}))
     assert part.wait({tyre: 1})[tyre].d["F_t"] == 10.0
-    assert sorted(part.mailbox[tyre]) == [1]  # step 0 dropped; step 2 not read yet
+    assert sorted(part.inputs[tyre].box) == [1]  # step 0 dropped; step 2 not read yet
     assert part.wait({tyre: 2})[tyre].d["F_t"] == 20.0
     late = threading.Timer(0.1, _put, (bus, "tyre_road", "force",
                                         encode("data", 3, 3e-3, {"F_t": 30.0})))

@@ -129,13 +129,13 @@ def test_far_ahead_steps_are_rejected_and_the_mailbox_stays_bounded() -> None:
     for k in range(3):
         put(k, k * 1e-3, float(k))
         assert part.wait({tyre: k})[tyre].d["F_t"] == float(k)
-        assert len(part.mailbox[tyre]) <= MAILBOX_WINDOW + 2
+        assert len(part.inputs[tyre].box) <= MAILBOX_WINDOW + 2
     assert part.rejected == flood
     put(1, 1e-3, 5.0)  # behind the step waited for
     put(2 + MAILBOX_WINDOW + 1, 1.0, 5.0)
     put(2 + MAILBOX_WINDOW, 1.0, 5.0)  # the window's edge
     part._drain_feeds()
-    assert part.rejected == flood + 2 and 2 + MAILBOX_WINDOW in part.mailbox[tyre]
+    assert part.rejected == flood + 2 and 2 + MAILBOX_WINDOW in part.inputs[tyre].box
     part.close()
 
 
@@ -145,7 +145,7 @@ def test_an_input_that_is_not_stepped_holds_a_bounded_number_of_messages() -> No
     loads = part.listen("recorder", "loads", required=("k0", "t"), stepped=False)
     for j in range(MAILBOX_MAX + 50):
         part.handle(loads, encode("data", j, 0.0, {"k0": j, "t": [0.0]}))
-    assert len(part.mailbox[loads]) == MAILBOX_MAX and part.rejected == 50
+    assert len(part.inputs[loads].box) == MAILBOX_MAX and part.rejected == 50
     part.close()
 
 

@@ -76,7 +76,7 @@ def test_a_node_takes_or_rejects_every_frame_on_its_inputs_and_clock() -> None:
             except RunError as exc:  # a signed, well-formed abort is obeyed
                 assert "aborted by the orchestrator" in str(exc)
     assert part.rejected > CASES  # every random and flipped frame at least
-    assert len(part.mailbox[tyre]) <= 70
+    assert len(part.inputs[tyre].box) <= 70
     part.close()
 
 
@@ -113,5 +113,5 @@ def test_signed_data_with_every_kind_of_bad_field_is_rejected() -> None:
     for j, d in enumerate(bad):
         part.handle(step, KEY.sign(where, encode_step(j, 0.0, [
             ("force", encode("data", j, 0.0, d))])))
-    assert part.rejected == len(bad) and not part.mailbox[tyre]
+    assert part.rejected == len(bad) and not part.inputs[tyre].box
     part.close()
