@@ -19,8 +19,7 @@ import numpy as np
 import pytest
 
 from cosim.errors import InputFileError
-from nodes.tyre_road.magic_formula import BUILTIN, MagicFormula, relax
-from nodes.tyre_road.tir_file import parse_tir, read_tir
+from nodes.tyre_road.magic_formula import BUILTIN, MagicFormula, parse_tir, read_tir, relax
 
 REF = Path(__file__).with_name("mfeval_mpv_215_65r16.csv")
 TOL = 1e-4

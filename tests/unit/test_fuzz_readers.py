@@ -164,7 +164,7 @@ def test_fuzz_road_csv(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("kind", ["tir", "duty", "sweep"])
 def test_fuzz_tyre_duty_and_sweep_files(tmp_path, monkeypatch, kind):
-    from nodes.tyre_road.tir_file import read_tir
+    from nodes.tyre_road.magic_formula import read_tir
     from orchestrator.duty import load_duty
     from orchestrator.sweep.spec import load_sweep
 
