@@ -1,28 +1,16 @@
-"""The law registry: a control law is one function.
+"""The law registry: a control law is one function (docs/control.md, "Adding a control law").
 
-Write the law as a function of the corner signals, its settings as keyword-only arguments,
-and decorate it; name it in a scenario (``[controller] law = "my_law"``) and it runs::
-
-    import numpy as np
-    from nodes.controller.registry import HARD, SOFT, Param, control_law
-
-    @control_law("my_law")
-    def my_law(v_b, v_rel, *, gain: float = Param(lo=0.0, unit="N·s/m"), c_min=SOFT, c_max=HARD):
-        \"\"\"One line that ``python3 -m nodes.controller.registry`` lists.\"\"\"
-        c = np.clip(gain * np.abs(v_b), c_min, c_max)
-        return c * v_rel, c                       # F_d (N), c_eff (N·s/m) [, extras]
-
-**Inputs** (before the ``*``, filled by name every step): per-corner float arrays ``v_b``,
-``v_w``, ``v_rel`` (m/s; ``v_w - v_b`` or ``v_damper``), ``z_b``, ``z_w`` (m) or any other
-state key; the full vehicle's scalars ``v_heave``, ``w_pitch``, ``w_roll``, ``pitch``,
-``roll``; ``t``, ``h`` (s), ``n`` (corners); ``memory``, a dict kept for the run.
-**Settings** (after the ``*``): keys of ``[controller]``, optional with a plain default,
-ranged or required with :func:`Param`; :data:`SOFT`/:data:`HARD` take the ``preset``
-defaults and ``hard >= soft`` is checked; a bad key is a ScenarioError naming it (exit 2).
-**Outputs**: ``(F_d, c_eff[, extras])``: force on the body, upward positive (N), its slope
-dF_d/dv_rel (N·s/m), further channels; n_corners values or scalars. A law outside this
-package is named ``"package.module:function"``; one that needs a class registers a
-:func:`law_builder`. docs/control.md walks through writing one.
+Decorated with :func:`control_law`, named in a scenario (``[controller] law = "my_law"``):
+its parameters before the ``*`` are inputs filled by name every step (per-corner arrays
+``v_b``, ``v_w``, ``v_rel`` in m/s, ``z_b``, ``z_w`` in m or any other state key; the full
+vehicle's scalars :data:`~nodes.controller.base.BODY_KEYS`; ``t``, ``h`` in s, ``n``;
+``memory``, a dict kept for the run), those after it settings, keys of ``[controller]``
+(optional with a plain default, ranged or required with :func:`Param`; :data:`SOFT` /
+:data:`HARD` take the ``preset`` defaults, ``hard >= soft`` checked; a bad key is a
+ScenarioError naming it, exit 2). It returns ``(F_d, c_eff[, extras])``: the force on the
+body, upward positive (N), its slope dF_d/dv_rel (N·s/m), further channels; n_corners values
+or scalars. A law outside this package is named ``"package.module:function"``; one that
+needs a class registers a :func:`law_builder`.
 """
 
 from __future__ import annotations
