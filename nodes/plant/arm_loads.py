@@ -17,49 +17,35 @@ if TYPE_CHECKING:
 
 
 def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
-    """Loads ON the lower arm during the latest substep, in the arm frame (which turns with
-    the arm) at the start of that substep, t_k [N, N m].
+    """Loads ON the lower arm during the latest substep, in the arm frame (it turns with the
+    arm) at the start of that substep, t_k [N, N m]; where each acts: the arm-frame points of
+    :data:`cosim.lower_arm.HARDPOINTS`.
 
-    Where each acts (arm-frame points: :data:`cosim.lower_arm.HARDPOINTS`):
+    * ``ball_joint_{x,y,z}``: from the hub: minus the lower ball joint's sensor force
+      (parent arm -> child hub), from the hub frame;
+    * ``damper_mount_{x,y,z}``: from the damper at its seat, -F_d along the damper axis;
+    * ``bush_front_{x,y,z}``, ``bush_rear_{x,y,z}``: from the body: the pivot's sensor wrench
+      (body -> arm) moved to the frame origin, F and M_O = M_com + r_com x F, split by the
+      moments between the bushes at x = +-d/2: F_front,z = F_z/2 - M_y/d, F_rear,z = F_z/2 +
+      M_y/d, F_front,y = F_y/2 + M_z/d, F_rear,y = F_y/2 - M_z/d, the axial F_x shared
+      equally (statically indeterminate between two bushes of equal stiffness);
+    * ``bump_stop_y``, ``bump_stop_z``: from the bumper at the pad, (0, 0, -F_bs) in world
+      axes: -F_bs sin(theta) and -F_bs cos(theta) <= 0 for an arm turned by theta (jounce
+      positive; no x component: the arm turns about x, the body only heaves); 0 while clear;
+    * ``torsion_bar_mx`` [N m]: the torsion spring's moment about x (M_x of the pivot, static
+      preload included), a pure moment entering through the pivot, half at each bush eye
+      (:data:`cosim.lower_arm.TORSION_SPRING_POINTS`, as the thesis split its revolute
+      joint's loads over nodes A and B): for the rigid arm its point does not matter, for the
+      FE it does.
 
-    * ``ball_joint_{x,y,z}``: force from the hub at the ball joint;
-    * ``damper_mount_{x,y,z}``: force from the damper at its seat, -F_d along the damper axis;
-    * ``bush_front_{x,y,z}``, ``bush_rear_{x,y,z}``: forces from the body at the two bush
-      centres;
-    * ``bump_stop_y``, ``bump_stop_z``: force from the jounce bumper at the pad
-      (``BUMP_STOP_PAD``): (0, 0, -F_bs) in world axes, i.e. ``bump_stop_z`` = -F_bs cos(theta)
-      <= 0 (pushes the arm down) and ``bump_stop_y`` = -F_bs sin(theta) for an arm turned by
-      theta (jounce positive); its arm-frame x component is zero (the arm turns about x and
-      the body only heaves). Both are 0 while the bumper is clear;
-    * ``torsion_bar_mx`` [N m]: the torsion-spring moment about the arm's x axis (static
-      preload included). It is a pure moment; it enters the arm through its pivot, half at each
-      bush eye (:data:`cosim.lower_arm.TORSION_SPRING_POINTS`, as the thesis split its
-      revolute joint's loads over nodes A and B); for the rigid arm's balance its point does
-      not matter, for the FE it does.
-
-    These loads and the arm's weight are in equilibrium with its inertia: sum F + m g =
-    m a_com and sum (r x F) + M_x e_x = d(H)/dt (tested, static and in bumper contact, in
-    tests/vehicles/test_double_wishbone.py).
-
-    Extraction:
-
-    * PyBullet's joint force-torque sensor (``enableJointForceTorqueSensor``,
-      ``getJointState(...)[2]``; ``getJointStateMultiDof`` for spherical joints) reports the
-      wrench that the **parent exerts on the child**, in the **child link frame**, the moment
-      taken about the child's **centre of mass**, with the joint motor torque included. It
-      includes the forces of the loop-closing POINT2POINT constraints. The child frame is
-      the one at the **start** of the substep (where the step's forces are evaluated), so
-      every load is rotated with the arm's and hub's orientation at t_k (the orientation
-      after the step would misplace them by omega dt and spoil the dynamic balance).
-    * ball joint: minus the lower-ball-joint sensor wrench's force (parent arm -> child hub),
-      rotated from the hub frame to the arm frame;
-    * damper mount and bump stop: the actuator forces we applied in that substep;
-    * bushes: the lower-arm pivot sensor wrench (body -> arm), moved to the arm-frame origin
-      (midpoint of the bushes): F, M_O = M_com + r_com x F. With the bushes at x = +-d/2 on the
-      pivot axis, the moments about y and z split the force between them:
-      F_front,z = F_z/2 - M_y/d, F_rear,z = F_z/2 + M_y/d, F_front,y = F_y/2 + M_z/d,
-      F_rear,y = F_y/2 - M_z/d; the axial force F_x is shared equally (statically
-      indeterminate between two bushes of equal stiffness). M_x is the torsion-bar moment.
+    PyBullet's joint force-torque sensor (``getJointState(...)[2]``, ``getJointStateMultiDof``
+    for spherical joints) gives the wrench the **parent exerts on the child**, in the **child
+    link frame**, about the child's **centre of mass**, the joint motor torque and the loop
+    constraints' forces included. That frame is the one at the **start** of the substep
+    (where its forces are evaluated), so the loads are rotated with the pose at t_k (the pose
+    after would misplace them by omega dt). With the arm's weight they balance its inertia:
+    sum F + m g = m a_com, sum (r x F) + M_x e_x = dH/dt (tests/vehicles/test_double_wishbone.py,
+    static and in bumper contact).
     """
     return arm_loads_at(model._w_pivot,
                         p.getJointStateMultiDof(model.body, HUB, physicsClientId=model.client)[2],

@@ -20,10 +20,10 @@ import numpy as np
 
 def point_velocity(link_state: Sequence[Sequence[float]], point: Sequence[float]) -> list[float]:
     """World velocity of a point fixed to a link (``link_state`` with velocity and forward
-    kinematics): v_com + omega x (r - r_com) [m/s], in floats."""
-    v, w, com = link_state[6], link_state[7], link_state[0]
-    c = cross3(w, (point[0] - com[0], point[1] - com[1], point[2] - com[2]))
-    return [v[0] + c[0], v[1] + c[1], v[2] + c[2]]
+    kinematics): v_com + omega x (r - r_com) [m/s], in floats (:func:`cross3`'s products)."""
+    (v0, v1, v2), (w0, w1, w2), (c0, c1, c2) = link_state[6], link_state[7], link_state[0]
+    r0, r1, r2 = point[0] - c0, point[1] - c1, point[2] - c2
+    return [v0 + (w1 * r2 - w2 * r1), v1 + (w2 * r0 - w0 * r2), v2 + (w0 * r1 - w1 * r0)]
 
 
 def cross3(a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray) -> list[float]:

@@ -103,9 +103,10 @@ def _rates_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     """response_velocities as it was written with small arrays."""
     arm = model._arm_state
     pos, R = np.array(arm[4]), model._R_arm
+    o = 0.5 * (geo.LOWER_BUSH_FRONT + geo.LOWER_BUSH_REAR)  # the arm link's origin
     out = {}
     for name, pt in geo.ARM_ACCEL_POINTS.items():
-        r = pos + R @ model._local_point(dw.LOWER_ARM, dw.la.to_corner(pt))
+        r = pos + R @ dw._link_point(o, dw.la.to_corner(pt))
         v = np.array(arm[6]) + np.cross(np.array(arm[7]), r - np.array(arm[0]))
         for axis, val in zip("xyz", v, strict=True):
             out[f"a_arm_{name}_{axis}"] = float(val)
