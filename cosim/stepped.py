@@ -71,37 +71,30 @@ class Fields(Mapping[str, np.ndarray]):
         return len(self._msg.d)
 
 
-class _Outputs:
-    """``step``'s result as channel -> fields, checked (see the module's docstring)."""
-
-    def __init__(self, kind: nk.NodeKind) -> None:
-        self.kind = kind
-        self.channels = [c for c in kind.writes if c not in ("step", "records")]
-        self.single = self.channels[0] if len(self.channels) == 1 else None
-
-    def __call__(self, out: Any, k: int) -> dict[str, Mapping[str, Any]]:
-        kind = self.kind
-        if not isinstance(out, Mapping):
-            raise RunError(f"{kind.name}: step {k} returned a {type(out).__name__}, expected a "
-                           "mapping of field -> value")
-        if out and all(c in self.channels and isinstance(v, Mapping) for c, v in out.items()):
-            by_channel = dict(out)
-        elif self.single is not None:
-            by_channel = {self.single: out}
-        else:
-            raise RunError(f"{kind.name}: step {k} must return {{channel: fields}} for the "
-                           f"channels {', '.join(self.channels)}")
-        fields = by_channel.get("force")
-        if kind.provides and fields is not None:
-            missing = [f for f in kind.provides if f not in fields]
-            if missing:
-                raise RunError(f"{kind.name}: step {k}'s force lacks {', '.join(missing)} "
-                               "(the plant couples through them)")
-        return by_channel
+def _channels(kind: nk.NodeKind) -> list[str]:
+    return [c for c in kind.writes if c not in ("step", "records")]
 
 
 def outputs_of(kind: nk.NodeKind, out: Any, k: int) -> dict[str, Mapping[str, Any]]:
-    return _Outputs(kind)(out, k)
+    """``step``'s result as channel -> fields, checked (see the module's docstring)."""
+    if not isinstance(out, Mapping):
+        raise RunError(f"{kind.name}: step {k} returned a {type(out).__name__}, expected a "
+                       "mapping of field -> value")
+    channels = _channels(kind)
+    if out and all(c in channels and isinstance(v, Mapping) for c, v in out.items()):
+        by_channel = dict(out)
+    elif len(channels) == 1:
+        by_channel = {channels[0]: out}
+    else:
+        raise RunError(f"{kind.name}: step {k} must return {{channel: fields}} for the "
+                       f"channels {', '.join(channels)}")
+    fields = by_channel.get("force")
+    if kind.provides and fields is not None:
+        missing = [f for f in kind.provides if f not in fields]
+        if missing:
+            raise RunError(f"{kind.name}: step {k}'s force lacks {', '.join(missing)} "
+                           "(the plant couples through them)")
+    return by_channel
 
 
 def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str) -> None:
@@ -109,8 +102,7 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
     kind = nk.kind(name)
     settings = RunSettings.of(scenario)
     wanted = getattr(cls, "FIELDS", None) or {}
-    outputs = _Outputs(kind)
-    for channel in outputs.channels:
+    for channel in _channels(kind):
         part.output(channel)
     tags = [part.listen(node, channel,
                         required=wanted.get(f"{node}/{channel}", schema.required(node, channel)))
@@ -137,7 +129,7 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
             msgs = part.wait(settings.needs(tags, k))
             t = msgs[_STATE].t if adaptive else k * h
             inputs = {names[tag]: Fields(m) for tag, m in msgs.items()}
-            for channel, fields in outputs(node.step(k, t, inputs), k).items():
+            for channel, fields in outputs_of(kind, node.step(k, t, inputs), k).items():
                 part.publish(channel, k, t, fields)
             part.send()  # the step's outputs in one message
             part.progress(k, t)
