@@ -24,7 +24,7 @@ from cosim import scenario as sc
 from cosim import zenoh_options as zo
 from cosim.errors import SuscosimError
 
-from .cli_util import ArgumentParser, error_line
+from .cli_util import ArgumentParser, error_line, interrupt_on_sigterm
 from .placement import PIN_MODES
 
 
@@ -76,18 +76,12 @@ def _num(x: float | str) -> str:
     return x if isinstance(x, str) else f"{x:.4g}"
 
 
-def _sigterm_as_interrupt(_signum: int, _frame: object) -> None:
-    raise KeyboardInterrupt
-
-
 def cmd_run(args: argparse.Namespace) -> int:
-    import signal
-
     from .runner import run_scenario
 
     # SIGTERM (docker compose down, a sweep stopping a run, kill) ends the run like Ctrl-C:
     # the nodes are told to abort and summary.json says "failed: interrupted"
-    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    interrupt_on_sigterm()
 
     if not (args.scenario or args.resume or args.fork):
         from cosim.errors import ScenarioError

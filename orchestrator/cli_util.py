@@ -7,6 +7,7 @@ and the pace options of the commands that replay a journal (``replay``, ``scope`
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
@@ -52,6 +53,15 @@ def parse_args(ap: argparse.ArgumentParser, argv: Sequence[str] | None) -> argpa
         return ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     except SystemExit as exc:
         return 0 if exc.code == 0 else 2
+
+
+def _interrupt(_signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def interrupt_on_sigterm() -> Any:
+    """SIGTERM raises KeyboardInterrupt from now on, as Ctrl-C; the previous handler."""
+    return signal.signal(signal.SIGTERM, _interrupt)
 
 
 def fail(prog: str, message: str, code: int = 2) -> int:

@@ -14,7 +14,7 @@ import sys
 import time
 from functools import partial
 
-from .cli_util import fail, parse_args
+from .cli_util import fail, interrupt_on_sigterm, parse_args
 from .sweep.phases import child_env
 
 _fail = partial(fail, "suscosim cluster")
@@ -86,10 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     sched_cmd += ["--dashboard-address", ":8787"] if args.dashboard else ["--no-dashboard"]
     procs: list[subprocess.Popen] = []
 
-    def on_signal(signum, frame):  # noqa: ARG001
-        raise KeyboardInterrupt
-
-    old = signal.signal(signal.SIGTERM, on_signal)
+    old = interrupt_on_sigterm()
     try:
         # one point per worker thread at a time: with Dask's default saturation (1.1) a
         # 1-thread worker is sent 2 points and runs them in turn while another worker idles

@@ -20,6 +20,7 @@ from typing import Any
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
+from cosim.run_folder import read_json
 from cosim.safe_open import open_user_text, read_user_text, read_user_toml
 
 from .cli_util import fail
@@ -151,13 +152,10 @@ def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
                sets: Sequence[str] = (), law_sets: Sequence[str] = ()) -> Path:
     """Run a scenario event into ``folder`` (a finished run with fatigue reused unless
     ``rerun``); ``law_sets`` after the event's own overrides."""
-    done = folder / "summary.json"
-    if not rerun and done.is_file() and (folder / "fatigue" / "damage_per_node.csv").is_file():
-        try:
-            if json.loads(done.read_text()).get("status") == "ok":
-                return folder
-        except (OSError, json.JSONDecodeError):
-            pass
+    done = read_json(folder / "summary.json")
+    if not rerun and isinstance(done, dict) and done.get("status") == "ok" and \
+            (folder / "fatigue" / "damage_per_node.csv").is_file():
+        return folder
     from cosim import scenario as sc
 
     from .runner import resolve, run_scenario

@@ -1,19 +1,9 @@
-"""``suscosim fatigue RUN_DIR | LOAD_FILE``: fatigue life of the lower arm.
-
-RUN_DIR: a finished run (its table and resolved scenario). LOAD_FILE: a measured or exported
-load history (RPC III ``.rsp/.tim/.rpc/.drv``, MDF 4 ``.mf4``, CSV, Parquet) mapped to the
-arm's load channels (by name, or ``--map SOURCE=TARGET[*SCALE]``), with the fatigue settings
-and road length of ``--scenario RUN_DIR|SCENARIO.toml`` (else the defaults and
-``--set track_length_m=...``); results in ``--out`` (default ``LOAD_FILE.fatigue/``).
-
-Where a run's results go: ``RUN_DIR/fatigue/`` without settings (the live node's place);
-with any ``--set``/``--method``/... (a what-if) ``RUN_DIR/fatigue-<8 hex of the settings>/``
-(its settings in its ``summary.json`` ``what_if``), so the live results stay; ``--out DIR``
-anywhere. The folder is written aside and renamed into place: never half-replaced.
-
-Exit codes: 0 a result (also a part that fails on the first cycle: life 0 km, printed as
-"fails on the first cycle"); 2 bad input (a scenario key, a load file, a non-finite or
-non-physical load sample: one line naming it); 1 an unexpected internal error.
+"""``suscosim fatigue RUN_DIR | LOAD_FILE``: fatigue life of the lower arm of a finished run,
+or under a load history (RPC III, MDF 4, CSV, Parquet) mapped to the arm's load channels (by
+name, or ``--map SOURCE=TARGET[*SCALE]``) with the settings of ``--scenario``. A run's results
+go to ``RUN_DIR/fatigue/``, or with settings (a what-if) to ``RUN_DIR/fatigue-<8 hex>/`` so the
+live results stay; written aside and renamed into place. Exit codes: 0 a result (also "fails
+on the first cycle": life 0 km); 2 bad input (one line naming it); 1 an internal error.
 """
 
 from __future__ import annotations
@@ -74,7 +64,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run and print a short summary; 0 on success, 2 for bad input (one-line message)."""
     args = parse_args(build_parser(), argv)
     if isinstance(args, int):
         return args
@@ -83,10 +72,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if "=" not in item:
             return fail("suscosim fatigue", f"--set expects KEY=VALUE, got {item!r}")
         k, v = item.split("=", 1)
-        k = k.strip()
-        if k.startswith("fatigue."):
-            k = k[len("fatigue."):]
-        overrides[k] = _value(v)
+        overrides[k.strip().removeprefix("fatigue.")] = _value(v)
     for k in ("equivalent", "method", "mean_stress", "residue"):
         if getattr(args, k) is not None:
             overrides[k] = getattr(args, k)
@@ -100,8 +86,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     is_file = args.run_dir.is_file()
     if not is_file and (args.scenario or args.map):
-        return fail("suscosim fatigue", f"{args.run_dir}: --scenario and --map are for a "
-                    "load file")
+        return fail("suscosim fatigue",
+                    f"{args.run_dir}: --scenario and --map are for a load file")
 
     def progress(msg: str) -> None:
         if not args.quiet:

@@ -15,16 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from cosim import auth as au
+from cosim import checkpoint as cp
 from cosim import scenario as sc
-from cosim.checkpoint import (
-    CHECKPOINTS_DIR,
-    RESUME_KEY,
-    Checkpoint,
-    CheckpointError,
-    checkpoint_key,
-    load_for_resume,
-    parse_fork,
-)
 from cosim.errors import InputFileError, ScenarioError
 from cosim.safe_open import read_user_text
 
@@ -45,7 +37,7 @@ def parent_scenario(run_dir: Path) -> dict[str, Any]:
         raise InputFileError(str(path), f"not valid JSON ({exc})") from None
     if not isinstance(scenario, dict) or not isinstance(scenario.get("run"), dict):
         raise InputFileError(str(path), "not a run's resolved scenario (no [run] table)")
-    scenario["run"].pop(RESUME_KEY, None)
+    scenario["run"].pop(cp.RESUME_KEY, None)
     return scenario
 
 
@@ -59,10 +51,10 @@ def key_of(run_dir: Path, scenario: dict[str, Any]) -> bytes | None:
     run_id = scenario["run"].get("id")
     if secret is None or not isinstance(run_id, str):
         return None
-    return checkpoint_key(au.derive_run_key(secret, run_id))
+    return cp.checkpoint_key(au.derive_run_key(secret, run_id))
 
 
-def checked_files(ck: Checkpoint) -> dict[str, str]:
+def checked_files(ck: cp.Checkpoint) -> dict[str, str]:
     return {node: str(e["sha256"]) for node, e in ck.manifest["nodes"].items()}
 
 
@@ -87,7 +79,7 @@ def code_named(scenario: dict[str, Any], run_dir: Path) -> list[str]:
 def _refuse_code(scenario: dict[str, Any], run_dir: Path) -> None:
     named = code_named(scenario, run_dir)
     if named and os.environ.get(TRUST_CODE_ENV) != "1":
-        raise CheckpointError(f"{Path(run_dir) / 'scenario.json'} names code to run ("
+        raise cp.CheckpointError(f"{Path(run_dir) / 'scenario.json'} names code to run ("
                               + "; ".join(named) + "): a run folder is data, and resuming or "
                               f"forking it would run that code; set {TRUST_CODE_ENV}=1 if "
                               "you trust whoever made the folder")
@@ -96,7 +88,7 @@ def _refuse_code(scenario: dict[str, Any], run_dir: Path) -> None:
 def journal_for(run_dir: Path, k: int) -> Path:
     """The journal holding every step < ``k``: one set aside by a resume from >= k, else the
     run's own."""
-    root = Path(run_dir) / CHECKPOINTS_DIR
+    root = Path(run_dir) / cp.CHECKPOINTS_DIR
     aside = sorted((int(p.stem.split("-k")[1]), p) for p in root.glob("journal-k*.msgpack")
                    if p.stem.split("-k")[1].isdigit())
     for kk, path in aside:
@@ -104,41 +96,41 @@ def journal_for(run_dir: Path, k: int) -> Path:
             return path
     path = Path(run_dir) / JOURNAL
     if not path.is_file():
-        raise CheckpointError(f"{run_dir}: no journal ({JOURNAL}) to resume the steps < {k} "
+        raise cp.CheckpointError(f"{run_dir}: no journal ({JOURNAL}) to resume the steps < {k} "
                               "from")
     return path
 
 
-def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], Checkpoint]:
+def resume_scenario(run_dir: str | Path) -> tuple[dict[str, Any], cp.Checkpoint]:
     """The scenario resuming ``run_dir``; CheckpointError (exit 2) naming what is wrong."""
     run_dir = Path(run_dir)
     scenario = parent_scenario(run_dir)
     _refuse_code(scenario, run_dir)
-    ck = load_for_resume(run_dir, scenario, key=key_of(run_dir, scenario))
+    ck = cp.load_for_resume(run_dir, scenario, key=key_of(run_dir, scenario))
     if Path(scenario["run"]["dir"]).resolve() != run_dir.resolve():
         scenario["run"]["dir"] = str(run_dir)  # a run folder moved since: it is here now
-    aside = run_dir / CHECKPOINTS_DIR / f"journal-k{ck.k:06d}.msgpack"
+    aside = run_dir / cp.CHECKPOINTS_DIR / f"journal-k{ck.k:06d}.msgpack"
     if not aside.exists():
         current = run_dir / JOURNAL
         if not current.is_file():
-            raise CheckpointError(f"{run_dir}: no journal ({JOURNAL}) to resume from")
+            raise cp.CheckpointError(f"{run_dir}: no journal ({JOURNAL}) to resume from")
         current.replace(aside)
-    scenario["run"][RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
+    scenario["run"][cp.RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
                                    "journal": str(aside), "fresh": [],
                                    "sha256": checked_files(ck)}
     return scenario, ck
 
 
 def fork_scenario(spec: str, overrides: list[str], out: str | None,
-                  resolve: Any) -> tuple[dict[str, Any], Checkpoint, list[str]]:
+                  resolve: Any) -> tuple[dict[str, Any], cp.Checkpoint, list[str]]:
     """(scenario, checkpoint, changed keys) of a fork ``RUN_DIR@T`` with ``overrides``."""
     try:
-        parent_dir, at = parse_fork(spec)
+        parent_dir, at = cp.parse_fork(spec)
     except ValueError as exc:
         raise ScenarioError("--fork", spec, str(exc)) from None
     parent = parent_scenario(parent_dir)
     _refuse_code(parent, parent_dir)
-    ck = load_for_resume(parent_dir, parent, at_t=at, key=key_of(parent_dir, parent))
+    ck = cp.load_for_resume(parent_dir, parent, at_t=at, key=key_of(parent_dir, parent))
     child = copy.deepcopy(parent)
     run = child["run"]
     for key in sc.RESOLVED_RUN_KEYS:
@@ -162,7 +154,7 @@ def fork_scenario(spec: str, overrides: list[str], out: str | None,
         raise ScenarioError("--out", run["dir"], "a folder other than the parent run's")
     fresh = [node for node, keys in RESTARTED_BY.items()
              if any(c.startswith(keys) for c in changed)]
-    run[RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
+    run[cp.RESUME_KEY] = {"k": ck.k, "t": ck.t, "folder": str(ck.folder),
                        "journal": str(journal_for(parent_dir, ck.k)), "fresh": fresh,
                        "parent": str(parent_dir), "sha256": checked_files(ck)}
     return child, ck, changed

@@ -13,6 +13,7 @@ import numpy as np
 from cosim.coupling_energy import WARNING_THRESHOLD
 from cosim.safe_open import read_user_file
 
+from . import signals, stream
 from .fatigue_section import fatigue_section
 from .markup import (
     badge,
@@ -30,24 +31,6 @@ from .markup import (
 )
 from .plots import MAX_PLOT_POINTS, fig_uri, img, new_figure, plot_panels
 from .run_data import RunData, load_run
-from .signals import (
-    BODY_ACC,
-    PSD_F_MAX_HZ,
-    TYRE_FORCE,
-    arm_groups,
-    corner_label,
-    first_present,
-    time_history_panels,
-    unit_of,
-)
-from .stream import (
-    PSD_MAX_NPERSEG,
-    StreamDecimator,
-    StreamWelch,
-    TableSource,
-    column_stats,
-    psd_nperseg,
-)
 
 RUN_KEYS = ("name", "id", "mode", "exchange", "coupling", "h", "substeps", "t_end",
             "t_end_source", "n_steps", "nodes")
@@ -163,16 +146,16 @@ def scenario_section(r: RunData) -> str:
     return section("scenario", "Scenario", row(*parts))
 
 
-def _source(r: RunData) -> TableSource:
+def _source(r: RunData) -> stream.TableSource:
     assert r.source is not None, "a table section of a run without a table"
     return r.source
 
 
-def streamed_panels(src: TableSource, build: Callable[[dict], tuple[list[tuple], list[str]]]
+def streamed_panels(src: stream.TableSource, build: Callable[[dict], tuple[list[tuple], list[str]]]
                     ) -> tuple[list[tuple], list[str], tuple[float, float]]:
     """``build(batch)``'s panels, each line decimated as the batches pass, the missing titles,
     the table's first and last time [s]."""
-    decs: list[list[StreamDecimator]] | None = None
+    decs: list[list[stream.StreamDecimator]] | None = None
     shape: list[tuple] = []
     missing: list[str] = []
     t0 = t1 = float("nan")
@@ -181,7 +164,7 @@ def streamed_panels(src: TableSource, build: Callable[[dict], tuple[list[tuple],
         if decs is None:
             t0 = float(b["t"][0])
             shape = panels
-            decs = [[StreamDecimator(src.n_rows, MAX_PLOT_POINTS) for _ in lines]
+            decs = [[stream.StreamDecimator(src.n_rows, MAX_PLOT_POINTS) for _ in lines]
                     for _t, _u, lines in panels]
         for ds, (_t, _u, lines) in zip(decs, panels, strict=True):
             for d, (_lab, y) in zip(ds, lines, strict=True):
@@ -194,7 +177,7 @@ def streamed_panels(src: TableSource, build: Callable[[dict], tuple[list[tuple],
 
 def time_section(r: RunData) -> str:
     src = _source(r)
-    panels, missing, (t0, t1) = streamed_panels(src, time_history_panels)
+    panels, missing, (t0, t1) = streamed_panels(src, signals.time_history_panels)
     body = f'<p class="meta">from {esc(r.table_note)}: {src.n_rows} samples, ' \
            f"t = {fmt(t0)} … {fmt(t1)} s</p>"
     if panels:
@@ -204,7 +187,7 @@ def time_section(r: RunData) -> str:
     return section("time", "Time histories", body)
 
 
-def _stream_rate(src: TableSource) -> float | None:
+def _stream_rate(src: stream.TableSource) -> float | None:
     """Sampling rate [Hz] (median step), None if a step is > 1 % off (ride_metrics' rule)."""
     step = None
     last = None
@@ -231,28 +214,28 @@ def psd_section(r: RunData) -> str:
                        note("the time column is not uniformly sampled (a run with missing "
                             "steps?): no PSD."))
     n = src.n_rows
-    nperseg = psd_nperseg(n)
-    sigs: list[tuple[str, str, tuple[str, ...], list[tuple[str, StreamWelch]]]] = []
+    nperseg = stream.psd_nperseg(n)
+    sigs: list[tuple[str, str, tuple[str, ...], list[tuple[str, stream.StreamWelch]]]] = []
     for b in src.batches():
         if not sigs:
             wanted: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-                ("Body acceleration", "(m/s²)²/Hz", BODY_ACC),
-                ("Tyre force", "N²/Hz", TYRE_FORCE))
+                ("Body acceleration", "(m/s²)²/Hz", signals.BODY_ACC),
+                ("Tyre force", "N²/Hz", signals.TYRE_FORCE))
             for title, unit, bases in wanted:
-                _b, cols = first_present(b, bases)
+                _b, cols = signals.first_present(b, bases)
                 if cols:
                     sigs.append((title, unit, bases,
-                                 [(c, StreamWelch(fs, nperseg)) for c, _x in cols]))
+                                 [(c, stream.StreamWelch(fs, nperseg)) for c, _x in cols]))
             if not sigs:
                 break
         for _t, _u, bases, ws in sigs:
-            _b, cols = first_present(b, bases)
+            _b, cols = signals.first_present(b, bases)
             for (_c, w), (_c2, x) in zip(ws, cols, strict=True):
                 w.add(x)
     if not sigs:
         return section("psd", "Power spectral densities",
                        note("no body acceleration or tyre force in the table."))
-    fmax = min(fs / 2, PSD_F_MAX_HZ)
+    fmax = min(fs / 2, signals.PSD_F_MAX_HZ)
     fig, axes = new_figure(1, len(sigs), row_h=3.4)
     for ax, (title, unit, _bases, ws) in zip(axes, sigs, strict=True):
         for c, w in ws:
@@ -267,8 +250,8 @@ def psd_section(r: RunData) -> str:
             ax.legend(fontsize=7)
     body = img(fig_uri(fig), "PSDs") + (
         f'<p class="meta">Welch, Hann window, {nperseg} samples per segment '
-        f"(n/4, at most {PSD_MAX_NPERSEG}), 50 % overlap, mean removed, segments accumulated "
-        f"as the table is read; fs = {fmt(fs)} Hz; shown to {fmt(fmax)} Hz.</p>")
+        f"(n/4, at most {stream.PSD_MAX_NPERSEG}), 50 % overlap, mean removed, segments "
+        f"accumulated as the table is read; fs = {fmt(fs)} Hz; shown to {fmt(fmax)} Hz.</p>")
     return section("psd", "Power spectral densities", body)
 
 
@@ -276,12 +259,12 @@ def stats_section(r: RunData) -> str:
     chans = (r.summary or {}).get("channels") or {}
     src = "summary.json"
     if not chans and r.source is not None:
-        chans = column_stats(r.source)
+        chans = stream.column_stats(r.source)
         src = r.table_note
     if not chans:
         return section("stats", "RMS and peak of every channel",
                        note("no channel statistics: the run recorded no complete step."))
-    rows = [(name, unit_of(name), st.get("rms"), st.get("peak"), st.get("t_peak"),
+    rows = [(name, signals.unit_of(name), st.get("rms"), st.get("peak"), st.get("t_peak"),
              st.get("mean"), st.get("std"), st.get("min"), st.get("max"))
             for name, st in sorted(chans.items())]
     body = f'<p class="meta">from {esc(src)}; peak = the value of largest magnitude ' \
@@ -291,7 +274,7 @@ def stats_section(r: RunData) -> str:
     return section("stats", "RMS and peak of every channel", body)
 
 
-def streamed_ride_metrics(src: TableSource) -> dict[str, float]:
+def streamed_ride_metrics(src: stream.TableSource) -> dict[str, float]:
     """:func:`nodes.recorder.ride_metrics.run_metrics` of the table read in batches
     (:mod:`nodes.recorder.ride_stream`): ``{label: value}``."""
     from nodes.recorder.ride_stream import streamed_run_metrics
@@ -317,11 +300,11 @@ def ride_section(r: RunData) -> str:
 
 def _load_panels(b: dict) -> tuple[list[tuple], list[str]]:
     panels = []
-    _b, ft = first_present(b, TYRE_FORCE)
+    _b, ft = signals.first_present(b, signals.TYRE_FORCE)
     if ft:
         panels.append(("Tyre force (vertical, compressive +)", "N",
-                       [(corner_label("F_t", c), x) for c, x in ft]))
-    for point, comps in arm_groups(b).items():
+                       [(signals.corner_label("F_t", c), x) for c, x in ft]))
+    for point, comps in signals.arm_groups(b).items():
         unit = "N·m" if all(a.startswith("m") for a, _ in comps) else "N"
         panels.append((f"Lower arm: {point.replace('_', ' ')} (arm frame)", unit, comps))
     return panels, []

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import signal
 import sys
 import threading
@@ -14,6 +13,7 @@ from typing import Any
 
 from cosim import keys
 from cosim.errors import ScenarioError
+from cosim.run_folder import read_json
 from cosim.wire import decode
 from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
 
@@ -57,14 +57,6 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
-def _read_scenario(folder: Path) -> dict[str, Any] | None:
-    try:
-        sc = json.loads((folder / "scenario.json").read_text())
-    except (OSError, ValueError):
-        return None
-    return sc if isinstance(sc, dict) else None
-
-
 def main(argv: list[str] | None = None) -> int:
     """Serve the scope; 0 when stopped, 1 the run's endpoint cannot be reached, 2 bad input."""
     args = parse_args(build_parser(), argv)
@@ -88,7 +80,8 @@ def _scope(args: argparse.Namespace, selection: Selection) -> int:
     from .server import ScopeServer
 
     folder = Path(args.run) if Path(args.run).is_dir() else None
-    scenario = _read_scenario(folder) if folder else None
+    scenario = read_json(folder / "scenario.json") if folder else None
+    scenario = scenario if isinstance(scenario, dict) else None
     replay = folder is not None and (args.replay or (folder / "summary.json").exists())
     bus = None
     if replay:

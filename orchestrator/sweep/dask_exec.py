@@ -18,6 +18,7 @@ from typing import Any, TextIO
 from cosim import scenario as sc
 from cosim.errors import SuscosimError
 
+from ..cli_util import interrupt_on_sigterm
 from .display import Display, event_line
 from .phases import point_meta
 from .spec import Point, Sweep
@@ -107,10 +108,7 @@ class DaskRunner:
         finished = failed = steps_done = 0
         interrupted = False
 
-        def on_signal(signum, frame):  # noqa: ARG001
-            raise KeyboardInterrupt
-
-        old = signal.signal(signal.SIGTERM, on_signal)
+        old = interrupt_on_sigterm()
         try:
             for p, st in sorted(todo, key=lambda ps: -ps[0].n_steps):  # longest first
                 fut = self.client.submit(run_point, self._task(p, st, topic),

@@ -13,19 +13,10 @@ from typing import TextIO
 
 from cosim.journal import last_step
 
+from ..cli_util import interrupt_on_sigterm
+from . import phases
 from .display import Display, event_line
 from .fork import Parent, keep_only_fork_checkpoint, parent_state
-from .phases import (
-    _kill_group,
-    _start,
-    fatigue_command,
-    fatigue_outcome,
-    point_meta,
-    prepare_run_dir,
-    run_command,
-    run_outcome,
-    this_worker,
-)
 from .spec import Point, Sweep
 
 
@@ -42,8 +33,7 @@ class Job:
     fresh: bool = True  # its run was (re)done in this session (counts in the step progress)
     parent: Parent | None = None  # the parent run of a group ([sweep] fork_at), not a point
 
-    def step(self) -> int | None:
-        """The step its run has reached (from the tail of its journal), or None."""
+    def step(self) -> int | None:  # from the tail of its journal
         return last_step(self.run_dir / "journal.msgpack")
 
 
@@ -65,43 +55,43 @@ class Runner:
     def _start_run(self, p: Point, parent: Parent | None = None) -> Job:
         """A point's run (a fork of its group's parent with fork_at), or a ``parent``'s."""
         d = self.run_dir(p) if parent is None else self.plan.parent_dir(self.out, parent)
-        prepare_run_dir(d, point_meta(self.sweep.name, p.id, p.params, str(p.base),
-                                      p.overrides, p.fingerprint), this_worker("local"))
+        meta = phases.point_meta(self.sweep.name, p.id, p.params, str(p.base), p.overrides,
+                                 p.fingerprint)
+        phases.prepare_run_dir(d, meta, phases.this_worker("local"))
         log = d / "sweep.log"
         if self.plan is not None and parent is None:
-            cmd = run_command(["--fork", self.plan.spec(self.out, p)], d,
-                              self.plan.fork_args(p), self.sweep.jobs > 1, self.connect)
+            cmd = phases.run_command(["--fork", self.plan.spec(self.out, p)], d,
+                                     self.plan.fork_args(p), self.sweep.jobs > 1, self.connect)
         else:
-            cmd = run_command([str(p.base)], d, p.set_args, self.sweep.jobs > 1, self.connect,
-                              self.external)
-        return Job(p, d, "run", _start(cmd, log), time.monotonic(), log, parent=parent)
+            cmd = phases.run_command([str(p.base)], d, p.set_args, self.sweep.jobs > 1,
+                                     self.connect, self.external)
+        return Job(p, d, "run", phases.start(cmd, log), time.monotonic(), log, parent=parent)
 
     def _start_fatigue(self, p: Point) -> Job:
         d = self.run_dir(p)
         shutil.rmtree(d / "fatigue", ignore_errors=True)
         log = d / "fatigue.log"
-        return Job(p, d, "fatigue", _start(fatigue_command(d), log), time.monotonic(), log)
+        proc = phases.start(phases.fatigue_command(d), log)
+        return Job(p, d, "fatigue", proc, time.monotonic(), log)
 
     def _finish(self, job: Job) -> Job | None:
         """A process ended: record the point's outcome, or return its next phase."""
         code = job.proc.returncode
         if code != 0:
-            _kill_group(job.proc)  # nodes orphaned by a killed run
+            phases.kill_group(job.proc)  # nodes orphaned by a killed run
         p = job.point
         if job.parent is not None:  # a parent: ok when its checkpoint at k is complete
-            st, err = run_outcome(code, job.run_dir, job.log, False)
+            st, err = phases.run_outcome(code, job.run_dir, job.log, False)
             if st == "ok" and parent_state(job.parent, job.run_dir) != "done":
                 st, err = "failed", f"no complete checkpoint at k = {job.parent.k}"
             if st == "ok":
                 keep_only_fork_checkpoint(job.parent, job.run_dir)
-            self.status[p.id] = (st, err)
-            return None
-        if job.phase == "run":
-            st, err = run_outcome(code, job.run_dir, job.log, self.sweep.fatigue)
+        elif job.phase == "run":
+            st, err = phases.run_outcome(code, job.run_dir, job.log, self.sweep.fatigue)
             if st == "fatigue":
                 return self._start_fatigue(p)
         else:
-            st, err = fatigue_outcome(code, job.run_dir, job.log)
+            st, err = phases.fatigue_outcome(code, job.run_dir, job.log)
         self.status[p.id] = (st, err)
         return None
 
@@ -117,9 +107,7 @@ class Runner:
         waiting: dict[str, list[tuple[Point, str]]] = {}  # parent id -> its forks to run
         if self.plan is not None:
             queue = [ps for ps in todo if ps[1] != "todo"]
-            for p, st in todo:
-                if st != "todo":
-                    continue
+            for p, st in (ps for ps in todo if ps[1] == "todo"):
                 parent = self.plan.parent_of[p.id]
                 if parent_state(parent, self.plan.parent_dir(self.out, parent)) == "done":
                     queue.append((p, st))
@@ -136,19 +124,14 @@ class Runner:
         jobs: list[Job] = []
         interrupted = False
 
-        def on_signal(signum, frame):  # noqa: ARG001
-            raise KeyboardInterrupt
-
-        old = signal.signal(signal.SIGTERM, on_signal)
+        old = interrupt_on_sigterm()
         finished = failed = steps_done = 0
         try:
             while queue or jobs:
                 while queue and len(jobs) < self.sweep.jobs:
                     p, state = queue.pop(0)
-                    if state == "parent":
-                        job = self._start_run(p, self.parents[p.id])
-                    else:
-                        job = self._start_run(p) if state == "todo" else self._start_fatigue(p)
+                    job = (self._start_fatigue(p) if state == "fatigue" else
+                           self._start_run(p, self.parents[p.id] if state == "parent" else None))
                     job.fresh = state != "fatigue"
                     jobs.append(job)
                 still: list[Job] = []
@@ -188,13 +171,13 @@ class Runner:
             interrupted = True
             display.close()
             for job in jobs:
-                _kill_group(job.proc)
+                phases.kill_group(job.proc)
             deadline = time.monotonic() + 5.0
             for job in jobs:
                 try:
                     job.proc.wait(timeout=max(0.1, deadline - time.monotonic()))
                 except subprocess.TimeoutExpired:
-                    _kill_group(job.proc, signal.SIGKILL)
+                    phases.kill_group(job.proc, signal.SIGKILL)
                     job.proc.wait()
                 self.status[job.point.id] = ("failed", "interrupted")
         finally:

@@ -30,7 +30,7 @@ def child_env() -> dict[str, str]:
     return env
 
 
-def _start(cmd: list[str], log: Path,
+def start(cmd: list[str], log: Path,
            preexec_fn: Callable[[], None] | None = None) -> subprocess.Popen:
     with open(log, "ab") as fh:
         return subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT,
@@ -38,7 +38,7 @@ def _start(cmd: list[str], log: Path,
                                 start_new_session=True, preexec_fn=preexec_fn)
 
 
-def _kill_group(proc: subprocess.Popen, sig: int = signal.SIGTERM) -> None:
+def kill_group(proc: subprocess.Popen, sig: int = signal.SIGTERM) -> None:
     """Signal the process group of one of our children (its node processes too)."""
     try:
         os.killpg(proc.pid, sig)

@@ -10,7 +10,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TextIO
 
-from .phases import _kill_group, _start, point_state
+from .phases import kill_group, point_state, start
 from .spec import Sweep
 
 
@@ -74,7 +74,7 @@ def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
                     cmd = [sys.executable, "-m", "orchestrator", "node", n, "--run", live[pid]]
                     for ep in connect:
                         cmd += ["--connect", ep]
-                    procs.append(_start(cmd, logs / f"{pid}.{n}.log"))
+                    procs.append(start(cmd, logs / f"{pid}.{n}.log"))
                 running[pid] = procs
                 stream.write(f"  {pid}: started {', '.join(nodes)}\n")
                 stream.flush()
@@ -97,6 +97,6 @@ def serve(sweep: Sweep, nodes: list[str], connect: list[str], out: Path,
     finally:
         for procs in running.values():
             for pr in procs:
-                _kill_group(pr)
+                kill_group(pr)
         bus.close()
 

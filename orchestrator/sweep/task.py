@@ -20,18 +20,7 @@ from typing import Any
 from cosim.journal import last_step
 from cosim.run_folder import read_json
 
-from .phases import (
-    ROOT,
-    _kill_group,
-    _start,
-    fatigue_command,
-    fatigue_outcome,
-    prepare_run_dir,
-    run_command,
-    run_outcome,
-    this_worker,
-    write_point_json,
-)
+from . import phases
 
 POLL_S = 0.5
 PROGRESS_S = 1.0
@@ -74,7 +63,8 @@ class _Context:
         self.worker = get_worker()
         self.key = self.worker.get_current_task()
         self.topic, self.id = task["topic"], task["point"]["id"]
-        self.info = this_worker("dask", address=self.worker.address, name=str(self.worker.name))
+        self.info = phases.this_worker("dask", address=self.worker.address,
+                                       name=str(self.worker.name))
         self.last = 0.0
 
     def cancelled(self) -> bool:
@@ -92,23 +82,23 @@ class _Context:
         """Wait for a phase's process, reporting the run's step; kill it if cancelled."""
         while proc.poll() is None:
             if self.cancelled():
-                _kill_group(proc)
+                phases.kill_group(proc)
                 try:
                     proc.wait(timeout=10)
                 except subprocess.TimeoutExpired:
-                    _kill_group(proc, signal.SIGKILL)
+                    phases.kill_group(proc, signal.SIGKILL)
                     proc.wait()
                 raise _Cancelled
             if phase == "run":
                 self.emit(phase, last_step(run_dir / "journal.msgpack"))
             time.sleep(POLL_S)
         if proc.returncode != 0:
-            _kill_group(proc)  # nodes orphaned by a killed run
+            phases.kill_group(proc)  # nodes orphaned by a killed run
         return int(proc.returncode)
 
 
 def _remap(text: str, root: str) -> str:
-    return text.replace(root, str(ROOT)) if root and root != str(ROOT) else text
+    return text.replace(root, str(phases.ROOT)) if root and root != str(phases.ROOT) else text
 
 
 def run_point(task: dict[str, Any]) -> dict[str, Any]:
@@ -125,28 +115,28 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
     try:
         phase = task["phase"]
         if phase == "todo":
-            prepare_run_dir(run_dir, task["point"], ctx.info)
+            phases.prepare_run_dir(run_dir, task["point"], ctx.info)
             ctx.emit("run", force=True)
             scenario = scratch / f"{pid}.toml"  # the point's scenario, whole
             scenario.write_text(_remap(task["scenario"], root))
-            cmd = run_command([str(scenario)], run_dir, [], pin_off=True)
-            code = ctx.wait(_start(cmd, run_dir / "sweep.log", _die_with_parent), "run",
+            cmd = phases.run_command([str(scenario)], run_dir, [], pin_off=True)
+            code = ctx.wait(phases.start(cmd, run_dir / "sweep.log", _die_with_parent), "run",
                             run_dir)
-            st, err = run_outcome(code, run_dir, run_dir / "sweep.log", task["fatigue"])
+            st, err = phases.run_outcome(code, run_dir, run_dir / "sweep.log", task["fatigue"])
             phase = "fatigue" if st == "fatigue" else "done"
         else:
             if task.get("archive"):
                 unpack(task["archive"], run_dir)
             meta = read_json(run_dir / "point.json") or dict(task["point"])
-            write_point_json(run_dir, {**meta, "fatigue_worker": ctx.info})
+            phases.write_point_json(run_dir, {**meta, "fatigue_worker": ctx.info})
             st, err = "failed", ""
         if phase == "fatigue":
             ctx.emit("fatigue", force=True)
             shutil.rmtree(run_dir / "fatigue", ignore_errors=True)
             log = run_dir / "fatigue.log"
-            code = ctx.wait(_start(fatigue_command(run_dir), log, _die_with_parent), "fatigue",
-                            run_dir)
-            st, err = fatigue_outcome(code, run_dir, log)
+            proc = phases.start(phases.fatigue_command(run_dir), log, _die_with_parent)
+            code = ctx.wait(proc, "fatigue", run_dir)
+            st, err = phases.fatigue_outcome(code, run_dir, log)
         result.update(status=st, error=err)
         if not shared:
             result["archive"] = pack(run_dir)
@@ -173,4 +163,4 @@ def task_doc(point_json: dict[str, Any], scenario: dict[str, Any], phase: str, f
         archive = pack(run_dir)
     return {"point": point_json, "scenario": scenario_toml(scenario), "phase": phase,
             "fatigue": fatigue, "runs_dir": str(runs_dir) if runs_dir else None,
-            "archive": archive, "root": str(ROOT), "topic": topic}
+            "archive": archive, "root": str(phases.ROOT), "topic": topic}

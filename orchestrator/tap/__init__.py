@@ -10,8 +10,7 @@ from __future__ import annotations
 from cosim.zenoh_options import is_loopback, session_mode
 
 from .cli import main
-from .csv_sink import CsvSink, fmt_value
-from .stats import Tap
+from .stats import CsvSink, Tap, fmt_value
 from .target import DEFAULT_ENDPOINT, TapInputError, resolve_target, tap_keyexpr
 
 __all__ = ["DEFAULT_ENDPOINT", "CsvSink", "Tap", "TapInputError", "fmt_value", "is_loopback",

@@ -15,8 +15,7 @@ from cosim.step_message import step_keyexprs
 from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
 
 from ..cli_util import fail, parse_args
-from .csv_sink import CsvSink
-from .stats import Tap
+from .stats import CsvSink, Tap
 from .target import DEFAULT_ENDPOINT, TapInputError, Target, resolve_target
 
 _fail = partial(fail, "suscosim tap")

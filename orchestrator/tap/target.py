@@ -3,7 +3,6 @@ folder's ``run.json``."""
 
 from __future__ import annotations
 
-import json
 import re
 import socket
 from dataclasses import dataclass
@@ -12,6 +11,7 @@ from typing import Any
 
 from cosim import keys
 from cosim.errors import ScenarioError
+from cosim.run_folder import read_json
 from cosim.zenoh_options import is_loopback
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -72,12 +72,8 @@ def resolve_target(run: str | None, pattern: str | None, connect: list[str] | No
         folder = Path(run)
         if (folder / "summary.json").exists():
             note = f"{folder} has a summary.json: that run has ended (tapping anyway)"
-        meta: dict[str, Any] = {}
-        for name in ("run.json", "scenario.json"):
-            try:
-                meta[name] = json.loads((folder / name).read_text())
-            except (OSError, ValueError):
-                pass
+        meta: dict[str, Any] = {n: doc for n in ("run.json", "scenario.json")
+                                if (doc := read_json(folder / n)) is not None}
         if not meta:
             raise TapInputError(f"{folder}: not a run folder (no run.json or scenario.json)")
         rj = meta.get("run.json") or {}

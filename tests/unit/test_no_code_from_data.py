@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from cosim.checkpoint import CheckpointError
 from orchestrator import resume as rs
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -90,9 +91,9 @@ def test_a_run_folder_whose_scenario_names_code_is_refused(tmp_path, monkeypatch
                                                    section: value}))
     monkeypatch.chdir(run)
     monkeypatch.delenv(rs.TRUST_CODE_ENV, raising=False)
-    with pytest.raises(rs.CheckpointError, match="names code to run") as e:
+    with pytest.raises(CheckpointError, match="names code to run") as e:
         rs.resume_scenario(run)
     assert e.value.exit_code == 2 and rs.TRUST_CODE_ENV in str(e.value)
-    with pytest.raises(rs.CheckpointError, match="evil_mod"):
+    with pytest.raises(CheckpointError, match="evil_mod"):
         rs.fork_scenario(f"{run}@1.0", [], None, lambda s, o: s)
     assert not (tmp_path / "pwned").exists()

@@ -38,18 +38,15 @@ ALLOWED: dict[str, dict[str, str]] = {
     "nodes/fatigue/materials/__init__.py": {"path.read_text()": "the shipped material library"},
     "nodes/plant/model.py": {"path.read_bytes()": "the .bullet file PyBullet just wrote"},
     "orchestrator/fmu_slave.py": {"read_text()": "the exported FMU's own resources"},
-    "orchestrator/duty.py": {"done.read_text()": "a duty run's summary.json (under --out)"},
     "orchestrator/compose_gen.py": {"read_text()": "the repository's compose templates"},
     "orchestrator/sweep/phases.py": {"log.read_text(": "a sweep point's log it wrote"},
     "orchestrator/fatigue_cli.py": {"read_text()": "the summary.json it just wrote"},
-    "orchestrator/scope/cli.py": {"read_text()": "a run folder's scenario.json"},
     "orchestrator/scope/server.py": {"(STATIC / name).read_bytes()": "shipped static files"},
     "orchestrator/export_fmu.py": {"SLAVE_TEMPLATE.read_text()": "a shipped template"},
     "orchestrator/placement.py": {"/proc/{pid}/task": "/proc"},
     "orchestrator/local_mesh.py": {"OWNER_FILE).read_text()": "the mesh folder it made"},
     "orchestrator/ride.py": {"read_text()": "a run folder's scenario.json"},
-    "orchestrator/tap/csv_sink.py": {"open(self.path, newline=\"\")": "the CSV it appends to"},
-    "orchestrator/tap/target.py": {"read_text()": "a run folder's JSON"},
+    "orchestrator/tap/stats.py": {"open(self.path, newline=\"\")": "the CSV it appends to"},
 }
 
 
