@@ -206,9 +206,8 @@ def run_key_from_env(run_id: str, environ: Mapping[str, str] | None = None) -> b
 
 def served_scenario(key: str, raw: bytes, auth: RunKey | None
                     ) -> tuple[dict[str, Any], bytes | None]:
-    """The resolved scenario a node fetched on ``key``, and the nonce it announces (None
-    without a run key). Only a reply signed with the run's (unbound) key counts; WireError
-    naming what is wrong: a bad signature, not a scenario, no nonce."""
+    """The resolved scenario a node fetched on ``key`` and the nonce it announces (None
+    without a run key); WireError unless signed with the run's (unbound) key and whole."""
     from .wire import decode
 
     msg = decode(auth.unbound().verify(key, raw) if auth else raw)

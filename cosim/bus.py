@@ -201,9 +201,8 @@ class ZenohBus:
         return None
 
     def query_all(self, key: str, timeout: float = 1.0) -> list[bytes]:
-        """Every reply to a query on ``key``, from every matching queryable, none
-        consolidated away (a rogue queryable must not shadow the orchestrator's reply: the
-        caller picks the one it can verify)."""
+        """Every reply to a query on ``key``, none consolidated away (a rogue queryable must
+        not shadow the orchestrator's: the caller picks the one it can verify)."""
         z = self._z
         return [r.ok.payload.to_bytes() for r in self.session.get(
             key, timeout=timeout, target=z.QueryTarget.ALL,

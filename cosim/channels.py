@@ -18,9 +18,8 @@ COUPLING_CHANNEL = (RECORDER, COUPLING)
 
 
 def __getattr__(name: str) -> tuple[str, ...]:
-    """``NODES`` (of every run, in start order), ``COUPLED`` (of the lock-step exchange) and
-    ``OPTIONAL_NODES`` (the live fatigue worker), from :mod:`cosim.node_kinds` (imported when
-    first asked: it imports this module)."""
+    """``NODES`` (in start order), ``COUPLED`` and ``OPTIONAL_NODES`` from
+    :mod:`cosim.node_kinds` (imported when first asked: it imports this module)."""
     from . import node_kinds as nk
 
     roles = {"NODES": (nk.COUPLED, nk.LISTENER), "COUPLED": (nk.COUPLED,),

@@ -235,9 +235,8 @@ def read_node_state(ckpt: Checkpoint, node: str, key: bytes | None = None,
 
 def load_for_resume(run_dir: Path, scenario: dict[str, Any], at_t: float | None = None,
                     key: bytes | None = None) -> Checkpoint:
-    """The checkpoint to resume (the last complete one) or fork (the one at ``at_t`` [s]):
-    ``scenario`` hashes equal to its own, every node file checked, with ``key`` every MAC
-    (without one a signed checkpoint is refused); CheckpointError naming what is wrong."""
+    """The checkpoint to resume (the last) or fork (at ``at_t`` [s]), of ``scenario``'s hash,
+    every node file and (``key``; without one a signed one is refused) MAC checked."""
     cks = complete_checkpoints(run_dir)
     if not cks:
         raise CheckpointError(f"{run_dir}: no complete checkpoint (no {CHECKPOINTS_DIR}/k*/"

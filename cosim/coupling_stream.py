@@ -190,13 +190,9 @@ BOND_CHANNELS = tuple(_FIELDS)
 
 class LiveResidual:
     """The residual of a run as its table's rows complete, cut into the messages of the
-    ``recorder/coupling`` channel (docs/coupling_residual.md, "The live channel").
-
-    The recorder gives it each data message it tabulates (:meth:`add`) and says when the
-    table wrote a step's row (:meth:`row`): the rows fed are the table's own, in its order.
-    :meth:`take` feeds the rows complete since the last call, in blocks of at most
-    :data:`MAX_STEPS`, and returns one message per block that completed a step.
-    """
+    ``recorder/coupling`` channel (docs/coupling_residual.md): the recorder gives it each data
+    message it tabulates (:meth:`add`) and each row the table wrote (:meth:`row`); :meth:`take`
+    feeds the new rows in blocks of at most :data:`MAX_STEPS`, a message per block."""
 
     def __init__(self, h: float | None, coupling: str, exchange: str,
                  channels: Iterable[str]) -> None:

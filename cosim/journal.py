@@ -242,11 +242,9 @@ def _body_records(body: bytes, rawlen: int, nrec: int, dctx: Any) -> list[tuple[
 
 
 class JournalReader:
-    """Stream a journal's intact records (``for channel, payload in reader``) in bounded
-    memory; after the iteration, :meth:`contents` says what was skipped or torn. With
-    ``tail_bytes``, reading starts at the first intact segment of the file's last
-    ``tail_bytes`` (doubled until a whole segment is found); with ``decode=False`` only the
-    CRCs are checked and records counted (nothing is yielded)."""
+    """Stream a journal's intact records in bounded memory; then :meth:`contents` says what
+    was skipped or torn. ``tail_bytes``: from the first whole segment of the file's last
+    ``tail_bytes`` (doubled until there is one); ``decode=False``: CRCs checked, nothing yielded."""
 
     def __init__(self, path: str | Path, tail_bytes: int | None = None,
                  decode: bool = True) -> None:

@@ -68,9 +68,8 @@ class Listener:
         return [f"{n}/{c}" for (n, c) in self.feeds if (n, c) not in self.heard]
 
     def poll(self, timeout: float = 0.05) -> Received | None:
-        """One message of a feed, or None (nothing within ``timeout`` [s], a control message,
-        a message rejected). Raises RunError on an abort, when the orchestrator is gone, or
-        when the start does not come within the start timeout."""
+        """One message of a feed, or None (none within ``timeout`` [s], a control message, a
+        rejected one); RunError on an abort, the orchestrator gone, or no start in time."""
         part = self.part
         part.check_orchestrator()
         if self.start is None:

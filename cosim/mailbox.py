@@ -67,9 +67,8 @@ class Mailbox:
 
 def file_step(inputs: dict[tuple[str, str], Mailbox], node: str, msg: Message
               ) -> list[tuple[tuple[str, str], str]]:
-    """File producer ``node``'s verified step message into ``inputs`` (each inner message of
-    a stepped input decoded against its channel's schema, others unread; a ``hello`` proves
-    every stepped input from ``node`` live); the rejections, ``(input, why)``."""
+    """File producer ``node``'s verified step message into ``inputs`` (a ``hello`` proves each
+    stepped input from ``node`` live); the rejections, ``(input, why)``."""
     rejected: list[tuple[tuple[str, str], str]] = []
     if msg.kind == "hello":
         for (n, _), each in inputs.items():

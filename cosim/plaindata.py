@@ -230,8 +230,7 @@ def _unpack(data: bytes, lenient: bool) -> Any:
 
 def decode(data: bytes, lenient: bool = False) -> Any:
     """The state ``data`` holds; :class:`PlainDataError` for anything malformed. ``lenient``
-    checks the bytes without the classes (a process that has not imported a node's modules):
-    an object of a class it has not registered is ``{"class": name, "fields": {...}}``."""
+    (a process without the node's modules): an object is ``{"class": name, "fields": {...}}``."""
     try:
         return _unpack(data, lenient)
     except PlainDataError:

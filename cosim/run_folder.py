@@ -132,9 +132,8 @@ def pid_alive(pid: int, pid_start: int | None = None) -> bool:
 
 
 def journal_integrity(path: Path) -> dict[str, Any]:
-    """What ``suscosim export`` would find in the journal: intact ``records``,
-    ``skipped_records`` (damaged), ``torn`` and ``problem`` (one line), from the segments'
-    CRCs (nothing decompressed)."""
+    """Intact ``records``, ``skipped_records``, ``torn`` and ``problem`` of a journal, from
+    its segments' CRCs."""
     try:
         c = scan_journal(path)
     except (OSError, ValueError) as exc:

@@ -15,9 +15,8 @@ from .wire import Message, decode, inner
 
 
 def step_keyexprs(keyexpr: str) -> list[str]:
-    """The key expressions to subscribe to for ``keyexpr`` (``suscosim/<run>/<node>/
-    <channel>`` with ``*``/``**`` wildcards): itself, and the step key of the nodes it names
-    (``suscosim/R/plant/state`` -> also ``suscosim/R/plant/step``)."""
+    """The key expressions to subscribe to for ``keyexpr``: itself, and the step key of the
+    nodes it names (``suscosim/R/plant/state`` -> also ``suscosim/R/plant/step``)."""
     chunks = keyexpr.split("/")
     if chunks[-1] == "**" or len(chunks) < 2:
         return [keyexpr]  # already takes the step keys
@@ -26,9 +25,8 @@ def step_keyexprs(keyexpr: str) -> list[str]:
 
 
 def expand(key: str, msg: Message) -> list[tuple[str, Message]]:
-    """``msg`` received on ``key``: a ``step`` as its inner messages, each on the key its
-    channel would have (decoded and type-checked: :class:`WireError` if one is malformed);
-    anything else as it is."""
+    """``msg`` received on ``key``: a ``step`` as its inner messages (decoded, WireError if
+    one is malformed), each on its channel's key; anything else as it is."""
     if msg.kind != "step":
         return [(key, msg)]
     run, node, _ = keys.parse_key(key)

@@ -38,9 +38,8 @@ def write_parquet(table: Table, path: str | Path) -> None:
 
 
 def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> Table:
-    """Read a table written by :func:`write_parquet` or :func:`write_csv` (by its suffix),
-    only the columns ``keep`` accepts (``k`` and ``t`` always); a file that is not such a
-    table is an :class:`~cosim.errors.InputFileError` naming it (and the CSV line)."""
+    """A table file (Parquet or CSV, by its suffix), the columns ``keep`` accepts (``k`` and
+    ``t`` always); InputFileError naming a file (and CSV line) that is not one."""
     path = Path(path)
 
     def wanted(name: str) -> bool:
@@ -131,9 +130,8 @@ def table_rows(folder: str | Path, stem: str = "table") -> int | None:
 
 
 def export_target(folder: str | Path, rows: int, damaged: bool) -> tuple[str, str]:
-    """(stem, why) for a table of ``rows`` rebuilt from a journal: ``table`` (why "") unless
-    the journal was ``damaged`` or a ``table.*`` with more rows is in ``folder``: then
-    ``table.recovered``, alongside, and ``why`` says which."""
+    """(stem, why) for a table of ``rows`` rebuilt from a journal: ``table``, or
+    ``table.recovered`` when the journal was ``damaged`` or a larger table is there."""
     before = table_rows(folder)
     if damaged:
         return RECOVERED_STEM, "the journal is damaged"

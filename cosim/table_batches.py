@@ -60,11 +60,8 @@ def uniform_grid_size(t0: float, t1: float, h: float) -> int:
 
 def resampled(batches: Iterator[dict[str, np.ndarray]], h: float
               ) -> Iterator[dict[str, np.ndarray]]:
-    """The batches of a table with a non-uniform ``t`` (an adaptive step, ``run.h = "auto"``)
-    on the uniform grid t0 + i h [s], each column linearly interpolated between the rows
-    around a grid point: for the methods that need a uniform time base (PSDs, the ride
-    metrics). Streamed (one row held between batches); the first grid point is the first
-    row."""
+    """The batches of a table with a non-uniform ``t`` (``run.h = "auto"``) on the uniform
+    grid t0 + i h [s] from its first row, linearly interpolated (for PSDs, ride metrics)."""
     prev: dict[str, np.ndarray] | None = None
     t0: float | None = None
     i_next = 0  # the next grid point's index

@@ -79,14 +79,9 @@ class _Stats:
 
 
 class TableWriter:
-    """Rows written as they complete; see the module docstring.
-
-    ``channels``: the channels of the table (every one must give a step for it to be a row);
-    ``folder`` None keeps nothing on disk (rows and stats only; with ``keep`` the columns in
-    memory, :meth:`table`);
-    ``first``: the channels in the order they were first heard (``t`` is the first's), when
-    known before their messages come; ``strict``: a message must have exactly its channel's
-    fields (the recorder), else at least them (a journal's table)."""
+    """Rows written as they complete (module docstring). ``folder`` None: nothing on disk
+    (with ``keep`` the columns in memory); ``first``: the channels in the order first heard,
+    when known before; ``strict``: a message has exactly its channel's fields (else at least)."""
 
     def __init__(self, channels: Iterable[str], folder: str | Path | None,
                  layout: Mapping[str, Layout] | None = None, first: Iterable[str] = (),
@@ -274,9 +269,8 @@ class TableWriter:
         return paths
 
     def abandon(self) -> None:
-        """Close and remove the files aside (an error while writing them). Closing flushes
-        what is buffered, which fails again on a full disk: the files are discarded anyway,
-        so that error is not the one to report."""
+        """Close and remove the files aside (after an error writing them; a second error while
+        closing, e.g. a full disk, is not the one to report)."""
         try:
             for f in (self._pq, self._csv):
                 if f is not None:
@@ -343,10 +337,8 @@ def _text(lay: Layout) -> str:
 def journal_layout(records: Iterable[tuple[str, bytes]]
                    ) -> tuple[dict[str, Layout], list[str]]:
     """The first pass over a journal: each channel's layout (the field set most of its data
-    messages carry, each field a list or not as in its most common complete shape, a list's
-    length from the first such message; a stray or forged message cannot displace the real
-    ones) and the channels in the order they were first heard. Memory: a few counters per
-    channel."""
+    messages carry, each a list or not as in its most common complete shape: a stray message
+    cannot displace the real ones) and the channels in the order first heard."""
     fields: dict[str, Counter[tuple[str, ...]]] = {}
     shapes: dict[str, Counter[Any]] = {}
     lengths: dict[str, dict[Any, dict[str, int]]] = {}
@@ -379,10 +371,8 @@ def journal_layout(records: Iterable[tuple[str, bytes]]
 def table_of_journal(open_records: Any, folder: str | Path | None,
                      chunk_rows: int | None = None, keep: bool = False
                      ) -> tuple[TableWriter | None, int]:
-    """The second pass: a :class:`TableWriter` fed the journal's data messages (``open_records``
-    is called once per pass and returns an iterable of (channel, payload)); returns it (not
-    closed: the caller picks the stem) and the records left out as bad, or (None, bad) when
-    the journal holds no data message."""
+    """The second pass: (a :class:`TableWriter` fed the journal's data messages, not closed,
+    or None without one; the records left out as bad). ``open_records()`` is called a pass."""
     layout, first = journal_layout(open_records())
     if not layout:
         bad = 0

@@ -145,9 +145,8 @@ def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
 
 def open_session(args: argparse.Namespace, connect: list[str], listen: list[str] | None, *,
                  lowlatency: bool = False, wait: bool = False) -> tuple[Any, str]:
-    """The bus ``args`` (:func:`add_zenoh_arguments`) ask for on ``connect``/``listen``, and
-    its mode. ``wait`` (a tap, a scope that may start before its run): a client chosen by
-    ``--mode auto`` is a :class:`LateBus`. Raises :class:`SessionOpenError`."""
+    """The bus ``args`` ask for and its mode (SessionOpenError); ``wait``: a client chosen by
+    ``--mode auto`` is a :class:`LateBus`."""
     mode = resolve_mode(args.mode, args.zenoh_config, connect, listen)
     ll = args.lowlatency or lowlatency
     if wait and mode == "client" and args.mode == "auto":
@@ -168,10 +167,8 @@ ATTEMPT_TIMEOUT_MS = 1000  # one attempt to reach the endpoint [ms]; then closed
 
 class LateBus:
     """A client session that may open after its command started (a tap or scope waiting for
-    a run): ``opener(timeout_ms)`` (a :class:`cosim.bus.ZenohBus`) is called in a thread of
-    its own, again after every failure, until it succeeds or :meth:`close` is called. The
-    subscriptions and watches asked meanwhile are declared then; until then a query answers
-    nothing."""
+    a run): ``opener(timeout_ms)`` is called in a thread of its own until it succeeds or
+    :meth:`close`; subscriptions asked meanwhile are declared then, queries answer nothing."""
 
     def __init__(self, opener: Callable[[int], Any]) -> None:
         self._opener = opener

@@ -124,10 +124,8 @@ def _read_csv_rows(path: str) -> ChannelSet:
 def write_chunks(path: str | Path, fmt: str, names: list[str], units: Mapping[str, str],
                  chunks: Iterable[Mapping[str, np.ndarray]], units_in_header: bool = False
                  ) -> int:
-    """Write ``t`` and the channels ``names`` of each chunk to ``path`` as ``fmt``: ``csv``
-    (numbers in full precision, repr; with ``units_in_header`` the header reads ``name
-    [unit]``) or ``parquet`` (float64, each field's unit in its metadata, ``unit``); return
-    the rows written."""
+    """Write ``t`` and ``names`` of each chunk to ``path`` as ``csv`` (numbers as repr; header
+    ``name [unit]`` with ``units_in_header``) or ``parquet`` (float64, metadata ``unit``)."""
     cols, rows = ["t", *names], 0
     if fmt == "csv":
         def head(n: str) -> str:
