@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import copy
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -107,6 +107,15 @@ class Controller(ABC):
         if self.velocity == "damper":
             return v_b, v_w, corner_array(state, "v_damper", self.n)
         return v_b, v_w, v_w - v_b
+
+    def inputs(self, state: Mapping[str, Any], names: Sequence[str], **known: Any) -> list[Any]:
+        """The signals ``names`` of the plant's ``state``: ``v_b``, ``v_w``, ``v_rel`` (m/s, of
+        :meth:`corners`) and any other key per corner, the full vehicle's :data:`BODY_KEYS` as
+        floats, the ``known`` ones as given."""
+        v_b, v_w, v_rel = self.corners(state)
+        known = {"v_b": v_b, "v_w": v_w, "v_rel": v_rel, **known}
+        return [known[k] if k in known else body_scalar(state, k) if k in BODY_KEYS
+                else corner_array(state, k, self.n) for k in names]
 
     def plant_slope(self, c_eff: np.ndarray, state: Mapping[str, Any]) -> np.ndarray:
         """The law's slope (N·s/m) as dF_d/d(v_w - v_b): for ``"damper"`` times the motion ratio

@@ -29,7 +29,7 @@ import numpy as np
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, RunError, ScenarioError
 from cosim.safe_open import check_user_file
-from nodes.controller.base import BODY_KEYS, Controller, ControlOutput, corner_array
+from nodes.controller.base import BODY_KEYS, Controller, ControlOutput
 from nodes.controller.registry import law_builder
 
 #: Our signals an FMU input can be mapped to.
@@ -366,17 +366,7 @@ class FmuController(Controller):
     # ------------------------------------------------------------------ the law
     def _signals(self, state: Mapping[str, Any]) -> list[list[float]]:
         """Input values per corner, in the order of the input map."""
-        v_b, v_w, v_rel = self.corners(state)
-        cols = []
-        velocities = {"v_b": v_b, "v_w": v_w, "v_rel": v_rel}
-        for _, signal in self._in:
-            if signal in velocities:
-                col = velocities[signal]
-            elif signal in BODY_KEYS:
-                col = corner_array(state, signal, 1)[0] * np.ones(self.n)
-            else:
-                col = corner_array(state, signal, self.n)
-            cols.append(col)
+        cols = [np.broadcast_to(c, (self.n,)) for c in self.inputs(state, [s for _, s in self._in])]
         return [[float(c[i]) for c in cols] for i in range(self.n)]
 
     def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:

@@ -27,7 +27,7 @@ import numpy as np
 
 from cosim.config import ConfigReader
 from cosim.errors import ScenarioError
-from nodes.controller.base import BODY_KEYS, Controller, ControlOutput, body_scalar, corner_array
+from nodes.controller.base import Controller, ControlOutput
 
 #: (c_soft, c_hard) in N·s/m of thesis Table 5.2 (``preset`` key).
 PRESETS = {"lumped": (1500.0, 2368.0), "realistic": (3800.0, 6000.0)}
@@ -225,11 +225,8 @@ class FunctionLaw(Controller):
         self.fixed_step = "h" in spec.inputs or "memory" in spec.inputs
 
     def step(self, t: float, state: Mapping[str, np.ndarray]) -> ControlOutput:
-        v_b, v_w, v_rel = self.corners(state)
-        known = {"v_b": v_b, "v_w": v_w, "v_rel": v_rel, "t": float(t), "h": self.h, "n": self.n,
-                 "memory": self.memory}
-        args = [known[k] if k in known else body_scalar(state, k) if k in BODY_KEYS
-                else corner_array(state, k, self.n) for k in self.spec.inputs]
+        args = self.inputs(state, self.spec.inputs, t=float(t), h=self.h, n=self.n,
+                           memory=self.memory)
         out = self.spec.fn(*args, **self.settings)  # type: ignore[misc]
         if not isinstance(out, tuple) or len(out) not in (2, 3):
             raise TypeError(f"control law '{self.law}' must return (F_d, c_eff) or "
