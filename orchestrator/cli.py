@@ -1,15 +1,6 @@
-"""``suscosim``: the command line.
-
-    suscosim run SCENARIO.toml [--out DIR] [--set KEY=VALUE ...] [--mode MODE]
-    suscosim check SCENARIO.toml [--set KEY=VALUE ...] [--mode MODE] [--json]
-    suscosim node NAME --run ID [--connect ENDPOINT]
-    suscosim export RUN_DIR|JOURNAL [--format mdf4|rpc3|csv|parquet] [--out DIR]
-    suscosim fatigue RUN_DIR [...]
-    suscosim tap [RUN] [PATTERN] | replay JOURNAL | runs [DIR] | router
-    suscosim sweep SWEEP.toml | report RUN_OR_SWEEP_DIR
-
-Exit codes: 0 success, 1 the run failed (dead node, stall, abort), 2 bad input (scenario,
-file, arguments). Every error line starts ``suscosim: error: ``.
+"""``suscosim COMMAND``: the command line (``run`` and ``check`` here, the other commands in
+their modules: :data:`COMMANDS`). Exit codes: 0 success, 1 the run failed (dead node, stall,
+abort), 2 bad input (scenario, file, arguments). Every error line starts ``suscosim: error: ``.
 """
 
 from __future__ import annotations
@@ -131,8 +122,7 @@ def _continued(args: argparse.Namespace) -> dict:
 
 
 def _resolved(args: argparse.Namespace) -> dict:
-    """The scenario of ``run`` / ``check``: read, ``--set`` applied, resolved (preflight); a
-    ScenarioError says how to replace a whole table when ``--set`` left a key behind."""
+    """The scenario of ``run`` / ``check``: read, ``--set`` applied, resolved (preflight)."""
     from cosim.errors import ScenarioError
 
     from .runner import resolve
@@ -145,8 +135,7 @@ def _resolved(args: argparse.Namespace) -> dict:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    """Resolve a scenario as ``run`` does, start and write nothing; print it as TOML (a
-    scenario file itself; ``--json``: as the run's scenario.json); a bad key is exit 2."""
+    """Resolve a scenario as ``run`` does, start nothing; print it (TOML, or ``--json``)."""
     scenario = _resolved(args)
     run = scenario["run"]
     if args.json:

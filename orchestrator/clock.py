@@ -195,8 +195,7 @@ class Clock:
                 return
 
     def _checkpointed(self, node: str, k: int, entry: dict[str, Any]) -> None:
-        """A node wrote its state at ``k``: once all have, the manifest completes the
-        checkpoint; a manifest that cannot be written is said and the run goes on."""
+        """A node wrote its state at ``k``: once all have, the manifest completes it."""
         got = self._ckpt_entries.setdefault(k, {})
         got[node] = {f: entry[f] for f in ("file", "sha256", "bytes")}
         if len(got) < len(self.status):

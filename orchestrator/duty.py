@@ -150,8 +150,7 @@ def _load_laws(laws: Any, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
                sets: Sequence[str] = (), law_sets: Sequence[str] = ()) -> Path:
-    """Run a scenario event into ``folder`` (a finished run with fatigue reused unless
-    ``rerun``); ``law_sets`` after the event's own overrides."""
+    """Run a scenario event into ``folder`` (a finished one reused unless ``rerun``)."""
     done = read_json(folder / "summary.json")
     if not rerun and isinstance(done, dict) and done.get("status") == "ok" and \
             (folder / "fatigue" / "damage_per_node.csv").is_file():
@@ -170,8 +169,7 @@ def _run_event(ev: dict[str, Any], folder: Path, mode: str | None, rerun: bool,
 
 
 def _event_fatigue(run_dir: Path, batch_into: Path) -> dict[str, Any]:
-    """A run folder's ``fatigue/`` results; when absent, computed into ``batch_into`` (a run
-    folder a duty file names is read, never written)."""
+    """A run folder's ``fatigue/`` results (when absent: computed into ``batch_into``)."""
     fat = run_dir / "fatigue"
     if not (fat / "damage_per_node.csv").is_file() or not (fat / "summary.json").is_file():
         from nodes.fatigue.run_dir import fatigue_run_dir
@@ -197,8 +195,7 @@ def _same_config(a: dict, b: dict) -> bool:
 
 def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
              rerun: bool = False, sets: Sequence[str] = ()) -> dict[str, Any]:
-    """Run/collect every event (under every law, if any), sum the damage, write ``out/``;
-    duty.json's content. ``sets``: before every scenario event's own ``set``."""
+    """Run/collect every event (under every law), sum the damage, write ``out/``."""
     laws = duty.get("laws")
     if not laws:
         return _schedule(duty, out, out / "runs", mode, rerun, sets)[0]

@@ -61,8 +61,7 @@ def _names(columns: list[str], patterns: list[str] | None) -> list[str]:
 
 def write_format(src: Path, fmt: str, path: Path, patterns: list[str] | None,
                  rpc3_type: str = "int") -> dict[str, Any]:
-    """The table ``src`` in ``fmt`` at ``path`` (written aside, renamed); what the format
-    reports (channels, RPC III resolution)."""
+    """The table ``src`` in ``fmt`` at ``path`` (written aside, renamed); the format's facts."""
     import os
 
     from cosim.formats import ChannelSet, si_unit, write_channels

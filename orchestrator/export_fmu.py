@@ -41,8 +41,7 @@ def _law_module_file(law: str) -> Path | None:
 
 
 def law_interface(scenario: dict[str, Any]) -> dict[str, Any]:
-    """The FMU's interface: controller table, h, inputs, outputs, parameters (ScenarioError
-    when the law cannot be exported)."""
+    """The FMU's interface: controller table, h, inputs, outputs, parameters."""
     import numpy as np
 
     from nodes.controller.laws import PassiveCurveController, build_controller

@@ -104,8 +104,7 @@ class Engine:
         self.sink_s = 0.0  # [s] the sinks' time within the steps
 
     def emit(self, node: str, channel: str, k: int, t: float, data: Any) -> Message:
-        """One data message encoded and checked as a node's outbox does, decoded as its
-        consumers take it, given to the sinks."""
+        """One data message through the codec, as a node's outbox and its consumers do."""
         raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{node}/{channel}: a message of {len(raw)} bytes at step {k} "

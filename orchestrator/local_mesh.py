@@ -32,8 +32,7 @@ class LocalMesh:
 
     @classmethod
     def create(cls, names: list[str]) -> LocalMesh:
-        """A new private folder in the temporary folder, or ``/tmp`` when paths there would be
-        too long; ValueError for a bad name or no short enough path, OSError if none."""
+        """A new private folder in the temporary folder (or ``/tmp``: shorter socket paths)."""
         error: ValueError | None = None
         for base in dict.fromkeys([tempfile.gettempdir(), "/tmp"]):
             remove_stale(Path(base))

@@ -34,8 +34,7 @@ class LocalNodes:
                  log_dir: Path, zenoh_config_file: str | None = None,
                  cores: dict[str, int] | None = None, lease_ms: int = 2000,
                  run_key: bytes | None = None, mesh: LocalMesh | None = None) -> None:
-        """Start ``names`` as ``suscosim node`` processes (output in ``log_dir/NAME.log``);
-        with ``mesh``, linked by it, gossip off (its folder removed by :meth:`stop`)."""
+        """Start ``names`` as ``suscosim node`` processes (output in ``log_dir/NAME.log``)."""
         self.mesh = mesh
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
@@ -96,8 +95,7 @@ class LocalNodes:
 
     def stop(self, grace_s: float = 5.0, tick: Callable[[], None] | None = None,
              tick_period_s: float = 0.25) -> None:
-        """Wait ``grace_s`` for the nodes to end (``tick`` every ``tick_period_s``), then
-        SIGTERM, SIGKILL 2 s later; remove the mesh folder."""
+        """Wait ``grace_s`` for the nodes to end, then SIGTERM, SIGKILL 2 s later."""
         deadline = time.monotonic() + grace_s
         for p in self.procs.values():
             while True:

@@ -1,10 +1,7 @@
-"""Start one node: ``suscosim node NAME --run ID [--connect ENDPOINT]``.
-
-The node opens its own Zenoh session, fetches the resolved scenario from the run's
-orchestrator and runs, on any machine that reaches it. The run key (:mod:`cosim.auth`):
-``SUSCOSIM_RUN_KEY``, else derived from ``--key-file``/``SUSCOSIM_KEY_FILE`` or
-``SUSCOSIM_KEY``. Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario
-or input (or no run key).
+"""``suscosim node NAME --run ID [--connect ENDPOINT]``: one node in its own Zenoh session, on
+any machine that reaches the run's orchestrator (it fetches the scenario from it). The run key:
+``SUSCOSIM_RUN_KEY``, else derived from ``--key-file``/``SUSCOSIM_KEY_FILE``/``SUSCOSIM_KEY``.
+Exit codes: 0 done, 1 run error (abort, stall, dead peer), 2 bad scenario, input or no key.
 """
 
 from __future__ import annotations
@@ -32,8 +29,7 @@ NODE_MODULES: dict[str, str] = nk.entries()  # node kind -> its module (the name
 
 
 def node_callable(name: str, scenario: dict[str, Any]) -> Callable[[Participant], None]:
-    """The implementation ``[nodes]`` picks: a function called as ``function(part, scenario)``,
-    a class run as a stepped node (:func:`cosim.stepped.run_stepped`)."""
+    """The implementation ``[nodes]`` picks: a function, or a class stepped as a node."""
     impl = nk.implementation(name, scenario)
     obj = nk.load(impl.entry, f"{nk.SECTION}.{name}")
     if inspect.isclass(obj):
@@ -43,8 +39,7 @@ def node_callable(name: str, scenario: dict[str, Any]) -> Callable[[Participant]
 
 def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
              spin_s: float = 0.0, key: bytes | None = None, nonce: bytes = b"") -> int:
-    """Run node ``name`` on ``bus``, errors reported to the orchestrator; the exit code.
-    ``key`` default: the environment's; ``nonce``: the run instance's, with ``scenario``."""
+    """Run node ``name`` on ``bus`` (errors told to the orchestrator); the exit code."""
 
     log = logging.getLogger(f"suscosim.{name}")
     try:

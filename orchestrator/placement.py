@@ -62,8 +62,7 @@ def _threads(pid: int) -> list[int]:
 
 
 def _set_class(pid: int, from_policy: int | None, to_policy: int) -> bool:
-    """Every thread of ``pid`` in ``from_policy`` (None: any not real-time) to ``to_policy``;
-    False if the process is gone or the OS refuses."""
+    """Every thread of ``pid`` in ``from_policy`` (None: not real-time) to ``to_policy``."""
     try:
         for tid in _threads(pid):
             try:
@@ -80,8 +79,7 @@ def _set_class(pid: int, from_policy: int | None, to_policy: int) -> bool:
 
 
 def background(pid: int) -> bool:
-    """Every thread of ``pid`` to ``SCHED_IDLE`` (only once the run has started: an idle node
-    could miss the start timeout); False where the OS refuses."""
+    """Every thread of ``pid`` to ``SCHED_IDLE`` (once the run has started, not before)."""
     return _set_class(pid, None, os.SCHED_IDLE) if hasattr(os, "SCHED_IDLE") else False
 
 

@@ -1,13 +1,8 @@
-"""``suscosim pseudo-damage``: pseudo-damage of the load channels of runs or load files, side
-by side (#30 item 5: compare a simulation with a rig or road measurement, or two runs).
-
-    suscosim pseudo-damage SOURCE [SOURCE ...] [--k 5] [--n-ref 1e6] [--json]
-
-A SOURCE is a run folder (its table's ``plant/arm/...`` columns) or a load file (RPC III,
-MDF 4, CSV, Parquet: every channel, in its own unit). Per channel: the rainflow cycles
-(ASTM half cycles for the residue), D = Σ n (ΔF / 1 kN)^k / N_ref and the damage-equivalent
-range ΔF_eq at N_ref cycles (:mod:`nodes.fatigue.lib.pseudo_damage`); each source after the first
-with its ratio D / D_first. Exit codes: 0 printed, 2 bad input (one line on stderr).
+"""``suscosim pseudo-damage SOURCE [SOURCE ...] [--k 5] [--n-ref 1e6] [--json]``: the
+pseudo-damage of the load channels of run folders (``plant/arm/...``) or load files (every
+channel, its own unit), side by side: per channel the rainflow cycles (ASTM half cycles for the
+residue), D = Σ n (ΔF / 1 kN)^k / N_ref, the damage-equivalent range ΔF_eq at N_ref
+(:mod:`nodes.fatigue.lib.pseudo_damage`), each source's ratio D / D_first. Exit 2: bad input.
 """
 
 from __future__ import annotations

@@ -46,8 +46,7 @@ def _journal_path(path: str | Path) -> Path:
 
 
 def _records(p: Path, counts: dict[str, Any] | None = None) -> Iterator[Record]:
-    """The journal's data records (node, channel, raw, t), streamed; ``counts`` gets the run
-    id, the records skipped and the reader's problem line."""
+    """The journal's data records (node, channel, raw, t), streamed; counts in ``counts``."""
     from cosim.journal import JournalReader
 
     try:
@@ -114,8 +113,7 @@ def _wait_for_subscriber(pubs: list[Any], wait_s: float) -> bool:
 
 def replay(bus: Any, run_id: str, records: Recorded, speed: float | None,
            wait_s: float = 5.0, log: Any = None) -> tuple[int, float]:
-    """Publish ``records`` under ``run_id`` on ``bus`` (``speed`` None: at once); (messages
-    published, wall s from the first to the last)."""
+    """Publish ``records`` under ``run_id`` (``speed`` None: at once); (sent, wall s)."""
     log = log or (lambda text: None)
     pubs: dict[tuple[str, str], Any] = {}
     for node, channel in sorted(records.channels):

@@ -42,8 +42,7 @@ def parent_scenario(run_dir: Path) -> dict[str, Any]:
 
 
 def key_of(run_dir: Path, scenario: dict[str, Any]) -> bytes | None:
-    """The checkpoint MAC key from ``SUSCOSIM_KEY[_FILE]``, else the folder's ``run.key``, else
-    None (an unsigned run)."""
+    """The checkpoint MAC key (``SUSCOSIM_KEY[_FILE]``, else ``run.key``; None: unsigned)."""
     secret = au.secret_from_env()
     path = Path(run_dir) / au.KEY_FILE_NAME
     if secret is None and path.is_file():
@@ -62,8 +61,7 @@ TRUST_CODE_ENV = "SUSCOSIM_TRUST_RUN_CODE"  # 1: resume/fork a folder that names
 
 
 def code_named(scenario: dict[str, Any], run_dir: Path) -> list[str]:
-    """What a run folder's scenario names to run as code: a ``package.module:attr`` node or
-    law, an FMU inside the run folder."""
+    """What a run folder's scenario names to run as code (``module:attr``, an FMU in it)."""
     found = [f"nodes.{kind} = {v!r}" for kind, v in (scenario.get("nodes") or {}).items()
              if isinstance(v, str) and ":" in v]
     got = scenario.get("controller")
@@ -86,8 +84,7 @@ def _refuse_code(scenario: dict[str, Any], run_dir: Path) -> None:
 
 
 def journal_for(run_dir: Path, k: int) -> Path:
-    """The journal holding every step < ``k``: one set aside by a resume from >= k, else the
-    run's own."""
+    """The journal holding every step < ``k`` (one set aside by a resume, else the run's)."""
     root = Path(run_dir) / cp.CHECKPOINTS_DIR
     aside = sorted((int(p.stem.split("-k")[1]), p) for p in root.glob("journal-k*.msgpack")
                    if p.stem.split("-k")[1].isdigit())

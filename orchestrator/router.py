@@ -34,8 +34,7 @@ def _is_unset(conf: Any, key: str) -> bool:
 
 def router_config(listen: list[str] | None = None, config_file: str | None = None,
                   lease_ms: int = DEFAULT_LEASE_MS) -> tuple[Any, list[str]]:
-    """A router's Zenoh configuration and endpoints (``listen``, else the file's, else
-    :data:`DEFAULT_LISTEN`); ValueError: the file does not load or an endpoint is malformed."""
+    """A router's Zenoh configuration and endpoints; ValueError for a bad file or endpoint."""
     import zenoh
 
     try:

@@ -180,8 +180,7 @@ def strict_json(obj: Any, key: str = "", nulled: list[str] | None = None) -> Any
 
 
 def write_summary(folder: Path, summary: dict[str, Any]) -> None:
-    """Write ``summary.json`` as strict JSON (non-finite numbers null, listed in
-    ``non_finite``), aside and renamed into place."""
+    """Write ``summary.json`` as strict JSON (NaN null, listed in ``non_finite``), atomically."""
     nulled: list[str] = []
     clean = strict_json(summary, nulled=nulled)
     if nulled:
@@ -349,8 +348,7 @@ def _error_text(exc: BaseException) -> str:
 
 def _raise_failure(exc: BaseException, unwritten: SummaryWriteError | None,
                    where: str) -> NoReturn:
-    """Raise the error to report of a failed run: ``exc`` (a SuscosimError or the
-    KeyboardInterrupt), else a RunError; with ``unwritten`` (a full disk) both said."""
+    """Raise a failed run's error (``unwritten``, a full disk: both said)."""
     if unwritten is not None:
         if isinstance(exc, KeyboardInterrupt):
             print(f"suscosim: {unwritten}", file=sys.stderr)
@@ -401,8 +399,7 @@ def _run_inprocess(scenario: dict[str, Any], bar: ProgressBar, started: float,
 def _fail(exc: BaseException, scenario: dict[str, Any], nodes: run_modes.Nodes,
           clock: Clock | None, bar: ProgressBar, external: list[str] | None, started: float,
           t0: float, lowlatency: bool) -> NoReturn:
-    """A failed or interrupted run: stop the nodes, close the bus, recover the table, write
-    the ``failed`` summary, raise the error to report."""
+    """A failed run: stop the nodes, close the bus, recover the table, write the summary."""
     folder = Path(scenario["run"]["dir"])
     if isinstance(exc, KeyboardInterrupt) and clock is not None:  # Ctrl-C or SIGTERM
         try:

@@ -1,5 +1,4 @@
 """``suscosim runs [DIR] [--json]``: list run folders and their state, from the files alone.
-
 A run folder holds ``scenario.json``; ``DIR`` (default ``runs``) holds them up to three levels
 down (a sweep). States: ``ok``/``failed`` (``summary.json``); ``running`` (``run.json``'s
 orchestrator process is alive: same host, pid, start time); ``interrupted`` (it is gone);

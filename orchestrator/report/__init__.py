@@ -1,9 +1,7 @@
-"""``suscosim report RUN_OR_SWEEP_DIR``: a self-contained HTML page of a run or a sweep.
-
-No server, network or JavaScript: matplotlib PNGs as ``data:`` URIs, inline CSS, relative links
+"""``suscosim report RUN_OR_SWEEP_DIR``: a self-contained HTML page of a run or a sweep. No
+server, network or JavaScript: matplotlib PNGs as ``data:`` URIs, inline CSS, relative links
 (docs/report.md). A failed run renders too, every missing piece named with the command that
 makes it. Exit codes: 0 written, 2 bad input.
-
 """
 
 from __future__ import annotations

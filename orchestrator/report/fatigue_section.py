@@ -67,8 +67,7 @@ MEAN_STRESS_NAMES = {"fkm": "FKM Haigh diagram", "goodman": "Goodman", "gerber":
 
 
 def life_from(cfg: dict) -> str | None:
-    """Which S-N curve, survival probability and mean-stress rule the headline life is from
-    (the ``sn_methods`` entry it equals); None for a summary without them."""
+    """The S-N curve, probability and mean-stress rule of the headline life (or None)."""
     rule = cfg.get("mean_stress_applied")
     if rule is None:
         return None
@@ -107,8 +106,7 @@ def sn_methods_table(fs: dict) -> str:
 
 
 def parts_block(r: RunData, fs: dict) -> str:
-    """With ``[fatigue] parts``: every part's life side by side (the primary summary's
-    ``parts``), and each more part's damage map (``fatigue/<part>/damage_map.png``)."""
+    """With ``[fatigue] parts``: every part's life side by side, each more one's map."""
     parts = [p for p in fs.get("parts") or [] if isinstance(p, dict)]
     if len(parts) < 2:
         return ""

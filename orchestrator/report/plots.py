@@ -37,8 +37,7 @@ def fig_uri(fig, dpi: int = 90) -> str:
 
 
 def file_uri(path: Path) -> str | None:
-    """A PNG file as a data URI (None if it is not a PNG, or not a regular file inside its
-    folder: a symlink out of a handed run folder is not embedded)."""
+    """A PNG file inside its folder (no symlink out) as a data URI, else None."""
     try:
         data = read_user_file(path, "report", inside=path.parent)
     except (OSError, ValueError):  # InputFileError

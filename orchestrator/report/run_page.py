@@ -153,8 +153,7 @@ def _source(r: RunData) -> stream.TableSource:
 
 def streamed_panels(src: stream.TableSource, build: Callable[[dict], tuple[list[tuple], list[str]]]
                     ) -> tuple[list[tuple], list[str], tuple[float, float]]:
-    """``build(batch)``'s panels, each line decimated as the batches pass, the missing titles,
-    the table's first and last time [s]."""
+    """``build(batch)``'s panels decimated batch by batch, missing titles, first/last t [s]."""
     decs: list[list[stream.StreamDecimator]] | None = None
     shape: list[tuple] = []
     missing: list[str] = []
@@ -275,8 +274,7 @@ def stats_section(r: RunData) -> str:
 
 
 def streamed_ride_metrics(src: stream.TableSource) -> dict[str, float]:
-    """:func:`nodes.recorder.ride_metrics.run_metrics` of the table read in batches
-    (:mod:`nodes.recorder.ride_stream`): ``{label: value}``."""
+    """:func:`nodes.recorder.ride_metrics.run_metrics` of the table read in batches."""
     from nodes.recorder.ride_stream import streamed_run_metrics
 
     return streamed_run_metrics(src.names, src.n_rows, lambda cols: src.batches(cols))

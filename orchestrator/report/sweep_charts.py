@@ -125,8 +125,7 @@ def sweep_compare_section(points: list[Point], keys: list[str]) -> str:
 
 def overlay_groups(points: list[Point], keys: list[str]
                    ) -> list[tuple[str, list[tuple[Point, str, str]]]]:
-    """``[(group title, [(point, label, colour)])]``: with a law axis, a group per cell of the
-    other axes, coloured by law; else one group."""
+    """``[(title, [(point, label, colour)])]``: a group per cell of the non-law axes."""
     axis = law_axis(points, keys)
     if axis is None:
         return [("", [(p, p.short, f"C{j % 10}") for j, p in enumerate(points)])]

@@ -68,8 +68,7 @@ class Point:
 
 
 def load_sweep(d: Path, runs_dir: Path | None = None) -> tuple[dict, list[Point]]:
-    """sweep.json and its points (BadInput if unreadable); run folders are read inside the
-    sweep folder or the ``runs_dir`` named on the command line."""
+    """sweep.json and its points (BadInput if unreadable)."""
     p = d / "sweep.json"
     try:
         spec = json.loads(read_user_text(p, "scenario", inside=d))

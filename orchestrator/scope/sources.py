@@ -166,8 +166,7 @@ class ReplayResidual:
 
 
 class JournalSource:
-    """Replay ``records`` (node, channel, raw, t) at ``speed`` x the recorded pace (None: at
-    once); with ``run`` (``[run]``) and a ``Recorded``, the coupling residual too."""
+    """Replay ``records`` at ``speed`` x the recorded pace (None: at once)."""
 
     def __init__(self, records: Any, state: ScopeState,
                  speed: float | None = 1.0, damage: DamageMap | None = None,

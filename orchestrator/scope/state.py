@@ -184,8 +184,7 @@ class ScopeState:
 
     def snapshot(self, since: int = -1, now: float | None = None,
                  coupling_since: int = -1) -> dict[str, Any]:
-        """The ``/data?since=K&coupling_since=C`` answer: samples of steps k > K, coupling
-        points of messages k > C."""
+        """The ``/data?since=K&coupling_since=C`` answer (steps k > K, messages k > C)."""
         now = time.monotonic() if now is None else now
         with self._lock:
             n = self.n_steps

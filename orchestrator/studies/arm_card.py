@@ -1,6 +1,5 @@
-"""``suscosim arm``: the built-in lower arm's model card, from its shipped results.
-
-Reads the results beside nodes/fatigue/parts/data/lower_arm.toml (no meshing, no solve) and
+"""``suscosim arm``: the built-in lower arm's model card, from its shipped results: reads the
+results beside nodes/fatigue/parts/data/lower_arm.toml (no meshing, no solve) and
 prints (or ``--json``): mass, the first six free-free modes, the hot-spot stress under the
 static wheel load (the double-wishbone plant's joint loads at static equilibrium, so the card
 and the runs see the same arm; inertia relief) with its node, 3 g vertical (static x 3,

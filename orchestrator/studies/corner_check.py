@@ -39,8 +39,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def check(corner: corner_file.Corner, travel: tuple[float, float], n: int, k_t: float,
           identify: bool = False) -> dict[str, object]:
-    """Everything ``corner check`` prints, SI (a travel the linkage cannot reach: listed in
-    ``unreachable``)."""
+    """Everything ``corner check`` prints, SI (unreachable travels listed)."""
     from nodes.plant import corner_kinematics as ck
 
     rows: dict[str, list[float]] = {}

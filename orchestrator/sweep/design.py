@@ -79,8 +79,7 @@ def _round(v: float) -> float:
 
 
 def parse_design(spec: Any, check_key: Any) -> Design:
-    """Read and sample ``[sweep.design]`` (``check_key(where, key, value)``: the sweep file's
-    key check); ScenarioError naming the key."""
+    """Read and sample ``[sweep.design]``; ScenarioError naming the key."""
     where = "sweep.design"
     if not isinstance(spec, dict):
         raise ScenarioError(where, spec, "a table with method, n, seed and ranges")

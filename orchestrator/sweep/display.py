@@ -28,8 +28,7 @@ class Job(Protocol):
 
 
 class Display:
-    """One progress display for the whole sweep: a line per running point, redrawn in place
-    on a terminal; on a pipe, a line per event and a status line now and then."""
+    """A line per running point, redrawn on a terminal; on a pipe, events and a status."""
 
     def __init__(self, stream: TextIO, total: int, n_steps_total: int) -> None:
         self.stream, self.total = stream, total

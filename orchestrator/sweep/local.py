@@ -101,8 +101,7 @@ class Runner:
                    (1, -ps[0].n_steps) if ps[1] == "todo" else (2, 0))
 
     def execute(self, todo: list[tuple[Point, str]]) -> bool:
-        """Run the given points (``todo`` or ``fatigue`` phase); False if interrupted. With
-        ``fork_at``, a point's fork waits for its parent, which runs first if not done."""
+        """Run the points (a fork after its parent); False if interrupted."""
         queue = list(todo)
         waiting: dict[str, list[tuple[Point, str]]] = {}  # parent id -> its forks to run
         if self.plan is not None:

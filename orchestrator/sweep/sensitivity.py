@@ -42,8 +42,7 @@ def _finite(v: Any) -> bool:
 
 
 def rank_correlations(x: np.ndarray, y: np.ndarray) -> list[tuple[float, float, float]]:
-    """Per column of ``x`` (n, d): (Spearman rho, p-value, PRCC) with ``y`` (n,); NaN where
-    undefined."""
+    """Per column of ``x`` (n, d): (Spearman rho, p, PRCC) with ``y`` (n,); NaN if undefined."""
     from scipy.stats import rankdata, spearmanr
 
     n, d = x.shape

@@ -179,8 +179,7 @@ MAX_POINTS = 10_000  # most points enumerated unless --max-points says more
 
 def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None = None,
                max_points: int = MAX_POINTS) -> Sweep:
-    """Read and check a sweep file and enumerate its points (not yet validated); more than
-    ``max_points`` is a ScenarioError, counted before any is made."""
+    """Read and check a sweep file, enumerate its points (at most ``max_points``)."""
     path = Path(path)
     data = read_user_toml(path, "scenario", "sweep file")
     if not isinstance(data.get("sweep"), dict):
@@ -290,8 +289,7 @@ def load_sweep(path: str | Path, jobs: int | None = None, fatigue: bool | None =
 
 
 def validate_points(sweep: Sweep, out: Path) -> None:
-    """Load and preflight every point's scenario; fill n_steps, the fingerprint and the fork
-    plan. SweepError naming the point and the key; starts nothing."""
+    """Preflight every point's scenario (n_steps, fingerprint, fork plan); SweepError."""
     from ..runner import resolve
 
     resolved_all: dict[str, dict[str, Any]] = {}

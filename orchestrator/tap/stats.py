@@ -174,8 +174,7 @@ class Tap:
     last_problem: str = ""
 
     def handle(self, key: str, raw: bytes, now: float) -> Message | None:
-        """Take one sample: decode, count, write to CSV; never raises on bad bytes. A ``step``
-        is taken as the data messages it carries that the expression names (the last returned)."""
+        """Take one sample (a ``step``: the messages it carries); never raises on bad bytes."""
         if not is_step_key(key):
             return self._take(key, raw, now)
         msg = self._take(key, raw, now, count=False)
