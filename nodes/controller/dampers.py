@@ -81,17 +81,18 @@ class PassiveCurve:
         self.slopes = np.diff(F_arr) / np.diff(v_arr)
         self.source = source
 
+    def _segment(self, v_rel: np.ndarray | float) -> np.ndarray:
+        x = np.asarray(v_rel, dtype=float)
+        return np.clip(np.searchsorted(self.v, x, side="right") - 1, 0, len(self.slopes) - 1)
+
     def force(self, v_rel: np.ndarray | float) -> np.ndarray:
         """Force on the body (N) at relative velocity ``v_rel`` (m/s)."""
-        x = np.asarray(v_rel, dtype=float)
-        seg = np.clip(np.searchsorted(self.v, x, side="right") - 1, 0, len(self.slopes) - 1)
-        return self.F[seg] + self.slopes[seg] * (x - self.v[seg])
+        seg = self._segment(v_rel)
+        return self.F[seg] + self.slopes[seg] * (np.asarray(v_rel, dtype=float) - self.v[seg])
 
     def slope(self, v_rel: np.ndarray | float) -> np.ndarray:
         """Local dF_d/dv_rel (N·s/m) of the segment containing ``v_rel``."""
-        x = np.asarray(v_rel, dtype=float)
-        seg = np.clip(np.searchsorted(self.v, x, side="right") - 1, 0, len(self.slopes) - 1)
-        return self.slopes[seg]
+        return self.slopes[self._segment(v_rel)]
 
     @classmethod
     def from_csv(cls, path: str | Path) -> PassiveCurve:

@@ -25,7 +25,7 @@ from cosim.errors import ScenarioError
 from cosim.run_settings import RunSettings
 
 from .config import build_road, build_tyre
-from .tyre_3d import KIN_FIELDS, build_tyre_3d, is_magic_formula
+from .tyre_3d import KIN_FIELDS, Tyre3D, build_tyre_3d, is_magic_formula
 from .tyres import Tyre
 from .wheel_paths import RoadPath, driver_radius, road_heights, road_heights_at
 
@@ -49,12 +49,7 @@ class TyreRoad:
 
     def __init__(self, scenario: dict[str, Any], start: dict[str, Any]) -> None:
         self.road = build_road(scenario["road"])
-        self.mf = None
-        self.tyre: Tyre
-        if is_magic_formula(scenario["tyre"]):
-            self.tyre, self.mf = build_tyre_3d(scenario["tyre"])
-        else:
-            self.tyre = build_tyre(scenario["tyre"])
+        self.tyre, self.mf = _tyres(scenario["tyre"])
         self._radius = driver_radius(scenario.get("vehicle", {}))
         self._origin: tuple[float, float] | None = None
         self._u: np.ndarray | None = None
@@ -111,15 +106,14 @@ class TyreRoad:
                 **{k: f[k] for k in ("Fx", "Fy", "Mz", "kappa", "alpha")}}
 
 
+def _tyres(cfg: Mapping[str, Any]) -> tuple[Tyre, Tyre3D | None]:
+    """The vertical tyre of ``[tyre]`` and the Magic Formula's 3-D one (or None)."""
+    return build_tyre_3d(cfg) if is_magic_formula(cfg) else (build_tyre(cfg), None)
+
 
 def static_check(scenario: dict[str, Any]) -> float | None:
     """Preflight: build road and tyre (raises ScenarioError); returns the road's duration [s]."""
-    if is_magic_formula(scenario["tyre"]):
-        build_tyre_3d(scenario["tyre"])
-        if scenario.get("run", {}).get("adaptive"):
-            raise ScenarioError("run.h", "auto", "a fixed step with tyre.model = "
-                                "\"magic_formula\" (its relaxation lengths are integrated "
-                                "with a fixed step)")
-    else:
-        build_tyre(scenario["tyre"])
+    if _tyres(scenario["tyre"])[1] is not None and scenario.get("run", {}).get("adaptive"):
+        raise ScenarioError("run.h", "auto", "a fixed step with tyre.model = \"magic_formula\" "
+                            "(its relaxation lengths are integrated with a fixed step)")
     return build_road(scenario["road"]).duration_s
