@@ -116,8 +116,7 @@ class RunKey:
         return lambda body: _sign(base, body)
 
     def verify(self, keyexpr: str, raw: bytes) -> bytes:
-        """``raw`` if it is signed with the run's key for ``keyexpr`` (decoded as it is: the
-        ``s`` field is ignored); :class:`AuthError` otherwise."""
+        """``raw`` if signed with the run's key for ``keyexpr`` (else AuthError)."""
         if len(raw) <= SIG_BYTES or raw[0] != SIGNED_HEAD or \
                 raw[-SIG_BYTES:-TAG_BYTES] != SIG_FIELD:
             raise AuthError("unsigned message (no signature field)")

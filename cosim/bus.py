@@ -22,8 +22,7 @@ LiveCallback = Callable[[str, bool], None]
 
 
 class Feed(Protocol):
-    """A lock-step input: ``recv`` blocks (``b""`` after ``wake``, from any thread),
-    ``try_recv`` gives None when nothing waits."""
+    """A lock-step input: ``recv`` blocks (``b""`` after ``wake``), ``try_recv`` does not."""
 
     def recv(self) -> bytes: ...
     def try_recv(self) -> bytes | None: ...
@@ -256,8 +255,7 @@ class ZenohBus:
 
 
 class _ZenohFeed:
-    """A subscriber on one key whose samples wait in a bounded FIFO (Zenoh's ``FifoChannel``)
-    until the node's thread takes them; a full FIFO holds the sender back."""
+    """A subscriber whose samples wait in a bounded FIFO (a full one holds the sender back)."""
 
     def __init__(self, bus: ZenohBus, key: str, capacity: int) -> None:
         z = bus._z

@@ -91,8 +91,7 @@ def _write_atomic(path: Path, data: bytes) -> None:
 
 
 def checkpoint_key(run_key: bytes | None) -> bytes | None:
-    """The key of a run's checkpoint MACs, derived from its run key (so a checkpoint MAC is
-    never a valid message signature); None without one."""
+    """The checkpoint MAC key derived from a run key (never a message signature); or None."""
     if not run_key:
         return None
     return hmac.new(run_key, b"suscosim-checkpoint-v2", hashlib.sha256).digest()
@@ -176,8 +175,7 @@ def _checked(doc: dict[str, Any], path: Path) -> Checkpoint:
 
 
 def complete_checkpoints(run_dir: Path) -> list[Checkpoint]:
-    """The complete checkpoints of ``run_dir``, oldest first (a manifest that is not JSON:
-    incomplete, skipped; one whose fields are wrong: CheckpointError)."""
+    """The complete checkpoints of ``run_dir``, oldest first (a non-JSON manifest: skipped)."""
     root = Path(run_dir) / CHECKPOINTS_DIR
     found: list[Checkpoint] = []
     if not root.is_dir():
@@ -268,8 +266,7 @@ def load_for_resume(run_dir: Path, scenario: dict[str, Any], at_t: float | None 
 
 
 def prune_checkpoints(run_dir: Path, keep: int) -> list[int]:
-    """Delete every complete checkpoint but the ``keep`` newest (its manifest first, then its
-    folder); the k deleted."""
+    """Delete all complete checkpoints but the ``keep`` newest (manifest first); the k deleted."""
     import shutil
 
     gone: list[int] = []

@@ -89,8 +89,7 @@ class ConfigReader:
         return default
 
     def only(self, keys: Iterable[str], *, unlisted: Iterable[str] = ()) -> None:
-        """Refuse every key outside ``keys`` (and ``unlisted``: accepted, not listed in the
-        message); declared for :meth:`finish` too."""
+        """Refuse every key outside ``keys`` and ``unlisted`` (declared for :meth:`finish` too)."""
         allowed = set(keys)
         self._declared |= allowed | set(unlisted)
         for k in self.cfg:
@@ -98,8 +97,7 @@ class ConfigReader:
                 raise self._unknown(str(k), sorted(allowed))
 
     def finish(self, *, also: Iterable[str] = ()) -> None:
-        """Refuse every key that was neither read nor declared (nor in ``also``): call it
-        once every key has been read."""
+        """Refuse every key neither read nor declared (nor in ``also``); call it last."""
         known = self._read | self._declared | set(also)
         for k in self.cfg:
             if k not in known:

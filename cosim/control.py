@@ -59,8 +59,7 @@ def _map(d: Mapping[str, Any], name: str, kind: str, required: bool = False) -> 
 
 
 def check_node_control(kind: str, d: Mapping[str, Any]) -> None:
-    """Raise WireError unless the payload ``d`` of a node's control message of ``kind`` has
-    the fields of the table above, with their types."""
+    """WireError unless a node's control message has the fields of the table above."""
     if kind == "ready":
         _map(d, "info", kind)
         _str_list(d.get("info", {}), "outputs", kind)
@@ -119,8 +118,7 @@ def check_clock(kind: str, d: Mapping[str, Any]) -> None:
 
 def check_start(d: Mapping[str, Any], n_steps: int | None = None, h: float | None = None,
                 nodes: Iterable[str] = ()) -> None:
-    """A ``start`` must be well formed and plausible: the number of steps and the step size
-    of the scenario the node runs, and facts for each of ``nodes``."""
+    """WireError unless ``start`` is well formed and of this run (steps, h, ``nodes``' facts)."""
     check_clock("start", d)
     if n_steps is not None and d["n_steps"] != n_steps:
         raise WireError(f"implausible start: n_steps={d['n_steps']}, the scenario has {n_steps}")

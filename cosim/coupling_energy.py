@@ -103,8 +103,7 @@ def coupling_residual(table: Mapping[str, np.ndarray], h: float, coupling: str,
 
 
 def summary(residuals: Mapping[str, BondResidual]) -> dict[str, float]:
-    """``summary.json``'s ``coupling_energy_residual``: each bond's relative residual and the
-    total (all bonds' |dE| over their carried energy)."""
+    """``summary.json``'s ``coupling_energy_residual``: each bond's relative residual, total."""
     out = {name: r.relative for name, r in residuals.items()}
     carried = sum(r.carried for r in residuals.values())
     out["total"] = (sum(r.abs_residual for r in residuals.values()) / carried

@@ -237,8 +237,7 @@ class LiveResidual:
         return len(self._rows)
 
     def take(self) -> list[tuple[int, float, dict[str, Any]]]:
-        """Feed the rows complete so far; the messages to publish as (last step ``k``, its
-        ``t`` [s], payload), in step order."""
+        """Feed the rows complete so far; the messages to publish, (last k, its t [s], payload)."""
         rows, self._rows = self._rows, []
         for j in [j for j in self._held if j < self._last_row]:  # never rows now: the
             del self._held[j]  # table dropped them (a channel's message came too late)
@@ -288,8 +287,7 @@ def _messages(done: list[tuple[int, float]], dE: Mapping[str, np.ndarray],
 
 def message(k0: int, dE: Mapping[str, np.ndarray], totals: Mapping[str, BondResidual],
             threshold: float) -> dict[str, Any]:
-    """The payload of one ``recorder/coupling`` message of steps ``k0 ..`` (fields and units:
-    :mod:`cosim.schema`)."""
+    """The payload of one ``recorder/coupling`` message of steps ``k0 ..`` (:mod:`cosim.schema`)."""
     d: dict[str, Any] = {"k0": int(k0)}
     for name, v in dE.items():
         d[f"dE_{name}"] = [float(x) for x in v]

@@ -38,8 +38,7 @@ class UnknownKeyError(ScenarioError):
 
 
 class InputFileError(SuscosimError, ValueError):
-    """A user's file is malformed: the message names the file, the line (1-based, when
-    known) and what is wrong."""
+    """A user's file is malformed: the message names the file, the line (if known), the fault."""
 
     exit_code = 2
 
@@ -58,8 +57,7 @@ class RunError(SuscosimError):
 
 
 class InputLate(RunError):
-    """A node's input did not come within the stall timeout: ``late`` names the nodes it
-    waited for (the ones to blame)."""
+    """A node's input did not come within the stall timeout; ``late``: the nodes to blame."""
 
     def __init__(self, message: str, late: list[str]) -> None:
         super().__init__(message)

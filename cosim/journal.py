@@ -393,8 +393,7 @@ def scan_journal(path: str | Path) -> JournalContents:
 
 
 def segment_index(path: str | Path) -> list[tuple[int, int, int, int]]:
-    """The intact segment headers of a journal, in order: (offset, bytes, records, first
-    record's index)."""
+    """The intact segment headers of a journal: (offset, bytes, records, first record's index)."""
     reader = JournalReader(path)
     out = []
     with open(reader.path, "rb") as fh:
@@ -411,8 +410,7 @@ TAIL_BYTES = 64 * 1024  # how much of a journal's end last_step reads (at least)
 
 
 def last_step(path: str | Path, tail_bytes: int = TAIL_BYTES) -> int | None:
-    """The last step ``k`` every channel in the journal's tail has reached, or None (no
-    journal, no data record in the tail)."""
+    """The last step every channel in the journal's tail has reached, or None."""
     try:
         contents = read_journal(path, tail_bytes=tail_bytes)
     except (OSError, ValueError):

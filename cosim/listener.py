@@ -52,8 +52,7 @@ class Listener:
 
     def feed(self, node: str, channel: str, kinds: Iterable[str] = ("data",),
              required: Iterable[str] = ()) -> Channel:
-        """Subscribe to ``node/channel``: messages of ``kinds`` with the ``required`` fields
-        come out of :meth:`poll`; anything else (but ``hello``) is rejected."""
+        """Subscribe to ``node/channel``: messages of ``kinds`` with the ``required`` fields."""
         tag = (node, channel)
         if tag in self.feeds:
             return tag
@@ -112,8 +111,7 @@ class Listener:
         return Received(tag[0], tag[1], feed.key, msg)
 
     def drain(self, quiet_s: float = 0.3, limit_s: float = 1.5) -> list[Received]:
-        """After an abort: the feeds' messages that still arrive, until the bus is quiet
-        (at most ``limit_s``); control messages are dropped."""
+        """After an abort: the feeds' messages that still come until the bus is quiet."""
         out: list[Received] = []
         end = time.monotonic() + limit_s
         while time.monotonic() < end:

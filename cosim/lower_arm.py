@@ -67,8 +67,7 @@ def arm_frame_of(c: Corner) -> tuple[np.ndarray, np.ndarray]:
 
 
 def hardpoints_of(c: Corner) -> dict[str, np.ndarray]:
-    """A corner's lower-arm load points in its arm frame [m] (:data:`HARDPOINTS`' names; the
-    bump-stop pad only if the corner has one)."""
+    """A corner's lower-arm load points in its arm frame [m] (:data:`HARDPOINTS`' names)."""
     o, R = arm_frame_of(c)
     names = {"bush_front": "lower_bush_front", "bush_rear": "lower_bush_rear",
              "ball_joint": "lower_ball_joint", "damper_mount": "damper_lower",

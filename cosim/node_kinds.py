@@ -232,8 +232,7 @@ def check_nodes_section(scenario: Mapping[str, Any]) -> dict[str, Impl]:
 
 
 def user_check(impl: Impl, key: str) -> Any:
-    """The preflight of a user's implementation: its ``preflight(scenario, facts)`` attribute
-    if it has one (else None)."""
+    """A user's implementation's ``preflight(scenario, facts)``, or None."""
     if impl.check is not None:
         return None
     obj = load(impl.entry, key)

@@ -65,8 +65,7 @@ class RecordBatch:
 
 
 class Outbox:
-    """The sending side of one node (see the module's docstring). ``publisher(key)`` makes
-    a publisher that signs with the run's key (the participant's)."""
+    """The sending side of one node; ``publisher(key)`` makes a signing publisher."""
 
     def __init__(self, publisher: Callable[[str], Publisher], run: str, node: str) -> None:
         self._publisher, self.run, self.node = publisher, run, node
@@ -111,8 +110,7 @@ class Outbox:
 
     def publish(self, channel: str, k: int, t: float, data: Mapping[str, Any],
                 record: bool = True, hold: bool = False) -> None:
-        """One data message (see the module's docstring), kept for the recorder unless
-        ``record`` is false."""
+        """One data message, kept for the recorder unless ``record`` is false."""
         raw = encode("data", k, t, data)
         if len(raw) > MAX_MESSAGE_BYTES:
             raise RunError(f"{self.node}/{channel}: a message of {len(raw)} bytes at step {k} "

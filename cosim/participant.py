@@ -167,8 +167,7 @@ class Participant:
         self.out.rebind(self._publisher)
 
     def fetch_scenario(self, timeout_s: float = 30.0) -> dict[str, Any]:
-        """The resolved scenario from the orchestrator's queryable (retried); only a reply
-        signed with the run's key counts; binds to its nonce."""
+        """The resolved scenario, signed with the run's key (retried); binds to its nonce."""
         deadline = time.monotonic() + timeout_s
         key = keys.key(self.run, keys.ORCHESTRATOR, keys.SCENARIO)
         tag = (keys.ORCHESTRATOR, keys.SCENARIO)
@@ -258,8 +257,7 @@ class Participant:
             self.reject(tag, "empty message")
 
     def _watch(self) -> None:
-        """Wake the node's thread blocked on an input when a control message came, the stall
-        timeout passed or the orchestrator is gone."""
+        """Wake the blocked node on a control message, a stall timeout or the orchestrator gone."""
         while not self._closed.wait(WATCHDOG_PERIOD_S):
             blocked = self._blocked
             if blocked is None:
@@ -380,8 +378,7 @@ class Participant:
                 return msg.d
 
     def finish(self, k: int, t: float, linger_s: float = 120.0, **extra: Any) -> None:
-        """``done``, then stay until the orchestrator closes the run (or is gone): what is in
-        flight is only delivered while the session is open."""
+        """``done``, then stay while the session delivers what is in flight, till the run ends."""
         self.flush_records()
         self.ctl("done", k, t, rejected=self.rejected, **extra)
         deadline = time.monotonic() + linger_s

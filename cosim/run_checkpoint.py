@@ -55,8 +55,7 @@ class NodeCheckpoints:
 
     @classmethod
     def of(cls, scenario: dict[str, Any], node: str) -> NodeCheckpoints:
-        """The plan of ``node`` in the resolved ``scenario``; ScenarioError for a
-        ``run.checkpoint_every_s`` that is not a whole number of steps."""
+        """The plan of ``node`` in the resolved ``scenario`` (ScenarioError for a bad period)."""
         run = scenario["run"]
         h = float(run["h"])
         every = float(run.get("checkpoint_every_s", 0.0) or 0.0)
@@ -105,8 +104,7 @@ class NodeCheckpoints:
                                   f"{type(exc).__name__}: {exc}") from None
 
     def save(self, part: _Ctl, k: int, state: dict[str, Any]) -> None:
-        """Write this node's ``state`` at boundary ``k`` (signed with ``part``'s run key, if
-        any) and tell the clock."""
+        """Write this node's ``state`` at ``k`` (signed with ``part``'s key), tell the clock."""
         auth = getattr(part, "auth", None)
         try:
             entry = write_node_state(self.run_dir, k, self.node, state,

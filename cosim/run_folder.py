@@ -66,8 +66,7 @@ def write_json(obj: object, path: str | Path) -> None:
 
 # ---- run.json (written by the runner) ------------------------------------------------------
 def _proc_stat(pid: int) -> list[str]:
-    """Fields 3.. of ``/proc/<pid>/stat`` (Linux; [] if unreadable): after comm, which may
-    hold spaces and parentheses."""
+    """Fields 3.. of ``/proc/<pid>/stat`` ([] if unreadable), after comm (may hold spaces)."""
     try:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
@@ -132,8 +131,7 @@ def pid_alive(pid: int, pid_start: int | None = None) -> bool:
 
 
 def journal_integrity(path: Path) -> dict[str, Any]:
-    """Intact ``records``, ``skipped_records``, ``torn`` and ``problem`` of a journal, from
-    its segments' CRCs."""
+    """Intact ``records``, ``skipped_records``, ``torn``, ``problem`` of a journal."""
     try:
         c = scan_journal(path)
     except (OSError, ValueError) as exc:

@@ -48,8 +48,7 @@ class RunSettings:
 
     @classmethod
     def of(cls, scenario: Mapping[str, Any]) -> RunSettings:
-        """The settings of ``scenario`` (resolved: :func:`orchestrator.runner.resolve`);
-        ScenarioError naming a key that is missing or of the wrong type."""
+        """The settings of a resolved ``scenario`` (ScenarioError naming a bad key)."""
         run = scenario.get("run")
         if not isinstance(run, Mapping):
             raise ScenarioError("run", run, "a [run] table")
@@ -72,8 +71,7 @@ class RunSettings:
         return settings
 
     def is_last(self, k: int, t: float) -> bool:
-        """Whether step ``k`` at ``t`` [s] is the run's last: k = N for a fixed step, t =
-        t_end for an adaptive one."""
+        """Whether step ``k`` at ``t`` [s] is the last: k = N, or t = t_end (adaptive)."""
         if self.adaptive is not None:
             return self.adaptive.is_last(t, self.t_end)
         return k == self.n_steps

@@ -143,8 +143,7 @@ def read_user_file(path: str | Path, kind: str, key: str = "",
 
 def read_user_text(path: str | Path, kind: str, key: str = "", encoding: str = "utf-8",
                    inside: str | Path | None = None) -> str:
-    """:func:`read_user_file` decoded; a byte that does not decode is an
-    :class:`InputFileError` naming its offset."""
+    """:func:`read_user_file` decoded (InputFileError naming a bad byte's offset)."""
     data = read_user_file(path, kind, key, inside)
     try:
         return data.decode(encoding)
@@ -161,8 +160,7 @@ def read_user_toml(path: str | Path, kind: str, key: str = "") -> dict[str, Any]
 
 
 def parse_user_toml(text: str, path: str | Path, key: str = "") -> dict[str, Any]:
-    """The TOML ``text`` of the file ``path``: invalid TOML, or nesting deeper than
-    :data:`MAX_TOML_DEPTH`, is an :class:`InputFileError` naming the file."""
+    """The TOML ``text`` of ``path`` (InputFileError: invalid, or nested too deep)."""
     import tomllib
 
     try:
@@ -191,8 +189,7 @@ def _depth(value: object) -> int:
 
 def check_user_file(path: str | Path, kind: str, key: str = "",
                     inside: str | Path | None = None) -> int:
-    """The size of ``path``, checked before a library opens it: a regular file, within
-    :func:`limit` by its size."""
+    """The size of the regular file ``path``, within :func:`limit` (before a library reads it)."""
     fd = _open_fd(path, kind, key, inside)
     try:
         size = os.fstat(fd).st_size

@@ -158,8 +158,7 @@ def check_finite(value: Any, key: str = "") -> None:
 
 
 def validate_common(scenario: dict[str, Any]) -> dict[str, Any]:
-    """A copy of ``scenario`` with its section names, numbers and ``run`` section checked and
-    the defaults filled."""
+    """A copy of ``scenario``, sections, numbers and ``run`` checked, defaults filled."""
     out = copy.deepcopy(scenario)
     check_finite(out)
     check_ranges(out)

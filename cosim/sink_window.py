@@ -62,8 +62,7 @@ class SinkWindow:
         return node, self.k[node]
 
     def hold(self, k: int) -> None:
-        """Before step ``k``: wait while a sink is more than the window behind (sending the
-        records batch first, so that it can catch up)."""
+        """Before step ``k``: send the records, wait while a sink is over the window behind."""
         if not self.k or min(self.k.values()) >= k - self.window:
             return
         self.part.flush_records()  # what the sinks need to catch up

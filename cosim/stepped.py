@@ -147,8 +147,7 @@ def run_stepped(cls: Any, part: Participant, scenario: dict[str, Any], name: str
 
 
 def _check_can_checkpoint(node: Any, plan: NodeCheckpoints, name: str) -> None:
-    """CheckpointError (exit 2) before the first step when the run saves or resumes
-    checkpoints and the node cannot."""
+    """CheckpointError before the first step if the run checkpoints and the node cannot."""
     if not plan.due and not plan.resuming:
         return
     if not callable(getattr(node, "checkpoint_state", None)) \

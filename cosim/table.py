@@ -89,8 +89,7 @@ def channel_stats(table: Table) -> dict[str, dict[str, float]]:
 
 
 def export(table: Table, folder: str | Path, stem: str = "table") -> dict[str, str]:
-    """Write ``<stem>.csv`` and ``<stem>.parquet`` in ``folder`` (each aside, then renamed
-    over its place: never half a table); return their paths."""
+    """Write ``<stem>.csv``, ``.parquet`` in ``folder``, each aside and renamed; the paths."""
     folder = Path(folder)
     paths = {"csv": str(folder / f"{stem}.csv"), "parquet": str(folder / f"{stem}.parquet")}
     for kind, write in (("csv", write_csv), ("parquet", write_parquet)):
@@ -109,8 +108,7 @@ RECOVERED_STEM = "table.recovered"
 
 
 def table_rows(folder: str | Path, stem: str = "table") -> int | None:
-    """Rows of the table already in ``folder`` (its parquet metadata, else its CSV's lines),
-    or None when there is none (or it cannot be read)."""
+    """Rows of the table in ``folder`` (Parquet metadata, else CSV lines), or None."""
     folder = Path(folder)
     pq_path, csv_path = folder / f"{stem}.parquet", folder / f"{stem}.csv"
     if pq_path.is_file():

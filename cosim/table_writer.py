@@ -244,8 +244,7 @@ class TableWriter:
             self._csv.flush()
 
     def close(self, stem: str | None = "table") -> dict[str, str]:
-        """Write what is complete and put the files in place as ``<stem>.csv`` / ``.parquet``
-        (``stem`` None: remove them); return their paths ({} when there is no row)."""
+        """Put the files in place as ``<stem>.*`` (None: remove them); their paths."""
         self._chunk()
         self._pending.clear()
         self._heap.clear()
@@ -397,8 +396,7 @@ def table_of_journal(open_records: Any, folder: str | Path | None,
 
 
 def journal_table(records: Sequence[tuple[str, bytes]]) -> tuple[dict[str, np.ndarray], int]:
-    """(table, records left out as bad) of a journal's records in memory: the table
-    :func:`table_of_journal` writes, as columns."""
+    """(table, records left out as bad) of a journal's records, in memory."""
     writer, bad = table_of_journal(lambda: records, None, keep=True)
     if writer is None:
         return {"k": np.zeros(0, dtype=np.int64), "t": np.zeros(0)}, bad

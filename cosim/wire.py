@@ -210,8 +210,7 @@ def codec(name: str) -> ChannelCodec:
 
 
 def inner(msg: Message) -> list[tuple[str, bytes]]:
-    """The ``[channel, raw]`` pairs a ``records`` or ``step`` message carries, in order
-    (WireError if the payload lacks them)."""
+    """The ``[channel, raw]`` pairs a ``records`` or ``step`` message carries (or WireError)."""
     try:
         return cast(list[tuple[str, bytes]], msg.d[BUNDLE_FIELD[msg.kind]])
     except KeyError:

@@ -129,8 +129,7 @@ def _reason(exc: Exception) -> str:
 def open_bus(connect: list[str], listen: list[str] | None, mode: str, *,
              lowlatency: bool = False, config_file: str | None = None,
              connect_timeout_ms: int = CLIENT_CONNECT_TIMEOUT_MS) -> Any:
-    """A :class:`cosim.bus.ZenohBus` in ``mode``; :class:`SessionOpenError` with Zenoh's
-    reason in one line."""
+    """A ZenohBus in ``mode``; SessionOpenError with Zenoh's reason in one line."""
     from cosim.bus import ZenohBus, zenoh_config
 
     try:

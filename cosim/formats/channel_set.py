@@ -81,8 +81,7 @@ def read_channels(path: str | Path) -> ChannelSet:
 
 def write_channels(cs: ChannelSet, path: str | Path, fmt: str, **options: Any
                    ) -> dict[str, Any]:
-    """Write ``cs`` to ``path`` in ``fmt`` (one of :data:`FORMATS`); returns what the format
-    reports (e.g. the RPC III resolution per channel)."""
+    """Write ``cs`` to ``path`` in ``fmt``; what the format reports (RPC III: resolution)."""
     if fmt not in _WRITERS:
         raise ValueError(f"unknown format {fmt!r}: expected one of {', '.join(FORMATS)}")
     out: dict[str, Any] = _function(_WRITERS, fmt)(cs, path, **options) or {}

@@ -69,8 +69,7 @@ def _columns(rows: list[list[str]], names: list[str], src: str) -> dict[str, np.
 
 def write_stream(src: str | Path, path: str | Path, fmt: str, names: list[str],
                  units: dict[str, str], units_in_header: bool = True) -> int:
-    """Write ``t`` and the channels ``names`` of the table ``src`` to ``path`` as ``fmt``
-    (``csv`` or ``parquet``, :func:`.tables.write_chunks`); return the rows written."""
+    """Write ``t`` and ``names`` of the table ``src`` to ``path`` as ``fmt``; the rows written."""
     if fmt not in ("csv", "parquet"):
         raise ValueError(f"streamed formats are csv and parquet, not {fmt!r}")
     return write_chunks(path, fmt, names, units, iter_chunks(src, ["t", *names]),
