@@ -65,18 +65,15 @@ class PitchRoll(Controller):
     """Full-vehicle pitch-and-roll two-state controller, TSS1 PnR (thesis Sec 5.4.4, Eqs
     5.4-5.12, Table 5.2; after Nell & Steyn [20]).
 
-    Each step, for the 16 soft/hard combinations MP1..MP16 of the four dampers (FL, FR, RL,
-    RR), the corner forces ``F_i = c_i * v_rel_i`` are formed and the combination with the
-    minimum product (MP) of the damper moment and the body angular acceleration is chosen:
-    if ``|theta''| > |phi''|`` (pitch dominates, Eq 5.6/5.7) ``P_n = (F_FL + F_FR - F_RL -
-    F_RR)_n * theta''``, else (Eq 5.8) ``P_n = (F_FL + F_RL - F_FR - F_RR)_n * phi''``, with
-    ``theta''`` the nose-**up** pitch acceleration (Eq 5.4: ``(z_FL'' - z_RL'')/wheelbase``) and
-    ``phi''`` the left-**up** roll acceleration (Eq 5.5: ``(z_FL'' - z_FR'')/track``), rad/s².
-    ``F_i`` is the force on the body, upward positive, so the front-minus-rear sum is a nose-up
-    moment (per unit lever arm) and the minimum product is the combination whose damper moment
-    most *opposes* the angular acceleration — the intent of [20]. (With the thesis's ``d_i = C
-    v_rel`` as a force that acts on the body with the opposite sign, the same minimum would aid
-    the motion; see docs/control.md.)
+    Each step, of the 16 soft/hard combinations MP1..MP16 of the dampers (FL, FR, RL, RR) with
+    corner forces ``F_i = c_i * v_rel_i``, the one with the minimum product (MP) of the damper
+    moment and the body angular acceleration is chosen: ``P_n = (F_FL + F_FR - F_RL - F_RR)_n *
+    theta''`` if ``|theta''| > |phi''|`` (Eq 5.6/5.7), else ``(F_FL + F_RL - F_FR - F_RR)_n *
+    phi''`` (Eq 5.8); ``theta''`` nose-**up** (Eq 5.4: ``(z_FL'' - z_RL'')/wheelbase``),
+    ``phi''`` left-**up** (Eq 5.5: ``(z_FL'' - z_FR'')/track``), rad/s². ``F_i`` is the force on
+    the body, upward positive, so the minimum is the combination whose moment most *opposes*
+    the angular acceleration, the intent of [20] (the thesis's ``d_i = C v_rel`` with the
+    opposite sign would aid the motion; docs/control.md).
 
     ``angular_acc = "rates"`` differentiates the ISO 8855 rates (``w_pitch`` about +y, nose
     down positive; ``w_roll`` about +x, left up positive: ``theta'' = -d(w_pitch)/dt``,

@@ -112,10 +112,14 @@ def bi_viscous_force(v: np.ndarray | float, I: np.ndarray | float,
                      p: MRParams = MRParams()) -> np.ndarray:
     """Static bi-viscous force F_bv(v, I) (N) at damper velocity v (m/s), damper frame."""
     v = np.asarray(v, dtype=float)
-    cp = c_post(I, p)
-    Fy = yield_force(I, p)
-    vy = Fy / (p.c_pre - cp)
+    cp, Fy, vy = _knee(I, p)
     return np.where(np.abs(v) <= vy, p.c_pre * v, Fy * np.sign(v) + cp * v)
+
+
+def _knee(I: np.ndarray | float, p: MRParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(c_post in N·s/m, F_y in N, v_y in m/s) at the current I (A)."""
+    cp, Fy = c_post(I, p), yield_force(I, p)
+    return cp, Fy, Fy / (p.c_pre - cp)
 
 
 #: A current schedule inside one communication step: (fraction of the step in (0, 1],
@@ -182,9 +186,7 @@ class MRDamper:
             frac = j / m
             I = self._current(current, frac, self.force)
             v_d = r * (v_rel0 + frac * (v_rel1 - v_rel0))
-            cp = c_post(I, p)
-            Fy = yield_force(I, p)
-            vy = Fy / (p.c_pre - cp)
+            cp, Fy, vy = _knee(I, p)
             rhs = p.M_f / dt * self.v_f + p.K_f * (self.s + dt * v_d)
             v_pre = rhs / (a + p.c_pre)
             v_post = (rhs - Fy * np.sign(rhs)) / (a + cp)

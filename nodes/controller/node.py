@@ -79,7 +79,6 @@ class Controller:
         self.law.close()  # an FMU law terminates and frees its instances
 
 
-
 #: Plant models whose state carries ``v_damper`` (for ``controller.velocity = "damper"``).
 DAMPER_VELOCITY_MODELS = ("quarter_car_double_wishbone", "full_vehicle_double_wishbone")
 

@@ -50,11 +50,10 @@ def skyhook_condition(v_b: np.ndarray, v_rel: np.ndarray) -> np.ndarray:
 
 def skyhook_on_off(v_b: np.ndarray, v_rel: np.ndarray, c_soft: float, c_hard: float
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Two-state skyhook TSS1 (thesis Eq 5.3, Moline [44]): (F_d in N, c in N·s/m, hard flag).
-
-    Thesis: ``c = C_hard if z_b'(z_b' - z_w') > 0 else C_soft``, ``F_d = c (z_b' - z_w')``;
-    here ``c = c_hard if v_b * v_rel < 0 else c_soft``, ``F_d = c * v_rel`` (v in m/s).
-    Table 5.2: 1500/2368 N·s/m (lumped QVM, 7-DOF FVM), 3800/6000 (realistic QVM)."""
+    """Two-state skyhook TSS1 (thesis Eq 5.3, Moline [44]; ``c = C_hard if z_b'(z_b' - z_w')
+    > 0 else C_soft``): ``c = c_hard if v_b * v_rel < 0 else c_soft``, ``F_d = c * v_rel``;
+    (F_d in N, c in N·s/m, hard flag). Table 5.2: 1500/2368 N·s/m (lumped QVM, 7-DOF FVM),
+    3800/6000 (realistic QVM)."""
     hard = skyhook_condition(v_b, v_rel)
     return (*two_state_force(hard, v_rel, c_soft, c_hard), hard)
 
@@ -120,9 +119,6 @@ def hybrid(v_b: np.ndarray, v_w: np.ndarray, alpha: float, G: float, c_min: floa
     """Hybrid law realised by a variable damper. Returns (F_d in N, c in N·s/m)."""
     v_rel = np.asarray(v_w, dtype=float) - np.asarray(v_b, dtype=float)
     return semi_active_force(hybrid_demand(v_b, v_w, alpha, G), v_rel, c_min, c_max)
-
-
-# ------------------------------------------------------------------ the laws, by name
 
 
 @control_law("hybrid")

@@ -30,9 +30,6 @@ WK_F3, WK_F4, WK_Q4 = 12.5, 12.5, 0.63  # acceleration-velocity transition
 WK_F5, WK_Q5, WK_F6, WK_Q6 = 2.37, 0.91, 3.35, 0.91  # upward step
 
 
-# ----------------------------------------------------------------------------- basics
-
-
 def rms(x: np.ndarray) -> float:
     """Root mean square of ``x`` (same unit as x)."""
     x = np.asarray(x, dtype=float)
@@ -113,9 +110,6 @@ def wk_response(f_hz: np.ndarray | float) -> np.ndarray:
     step = ((1 + s / (WK_Q5 * w5) + (s / w5) ** 2) / (1 + s / (WK_Q6 * w6) + (s / w6) ** 2)
             * (w5 / w6) ** 2)
     return high * low * transition * step
-
-
-# ------------------------------------------------------------------------ run tables
 
 
 def column_names(names: Sequence[str] | Table, name: str) -> list[tuple[str, str]]:

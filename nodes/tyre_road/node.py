@@ -1,10 +1,9 @@
 """The tyre/road node: road profile under each wheel and the vertical tyre force.
 
-Every step k it waits for the plant's ``state`` (of step k in the sequential exchange, of
-step k-1 in the parallel one), evaluates the road height at each contact point of each wheel
-(wheel i at distance s_i = v t_k + x_i, x_i its offset from the front axle, on its track) and
-publishes ``force``: F_t [N] (absolute, compressive-positive, >= 0), k_t = dF_t/d(z_g - z_w)
-[N/m] for the plant's coupling, z_g [m] (road height at the contact centre).
+Every step k, from the plant's ``state`` (of step k, or k-1 in the parallel exchange), the road
+height at each contact point of each wheel (:mod:`.wheel_paths`) and ``force``: F_t [N]
+(absolute, compressive-positive, >= 0), k_t = dF_t/d(z_g - z_w) [N/m] for the plant's
+coupling, z_g [m] (road height at the contact centre).
 
 With ``[tyre] model = "magic_formula"`` (the four-corner vehicle): F_t from the point
 contact as above, and the Magic Formula's road-plane Fx, Fy [N], Mz [N m] and the slips
