@@ -179,7 +179,7 @@ name = "tkill"
 base = "{CH3_STEP}"
 jobs = 2
 [sweep.grid]
-"run.t_end" = [0.5, 6.0]
+"run.t_end" = [0.5, 2.0]
 [sweep.set]
 "run.stall_timeout_s" = 30.0
 """
@@ -189,7 +189,7 @@ jobs = 2
 def test_killed_run_fails_alone_and_resume_redoes_only_it(tmp_path):
     f = _write(tmp_path, "k.toml", KILL_SWEEP)
     out = tmp_path / "sw"
-    victim = "tkill-6.0"
+    victim = "tkill-2.0"
     proc = popen_suscosim("sweep", str(f), "--out", str(out))
     try:
         deadline = time.monotonic() + 120
@@ -222,7 +222,7 @@ def test_killed_run_fails_alone_and_resume_redoes_only_it(tmp_path):
     assert "1 to run (1 already done)" in res.stdout
     assert ok_summary.stat().st_mtime_ns == mtime
     summary = json.loads((out / "runs" / victim / "summary.json").read_text())
-    assert summary["status"] == "ok" and summary["n_steps"] == 6000
+    assert summary["status"] == "ok" and summary["n_steps"] == 2000
 
 
 FATIGUE_SWEEP = f"""

@@ -33,6 +33,7 @@ def _write_rig_file(path: Path, rows: int) -> None:
             fh.write("\n")
 
 
+@pytest.mark.long  # memory bound: writes and reads a 10-million-row file
 def test_a_1e7_row_load_csv_is_read_in_under_1_gb(tmp_path: Path) -> None:
     path = tmp_path / "rig.csv"
     _write_rig_file(path, ROWS)

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 
 from cosim import keys
 from cosim.journal import last_step, read_journal
@@ -114,6 +115,7 @@ def test_a_replayed_records_batch_is_counted_not_journaled(tmp_path: Path) -> No
     assert done["rows"] == n + 1
 
 
+@pytest.mark.long  # memory growth: 12 000 steps under tracemalloc
 def test_recorder_memory_per_step_is_bounded_and_its_table_is_the_journals(
         tmp_path: Path, monkeypatch) -> None:
     """#32: the recorder grew ~3.5 kB a coupled step (a set of every step per channel, the
