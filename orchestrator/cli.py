@@ -261,13 +261,9 @@ def build_parser() -> argparse.ArgumentParser:
                             metavar=None)
     zo.add_listen_argument(r, "endpoint the orchestrator listens on (default: a free loopback "
                               "port)", metavar=None)
-    zo.add_lowlatency_argument(r, "Zenoh's low-latency transport for the local nodes' "
-                                  "sessions, linked as an explicit mesh with gossip off "
-                                  "(default: on, off with --zenoh-config; ~15-30 %% faster than "
-                                  "--no-lowlatency; the "
-                                  "orchestrator's own session is universal; peers without it "
-                                  "still connect)",
-                                  negatable=True)
+    zo.add_lowlatency_argument(r, "Zenoh's low-latency transport for the local nodes' sessions "
+                                  "(default: on, off with --zenoh-config; ~15-30 %% faster; the "
+                                  "orchestrator's own session is universal)", negatable=True)
     r.add_argument("--pin", choices=PIN_MODES, default="auto",
                    help="pin the local node processes to cores (auto: on machines of 2-4 "
                         "cores; see orchestrator/placement.py)")

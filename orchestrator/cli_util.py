@@ -15,13 +15,9 @@ from typing import Any, NoReturn
 ERROR_PREFIX = "suscosim: error: "
 
 
-def _command(prog: str) -> str:
-    return prog.removeprefix("suscosim").strip()
-
-
 def error_line(prog: str, message: str) -> str:
     """``suscosim: error: <command>: message`` (the command left out for ``suscosim``)."""
-    cmd = _command(prog)
+    cmd = prog.removeprefix("suscosim").strip()
     return f"{ERROR_PREFIX}{cmd + ': ' if cmd else ''}{message}"
 
 

@@ -31,10 +31,8 @@ def _value(text: str):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="suscosim fatigue",
-                                description="Fatigue life of the lower suspension arm (and the "
-                                            "scenario's [fatigue] parts) of a run, or under a "
-                                            "measured load file.")
+    p = argparse.ArgumentParser(prog="suscosim fatigue", description="Fatigue life of the lower "
+                                "arm (and [fatigue] parts) of a run, or under a load file.")
     p.add_argument("run_dir", metavar="RUN_DIR|LOAD_FILE", type=Path)
     p.add_argument("--scenario", type=Path, metavar="RUN_DIR|SCENARIO",
                    help="load file only: take the fatigue settings and road length from this "
@@ -44,8 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "(e.g. LCA_Fz=ball_joint_z*-1); by default channels are matched by "
                         "name (plant/arm/ball_joint_z or ball_joint_z)")
     p.add_argument("--out", type=Path, help="results folder (default LOAD_FILE.fatigue/, "
-                                            "RUN_DIR/fatigue/, or RUN_DIR/fatigue-<hash>/ "
-                                            "for a what-if with settings)")
+                                            "RUN_DIR/fatigue/, or RUN_DIR/fatigue-<hash>/)")
     p.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     p.add_argument("--equivalent", choices=(*EQUIVALENTS, *CRITICAL_PLANES),
                    help="findley: critical planes at the abs_max_principal pass's hot spots")
@@ -53,10 +50,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mean-stress", choices=MEAN_STRESS_METHODS)
     p.add_argument("--residue", choices=RESIDUES)
     p.add_argument("--part", type=Path, metavar="PART.toml",
-                   help="the part to assess: a part file (STEP or mesh, material, joints; "
-                        "docs/parts.md) instead of the scenario's influence and parts (a "
-                        "what-if); its load channel (plant/arm or plant/upper_arm) follows "
-                        "from its joints' channels")
+                   help="assess this part file (docs/parts.md) instead of the scenario's "
+                        "influence and parts (a what-if); its joints give its load channel")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a fatigue key, e.g. --set material.sf=1.9e9 "
                         "--set mesh_size_m=0.03 (values parsed as JSON when possible)")

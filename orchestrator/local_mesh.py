@@ -19,10 +19,6 @@ OWNER_FILE = "owner.pid"  # the pid of the orchestrator that made it
 SOCKET_PATH_MAX = 107  # [bytes] Linux ``sun_path`` is 108
 
 
-def unix_endpoint(path: Path) -> str:
-    return f"unixsock-stream/{path}"
-
-
 @dataclass
 class LocalMesh:
     """One run's socket folder; ``names``: the local nodes in start order."""
@@ -59,7 +55,7 @@ class LocalMesh:
         return path
 
     def listen(self, name: str) -> str:
-        return unix_endpoint(self.socket(name))
+        return f"unixsock-stream/{self.socket(name)}"
 
     def connect(self, name: str) -> list[str]:
         """The orchestrator's and the earlier nodes' endpoints."""

@@ -25,6 +25,8 @@ from cosim.errors import InputLate, RunError, SuscosimError
 from cosim.participant import Participant
 from cosim.stepped import run_stepped
 
+from .cli_util import fail
+
 NODE_MODULES: dict[str, str] = nk.entries()  # node kind -> its module (the names node takes)
 
 
@@ -84,34 +86,27 @@ def main(argv: list[str] | None = None) -> int:
     zo.add_connect_argument(ap, "Zenoh endpoint of the orchestrator or a router, e.g. "
                                 "tcp/10.0.0.1:7447", metavar=None, default=[])
     zo.add_listen_argument(ap, "endpoint to listen on (default: loopback only)", metavar=None)
-    zo.add_lowlatency_argument(ap, "Zenoh low-latency transport (negotiated per link: peers "
-                                   "without it still connect; the orchestrator sets it for "
-                                   "its local nodes)")
+    zo.add_lowlatency_argument(ap, "Zenoh low-latency transport (negotiated per link; the "
+                                   "orchestrator sets it for its local nodes)")
     zo.add_config_argument(ap)
     ap.add_argument("--gossip", action=argparse.BooleanOptionalAction, default=True,
                     help="find the run's other peers through the endpoints connected to "
                          "(default); --no-gossip: link only to --connect and to who connects "
                          "to --listen (the orchestrator's explicit mesh of its local nodes)")
     ap.add_argument("--key-file",
-                    help="file holding the secret the run key is derived from (mode 0600; "
-                         "e.g. RUN_DIR/run.key written by the orchestrator; default "
-                         f"${ENV_KEY_FILE}); the nodes the orchestrator starts get the run "
-                         "key in their environment")
+                    help="file holding the secret the run key is derived from (mode 0600, "
+                         f"e.g. RUN_DIR/run.key; default ${ENV_KEY_FILE})")
     ap.add_argument("--lease-ms", type=int, default=2000,
                     help="Zenoh link lease [ms]: how long peers keep this node's links when it "
-                         "goes silent (default 2000; the orchestrator gives its local nodes "
-                         "the run's stall timeout)")
+                         "goes silent (default 2000)")
     ap.add_argument("--spin-us", type=float, default=0.0,
                     help="poll an input this long before blocking on it [us] (the "
                          "orchestrator sets it for nodes it pins to a core)")
-    zo.add_mode_argument(ap, "Zenoh mode (default: the config file's, else client: "
-                             "everything through the router or orchestrator given by "
-                             "--connect; the orchestrator starts its local nodes as peers)",
-                         choices=("client", "peer"), default=None)
+    zo.add_mode_argument(ap, "Zenoh mode (default: the config file's, else client: everything "
+                             "through --connect)", choices=("client", "peer"), default=None)
     args = ap.parse_args(argv)
     if args.lease_ms <= 0:
-        print(f"suscosim node: --lease-ms {args.lease_ms}: expected > 0", file=sys.stderr)
-        return 2
+        return fail("suscosim node", f"--lease-ms {args.lease_ms}: expected > 0")
     if args.key_file:  # read where run_node looks (the environment), like the default
         os.environ[ENV_KEY_FILE] = args.key_file
         os.environ.pop("SUSCOSIM_RUN_KEY", None)

@@ -13,22 +13,9 @@ import numpy as np
 from cosim.coupling_energy import WARNING_THRESHOLD
 from cosim.safe_open import read_user_file
 
+from . import markup as mk
 from . import signals, stream
 from .fatigue_section import fatigue_section
-from .markup import (
-    badge,
-    cmd,
-    esc,
-    flatten,
-    fmt,
-    kv_table,
-    nav,
-    note,
-    page,
-    row,
-    section,
-    table_html,
-)
 from .plots import MAX_PLOT_POINTS, fig_uri, img, new_figure, plot_panels
 from .run_data import RunData, load_run
 
@@ -38,17 +25,17 @@ RUN_KEYS = ("name", "id", "mode", "exchange", "coupling", "h", "substeps", "t_en
 
 def run_header(r: RunData, title_prefix: str = "Run") -> str:
     s = r.summary or {}
-    out = [f"<h1>{esc(title_prefix)} {esc(r.run_id)} {badge(r.status)}</h1>",
-           f'<p class="meta">folder {cmd(str(r.path.resolve()))} · report written '
-           f"{esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
+    out = [f"<h1>{mk.esc(title_prefix)} {mk.esc(r.run_id)} {mk.badge(r.status)}</h1>",
+           f'<p class="meta">folder {mk.cmd(str(r.path.resolve()))} · report written '
+           f"{mk.esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
     if r.summary is None:
-        out.append(note("no summary.json: the run is still going, or its orchestrator was "
+        out.append(mk.note("no summary.json: the run is still going, or its orchestrator was "
                         "killed before it could write one. Shown: whatever the folder holds."))
     if s.get("error"):
-        out.append(f'<div class="error">run failed: {esc(s["error"])}</div>')
+        out.append(f'<div class="error">run failed: {mk.esc(s["error"])}</div>')
     for p in r.problems:
-        out.append(note(esc(p)))
-    glance = kv_table(at_a_glance(r), "At a glance", cls="kv glance")
+        out.append(mk.note(mk.esc(p)))
+    glance = mk.kv_table(at_a_glance(r), "At a glance", cls="kv glance")
     status_tab = ""
     if r.summary is not None:
         labels = {"wall_s": "wall time [s]", "step_wall_s": "stepping wall time [s]",
@@ -60,11 +47,11 @@ def run_header(r: RunData, title_prefix: str = "Run") -> str:
         rej = {k: v for k, v in (s.get("rejected_messages") or {}).items() if v}
         pairs.append(("rejected messages", rej or "none"))
         pairs += coupling_residual_rows(s)
-        status_tab = kv_table(pairs, "Run")
-    out.append(row(glance, status_tab))
+        status_tab = mk.kv_table(pairs, "Run")
+    out.append(mk.row(glance, status_tab))
     res = s.get("coupling_energy_residual") or {}
     if res.get("total", 0.0) > WARNING_THRESHOLD:
-        out.append(note(f"the coupling energy residual ({100 * res['total']:.3g} %) is above "
+        out.append(mk.note(f"the coupling energy residual ({100 * res['total']:.3g} %) is above "
                         f"{100 * WARNING_THRESHOLD:g} % (about 1 % peak error, "
                         "docs/coupling_residual.md): a smaller run.h or the jacobian coupling "
                         "would be more accurate"))
@@ -88,13 +75,12 @@ def _scn(r: RunData, sec: str, key: str) -> Any:
 def at_a_glance(r: RunData) -> list[tuple[str, Any]]:
     pairs: list[tuple[str, Any]] = []
     if r.scenario is not None:
+        road = r.scenario.get("road") or {}
+        parts = (road.get("type"), road.get("class") and f"class {road['class']}",
+                 road.get("speed_kmh") and f"{mk.fmt(road['speed_kmh'])} km/h",
+                 road.get("length_m") and f"{mk.fmt(road['length_m'])} m")
         pairs += [("vehicle", _scn(r, "vehicle", "model")),
-                  ("road", " ".join(str(x) for x in (
-                      _scn(r, "road", "type"), _scn(r, "road", "class") and
-                      f"class {_scn(r, 'road', 'class')}",
-                      _scn(r, "road", "speed_kmh") and f"{fmt(_scn(r, 'road', 'speed_kmh'))} km/h",
-                      _scn(r, "road", "length_m") and f"{fmt(_scn(r, 'road', 'length_m'))} m")
-                      if x)),
+                  ("road", " ".join(str(x) for x in parts if x)),
                   ("tyre", _scn(r, "tyre", "model")),
                   ("controller", _scn(r, "controller", "law"))]
     s = r.summary or {}
@@ -127,7 +113,7 @@ def _idle_run_keys(run: dict) -> set[str]:
 
 def scenario_section(r: RunData) -> str:
     if r.scenario is None:
-        return section("scenario", "Scenario", note("no scenario.json in the run folder."))
+        return mk.section("scenario", "Scenario", mk.note("no scenario.json in the run folder."))
     parts = []
     order = ["run", "vehicle", "road", "tyre", "controller", "fatigue"]
     keys = order + [k for k in r.scenario if k not in order]
@@ -138,12 +124,12 @@ def scenario_section(r: RunData) -> str:
         if k == "run":
             idle = _idle_run_keys(v)
             pairs = [(x, v[x]) for x in RUN_KEYS if x in v] + \
-                    [(x, y) for x, y in flatten(v)
+                    [(x, y) for x, y in mk.flatten(v)
                      if x not in RUN_KEYS and x != "dir" and x.split(".")[0] not in idle]
         else:
-            pairs = flatten(v)
-        parts.append(kv_table(pairs, k))
-    return section("scenario", "Scenario", row(*parts))
+            pairs = mk.flatten(v)
+        parts.append(mk.kv_table(pairs, k))
+    return mk.section("scenario", "Scenario", mk.row(*parts))
 
 
 def _source(r: RunData) -> stream.TableSource:
@@ -177,13 +163,13 @@ def streamed_panels(src: stream.TableSource, build: Callable[[dict], tuple[list[
 def time_section(r: RunData) -> str:
     src = _source(r)
     panels, missing, (t0, t1) = streamed_panels(src, signals.time_history_panels)
-    body = f'<p class="meta">from {esc(r.table_note)}: {src.n_rows} samples, ' \
-           f"t = {fmt(t0)} … {fmt(t1)} s</p>"
+    body = f'<p class="meta">from {mk.esc(r.table_note)}: {src.n_rows} samples, ' \
+           f"t = {mk.fmt(t0)} … {mk.fmt(t1)} s</p>"
     if panels:
         body += img(plot_panels(None, panels), "time histories")
     if missing:
-        body += note("not in this run's table: " + esc(", ".join(missing)))
-    return section("time", "Time histories", body)
+        body += mk.note("not in this run's table: " + mk.esc(", ".join(missing)))
+    return mk.section("time", "Time histories", body)
 
 
 def _stream_rate(src: stream.TableSource) -> float | None:
@@ -209,8 +195,8 @@ def psd_section(r: RunData) -> str:
     src = _source(r)
     fs = _stream_rate(src)
     if fs is None:
-        return section("psd", "Power spectral densities",
-                       note("the time column is not uniformly sampled (a run with missing "
+        return mk.section("psd", "Power spectral densities",
+                       mk.note("the time column is not uniformly sampled (a run with missing "
                             "steps?): no PSD."))
     n = src.n_rows
     nperseg = stream.psd_nperseg(n)
@@ -232,8 +218,8 @@ def psd_section(r: RunData) -> str:
             for (_c, w), (_c2, x) in zip(ws, cols, strict=True):
                 w.add(x)
     if not sigs:
-        return section("psd", "Power spectral densities",
-                       note("no body acceleration or tyre force in the table."))
+        return mk.section("psd", "Power spectral densities",
+                       mk.note("no body acceleration or tyre force in the table."))
     fmax = min(fs / 2, signals.PSD_F_MAX_HZ)
     fig, axes = new_figure(1, len(sigs), row_h=3.4)
     for ax, (title, unit, _bases, ws) in zip(axes, sigs, strict=True):
@@ -250,8 +236,8 @@ def psd_section(r: RunData) -> str:
     body = img(fig_uri(fig), "PSDs") + (
         f'<p class="meta">Welch, Hann window, {nperseg} samples per segment '
         f"(n/4, at most {stream.PSD_MAX_NPERSEG}), 50 % overlap, mean removed, segments "
-        f"accumulated as the table is read; fs = {fmt(fs)} Hz; shown to {fmt(fmax)} Hz.</p>")
-    return section("psd", "Power spectral densities", body)
+        f"accumulated as the table is read; fs = {mk.fmt(fs)} Hz; shown to {mk.fmt(fmax)} Hz.</p>")
+    return mk.section("psd", "Power spectral densities", body)
 
 
 def stats_section(r: RunData) -> str:
@@ -261,16 +247,16 @@ def stats_section(r: RunData) -> str:
         chans = stream.column_stats(r.source)
         src = r.table_note
     if not chans:
-        return section("stats", "RMS and peak of every channel",
-                       note("no channel statistics: the run recorded no complete step."))
+        return mk.section("stats", "RMS and peak of every channel",
+                       mk.note("no channel statistics: the run recorded no complete step."))
     rows = [(name, signals.unit_of(name), st.get("rms"), st.get("peak"), st.get("t_peak"),
              st.get("mean"), st.get("std"), st.get("min"), st.get("max"))
             for name, st in sorted(chans.items())]
-    body = f'<p class="meta">from {esc(src)}; peak = the value of largest magnitude ' \
-           f"(signed), at t_peak.</p>" + table_html(
+    body = f'<p class="meta">from {mk.esc(src)}; peak = the value of largest magnitude ' \
+           f"(signed), at t_peak.</p>" + mk.table_html(
                ["channel", "unit", "rms", "peak", "t_peak [s]", "mean", "std", "min", "max"],
                rows)
-    return section("stats", "RMS and peak of every channel", body)
+    return mk.section("stats", "RMS and peak of every channel", body)
 
 
 def streamed_ride_metrics(src: stream.TableSource) -> dict[str, float]:
@@ -284,16 +270,16 @@ def ride_section(r: RunData) -> str:
     try:
         m = streamed_ride_metrics(_source(r))
     except (ValueError, KeyError) as exc:
-        return section("ride", "Ride metrics", note(f"no ride metrics: {esc(exc)}"))
+        return mk.section("ride", "Ride metrics", mk.note(f"no ride metrics: {mk.esc(exc)}"))
     if not m:
-        return section("ride", "Ride metrics", note("no ride channels in the table."))
-    body = table_html(["metric", "value"], list(m.items()), cls="kv") + (
+        return mk.section("ride", "Ride metrics", mk.note("no ride channels in the table."))
+    body = mk.table_html(["metric", "value"], list(m.items()), cls="kv") + (
         '<p class="meta">nodes.recorder.ride_metrics.run_metrics: band RMS as the thesis '
         "computes it (resampled to 500 Hz, periodogram of the whole record, Eq 4.8/4.9; the "
         "table read in batches, nodes.recorder.ride_stream), full-band RMS at the "
         "run's own rate, ISO 2631-1 Wk weighting, suspension "
         "working space (SWS), dynamic tyre load (DTL).</p>")
-    return section("ride", "Ride metrics", body)
+    return mk.section("ride", "Ride metrics", body)
 
 
 def _load_panels(b: dict) -> tuple[list[tuple], list[str]]:
@@ -316,13 +302,13 @@ def loads_section(r: RunData) -> str:
         body += img(plot_panels(None, panels), "load histories")
     if not r.has_arm():
         model = ((r.scenario or {}).get("vehicle") or {}).get("model", "?")
-        body += note(f"no lower-arm load channels (<code>plant/arm/...</code>) in this run: the "
-                     f"vehicle model {cmd(model)} has no arm. The double-wishbone corner "
-                     f"({cmd('quarter_car_double_wishbone')}) reports them.")
+        body += mk.note(f"no lower-arm load channels (<code>plant/arm/...</code>) in this run: the "
+                     f"vehicle model {mk.cmd(model)} has no arm. The double-wishbone corner "
+                     f"({mk.cmd('quarter_car_double_wishbone')}) reports them.")
     else:
         body += '<p class="meta">Forces on the lower arm at its joints, arm frame ' \
                 "(see cosim/channels.py); these drive the fatigue analysis.</p>"
-    return section("loads", "Tyre and lower-arm load histories", body)
+    return mk.section("loads", "Tyre and lower-arm load histories", body)
 
 
 def logs_section(r: RunData) -> str:
@@ -336,10 +322,10 @@ def logs_section(r: RunData) -> str:
             continue
         lines = [ln for ln in lines if ln.strip() and not ln.startswith("pybullet build time")]
         if lines:
-            parts.append(f"<h3>{esc(p.name)}</h3><pre>{esc(chr(10).join(lines[-25:]))}</pre>")
+            parts.append(f"<h3>{mk.esc(p.name)}</h3><pre>{mk.esc(chr(10).join(lines[-25:]))}</pre>")
     if not parts:
         return ""
-    return section("logs", "Node logs (last lines)", "".join(parts))
+    return mk.section("logs", "Node logs (last lines)", "".join(parts))
 
 
 def run_body(r: RunData) -> str:
@@ -348,13 +334,13 @@ def run_body(r: RunData) -> str:
     if r.source is None:
         j = r.path / "journal.msgpack"
         if r.table_note:
-            hint = esc(r.table_note)
+            hint = mk.esc(r.table_note)
         elif j.is_file():
-            hint = f"run {cmd(f'suscosim export {j}')}"
+            hint = f"run {mk.cmd(f'suscosim export {j}')}"
         else:
             hint = "the run recorded nothing (no journal.msgpack)"
-        parts.append(section("time", "Time histories",
-                             note(f"no table (table.parquet / table.csv): {hint}.")))
+        parts.append(mk.section("time", "Time histories",
+                             mk.note(f"no table (table.parquet / table.csv): {hint}.")))
         parts.append(stats_section(r))
     else:
         parts += [time_section(r), psd_section(r), stats_section(r), ride_section(r),
@@ -373,5 +359,5 @@ RUN_NAV = (("scenario", "Scenario"), ("time", "Time histories"), ("psd", "PSDs")
 
 def render_run(d: Path) -> str:
     r = load_run(d)
-    body = run_header(r) + nav(RUN_NAV) + run_body(r)
-    return page(f"suscosim run {r.run_id}", body)
+    body = run_header(r) + mk.nav(RUN_NAV) + run_body(r)
+    return mk.page(f"suscosim run {r.run_id}", body)

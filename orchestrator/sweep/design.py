@@ -42,10 +42,6 @@ class Design:
         return [r.key for r in self.ranges]
 
 
-def _space(r: Range) -> list[float]:
-    return [math.log10(r.low), math.log10(r.high)] if r.scale == "log" else [r.low, r.high]
-
-
 def _number(where: str, v: Any) -> float:
     if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
         raise ScenarioError(where, v, "a finite number")
@@ -72,10 +68,6 @@ def _range(where: str, key: str, spec: Any) -> Range:
     if scale == "log" and lo <= 0:
         raise ScenarioError(where, bounds, "low > 0 for a log scale")
     return Range(key, lo, hi, scale)
-
-
-def _round(v: float) -> float:
-    return float(f"{v:.6g}")
 
 
 def parse_design(spec: Any, check_key: Any) -> Design:
@@ -107,9 +99,9 @@ def parse_design(spec: Any, check_key: Any) -> Design:
     unit = _unit_samples(method, n, seed, len(ranges), ranges)
     values = np.empty_like(unit)
     for j, r in enumerate(ranges):
-        lo, hi = _space(r)
+        lo, hi = (math.log10(r.low), math.log10(r.high)) if r.scale == "log" else (r.low, r.high)
         x = lo + unit[:, j] * (hi - lo)
-        values[:, j] = [_round(10.0 ** v if r.scale == "log" else v) for v in x]
+        values[:, j] = [float(f"{10.0 ** v if r.scale == 'log' else v:.6g}") for v in x]
     return Design(method, n, seed, ranges, values)
 
 

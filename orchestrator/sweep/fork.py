@@ -72,9 +72,6 @@ class ForkPlan:
     def parent_dir(self, out: Path, parent: Parent) -> Path:
         return out / "parents" / parent.id
 
-    def fork_args(self, p: Point) -> list[str]:
-        return [*self.fork_sets[p.id], f"run.id={toml_value(p.run_id)}"]
-
     def spec(self, out: Path, p: Point) -> str:
         parent = self.parent_of[p.id]
         return f"{self.parent_dir(out, parent)}@{parent.t!r}"

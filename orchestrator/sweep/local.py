@@ -17,7 +17,7 @@ from ..cli_util import interrupt_on_sigterm
 from . import phases
 from .display import Display, event_line
 from .fork import Parent, keep_only_fork_checkpoint, parent_state
-from .spec import Point, Sweep
+from .spec import Point, Sweep, toml_value
 
 
 @dataclass
@@ -61,7 +61,8 @@ class Runner:
         log = d / "sweep.log"
         if self.plan is not None and parent is None:
             cmd = phases.run_command(["--fork", self.plan.spec(self.out, p)], d,
-                                     self.plan.fork_args(p), self.sweep.jobs > 1, self.connect)
+                                     [*self.plan.fork_sets[p.id], f"run.id={toml_value(p.run_id)}"],
+                                     self.sweep.jobs > 1, self.connect)
         else:
             cmd = phases.run_command([str(p.base)], d, p.set_args, self.sweep.jobs > 1,
                                      self.connect, self.external)

@@ -111,12 +111,10 @@ def sensitivity(sweep: Sweep, rows: list[dict]) -> dict[str, Any]:
             "validity": VALIDITY[design.method], "rows": table}
 
 
-def _clean(v: Any) -> Any:
-    return None if isinstance(v, float) and not math.isfinite(v) else v
-
-
 def write_sensitivity(out: Path, sens: dict[str, Any]) -> None:
-    rows = [{k: _clean(v) for k, v in r.items()} for r in sens["rows"]]
+    from ..runner import strict_json
+
+    rows = strict_json(sens["rows"])
     (out / "sensitivity.json").write_text(json.dumps({**sens, "rows": rows}, indent=2))
     columns = [*sens["group_axes"], *COLUMNS]
     with open(out / "sensitivity.csv", "w", newline="") as fh:
