@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from nodes.tyre_road.roads import bump_height
+
 from .double_wishbone import DoubleWishboneCorner, DoubleWishboneParams
 from .equivalent_lumped import K_T, SPEED, ch4_bump_pothole
 
@@ -61,12 +63,6 @@ def road_run(z_g: Callable[[float], float], c: float, t_end: float = 3.0, dt: fl
     return {"jounce_max_m": rel, "F_bs_max": fbs}
 
 
-def large_bump(s: float, height: float = 0.10, length: float = 1.0, x0: float = 1.0) -> float:
-    """A 1-cos bump ``height`` x ``length`` [m] starting at ``x0`` [m]: road height at s [m]."""
-    u = (s - x0) / length
-    return 0.5 * height * (1.0 - np.cos(2.0 * np.pi * u)) if 0.0 <= u <= 1.0 else 0.0
-
-
 def study(dt: float = 1e-3) -> dict[str, Any]:
     """Steps 1-3 of the module docstring: ``first_contact`` (:func:`first_contact`),
     ``ch4_bump_pothole`` (damping coefficient [N s/m] as text -> :func:`road_run`'s peaks)
@@ -75,4 +71,6 @@ def study(dt: float = 1e-3) -> dict[str, Any]:
             "ch4_bump_pothole": {
                 str(int(c)): road_run(lambda t: float(ch4_bump_pothole(SPEED * t)), c, dt=dt)
                 for c in (3800.0, 2000.0, 1000.0)},
-            "bump_100mm": road_run(lambda t: large_bump(SPEED * t), 3800.0, t_end=1.0, dt=dt)}
+            "bump_100mm": road_run(  # a 1-cos bump 100 mm x 1.0 m from x = 1 m
+                lambda t: float(bump_height(np.asarray(SPEED * t), 1.0, 0.10, 1.0)), 3800.0,
+                t_end=1.0, dt=dt)}

@@ -173,35 +173,47 @@ class CornerGeometry:
         """URDF of the corner (links, inertias, joints) for the given masses. The lower arm's
         link axes are the corner's (the revolute joint's axis is the arm frame's x, given in
         them)."""
-        la_o = 0.5 * (self.lower_bush_front + self.lower_bush_rear)
-        ua_o = 0.5 * (self.upper_bush_front + self.upper_bush_rear)
-        ua_com = (self.upper_bush_front + self.upper_bush_rear + self.upper_ball_joint) / 3.0
-        tr_com = 0.5 * (self.tie_rod_inner + self.tie_rod_outer)
-        tr_len = float(np.linalg.norm(self.tie_rod_outer - self.tie_rod_inner))
-        body_com = np.array([0.0, -self.half_track, 0.25])  # on the vehicle centreline
-        la_axis = _fmt(self.arm_rotation[:, 0])
-        ua_axis = self.upper_bush_front - self.upper_bush_rear
-        ua_axis = _fmt(ua_axis / np.linalg.norm(ua_axis))
-        s = ""
-        s += _link("ground", 0, [0, 0, 0], (0, 0, 0))
-        s += _link("body", pr.body_mass, body_com, (100, 100, 100))
-        s += _link("lower_arm", pr.lower_arm_mass, self.lower_arm_com - la_o,
-                   self.lower_arm_inertia(pr.lower_arm_mass))
-        # hub + wheel ~ a disc about y; upper arm a small triangle
-        s += _link("hub", pr.hub_mass, self.wheel_centre - self.lower_ball_joint,
-                   (1.2, 2.0, 1.2))
-        s += _link("upper_arm", pr.upper_arm_mass, ua_com - ua_o, (0.012, 0.01, 0.02))
-        # slender rod along y: I_perp = m L^2 / 12, I_axis = m r^2 / 2 with r = 10 mm
-        i_perp = pr.tie_rod_mass * tr_len ** 2 / 12.0
-        s += _link("tie_rod", pr.tie_rod_mass, tr_com - self.tie_rod_inner,
-                   (i_perp, pr.tie_rod_mass * 1e-4 / 2.0, i_perp))
-        s += _joint("body_z", "prismatic", "ground", "body", [0, 0, 0], "0 0 1")
-        s += _joint("lower_arm_pivot", "revolute", "body", "lower_arm", la_o, la_axis)
-        s += _joint("lower_ball_joint", "spherical", "lower_arm", "hub",
-                    self.lower_ball_joint - la_o)
-        s += _joint("upper_arm_pivot", "revolute", "body", "upper_arm", ua_o, ua_axis)
-        s += _joint("tie_rod_inner", "spherical", "body", "tie_rod", self.tie_rod_inner)
+        lower, others, joints = self.arm_urdf((pr.lower_arm_mass, pr.upper_arm_mass,
+                                               pr.tie_rod_mass))
+        # the body's centre of mass on the vehicle centreline; hub + wheel ~ a disc about y
+        s = (_link("ground", 0, [0, 0, 0], (0, 0, 0))
+             + _link("body", pr.body_mass, np.array([0.0, -self.half_track, 0.25]),
+                     (100, 100, 100)) + lower
+             + _link("hub", pr.hub_mass, self.wheel_centre - self.lower_ball_joint,
+                     (1.2, 2.0, 1.2)) + others
+             + _joint("body_z", "prismatic", "ground", "body", [0, 0, 0], "0 0 1") + joints)
         return f'<?xml version="1.0"?>\n<robot name="double_wishbone">\n{s}</robot>\n'
+
+    def arm_urdf(self, masses: tuple[float, float, float], n: str = "",
+                 at: np.ndarray | None = None, rack: str = "body") -> tuple[str, str, str]:
+        """The URDF of the corner's lower arm, upper arm and tie rod (masses [kg], in that
+        order) with the wheel centre at ``at`` [m] (default 0): (the lower arm's link, the
+        upper arm's and the tie rod's links, their joints: the arm pivots on ``body``, the
+        ball joint to ``hub{n}``, the tie rod's inner joint on ``rack``), names suffixed by
+        ``n``; each joint is named after its child link. The upper arm is a small triangle,
+        the tie rod a slender rod along y: I_perp = m L^2 / 12, I_axis = m r^2 / 2 with
+        r = 10 mm."""
+        wc = np.zeros(3) if at is None else at
+        m_la, m_ua, m_tr = masses
+        la_o = wc + 0.5 * (self.lower_bush_front + self.lower_bush_rear)
+        ua_o = wc + 0.5 * (self.upper_bush_front + self.upper_bush_rear)
+        bj, tri = wc + self.lower_ball_joint, wc + self.tie_rod_inner
+        ua_com = wc + (self.upper_bush_front + self.upper_bush_rear + self.upper_ball_joint) / 3.0
+        tr_com = wc + 0.5 * (self.tie_rod_inner + self.tie_rod_outer)
+        tr_len = float(np.linalg.norm(self.tie_rod_outer - self.tie_rod_inner))
+        i_perp = m_tr * tr_len ** 2 / 12.0
+        ua_axis = self.upper_bush_front - self.upper_bush_rear
+        lower = _link(f"lower_arm{n}", m_la, wc + self.lower_arm_com - la_o,
+                      self.lower_arm_inertia(m_la))
+        others = (_link(f"upper_arm{n}", m_ua, ua_com - ua_o, (0.012, 0.01, 0.02))
+                  + _link(f"tie_rod{n}", m_tr, tr_com - tri, (i_perp, m_tr * 1e-4 / 2.0, i_perp)))
+        joints = (_joint(f"lower_arm{n}", "revolute", "body", f"lower_arm{n}", la_o,
+                         _fmt(self.arm_rotation[:, 0]))
+                  + _joint(f"hub{n}", "spherical", f"lower_arm{n}", f"hub{n}", bj - la_o)
+                  + _joint(f"upper_arm{n}", "revolute", "body", f"upper_arm{n}", ua_o,
+                           _fmt(ua_axis / np.linalg.norm(ua_axis)))
+                  + _joint(f"tie_rod{n}", "spherical", rack, f"tie_rod{n}", tri))
+        return lower, others, joints
 
 
 _G = CornerGeometry(corner_file.builtin())

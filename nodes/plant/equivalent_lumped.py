@@ -39,6 +39,7 @@ from collections.abc import Callable
 import numpy as np
 
 from cosim.corner import Corner
+from nodes.tyre_road.roads import bump_height, pothole_height
 
 from .double_wishbone import DoubleWishboneCorner
 from .model import PlantModel
@@ -58,13 +59,8 @@ SPEED = 34.0 / 3.6
 
 def ch4_bump_pothole(s: np.ndarray | float) -> np.ndarray:
     """Road height [m] at distance s [m] of the Ch. 4 bump + pothole road."""
-    s = np.asarray(s, dtype=float)
-
-    def cos_event(x0: float, h: float, length: float) -> np.ndarray:
-        u = (s - x0) / length
-        return np.where((u >= 0) & (u <= 1), 0.5 * h * (1 - np.cos(2 * np.pi * u)), 0.0)
-
-    return cos_event(3.0, 0.05, 1.0) - cos_event(10.0, 0.04, 0.6)
+    x = np.asarray(s, dtype=float)
+    return bump_height(x, 3.0, 0.05, 1.0) + pothole_height(x, 10.0, 0.04, 0.6)
 
 
 def simulate(model: PlantModel, t_end: float, dt: float, z_g: Callable[[float], float],

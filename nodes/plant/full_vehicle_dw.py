@@ -42,7 +42,7 @@ from cosim.corner import Corner
 from .anti_roll_bar import ARB_FRONT_NM_PER_DEG, ARB_REAR_NM_PER_DEG, axle_bars, axle_torques
 from .arm_loads import arm_loads_at
 from .bump_stop import BumpStopParams, bump_stop_force
-from .double_wishbone_geometry import CornerGeometry, _fmt, _joint, _link
+from .double_wishbone_geometry import CornerGeometry, _joint, _link
 from .driver import Driver
 from .full_vehicle_dw_wheels import WheelsAndDriver, steer_lever, wheel_inertia, wheel_mass
 from .model import GRAVITY, PlantModel
@@ -177,33 +177,14 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         s += _link("rack", RACK_MASS, [0, 0, 0], (0.01, 0.01, 0.01))
         joints = _joint("rack", "prismatic", "body", "rack", [0, 0, 0], "0 1 0")
         for i, (g, c, n) in enumerate(zip(self.geoms, self.corners, CORNERS, strict=True)):
-            wc, m = self.wheel_centres[i], c.masses
-            la_o = wc + 0.5 * (g.lower_bush_front + g.lower_bush_rear)
-            ua_o = wc + 0.5 * (g.upper_bush_front + g.upper_bush_rear)
+            wc, m, m_w = self.wheel_centres[i], c.masses, wheel_mass(c)
+            lower, others, js = g.arm_urdf((m["lower_arm"], m["upper_arm"], m["tie_rod"]),
+                                           f"_{n}", wc, "rack" if i < 2 else "body")
             bj = wc + g.lower_ball_joint
-            tri = wc + g.tie_rod_inner
-            ua_com = wc + (g.upper_bush_front + g.upper_bush_rear + g.upper_ball_joint) / 3.0
-            tr_com = wc + 0.5 * (g.tie_rod_inner + g.tie_rod_outer)
-            tr_len = float(np.linalg.norm(g.tie_rod_outer - g.tie_rod_inner))
-            i_perp = m["tie_rod"] * tr_len ** 2 / 12.0
-            s += _link(f"lower_arm_{n}", m["lower_arm"], wc + g.lower_arm_com - la_o,
-                       g.lower_arm_inertia(m["lower_arm"]))
-            m_w = wheel_mass(c)
-            s += _link(f"hub_{n}", m["hub"] - m_w, wc - bj, (0.15, 0.15, 0.15))
-            s += _link(f"wheel_{n}", m_w, [0, 0, 0], wheel_inertia(m_w))
-            s += _link(f"upper_arm_{n}", m["upper_arm"], ua_com - ua_o, (0.012, 0.01, 0.02))
-            s += _link(f"tie_rod_{n}", m["tie_rod"], tr_com - tri,
-                       (i_perp, m["tie_rod"] * 1e-4 / 2.0, i_perp))
-            ua_axis = g.upper_bush_front - g.upper_bush_rear
-            joints += _joint(f"lower_arm_{n}", "revolute", "body", f"lower_arm_{n}", la_o,
-                             _fmt(g.arm_rotation[:, 0]))
-            joints += _joint(f"hub_{n}", "spherical", f"lower_arm_{n}", f"hub_{n}", bj - la_o)
-            joints += _joint(f"upper_arm_{n}", "revolute", "body", f"upper_arm_{n}", ua_o,
-                             _fmt(ua_axis / np.linalg.norm(ua_axis)))
-            joints += _joint(f"tie_rod_{n}", "spherical", "rack" if i < 2 else "body",
-                             f"tie_rod_{n}", tri)
-            joints += _joint(f"wheel_{n}", "continuous", f"hub_{n}", f"wheel_{n}", wc - bj,
-                             "0 1 0")
+            s += (lower + _link(f"hub_{n}", m["hub"] - m_w, wc - bj, (0.15, 0.15, 0.15))
+                  + _link(f"wheel_{n}", m_w, [0, 0, 0], wheel_inertia(m_w)) + others)
+            joints += js + _joint(f"wheel_{n}", "continuous", f"hub_{n}", f"wheel_{n}", wc - bj,
+                                  "0 1 0")
         return f'<?xml version="1.0"?>\n<robot name="full_vehicle_dw">\n{s}{joints}</robot>\n'
 
     def _local(self, link: int, body_point: np.ndarray) -> list[float]:
