@@ -19,8 +19,8 @@ from cosim import scenario as sc
 from cosim.errors import SuscosimError
 
 from ..cli_util import interrupt_on_sigterm
-from .display import Display, event_line
 from .phases import point_meta
+from .results import Display, event_line
 from .spec import Point, Sweep
 from .task import run_point, task_doc, unpack
 

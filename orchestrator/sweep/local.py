@@ -15,8 +15,8 @@ from cosim.journal import last_step
 
 from ..cli_util import interrupt_on_sigterm
 from . import phases
-from .display import Display, event_line
 from .fork import Parent, keep_only_fork_checkpoint, parent_state
+from .results import Display, event_line
 from .spec import Point, Sweep, toml_value
 
 
