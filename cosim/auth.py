@@ -8,9 +8,8 @@ expression it is published on and of ``F``::
     raw = b"\x86" + F + b"\xa1s\xc4\x10" + blake2b(key=run_key, person="suscosim-msg-v1",
                                                 digest_size=16)(keyexpr + b"\0" + F)
 
-A reader without the key (a tap, ``suscosim replay``) reads it with one more field to ignore;
-a receiver with the key checks the bytes as they came (:meth:`RunKey.verify`); an unsigned or
-badly signed message is rejected (:class:`AuthError`, counted) before it is decoded. The key
+A reader without the key (a tap) ignores the extra field; a receiver with it rejects an
+unsigned or badly signed message (:class:`AuthError`, counted) before decoding it. The key
 expression is in the MAC: no replay on another channel or run. BLAKE2b: keyed natively, the
 fastest keyed hash of :mod:`hashlib` (~1 us a message).
 
@@ -19,10 +18,9 @@ so the orchestrator draws a 16-byte nonce per run and every message is signed bo
 (person ``suscosim-msg-v2`` over ``nonce + keyexpr + "\0" + F``), except the served scenario
 (key alone), which announces the nonce (field ``session``, hex) for the nodes to bind to.
 
-Where the key comes from (:func:`run_key_from_env`), in this order: ``SUSCOSIM_RUN_KEY`` (the
-run key, hex, set by the orchestrator for the nodes it starts); ``SUSCOSIM_KEY_FILE`` (a
-secret file, mode 0600, e.g. ``RUN/run.key``; the key is derived from it and the run id);
-``SUSCOSIM_KEY`` (a secret, derived the same way).
+The key (:func:`run_key_from_env`): ``SUSCOSIM_RUN_KEY`` (hex, set by the orchestrator for
+its nodes), else derived with the run id from the secret of ``SUSCOSIM_KEY_FILE`` (mode 0600,
+e.g. ``RUN/run.key``) or ``SUSCOSIM_KEY``.
 """
 
 from __future__ import annotations

@@ -8,13 +8,11 @@ Layout inside a run folder::
                                         file is in place: {"k", "t", "scenario_sha256",
                                         "nodes": {node: {"file", "sha256", "bytes"}}}
 
-A node file is ``MAGIC`` + the 32-byte SHA-256 of the payload + a 32-byte MAC (zeros without
-a run key) + the payload: the node's state dict as plain data (:mod:`cosim.plaindata`; never
-a pickle). With the run's key the MAC is an HMAC-SHA256 of its step, node name and payload,
-and the manifest carries one of its canonical JSON (``mac``; key: :func:`checkpoint_key`).
-Every file is written aside, fsynced and renamed into place; a checkpoint without a manifest
-is incomplete and ignored. Whatever is wrong is a :class:`CheckpointError` (exit code 2)
-naming the node, the file and the fault.
+A node file is ``MAGIC`` + the payload's SHA-256 + a 32-byte MAC (HMAC-SHA256 of step, node
+and payload with :func:`checkpoint_key`; zeros without a run key) + the payload: the node's
+state as plain data (:mod:`cosim.plaindata`; never a pickle); the manifest carries the MAC of
+its canonical JSON (``mac``). Every file is written aside, fsynced and renamed into place. A
+fault is a :class:`CheckpointError` (exit 2) naming the node, the file and the fault.
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
 """A double-wishbone corner as data: the reader of a corner file (``suscosim-corner``, v1).
 
-A corner file (TOML; schema and the built-in corner's sources in docs/corners.md) holds what
-an ADAMS/Car hardpoint table holds: the **left** corner's hardpoints in vehicle axes (ISO 8855:
-x forward, y left, z up; metres), part masses, spring (torsion bar about the lower arm's pivot
-axis and/or coil spring), nominal damper, jounce bumper and body bushes; each hardpoint is
-defined once, here.
+A corner file (TOML; docs/corners.md) holds the **left** corner's hardpoints in vehicle axes
+(ISO 8855: x forward, y left, z up; metres), part masses, spring (torsion bar about the lower
+arm's pivot axis and/or coil spring), nominal damper, jounce bumper and body bushes.
 
 Every point is returned in the **corner frame**: vehicle axes, origin at the static wheel
 centre. With ``frame.reference = "wheel_centre"`` the file's numbers are used as they are;

@@ -7,20 +7,14 @@ reach :data:`SEGMENT_RAW_BYTES`)::
 
     "SJS3" | clen u32 | rawlen u32 | nrec u32 | first u64 | hcrc u32 | body (clen) | bcrc u32
 
-(little-endian). ``body`` is one zstd frame (with its own content checksum) of ``nrec``
-msgpack arrays ``[channel, payload]``: ``channel`` is ``"<node>/<channel>"``, ``payload`` the
-raw bus message exactly as received. ``first`` is how many records the journal held before
-this segment, ``hcrc`` the CRC-32 of the 24 header bytes before it, ``bcrc`` that of the
-compressed body (88 B a step for the Chapter 3 quarter car's 14 columns, docs/memory.md).
+(little-endian; docs/data_formats.md). ``body`` is one zstd frame of ``nrec`` msgpack arrays
+``[channel, payload]`` (``"<node>/<channel>"``, the bus message as received); ``first``: the
+records before this segment; ``hcrc``, ``bcrc``: CRC-32 of the 24 header bytes and of the body.
 
-Crash safety: a segment is one ``write`` of the append-only file, so a killed recorder loses
-at most its last ~50 ms (a torn last segment: the reader stops there and says so). A damaged
-segment in the middle (bad CRC, a body that does not decompress) costs that segment only: the
-reader resynchronises on the next intact header and reports the stretch (:class:`Skipped`)
-with the exact records lost, from the ``first`` of the segments around it.
-
-Versions 1 and 2 (before 2026-12-02) are refused as unsupported (exit 2). Every reader goes
-through :class:`JournalReader` (streamed) or :func:`read_journal` (a list, for small journals).
+A segment is one ``write``, so a killed recorder loses at most its last ~50 ms (a torn last
+segment, said so). A damaged segment costs that segment only: the reader resynchronises on
+the next intact header and reports the records lost (:class:`Skipped`), from the ``first``
+of the segments around it. Versions 1 and 2 (before 2026-12-02) are refused (exit 2).
 """
 
 from __future__ import annotations

@@ -1,21 +1,13 @@
 """What a node sends: its output channels, its step message and its records batches.
 
-A node's :class:`cosim.participant.Participant` keeps one :class:`Outbox`. Every data message
-is encoded once and checked against its channel's schema before it leaves (what a consumer
-would reject is never sent: a diverged model ends the run naming the field). Then:
-
-* a **per-step channel**'s message joins the node's *step*, published as ONE signed message
-  on ``<node>/step`` by :meth:`Outbox.send` (in two if it would not fit one);
-* a **block channel** of the schema (``stepped=False``: ``fatigue/damage``,
-  ``recorder/coupling``) goes out at once on its own key ``suscosim/<run>/<node>/<channel>``;
-* every data message is also kept, as encoded, for the recorder, which gets them in batches
-  on ``<node>/records`` (:class:`RecordBatch`: at most :data:`RECORD_BATCH` messages or
-  :data:`RECORD_PERIOD_S` old, in one message). A batch that falls due with a per-step message
-  goes out right after the step: never between a step's last input and its output.
-
-A message published with ``hold=True`` (the plant's response and loads of the step before,
-encoded while it waits for this step's forces) joins the *next* step message, ahead of that
-step's own; :meth:`Outbox.flush` sends it at once.
+Every data message is encoded once and checked against its channel's schema before it
+leaves (a diverged model ends the run naming the field). A **per-step channel**'s message
+joins the node's *step*, ONE signed message on ``<node>/step`` (:meth:`Outbox.send`; two if
+it would not fit one); a **block channel** (``stepped=False``) goes out at once on its own key.
+Every data message is also kept for the recorder, sent in batches on ``<node>/records``
+(:class:`RecordBatch`) right after the step they fell due with, never between a step's last
+input and its output. ``hold=True`` (the plant's response and loads of the step before)
+puts a message in the *next* step message, ahead of that step's own.
 """
 
 from __future__ import annotations

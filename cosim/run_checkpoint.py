@@ -9,10 +9,9 @@ size) without waiting; the clock writes the manifest once every node has. The re
 once every step < k is in its journal, fsynced (its state is the journal, replayed on
 resume); the fatigue node once it has taken load step k - 1.
 
-``run.resume`` (set by ``suscosim run --resume`` / ``--fork``, never by a user):
-``{"k", "t", "folder", "journal": the journal holding the steps < k, "fresh": nodes that start
-afresh (a fork's changed controller), "sha256": {node: its file's SHA-256 as the orchestrator
-checked it}}``: a node reads its file only if it is still the one checked.
+``run.resume`` (set by ``suscosim run --resume`` / ``--fork``): ``{"k", "t", "folder",
+"journal", "fresh": nodes that start afresh, "sha256": {node: its file's SHA-256 as the
+orchestrator checked it}}``: a node reads its file only if it is still the one checked.
 """
 
 from __future__ import annotations

@@ -12,12 +12,10 @@
 ``fatigue/``        the lower arm's damage (``summary.json``, ``damage_per_node.csv``, map)
 ==================  ==========================================================================
 
-The state of a run (:func:`run_info`) is read from the files alone: ``ok`` / ``failed`` as
-``summary.json`` says (written at the end of every run); without one, ``running`` while the
-orchestrator process of ``run.json`` is alive (same host, pid and process start time: a
-reused pid is not taken for it), ``interrupted`` once it is gone, ``unknown`` when there is no
-way to tell (no ``run.json``, or another host). Steps: the last step every channel of the
-journal has reached, against ``run.n_steps``.
+A run's state (:func:`run_info`), from the files alone: ``ok`` / ``failed`` as
+``summary.json`` says; without one, ``running`` while the orchestrator process of ``run.json``
+is alive (same host, pid and start time), ``interrupted`` once it is gone, ``unknown`` when
+there is no telling (no ``run.json``, or another host).
 """
 
 from __future__ import annotations

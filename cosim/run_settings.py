@@ -1,15 +1,10 @@
 """The run's settings, typed and read once: :class:`RunSettings` from the resolved scenario's
 ``[run]`` table, and the lag rule of the exchange in one place (:meth:`RunSettings.needs`).
 
-The exchange (``run.exchange``, DESIGN.md "Lock-step co-simulation"):
-
-* ``sequential`` (the thesis's scheme): the plant publishes its state at t_k, the force
-  nodes answer with forces at t_k computed from it, the plant integrates to t_{k+1};
-* ``parallel`` (Jacobi): every node steps on the previous step's inputs, so a force node
-  computes step k's forces from the state of step k - 1 (step 0: from step 0's).
-
-The inputs that lag are :data:`LAGGED` (the plant's state, for the force nodes); the plant's
-own inputs (the forces of step k) never do.
+``run.exchange`` ``sequential`` (the thesis's): the force nodes answer the plant's state at
+t_k with the forces at t_k, then the plant integrates to t_{k+1}; ``parallel`` (Jacobi): every
+node steps on the previous step's inputs, so the inputs of :data:`LAGGED` (the plant's state,
+for the force nodes) are of step k - 1 (step 0: of step 0).
 """
 
 from __future__ import annotations

@@ -1,9 +1,8 @@
 """A user's node as a class: the lock-step shell around ``step``, for a kind of the registry.
 
 ``[nodes] controller = "mypackage.mymodule:MyController"`` names a class; the node process
-(``suscosim node controller``) runs it with :func:`run_stepped`: it declares the kind's
-outputs (:attr:`cosim.node_kinds.NodeKind.writes`), listens to its inputs
-(:func:`cosim.node_kinds.inputs`), does the start handshake, then every step k::
+runs it with :func:`run_stepped`: it declares the kind's outputs, listens to its inputs, does
+the start handshake, then every step k::
 
     node = MyController(scenario, start)          # once, after the start handshake
     out = node.step(k, t, inputs)                 # every step k = 0..N, t = k h [s]

@@ -4,12 +4,10 @@ The table of a run or a journal (:func:`table_of_journal`, :func:`journal_table`
 ``t`` [s], then ``<node>/<channel>/<field>`` (a list field becomes ``<field>[i]``), channels
 sorted by name and each channel's fields sorted; a row is a step every channel delivered (a
 step some channel never gave is no row), ``t`` that of the channel heard first; the first
-message of a step counts. :class:`TableWriter` holds only the steps not yet complete: a row is
-written once every channel has given its step, to ``table.csv`` (as
-:func:`cosim.table.write_csv`) and ``table.parquet`` (row groups of :data:`GROUP_ROWS`), both
+message of a step counts. :class:`TableWriter` holds only the steps not yet complete and
+writes a row once every channel has given its step, to ``table.csv`` and ``table.parquet``
 beside their place until :meth:`TableWriter.close` renames them over it. A step completed
-*after* a later row was written (records out of their own order: never in a run) is left out,
-counted in ``late``.
+after a later row was written (never in a run) is left out, counted in ``late``.
 
 A channel's layout (its fields, each a number or a list of one length) is fixed by its first
 message, or given (``layout``: what :func:`journal_layout` finds by majority in a journal);

@@ -17,11 +17,9 @@ messages, each as it would be on its own (unsigned: the bundle's signature cover
 ``d = {FIELD: [[channel, raw message bytes], ...]}``, ``k``/``t`` the newest inner message's;
 a consumer decodes only the inner messages of the channels it reads (:func:`inner`).
 
-Encoding and decoding are msgspec's (compiled; the bytes are msgpack's): with ``channel`` the
-numbers are bounded by that channel's limit of :mod:`cosim.schema` (NaN, +-inf, 1e308
-refused), its non-negative fields checked, ``k >= 0`` and ``t >= 0``; a message that fails is
-explained field by field (the slow path). A signed message has a sixth field ``"s"``
-(:mod:`cosim.auth`).
+Encoding and decoding are msgspec's (compiled): with ``channel`` the numbers are bounded by
+its limit (NaN, +-inf, 1e308 refused), its non-negative fields checked, ``k, t >= 0``; a
+message that fails is explained field by field. A signed message has a sixth field ``"s"``.
 """
 
 from __future__ import annotations
