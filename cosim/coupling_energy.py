@@ -11,17 +11,10 @@ does not receive:
 
     dE_k = h/2 [ (F_app(t_k+) - F(x_k)) v_k + (F_app(t_k+1-) - F(x_k+1)) v_k+1 ]     [J]
 
-(the trapezoidal rule over step k; in the sequential exchange the first term is zero, since
-the plant starts each step from the force computed from its own state). Everything in it is
-in the run's table (forces, their derivatives ``k_t``, ``c_eff``, the plant's states): no
-reference solution nor vehicle model is needed.
-
-Two bonds, per corner, summed over corners:
-
-* ``damper``: the damper force F_d [N] (``controller/force``) through the strut velocity
-  v_rel = v_w - v_b [m/s] (the velocity the plant's coupling linearises about);
-* ``tyre``: the vertical tyre force F_t [N] (``tyre_road/force``) through the wheel's
-  vertical velocity v_w [m/s].
+(the trapezoidal rule over step k; zero first term in the sequential exchange). It needs only
+the run's table: no reference solution nor vehicle model. Two bonds, summed over corners:
+``damper``, F_d [N] through the strut velocity v_rel = v_w - v_b [m/s]; ``tyre``, the vertical
+tyre force F_t [N] through the wheel's vertical velocity v_w [m/s].
 
 The relative residual of a bond is sum_k |dE_k| over the energy the bond carried,
 sum_k h |F(x_k) v_k|; the totals go into ``summary.json`` as ``coupling_energy_residual``.

@@ -37,8 +37,7 @@ HEADER_MAX = 64 * 1024  # the header record is read from the first bytes only
 SEG_MAGIC = b"SJS3"
 _SEG = struct.Struct("<4sIIIQ")  # magic, clen, rawlen, nrec, first
 SEG_HEAD = _SEG.size + 4  # + hcrc
-SEGMENT_RAW_BYTES = 1 << 20
-"""A segment is cut when the records it holds reach this many bytes (before compression)."""
+SEGMENT_RAW_BYTES = 1 << 20  # a segment is cut when its records reach this (uncompressed)
 MAX_SEGMENT_BYTES = 64 << 20  # a header claiming more is not taken for one
 ZSTD_LEVEL = 3
 _CHUNK = 1 << 20  # bytes read at a time

@@ -1,11 +1,9 @@
 """The shell of a node that only listens (the recorder, the live fatigue node): it takes each
-message as it arrives, before the run's ``start`` as after it.
-
-:meth:`Listener.feed` subscribes to an input; :meth:`Listener.poll` takes one message,
-verified, decoded and checked (else rejected and counted; ``hello`` is not returned), handles
-clock messages (abort: :class:`RunError`; a plausible ``start`` sets :attr:`Listener.start`)
-and, until the start, keeps the handshake going (:class:`cosim.participant.StartBarrier`).
-"""
+message as it arrives, before the run's ``start`` as after it. :meth:`Listener.feed` subscribes
+to an input; :meth:`Listener.poll` takes one message, verified, decoded and checked (else
+rejected and counted; ``hello`` is not returned), handles clock messages (abort:
+:class:`RunError`; a plausible ``start`` sets :attr:`Listener.start`) and, until the start,
+keeps the handshake going (:class:`cosim.participant.StartBarrier`)."""
 
 from __future__ import annotations
 

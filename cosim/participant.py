@@ -1,18 +1,10 @@
 """The lock-step participant: what every node does around its model (DESIGN.md, "Lock-step
-co-simulation").
-
-1. **Declare** a liveliness token ``suscosim/<run>/<node>/alive``; fetch the resolved scenario.
-2. **Handshake**: ``hello`` on every output every 50 ms; once every input has been heard,
-   ``ready`` (with the node's facts) until the orchestrator's ``start`` arrives.
-3. **Steps**: :meth:`Participant.wait` blocks until every input a step needs has arrived, read
-   from one FIFO per producer (:meth:`bus.feed`) by the node's own thread; the outputs go out
-   as one signed ``<node>/step`` message per step (:mod:`cosim.outbox`). A watchdog thread
-   wakes a blocked node on stall timeout, an abort, or when the orchestrator is gone.
-4. **End**: ``done`` after the last step; an ``abort``, or an input late by more than the
-   stall timeout, ends the node with :class:`RunError`.
-
-A message that does not verify, decode, fit the schema or its bounded mailbox
-(:mod:`cosim.mailbox`) is rejected: logged, counted, never a crash.
+co-simulation"): a liveliness token, the resolved scenario fetched, the start handshake
+(:class:`StartBarrier`), then per step :meth:`Participant.wait` for its inputs (one FIFO per
+producer, read by the node's own thread; a watchdog thread wakes it on stall timeout, an
+abort, or the orchestrator gone) and one signed ``<node>/step`` message of its outputs
+(:mod:`cosim.outbox`); ``done`` at the end. A message that does not verify, decode, fit the
+schema or its bounded mailbox is rejected: logged, counted, never a crash.
 """
 
 from __future__ import annotations

@@ -1,7 +1,6 @@
-"""Plain data on disk: how a checkpoint holds a node's state without holding code (issue #43).
-
-A state is encoded with msgpack: ``None``, ``bool``, ``int``, ``float``, ``str``, ``bytes``,
-``list`` and ``dict`` as themselves, and as msgpack extension types a NumPy array or scalar
+"""Plain data on disk: how a checkpoint holds a node's state without holding code. A state is
+encoded with msgpack: ``None``, ``bool``, ``int``, ``float``, ``str``, ``bytes``, ``list`` and
+``dict`` as themselves, and as extension types a NumPy array or scalar
 (dtype of :data:`NUMERIC_DTYPES` by name, shape, raw bytes in C order), a ``tuple``, ``set``,
 ``frozenset``, ``complex``, an ``int`` beyond 64 bits (decimal), a
 ``numpy.random.Generator`` (its bit generator's name and state), and an object of a class in

@@ -1,9 +1,6 @@
-"""One run per run folder (a lock file), and one live run per run id on a shared bus.
-
-``RUN_DIR/.run.lock`` is locked with ``flock`` (exclusive, non-blocking) for the whole run
-and holds the pid of its holder: a second run on the same folder is refused with exit 2,
-naming the pid, before it writes anything. The lock goes with the process (no stale lock).
-"""
+"""One run per run folder, and one live run per run id on a shared bus. ``RUN_DIR/.run.lock``
+is ``flock``ed for the whole run and holds its pid: a second run on the folder is refused
+(exit 2, naming the pid) before it writes anything; the lock goes with the process."""
 
 from __future__ import annotations
 

@@ -9,10 +9,8 @@ vehicle's suspension produces. The channel limit is ``|x| <= 1e9`` in SI units (
 corner's largest stiffness, the bump stop at full compression, is below 1e6 N/m and 1e5 N);
 ``nonneg`` fields must be ``>= 0`` (DESIGN.md: the tyre force is compressive-positive).
 Undeclared fields (a law's extras, a user's node's outputs) are type-checked only: a law's
-extra may be NaN by design (TSS3's ``F_demand`` where it demands nothing).
-
-Per-corner fields are a number for a quarter car and a list of 4 (FL, FR, RL, RR) for a
-full vehicle.
+extra may be NaN by design (TSS3's ``F_demand`` where it demands nothing). Per-corner fields
+are a number for a quarter car and a list of 4 (FL, FR, RL, RR) for a full vehicle.
 """
 
 from __future__ import annotations

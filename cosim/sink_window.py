@@ -1,13 +1,10 @@
-"""The sinks' bounded window (DESIGN.md "Multi-rate").
-
-The *sinks* (the recorder, the live fatigue node: every node off the coupled chain) take the
-producers' data as it comes. A sink that lags is buffered up to ``run.sink_window_s`` of
-simulated time (as steps: ``window``; 0: unbounded); beyond that the plant holds the chain
-before its next step until the sink is back inside the window: a sink that cannot keep up
-costs time, never unbounded memory. A sink's progress is what it tells the orchestrator on
-its control key (the plant listens too); one that makes no progress for the stall timeout
-while the chain waits ends the run with a :class:`RunError` naming it.
-"""
+"""The sinks' bounded window (DESIGN.md "Multi-rate"). The *sinks* (every node off the coupled
+chain) take the producers' data as it comes. A sink that lags is buffered up to
+``run.sink_window_s`` of simulated time (as steps: ``window``; 0: unbounded); beyond that the
+plant holds the chain before its next step until the sink is back inside the window: a sink
+that cannot keep up costs time, never unbounded memory. A sink's progress is what it tells the
+orchestrator on its control key (the plant listens too); one that makes no progress for the
+stall timeout while the chain waits ends the run with a :class:`RunError` naming it."""
 
 from __future__ import annotations
 

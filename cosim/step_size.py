@@ -41,14 +41,10 @@ import numpy as np
 class AdaptiveStep:
     """The step-size controller's settings (``run.h_min``, ``run.h_max``, ``run.h_tol``)."""
 
-    h_min: float
-    """Smallest step [s]."""
-    h_max: float
-    """Largest step [s]."""
-    tol: float
-    """Energy residual allowed per step, relative to the energy carried over it [-]."""
-    atol: float = 1e-6
-    """Absolute floor of the energy residual's scale [J]."""
+    h_min: float  # smallest step [s]
+    h_max: float  # largest step [s]
+    tol: float  # energy residual allowed per step, over the energy carried over it [-]
+    atol: float = 1e-6  # absolute floor of the energy residual's scale [J]
     safety: float = 0.9
     k_i: float = 0.3
     k_p: float = 0.1

@@ -8,9 +8,8 @@ the start handshake, then every step k::
     out = node.step(k, t, inputs)                 # every step k = 0..N, t = k h [s]
     node.close()                                  # at the end, if it has one
 
-The kind's own ``TyreRoad`` and ``Controller`` are stepped classes too. A class may have a
-``FIELDS`` mapping of ``"node/channel"`` to the fields it needs of that input (default: the
-input's required fields of :mod:`cosim.schema`); a message without them is rejected.
+A class may have a ``FIELDS`` mapping of ``"node/channel"`` to the fields it needs of that
+input (default: its required fields); a message without them is rejected.
 
 ``start`` is the orchestrator's start payload (``n_steps``, ``h``, ``info``: every node's
 facts, e.g. ``start["info"]["plant"]["n_corners"]``). ``inputs`` maps ``"node/channel"`` to
