@@ -35,7 +35,8 @@ def test_tss1_hand_cases():
     #            body up, wheel still | body up, wheel faster up | body down, wheel up | v_b = 0
     v_b = np.array([0.2, 0.2, -0.1, 0.0])
     v_w = np.array([0.0, 0.5, 0.1, 0.3])
-    F, c, hard = skyhook_on_off(v_b, v_w - v_b, 1500.0, 2368.0)
+    F, c, ex = skyhook_on_off(v_b, v_w - v_b, c_soft=1500.0, c_hard=2368.0)
+    hard = ex["state"] == 1.0
     # case 1: extension (v_rel = -0.2) while the body rises: hard, pulls the body down
     # case 2: compression (0.3) while the body rises: damper would push it up -> soft
     # case 3: compression (0.2) while the body falls: hard, pushes it up
@@ -61,12 +62,13 @@ def test_tss1_jumps_at_switching_but_no_jerk_skyhook_does_not():
     # body velocity crossing zero while the damper extends: v_rel = -0.2 fixed
     v_b = np.array([-1e-6, 1e-6])
     v_rel = np.array([-0.2, -0.2])
-    F_onoff, _, _ = skyhook_on_off(v_b, v_rel, 1500.0, 2368.0)
+    F_onoff, _, _ = skyhook_on_off(v_b, v_rel, c_soft=1500.0, c_hard=2368.0)
     assert abs(F_onoff[1] - F_onoff[0]) == pytest.approx(0.2 * (2368.0 - 1500.0))
-    F_nj, c_nj = skyhook_no_jerk(v_b, v_rel, 20000.0, 1500.0, 2368.0)
+    F_nj, c_nj, _ = skyhook_no_jerk(v_b, v_rel, G=20000.0, c_min=1500.0, c_max=2368.0)
     assert abs(F_nj[1] - F_nj[0]) < 1e-3
     # no-jerk inside the region: c = G |v_b| = 20000 * 0.1 = 2000 N·s/m
-    F, c = skyhook_no_jerk(np.array([0.1]), np.array([-0.2]), 20000.0, 1500.0, 2368.0)
+    F, c, _ = skyhook_no_jerk(np.array([0.1]), np.array([-0.2]), G=20000.0, c_min=1500.0,
+                              c_max=2368.0)
     assert c[0] == pytest.approx(2000.0) and F[0] == pytest.approx(-400.0)
 
 
@@ -76,7 +78,7 @@ def test_tss1_jumps_at_switching_but_no_jerk_skyhook_does_not():
 def test_continuous_skyhook_hand_cases():
     v_b = np.array([0.2, 0.1, 0.1, 0.1])
     v_w = np.array([0.0, -0.2, -0.05, 0.3])
-    F, c = skyhook_continuous(v_b, v_w - v_b, 3000.0, 1500.0, 2368.0)
+    F, c, _ = skyhook_continuous(v_b, v_w - v_b, c_sky=3000.0, c_min=1500.0, c_max=2368.0)
     # demands -600, -300, -300, -300 N on v_rel -0.2, -0.3, -0.15, +0.2
     np.testing.assert_allclose(c, [2368.0, 1500.0, 2000.0, 1500.0])
     np.testing.assert_allclose(F, [-473.6, -450.0, -300.0, 300.0])
@@ -87,23 +89,24 @@ def test_groundhook_hand_cases():
     v_w = np.array([0.1, 0.1])
     # wheel rising and compressing (v_rel +0.1): the groundhook wants the wheel pushed down,
     # i.e. F_d = +c_gnd v_w on the body: dissipative; wheel rising but extending: not
-    F, c = groundhook_continuous(v_w, v_w - v_b, 3000.0, 1500.0, 2368.0)
+    F, c, _ = groundhook_continuous(v_w, v_w - v_b, c_gnd=3000.0, c_min=1500.0, c_max=2368.0)
     np.testing.assert_allclose(c, [2368.0, 1500.0])
     np.testing.assert_allclose(F, [236.8, -150.0])
-    F, c, hard = groundhook_on_off(v_w, v_w - v_b, 1500.0, 2368.0)
-    np.testing.assert_array_equal(hard, [True, False])
+    F, c, ex = groundhook_on_off(v_w, v_w - v_b, c_soft=1500.0, c_hard=2368.0)
+    np.testing.assert_array_equal(ex["state"], [1.0, 0.0])
 
 
 def test_hybrid_limits_and_mixed_case():
     rng = np.random.default_rng(3)
     v_b, v_w = rng.normal(0, 0.3, 50), rng.normal(0, 0.3, 50)
-    sky = skyhook_continuous(v_b, v_w - v_b, 4000.0, 1500.0, 2368.0)[0]
-    gnd = groundhook_continuous(v_w, v_w - v_b, 4000.0, 1500.0, 2368.0)[0]
-    np.testing.assert_allclose(hybrid(v_b, v_w, 1.0, 4000.0, 1500.0, 2368.0)[0], sky)
-    np.testing.assert_allclose(hybrid(v_b, v_w, 0.0, 4000.0, 1500.0, 2368.0)[0], gnd)
+    lim = {"c_min": 1500.0, "c_max": 2368.0}
+    sky = skyhook_continuous(v_b, v_w - v_b, c_sky=4000.0, **lim)[0]
+    gnd = groundhook_continuous(v_w, v_w - v_b, c_gnd=4000.0, **lim)[0]
+    np.testing.assert_allclose(hybrid(v_b, v_w, alpha=1.0, G=4000.0, **lim)[0], sky)
+    np.testing.assert_allclose(hybrid(v_b, v_w, alpha=0.0, G=4000.0, **lim)[0], gnd)
     # both parts active: v_b = 0.1, v_w = -0.1, v_rel = -0.2:
     # demand = 4000 (0.5 * -0.1 + 0.5 * -0.1) = -400 -> c = 2000
-    F, c = hybrid(np.array([0.1]), np.array([-0.1]), 0.5, 4000.0, 1500.0, 2368.0)
+    F, c, _ = hybrid(np.array([0.1]), np.array([-0.1]), alpha=0.5, G=4000.0, **lim)
     assert c[0] == pytest.approx(2000.0) and F[0] == pytest.approx(-400.0)
 
 
