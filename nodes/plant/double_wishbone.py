@@ -31,7 +31,7 @@ body and down on the pad, from the state at the start of the step.
 
 **Arm accelerations** ``a_arm_{loc1,cg,loc2}_{x,y,z}`` [m/s^2] (in ``plant/response``, via
 :meth:`response_velocities`): vehicle axes, of the lower arm's points
-:data:`.double_wishbone_geometry.ARM_ACCEL_POINTS`
+:attr:`.CornerGeometry.arm_accel_points`
 (thesis Table 5.4's Loc1, CG, Loc2), derived by the node as a_b and a_w are.
 
 **Arm loads** (``loads()["arm"]``): the loads ON the lower arm in the arm frame (origin at the

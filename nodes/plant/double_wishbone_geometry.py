@@ -130,6 +130,15 @@ class CornerGeometry:
         self.lower_arm_com = self.to_corner(com_arm)
         self.arm_accel_points = {"loc1": hp["ball_joint"] - np.array([0.0, 0.020, 0.0]),
                                  "cg": com_arm, "loc2": np.array([0.0, 0.020, 0.0])}
+        """Points of the lower arm whose accelerations ``plant/response`` carries (thesis
+        Table 5.4), in the arm frame [m]. The thesis names them only "Loc1" (near the hub),
+        "CG" and "Loc2" (near the body pivot) without a drawing, so (ours): ``loc1`` 20 mm
+        inboard of the ball joint, on its boss's edge ((0.025, 0.274, 0) on the built-in
+        arm); ``cg`` the arm's centre of mass (0.085 m from the pivot axis); ``loc2`` (0,
+        0.020, 0), 20 mm outboard of the bush midpoint, moving almost with the body. A
+        point's vertical acceleration is the body's plus the arm's angular acceleration times
+        its distance from the pivot axis: it falls from Loc1 to the CG to Loc2, as in Table
+        5.4."""
         self.lever_ball_joint = float(hp["ball_joint"][1])
         """Horizontal distance of the ball joint from the pivot axis, L [m]."""
 
@@ -216,65 +225,9 @@ class CornerGeometry:
         return lower, others, joints
 
 
-_G = CornerGeometry(corner_file.builtin())
-"""The built-in corner's geometry; the constants below are its."""
-
-# ---- hardpoints in the corner frame [m] (see module docstring) ----
-WHEEL_CENTRE = _G.wheel_centre
-ARM_ORIGIN = la.ARM_ORIGIN
-"""Lower-arm frame origin (bush midpoint) in the corner frame; arm axes = corner axes."""
-LOWER_BUSH_FRONT = _G.lower_bush_front
-LOWER_BUSH_REAR = _G.lower_bush_rear
-LOWER_BALL_JOINT = _G.lower_ball_joint
-DAMPER_LOWER = _G.damper_lower
-BUMP_STOP_PAD: np.ndarray = _G.bump_stop_pad  # type: ignore[assignment]  # the built-in has one
-DAMPER_UPPER = _G.damper_upper  # above the seat: no fore-aft lean
-UPPER_BUSH_FRONT = _G.upper_bush_front
-UPPER_BUSH_REAR = _G.upper_bush_rear
-UPPER_BALL_JOINT = _G.upper_ball_joint
-TIE_ROD_INNER = _G.tie_rod_inner
-TIE_ROD_OUTER = _G.tie_rod_outer
-HALF_TRACK = _G.half_track
-
-LOWER_ARM_COM = _G.lower_arm_com
-"""Lower arm's centre of mass (corner frame) [m]: the FE arm's (cosim.lower_arm)."""
-
-
-def arm_frame() -> tuple[np.ndarray, np.ndarray]:
-    """(origin, R): the lower-arm frame in the corner frame at static ride height; columns of
-    R are the arm's x, y, z axes, so p_arm = R.T @ (p_corner - origin)."""
-    return la.arm_frame_of(_G.corner)
-
-
-to_arm_frame = _G.to_arm_frame
-"""A corner-frame point in the built-in corner's arm frame [m]."""
-lower_arm_inertia = _G.lower_arm_inertia
-"""(I_xx, I_yy, I_zz) of the built-in lower arm [kg m^2] for a mass [kg]: the FE arm's tensor
-(:data:`cosim.lower_arm.MASS_PROPERTIES`) scaled, its product of inertia (I_xy, 6 % of
-I_xx) dropped (the URDF link is axis-aligned)."""
-corner_urdf = _G.urdf
-"""URDF of the built-in corner for the given masses."""
-
-ARM_POINTS = _G.arm_points
-"""The lower arm's load points (corner frame); :func:`to_arm_frame` gives them in the arm frame
-(equal to :data:`cosim.lower_arm.HARDPOINTS`, tested)."""
-
-ARM_ACCEL_POINTS = _G.arm_accel_points
-"""Points of the lower arm whose accelerations ``plant/response`` carries (thesis Table 5.4),
-in the arm frame [m]. The thesis names them only "Loc1" (near the hub), "CG" and "Loc2"
-(near the body pivot) without a drawing, so (ours; another corner: the same rule):
-
-* ``loc1``: (0.025, 0.274, 0), 20 mm inboard of the ball joint, on its boss's edge;
-* ``cg``: the arm's centre of mass, 0.085 m from the pivot axis;
-* ``loc2``: (0, 0.020, 0), 20 mm outboard of the bush midpoint, moving almost with the body.
-
-A point's vertical acceleration is the body's plus the arm's angular acceleration times its
-distance from the pivot axis, so it falls from Loc1 to the CG to Loc2, as in Table 5.4."""
-
-ARM_ROTATION = _G.arm_rotation
-"""The arm frame's axes in the corner frame at static ride height (columns x, y, z)."""
-BUSH_SPACING = _G.bush_spacing
-"""Distance between the two lower bush centres, d [m]."""
+BUILTIN = CornerGeometry(corner_file.builtin())
+"""The built-in corner's geometry (``cosim/corners/mpv_front.toml``; its arm frame is
+:mod:`cosim.lower_arm`'s: origin ``ARM_ORIGIN``, the corner's axes)."""
 
 
 def _fmt(v) -> str:

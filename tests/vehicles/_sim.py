@@ -84,17 +84,17 @@ def arm_balance_residuals(rec, dt, with_bump=True):
     """Newton-Euler residuals of the lower arm in world axes: sum F + m g - m a_com [N] and
     sum (r - r_com) x F + M_x e_x - (I alpha + w x I w) [N m]; loads at the pose of t_k."""
     mass = la.MASS_KG
-    I = np.diag(geo.lower_arm_inertia(mass))
+    I = np.diag(geo.BUILTIN.lower_arm_inertia(mass))
     com0, O0, R0, v0, w0 = rec["before"]
     _, _, _, v1, w1 = rec["after"]
     L = rec["L"]
     F_tot = np.array([0.0, 0.0, -mass * 9.81])
     M_tot = R0 @ np.array([L["torsion_bar_mx"], 0.0, 0.0])
-    for name, corner_pt in geo.ARM_POINTS.items():
+    for name, corner_pt in geo.BUILTIN.arm_points.items():
         if name == "bump_stop" and not with_bump:
             continue
         f = R0 @ np.array([L.get(f"{name}_{a}", 0.0) for a in "xyz"])
-        r = O0 + R0 @ geo.to_arm_frame(corner_pt)
+        r = O0 + R0 @ geo.BUILTIN.to_arm_frame(corner_pt)
         F_tot += f
         M_tot += np.cross(r - com0, f)
     a, alpha = (v1 - v0) / dt, (w1 - w0) / dt

@@ -37,7 +37,7 @@ def _accels(m, F_t, F_d):
 
 
 def test_points_are_where_the_docstring_says():
-    pts = geo.ARM_ACCEL_POINTS
+    pts = geo.BUILTIN.arm_accel_points
     np.testing.assert_allclose(pts["loc1"], dw.la.BALL_JOINT - [0, 0.020, 0])
     np.testing.assert_allclose(pts["loc2"], [0, 0.020, 0])
     np.testing.assert_allclose(pts["cg"], dw.la.MASS_PROPERTIES["centre_of_mass_m"])
@@ -86,7 +86,7 @@ def test_rigid_arm_kinematics_over_a_bump():
     th0, w0, th1, w1 = (np.array([r[i] for r in rows]) for i in range(2, 6))
     scale = np.sqrt(np.mean(z["loc1"] ** 2))
     for n in NAMES:
-        r = geo.ARM_ACCEL_POINTS[n][1]  # distance from the pivot axis (the arm frame's x)
+        r = geo.BUILTIN.arm_accel_points[n][1]  # distance from the pivot axis (the arm frame's x)
         # the point's velocity from the joint: v_z = v_b + omega r cos(theta),
         # v_y = -omega r sin(theta); its difference quotient over the substep (to 1e-4 of
         # Loc1's RMS: PyBullet's link and joint velocities differ by ~2e-5 of it)
@@ -101,7 +101,7 @@ def test_rigid_arm_kinematics_over_a_bump():
     # relative to the pivot, z scales with r: (a_loc1 - a_b) / (a_cg - a_b) = r_loc1 / r_cg
     rel1, relcg = z["loc1"] - a_b, z["cg"] - a_b
     big = np.abs(relcg) > 0.2 * np.max(np.abs(relcg))
-    ratio = geo.ARM_ACCEL_POINTS["loc1"][1] / geo.ARM_ACCEL_POINTS["cg"][1]
+    ratio = geo.BUILTIN.arm_accel_points["loc1"][1] / geo.BUILTIN.arm_accel_points["cg"][1]
     np.testing.assert_allclose(rel1[big] / relcg[big], ratio, rtol=0.02)
 
 

@@ -12,13 +12,14 @@ from nodes.plant import double_wishbone_geometry as geo
 
 @pytest.mark.parametrize("name", sorted(la.HARDPOINTS))
 def test_plant_arm_points_in_the_arm_frame_are_cosim_lower_arm(name):
-    assert np.allclose(geo.to_arm_frame(geo.ARM_POINTS[name]), la.HARDPOINTS[name], atol=1e-12)
+    g = geo.BUILTIN
+    assert np.allclose(g.to_arm_frame(g.arm_points[name]), la.HARDPOINTS[name], atol=1e-12)
 
 
 def test_the_plant_has_every_load_point_of_the_arm():
-    assert set(geo.ARM_POINTS) == set(la.HARDPOINTS)
+    assert set(geo.BUILTIN.arm_points) == set(la.HARDPOINTS)
     # the arm frame of the plant is cosim.lower_arm's: origin ARM_ORIGIN, axes parallel
-    o, R = geo.arm_frame()
+    o, R = (geo.BUILTIN.arm_origin, geo.BUILTIN.arm_rotation)
     assert np.allclose(o, la.ARM_ORIGIN) and np.allclose(R, np.eye(3))
 
 
@@ -36,7 +37,7 @@ def test_pybullet_places_the_arm_where_cosim_lower_arm_says(corner):
     # the body starts at z = 0 of the world = the static corner frame
     assert np.allclose(arm[4], la.ARM_ORIGIN, atol=1e-9)          # pivot-axis midpoint
     assert np.allclose(hub[4], la.to_corner(la.BALL_JOINT), atol=1e-9)  # hub on the ball joint
-    assert np.allclose(hub[0], geo.WHEEL_CENTRE, atol=1e-9)          # hub mass at the wheel
+    assert np.allclose(hub[0], geo.BUILTIN.wheel_centre, atol=1e-9)          # hub mass at the wheel
     info = corner.info()
     for name, pt in la.HARDPOINTS.items():
         assert np.allclose(info["arm_points"][name], pt, atol=1e-12), name

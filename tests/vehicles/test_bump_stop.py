@@ -76,9 +76,10 @@ def four_bar_wheel_rise(theta: float) -> float:
     the front-view (y, z) four-bar: both arms turn about x, so their ball joints move in y-z
     planes and the front-view distance between them is constant. The upright's steer is
     ignored."""
-    A = 0.5 * (geo.LOWER_BUSH_FRONT + geo.LOWER_BUSH_REAR)[1:]
-    C = 0.5 * (geo.UPPER_BUSH_FRONT + geo.UPPER_BUSH_REAR)[1:]
-    B0, D0, W0 = geo.LOWER_BALL_JOINT[1:], geo.UPPER_BALL_JOINT[1:], geo.WHEEL_CENTRE[1:]
+    g = geo.BUILTIN
+    A = 0.5 * (g.lower_bush_front + g.lower_bush_rear)[1:]
+    C = 0.5 * (g.upper_bush_front + g.upper_bush_rear)[1:]
+    B0, D0, W0 = g.lower_ball_joint[1:], g.upper_ball_joint[1:], g.wheel_centre[1:]
     B = A + _rot(theta) @ (B0 - A)
     r1, r2 = np.linalg.norm(D0 - C), np.linalg.norm(D0 - B0)
     d = np.linalg.norm(B - C)

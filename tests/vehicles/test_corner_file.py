@@ -155,12 +155,12 @@ def test_importing_the_plant_prints_no_pybullet_banner():
 
 def test_a_copy_of_the_builtin_file_builds_the_same_corner(tmp_path):
     from nodes.plant.double_wishbone import DoubleWishboneParams
-    from nodes.plant.double_wishbone_geometry import CornerGeometry, corner_urdf
+    from nodes.plant.double_wishbone_geometry import BUILTIN, CornerGeometry
 
     copy_ = tmp_path / "mine.toml"
     copy_.write_text(cf.BUILTIN.read_text())
     g = CornerGeometry(cf.load(copy_))
     # the same lower arm is the FE part wherever the file lives (and mirrored, too)
     assert g.fe_arm and CornerGeometry(cf.builtin().mirrored()).fe_arm
-    assert g.urdf(DoubleWishboneParams()) == corner_urdf(DoubleWishboneParams())
+    assert g.urdf(DoubleWishboneParams()) == BUILTIN.urdf(DoubleWishboneParams())
     assert not CornerGeometry(cf.load(WIDE)).fe_arm

@@ -5,13 +5,7 @@ import numpy as np
 import pytest
 
 from nodes.plant.double_wishbone import DoubleWishboneCorner
-from nodes.plant.double_wishbone_geometry import (
-    ARM_POINTS,
-    LOWER_ARM_COM,
-    LOWER_BUSH_FRONT,
-    arm_frame,
-    to_arm_frame,
-)
+from nodes.plant.double_wishbone_geometry import BUILTIN
 
 from ._sim import arm_balance_residuals
 
@@ -42,7 +36,7 @@ def test_stays_in_static_equilibrium(corner):
 def _point_forces(L: dict[str, float]) -> dict[str, np.ndarray]:
     """The arm's point loads (arm frame) by load point; the bump stop has no x component."""
     out = {}
-    for k in ARM_POINTS:
+    for k in BUILTIN.arm_points:
         out[k] = np.array([L.get(f"{k}_{a}", 0.0) for a in "xyz"])
     assert "bump_stop_x" not in L and {"bump_stop_y", "bump_stop_z"} <= set(L)
     return out
@@ -51,14 +45,14 @@ def _point_forces(L: dict[str, float]) -> dict[str, np.ndarray]:
 def test_static_arm_loads_balance_the_arm_weight(corner):
     corner.substep(1e-3, corner.static_tyre_load(), np.zeros(1))
     L = corner.loads()["arm"]
-    pts = {k: to_arm_frame(v) for k, v in ARM_POINTS.items()}
+    pts = {k: BUILTIN.to_arm_frame(v) for k, v in BUILTIN.arm_points.items()}
     F = _point_forces(L)
-    _, R = arm_frame()
+    R = BUILTIN.arm_rotation
     g_arm = R.T @ np.array([0.0, 0.0, -5.0 * 9.81])  # arm weight in the arm frame
     total = sum(F.values())
     assert np.allclose(total + g_arm, 0.0, atol=0.5)  # |F| ~ 5 kN: 1e-4 relative
     # moments about the arm origin close with the torsion-bar moment about x
-    com = to_arm_frame(LOWER_ARM_COM)
+    com = BUILTIN.to_arm_frame(BUILTIN.lower_arm_com)
     M = sum(np.cross(pts[k], F[k]) for k in pts) + np.cross(com, g_arm)
     M[0] += L["torsion_bar_mx"]
     assert np.allclose(M, 0.0, atol=0.5)
@@ -97,10 +91,10 @@ def test_arm_balance_with_its_inertia_in_bumper_contact(big_bump):
 
 
 def test_arm_frame_definition():
-    o, R = arm_frame()
+    R = BUILTIN.arm_rotation
     assert np.allclose(R.T @ R, np.eye(3))
-    assert np.allclose(to_arm_frame(LOWER_BUSH_FRONT)[1:], 0.0)  # bushes on the x axis
-    bj = to_arm_frame(ARM_POINTS["ball_joint"])
+    assert np.allclose(BUILTIN.to_arm_frame(BUILTIN.lower_bush_front)[1:], 0.0)  # on the x axis
+    bj = BUILTIN.to_arm_frame(BUILTIN.arm_points["ball_joint"])
     assert bj[1] == pytest.approx(0.294) and abs(bj[2]) < 1e-12  # y out to the ball joint
     assert R[2, 2] > 0.99  # left corner: arm z is (nearly) up
 

@@ -73,7 +73,7 @@ def test_to_frame_is_the_numpy_product_within_an_ulp():
 def _arm_loads_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     """arm_loads as it was written with small arrays (before issue #16's floats)."""
     c, b = model.client, model.body
-    R_af = geo.ARM_ROTATION
+    R_af = geo.BUILTIN.arm_rotation
     R_arm, hub_quat, u_list = model._applied_pose
     R_hub = np.array(dw.p.getMatrixFromQuaternion(hub_quat)).reshape(3, 3)
     u = np.array(u_list)
@@ -82,7 +82,7 @@ def _arm_loads_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     F_link = w_pivot[:3]
     M_link = w_pivot[3:] + np.cross(model._arm_r_com, F_link)
     F, M = R_af.T @ F_link, R_af.T @ M_link
-    d = geo.BUSH_SPACING
+    d = geo.BUILTIN.bush_spacing
     front = np.array([F[0] / 2, F[1] / 2 + M[2] / d, F[2] / 2 - M[1] / d])
     rear = np.array([F[0] / 2, F[1] / 2 - M[2] / d, F[2] / 2 + M[1] / d])
     w_bj = np.array(dw.p.getJointStateMultiDof(b, dw.HUB, physicsClientId=c)[2])
@@ -103,9 +103,9 @@ def _rates_numpy(model: dw.DoubleWishboneCorner) -> dict[str, float]:
     """response_velocities as it was written with small arrays."""
     arm = model._arm_state
     pos, R = np.array(arm[4]), model._R_arm
-    o = 0.5 * (geo.LOWER_BUSH_FRONT + geo.LOWER_BUSH_REAR)  # the arm link's origin
+    o = 0.5 * (geo.BUILTIN.lower_bush_front + geo.BUILTIN.lower_bush_rear)  # the arm link's origin
     out = {}
-    for name, pt in geo.ARM_ACCEL_POINTS.items():
+    for name, pt in geo.BUILTIN.arm_accel_points.items():
         r = pos + R @ dw._link_point(o, dw.la.to_corner(pt))
         v = np.array(arm[6]) + np.cross(np.array(arm[7]), r - np.array(arm[0]))
         for axis, val in zip("xyz", v, strict=True):
