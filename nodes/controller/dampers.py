@@ -3,7 +3,7 @@
 Convention (see :mod:`nodes.controller.base`): ``v_rel = v_w - v_b`` (m/s, compression
 positive); ``F_d`` is the force on the body, upward positive (N).
 
-* :func:`passive_linear` — ``F_d = c * v_rel`` (thesis Table 4.3: c = 1500 N·s/m lumped,
+* :func:`passive` — ``F_d = c * v_rel`` (thesis Table 4.3: c = 1500 N·s/m lumped,
   Table 4.2: 3800 N·s/m realistic).
 * :class:`PassiveCurve` — a measured force-velocity curve, piecewise linear, with different
   bump (compression, v_rel > 0) and rebound (v_rel < 0) branches; read from CSV by
@@ -27,15 +27,13 @@ from cosim.safe_open import read_user_text
 from nodes.controller.registry import Param, control_law
 
 
-def passive_linear(v_rel: np.ndarray | float, c: float) -> np.ndarray:
-    """Linear viscous damper: force on the body ``F_d = c * v_rel`` (N), ``c`` >= 0 (N·s/m)."""
-    return c * np.asarray(v_rel, dtype=float)
-
-
 @control_law("passive")
-def passive(v_rel: np.ndarray, *, c: float = Param(1500.0, lo=0.0, unit="N·s/m")):
-    """Linear passive damper F_d = c v_rel (Table 4.3)."""
-    return passive_linear(v_rel, c), c
+def passive(v_rel: np.ndarray | float, *, c: float = Param(1500.0, lo=0.0, unit="N·s/m")
+            ) -> tuple[np.ndarray, float]:
+    """Linear passive damper F_d = c v_rel (Table 4.3).
+
+    Force on the body (N), ``c`` >= 0 (N·s/m); (F_d, c)."""
+    return c * np.asarray(v_rel, dtype=float), c
 
 
 def two_state_force(

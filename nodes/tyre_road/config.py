@@ -13,13 +13,10 @@ Road keys (``[road]``):
   above (the Ch. 4 bump + pothole road)
 * iso8608: ``class`` (A-H), ``seed`` (int), ``correlation`` ("identical" | "independent" |
   number in [0, 1]), ``n_min``, ``n_max`` [cycles/m]
-* power_law (thesis Eq. 4.10, S(n) = G n^-p): ``G`` [m^(3-p)] (> 0; the thesis: 1e-7 smooth
-  motorway ... 5e-6 rough minor road), ``waviness`` p (default 2.5), ``seed``, ``correlation``
-  (as iso8608), ``band`` = [n_min, n_max] [cycles/m] (default [0.011, 2.83])
-* pave (synthetic Belgian block on long waves, :mod:`nodes.tyre_road.cobblestone`; every key
-  optional, defaults the calibrated pavé): ``seed``, ``stone_length``, ``stone_length_std``,
-  ``joint_width``, ``joint_depth``, ``stone_height_std``, ``crown`` [m]; long waves ``G``,
-  ``waviness``, ``band``, ``correlation`` (as power_law)
+* power_law (thesis Eq. 4.10, S(n) = G n^-p, :mod:`.iso8608`): ``G`` [m^(3-p)] (> 0),
+  ``waviness`` p [2.5], ``seed``, ``correlation``, ``band`` [n_min, n_max] cycles/m
+* pave (:mod:`.cobblestone`, every key optional, defaults the calibrated pavé): ``seed``, the
+  stones' :data:`PAVE_KEYS` [m] and the long waves' ``G``, ``waviness``, ``band``, ``correlation``
 * measured (csv, opencrg, mdf4: :mod:`.measured`): ``path``, ``zero_start``
   (default true) and the format's keys (docs/data_formats.md)
 

@@ -9,15 +9,15 @@ from cosim.errors import InputFileError
 from nodes.controller.dampers import (
     PassiveCurve,
     load_curve_csv,
-    passive_linear,
+    passive,
     semi_active_force,
 )
 
 
 def test_passive_linear_sign_convention():
     # compression (wheel up toward body, v_rel > 0) pushes the body up
-    assert passive_linear(0.2, 1500.0) == pytest.approx(300.0)
-    assert passive_linear(-0.1, 1500.0) == pytest.approx(-150.0)
+    assert passive(0.2, c=1500.0)[0] == pytest.approx(300.0)
+    assert passive(-0.1, c=1500.0)[0] == pytest.approx(-150.0)
 
 
 def test_curve_asymmetric_interpolation_and_extrapolation():
