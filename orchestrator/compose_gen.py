@@ -116,28 +116,26 @@ def acl_policies() -> str:
                    for n in nk.names())
 
 
-def client_config(name: str) -> str:
-    """deploy/zenoh/clients/<name>.json5 of a node kind."""
-    return (f"// Zenoh client configuration of the {name} node, for a router\n"
-            "// configured with deploy/zenoh/router.json5. Certificate common name: "
-            f"{name}\n"
-            f"// (may publish on suscosim/<run>/{name}/** only).\n"
-            "// Certificates from deploy/zenoh/make_certs.sh, in /etc/suscosim/certs "
-            "(edit if elsewhere).\n"
-            f"// Generated {NOTE}.\n"
-            "{\n"
-            '  mode: "client",\n'
-            "  transport: {\n"
-            "    link: {\n"
-            "      tls: {\n"
-            '        root_ca_certificate: "/etc/suscosim/certs/ca.pem",\n'
-            f'        connect_certificate: "/etc/suscosim/certs/{name}.pem",\n'
-            f'        connect_private_key: "/etc/suscosim/certs/{name}-key.pem",\n'
-            "        enable_mtls: true,\n"
-            "      },\n"
-            "    },\n"
-            "  },\n"
-            "}\n")
+CLIENT = """// Zenoh client configuration of the {name} node, for a router
+// configured with deploy/zenoh/router.json5. Certificate common name: {name}
+// (may publish on suscosim/<run>/{name}/** only).
+// Certificates from deploy/zenoh/make_certs.sh, in /etc/suscosim/certs (edit if elsewhere).
+// Generated {note}.
+{{
+  mode: "client",
+  transport: {{
+    link: {{
+      tls: {{
+        root_ca_certificate: "/etc/suscosim/certs/ca.pem",
+        connect_certificate: "/etc/suscosim/certs/{name}.pem",
+        connect_private_key: "/etc/suscosim/certs/{name}-key.pem",
+        enable_mtls: true,
+      }},
+    }},
+  }},
+}}
+"""
+"""deploy/zenoh/clients/<name>.json5 of a node kind (``CLIENT.format(name=..., note=NOTE)``)."""
 
 
 def cert_names() -> str:
@@ -183,7 +181,7 @@ def render(root: Path = ROOT) -> dict[Path, str]:
     """Every generated file's text as the registry has it."""
     out = {root / rel: fill((root / rel).read_text(), regs, rel) for rel, regs in regions().items()}
     for name in nk.names():
-        out[root / "deploy/zenoh/clients" / f"{name}.json5"] = client_config(name)
+        out[root / "deploy/zenoh/clients" / f"{name}.json5"] = CLIENT.format(name=name, note=NOTE)
     return out
 
 

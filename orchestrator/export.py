@@ -11,6 +11,7 @@ import argparse
 import json
 import re
 import sys
+from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Any
 
@@ -50,15 +51,6 @@ def selection_stem(patterns: list[str] | None) -> str:
     return f"table.{slug[:120]}"
 
 
-def _names(columns: list[str], patterns: list[str] | None) -> list[str]:
-    from fnmatch import fnmatchcase
-
-    names = [c for c in columns if c not in ("k", "t")]
-    if patterns:
-        names = [c for c in names if any(fnmatchcase(c, p) for p in patterns)]
-    return names
-
-
 def write_format(src: Path, fmt: str, path: Path, patterns: list[str] | None,
                  rpc3_type: str = "int") -> dict[str, Any]:
     """The table ``src`` in ``fmt`` at ``path`` (written aside, renamed); the format's facts."""
@@ -68,7 +60,8 @@ def write_format(src: Path, fmt: str, path: Path, patterns: list[str] | None,
     from cosim.formats.stream import table_columns, write_stream
     from cosim.table import read_table
 
-    names = _names(table_columns(src), patterns)
+    names = [c for c in table_columns(src) if c not in ("k", "t")
+             and (not patterns or any(fnmatchcase(c, p) for p in patterns))]
     if not names:
         raise ValueError(f"no column matches --channels {' '.join(patterns or [])}")
     units = {c: si_unit(c) for c in names}
@@ -94,6 +87,7 @@ def write_format(src: Path, fmt: str, path: Path, patterns: list[str] | None,
 
 def _export_run_dir(run_dir: Path, args: argparse.Namespace) -> int:
     from cosim.formats.channel_set import EXTENSION
+    from cosim.table import table_rows
 
     out = Path(args.out) if args.out else run_dir / "export"
     src = next((run_dir / n for n in ("table.parquet", "table.csv")
@@ -107,7 +101,7 @@ def _export_run_dir(run_dir: Path, args: argparse.Namespace) -> int:
     try:
         out.mkdir(parents=True, exist_ok=True)
         info = write_format(src, args.format, path, args.channels, args.rpc3_type)
-        rows = _rows(src)
+        rows = int(table_rows(src.parent, src.name.rsplit(".", 1)[0]) or 0)
     except (OSError, ValueError) as exc:
         return _err(str(exc))
     if replaced:
@@ -115,12 +109,6 @@ def _export_run_dir(run_dir: Path, args: argparse.Namespace) -> int:
     print(json.dumps({"rows": rows, "source": str(src),
                       "files": {args.format: str(path)}, **info}, indent=2))
     return 0
-
-
-def _rows(src: Path) -> int:
-    from cosim.table import table_rows
-
-    return int(table_rows(src.parent, src.name.rsplit(".", 1)[0]) or 0)
 
 
 def export_journal(journal: Path, out: Path, fmt: str | None = None,

@@ -76,8 +76,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _scope(args: argparse.Namespace, selection: Selection) -> int:
-    from .damage import DamageMap, wants_map
     from .server import ScopeServer
+    from .sources import DamageMap, wants_map
 
     folder = Path(args.run) if Path(args.run).is_dir() else None
     scenario = read_json(folder / "scenario.json") if folder else None
