@@ -17,9 +17,10 @@ if TYPE_CHECKING:
 
 
 def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
-    """Loads ON the lower arm during the latest substep, in the arm frame (it turns with the
-    arm) at the start of that substep, t_k [N, N m]; where each acts: the arm-frame points of
-    :data:`cosim.lower_arm.HARDPOINTS`.
+    """Loads ON the lower arm during the latest substep, in the arm frame at the start of that
+    substep, t_k [N, N m] (:func:`cosim.lower_arm.arm_frame_of`: origin at the bush midpoint, x
+    along the pivot axis forward, y toward the ball joint, z = x cross y; it turns with the
+    arm); where each acts: the arm-frame points of :data:`cosim.lower_arm.HARDPOINTS`.
 
     * ``ball_joint_{x,y,z}``: from the hub: minus the lower ball joint's sensor force
       (parent arm -> child hub), from the hub frame;

@@ -1,23 +1,21 @@
 """Realistic quarter car: a double-wishbone front corner of an MPV in PyBullet (thesis Ch. 4
-Sec. 4.2, Table 4.2), closed kinematic loop and jounce bumper included.
+Sec. 4.2, Table 4.2), closed kinematic loop and jounce bumper included; its hardpoints:
+:mod:`.double_wishbone_geometry` (the thesis gives none; ours and their reasoning there).
 
 Parts (Table 4.2): body M_b 535 kg on a vertical translational joint; lower arm 5 kg and upper
 arm 2 kg on revolute joints (body bushes); hub (upright + wheel) 38.75 kg on a spherical joint
-at the lower ball joint; tie rod 2 kg on a spherical joint at the rack. The loops are closed by
-two PyBullet point-to-point constraints (``JOINT_POINT2POINT``): upper arm <-> hub at the upper
-ball joint, tie rod <-> hub at the steering-arm ball joint. Mobility: body heave, suspension
-travel, and the (inert) spin of the tie rod about its own axis.
+at the lower ball joint; tie rod 2 kg on a spherical joint at the rack. Two PyBullet
+``JOINT_POINT2POINT`` constraints close the loops: upper arm <-> hub at the upper ball joint,
+tie rod <-> hub at the steering-arm ball joint. Mobility: body heave, suspension travel, the
+(inert) spin of the tie rod about its axis.
 
-Forces: the torsion spring K_theta = 46.74 N m/deg acts about the lower-arm pivot axis (a
-torsion bar; applied as the revolute joint's torque, preloaded with the static torque tau_0);
-the damper (c = 3800 N s/m, in the controller node) is a force actuator along the damper axis
-between the body mount and the lower-arm mount; the jounce bumper (:mod:`.bump_stop`) pushes
-the lower arm's pad down and the body up, along the body's vertical, once its clearance has
-closed; the tyre force F_t (tyre node) is applied vertically at the wheel centre of the hub,
-as the thesis applies it.
-
-**Hardpoints**: :mod:`.double_wishbone_geometry` (the thesis gives none; our values and
-reasoning there).
+Forces: the torsion spring K_theta = 46.74 N m/deg about the lower-arm pivot axis (a torsion
+bar: the revolute joint's torque, preloaded with the static torque tau_0); the damper (c =
+3800 N s/m, in the controller node) along its axis between the body mount and the lower-arm
+mount; the jounce bumper (:mod:`.bump_stop`) down on the arm's pad and up on the body, along
+the body's vertical, once its clearance has closed (``F_bs`` [N] >= 0 in ``plant/response``,
+from the state at the step's start); the tyre force F_t (tyre node) vertical at the wheel
+centre, as the thesis applies it.
 
 **Damper force convention**: ``F_d`` is the damper's axial force, compression-positive on the
 body (the arm gets -F_d along the axis; vertical share cos 4.0 deg = 0.998). The damper moves
@@ -26,18 +24,10 @@ at about MR = 0.62 of the wheel centre, so the state also gives ``z_damper`` and
 is the thesis's damper; a law on v_w - v_b needs an equivalent c_s (Table 4.3: 1500 N s/m;
 ``suscosim equivalent-lumped``, docs/vehicles_roads.md).
 
-**Bump-stop force** ``F_bs`` [N] (``plant/response``, :meth:`extra_response`): >= 0, up on the
-body and down on the pad, from the state at the start of the step.
-
-**Arm accelerations** ``a_arm_{loc1,cg,loc2}_{x,y,z}`` [m/s^2] (in ``plant/response``, via
-:meth:`response_velocities`): vehicle axes, of the lower arm's points
-:attr:`.CornerGeometry.arm_accel_points`
-(thesis Table 5.4's Loc1, CG, Loc2), derived by the node as a_b and a_w are.
-
-**Arm loads** (``loads()["arm"]``): the loads ON the lower arm in the arm frame (origin at the
-midpoint of the two body bushes, x along the pivot axis forward, y outward toward the ball
-joint in the arm plane, z = x cross y; the frame turns with the arm), in N; see
-:func:`arm_loads` for where each acts and how it is extracted.
+``plant/response`` also carries ``a_arm_{loc1,cg,loc2}_{x,y,z}`` [m/s^2], vehicle axes, of the
+lower arm's points :attr:`.CornerGeometry.arm_accel_points` (thesis Table 5.4's Loc1, CG,
+Loc2; :meth:`response_velocities`). ``loads()``: the loads ON the lower arm in its arm frame
+(:func:`.arm_loads.arm_loads`) and ON the upper arm (:mod:`.upper_arm_loads`) [N, N m].
 """
 
 from __future__ import annotations

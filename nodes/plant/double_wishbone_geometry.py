@@ -3,57 +3,54 @@ named points, and its URDF (links with masses and inertias, joints). Pure number
 PyBullet; :mod:`.double_wishbone` builds the multi-body model from them.
 
 **Hardpoints** are data: a corner file (:mod:`cosim.corner`, docs/corners.md) read into a
-:class:`CornerGeometry`; the module's constants are the built-in corner's,
-``cosim/corners/mpv_front.toml``. The thesis gives none ("the actual dimensions of the arms
-are not available"); ours, for a small MPV, in metres, corner frame = vehicle axes (x
-forward, y left, z up) at the static wheel centre of this **front-left** corner:
+:class:`CornerGeometry`; :data:`BUILTIN` is ``cosim/corners/mpv_front.toml``'s. The thesis gives
+none ("the actual dimensions of the arms are not available"); ours, for a small MPV, in
+metres, corner frame = vehicle axes (x forward, y left, z up) at the static wheel centre of
+this **front-left** corner:
 
 * *lower arm*: from :mod:`cosim.lower_arm`, the one definition the FE reads too (arm frame:
   bushes (+-0.13, 0, 0), ball joint (0.025, 0.294, 0), damper seat (0.064, 0.185, 0), pad
-  (-0.017, 0.215, 0); origin ``ARM_ORIGIN`` = (0, -0.354, -0.13), axes the corner's: no
-  anti-dive, the arm plane horizontal at ride height).
-  The lever 0.294 m is what makes the torsion bar a 31 kN/m wheel rate (K_theta / L^2);
-  ``tests/vehicles/test_arm_geometry_consistent.py`` checks that the PyBullet corner puts the
-  arm's points where :mod:`cosim.lower_arm` says.
+  (-0.017, 0.215, 0); origin (0, -0.354, -0.13), the corner's axes: no anti-dive, the arm
+  plane horizontal at ride height). The lever 0.294 m makes the torsion bar a 31 kN/m wheel
+  rate (K_theta / L^2); tests/vehicles/test_arm_geometry_consistent.py checks that the
+  PyBullet corner puts the arm's points where :mod:`cosim.lower_arm` says.
 * *upper arm*: bushes (+-0.14, -0.34, 0.18), ball joint (-0.005, -0.10, 0.20); 0.24 m long
   in front view, 0.82 of the lower arm (short-long: camber gain), its inner end 20 mm lower,
-  so the arms meet inboard at the instant centre y = -4.06 m, z = -0.13 m, which gives
-  - camber gain 1 / 4.06 m = 1.4 deg per 100 mm of jounce at ride height (wheel top inward;
-    the PyBullet corner: 0.31 deg at 20 mm, 1.06 deg at 59 mm), in the 1-2.5 deg/100 mm of
-    passenger-car double wishbones;
-  - a roll centre 30 mm above the ground (the line from the contact patch, 0.30 m below the
-    wheel centre for a 15-16 in MPV wheel, to the instant centre, at the centreline);
-  - a wheel centre that rises 1.015 times as fast as the ball joint (it is 4.06 m from the
-    instant centre, the ball joint 4.00 m), so the wheel-centre lever is 0.2984 m (the
-    PyBullet corner: 0.2984 m) and the wheel rate K_theta / 0.2984^2 = 30.1 kN/m (Table 4.3:
-    31 kN/m, -3 %; identified: 30.0 kN/m). Parallel arms would give 0.294 m and 31.0 kN/m,
-    but no camber gain.
-  The bushes are 0.28 m apart (an A-arm whose legs straddle the damper, 50 mm in diameter,
-  which passes between them at y = -0.19 m).
+  so the arms meet inboard at the instant centre y = -4.06 m, z = -0.13 m: a camber gain of
+  1 / 4.06 m = 1.4 deg per 100 mm of jounce at ride height (wheel top inward; the PyBullet
+  corner: 0.31 deg at 20 mm, 1.06 deg at 59 mm), in the 1-2.5 deg/100 mm of passenger-car
+  double wishbones; a roll centre 30 mm above the ground (the line from the contact patch,
+  0.30 m below the wheel centre for a 15-16 in MPV wheel, to the instant centre, at the
+  centreline); a wheel centre rising 1.015 times as fast as the ball joint (4.06 m from the
+  instant centre, the ball joint 4.00 m), so a wheel-centre lever of 0.2984 m (the PyBullet
+  corner: 0.2984 m) and a wheel rate K_theta / 0.2984^2 = 30.1 kN/m (Table 4.3: 31 kN/m,
+  -3 %; identified: 30.0 kN/m). Parallel arms would give 0.294 m and 31.0 kN/m but no camber
+  gain. The bushes are 0.28 m apart (an A-arm whose legs straddle the 50 mm damper, which
+  passes between them at y = -0.19 m).
 * *steering axis*: lower ball joint (0.025, -0.06, -0.13) to upper (-0.005, -0.10, 0.20):
   kingpin inclination atan(0.04 / 0.33) = 6.9 deg, caster atan(0.03 / 0.33) = 5.2 deg, the
   axis meeting the ground 39 mm inboard of the contact patch centre (positive scrub radius).
 * *damper*: lower mount = the arm's seat, (0.064, -0.169, -0.13); top mount (0.064, -0.206,
   0.40), straight above it in side view: 0.53 m between mounts, leaning 4.0 deg inboard at
   the top (as front dampers lean to clear the tyre). Its motion ratio to the ball joint is
-  (0.185 / 0.294) cos(4.0 deg) = 0.628,
-  and the physical 3800 N s/m acts at the wheel centre as 3800 (0.185 cos 4 deg / 0.2984)^2
-  = 1454 N s/m (Table 4.3: 1500 N s/m).
+  (0.185 / 0.294) cos(4.0 deg) = 0.628; the physical 3800 N s/m acts at the wheel centre as
+  3800 (0.185 cos 4 deg / 0.2984)^2 = 1454 N s/m (Table 4.3: 1500 N s/m).
 * *tie rod*: outer ball joint (-0.14, -0.072, -0.03) on the steering axis, 0.14 m behind the
-  axle (rear steer); inner (rack) end (-0.14, -0.350, -0.037), 0.278 m long. The inner end is
-  where the line from the instant centre through the outer end meets the line through the
-  arms' inner pivots: no bump steer to first and second order (the PyBullet corner steers
-  0.002 deg at 20 mm and 0.024 deg at 59 mm of jounce).
+  axle (rear steer); inner (rack) end (-0.14, -0.350, -0.037), 0.278 m long, where the line
+  from the instant centre through the outer end meets the line through the arms' inner
+  pivots: no bump steer to first and second order (the PyBullet corner steers 0.002 deg at
+  20 mm and 0.024 deg at 59 mm of jounce).
 * *bump stop*: the jounce bumper on the body above the arm's pad; clearance, rate and the
   wheel travel to first contact (58.5 mm) in :mod:`.bump_stop`.
 * *half track* 0.7055 m (t = 1.411 m, Ch. 4 extraction); the body's centre of mass is put on
   the vehicle centreline (it only moves vertically, so its position has no effect).
 
 *Mass properties*: the built-in lower arm's are the FE arm's (:data:`cosim.lower_arm.
-MASS_PROPERTIES`, scaled to its mass, product of inertia dropped). Another corner's lower arm
-is three equal point masses at its bushes and ball joint, plus 10 % of the polar inertia on
-each axis for its depth (ours: a forged A-arm's mass sits in its eyes and bosses). The hub
-is a wheel (spin axis y), the tie rod a slender rod, the upper arm a small triangle.
+MASS_PROPERTIES`, scaled to its mass, its product of inertia, I_xy 6 % of I_xx, dropped: the
+URDF link is axis-aligned). Another corner's lower arm is three equal point masses at its
+bushes and ball joint, plus 10 % of the polar inertia on each axis for its depth (ours: a
+forged A-arm's mass sits in its eyes and bosses). The hub is a wheel (spin axis y), the tie
+rod a slender rod, the upper arm a small triangle.
 """
 
 from __future__ import annotations

@@ -23,21 +23,16 @@ roll inertia 465.3 kg m^2. The thesis gives no wheelbase or track; the defaults
 L = 2.774 m, t = 1.411 m are those for which the tabulated inertias follow from the masses
 read per axle (see shared/reference/thesis-ch4.md Sec. 4).
 
-**One mass basis.** Sec. 4.4 says the sprung mass "is represented as lumped
-masses at each corner" (after Hudson [103]). So the body here is point masses m_i at the
-corners (x_i, y_i) and everything follows from them: M = sum m_i, the CG where the static
-corner loads balance (a = L m_rear / (m_front + m_rear) behind the front axle), and, unless a
-scenario gives them, I_pitch = sum m_i x_i^2 and I_roll = sum m_i y_i^2 [kg m^2]; the
-dynamic index k_pitch^2 / (a b) is then exactly 1 (Gillespie's "near unity" of passenger
-cars). ``mass_basis`` reads the sprung masses as per **corner** (default: 2*535 + 2*400 =
-1870 kg, each corner the quarter car's 535 / 400 kg, so a front corner is Table 4.3's QVM and
-Appendix III's 1.14 Hz) or per **axle** (935 kg). With the axle reading the point-mass
-inertias are Table 4.4's printed 1761.3 / 465.3 kg m^2 to 0.1 %; with the corner reading
-they double (3522.5 / 930.8 kg m^2). 935 kg is too light for an unladen MPV (App. I's 7-DOF
-MPV: 1600 kg); 1870 kg sprung + 191 kg unsprung is a mid-size MPV's kerb mass. The radii
-of gyration are k_pitch = 1.372 m (0.49 L) and k_roll = t/2 = 0.706 m; App. I's MPV
-(1600 kg, I = 1580 / 628 kg m^2) has 0.99 / 0.63 m, so ours are upper bounds of a real body
-(mass inboard of the wheels), by 38 % / 13 % in radius; see docs/vehicles_roads.md.
+**One mass basis** (docs/vehicles_roads.md, "7-DOF full vehicle: choices"). Sec. 4.4 says the
+sprung mass "is represented as lumped masses at each corner" (after Hudson [103]): the body is
+point masses m_i at the corners (x_i, y_i), so M = sum m_i, the CG where the static corner
+loads balance (a = L m_rear / (m_front + m_rear) behind the front axle) and, unless a scenario
+gives them, I_pitch = sum m_i x_i^2, I_roll = sum m_i y_i^2 [kg m^2] (dynamic index
+k_pitch^2 / (a b) exactly 1, Gillespie's "near unity"). ``mass_basis`` reads the masses per
+**corner** (default: 1870 kg, a front corner the QVM's 535 kg: Appendix III's 1.14 Hz;
+I = 3522.5 / 930.8 kg m^2, radii of gyration 1.372 m = 0.49 L and t/2 = 0.706 m, upper bounds
+of App. I's 1600 kg MPV's 0.99 / 0.63 m) or per **axle** (935 kg, too light for an unladen
+MPV; I = Table 4.4's printed 1761.3 / 465.3 kg m^2 to 0.1 %).
 """
 
 from __future__ import annotations

@@ -277,13 +277,8 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
     def _corner_body_points(self) -> tuple[np.ndarray, np.ndarray]:
         """World z and vertical velocity of the body points at the static wheel centres."""
         P, R, V, Wb = self._base[:4]
-        z = np.empty(4)
-        vz = np.empty(4)
-        for i, wc in enumerate(self.wheel_centres):
-            pt = P + R @ wc
-            z[i] = pt[2]
-            vz[i] = (V + np.cross(Wb, pt - P))[2]
-        return z, vz
+        pts = P + np.matmul(R, self.wheel_centres[:, :, None])[:, :, 0]  # each R @ wc's bits
+        return pts[:, 2], (V + np.cross(Wb, pts - P))[:, 2]
 
     def _bump_forces(self) -> np.ndarray:
         F = np.zeros(4)

@@ -1,29 +1,20 @@
 """Plant model factory: the ``[vehicle]`` scenario section -> a :class:`PlantModel`.
 
-``model`` selects the model; the other keys are its parameters (SI units):
+``model`` selects the model; the other keys are the fields of its params dataclass (SI
+units; missing ones take its defaults): ``quarter_car_lumped`` (:class:`.quarter_car_lumped.
+LumpedQuarterCarParams`, Ch. 3 Table 3.1), ``quarter_car_double_wishbone``
+(:class:`.double_wishbone.DoubleWishboneParams`, Table 4.2, plus ``corner``: the corner file,
+default the built-in ``cosim/corners/mpv_front.toml``, a relative path relative to the
+scenario file; the params override the file's masses, torsion bar and bumper),
+``full_vehicle_7dof`` (:class:`.full_vehicle_7dof.FullVehicleParams`, Table 4.4,
+``mass_basis`` "corner" | "axle"), ``full_vehicle_double_wishbone``
+(:class:`.full_vehicle_dw.FullVehicleDWParams`, plus ``front``, ``rear``: the left corners'
+files, the rear defaulting to the front, and ``driver``: a table, ``speed`` [[t, v], ...] m/s,
+``steer`` [[t, delta], ...] rad or ``radius`` m, ``brake_balance``, ``driven``,
+:mod:`.driver`; with ``[tyre] model = "magic_formula"`` its tyres act in 3-D).
 
-* ``quarter_car_lumped`` (Ch. 3 Table 3.1 defaults; Ch. 4 Table 4.3 via the scenario):
-  ``sprung_mass``, ``unsprung_mass``, ``spring_stiffness``.
-* ``quarter_car_double_wishbone`` (Table 4.2): ``corner``, the corner file (hardpoints,
-  masses, spring, bumper: :mod:`cosim.corner`, docs/corners.md; default the built-in MPV
-  corner ``cosim/corners/mpv_front.toml``; a relative path is relative to the scenario
-  file); the file's values can be overridden by ``body_mass``, ``hub_mass``,
-  ``lower_arm_mass``, ``upper_arm_mass``, ``tie_rod_mass``, ``torsion_stiffness_nm_per_deg``;
-  its jounce bumper (:mod:`.bump_stop`): ``bump_stop`` (true/false), ``bump_stop_clearance``
-  [m], ``bump_stop_initial_rate`` [N/m], ``bump_stop_stroke`` [m], ``bump_stop_transition``.
-* ``full_vehicle_7dof`` (Table 4.4): ``sprung_mass_front``, ``sprung_mass_rear``,
-  ``unsprung_mass``, ``spring_stiffness``, ``pitch_inertia``, ``roll_inertia``, ``wheelbase``,
-  ``track``, ``mass_basis`` ("corner" | "axle").
-* ``full_vehicle_double_wishbone`` (:mod:`.full_vehicle_dw`; with ``[tyre] model =
-  "magic_formula"`` its tyres act in 3-D): ``front``, ``rear`` (corner files of the left
-  corners, default the built-in; the rear defaults to the front), the body's ``sprung_mass``,
-  ``cg_to_front_axle``, ``wheelbase``, ``pitch_inertia``, ``roll_inertia``, ``yaw_inertia``,
-  ``cg_height``, ``speed_kmh`` (at t = 0), ``driver`` (a table: ``speed`` [[t, v], ...] m/s,
-  ``steer`` [[t, delta], ...] rad or ``radius`` m, ``brake_balance``, ``driven``: :mod:`.driver`).
-
-Missing parameters take the defaults of the model's params dataclass. Numbers must be > 0,
-switches true or false. Bad keys or values raise :class:`cosim.errors.ScenarioError`.
-(Damper and tyre live in the controller and tyre nodes.)
+Numbers must be > 0, switches true or false; bad keys or values raise
+:class:`cosim.errors.ScenarioError`. (Damper and tyre live in the controller and tyre nodes.)
 """
 
 from __future__ import annotations
