@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -57,32 +56,34 @@ def format_of(path: str | Path) -> str:
     return SUFFIXES[suffix]
 
 
-_READERS = {"mdf4": (".mdf4", "read_mdf4"), "rpc3": (".rpc3", "read_rpc3"),
-            "csv": (".tables", "read_csv"), "parquet": (".tables", "read_parquet")}
-_WRITERS = {"mdf4": (".mdf4", "write_mdf4"), "rpc3": (".rpc3", "write_rpc3"),
-            "csv": (".tables", "write_csv"), "parquet": (".tables", "write_parquet")}
-
-
-def _function(table: dict[str, tuple[str, str]], fmt: str) -> Callable[..., Any]:
-    """The reader or writer of ``fmt``, its module imported when first used."""
-    module, name = table[fmt]
-    fn: Callable[..., Any] = getattr(importlib.import_module(module, __package__), name)
-    return fn
-
-
 def read_channels(path: str | Path) -> ChannelSet:
     """Read any supported file (by suffix) into a checked :class:`ChannelSet`."""
     path = Path(path)
     fmt = format_of(path)
     check_user_file(path, "mdf" if fmt == "mdf4" else "loads", "load file")
-    cs: ChannelSet = _function(_READERS, fmt)(path)
-    return cs.check(str(path))
+    if fmt == "mdf4":
+        from .mdf4 import read_mdf4 as reader
+    elif fmt == "rpc3":
+        from .rpc3 import read_rpc3 as reader
+    elif fmt == "csv":
+        from .tables import read_csv as reader
+    else:
+        from .tables import read_parquet as reader
+    return reader(path).check(str(path))
 
 
 def write_channels(cs: ChannelSet, path: str | Path, fmt: str, **options: Any
                    ) -> dict[str, Any]:
     """Write ``cs`` to ``path`` in ``fmt``; what the format reports (RPC III: resolution)."""
-    if fmt not in _WRITERS:
+    writer: Callable[..., dict[str, Any]]
+    if fmt == "mdf4":
+        from .mdf4 import write_mdf4 as writer
+    elif fmt == "rpc3":
+        from .rpc3 import write_rpc3 as writer
+    elif fmt == "csv":
+        from .tables import write_csv as writer
+    elif fmt == "parquet":
+        from .tables import write_parquet as writer
+    else:
         raise ValueError(f"unknown format {fmt!r}: expected one of {', '.join(FORMATS)}")
-    out: dict[str, Any] = _function(_WRITERS, fmt)(cs, path, **options) or {}
-    return out
+    return writer(cs, path, **options) or {}
