@@ -98,8 +98,6 @@ class CornerGeometry:
         self.damper_lower = P["damper_lower"]
         self.damper_upper = P["damper_upper"]
         self.bump_stop_pad = P.get("bump_stop_pad")
-        self.spring_lower = P.get("spring_lower")
-        self.spring_upper = P.get("spring_upper")
         self.upper_bush_front = P["upper_bush_front"]
         self.upper_bush_rear = P["upper_bush_rear"]
         self.upper_ball_joint = P["upper_ball_joint"]
