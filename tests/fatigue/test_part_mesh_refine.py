@@ -114,11 +114,11 @@ def test_convergence_refines_round_the_most_damaged_nodes_too(link):
     def damage(inf):
         return np.exp(-np.sum((inf.node_xyz - x0) ** 2, axis=1) / 0.003 ** 2)
 
-    static_only = convergence(part, [0.02], loads, local_sizes=[0.006], radius=0.02)
+    static_only = convergence(part, [0.02], loads, local_sizes=[0.008], radius=0.02)
     rf0 = static_only["refinement"]
     assert not rf0["capped"]
     assert np.min(np.linalg.norm(np.array(rf0["centres_m"]) - x0, axis=1)) > 0.02
-    cv = convergence(part, [0.02], loads, local_sizes=[0.006, 0.004], radius=0.02,
+    cv = convergence(part, [0.02], loads, local_sizes=[0.008, 0.006], radius=0.02,
                      damage=damage)
     dm = cv["damaged"]
     d = [x["damage"] for x in dm]
