@@ -21,6 +21,7 @@ not journaled: a journal's table gives it again (docs/coupling_residual.md).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
@@ -192,10 +193,8 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     except OSError as exc:  # the journal or the table could not be written (a full disk)
         if rec.table is not None:
             rec.table.abandon()
-        try:
+        with contextlib.suppress(OSError):
             journal.close()
-        except OSError:
-            pass
         raise write_error(exc, folder) from None
     journal.close()
     publish_live()  # the last rows' residual, before done (the orchestrator then closes)

@@ -107,9 +107,7 @@ def build_tyre_3d(cfg: Mapping[str, Any], key_prefix: str = "tyre") -> tuple[Poi
     r.only(MF_KEYS)
     path = r.string("tir", "builtin")
     mf = MagicFormula.from_tir() if path == "builtin" else MagicFormula.from_tir(path)
-    k_default = mf.p.get("VERTICAL_STIFFNESS")
-    if k_default is None or not k_default > 0:
-        k_t = r.number("stiffness", positive=True, unit="N/m")
-    else:
-        k_t = r.number("stiffness", k_default, positive=True, unit="N/m")
+    k_file = mf.p.get("VERTICAL_STIFFNESS")  # the default, when the file has one > 0
+    default = (k_file,) if k_file is not None and k_file > 0 else ()
+    k_t = r.number("stiffness", *default, positive=True, unit="N/m")
     return PointContact(k_t=k_t), Tyre3D(mf, transient=r.boolean("transient", True))
