@@ -37,14 +37,9 @@ GRAVITY = 9.81
 
 
 class PlantModel(ABC):
-    """A vehicle model in PyBullet that the plant node steps.
-
-    The node calls, every communication step k:
-    ``state()`` -> publish; receive ``F_t, F_d``; ``substep(dt, F_t, F_d)`` ``n`` times (the
-    node may change the forces between substeps: extrapolation or Jacobian coupling);
-    ``spring_force()`` and ``extra_response()`` before the first substep and ``loads()`` after
-    it give the spring force, the model's extra response fields and the joint loads at t_k.
-    """
+    """A vehicle model in PyBullet that the plant's stepper (:mod:`.stepper`) steps: each step
+    ``state()``, ``spring_force()``, ``extra_response()``, ``response_velocities()``, then
+    ``substep`` n times with the coupling's forces, ``loads()`` after the first."""
 
     n_corners: int = 1
     name: str = "plant"
