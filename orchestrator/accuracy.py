@@ -19,8 +19,7 @@ TABLE_3_3_SIGNALS = {
 
 def peak_errors(cosim: Table, reference: Table, signals: dict[str, str] | None = None,
                 t_from: float = 0.0) -> dict[str, dict[str, float]]:
-    """Per signal: % error of the maximum and of the minimum (after ``t_from`` s); the
-    minimum is left out where the reference has no valley (its rest value 0)."""
+    """Per signal: % error of the max and of the min (a valley only) after ``t_from`` [s]."""
 
     out: dict[str, dict[str, float]] = {}
     for label, col in (signals or TABLE_3_3_SIGNALS).items():

@@ -42,8 +42,7 @@ def unify_errors(ap: argparse.ArgumentParser) -> None:
 
 
 def parse_args(ap: argparse.ArgumentParser, argv: Sequence[str] | None) -> argparse.Namespace | int:
-    """``ap``'s arguments from ``argv`` (None: ``sys.argv[1:]``), or the exit code where argparse
-    would exit: 0 after ``--help``, 2 after a usage error (printed)."""
+    """``ap``'s arguments from ``argv``, or the exit code (0 after ``--help``, 2 a usage error)."""
     unify_errors(ap)
     try:
         return ap.parse_args(list(sys.argv[1:] if argv is None else argv))

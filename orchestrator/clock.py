@@ -266,8 +266,7 @@ class Clock:
         return text
 
     def _blame_late(self, noticed_by: str, late: list[str], message: str) -> str:
-        """The error when ``noticed_by`` gave up waiting for ``late``: they are blamed (which
-        of node and clock notices first is a race; the answer must not be)."""
+        """The error when ``noticed_by`` gave up waiting for ``late``: they are blamed."""
         stall = self.scenario["run"]["stall_timeout_s"]
         k, node = min((self.status[n].k, n) for n in late)
         return (f"node '{node}' made no progress for {stall:.1f} s (stalled at step {k} of "

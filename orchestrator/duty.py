@@ -210,8 +210,7 @@ def run_duty(duty: dict[str, Any], out: Path, mode: str | None = None,
 
 
 def _compare_laws(done: list, first: dict) -> dict[str, Any]:
-    """duty.json's ``laws``: each law's damage per schedule of every event at the reference
-    law's critical node, its ratio to the reference's, each law's own totals."""
+    """duty.json's ``laws``: each law's damages at the reference's critical node, ratios."""
     from nodes.fatigue.lib.duty_cycle import law_matrix
 
     for name, _, _, fat in done[1:]:

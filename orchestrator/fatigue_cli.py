@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from cosim.errors import SuscosimError
+from cosim.run_folder import read_json
 from nodes.fatigue.config import RESIDUES
 from nodes.fatigue.lib.critical_plane import CRITICAL_PLANES
 from nodes.fatigue.lib.damage import METHODS
@@ -104,7 +105,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"fatigue: {s['n_nodes']} nodes, {r.n_samples} samples, track {r.track_length_m:.1f} m")
     print(f"  method {r.config['method']}, mean stress {r.config['mean_stress_applied']}, "
           f"equivalent {r.config['equivalent']}")
-    summary = _read_summary(out)
+    summary = read_json(Path(out) / "summary.json")
+    summary = summary if isinstance(summary, dict) else {}
     if summary.get("fails_first_cycle"):
         print("  fails on the first cycle: life 0 km (a cycle's mean-stress corrected "
               "stress is at or beyond the strength)")
@@ -153,14 +155,6 @@ def _life_from(config: dict) -> str:
         return ""
     return (f" (S-N {config.get('sn_method')} at P = {comp.get('reliability')!r}, "
             f"mean stress {config.get('mean_stress_applied')})")
-
-
-def _read_summary(out: Path) -> dict:
-    try:
-        d = json.loads((Path(out) / "summary.json").read_text())
-    except (OSError, ValueError):
-        return {}
-    return d if isinstance(d, dict) else {}
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -67,8 +67,7 @@ class LocalMesh:
 
 
 def remove_stale(base: Path | None = None) -> list[Path]:
-    """Remove (and return) this user's mesh folders in ``base`` whose orchestrator is gone; one
-    without a readable owner file may be being made: left alone."""
+    """Remove (and return) this user's mesh folders in ``base`` whose orchestrator is gone."""
     removed = []
     for folder in (base or Path(tempfile.gettempdir())).glob(f"{PREFIX}*"):
         try:

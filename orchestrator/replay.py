@@ -71,8 +71,7 @@ def _records(p: Path, counts: dict[str, Any] | None = None) -> Iterator[Record]:
 
 
 class Recorded:
-    """A journal's records, streamed from the file at each iteration; a first pass counts
-    them: ``count``, ``channels``, ``t_first``/``t_last`` [s], ``skipped``, ``problem``."""
+    """A journal's records, streamed at each iteration; counted once (``count``, ``channels``)."""
 
     def __init__(self, path: str | Path) -> None:
         self.path = _journal_path(path)

@@ -330,8 +330,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
 
 
 def _sink_lags(result: ClockResult) -> dict[str, dict[str, float]]:
-    """Each sink's largest lag behind the coupled chain [steps] and how long it worked on
-    after the chain's last step [s] (docs/cosim.md, "Sinks")."""
+    """Each sink's largest lag [steps] and its work after the chain's last step [s]."""
     ends = [st.done_at for n, st in result.nodes.items()
             if n in ch.COUPLED and st.done_at is not None]
     end = max(ends) if ends else None

@@ -8,8 +8,8 @@ from functools import partial
 from pathlib import Path
 
 from ..cli_util import fail, parse_args
-from .duty_page import is_duty_dir, render_duty
-from .run_data import BadInput, is_run_dir, is_sweep_dir
+from .duty_page import render_duty
+from .run_data import BadInput, is_run_dir
 from .run_page import render_run
 from .sweep_page import render_sweep
 
@@ -34,9 +34,9 @@ def render(d: Path, runs_dir: Path | None = None) -> tuple[str, str]:
     """(kind, HTML) of a run, sweep or duty folder; raises BadInput if it is none."""
     if not d.is_dir():
         raise BadInput(f"{d}: no such folder")
-    if is_sweep_dir(d):
+    if (d / "sweep.json").is_file():
         return "sweep", render_sweep(d, runs_dir)
-    if is_duty_dir(d):
+    if (d / "duty.json").is_file():
         return "duty", render_duty(d)
     if is_run_dir(d):
         return "run", render_run(d)

@@ -19,10 +19,6 @@ from .plots import fig_uri, img, new_figure
 from .run_data import BadInput
 
 
-def is_duty_dir(d: Path) -> bool:
-    return (d / "duty.json").is_file()
-
-
 def _load(d: Path) -> tuple[dict[str, Any], dict[str, np.ndarray] | None, str]:
     try:
         duty = json.loads(read_user_text(d / "duty.json", "report", inside=d))

@@ -63,7 +63,6 @@ def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:
 
 MEAN_STRESS_NAMES = {"fkm": "FKM Haigh diagram", "goodman": "Goodman", "gerber": "Gerber",
                      "morrow": "Morrow", "swt": "SWT", "none": "none"}
-"""How the report names a mean-stress rule (``mean_stress`` values, docs/fatigue.md)."""
 
 
 def life_from(cfg: dict) -> str | None:

@@ -77,8 +77,7 @@ def decimate(t: np.ndarray, x: np.ndarray, n_max: int = MAX_PLOT_POINTS,
 
 
 def plot_panels(t: np.ndarray | None, panels: list[tuple], width: float = 11.0) -> str:
-    """Stacked panels ``[(title, unit, [(label, y)])]``: ``y`` a signal on ``t`` (decimated
-    here) or an already decimated ``(t, y)`` pair (:class:`.stream.StreamDecimator`)."""
+    """Stacked panels ``[(title, unit, [(label, y or (t, y))])]`` (``y`` decimated here)."""
     fig, axes = new_figure(len(panels), width=width, sharex=True)
     styles = ("-", "--", ":", "-.")
     for ax, (title, unit, lines) in zip(axes, panels, strict=True):

@@ -77,10 +77,6 @@ def is_run_dir(d: Path) -> bool:
                                           "table.parquet", "table.csv"))
 
 
-def is_sweep_dir(d: Path) -> bool:
-    return (d / "sweep.json").is_file()
-
-
 def load_run(d: Path) -> RunData:
     """Read every piece of a run folder that exists; never raises for a bad piece."""
     r = RunData(path=d)

@@ -87,8 +87,7 @@ class TableSource:
 
 
 class StreamDecimator:
-    """:func:`.plots.decimate` of ``n`` samples fed in batches: buckets of ``b`` reduced as they
-    complete, the last at :meth:`result`: the same points as on the whole signal."""
+    """:func:`.plots.decimate` of ``n`` samples fed in batches (the same points)."""
 
     def __init__(self, n: int, n_max: int) -> None:
         self.n, self.n_max = n, n_max

@@ -26,7 +26,6 @@ PASSIVE = "passive"
 
 @dataclass
 class Point:
-
     id: str
     params: dict[str, Any]
     run_dir: Path

@@ -7,6 +7,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -107,15 +108,11 @@ def sweep_results_section(spec: dict, points: list[Point], keys: list[str], d: P
                           *[p.params.get(k) for k in keys], badge(p.status),
                           s.get("wall_s"), s.get("steps_per_s"), rms_of(p, BODY_ACC),
                           rms_of(p, TYRE_FORCE), p.life_km]
-        if life_change:
-            row.append(life_change.get(p.id))
-        if acc_change:
-            row.append(acc_change.get(p.id))
+        row += [change.get(p.id) for change in (life_change, acc_change) if change]
         err = s.get("error") or ("" if p.run else f"no run folder {p.run_dir}")
         row.append(err[:160] + ("…" if len(err) > 160 else ""))
         rows.append(row)
-    status_col = 1 + len(keys)
-    body = table_html(header, rows, raw_cols=(0, status_col))
+    body = table_html(header, rows, raw_cols=(0, 1 + len(keys)))  # the link, the status
     results, src = read_results(d)
     if results:
         cols: list[str] = []
@@ -175,9 +172,7 @@ def render_sweep(d: Path, runs_dir: Path | None = None) -> str:
     spec, points = load_sweep(d, runs_dir)
     keys = grid_keys(spec, points)
     name = str(spec.get("name") or d.name)
-    counts: dict[str, int] = {}
-    for p in points:
-        counts[p.status] = counts.get(p.status, 0) + 1
+    counts = Counter(p.status for p in points)
     head = [f"<h1>Sweep {esc(name)}</h1>",
             f'<p class="meta">folder {cmd(str(d.resolve()))} · report written '
             f"{esc(_dt.datetime.now().strftime('%Y-%m-%d %H:%M:%S'))}</p>"]
@@ -198,10 +193,8 @@ def render_sweep(d: Path, runs_dir: Path | None = None) -> str:
     navs = [("results", "Results"), *([("sensitivity", "Sensitivity")] if sens else []),
             ("compare", "Comparison"), ("overlay", "PSDs / histories"),
             ("maps", "Damage maps"), ("points", "Points")]
-    body = "".join(head) + nav(navs)
-    body += sweep_results_section(spec, points, keys, d) + sens
-    body += sweep_compare_section(points, keys)
-    body += sweep_overlay_section(points, keys)
-    body += sweep_maps_section(points)
-    body += section("points", "Points", "".join(point_section(p, d) for p in points))
+    body = "".join(head) + nav(navs) + sweep_results_section(spec, points, keys, d) + sens + \
+        sweep_compare_section(points, keys) + sweep_overlay_section(points, keys) + \
+        sweep_maps_section(points) + \
+        section("points", "Points", "".join(point_section(p, d) for p in points))
     return page(f"suscosim sweep {name}", body)

@@ -69,8 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.buffer < 100:
         return _fail(f"--buffer {args.buffer}: expected at least 100 samples")
     try:
-        selection = Selection(args.channels)
-        return _scope(args, selection)
+        return _scope(args, Selection(args.channels))
     except ScopeInputError as exc:
         return _fail(str(exc))
 

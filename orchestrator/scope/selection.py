@@ -29,7 +29,6 @@ class ScopeInputError(SuscosimError):
 
 @dataclass(frozen=True)
 class Pattern:
-
     node: str
     channel: str
     field: str | None
@@ -74,7 +73,6 @@ class Line:
 
 
 class Selection:
-
     def __init__(self, patterns: list[str] | None = None) -> None:
         self.patterns = [parse_pattern(p) for p in (patterns or DEFAULT_CHANNELS)]
         self._lines: dict[tuple[str, str, str, int], list[Line]] = {}

@@ -43,8 +43,7 @@ def _is_wildcard(host: str) -> bool:
 
 
 def allowed_hosts(host: str) -> tuple[set[str], bool]:
-    """The names (lower case, no port) a scope on ``host`` answers to in a ``Host`` header,
-    and whether any IP literal is accepted too (``host`` a wildcard)."""
+    """The ``Host`` names a scope on ``host`` answers to; whether any IP literal is too."""
     names = set(LOOPBACK_NAMES)
     if _is_loopback(host):
         return names, False
@@ -58,8 +57,7 @@ def allowed_hosts(host: str) -> tuple[set[str], bool]:
 
 
 def host_header_ok(value: str | None, names: set[str], any_ip: bool, port: int) -> bool:
-    """Whether a ``Host`` header names this server: one of ``names`` (or an IP literal when
-    ``any_ip``) with ``port`` (or none when it is 80)."""
+    """Whether a ``Host`` header names this server (with ``port``, or none for port 80)."""
     if not value:
         return False
     value = value.strip().lower()
@@ -147,7 +145,6 @@ def _handler(state: ScopeState, names: set[str] | None = None,
 
 
 class ScopeServer:
-
     def __init__(self, state: ScopeState, host: str = "127.0.0.1", port: int = 0) -> None:
         self.allowed_names, any_ip = allowed_hosts(host)
         self.httpd = ThreadingHTTPServer((host, port), _handler(state, self.allowed_names, any_ip))

@@ -164,7 +164,6 @@ _CTL_STATES = {"ready": "ready", "waiting": "up", "progress": "stepping", "done"
 
 
 class _Router:
-
     def __init__(self, state: ScopeState, damage: DamageMap | None) -> None:
         self.state, self.damage = state, damage
 

@@ -212,8 +212,7 @@ class ScopeState:
 
 
 class _Coupling:
-    """``recorder/coupling`` per message: step ``k``, ``t`` [s], running relative residual of
-    each bond and total [-] (last ``max_samples``), the last message's totals [J]."""
+    """``recorder/coupling`` per message: ``k``, ``t`` [s], relative residuals [-], totals [J]."""
 
     def __init__(self, max_samples: int) -> None:
         self.max = max_samples

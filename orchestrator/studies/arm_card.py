@@ -41,8 +41,7 @@ def static_arm_loads() -> dict[str, float]:
 
 
 def stress_floor(moment: float, mass: float, mat) -> dict[str, float]:
-    """Least nominal bending stress [MPa] carrying the static torsion-bar moment with M1 at
-    Table 6.1's 362 Hz and +15 % (arm_bounds.py, ideal section κ = 1)."""
+    """Least nominal bending stress [MPa] for M1 at Table 6.1's 362 Hz and +15 % (κ = 1)."""
     from nodes.fatigue.lib.arm_bounds import nominal_bending_stress as sigma
 
     return {f"at_{f:.0f}_hz": sigma(moment, mass, LEG_LENGTH, f, mat.E, mat.rho) / 1e6

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from typing import Any
 
 import numpy as np
 
@@ -38,7 +39,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def check(corner: corner_file.Corner, travel: tuple[float, float], n: int, k_t: float,
-          identify: bool = False) -> dict[str, object]:
+          identify: bool = False) -> dict[str, Any]:
     """Everything ``corner check`` prints, SI (unreachable travels listed)."""
     from nodes.plant import corner_kinematics as ck
 
@@ -57,7 +58,7 @@ def check(corner: corner_file.Corner, travel: tuple[float, float], n: int, k_t: 
     eq = ck.equivalent_quarter_car(corner)
     m_s, m_u, k_s = eq["m_s"], eq["m_u"], eq["k_s"]
     ride = k_s * k_t / (k_s + k_t)
-    out: dict[str, object] = {
+    out: dict[str, Any] = {
         "corner": corner.name, "source": corner.source, "half_track_m": corner.half_track,
         "curves": rows, "unreachable_travel_m": unreachable, "ride_height": {
             "camber_gain_rad_per_m": float((g["camber"][2] - g["camber"][0]) / (2 * h)),
@@ -80,9 +81,8 @@ def check(corner: corner_file.Corner, travel: tuple[float, float], n: int, k_t: 
     return out
 
 
-def _print(r: dict[str, object]) -> None:
+def _print(r: dict[str, Any]) -> None:
     cv = r["curves"]
-    assert isinstance(cv, dict)
     print(f"corner {r['corner']} ({r['source']}), half track {r['half_track_m']:.4f} m")
     print("kinematics and compliance against wheel travel (body held; jounce +):")
     print(f"{'z_w mm':>8}{'arm deg':>9}{'camber deg':>11}{'toe deg':>9}{'MR_d':>8}"
@@ -94,16 +94,14 @@ def _print(r: dict[str, object]) -> None:
               f"{cv['wheel_load'][i]:9.0f}{cv['bump_stop_force'][i]:9.0f}")
     if r["unreachable_travel_m"]:
         print("  the linkage does not reach z_w = "
-              + ", ".join(f"{z * 1e3:.0f}" for z in r["unreachable_travel_m"]) + " mm")  # type: ignore[attr-defined]
+              + ", ".join(f"{z * 1e3:.0f}" for z in r["unreachable_travel_m"]) + " mm")
     rh = r["ride_height"]
-    assert isinstance(rh, dict)
     print(f"at ride height: camber gain {rh['camber_gain_rad_per_m'] * DEG / 10:.3f} deg/100 mm"
           f", bump steer {rh['bump_steer_rad_per_m'] * DEG / 10:.4f} deg/100 mm (toe-in +), "
           f"MR_d {rh['mr_damper']:.4f}, wheel rate {rh['wheel_rate_n_per_m'] / 1e3:.2f} N/mm "
           f"(elastic {rh['wheel_rate_elastic_n_per_m'] / 1e3:.2f}: K_theta / z'^2 + k_c MR_s^2; "
           f"the rest is the preload through the lever's change)")
     eq = r["equivalent_quarter_car"]
-    assert isinstance(eq, dict)
     print(f"equivalent quarter car: m_s {eq['m_s']:.2f} kg, m_u {eq['m_u']:.2f} kg, "
           f"k_s {eq['k_s']:.0f} N/m, c_s {eq['c_s']:.0f} N s/m; with k_t {eq['k_t']:.0f} N/m: "
           f"ride rate {eq['ride_rate']:.0f} N/m, body {eq['f_body_hz']:.3f} Hz "

@@ -131,8 +131,7 @@ def _simulated_fork(parent: dict[str, Any], sets: list[str], out: Path) -> dict[
 
 
 def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> ForkPlan:
-    """Group the points, preflight each group's parent, check that ``fork_at`` is a step
-    boundary and every fork resolves to its point's scenario; SweepError (exit 2) else."""
+    """Group the points under parents and check every fork; SweepError (exit 2) else."""
     from ..runner import resolve
 
     at = sweep.fork_at

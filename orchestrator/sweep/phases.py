@@ -92,8 +92,7 @@ def write_point_json(run_dir: Path, doc: dict[str, Any]) -> None:
 
 def run_command(source: list[str], run_dir: Path, set_args: list[str], pin_off: bool,
                 connect: list[str] = (), external: list[str] = ()) -> list[str]:  # type: ignore[assignment]
-    """``suscosim run SOURCE --out RUN_DIR --quiet --set ...``: ``source`` is ``[BASE]`` or
-    ``["--fork", "PARENT_DIR@T"]``; unpinned when runs share the machine's cores."""
+    """``suscosim run SOURCE --out RUN_DIR --quiet --set ...`` (``[BASE]`` or a ``--fork``)."""
     cmd = [sys.executable, "-m", "orchestrator", "run", *source, "--out", str(run_dir),
            "--quiet"]
     if pin_off:  # runs side by side: pinning each to the same cores hurts
@@ -131,8 +130,7 @@ def point_state(p: Point, run_dir: Path, fatigue: bool) -> str:
 
 
 def run_outcome(code: int, run_dir: Path, log: Path, fatigue: bool) -> tuple[str, str]:
-    """The run phase ended with exit ``code``: ``("ok", "")``, ``("fatigue", "")`` (ok, the
-    fatigue phase still to do) or ``("failed", why)``."""
+    """``("ok", "")``, ``("fatigue", "")`` (fatigue still to do) or ``("failed", why)``."""
     summary = read_json(run_dir / "summary.json")
     if code == 0 and isinstance(summary, dict) and summary.get("status") == "ok":
         return ("fatigue", "") if fatigue and not _fatigue_done(run_dir) else ("ok", "")

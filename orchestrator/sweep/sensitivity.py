@@ -14,8 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .design import AXIS
-from .spec import Sweep
+from .spec import AXIS, Sweep
 
 COLUMNS = ("output", "parameter", "n", "spearman", "spearman_p", "prcc", "S1", "S1_conf",
            "ST", "ST_conf")

@@ -143,10 +143,6 @@ class KeyStats:
     msg: Message | None = None
     problem: str = ""
 
-    @classmethod
-    def starting(cls, now: float) -> KeyStats:
-        return cls(first=now, window=RateWindow(start=now))
-
     def seen(self, now: float, msg: Message) -> None:
         self.count += 1
         self.window.count += 1
@@ -211,7 +207,7 @@ class Tap:
     def _stats(self, key: str, now: float) -> KeyStats:
         st = self.stats.get(key)
         if st is None:
-            st = self.stats[key] = KeyStats.starting(now)
+            st = self.stats[key] = KeyStats(first=now, window=RateWindow(start=now))
         return st
 
     def _seen(self, key: str, msg: Message, now: float) -> Message:

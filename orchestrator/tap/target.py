@@ -50,7 +50,6 @@ def tap_keyexpr(run: str | None, pattern: str | None) -> str:
 
 @dataclass
 class Target:
-
     keyexpr: str
     endpoints: list[str]
     lowlatency: bool = False

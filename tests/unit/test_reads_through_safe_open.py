@@ -40,7 +40,6 @@ ALLOWED: dict[str, dict[str, str]] = {
     "orchestrator/fmu_slave.py": {"read_text()": "the exported FMU's own resources"},
     "orchestrator/compose_gen.py": {"read_text()": "the repository's compose templates"},
     "orchestrator/sweep/phases.py": {"log.read_text(": "a sweep point's log it wrote"},
-    "orchestrator/fatigue_cli.py": {"read_text()": "the summary.json it just wrote"},
     "orchestrator/scope/server.py": {"(STATIC / name).read_bytes()": "shipped static files"},
     "orchestrator/export_fmu.py": {"SLAVE_TEMPLATE.read_text()": "a shipped template"},
     "orchestrator/placement.py": {"/proc/{pid}/task": "/proc"},
