@@ -31,8 +31,7 @@ __all__ = ["MAILBOX_MAX", "MAILBOX_WINDOW", "Channel", "Participant"]
 
 log = logging.getLogger("suscosim.node")
 
-Channel = tuple[str, str]
-"""(node, channel) of an input."""
+Channel = tuple[str, str]  # (node, channel) of an input
 
 _CLOCK_TAG: Channel = (keys.ORCHESTRATOR, keys.CLOCK)
 HELLO_PERIOD_S = 0.05

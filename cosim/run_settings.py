@@ -25,17 +25,14 @@ EXCHANGES = ("sequential", "parallel")
 class RunSettings:
     """The settings of one run every node shell needs (``[run]`` of the resolved scenario)."""
 
-    h: float
-    """Communication step [s]."""
-    n_steps: int | None
-    """N: steps k = 0..N (None before the scenario is resolved)."""
+    h: float  # communication step [s]
+    n_steps: int | None  # N: steps k = 0..N (None before the scenario is resolved)
     exchange: str
     coupling: str
     substeps: int
     stall_timeout_s: float
     start_timeout_s: float
-    t_end: float = 0.0
-    """Simulated time [s] (t_N)."""
+    t_end: float = 0.0  # simulated time [s] (t_N)
     adaptive: AdaptiveStep | None = None
     """``run.h = "auto"``: the step is chosen as the run goes (:mod:`cosim.step_size`); then
     :attr:`h` is h_min and :attr:`n_steps` an upper bound, and a node knows the last step by

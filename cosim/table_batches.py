@@ -11,8 +11,7 @@ import numpy as np
 
 from .errors import InputFileError
 
-BATCH_ROWS = 65_536
-"""Rows yielded at a time at most (~0.5 MB a column)."""
+BATCH_ROWS = 65_536  # rows yielded at a time at most (~0.5 MB a column)
 
 
 @contextmanager

@@ -12,8 +12,7 @@ import numpy as np
 from cosim.errors import InputFileError
 from cosim.safe_open import check_user_file
 
-FORMATS = ("mdf4", "rpc3", "csv", "parquet")
-"""Formats ``suscosim export --format`` writes."""
+FORMATS = ("mdf4", "rpc3", "csv", "parquet")  # formats ``suscosim export --format`` writes
 SUFFIXES = {".mf4": "mdf4", ".mdf": "mdf4", ".rsp": "rpc3", ".tim": "rpc3", ".rpc": "rpc3",
             ".drv": "rpc3", ".csv": "csv", ".parquet": "parquet"}
 """File suffix -> format, for reading."""
