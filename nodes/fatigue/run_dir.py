@@ -255,6 +255,14 @@ def settings_source(source: Path | None) -> tuple[dict, Path]:
     return sc.load(source), source.parent
 
 
+def _config(scenario: dict, overrides: dict | None, base: Path) -> FatigueConfig:
+    """The scenario's ``[fatigue]`` with ``overrides`` (dotted keys relative to it) merged in."""
+    section = scenario.get("fatigue", {}) or {}
+    if not isinstance(section, dict):
+        raise ScenarioError("fatigue", section, "a table")
+    return FatigueConfig.from_dict(_merge(section, overrides or {}), "fatigue", base_dir=base)
+
+
 def _extra(peaks: dict[str, float], cfg: FatigueConfig, what_if: dict | None) -> dict:
     """The summary keys of a batch analysis: ``unmapped_channels``, the load channels no
     influence case answers to (their load is not in the stresses) with their peak |load| (N
@@ -303,10 +311,7 @@ def fatigue_load_file(path: Path, overrides: dict | None = None,
 
     path = Path(path)
     scenario, base = settings_source(settings)
-    section = scenario.get("fatigue", {}) or {}
-    if not isinstance(section, dict):
-        raise ScenarioError("fatigue", section, "a table")
-    cfg = FatigueConfig.from_dict(_merge(section, overrides or {}), "fatigue", base_dir=base)
+    cfg = _config(scenario, overrides, base)
     cs = read_channels(path)
     loads = arm_loads(cs, str(path), load_influence(cfg).case_names, mapping)
     if cfg.track_length_m is not None:
@@ -407,16 +412,9 @@ def fatigue_run_dir(run_dir: Path, overrides: dict | None = None, out: Path | No
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise InputFileError(str(run_dir), "run folder not found")
-    sc_path = run_dir / "scenario.json"
-    if not sc_path.is_file():
-        raise InputFileError(str(sc_path), "resolved scenario not found")
-    scenario = _scenario_json(sc_path)
-    section = scenario.get("fatigue", {}) or {}
-    if not isinstance(section, dict):
-        raise ScenarioError("fatigue", section, "a table")
-    cfg = FatigueConfig.from_dict(_merge(section, overrides or {}), "fatigue",
-                                  base_dir=run_dir)
-    if overrides and cfg == FatigueConfig.from_dict(section, "fatigue", base_dir=run_dir):
+    scenario, _ = settings_source(run_dir)
+    cfg = _config(scenario, overrides, run_dir)
+    if overrides and cfg == _config(scenario, None, run_dir):
         overrides = {}  # settings that only repeat the run's own: not a what-if
     folder = results_folder(run_dir, overrides, out)
     if cfg.method in SPECTRAL_METHODS:  # the whole table at once: its PSD needs it
