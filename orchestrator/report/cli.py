@@ -9,8 +9,8 @@ from pathlib import Path
 
 from ..cli_util import fail, parse_args
 from .duty_page import render_duty
-from .run_data import BadInput, is_run_dir
 from .run_page import render_run
+from .stream import BadInput, is_run_dir
 from .sweep_page import render_sweep
 
 _fail = partial(fail, "suscosim report")

@@ -16,7 +16,7 @@ from cosim.safe_open import open_user_text, read_user_text
 
 from .markup import cmd, esc, kv_table, nav, note, page, section, table_html
 from .plots import fig_uri, img, new_figure
-from .run_data import BadInput
+from .stream import BadInput
 
 
 def _load(d: Path) -> tuple[dict[str, Any], dict[str, np.ndarray] | None, str]:

@@ -10,7 +10,7 @@ from typing import Any
 
 from .markup import cmd, esc, flatten, fmt, is_num, kv_table, note, row, section, table_html
 from .plots import file_uri, img
-from .run_data import RunData
+from .stream import RunData
 
 
 def fatigue_numbers(fs: dict) -> list[tuple[str, Any]]:

@@ -17,7 +17,7 @@ from . import markup as mk
 from . import signals, stream
 from .fatigue_section import fatigue_section
 from .plots import MAX_PLOT_POINTS, fig_uri, img, new_figure, plot_panels
-from .run_data import RunData, load_run
+from .stream import RunData, load_run
 
 RUN_KEYS = ("name", "id", "mode", "exchange", "coupling", "h", "substeps", "t_end",
             "t_end_source", "n_steps", "nodes")

@@ -1,6 +1,6 @@
 """The sweep page: its header, results table, the sensitivity of a sampled design
 (``[sweep.design]``: sensitivity.json's rank correlations and Sobol' indices, each output
-against each parameter), one section per point; the charts are :mod:`.sweep_charts`'."""
+against each parameter), one section per point; the charts are :mod:`.sweep_data`'s."""
 
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ from typing import Any
 
 from cosim.safe_open import read_user_text
 
+from . import sweep_data as sd
 from .fatigue_section import fatigue_numbers
 from .markup import anchor_id, badge, cmd, esc, kv_table, nav, note, page, section, table_html
 from .plots import fig_uri, img, new_figure
 from .signals import BODY_ACC, TYRE_FORCE
-from .sweep_charts import sweep_compare_section, sweep_maps_section, sweep_overlay_section
 from .sweep_data import Point, grid_keys, load_sweep, read_results, rms_of, vs_passive
 
 MAX_SCATTER_OUTPUTS = 4
@@ -194,7 +194,7 @@ def render_sweep(d: Path, runs_dir: Path | None = None) -> str:
             ("compare", "Comparison"), ("overlay", "PSDs / histories"),
             ("maps", "Damage maps"), ("points", "Points")]
     body = "".join(head) + nav(navs) + sweep_results_section(spec, points, keys, d) + sens + \
-        sweep_compare_section(points, keys) + sweep_overlay_section(points, keys) + \
-        sweep_maps_section(points) + \
+        sd.sweep_compare_section(points, keys) + sd.sweep_overlay_section(points, keys) + \
+        sd.sweep_maps_section(points) + \
         section("points", "Points", "".join(point_section(p, d) for p in points))
     return page(f"suscosim sweep {name}", body)

@@ -62,7 +62,6 @@ class ScopeState:
         self.messages = 0
         self.undecodable = 0
         self._rate: deque[tuple[float, int]] = deque()
-        self.steps_per_s = 0.0
         self.fatigue: dict[str, Any] | None = None  # from the fatigue node's fatigue/damage
         self.damage_map: dict[str, Any] | None = None  # per-node damage (orchestrator.scope.damage)
         self.map_geometry: dict[str, Any] | None = None
@@ -147,9 +146,7 @@ class ScopeState:
             return  # a late message of a node that has ended
         if state == "up" and old not in ("waiting", "gone"):
             return
-        n["state"] = state
-        if k > n["k"]:
-            n["k"] = k
+        n["state"], n["k"] = state, max(n["k"], k)
         if info:
             n["info"] = info
 
