@@ -1,36 +1,26 @@
-"""Batch fatigue of a run folder read in row batches: memory that does not grow with the run.
+"""Batch fatigue of a load history in row batches: memory that does not grow with the run.
 
 ``suscosim fatigue RUN_DIR`` reads ``table.parquet`` (or ``table.csv``) in batches of
-:data:`BATCH_ROWS` rows, never whole, and feeds the same block engine the live fatigue node
-uses (:class:`.worker.LiveFatigue`, blocks of ``fatigue.block_samples`` cut from the first
-sample, so the damage is :func:`.worker.analyse`'s bit for bit). Three passes over the file:
+:data:`BATCH_ROWS` rows (a load file is one batch) and feeds the live node's block engine
+(:class:`.worker.LiveFatigue`, blocks of ``fatigue.block_samples`` from the first sample:
+:func:`.worker.analyse`'s damage bit for bit). Four passes:
 
-1. **check** (:func:`scan`): times finite and strictly increasing, every load sample finite
-   and plausible (:func:`.load_file.check_loads`'s rule and message, the sample index counted
-   from the table's first row), the peak of every load channel, and each load channel's
-   rainflow cycles counted streamed (their count, largest range and mean extremes: the
-   rainflow matrix's axes) and their pseudo-damage terms summed;
+1. **check** (:func:`scan`): times finite and strictly increasing, every load sample
+   plausible (:func:`.load_file.bad_sample`, the index counted from the table's first row),
+   each channel's peak, and its rainflow cycles streamed (count, largest range, mean
+   extremes: its matrix's axes; the pseudo-damage terms summed);
 2. **damage**: the primary analysis and every S-N method of :func:`.outputs.method_table`
-   (each its own engine, all fed the same batches), and each load channel's range-mean
-   matrix accumulated batch by batch on the axes of pass 1;
+   (an engine each, fed the same batches); each channel's range-mean matrix on pass 1's axes;
 3. **critical node**: its six stress components and equivalent stress by superposition,
-   written to ``critical_stress.csv`` row by row; its equivalent stress's cycles counted
-   streamed, into the S-N plot's spectrum by level (:class:`.outputs.SnSpectrum`) and the
-   axes of its rainflow matrix (count, largest range, mean extremes);
-4. **critical node's matrix**: its equivalent stress computed again (one node: cheap) and
-   its cycles binned on those axes (as pass 2 bins the load channels').
+   written to ``critical_stress.csv`` row by row, its cycles into the S-N plot's spectrum
+   (:class:`.outputs.SnSpectrum`) and its matrix's axes;
+4. **critical node's matrix**: its equivalent stress again (one node: cheap), binned.
 
-Memory: a batch of the arm's columns (~16 columns x 65 536 rows x 8 B = 8 MB), the engines'
-per-node state, the rainflow residues and the fixed-size spectrum and matrices: nothing
-grows with the run.
-
-Bit-identity with the whole history at once (``analyse``; the outputs' oracle is
-tests/fatigue/whole_outputs.py): the damage, lives, extremes, cycles, S-N method lives, the
-critical-node files and the rainflow matrices' counts (sums of 0.5 and 1) are identical; a
-load file is one batch. A channel's pseudo-damage is the sum of
-its cycles' terms accumulated batch by batch instead of one ``np.sum`` (pairwise) over all
-of them, so it can differ in the last digit (a few 1e-16 relative): unavoidable without
-holding every cycle of every channel, which grows with the run.
+Memory: a batch of the arm's columns (~16 x 65 536 rows x 8 B = 8 MB), the engines' per-node
+state, the residues and the fixed-size spectrum and matrices. The whole-history outputs are the
+test oracle (tests/fatigue/whole_outputs.py): the same bits, except a channel's pseudo-damage,
+summed batch by batch instead of one pairwise ``np.sum`` over all cycles (a few 1e-16
+relative: unavoidable without holding every cycle, which grows with the run).
 """
 
 from __future__ import annotations
