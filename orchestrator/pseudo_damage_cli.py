@@ -49,25 +49,17 @@ def compare(sources: Sequence[Path], k: float = 5.0, n_ref: float = 1e6) -> dict
     """{"k", "n_ref", "sources": [...], "channels": {name: [{d, eq_range, ratio}, ...]}}."""
     from nodes.fatigue.lib.pseudo_damage import channel_pseudo_damage
 
-    per = []
-    for s in sources:
-        per.append({p.channel: p for p in channel_pseudo_damage(source_loads(s), k,
-                                                                 "half_cycles", n_ref)})
-    names = list(dict.fromkeys(n for d in per for n in d))
+    per = [{p.channel: p for p in channel_pseudo_damage(source_loads(s), k, "half_cycles",
+                                                         n_ref)} for s in sources]
     table: dict[str, list] = {}
-    for n in names:
+    for n in dict.fromkeys(n for d in per for n in d):
         first = per[0].get(n)
-        row: list[dict | None] = []
-        for d in per:
-            p = d.get(n)
-            if p is None:
-                row.append(None)
-                continue
-            ratio = (p.pseudo_damage / first.pseudo_damage
-                     if first is not None and first.pseudo_damage > 0 else None)
-            row.append({"pseudo_damage": p.pseudo_damage, "equivalent_range": p.equivalent_range,
-                        "cycles": p.cycles, "max_range": p.max_range, "ratio_to_first": ratio})
-        table[n] = row
+        table[n] = [None if p is None else {
+            "pseudo_damage": p.pseudo_damage, "equivalent_range": p.equivalent_range,
+            "cycles": p.cycles, "max_range": p.max_range,
+            "ratio_to_first": (p.pseudo_damage / first.pseudo_damage
+                               if first is not None and first.pseudo_damage > 0 else None)}
+            for p in (d.get(n) for d in per)]
     return {"k": k, "n_ref": n_ref, "ref_range": 1000.0,
             "sources": [str(s) for s in sources], "channels": table}
 

@@ -153,7 +153,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Replay a journal; return the exit code (0 done, 2 bad input, 130 interrupted)."""
     args = parse_args(build_parser(), argv)
     if isinstance(args, int):
         return args
@@ -163,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
         records = Recorded(args.journal)
     except ReplayInputError as exc:
         return _fail(str(exc))
-    original, skipped, problem = records.run_id, records.skipped, records.problem
+    original = records.run_id
     if not records.count:
         return _fail(f"{args.journal}: the journal holds no data message to replay")
     run_id = args.run or f"{original}-replay"
@@ -172,11 +171,12 @@ def main(argv: list[str] | None = None) -> int:
     except ScenarioError:
         return _fail(f"run id {run_id!r}: 1-64 letters, digits, '_', '.', '-' (give one with "
                      "--run)")
-    if problem:
-        print(f"suscosim replay: note: {problem}; replaying the {len(records)} records "
+    if records.problem:
+        print(f"suscosim replay: note: {records.problem}; replaying the {len(records)} records "
               "before it", file=sys.stderr)
-    if skipped:
-        print(f"suscosim replay: note: skipped {skipped} undecodable record(s)", file=sys.stderr)
+    if records.skipped:
+        print(f"suscosim replay: note: skipped {records.skipped} undecodable record(s)",
+              file=sys.stderr)
     connect = list(args.connect or [])
     listen = args.listen or (None if connect else [DEFAULT_LISTEN])
     try:
@@ -184,12 +184,10 @@ def main(argv: list[str] | None = None) -> int:
     except SessionOpenError as exc:
         return _fail(exc.message(f"listen {listen or 'loopback'}, connect {connect}"), exc.code)
     where = ", ".join(connect or listen or [])
-    n_ch = len(records.channels)
     pace_text = "as fast as possible" if args.fast else f"at {args.speed:g}x the recorded pace"
-    print(f"suscosim replay: {len(records)} messages on {n_ch} channels of run {original} as "
-          f"suscosim/{run_id}/** via {where} ({mode} session), {pace_text}", file=sys.stderr,
-          flush=True)
-    sent, wall = 0, 0.0
+    print(f"suscosim replay: {len(records)} messages on {len(records.channels)} channels of run "
+          f"{original} as suscosim/{run_id}/** via {where} ({mode} session), {pace_text}",
+          file=sys.stderr, flush=True)
     try:
         sent, wall = replay(bus, run_id, records, pace_factor(args),
                             args.wait, log=lambda text: print(f"suscosim replay: {text}",
@@ -200,7 +198,6 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     finally:
         bus.close()
-    t_span = records.t_last - records.t_first
-    print(f"replayed {sent} messages as run {run_id}: {t_span:.4g} s of run time in "
-          f"{wall:.3g} s wall")
+    print(f"replayed {sent} messages as run {run_id}: {records.t_last - records.t_first:.4g} s "
+          f"of run time in {wall:.3g} s wall")
     return 0

@@ -10,11 +10,12 @@ from functools import partial
 from pathlib import Path
 
 from cosim.errors import SuscosimError
+from cosim.run_folder import write_json
 from cosim.zenoh_options import add_connect_argument
 
 from ..cli_util import fail, parse_args
 from .dask_exec import DaskRunner
-from .fork import fork_header, fork_report, fork_text, parent_state, write_fork_json
+from .fork import fork_header, fork_report, fork_text, parent_state
 from .local import Runner
 from .phases import point_state
 from .results import result_rows, results_table, write_results, write_sweep_json
@@ -154,7 +155,7 @@ def main(argv: list[str] | None = None) -> int:
     if sweep.fork is not None:
         doc = fork_report(sweep, sweep.fork, out)
         doc["elapsed_s"] = time.monotonic() - t0  # this session's, the parents' wait included
-        write_fork_json(out, doc)
+        write_json(doc, out / "fork.json")
         print(fork_text(doc) + f"\n  in {out / 'fork.json'}")
     n_failed = sum(r["status"] != "ok" for r in rows)
     print(f"sweep {sweep.name}: {len(rows) - n_failed} ok, {n_failed} failed, "

@@ -9,9 +9,7 @@ in ``fork.json``. Local executor only, without ``--external``/``--serve``.
 from __future__ import annotations
 
 import copy
-import json
 import math
-import os
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -284,12 +282,6 @@ def fork_report(sweep: Sweep, plan: ForkPlan, out: Path) -> dict[str, Any]:
                                 "taken as long as its parent's (the same steps from t = 0; "
                                 "the laws' own costs aside)"}
     return doc
-
-
-def write_fork_json(out: Path, doc: dict[str, Any]) -> None:
-    tmp = out / "fork.json.tmp"
-    tmp.write_text(json.dumps(doc, indent=2, default=str))
-    os.replace(tmp, out / "fork.json")
 
 
 def fork_header(plan: ForkPlan) -> str:

@@ -29,8 +29,8 @@ def channel_keyexpr(pattern: str | None) -> str:
     for c in chunks:
         if not _CHUNK.match(c):
             raise TapInputError(f"pattern {pattern!r}: chunk {c!r} is not a name, '*' or '**'")
-    if len(chunks) == 1 and chunks[0] not in ("**",):
-        chunks = [chunks[0], "*"] if chunks[0] != "*" else ["*", "*"]
+    if len(chunks) == 1 and chunks[0] != "**":
+        chunks.append("*")  # a node: its every channel
     if len(chunks) > 2 and "**" not in chunks:
         raise TapInputError(f"pattern {pattern!r}: expected NODE/CHANNEL (two names at most)")
     return "/".join(chunks)
@@ -39,7 +39,7 @@ def channel_keyexpr(pattern: str | None) -> str:
 def tap_keyexpr(run: str | None, pattern: str | None) -> str:
     """``suscosim/<run or *>/<pattern>``."""
     run = run or "*"
-    if run != "*":
+    if run != "*":  # a run id
         try:
             keys.check_name("run", run)
         except ScenarioError:
