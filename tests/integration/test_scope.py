@@ -338,6 +338,7 @@ def test_scope_started_by_run_id_before_its_run(tmp_path) -> None:
 
 
 # ---- the damage map of a realistic run with live fatigue --------------------------------------
+@pytest.mark.long  # headless Chromium: the map's DOM and a screenshot of it
 def test_damage_map_of_a_realistic_run_with_live_fatigue(tmp_path) -> None:
     out = tmp_path / "ch6"
     run = popen_suscosim("run", str(REALISTIC), "--out", str(out), "--quiet", "--listen",
