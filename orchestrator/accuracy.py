@@ -1,8 +1,6 @@
-"""Accuracy of a co-simulation against the reference, as Table 3.3 of the thesis measures it.
-
-Eq. 3.5: %diff = (Peak_cosim - Peak_reference) / Peak_reference x 100, applied to the maximum
-and to the minimum of each response. The reference peak is taken on a fine time grid (the
-true peak of the continuous solution), the co-simulation peak on its communication grid.
+"""Accuracy of a co-simulation against the reference, as Table 3.3 of the thesis measures it:
+Eq. 3.5, %diff = (Peak_cosim - Peak_reference) / Peak_reference x 100, of the maximum and the
+minimum of each response (the reference's on a fine grid: the continuous solution's true peak).
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from cosim import scenario as sc
 from cosim import zenoh_options as zo
 from cosim.errors import SuscosimError
 
-from .cli_util import ArgumentParser, error_line, interrupt_on_sigterm
+from .cli_util import ArgumentParser, error_line, interrupt_on_sigterm, num
 from .placement import PIN_MODES
 
 
@@ -58,13 +58,9 @@ def _print_summary(summary: dict) -> None:
                   "the jacobian coupling would be more accurate")
     fat = summary.get("fatigue")
     if fat:
-        print(f"  fatigue (live): lower-arm min life {_num(fat['min_life_km'])} km = "
-              f"{_num(fat['min_life_repeats'])} repeats, critical node "
+        print(f"  fatigue (live): lower-arm min life {num(fat['min_life_km'])} km = "
+              f"{num(fat['min_life_repeats'])} repeats, critical node "
               f"{fat['critical_node_id']}  ({fat['files']})")
-
-
-def _num(x: float | str) -> str:
-    return x if isinstance(x, str) else f"{x:.4g}"
 
 
 def cmd_run(args: argparse.Namespace) -> int:

@@ -50,6 +50,11 @@ def parse_args(ap: argparse.ArgumentParser, argv: Sequence[str] | None) -> argpa
         return 0 if exc.code == 0 else 2
 
 
+def num(x: float | str, spec: str = ".4g") -> str:
+    """A number as ``spec``; a text (``"inf"``, a note) as it is."""
+    return x if isinstance(x, str) else format(x, spec)
+
+
 def _interrupt(_signum: int, _frame: object) -> None:
     raise KeyboardInterrupt
 

@@ -130,7 +130,6 @@ class Clock:
         return node if node in self.status else None
 
     def _pump(self, timeout: float) -> None:
-        """Handle the events that arrive within ``timeout`` seconds."""
         end = time.monotonic() + timeout
         while True:
             try:

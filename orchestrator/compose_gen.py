@@ -144,7 +144,6 @@ def cert_names() -> str:
 
 
 def regions() -> dict[str, dict[str, str]]:
-    """File -> region name -> the region's generated text."""
     return {
         "docker-compose.yml": {"services": compose_services()},
         "deploy/compose/nodes.yml": {"services": machine_nodes()},
@@ -178,7 +177,6 @@ def fill(text: str, regs: dict[str, str], path: str) -> str:
 
 
 def render(root: Path = ROOT) -> dict[Path, str]:
-    """Every generated file's text as the registry has it."""
     out = {root / rel: fill((root / rel).read_text(), regs, rel) for rel, regs in regions().items()}
     for name in nk.names():
         out[root / "deploy/zenoh/clients" / f"{name}.json5"] = CLIENT.format(name=name, note=NOTE)

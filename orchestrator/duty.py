@@ -23,7 +23,7 @@ from cosim.keys import check_name
 from cosim.run_folder import read_json
 from cosim.safe_open import open_user_text, read_user_text, read_user_toml
 
-from .cli_util import fail
+from .cli_util import fail, num
 
 DUTY_KEYS = ("name", "out", "survival_probability", "log10_std", "scatter_band")
 EVENT_KEYS = ("name", "scenario", "run", "set", "repeats", "distance_km")
@@ -358,17 +358,16 @@ def _print(result: dict) -> None:
         print(f"  {e['name']:<16} {e['repeats']:>9.4g} {e['distance_km']:>9.4g} "
               f"{e['max_damage_per_pass']:>11.3e} {e['damage_per_schedule_at_critical']:>17.3e} "
               f"{100 * e['share_at_critical']:>6.1f}%")
-    life = result["life_schedules"]
-    fmt = (lambda x: x if isinstance(x, str) else f"{x:.4g}")  # noqa: E731
     print(f"  critical node {result['critical_node_id']}: D = "
-          f"{result['max_damage_per_schedule']:.3e} per schedule, life {fmt(life)} schedules = "
-          f"{fmt(result['life_km'])} km; dominant event {result['dominant_event']} "
+          f"{result['max_damage_per_schedule']:.3e} per schedule, life "
+          f"{num(result['life_schedules'])} schedules = {num(result['life_km'])} km; dominant "
+          f"event {result['dominant_event']} "
           f"({100 * result['dominant_share']:.1f} %)")
     cert = result.get("certainty")
     if cert:
         print(f"  at {100 * cert['survival_probability']:g} % survival (s = "
-              f"{cert['log10_std']:.3g} in log10 N): {fmt(cert['life_schedules'])} schedules = "
-              f"{fmt(cert['life_km'])} km (x {cert['life_factor']:.3g})")
+              f"{cert['log10_std']:.3g} in log10 N): {num(cert['life_schedules'])} schedules = "
+              f"{num(cert['life_km'])} km (x {cert['life_factor']:.3g})")
     laws = result.get("laws")
     if laws:
         names = [law["name"] for law in laws["laws"]]
@@ -377,14 +376,10 @@ def _print(result: dict) -> None:
         print(f"  {'event':<16} " + " ".join(f"{n:>26}" for n in names))
         for j, ev in enumerate(laws["events"]):
             cells = [f"{law['damage_per_schedule_at_node'][j]:.3e} "
-                     f"(x{_ratio(law['ratio_to_reference'][j])})" for law in laws["laws"]]
+                     f"(x{num(law['ratio_to_reference'][j], '.3g')})" for law in laws["laws"]]
             print(f"  {ev:<16} " + " ".join(f"{c:>26}" for c in cells))
-        print(f"  {'life [km]':<16} " + " ".join(f"{fmt(law['life_km']):>26}"
+        print(f"  {'life [km]':<16} " + " ".join(f"{num(law['life_km']):>26}"
                                                  for law in laws["laws"]))
-
-
-def _ratio(x: float | str) -> str:
-    return x if isinstance(x, str) else f"{x:.3g}"
 
 
 def main(argv: Sequence[str] | None = None) -> int:

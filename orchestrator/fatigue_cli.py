@@ -21,7 +21,7 @@ from nodes.fatigue.lib.critical_plane import CRITICAL_PLANES
 from nodes.fatigue.lib.damage import METHODS
 from nodes.fatigue.lib.equivalent_stress import EQUIVALENTS
 from nodes.fatigue.lib.mean_stress import MEAN_STRESS_METHODS
-from orchestrator.cli_util import fail, parse_args
+from orchestrator.cli_util import fail, num, parse_args
 
 
 def _value(text: str):
@@ -118,9 +118,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     cp = summary.get("critical_plane") or {}
     if cp.get("hot_spots"):  # equivalent = "findley": its life is summary.json's headline
         h = cp["hot_spots"][0]
-        life = h["life_km"] if isinstance(h["life_km"], str) else f"{h['life_km']:.4g}"
         print(f"  critical plane ({cp['method']}, {cp['hot_spots_assessed']} hot spots of "
-              f"the line above): min life {life} km at node {h['node_id']}, normal ("
+              f"the line above): min life {num(h['life_km'])} km at node {h['node_id']}, normal ("
               + ", ".join(f"{v:.3f}" for v in h["normal"])
               + f"), rotation factor {h['rotation_factor']:.2f}")
     sm = summary.get("sn_methods") or {}
@@ -133,9 +132,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"  S-N {m}: not computed ({why})")
     print(f"  critical node {r.critical_node_id}{where}, max damage/pass {r.max_damage:.3e}")
     for p in (summary.get("parts") or [])[1:]:  # [fatigue] parts: each more part's headline
-        life = p.get("min_life_km")
         print(f"  part {p.get('name')} ({p.get('load_channel')}): min life "
-              f"{life if isinstance(life, str) else f'{life:.4g}'} km, critical node "
+              f"{num(p.get('min_life_km'))} km, critical node "
               f"{p.get('critical_node_id')}, results in {Path(out) / str(p.get('folder'))}")
     if r.missing_channels:
         print("  no load given for " + ", ".join(r.missing_channels) + " (zero)")

@@ -1,13 +1,10 @@
-"""The one-process engine (``run.transport = "inprocess"``, ``--inprocess``; the thesis's
-"purely multi-body"): the node models stepped in this process, one thread, no bus, in the
-distributed run's sequential order. Every step k: the plant's state
-(:class:`nodes.plant.stepper.PlantStepper`), each force node's step in registry order, the plant
-couples the forces and gives response and loads, the sinks (recorder's
-:class:`nodes.recorder.recording.Recording`, live fatigue's LiveLoads) take every message, the
-plant integrates to t_{k+1}. Every message goes through the run's codec (:mod:`cosim.wire`), so
-the tables and fatigue files are the distributed run's bit for bit (tested). DESIGN.md allows
-this module, and only it, to import node modules. Refused (ScenarioError, exit 2): checkpoints,
-resume/fork, a node given as a function (it is written against the bus).
+"""The one-process engine (``run.transport = "inprocess"``; the thesis's "purely multi-body"):
+the node models stepped in this thread, no bus, in the distributed run's sequential order: per
+step the plant's state, each force node's step in registry order, the plant couples the forces,
+the sinks (recorder, live fatigue) take every message, the plant integrates to t_{k+1}. Every
+message goes through the run's codec (:mod:`cosim.wire`): the tables and fatigue files are the
+distributed run's bit for bit (tested). DESIGN.md allows this module, and only it, to import
+node modules. Refused (ScenarioError, exit 2): checkpoints, resume/fork, a function node.
 """
 
 from __future__ import annotations
@@ -88,8 +85,6 @@ class _Stepped:
 
 
 class Engine:
-    """One run's nodes in this process."""
-
     def __init__(self, scenario: dict[str, Any],
                  on_progress: Callable[[int, int], None] | None = None) -> None:
         refusal(scenario)
@@ -146,7 +141,6 @@ class Engine:
         return t, out
 
     def execute(self) -> EngineResult:
-        """Run every step; write the journal, the table and the fatigue files."""
         run, settings, scenario = self.run, self.settings, self.scenario
         folder = Path(run["dir"])
         names = list(run["nodes"])

@@ -28,8 +28,6 @@ def local_lease_ms(stall_timeout_s: float) -> int:
 
 
 class LocalNodes:
-    """Node processes started on this machine, their logs, and their fate."""
-
     def __init__(self, run_id: str, names: list[str], connect: list[str], lowlatency: bool,
                  log_dir: Path, zenoh_config_file: str | None = None,
                  cores: dict[str, int] | None = None, lease_ms: int = 2000,

@@ -1,10 +1,9 @@
-"""A one-line progress bar on stderr (only when stderr is a terminal)::
+"""A one-line progress bar on stderr (a terminal only): ``starting nodes``, ``handshake`` (the
+clock's start barrier, k = -1), any :meth:`ProgressBar.phase`, then the steps::
 
     ch3-step-... [###########...................]  37.2% step 1488/4000    2012 steps/s ETA 0:01
 
-It shows ``starting nodes`` at once, ``handshake`` while the clock's start barrier waits (k =
--1), any :meth:`ProgressBar.phase`, then the steps. Rate and ETA count from the first step
-shown: ETA = (n - k) / rate.
+Rate and ETA count from the first step shown: ETA = (n - k) / rate.
 """
 
 from __future__ import annotations

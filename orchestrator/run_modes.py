@@ -18,8 +18,6 @@ from .placement import core_layout, should_pin, usable_cores
 
 @dataclass
 class Nodes:
-    """The bus a run's clock uses, and the nodes on it."""
-
     bus: Bus
     dead: Callable[[], str | None]  # why a node is gone, or None (every clock tick)
     local: LocalNodes | None = None

@@ -273,23 +273,21 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         lowlatency = LOWLATENCY_DEFAULT and not zenoh_config_file
     run = scenario["run"]
     folder = Path(run["dir"])
-    if run["mode"] == "distributed":  # chosen here so that run.json can tell taps where to go
+    bus_eps = run["mode"] == "distributed"  # the other modes open no Zenoh session
+    if bus_eps:  # chosen here so that run.json can tell taps where to go
         # every node elsewhere behind a router (compose): the orchestrator is its client too
         as_client = bool(connect) and not listen and all(n in (external or [])
                                                          for n in run["nodes"])
         listen = [] if as_client else list(listen or [free_loopback_endpoint()])
-    from cosim.run_folder import write_run_json
-
-    bus_eps = run["mode"] == "distributed"  # the other modes open no Zenoh session
     try:  # before any node or bus: an unwritable folder or a full disk ends it here
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "scenario.json").write_text(json.dumps(scenario, indent=2, sort_keys=True))
-        if run["mode"] == "distributed":
+        if bus_eps:
             (folder / "logs").mkdir(exist_ok=True)
-        write_run_json(folder, run["id"], listen if bus_eps else [],
-                       connect if bus_eps else [], lowlatency)
-        run_key = run_key_for(run, folder, [] if run["mode"] != "distributed"
-                              else [n for n in run["nodes"] if n in (external or [])])
+        run_folder.write_run_json(folder, run["id"], listen if bus_eps else [],
+                                  connect if bus_eps else [], lowlatency)
+        run_key = run_key_for(run, folder, [n for n in run["nodes"] if n in (external or [])]
+                              if bus_eps else [])
     except OSError as exc:
         raise _folder_error(exc, folder) from None
     auth = au.RunKey(run_key, au.new_nonce())  # this instance of the run (issue #30 item 11)
@@ -360,7 +358,6 @@ def _raise_failure(exc: BaseException, unwritten: SummaryWriteError | None,
 
 def _run_inprocess(scenario: dict[str, Any], bar: ProgressBar, started: float,
                    t0: float) -> dict[str, Any]:
-    """The one-process engine's run (:mod:`orchestrator.inprocess`)."""
     from .inprocess import Engine
 
     folder = Path(scenario["run"]["dir"])
@@ -449,5 +446,3 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
             "background": list(local.background),
             "background_starved": list(local.guard.moved)}
 
-
-__all__ = ["resolve", "run_scenario", "RunError"]

@@ -45,7 +45,6 @@ def render(d: Path, runs_dir: Path | None = None) -> tuple[str, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Write the report; 0 on success, 2 for bad input (one line on stderr)."""
     args = parse_args(build_parser(), argv)
     if isinstance(args, int):
         return args

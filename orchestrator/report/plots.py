@@ -22,7 +22,6 @@ MAX_PLOT_POINTS = 4000
 
 def new_figure(nrows: int, ncols: int = 1, width: float = 11.0, row_h: float = 2.6,
             sharex: bool = False):
-    """A matplotlib Figure (no pyplot) and its axes as a flat list."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(width, max(2.4, row_h * nrows)), layout="constrained")

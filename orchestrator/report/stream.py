@@ -81,7 +81,6 @@ class TableSource:
         yield from parquet_batches(self.path, cols, rows)
 
     def read(self, keep: Callable[[str], bool]) -> dict[str, np.ndarray]:
-        """The columns ``keep`` accepts (and ``t``), whole."""
         cols = [c for c in self.names if c == "t" or keep(c)]
         parts: dict[str, list[np.ndarray]] = {c: [] for c in cols}
         for b in self.batches(cols):

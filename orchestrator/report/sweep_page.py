@@ -40,7 +40,6 @@ def _conf(v: Any, c: Any) -> str:
 
 
 def read_sensitivity(d: Path) -> tuple[dict[str, Any] | None, str]:
-    """(sensitivity.json or None, a problem with it or "")."""
     path = d / "sensitivity.json"
     if not path.is_file():
         return None, ""
@@ -54,7 +53,6 @@ def read_sensitivity(d: Path) -> tuple[dict[str, Any] | None, str]:
 
 
 def sensitivity_section(d: Path, results: list[dict]) -> str:
-    """The section, or "" for a sweep without a sampled design."""
     sens, problem = read_sensitivity(d)
     if sens is None:
         return section("sensitivity", "Sensitivity", note(esc(problem))) if problem else ""

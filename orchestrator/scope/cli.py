@@ -58,7 +58,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Serve the scope; 0 when stopped, 1 the run's endpoint cannot be reached, 2 bad input."""
     args = parse_args(build_parser(), argv)
     if isinstance(args, int):
         return args

@@ -21,8 +21,6 @@ RATE_WINDOW_S = 2.0  # [s] of wall time steps/s is measured over
 
 
 class _Samples:
-    """One line's samples, the last ``max_samples`` kept."""
-
     def __init__(self, line: Line, max_samples: int) -> None:
         self.line, self.max = line, max_samples
         self.k: list[int] = []

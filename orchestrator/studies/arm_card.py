@@ -49,7 +49,6 @@ def stress_floor(moment: float, mass: float, mat) -> dict[str, float]:
 
 
 def card() -> dict:
-    """The model card as a dict (SI inside, MPa where the key says so)."""
     from nodes.fatigue.config import BUILTIN_PART
     from nodes.fatigue.lib.equivalent_stress import von_mises
     from nodes.fatigue.materials import steel_817M40

@@ -46,7 +46,6 @@ def pack(run_dir: Path) -> bytes:
 
 
 def unpack(data: bytes, run_dir: Path) -> None:
-    """Replace ``run_dir`` by the folder packed in ``data``."""
     if run_dir.exists():
         shutil.rmtree(run_dir)
     run_dir.mkdir(parents=True)

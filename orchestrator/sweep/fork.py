@@ -220,7 +220,6 @@ def parent_state(parent: Parent, run_dir: Path) -> str:
 
 
 def keep_only_fork_checkpoint(parent: Parent, run_dir: Path) -> None:
-    """Remove the parent's checkpoints other than the one at k."""
     keep = step_folder(run_dir, parent.k).name
     root = run_dir / CHECKPOINTS_DIR
     for sub in sorted(root.glob("k*")) if root.is_dir() else []:

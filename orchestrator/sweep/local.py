@@ -22,8 +22,6 @@ from .spec import Point, Sweep, toml_value
 
 @dataclass
 class Job:
-    """A point being worked on: its phase (run, fatigue) and process."""
-
     point: Point
     run_dir: Path
     phase: str
@@ -38,8 +36,6 @@ class Job:
 
 
 class Runner:
-    """Runs the points of a validated sweep, ``jobs`` at a time."""
-
     def __init__(self, sweep: Sweep, out: Path, connect: list[str], external: list[str],
                  stream: TextIO) -> None:
         self.sweep, self.out = sweep, out

@@ -57,8 +57,6 @@ class Axis:
 
 @dataclass
 class Point:
-    """One grid point: one run."""
-
     index: int
     id: str
     params: dict[str, Any]
@@ -109,7 +107,6 @@ class Sweep:
         return (self.runs_dir if self.runs_dir is not None else out / "runs") / p.id
 
     def run_dir_text(self, p: Point) -> str:
-        """The run folder as results and sweep.json give it."""
         return str(self.runs_dir / p.id) if self.runs_dir is not None else f"runs/{p.id}"
 
 

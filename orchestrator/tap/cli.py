@@ -44,7 +44,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Tap a run; return the exit code (0 done, 2 bad input)."""
     args = parse_args(build_parser(), argv)
     if isinstance(args, int):
         return args

@@ -57,8 +57,6 @@ def flatten(d: dict[str, Any]) -> dict[str, Any]:
 
 
 class CsvSink:
-    """Append data rows to a CSV file whose header grows with the fields seen."""
-
     BASE = ["key", "k", "t"]
 
     def __init__(self, path: str | Path) -> None:
@@ -228,7 +226,6 @@ class Tap:
             st.window.close(now)
 
     def table(self, width: int = 0, final: bool = False) -> str:
-        """The per-key display (``final``: average rates over the whole tap)."""
         kw = max([len(_short_key(key)) for key in self.stats] + [24])
         lines = [f"{'key':<{kw}} {'count':>7} {'msg/s':>8} {'k':>7} {'t [s]':>9}  last values"]
         for key in sorted(self.stats):

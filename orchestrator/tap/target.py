@@ -37,7 +37,6 @@ def channel_keyexpr(pattern: str | None) -> str:
 
 
 def tap_keyexpr(run: str | None, pattern: str | None) -> str:
-    """``suscosim/<run or *>/<pattern>``."""
     run = run or "*"
     if run != "*":  # a run id
         try:
@@ -64,7 +63,6 @@ def _local(ep: str) -> str:
 
 
 def resolve_target(run: str | None, pattern: str | None, connect: list[str] | None) -> Target:
-    """Resolve RUN (id, ``*`` or a run folder), PATTERN and endpoints."""
     endpoints: list[str] = list(connect or [])
     lowlatency, source, note = False, "", ""
     if run and Path(run).is_dir():
