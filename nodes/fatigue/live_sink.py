@@ -25,7 +25,6 @@ from cosim.run_settings import RunSettings
 
 from .config import FatigueConfig
 from .more_parts import (
-    UPPER_ARM,
     column_names,
     load_channel,
     more_parts,
@@ -49,9 +48,7 @@ class Track:
         self.done = False
 
     def columns(self, fields: list[str]) -> list[str]:
-        """The load columns' names (the primary's as before: ``plant/arm/<field>``)."""
-        if self.channel != UPPER_ARM:
-            return [f"{ch.PLANT}/{ch.ARM}/{f}" for f in fields]
+        """The load columns' names (:func:`.more_parts.column_names`)."""
         return column_names(self.channel, fields, self.cases)
 
 

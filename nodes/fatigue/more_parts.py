@@ -60,9 +60,10 @@ def load_channel(cfg: FatigueConfig) -> str:
 
 
 def column_names(channel: str, fields: list[str], cases: list[str]) -> list[str]:
-    """The names the load columns of ``channel``'s ``fields`` go by (module docstring)."""
+    """The names the load columns of ``channel``'s ``fields`` go by (module docstring; any
+    channel but the upper arm's, a corner's too, is the lower arm's ``plant/arm/...``)."""
     if channel != UPPER_ARM:
-        return [f"plant/{channel}/{f}" for f in fields]
+        return [f"plant/arm/{f}" for f in fields]
     return [f"plant/{channel}/{f}" if f"plant/{channel}/{f}" in cases else f for f in fields]
 
 

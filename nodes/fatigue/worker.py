@@ -398,11 +398,6 @@ class LiveFatigue:
         self._t_last = float(t_block[-1])
         self._eng.push(_matrix(self._cols, data, t_block.size))
 
-    @property
-    def damage(self) -> np.ndarray:
-        """Damage of the cycles closed so far (no residue), per node."""
-        return self._eng.damage.copy()
-
     def result(self, track_length_m: float | None = None) -> FatigueResult:
         L = track_length_m if track_length_m is not None else self.track_length_m
         # _t0 and _t_last are set together, by the first block
