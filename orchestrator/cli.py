@@ -197,7 +197,6 @@ def _version() -> str:
 
 
 def _grouped_help() -> str:
-    """The ``--help`` epilog: the subcommands by :data:`COMMANDS` group."""
     width = max(len(c[0]) for _, cmds in COMMANDS for c in cmds) + 2
     out = []
     for title, cmds in COMMANDS:
@@ -290,9 +289,7 @@ def main(argv: list[str] | None = None) -> int:
     if unknown and args.func is not None:
         ap.error(f"unrecognized arguments: {' '.join(unknown)}")
     try:
-        if args.func is None:
-            return _delegate(args.module, unknown + args.rest)
-        return args.func(args)
+        return _delegate(args.module, unknown + args.rest) if args.func is None else args.func(args)
     except SuscosimError as exc:
         print(error_line("suscosim", str(exc)), file=sys.stderr)
         return exc.exit_code

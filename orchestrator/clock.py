@@ -33,8 +33,6 @@ re-declares tokens while links reorganise under load; a local process's exit is 
 
 @dataclass
 class NodeStatus:
-    """What the clock knows of one node."""
-
     alive: bool = False
     ready: bool = False
     started: bool = False
@@ -275,9 +273,7 @@ class Clock:
         st = self.status[node]
         if not st.alive:
             return " (absent)"
-        if st.waiting_for:
-            return f" (never heard {', '.join(st.waiting_for)})"
-        return ""
+        return f" (never heard {', '.join(st.waiting_for)})" if st.waiting_for else ""
 
     def announce_abort(self, reason: str) -> None:
         """Publish ``abort`` (the nodes stop, the recorder exports what it has)."""

@@ -44,9 +44,7 @@ def usable_cores() -> list[int]:
 def core_layout(nodes: Iterable[str], cores: list[int]) -> dict[str, int]:
     """The core of each node (the table above); empty with fewer than 2 cores."""
     n = len(cores)
-    if n < 2:
-        return {}
-    return {node: cores[nk.core_index(node, n)] for node in nodes}
+    return {} if n < 2 else {node: cores[nk.core_index(node, n)] for node in nodes}
 
 
 def should_pin(mode: str, cores: list[int]) -> bool:

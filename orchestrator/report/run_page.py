@@ -323,9 +323,7 @@ def logs_section(r: RunData) -> str:
         lines = [ln for ln in lines if ln.strip() and not ln.startswith("pybullet build time")]
         if lines:
             parts.append(f"<h3>{mk.esc(p.name)}</h3><pre>{mk.esc(chr(10).join(lines[-25:]))}</pre>")
-    if not parts:
-        return ""
-    return mk.section("logs", "Node logs (last lines)", "".join(parts))
+    return mk.section("logs", "Node logs (last lines)", "".join(parts)) if parts else ""
 
 
 def run_body(r: RunData) -> str:

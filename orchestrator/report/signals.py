@@ -22,9 +22,7 @@ def unit_of(column: str) -> str:
     fld = re.sub(r"\[\d+\]$", "", parts[-1])
     if len(parts) >= 2 and parts[-2] == "arm":
         return "N·m" if fld.rsplit("_", 1)[-1].startswith("m") else "N"
-    if fld in UNITS:
-        return UNITS[fld]
-    return UNITS.get(fld.split("_", 1)[0], "")
+    return UNITS[fld] if fld in UNITS else UNITS.get(fld.split("_", 1)[0], "")
 
 
 def corner_cols(table: dict[str, np.ndarray], base: str) -> list[tuple[str, np.ndarray]]:

@@ -192,8 +192,6 @@ class BadInput(Exception):
 
 @dataclass
 class RunData:
-    """What a run folder holds (every piece optional) and what was wrong with it."""
-
     path: Path
     scenario: dict | None = None
     summary: dict | None = None
@@ -206,9 +204,7 @@ class RunData:
 
     @property
     def status(self) -> str:
-        if self.summary is None:
-            return "unknown"
-        return str(self.summary.get("status", "unknown"))
+        return "unknown" if self.summary is None else str(self.summary.get("status", "unknown"))
 
     @property
     def run_id(self) -> str:

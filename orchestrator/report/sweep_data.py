@@ -54,9 +54,7 @@ class Point:
 
     @property
     def status(self) -> str:
-        if self.run is None:
-            return "not run"
-        return self.run.status
+        return "not run" if self.run is None else self.run.status
 
     @property
     def life_km(self) -> float | None:

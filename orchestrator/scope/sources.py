@@ -202,8 +202,6 @@ class _Router:
 
 
 class LiveSource:
-    """Subscribe to a live run on ``bus`` (the bus owns the subscribers)."""
-
     def __init__(self, bus: Any, state: ScopeState, damage: DamageMap | None = None) -> None:
         self.bus, self.state = bus, state
         self.router = _Router(state, damage)

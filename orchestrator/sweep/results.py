@@ -19,9 +19,7 @@ from .spec import Point, Sweep
 def _fmt(v: Any) -> str:
     if v is None or v == "":
         return ""
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    return str(v)
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
 def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> list[dict]:
@@ -164,8 +162,6 @@ def write_sweep_json(sweep: Sweep, out: Path) -> None:
 
 
 class Job(Protocol):
-    """A point being worked on (a local process or a Dask task)."""
-
     point: Point
     phase: str
     t0: float

@@ -39,8 +39,6 @@ RESERVED = ("base", "point", "status", "error", "wall_s", "steps_per_s", "n_step
 
 
 class SweepError(SuscosimError):
-    """A bad sweep file or point (exit code 2), naming the key or the point."""
-
     exit_code = 2
 
 
