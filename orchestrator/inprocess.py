@@ -12,6 +12,7 @@ from __future__ import annotations
 import inspect
 import time
 from collections.abc import Callable
+from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -215,10 +216,8 @@ class Engine:
         except BaseException as exc:
             table = self.rec.table if self.rec is not None else None
             if journal is not None:
-                try:
+                with suppress(OSError):
                     journal.close()
-                except OSError:
-                    pass
             if table is not None:
                 try:
                     if isinstance(exc, OSError):

@@ -15,6 +15,7 @@ import signal
 import sys
 import traceback
 from collections.abc import Callable
+from contextlib import suppress
 from typing import Any
 
 from cosim import node_kinds as nk
@@ -72,10 +73,8 @@ def run_node(bus, run_id: str, name: str, scenario: dict | None = None,
         part.ctl("error", message=f"internal error: {type(exc).__name__}: {exc}", exit_code=1)
         return 1
     finally:
-        try:
+        with suppress(Exception):
             part.flush_records()  # what this node computed stays recorded, even on an error
-        except Exception:
-            pass
         part.close()
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,10 +34,8 @@ class Nodes:
 
 def close_quietly(bus: Bus) -> None:
     """Close ``bus`` on an error path (the first error is the one to report)."""
-    try:
+    with suppress(Exception):
         bus.close()
-    except Exception:
-        pass
 
 
 def distributed(run: dict[str, Any], folder: Path, connect: list[str] | None,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
@@ -88,18 +89,14 @@ def _remove_stale_tables(folder: Path) -> None:
         parts = tmp.name.split(".")
         pid = int(parts[3]) if len(parts) > 4 and parts[3].isdigit() else None
         if pid is not None and not pid_alive(pid):
-            try:
+            with suppress(OSError):
                 tmp.unlink()
-            except OSError:
-                pass
 
 
 def _remove_tables(folder: Path, stem: str) -> None:
     for suffix in (".csv", ".parquet"):
-        try:
+        with suppress(OSError):
             (folder / f"{stem}{suffix}").unlink(missing_ok=True)
-        except OSError:
-            pass
 
 
 def _recorders_table(folder: Path, journal: Path, since: float | None) -> dict[str, Any] | None:

@@ -17,6 +17,7 @@ import os
 import secrets
 import sys
 import time
+from contextlib import suppress
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -195,10 +196,8 @@ def write_summary(folder: Path, summary: dict[str, Any]) -> None:
         os.replace(tmp, path)
         run_folder.mark_run_ended(folder, str(summary.get("status", "ended")))
     except OSError as exc:
-        try:
+        with suppress(OSError):
             tmp.unlink(missing_ok=True)
-        except OSError:
-            pass
         raise SummaryWriteError(path, exc) from None
 
 
@@ -398,10 +397,8 @@ def _fail(exc: BaseException, scenario: dict[str, Any], nodes: run_modes.Nodes,
     """A failed run: stop the nodes, close the bus, recover the table, write the summary."""
     folder = Path(scenario["run"]["dir"])
     if isinstance(exc, KeyboardInterrupt) and clock is not None:  # Ctrl-C or SIGTERM
-        try:
+        with suppress(Exception):
             clock.announce_abort("the orchestrator was interrupted")
-        except Exception:
-            pass
     error = _error_text(exc)
     unwritten: SummaryWriteError | None = None
     bus_open = True
@@ -410,10 +407,8 @@ def _fail(exc: BaseException, scenario: dict[str, Any], nodes: run_modes.Nodes,
 
         def say_abort() -> None:  # to a node that joined after it was first said
             if clock is not None:
-                try:
+                with suppress(Exception):
                     clock.announce_abort(error)
-                except Exception:
-                    pass
 
         nodes.stop(grace_s=3.0, tick=say_abort)
         say_abort()  # once more, the nodes stopped: then the bus is closed

@@ -18,6 +18,7 @@ import tempfile
 import threading
 import time
 import uuid
+from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
@@ -53,11 +54,11 @@ def unpack(data: bytes, run_dir: Path) -> None:
         tar.extractall(run_dir, filter="data")
 
 
-def _die_with_parent() -> None:  # runs in the child between fork and exec
-    try:  # Linux: SIGTERM when the worker thread that started us dies (a killed worker)
+def _die_with_parent() -> None:
+    """In the child between fork and exec (Linux): SIGTERM when the worker thread that started
+    us dies (a killed worker)."""
+    with suppress(OSError, AttributeError):
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
 
 
 class _Cancelled(Exception):
@@ -291,10 +292,8 @@ class DaskRunner:
         finally:
             signal.signal(signal.SIGTERM, old)
             display.close()
-            try:
+            with suppress(Exception):  # noqa: BLE001 - the scheduler may be gone
                 self.client.unsubscribe_topic(topic)
-            except Exception:  # noqa: BLE001 - the scheduler may be gone
-                pass
             self.client.close()
         return not interrupted
 

@@ -14,6 +14,7 @@ import socket
 import subprocess
 import sys
 from collections.abc import Callable
+from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
@@ -40,10 +41,8 @@ def start(cmd: list[str], log: Path,
 
 def kill_group(proc: subprocess.Popen, sig: int = signal.SIGTERM) -> None:
     """Signal the process group of one of our children (its node processes too)."""
-    try:
+    with suppress(ProcessLookupError, PermissionError):
         os.killpg(proc.pid, sig)
-    except (ProcessLookupError, PermissionError):
-        pass
 
 
 def _last_error(log: Path) -> str:
