@@ -119,7 +119,6 @@ class Clock:
                                   f"send (signed with the run's key: an insider; its reason: "
                                   f"{reason!r})")
 
-    # ---- events -------------------------------------------------------------------------
     def _node_of(self, key: str) -> str | None:
         try:
             _, node, _ = keys.parse_key(key)
@@ -280,7 +279,6 @@ class Clock:
         for _ in range(3):
             self._clock(encode("abort", -1, 0.0, {"reason": reason}))
 
-    # ---- the run --------------------------------------------------------------------------
     def run(self) -> ClockResult:
         t0 = time.monotonic()
         self._last_tick = t0

@@ -114,9 +114,7 @@ def replay(bus: Any, run_id: str, records: Recorded, speed: float | None,
            wait_s: float = 5.0, log: Any = None) -> tuple[int, float]:
     """Publish ``records`` under ``run_id`` (``speed`` None: at once); (sent, wall s)."""
     log = log or (lambda text: None)
-    pubs: dict[tuple[str, str], Any] = {}
-    for node, channel in sorted(records.channels):
-        pubs[node, channel] = bus.publisher(keys.key(run_id, node, channel))
+    pubs = {(n, c): bus.publisher(keys.key(run_id, n, c)) for n, c in sorted(records.channels)}
     if wait_s > 0 and not _wait_for_subscriber(list(pubs.values()), wait_s):
         log(f"no subscriber after {wait_s:g} s: publishing anyway")
     t_first: float | None = None

@@ -62,10 +62,9 @@ def time_history_panels(table: dict[str, np.ndarray]) -> tuple[list[tuple], list
         else:
             missing.append(title)
 
-    disp = []
-    for base, name in (("plant/state/z_b", "body z_b"), ("plant/state/z_w", "wheel z_w"),
-                       ("tyre_road/force/z_g", "road z_g")):
-        disp += [(corner_label(name, c), 1e3 * x) for c, x in corner_cols(table, base)]
+    disp = [(corner_label(name, c), 1e3 * x) for base, name in (
+        ("plant/state/z_b", "body z_b"), ("plant/state/z_w", "wheel z_w"),
+        ("tyre_road/force/z_g", "road z_g")) for c, x in corner_cols(table, base)]
     add("Body and wheel displacement", "mm", disp)
     add("Body acceleration", "m/s²",
         [(corner_label("a_b", c), x) for c, x in corner_cols(table, "plant/response/a_b")])

@@ -177,10 +177,7 @@ def vs_passive(points: list[Point], keys: list[str], value) -> dict[str, float]:
     def cell(p: Point) -> tuple:
         return tuple(json.dumps(p.params.get(k), sort_keys=True, default=str) for k in others)
 
-    base: dict[tuple, float | None] = {}
-    for p in points:
-        if is_passive(p, axis) and cell(p) not in base:
-            base[cell(p)] = value(p)
+    base = {cell(p): value(p) for p in reversed(points) if is_passive(p, axis)}  # the first
     out = {}
     for p in points:
         b, v = base.get(cell(p)), value(p)

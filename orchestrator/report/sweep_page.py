@@ -113,9 +113,7 @@ def sweep_results_section(spec: dict, points: list[Point], keys: list[str], d: P
     body = table_html(header, rows, raw_cols=(0, 1 + len(keys)))  # the link, the status
     results, src = read_results(d)
     if results:
-        cols: list[str] = []
-        for res in results:
-            cols += [k for k in res if k not in cols]
+        cols = list(dict.fromkeys(k for res in results for k in res))
         body += (f"<details><summary>{esc(src)}: every column ({len(cols)})</summary>"
                  + table_html(cols, [[_num_or_text(r.get(c)) for c in cols] for r in results])
                  + "</details>")

@@ -65,7 +65,6 @@ class ScopeState:
         self.map_geometry: dict[str, Any] | None = None
         self._coupling = _Coupling(max_samples)
 
-    # ---- filled by the source ---------------------------------------------------------
     def add_data(self, node: str, channel: str, msg: Message, now: float | None = None) -> None:
         if msg.k < 0:
             return
@@ -169,7 +168,6 @@ class ScopeState:
         with self._lock:
             return list(self._nodes)
 
-    # ---- read by the server -----------------------------------------------------------
     def meta(self) -> dict[str, Any]:
         with self._lock:
             return {"run": self.run_id, "source": self.source, "n_steps": self.n_steps,

@@ -21,10 +21,8 @@ from ..cli_util import fail
 def _static_loads(channels: list[str]) -> dict[str, float]:
     from .arm_card import static_plant_loads
 
-    out: dict[str, float] = {}
-    for fields in static_plant_loads().values():
-        out.update({k: v for k, v in fields.items() if k in channels})
-    return out
+    return {k: v for fields in static_plant_loads().values() for k, v in fields.items()
+            if k in channels}
 
 
 def check(args: argparse.Namespace) -> int:

@@ -88,13 +88,8 @@ def parse_fork_at(value: Any) -> float | None:
 def _parent_overrides(sweep: Sweep, member: Point) -> dict[str, Any]:
     """The member's overrides without the axes' fork-changeable ones (``[sweep.set]``'s stay)."""
     fixed = _absolute_paths(sweep.fixed, sweep.path.resolve().parent)
-    out: dict[str, Any] = {}
-    for key, value in member.overrides.items():
-        if not fork_key(key):
-            out[key] = value
-        elif key in fixed:
-            out[key] = fixed[key]
-    return out
+    return {k: fixed[k] if fork_key(k) else v for k, v in member.overrides.items()
+            if not fork_key(k) or k in fixed}
 
 
 def _fork_sets(point: dict[str, Any], parent: dict[str, Any]) -> list[str]:
@@ -209,8 +204,6 @@ def plan_forks(sweep: Sweep, out: Path, resolved: dict[str, dict[str, Any]]) -> 
             fork_sets[p.id] = sets
     return ForkPlan(at, parents, parent_of, fork_sets)
 
-
-# --------------------------------------------------------------------------- run folders
 
 def parent_state(parent: Parent, run_dir: Path) -> str:
     """``done`` (an ok run of this parent with its checkpoint at k) or ``todo``."""

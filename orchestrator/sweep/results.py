@@ -92,10 +92,7 @@ def _worker_text(w: dict[str, Any]) -> str:
 
 
 def write_results(out: Path, rows: list[dict]) -> None:
-    columns: list[str] = []
-    for r in rows:
-        columns += [c for c in r if c not in columns]
-    columns = [c for c in columns  # a channel no run has (e.g. arm loads of a lumped car)
+    columns = [c for c in dict.fromkeys(c for r in rows for c in r)  # not a channel no run has
                if not c.endswith((" peak", " rms")) or any(r.get(c) is not None for r in rows)]
     rows = [{c: r.get(c) for c in columns} for r in rows]
     with open(out / "results.csv", "w", newline="") as fh:

@@ -315,7 +315,6 @@ def _params_text(params: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v}" for k, v in params.items()) or "no parameters"
 
 
-# ---- sampled designs ([sweep.design])
 METHODS = ("lhs", "sobol", "saltelli")
 DESIGN_KEYS = ("method", "n", "seed", "ranges")
 AXIS = "sample"

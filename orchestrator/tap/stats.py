@@ -46,14 +46,9 @@ def fmt_fields(msg: Message) -> str:
 
 def flatten(d: dict[str, Any]) -> dict[str, Any]:
     """Data fields as CSV columns: a list ``x`` becomes ``x[0]``, ``x[1]``, ..."""
-    out: dict[str, Any] = {}
-    for name, value in d.items():
-        if isinstance(value, list):
-            for i, v in enumerate(value):
-                out[f"{name}[{i}]"] = v
-        else:
-            out[name] = value
-    return out
+    return {k: v for name, value in d.items()
+            for k, v in ([(f"{name}[{i}]", x) for i, x in enumerate(value)]
+                         if isinstance(value, list) else [(name, value)])}
 
 
 class CsvSink:
