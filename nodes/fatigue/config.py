@@ -180,11 +180,6 @@ class FatigueConfig:
         return "arm" if self.corner is None else f"arm_{self.corner}"
 
     @property
-    def endurance_limit(self) -> str:
-        """The endurance treatment (what `damage.miner_per_node` takes as endurance_limit)."""
-        return self.endurance
-
-    @property
     def material(self) -> Material:
         """The named material with the overrides, its S-N curve attached: the data curve
         (``sn_curve``), else the component's by ``component.method``, else the material's."""

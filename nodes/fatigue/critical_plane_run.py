@@ -47,7 +47,7 @@ def critical_plane_pass(loads: Iterable[Mapping[str, np.ndarray]], cfg: FatigueC
     mat = cfg.material
 
     def reversals(s: np.ndarray) -> np.ndarray:
-        return cycle_reversals(s, -s, mat, cfg.method, "none", cfg.endurance_limit)
+        return cycle_reversals(s, -s, mat, cfg.method, "none", cfg.endurance)
 
     nodes = [cp.findley_node(S[:, i], reversals, residue=cfg.residue) for i in range(top.size)]
     L = result.track_length_m

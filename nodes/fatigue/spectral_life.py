@@ -55,7 +55,7 @@ def spectral_analyse(t: np.ndarray, loads: Mapping[str, np.ndarray], cfg: Fatigu
 
     def reversals(s1: np.ndarray, s2: np.ndarray) -> np.ndarray:
         return cycle_reversals(s1, s2, cfg.material, "stress_life", cfg.mean_stress_rule,
-                               cfg.endurance_limit)
+                               cfg.endurance)
     for j in range(0, n, NODE_CHUNK):
         sl = slice(j, min(n, j + NODE_CHUNK))
         x = np.ascontiguousarray(equivalent_of(superpose_components(F, per_node[sl]),

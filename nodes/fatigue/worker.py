@@ -131,7 +131,7 @@ class _Engine:
         self.parked: list[_Parked] = []
         if screen and why is None:
             self.scr = Screening(inf.coefficients, cfg.equivalent, self.mat, cfg.method,
-                                 cfg.mean_stress_rule, cfg.endurance_limit, float(screen))
+                                 cfg.mean_stress_rule, cfg.endurance, float(screen))
             self.scr.total = total
 
     def push(self, F: np.ndarray) -> None:
@@ -267,7 +267,7 @@ class _Engine:
             return
         node = idx[cyc.series]
         np.add.at(damage, node, cycle_damage(cyc, self.mat, self.cfg.method,
-                                             self.cfg.mean_stress_rule, self.cfg.endurance_limit))
+                                             self.cfg.mean_stress_rule, self.cfg.endurance))
         np.add.at(ncyc, node, cyc.count)
         np.maximum.at(rmax, node, cyc.range)
 

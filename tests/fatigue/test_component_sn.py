@@ -173,7 +173,7 @@ def test_sn_curve_checks_its_inputs():
 # ----------------------------------------------------------------- config
 def test_config_defaults_and_summary():
     cfg = FatigueConfig.from_dict({})
-    assert cfg.endurance == "haibach" and cfg.endurance_limit == "haibach"
+    assert cfg.endurance == "haibach"
     assert cfg.component == ComponentSpec()
     d = cfg.as_dict()
     json.dumps(d)

@@ -45,11 +45,11 @@ def test_the_bound_is_above_the_exact_envelope_variation_and_damage(kw):
     assert np.all(hi >= e.max(0)) and np.all(lo <= e.min(0))
     assert np.all(tv >= np.abs(np.diff(e, axis=0)).sum(0))
     U = damage_bound(hi, lo, tv, cfg.material, cfg.method, cfg.mean_stress,
-                     cfg.endurance_limit)
+                     cfg.endurance)
     for node in np.argsort(U)[::-1][:5].tolist() + [0, inf.n_nodes // 2]:
         cyc = count_series(e[:, node], cfg.residue)
         d = miner_per_node(cyc, 1, cfg.material, cfg.method, cfg.mean_stress,
-                           cfg.endurance_limit)[0]
+                           cfg.endurance)[0]
         assert 0 < d <= U[node]
 
 

@@ -74,7 +74,7 @@ def test_the_spectral_life_of_a_run(run_dir: Path, tmp_path: Path, method: str) 
 
     def rev(s1, s2):
         return cycle_reversals(s1, s2, cfg.material, "stress_life", cfg.mean_stress_rule,
-                               cfg.endurance_limit)
+                               cfg.endurance)
     want = spectral.damage_rate(method, spectral.moments(f, G), x.mean(axis=1), rev) * N / FS
     rows = np.genfromtxt(out / "damage_per_node.csv", delimiter=",", names=True)
     assert rows["node_id"].tolist() == [1, 2, 3, 4, 5, 6]
