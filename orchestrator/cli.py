@@ -184,7 +184,6 @@ COMMANDS: tuple[tuple[str, tuple[tuple[str, str, str], ...]], ...] = (
 )
 """The subcommands by ``--help`` group: (name, the module that parses its own arguments ("":
 run and check, parsed here), one-line help)."""
-COMMAND_GROUPS = tuple((title, tuple(c[0] for c in cmds)) for title, cmds in COMMANDS)
 
 
 def _version() -> str:

@@ -205,7 +205,6 @@ class SummaryWriteError(RunError):
     """``summary.json`` could not be written (a full disk, an unwritable folder)."""
 
     def __init__(self, path: Path, exc: OSError) -> None:
-        self.path, self.os_error = path, exc
         super().__init__(f"cannot write {path}: {exc.strerror or exc}"
                          + (" (the disk is full)" if exc.errno == errno.ENOSPC else ""))
 
