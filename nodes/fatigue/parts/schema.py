@@ -49,6 +49,8 @@ from cosim.errors import InputFileError
 from cosim.keys import NAME
 from cosim.safe_open import parse_user_toml, read_user_file
 
+from ..lib.influence_set import short_channel
+
 COUPLINGS = ("distributing", "rigid")
 UNITS = {"m": 1.0, "mm": 1e-3}
 AXES = ("x", "y", "z")
@@ -199,7 +201,7 @@ def _joint(src: str, i: int, raw: Any, scale_hp: float) -> Joint:
             if ax not in AXES or not isinstance(ch, str) or not ch:
                 raise InputFileError(src, f"key {where}{kind}.{ax}: expected x/y/z = "
                                           f"\"channel name\", got {ax} = {ch!r}")
-        loads[kind] = {ax: short(ch) for ax, ch in t.items()}
+        loads[kind] = {ax: short_channel(ch) for ax, ch in t.items()}
     return Joint(name, centre, radius, axis, length, node_set, coupling, mass, zone,
                  loads["forces"], loads["moments"])
 
@@ -228,11 +230,6 @@ def _refine(src: str, m: dict, scale: float) -> list[tuple[float, float, float, 
         x, y, z = (float(v) for v in _vec(src, f"mesh.refine_centres[{i}]", c) * scale)
         out.append((x, y, z, r, h))
     return out
-
-
-def short(ch: str) -> str:
-    """``plant/arm/ball_joint_z`` -> ``ball_joint_z`` (as influence.short_channel)."""
-    return ch[len("plant/arm/"):] if ch.startswith("plant/arm/") else ch
 
 
 def _content(raw: dict) -> bytes:
