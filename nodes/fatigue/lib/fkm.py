@@ -41,9 +41,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from statistics import NormalDist
 
 from .life_models import ENDURANCE_MODES, SNCurve
+from .material import reliability_factor
 
 MPa = 1.0e6
 P_FKM = 0.975
@@ -60,14 +60,6 @@ def temperature_factor(T_c: float) -> float:
     if not lo <= T_c <= hi:
         raise ValueError(f"FKM covers steel from {lo:g} to {hi:g} °C, got {T_c!r} °C")
     return 1.0 if T_c <= 100.0 else 1.0 - 1.4e-3 * (T_c - 100.0)
-
-
-def strength_scatter_factor(P: float) -> float:
-    """1 - 0.08 z_P (Shigley Eq 6-29): the strength at survival probability P over the
-    median."""
-    if not 0.5 <= P <= 0.999999:
-        raise ValueError(f"survival probability must be 0.5-0.999999, got {P!r}")
-    return 1.0 - 0.08 * NormalDist().inv_cdf(P)
 
 
 @dataclass(frozen=True)
@@ -136,7 +128,7 @@ def fkm_factors(Su: float, spec: FKMSpec, P: float = P_FKM,
     kr = roughness_factor(Rm, spec.rz_um, spec.a_r_sigma, spec.rm_n_min_pa)
     ktd = temperature_factor(temperature_c)
     swk_975 = sw * kr * spec.k_v * spec.k_s * spec.support_factor * ktd
-    p_factor = strength_scatter_factor(P) / strength_scatter_factor(P_FKM)
+    p_factor = reliability_factor(P) / reliability_factor(P_FKM)  # 1 - 0.08 z_P
     return {"K_dm": kdm, "K_A": spec.k_a, "Rm_pa": Rm, "f_W_sigma": spec.f_w_sigma,
             "sigma_W_zd_pa": sw, "K_R_sigma": kr, "K_V": spec.k_v, "K_S": spec.k_s,
             "n_sigma": spec.support_factor, "temperature_c": temperature_c, "K_T_D": ktd,
