@@ -40,8 +40,10 @@ def _realistic_run(out: Path, law: str, tmp: Path) -> Path:
         text = re.sub(r"(?m)^c = 3800\.0.*\n", "", text)
         scenario = tmp / f"{law}.toml"
         scenario.write_text(text)
+    # no live fatigue node: the batch below writes the run's fatigue results
     _ok(suscosim("run", str(scenario), "--out", str(out), "--quiet", "--set", "run.t_end=1.2",
-                 "--set", f"fatigue.influence={COARSE_ARM}", timeout=180))
+                 "--set", f"fatigue.influence={COARSE_ARM}", "--set", "fatigue.live=false",
+                 timeout=180))
     _ok(suscosim("fatigue", str(out), "--set", f"influence={COARSE_ARM}", timeout=180))
     return out
 
