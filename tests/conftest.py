@@ -109,6 +109,8 @@ def pytest_unconfigure(config: pytest.Config) -> None:
     what the summary above says. SUSCOSIM_TEST_FINALIZE=1 keeps the normal exit, to hunt it."""
     if os.environ.get("SUSCOSIM_TEST_FINALIZE") == "1" or not _EXIT_STATUS:
         return
+    if hasattr(config, "workerinput"):  # a pytest-xdist worker: its controller ends it
+        return
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(_EXIT_STATUS[-1])
