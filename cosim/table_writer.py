@@ -47,7 +47,8 @@ def layout_of(d: Mapping[str, Any]) -> Layout:
 class _Stats:
     """Running max/min/peak/mean/rms/std of one column, combined chunk by chunk (Chan et
     al.'s pairwise update for the variance): equal to numpy's whole-array values to the
-    last bits of the mean, rms and std (a sum in another order), the extremes exactly."""
+    last bits of the mean, rms and std (a sum in another order), the extremes exactly; a
+    NaN in the column makes every value NaN as numpy's (a law's ``F_demand`` may be NaN)."""
 
     __slots__ = ("n", "mx", "mn", "peak", "t_peak", "mean", "m2", "sq")
 
@@ -60,7 +61,8 @@ class _Stats:
         i = int(np.argmax(np.abs(x)))
         if self.n == 0 or abs(x[i]) > abs(self.peak) or math.isnan(x[i]):
             self.peak, self.t_peak = float(x[i]), float(t[i])
-        self.mx, self.mn = max(self.mx, float(x.max())), min(self.mn, float(x.min()))
+        self.mx = float(np.maximum(self.mx, x.max()))  # NaN-propagating, as x.max()
+        self.mn = float(np.minimum(self.mn, x.min()))
         mean_b = float(x.mean())
         m2_b = float(np.sum((x - mean_b) ** 2))
         n = self.n + m
@@ -73,7 +75,7 @@ class _Stats:
     def result(self) -> dict[str, float]:
         return {"max": self.mx, "min": self.mn, "peak": self.peak, "t_peak": self.t_peak,
                 "mean": self.mean, "rms": math.sqrt(self.sq / self.n),
-                "std": math.sqrt(max(0.0, self.m2 / self.n))}
+                "std": math.sqrt(self.m2 / self.n if not self.m2 < 0.0 else 0.0)}
 
 
 class TableWriter:

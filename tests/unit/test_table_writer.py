@@ -75,3 +75,19 @@ def test_a_step_behind_the_last_row_is_taken_and_counted_late() -> None:
     assert w.add("b/y", 3, 3.0, {"v": [2.0]}) is not None  # another layout: left out, why
     w.close()
     assert w.rows == 2 and w.held == 0
+
+
+def test_a_column_with_nan_has_nan_stats_as_numpy_gives() -> None:
+    """A NaN anywhere in a column (a law's extra field may be NaN) makes its max, min,
+    mean, rms and std NaN, as channel_stats (numpy) gives, in whichever chunk it comes."""
+    for at in (3, 600):
+        records = [("controller/force", encode("data", k, k * 1e-3,
+                                               {"F": float("nan") if k == at else k * 0.5}))
+                   for k in range(1000)]
+        writer, _ = table_of_journal(lambda r=records: r, None, chunk_rows=256)
+        assert writer is not None
+        ref, _ = build_table(records)
+        st, st_ref = writer.stats()["controller/force/F"], channel_stats(ref)[
+            "controller/force/F"]
+        for q in ("max", "min", "mean", "rms", "std"):
+            assert np.isnan(st_ref[q]) and np.isnan(st[q]), (at, q, st[q])
