@@ -35,7 +35,7 @@ z = 0, the forging's parting plane):
   inside the tubes, away from every fillet, so cutting them after changes no fillet.
 
 Lengths in metres. :func:`build` leaves the solid in the current gmsh model and returns the
-tags of the fillet faces (for mesh refinement); :func:`write_step` writes the STEP file.
+tags of the fillet faces (for mesh refinement).
 """
 
 from __future__ import annotations
