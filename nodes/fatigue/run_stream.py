@@ -49,7 +49,7 @@ from .lib.pseudo_damage import (
 )
 from .lib.superposition import stress_history
 from .load_file import bad_sample, bad_samples
-from .more_parts import UPPER_ARM, column_names
+from .more_parts import column_names
 from .outputs import (
     SnSpectrum,
     method_table,
@@ -80,14 +80,14 @@ def table_source(run_dir: Path) -> Path:
 
 def table_batches(src: Path, rows: int = BATCH_ROWS, channel: str = "arm",
                   cases: Sequence[str] = ()) -> Batches:
-    """Batches of ``t`` and the ``plant/<channel>/...`` columns of a run's table, named as a
-    part's ``cases`` name them (:func:`.more_parts.column_names`; any channel but the upper
-    arm's is the lower arm's ``plant/arm/...``, names as in the table).
+    """Batches of ``t`` and the ``plant/<channel>/...`` columns of a run's table (a four-corner
+    run's ``arm_<corner>``: that corner's loads), named as a part's ``cases`` name them
+    (:func:`.more_parts.column_names`; any channel but the upper arm's, a corner's too, is
+    the lower arm's ``plant/arm/...``).
 
     Parquet: a row group at a time (:func:`cosim.table_batches.parquet_batches`). CSV (a
     run that left no Parquet table): read whole by :func:`cosim.table.read_table`, then cut
     (bounded only for Parquet)."""
-    channel = channel if channel == UPPER_ARM else "arm"
     prefix = f"plant/{channel}/"
 
     def named(cols: list[str]) -> list[str]:

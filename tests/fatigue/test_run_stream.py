@@ -159,3 +159,21 @@ def test_critical_node_passes_memory_does_not_grow(tmp_path):
         peaks.append(tracemalloc.get_traced_memory()[1])
         tracemalloc.stop()
     assert peaks[2] < 1.2 * peaks[1], peaks  # 37 % more when eq was kept whole (65bbfeb)
+
+
+def test_a_corners_batches_are_its_own_arm_columns_not_the_front_lefts(tmp_path) -> None:
+    """A four-corner run's table holds plant/arm (the front left's) beside plant/arm_<corner>:
+    ``suscosim fatigue RUN`` with ``corner = "RL"`` reads the rear left's columns, named as
+    the lower arm's (plant/arm/...), the live node's channel (was: the front left's)."""
+    fields = ["ball_joint_x", "ball_joint_z"]
+    cols = ["k", "t", *(f"plant/arm/{f}" for f in fields),
+            *(f"plant/arm_RL/{f}" for f in fields)]
+    rows = [[k, k * 1e-3, 1.0 + k, 2.0 + k, -1.0 - k, -2.0 - k] for k in range(50)]
+    src = tmp_path / "table.csv"
+    src.write_text(",".join(cols) + "\n" + "\n".join(",".join(map(str, r)) for r in rows))
+    t, loads = (np.concatenate(x) for x in zip(*(
+        (b_t, np.column_stack([b[f"plant/arm/{f}"] for f in fields]))
+        for b_t, b in rs.table_batches(src, rows=16, channel="arm_RL")()), strict=True))
+    assert t.tolist() == [k * 1e-3 for k in range(50)]
+    assert loads[:, 0].tolist() == [-1.0 - k for k in range(50)]
+    assert loads[:, 1].tolist() == [-2.0 - k for k in range(50)]
