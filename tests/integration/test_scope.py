@@ -139,10 +139,12 @@ def unwatched(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def watched(tmp_path_factory) -> dict:
-    """The run with a scope on it: two /data reads and the page's DOM while it runs, the
-    last /data after it ended."""
+def watched(tmp_path_factory, request) -> dict:
+    """The run with a scope on it: two /data reads and the page's DOM while it runs (when
+    the Chromium test, marker ``long``, is selected), the last /data after it ended."""
     tmp = tmp_path_factory.mktemp("watched")
+    dom_wanted = CHROMIUM and any(i.name == "test_the_page_loads_the_data_in_chromium"
+                                  for i in request.session.items)
     out = tmp / "run"
     run = popen_suscosim("run", str(CH3_STEP), "--out", str(out), "--quiet", "--listen",
                          free_loopback_endpoint(), "--set", f"run.t_end={T_END}",
@@ -156,7 +158,7 @@ def watched(tmp_path_factory) -> dict:
         seen["first_running"] = run.poll() is None
         second = _until(url, lambda d: d["k"] > first["k"] + 50, since=first["k"])
         seen["second_running"] = run.poll() is None
-        if CHROMIUM:  # (while the run goes, if it still does)
+        if dom_wanted:  # (while the run goes, if it still does)
             seen["dom"] = _chromium(url, tmp)
         seen["first"], seen["second"] = first, second
         stdout, stderr = run.communicate(timeout=180)
@@ -204,6 +206,7 @@ def test_the_watched_run_is_the_unwatched_run(watched, unwatched) -> None:
         assert np.array_equal(base[col], mine[col]), col
 
 
+@pytest.mark.long  # headless Chromium
 @pytest.mark.skipif(CHROMIUM is None, reason=NO_CHROMIUM)
 def test_the_page_loads_the_data_in_chromium(watched) -> None:
     dom = watched["dom"]
