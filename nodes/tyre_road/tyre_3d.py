@@ -1,6 +1,6 @@
 """The 3-D tyre of the four-corner vehicle: the Magic Formula's road-plane forces
 from the wheel's kinematics, beside the vertical force of the point-contact tyre. Pure
-numerics: no I/O (the tyre/road node and :mod:`nodes.plant.full_vehicle_dw_sim` call it).
+numerics: no I/O (the tyre/road node calls it).
 
 Per corner, from what the plant publishes (``FullVehicleDoubleWishbone.wheel_kinematics``,
 the fields ``vx_wc``, ``vy_wc``, ``omega_w``, ``gamma``, ``r_l`` of ``plant/state``):

@@ -4,11 +4,16 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pybullet as p
 
 from cosim import lower_arm as la
+from cosim import scenario as sc
+from cosim.channels import CORNERS
+from cosim.table import read_table
 from nodes.plant import double_wishbone as dw
 from nodes.plant import double_wishbone_geometry as geo
 
@@ -31,6 +36,31 @@ def run_closed_loop(model, t_end: float, dt: float, k_t: float, c_s: float,
         for key, v in st.items():
             out.setdefault(key, []).append(np.array(v, dtype=float))
     return {k: np.array(v) for k, v in out.items()}
+
+
+def event_run(scenario: Path, folder: Path, *overrides: str) -> SimpleNamespace:
+    """An events scenario (scenarios/events/) run by the one-process engine (run.mode =
+    "monolithic", the live fatigue node off) into ``folder``; its table as histories per step:
+    t [s], F_z (the tyre's F_t), F_x, F_y [N] (n, 4: FL, FR, RL, RR), u [m/s], w_yaw [rad/s],
+    pitch, roll [rad], a_x = du/dt - v r, a_y = dv/dt + u r [m/s^2] (body axes, np.gradient
+    over the step) and arm[corner][field] (the ``plant/arm_<corner>`` loads)."""
+    from orchestrator.runner import resolve, run_scenario
+
+    s = sc.load(scenario, ['run.mode="monolithic"', "fatigue.live=false", *overrides])
+    run_scenario(resolve(s, folder), quiet=True)
+    tab = read_table(folder / "table.parquet")
+    t = tab["t"]
+    u, v, r = (tab[f"plant/state/{k}"] for k in ("u", "v", "w_yaw"))
+
+    def four(name: str) -> np.ndarray:
+        return np.column_stack([tab[f"{name}[{i}]"] for i in range(4)])
+
+    arm = {c: {k.rsplit("/", 1)[1]: tab[k] for k in tab if k.startswith(f"plant/arm_{c}/")}
+           for c in CORNERS}
+    return SimpleNamespace(t=t, F_z=four("tyre_road/force/F_t"), F_x=four("tyre_road/force/Fx"),
+                           F_y=four("tyre_road/force/Fy"), u=u, w_yaw=r,
+                           a_x=np.gradient(u, t) - v * r, a_y=np.gradient(v, t) + u * r,
+                           pitch=tab["plant/state/pitch"], roll=tab["plant/state/roll"], arm=arm)
 
 
 def peak_frequency(x: np.ndarray, dt: float, f_lo: float, f_hi: float) -> float:

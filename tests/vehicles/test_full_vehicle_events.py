@@ -1,22 +1,27 @@
 """The four-corner vehicle with Magic Formula tyres and the driver (#31 items 2-3): straight
 braking at 0.8 g and steady cornering at 0.5 g (roll with the anti-roll bars, load transfer
-per axle) against hand calculations (the bars of #31),
-stepped in the co-simulation's exchange (nodes/plant/full_vehicle_dw_sim.py: h = 2 ms,
-4 substeps, the tyre and damper held over a step, as the Ch 4-6 scenarios run)."""
+per axle) against hand calculations (the bars of #31), the shipped events
+(scenarios/events/braking_50kmh_0p8g.toml, cornering_0p5g.toml) run by the one-process engine
+(h = 2 ms, 4 substeps, the tyre and damper held over a step, as the Ch 4-6 scenarios run; the
+road is flat). The driver runs in the plant every substep on the model's mass (the one-process
+loop these tests used before held its command over a step, on the hand mass): the steady roll
+at 0.5 g is 0.04901 rad either way, a_x 0.799 g from 0.3 s (the scenario's ramp)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from nodes.plant.driver import Driver
 from nodes.plant.full_vehicle_dw import FullVehicleDoubleWishbone, FullVehicleDWParams
-from nodes.plant.full_vehicle_dw_sim import simulate
 from nodes.plant.model import GRAVITY
 from nodes.tyre_road.magic_formula import MagicFormula
 from nodes.tyre_road.tyre_3d import Tyre3D, kinematic_slip
+from tests.conftest import ROOT
 
-H, SUB, K_T, C_D = 0.002, 4, 239000.0, 3800.0
+from ._sim import event_run
+
+EVENTS = ROOT / "scenarios" / "events"
+H, K_T = 0.002, 239000.0
 M_B, H_CG, L, T, R_L = 1870.0, 0.55, 2.774, 1.411, 0.30
 
 
@@ -29,13 +34,13 @@ def _hand_mass_and_cg(car: FullVehicleDoubleWishbone) -> tuple[float, float]:
     return m, (M_B * H_CG + m_u * R_L) / m
 
 
-def _run(speed_kmh: float, t_end: float, **driver):
-    car = FullVehicleDoubleWishbone(FullVehicleDWParams(speed_kmh=speed_kmh))
+@pytest.fixture(scope="module")
+def parked():
+    """The scenario's vehicle (its static loads, masses and geometry for the hand numbers)."""
+    car = FullVehicleDoubleWishbone(FullVehicleDWParams())
     try:
         m, h = _hand_mass_and_cg(car)
-        drv = Driver(mass=m, wheel_radius=R_L, wheelbase=L, **driver)
-        hist = simulate(car, Tyre3D(MagicFormula.from_tir()), drv, t_end, H, SUB, K_T, C_D)
-        return car, hist, m, h
+        yield car, m, h
     finally:
         car.close()
 
@@ -54,15 +59,15 @@ def test_the_slips_of_a_free_rolling_and_a_sliding_wheel():
 
 
 @pytest.fixture(scope="module")
-def braking():
-    v0 = 50.0 / 3.6
-    a = 0.8 * GRAVITY
-    return _run(50.0, 1.6, speed=[(0.0, v0), (0.2, v0), (1.7, v0 - a * 1.5)])
+def braking(tmp_path_factory):
+    """50 km/h, the driver's 0.8 g speed ramp from 0.3 s (13.89 -> 2.0 m/s at 1.815 s)."""
+    return event_run(EVENTS / "braking_50kmh_0p8g.toml", tmp_path_factory.mktemp("braking"),
+                     "run.t_end=1.6")
 
 
-def test_braking_at_0_8_g_load_transfer_and_the_front_arm_bush_x_loads(braking):
-    car, hist, m, h = braking
-    win = (hist.t >= 0.6) & (hist.t <= 1.4)  # one pitch period (0.8 s) of steady braking
+def test_braking_at_0_8_g_load_transfer_and_the_front_arm_bush_x_loads(braking, parked):
+    hist, (car, m, h) = braking, parked
+    win = (hist.t >= 0.7) & (hist.t <= 1.5)  # one pitch period (0.8 s) of steady braking
     a_x = float(np.mean(hist.a_x[win]))
     assert a_x == pytest.approx(-0.8 * GRAVITY, rel=0.03)
     W = car.static_tyre_load()
@@ -94,19 +99,18 @@ def test_braking_at_0_8_g_load_transfer_and_the_front_arm_bush_x_loads(braking):
     X_l = (inertia - lhs) / (z_l - z_u)  # on the upright, forward +
     bush_hand = (X_l + c.masses["lower_arm"] * a) / 2  # on the arm: B - X_l = m_arm a
     fl = hist.arm["FL"]
-    win_a = win[:-1]
     for key in ("bush_front_x", "bush_rear_x"):
-        assert np.mean(fl[key][win_a]) == pytest.approx(bush_hand, rel=0.10), key
+        assert np.mean(fl[key][win]) == pytest.approx(bush_hand, rel=0.10), key
     # the right arm, in its mirrored frame, carries the same fore-aft bush loads
-    assert np.mean(hist.arm["FR"]["bush_front_x"][win_a]) == pytest.approx(
-        np.mean(fl["bush_front_x"][win_a]), rel=0.02)
+    assert np.mean(hist.arm["FR"]["bush_front_x"][win]) == pytest.approx(
+        np.mean(fl["bush_front_x"][win]), rel=0.02)
 
 
 @pytest.fixture(scope="module")
-def cornering():
-    R = 40.0
-    v0 = float(np.sqrt(0.5 * GRAVITY * R))
-    return _run(v0 * 3.6, 3.0, speed=[(0.0, v0)], radius=R)
+def cornering(tmp_path_factory):
+    """R = 40 m at v0 = sqrt(0.5 g R) = 14.007 m/s."""
+    return event_run(EVENTS / "cornering_0p5g.toml", tmp_path_factory.mktemp("cornering"),
+                     "run.t_end=3.0")
 
 
 def _hand_roll_stiffness() -> tuple[float, float]:
@@ -122,8 +126,8 @@ def _hand_roll_stiffness() -> tuple[float, float]:
     return axles[0], axles[1]
 
 
-def test_steady_cornering_at_0_5_g_roll_and_lateral_load_transfer(cornering):
-    car, hist, m, h = cornering
+def test_steady_cornering_at_0_5_g_roll_and_lateral_load_transfer(cornering, parked):
+    hist, (car, m, h) = cornering, parked
     win = hist.t >= 2.0  # steady: the yaw-rate follower settled (roll within 0.0487-0.0494)
     a_y = float(np.mean(hist.a_y[win]))
     assert a_y == pytest.approx(0.5 * GRAVITY, rel=0.05)
