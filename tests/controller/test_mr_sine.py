@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bench.thesis_ch5 import THESIS_LAWS, sine_response
 from nodes.controller import mr_damper as mr
-from nodes.controller.sine_study import THESIS_LAWS, sine_response
 
 ROWS = {r["id"]: r for r in csv.DictReader(
     (Path(__file__).parent / "data" / "thesis_ch5_sine.csv").open())}

@@ -1,29 +1,15 @@
 """python -m bench ch5-sine-bounds: the closed-form 2-DOF amplitudes against the time-domain sine
 study, and the bound that puts Fig 5.13(c)'s 5 Hz force out of reach of the scaled MR damper."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from bench import thesis_ch5 as sb
+from bench.thesis_ch5 import sine_response, steady
 from nodes.controller import mr_damper as mr
-from nodes.controller.sine_study import sine_response, steady
-
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def _bench():
-    spec = importlib.util.spec_from_file_location("thesis",
-                                                  ROOT / "bench" / "thesis_ch5.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def test_closed_form_matches_time_domain_passive():
-    sb = _bench()
     freqs = [1.5, 5.0]
     r = sine_response({"law": "passive", "c": 1500.0}, freqs)
     for i, f in enumerate(freqs):
@@ -34,7 +20,6 @@ def test_closed_form_matches_time_domain_passive():
 
 
 def test_scaled_mr_force_cannot_reach_fig_5_13c():
-    sb = _bench()
     p = mr.MRParams()
     vmax = max(sb.linear_amplitudes(5.0, c)[0] for c in np.linspace(0.0, 6000.0, 61))
     fy, cp = float(mr.yield_force(0.6, p)), float(mr.c_post(0.6, p))
