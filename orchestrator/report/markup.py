@@ -1,5 +1,5 @@
 """HTML primitives of the report: escaping, number formatting, tables, sections, the page
-frame and its inline CSS (no scripts, no external resources)."""
+frame and its CSS (report.css, inlined: no scripts, no external resources)."""
 
 from __future__ import annotations
 
@@ -7,36 +7,11 @@ import html
 import math
 import re
 from collections.abc import Iterable, Sequence
+from importlib import resources
 from typing import Any, TypeGuard
 
-CSS = """
-body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;
- margin:0;background:#f4f5f7;color:#1d2330;font-size:15px;line-height:1.45}
-main{max-width:1180px;margin:0 auto;padding:18px 26px 60px;background:#fff;
- box-shadow:0 0 8px rgba(0,0,0,.08)}
-h1{font-size:1.6em;margin:.3em 0 .2em}h2{font-size:1.3em;margin:1.6em 0 .5em;
- border-bottom:2px solid #d7dbe3;padding-bottom:.2em}h3{font-size:1.08em;margin:1.1em 0 .4em}
-table{border-collapse:collapse;margin:.4em 0 .8em;font-size:.88em}
-th,td{border:1px solid #d7dbe3;padding:3px 8px;text-align:left;vertical-align:top}
-th{background:#eef1f6}td.num{text-align:right;font-variant-numeric:tabular-nums}
-.scroll{overflow-x:auto;max-width:100%}
-.kv td:first-child{color:#4a5568;white-space:nowrap}
-.badge{display:inline-block;padding:1px 10px;border-radius:10px;font-weight:600;color:#fff}
-.ok{background:#2f855a}.failed{background:#c53030}.unknown{background:#718096}
-.note{background:#fffbea;border-left:4px solid #d69e2e;padding:6px 12px;margin:.6em 0}
-.error{background:#fff5f5;border-left:4px solid #c53030;padding:6px 12px;margin:.6em 0;
- white-space:pre-wrap;font-family:ui-monospace,Menlo,Consolas,monospace;font-size:.9em}
-code,pre{font-family:ui-monospace,Menlo,Consolas,monospace;font-size:.92em}
-pre{background:#f6f8fa;padding:8px;white-space:pre-wrap;word-break:break-word}
-img.plot{max-width:100%;height:auto;display:block;margin:.4em 0}
-nav{font-size:.92em;margin:.4em 0 1em}nav a{margin-right:12px}
-.maps{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:12px}
-figure{margin:0}figcaption{font-size:.88em;color:#4a5568}
-.meta{color:#4a5568;font-size:.88em}
-.row{display:flex;flex-wrap:wrap;gap:0 26px;align-items:flex-start}
-.row>div{min-width:0}.kv td.num{text-align:left}
-.glance{font-size:1.02em}.glance td:last-child{font-weight:600}
-"""
+CSS = resources.files(__package__).joinpath("report.css").read_text(encoding="utf-8")
+"""The page's style sheet (report.css, package data), inlined in every page."""
 
 
 def esc(x: Any) -> str:
@@ -141,6 +116,6 @@ def nav(items: Sequence[tuple[str, str]]) -> str:
 def page(title: str, body: str) -> str:
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-            f"<title>{esc(title)}</title><style>{CSS}</style></head>\n<body><main>\n"
+            f"<title>{esc(title)}</title><style>\n{CSS}</style></head>\n<body><main>\n"
             f"{body}\n<p class=\"meta\">suscosim report · self-contained: no scripts, no "
             "external resources.</p></main></body></html>\n")
