@@ -129,7 +129,6 @@ def test_compiled_bound_of_kept_slots_equals_a_fresh_gather_as_the_set_changes()
     """StressScreen.bounds_kept (the nodes' table columns kept in slots between blocks, nodes
     leaving and joining) gives each node the bound a fresh screen, which gathers them anew,
     gives it, bit for bit (a node's lanes never mix with another's)."""
-    pytest.importorskip("numba")
     from nodes.fatigue.lib.screening import load_stats
 
     cfg = FatigueConfig.from_dict(COARSE)

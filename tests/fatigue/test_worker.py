@@ -9,7 +9,6 @@ import pytest
 
 from cosim.errors import InputFileError, ScenarioError
 from nodes.fatigue.config import FatigueConfig
-from nodes.fatigue.lib.screening import SCREEN_FRACTION
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import LiveFatigue, analyse
 from orchestrator.fatigue_cli import main
@@ -82,11 +81,11 @@ def test_screened_live_in_blocks_of_block_samples_is_the_batch_bit_for_bit():
     nodes with the same bounds; fed other blocks, the reported quantities still agree."""
     cfg = FatigueConfig.from_dict({**COARSE, "block_samples": 300})
     t, loads = pave_like_loads(4.0, seed=2, static_n=6000, rms_n=4000)
-    batch = analyse(t, loads, cfg, 40.0, screen=SCREEN_FRACTION)
+    batch = analyse(t, loads, cfg, 40.0, screen=0.01)
     assert batch.screened is not None and batch.screened.any()
     channels = list(loads)
     arr = np.stack([loads[c] for c in channels], axis=1)
-    live = LiveFatigue(cfg, channels, track_length_m=40.0, screen=SCREEN_FRACTION,
+    live = LiveFatigue(cfg, channels, track_length_m=40.0, screen=0.01,
                        total_samples=t.size)
     for i in range(0, t.size, 300):
         live.update(t[i:i + 300], arr[i:i + 300])
@@ -95,7 +94,7 @@ def test_screened_live_in_blocks_of_block_samples_is_the_batch_bit_for_bit():
     np.testing.assert_array_equal(res.screened, batch.screened)
     np.testing.assert_array_equal(res.eq_max, batch.eq_max)
     assert res.summary()["top_nodes"] == batch.summary()["top_nodes"]
-    other = LiveFatigue(cfg, channels, track_length_m=40.0, screen=SCREEN_FRACTION)
+    other = LiveFatigue(cfg, channels, track_length_m=40.0, screen=0.01)
     rng = np.random.default_rng(7)
     i = 0
     while i < t.size:

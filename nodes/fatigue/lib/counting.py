@@ -42,11 +42,13 @@ COMPILE_S: dict[str, float] = {}
 _COMPILE_LOCK = threading.Lock()
 
 
-def compile_kernels(g: dict, kernels: tuple[tuple[str, str], ...]) -> None:
+def compile_kernels(g: dict, kernels: tuple[tuple[str, str], ...],
+                    inline: tuple[str, ...] = ()) -> None:
     """Replace the pure-Python kernels ``kernels`` ((name, numba signature), callees first)
     of the module whose globals are ``g`` by numba functions compiled now: explicit
     signatures, ``cache=True`` (in ``__pycache__``, or numba's user cache where that is
-    read-only), no fastmath (IEEE operations in the order written). Once per module, any
+    read-only), no fastmath (IEEE operations in the order written); the helpers ``inline``
+    (names in ``g``) are inlined into them (``inline="always"``). Once per module, any
     thread. numba is a dependency: one that does not import is an error."""
     name = g["__name__"]
     if name in COMPILE_S:
@@ -60,6 +62,8 @@ def compile_kernels(g: dict, kernels: tuple[tuple[str, str], ...]) -> None:
         except Exception as exc:  # a broken install: say so
             raise RuntimeError(f"numba does not import ({exc}); the fatigue kernels need it "
                                "(a dependency: pip install numba)") from exc
+        for fn in inline:
+            g[fn] = numba.njit(inline="always")(getattr(g[fn], "py_func", g[fn]))
         for fn, sig in kernels:
             g[fn] = numba.njit(sig, cache=True, error_model="numpy", nogil=True)(g[fn])
         COMPILE_S[name] = time.perf_counter() - t0

@@ -1,77 +1,40 @@
 """Screening: an upper bound of each node's Miner damage from the loads' block statistics.
 
 Computing a node's damage exactly costs its stresses at every sample (superposition, the
-equivalent stress, rainflow). This module bounds it from what a block of load samples gives
-for all nodes at once, so that a node whose bound stays below a stated fraction of the
-damage already reached need not be computed (:mod:`.worker`).
+equivalent stress, rainflow). This module bounds it from what a block of loads gives for all
+nodes at once, so that a node whose bound stays below a stated fraction of the damage already
+reached need not be computed (:mod:`.worker`). Symbols: A_c a node's influence coefficients
+(σx σy σz τxy τyz τzx, Pa per N or N m) of load case c, F_c the loads (N, N m), stress
+σ = Σ_c A_c F_c; e_k the equivalent stress (Pa; abs-max principal or signed von Mises) at
+sample k. Per block and node (:class:`StressScreen`, per sub-block of :data:`SUB_SAMPLES`
+loads): the envelope [lo, hi] of e and a bound of its total variation TV = Σ_k |e_k - e_(k-1)|
+(Pa). Over the history (envelope [LO, HI]) the damage D <= g (TV + (HI - LO)/2)
+(:func:`damage_bound`), g (1/Pa) the largest damage per unit of range of a cycle inside
+[LO, HI] (:func:`damage_per_range`), for the laws :func:`unsupported` accepts. Source: derived
+for this project from Weyl's inequality, Perron-Frobenius and rainflow's four-point rule;
+the derivation, and the rounding margins (:data:`BRACKET_REL`, :data:`BRACKET_ABS`,
+:data:`ROUNDING_MARGIN`) that keep it above the true principal stresses of the computed
+tensors, are in docs/live_fatigue.md, "The screening bound". It holds for every history
+(tests/fatigue/test_screening.py checks it against exact counts; a non-finite tensor gives
+the node (+inf, -inf, +inf): never left out); it is not tight, which only costs how many
+nodes are screened out, never a wrong result.
 
-**The bound** (one node, equivalent-stress history e_k, k = 0..N-1, Pa). With the node's
-influence coefficients A_c (6 components per load case c) the stress is σ(t) = Σ_c A_c F_c(t).
-Per block of loads (the previous block's last sample included):
-
-1. *Envelope* [lo, hi] of e over the block. With F_mid the middle and h_c the half range of
-   each load over the block, σ(t) = σ_mid + E(t), |E_ij| <= R_ij = Σ_c |A_c,ij| h_c; the
-   spectral norm ||E|| <= λmax(R) =: ρ (a non-negative matrix bounds |E|'s spectral radius,
-   Perron-Frobenius). Weyl's inequality puts each principal stress within ρ of σ_mid's.
-   *abs_max_principal*: e = σ1 where σ1 + σ3 >= 0 (then σ1 >= 0), else σ3 (< 0); σ1 + σ3 moves
-   by at most 2ρ, which tells which branches the block can take. *signed_von_mises*: the von
-   Mises stress is a seminorm (|vm(a) - vm(b)| <= vm(a - b)), vm(E) <= sqrt(R·|Q|·R) with Q its
-   quadratic form; the hydrostatic stress, linear in the loads, has the exact interval
-   tr(σ_mid)/3 ± Σ_c |tr A_c|/3 h_c.
-2. *Total variation* TV = Σ_k |e_k - e_(k-1)|. On a step that keeps the branch,
-   |Δe| <= N(Δσ) with N the Frobenius norm (>= the spectral norm, 1-Lipschitz for σ1, σ3) or
-   vm. A step that changes the branch jumps by at most 2 N(Δσ) + J: J = 2 max min(|σ1|, |σ3|)
-   (the jump's ends are both near the switching surface |σ1| = |σ3|), or 2 max vm for the
-   signed von Mises. Σ_k N(Δσ_k) over the block is at most the smaller of Σ_c N(A_c) Σ_k |ΔF_ck|
-   and Σ_m N(A v_m) Σ_k |z_mk| (the loads' increments in the principal axes v_m of their
-   scatter matrix, z = Vᵀ ΔF). A block where the branch can change counts every step as a
-   possible change.
-3. *Damage.* The rainflow count removes pairs b, c from a, b, c, d with |b - c| <= |a - b|,
-   |c - d|: the history's total variation drops by exactly 2|b - c|. So the full cycles' ranges
-   sum to (TV - TV(residue)) / 2; half cycles of the residue sum to TV(residue) / 2, and the
-   repeated residue closes cycles whose 2Δ sum to at most 2 TV(residue) + |r_m - r_1|:
-   Σ count·Δ <= TV + (HI - LO) / 2 in both residue modes (HI, LO: the envelope over all
-   blocks). A cycle's damage d(σa, σm) (stress-life) grows with σm and d / σa grows with σa
-   (Basquin slopes k >= 1, Haibach 2k - 1, SWT needs k >= 2); a cycle of amplitude a in
-   [LO, HI] has σm <= HI - a, so on a grid a_j = j A / K (A = (HI - LO) / 2) every cycle has
-   d <= Δ · max_j d(a_(j+1), HI - a_j) / (2 a_(j+1)) =: Δ · g, and D <= g (TV + (HI - LO)/2).
-
-Steps 1-2 are numba kernels (:meth:`StressScreen.block`, per :data:`SUB_SAMPLES`-sample
-sub-block: ~1.8 ns per node-sample against 11-14 for the exact path): the loads' statistics
-per sub-block once in numpy (:func:`load_stats`), then per node and sub-block ~550
-floating-point operations with the node's coefficients in cache (:attr:`StressScreen.T`),
-written for LLVM's vectoriser (flat scratch rows, inlined scalar helpers). The bound is
-rigorous for every history (the tests check it against exact counts); it is not tight,
-which only costs how many nodes are screened out, never a wrong result.
-
-**Rounding.** Principal stresses without transcendentals, proven: the largest root of
-4c³ - 3c = r is bracketed by :func:`.turning_eq._root1`. The bound must hold for the *true*
-principal stresses of the computed tensor, so the rounding of q, p, det and r is covered by a
-half-width ``BRACKET_REL`` x 2p + ``BRACKET_ABS`` x |q| (r's rounding, a few 1e-16, moves the
-root by at most ~sqrt(|Δr|) < 1e-7 at the double root r = -1; q's and the deviator's by a few
-ulp of |q|). The middle stress's own rounding (a sum of 15 products) is below
-1e-15 x max_c |F_c| x Σ|A|: the envelope is padded by :data:`ROUNDING_MARGIN` (1e-9) times
-that, |hi|, |lo| and Σ R; TV and the damage bound are raised by the same margin. A
-non-finite tensor gives the node (+inf, -inf, +inf): never left out.
+The bound is numba kernels (:func:`_bound_chunk`): the loads' statistics per sub-block once in
+numpy (:func:`load_stats`), then ~550 flops per node and sub-block, :data:`CHUNK` nodes at a
+time, written for LLVM's vectoriser (~1.8 ns per node-sample against 11-14 for the exact path).
 """
 
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 
-from .counting import COMPILE_S, compile_kernels
+from . import turning_eq
+from .counting import compile_kernels
 from .damage import cycle_reversals, sn_curve
 from .life_models import SNCurve
 from .material import Material
 from .turning_eq import _root1  # noqa: F401  (compiled with this module's kernels)
 
-SCREEN_FRACTION = 1e-2
-"""Suggested screening fraction f (screening is off unless asked for: ``screen=`` of
-:func:`.worker.analyse` / :class:`.worker.LiveFatigue`; docs/live_fatigue.md): a node
-is left out while its damage bound is below f times the largest damage reached (and below
-the tenth largest, and its stress envelope inside the computed nodes' extremes)."""
 TOP_NODES = 10
 """The reported most damaged nodes (``summary.json`` ``top_nodes``): never screened out."""
 ROUNDING_MARGIN = 1e-9
@@ -79,10 +42,9 @@ SUB_SAMPLES = 25
 GRID = 8
 """Amplitude intervals of the damage-per-range bound g."""
 BRACKET_REL = 1e-6
-"""Half-width of a principal stress's bracket per unit of 2p (see the module docstring)."""
+"""Half-width of a principal stress's bracket per unit of 2p (covers r's rounding)."""
 BRACKET_ABS = 1e-12
 """Half-width of a principal stress's bracket per unit of |q| (rounding of q, deviator)."""
-_LOCK = threading.Lock()
 _FROB = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
 """Frobenius norm² of a symmetric tensor from its 6 components (σx σy σz τxy τyz τzx)."""
 _VM = np.array([[1.0, -0.5, -0.5, 0, 0, 0], [-0.5, 1.0, -0.5, 0, 0, 0],
@@ -117,9 +79,8 @@ def _sel(c, a, b):  # type: ignore[no-untyped-def]
 
 
 CHUNK = 32
-"""Nodes bounded at a time (their gathered table 32 x ~3.5 kB stays in L2; measured best
-of 8-64). A compile-time constant of the kernels: the scratch rows are CHUNK apart, so
-LLVM sees their distances and vectorises the node loops without runtime alias checks."""
+"""Nodes bounded at a time (measured best of 8-64); a compile-time constant, so LLVM sees the
+scratch rows' distances and vectorises the node loops without runtime alias checks."""
 _S, _HR, _ZR, _RH, _HB, _LB, _BAD, _JMP, _WT, _T1, _T2 = (
     0, 6, 12, 18, 19, 20, 21, 22, 23, 24, 25)
 """Rows of the flat scratch (x CHUNK): the middle stress (6), the two deviation bounds
@@ -129,10 +90,9 @@ ROWS = 26
 
 
 def _bound_chunk(X, M, H, ZH, Mmax, tvF, tvZ, nin, vm, o, w, tv):  # type: ignore[no-untyped-def]  # noqa: C901, E501
-    """The CHUNK nodes of the gathered table X (width, CHUNK; offsets ``o`` of
-    :class:`StressScreen`) over every sub-block j: envelope into the rows _HB, _LB of the
-    flat scratch w (ROWS x CHUNK), TV into tv, non-finite into _BAD. Every inner loop
-    runs over the nodes (SIMD)."""
+    """The CHUNK nodes of the table X (width, CHUNK; offsets ``o``) over every sub-block:
+    envelope into the rows _HB, _LB of the scratch w (ROWS x CHUNK), TV into tv, non-finite
+    into _BAD. Every inner loop runs over the nodes (SIMD)."""
     nc = M.shape[1]
     C = CHUNK
     oC, oA, oV, oNA, oNAV, oT, oS = o[0], o[1], o[2], o[3], o[4], o[5], o[6]
@@ -217,8 +177,7 @@ def _bound_chunk(X, M, H, ZH, Mmax, tvF, tvZ, nin, vm, o, w, tv):  # type: ignor
 
 def _bound_slots(Xs, m, M, H, ZH, Mmax, tvF, tvZ, nin, vm, o, w, hi_out, lo_out,  # type: ignore[no-untyped-def]  # noqa: E501
                  tv_out):
-    """Envelope and TV bound over the block (:func:`_bound_chunk`) of the nodes in the
-    first m slots of the chunks Xs (chunks, width, CHUNK), results by slot."""
+    """:func:`_bound_chunk` of the first m slots of the chunks Xs, results by slot."""
     C = CHUNK
     tv = np.empty(C)
     for ch in range((m + C - 1) // C):
@@ -241,34 +200,27 @@ _STATS = f"{_A2}, {_A2}, {_A2}, {_F1}, {_A2}, {_A2}, {_F1}, i8, i8[::1]"
 """M, H, ZH, Mmax, tvF, tvZ, nin (:func:`load_stats`), vm, offsets."""
 KERNELS = (("_bound_chunk", f"void({_A2}, {_STATS}, {_F1}, {_F1})"),
            ("_bound_slots", f"void(f8[:, :, ::1], i8, {_STATS}, {_F1}, {_F1}, {_F1}, {_F1})"))
-INLINE = ("_sel", "_principal")
+INLINE = ("_root1", "_sel", "_principal")
 """Helpers inlined into the kernels (numba ``inline="always"``: the node loops stay
 straight-line code that LLVM vectorises; a call per node-sub-block would not)."""
 
 
 def build() -> None:
     """Compile this module's kernels now (or load them from numba's cache; once)."""
-    from . import turning_eq
-
-    g = globals()
-    if __name__ not in COMPILE_S:
-        import numba
-
-        turning_eq.build()
-        with _LOCK:
-            if not hasattr(g["_sel"], "py_func"):
-                root = getattr(turning_eq._root1, "py_func", turning_eq._root1)
-                g["_root1"] = numba.njit(inline="always")(root)
-                for fn in INLINE:
-                    g[fn] = numba.njit(inline="always")(g[fn])
-    compile_kernels(g, KERNELS)
+    turning_eq.build()
+    compile_kernels(globals(), KERNELS, INLINE)
 
 
-def load_stats(Fe: np.ndarray, V: np.ndarray, sub_samples: int) -> dict[str, np.ndarray]:
+LoadStats = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                  np.ndarray]
+
+
+def load_stats(Fe: np.ndarray, V: np.ndarray, sub_samples: int) -> LoadStats:
     """The loads' statistics per sub-block of ``sub_samples`` increments (N, N m): middle M,
     half range H, the half range ZH along the principal axes V about M, max |M|, the
-    increments' absolute sums tvF and tvZ and the number of increments nin. ``Fe``
-    (n_e, cases): the block with the previous block's last sample first."""
+    increments' absolute sums tvF and tvZ and the number of increments nin (the kernels'
+    arguments in that order). ``Fe`` (n_e, cases): the block with the previous block's last
+    sample first."""
     n_e, nc = Fe.shape
     L = max(1, int(sub_samples))
     starts = np.arange(0, max(n_e - 1, 1), L)
@@ -289,8 +241,7 @@ def load_stats(Fe: np.ndarray, V: np.ndarray, sub_samples: int) -> dict[str, np.
         tvF = np.add.reduceat(np.abs(np.diff(Fe, axis=0)), starts, axis=0)
         tvZ = np.add.reduceat(np.abs(np.diff(Z, axis=0)), starts, axis=0)
         nin = (stops - starts - 1).astype(float)
-    return {"M": M, "H": H, "ZH": np.ascontiguousarray(ZH), "Mmax": np.abs(M).max(axis=1),
-            "tvF": tvF, "tvZ": tvZ, "nin": nin}
+    return M, H, np.ascontiguousarray(ZH), np.abs(M).max(axis=1), tvF, tvZ, nin
 
 
 def unsupported(mat: Material, method: str, mean_stress: str) -> str | None:
@@ -342,12 +293,10 @@ def damage_per_range(hi: np.ndarray, lo: np.ndarray, mat: Material, method: str,
 
 
 class StressScreen:
-    """Bounds of the equivalent stress of any set of nodes over a block of loads, from the
-    loads alone (module docstring): the envelope [lo, hi] and the total variation TV, per
-    sub-block of ``sub_samples`` (the smaller a sub-block's load ranges, the tighter its
-    envelope; the cost grows with their number). The kernels' per-node table :attr:`T`, one
-    row a node: A (cases x 6), |A|, |A V|, the norms N(A_c), N(A v_m), |tr A_c|/3 and Σ|A|
-    (316 doubles a node: read from memory once a block); :attr:`offsets` where each starts."""
+    """The envelope [lo, hi] and total variation TV of the equivalent stress of any set of
+    nodes over a block of loads, from the loads alone. The kernels' per-node table :attr:`T`,
+    a row a node: A (cases x 6), |A|, |A V|, the norms N(A_c), N(A v_m), |tr A_c|/3 and Σ|A|
+    (316 doubles a node); :attr:`offsets` where each starts."""
 
     def __init__(self, coefficients: np.ndarray, equivalent: str) -> None:
         C = np.asarray(coefficients, dtype=float)
@@ -358,31 +307,23 @@ class StressScreen:
         self.Q = np.diag(_FROB) if equivalent == "abs_max_principal" else _VM
         self.V: np.ndarray | None = None
         Cn = C.transpose(1, 0, 2).reshape(n, -1)
-        widths = [6 * nc, 6 * nc, 6 * nc, nc, nc, nc, 1]
-        self.offsets = np.cumsum([0] + widths[:-1]).astype(np.int64)
-        o = self.offsets
-        self.T = np.empty((n, sum(widths)))
-        self.T[:, o[0]:o[1]] = Cn
-        np.abs(Cn, out=self.T[:, o[1]:o[2]])
-        self.T[:, o[3]:o[4]] = self._norms(C).T
-        self.T[:, o[5]:o[6]] = (np.abs(C[:, :, 0] + C[:, :, 1] + C[:, :, 2]) / 3.0).T
-        self.T[:, o[6]] = self.T[:, o[1]:o[2]].sum(axis=1)
-        self.T[:, o[2]:o[3]] = np.inf  # until set_axes: no tighter bound along them
-        self.T[:, o[4]:o[5]] = np.inf
+        un = np.full((n, 7 * nc), np.inf)  # |A V|, N(A v_m) until set_axes: no tighter bound
+        cols = [Cn, np.abs(Cn), un[:, :6 * nc], self._norms(C).T, un[:, 6 * nc:],
+                (np.abs(C[:, :, 0] + C[:, :, 1] + C[:, :, 2]) / 3.0).T,
+                np.abs(Cn).sum(axis=1)[:, None]]
+        self.T = np.concatenate(cols, axis=1)
+        self.offsets = np.cumsum([0] + [c.shape[1] for c in cols[:-1]]).astype(np.int64)
         self.slot_node = np.zeros(0, dtype=np.int64)
         """The node in each kept slot (:meth:`bounds_kept`)."""
         self.node_slot = np.full(n, -1, dtype=np.int64)
         self.Xs = np.zeros((-(-n // CHUNK), self.T.shape[1], CHUNK))
-        """Kept nodes' table columns, CHUNK nodes a chunk (node-innermost; room for every
-        node, its pages touched only as nodes are kept)."""
+        """Kept nodes' table columns, CHUNK nodes a chunk (node-innermost; room for all)."""
 
     def block(self, Fe: np.ndarray, idx: np.ndarray, sub_samples: int,
               probe: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(hi, lo, tv) of nodes ``idx`` over the samples of ``Fe`` (n_e, cases): the block's
-        loads with the previous block's last sample first (its increment counts; the
-        envelope covers it too; TV covers the n_e - 1 increments); the nodes ``idx`` kept in
-        slots between calls (the left-out set); ``probe``: more nodes (gathered for this
-        call), their results after idx's."""
+        """(hi, lo, tv) of nodes ``idx`` (then ``probe``'s) over ``Fe`` (n_e, cases): the
+        block's loads with the previous block's last sample first (TV covers its n_e - 1
+        increments)."""
         if self.V is None:
             self.set_axes(Fe)
         assert self.V is not None
@@ -396,9 +337,8 @@ class StressScreen:
         return np.sqrt(np.maximum(((C @ self.Q) * C).sum(axis=2), 0.0))
 
     def set_axes(self, F: np.ndarray) -> None:
-        """Principal axes V of a block of loads (the first): correlated loads (joint loads in
-        equilibrium) bound much tighter along them than channel by channel. Sets the
-        table's columns |A V| and N(A v_m)."""
+        """Principal axes V of a block of loads (the first; correlated loads bound much tighter
+        along them than channel by channel) and the table's columns |A V|, N(A v_m)."""
         X = np.asarray(F, dtype=float)
         X = X - X.mean(axis=0)
         _, V = np.linalg.eigh(X.T @ X)
@@ -411,9 +351,8 @@ class StressScreen:
         self.node_slot[:] = -1
 
     def _keep(self, idx: np.ndarray) -> None:
-        """Make the kept slots hold exactly the nodes ``idx`` (any order): a node that
-        left is replaced by one from the end, new nodes appended (their columns written
-        once, not gathered every block)."""
+        """Make the kept slots hold exactly the nodes ``idx`` (any order): a node that left
+        is replaced by one from the end, new nodes appended (columns written once)."""
         n = self.node_slot.size
         want = np.zeros(n, dtype=bool)
         want[idx] = True
@@ -437,18 +376,16 @@ class StressScreen:
             self.slot_node = np.concatenate([self.slot_node, new])
             self.node_slot[new] = slots
 
-    def bounds_kept(self, stats: dict[str, np.ndarray], idx: np.ndarray, von_mises: bool
+    def bounds_kept(self, stats: LoadStats, idx: np.ndarray, von_mises: bool
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(hi, lo, tv) (Pa) of nodes ``idx`` (distinct) over the block of ``stats``, their
-        table rows kept in slots between calls (written once, not gathered every block)."""
+        """(hi, lo, tv) (Pa) of nodes ``idx`` (distinct) over the block of ``stats``
+        (:func:`load_stats`), their table rows kept in slots between calls."""
         build()
         self._keep(idx)
         m = self.slot_node.size
         hi, lo, tv = np.empty(m), np.empty(m), np.empty(m)
-        s = stats
-        _bound_slots(self.Xs, m, s["M"], s["H"], s["ZH"], s["Mmax"], s["tvF"], s["tvZ"],
-                     s["nin"], int(von_mises), self.offsets, np.empty(ROWS * CHUNK),
-                     hi, lo, tv)
+        _bound_slots(self.Xs, m, *stats, int(von_mises), self.offsets,
+                     np.empty(ROWS * CHUNK), hi, lo, tv)
         at = self.node_slot[idx]
         return hi[at], lo[at], tv[at]
 
@@ -457,45 +394,42 @@ def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, 
                  mean_stress: str, endurance: str | bool | None,
                  g: np.ndarray | None = None) -> np.ndarray:
     """Upper bound of each node's damage (residue closed, either mode) from its envelope
-    [lo, hi] and total variation tv over the history: g (TV + (HI - LO)/2), raised by the
+    [lo, hi] and total variation tv (Pa) over the history: g (TV + (HI - LO)/2), raised by the
     rounding margin; inf where the envelope is not finite. ``g``: :func:`damage_per_range`
     of this envelope when already known (1/Pa, per node)."""
     hi = np.asarray(hi, dtype=float)
     lo = np.asarray(lo, dtype=float)
-    out = np.full(hi.shape, np.inf)
-    seen = np.isfinite(hi) & np.isfinite(lo)
-    if not seen.any():
-        return out
-    g = damage_per_range(hi[seen], lo[seen], mat, method, mean_stress, endurance) \
-        if g is None else np.asarray(g)[seen]
+    if g is None:
+        g = _per_range(hi, lo, (mat, method, mean_stress, endurance))
     with np.errstate(invalid="ignore"):
-        U = g * (tv[seen] + 0.5 * (hi[seen] - lo[seen]))
-    out[seen] = np.where(np.isnan(U), np.inf, U) * (1.0 + ROUNDING_MARGIN) + 1e-300
-    return out
+        U = g * (tv + 0.5 * (hi - lo))
+        ok = np.isfinite(hi) & np.isfinite(lo) & ~np.isnan(U)
+        return np.where(ok, U * (1.0 + ROUNDING_MARGIN) + 1e-300, np.inf)
+
+
+def _per_range(hi: np.ndarray, lo: np.ndarray, law: tuple) -> np.ndarray:
+    """:func:`damage_per_range` where the envelope is finite, else inf."""
+    ok = np.isfinite(hi) & np.isfinite(lo)
+    g = np.full(hi.shape, np.inf)
+    g[ok] = damage_per_range(hi[ok], lo[ok], *law)
+    return g
 
 
 DROP_MARGIN = 0.5
 PROJECTED_MARGIN = 0.3
 PROBE_SAMPLES = 2000
-"""A candidate's :attr:`Screening.rate` is measured until it has seen this many samples."""
+"""A candidate's bound rate is measured until it has seen this many samples."""
 
 
 class Screening:
     """Which nodes must be computed exactly, block by block (the rule of :mod:`.worker`).
 
-    Per node it keeps the envelope [LO, HI] of the equivalent stress over the history (exact
-    for the blocks in which the node was computed, bounds of :class:`StressScreen` for the
-    others), the damage D0 of the cycles closed when it was last computed (exact), and TVr:
-    the total variation of its rainflow residue then plus the bounds of the variation of
-    every block since. The rest of the count is the counter run on the residue and the
-    later samples, so (module docstring, step 3, on that sequence)
-
-        D <= U = D0 + g(HI, LO) (TVr + (HI - LO)/2)
-
-    bounds the node's damage so far, residue closed, however each block was taken. The load
-    blocks are kept (:attr:`history`) so that a node brought back is recomputed from where
-    it was left out (its exact state then is kept by the engine).
-    """
+    Per node: the envelope [LO, HI] (:attr:`hi`, :attr:`lo`: exact while computed, else
+    :class:`StressScreen`'s bounds), D0 the damage of the cycles closed when last computed,
+    TVr the total variation of its rainflow residue then plus every block's bound since; the
+    rest of the count is the counter run on the residue and the later samples, so
+    D <= U = D0 + g(HI, LO) (TVr + (HI - LO)/2). The load blocks are kept (:attr:`history`):
+    a node brought back is recomputed from where it was left out."""
 
     def __init__(self, coefficients: np.ndarray, equivalent: str, mat: Material, method: str,
                  mean_stress: str, endurance: str | bool | None, fraction: float) -> None:
@@ -520,29 +454,26 @@ class Screening:
         """The envelopes (hi, lo) at which :attr:`g` was computed (NaN: not yet)."""
         self.rate_tv = np.zeros(n)
         self.rate_n = np.zeros(n)
+        """Per node: its bound's variation (Pa) over the blocks it was bounded in (left out,
+        or a candidate to be), and their samples: the rate rate_tv / rate_n."""
         self.probe = np.arange(n)
-        """Computed nodes whose :attr:`rate` the next block measures (the candidates)."""
+        """Computed nodes whose rate the next block measures (the candidates)."""
 
     def bound(self, idx: np.ndarray | None = None, tv: np.ndarray | None = None
               ) -> np.ndarray:
-        """U of nodes ``idx`` (all when None), or with variation ``tv`` instead of theirs;
-        g of their envelope from :meth:`_g`."""
+        """U of nodes ``idx`` (all when None), or with variation ``tv`` instead of theirs."""
         s = np.arange(self.hi.size) if idx is None else idx
         return self.d0[s] + damage_bound(self.hi[s], self.lo[s],
                                          self.tv_r[s] if tv is None else tv, *self.law,
                                          g=self._g(s))
 
     def _g(self, idx: np.ndarray) -> np.ndarray:
-        """:func:`damage_per_range` of nodes ``idx``'s envelopes, recomputed only where an
-        envelope changed since (most left-out nodes' envelopes stop growing early)."""
+        """g of nodes ``idx``'s envelopes, recomputed only where an envelope changed since
+        (most left-out nodes' envelopes stop growing early)."""
         stale = idx[(self.hi[idx] != self.g_at[0, idx]) | (self.lo[idx] != self.g_at[1, idx])]
         if stale.size:
-            h, lo = self.hi[stale], self.lo[stale]
-            ok = np.isfinite(h) & np.isfinite(lo)
-            g = np.full(stale.size, np.inf)
-            g[ok] = damage_per_range(h[ok], lo[ok], *self.law)
-            self.g[stale] = g
-            self.g_at[:, stale] = h, lo
+            self.g[stale] = _per_range(self.hi[stale], self.lo[stale], self.law)
+            self.g_at[:, stale] = self.hi[stale], self.lo[stale]
         return self.g[idx]
 
     def envelope(self, idx: np.ndarray, hi: np.ndarray, lo: np.ndarray) -> None:
@@ -556,9 +487,8 @@ class Screening:
         self.tv_r[idx] = residue_tv
 
     def add_block(self, F: np.ndarray, left_out: np.ndarray) -> None:
-        """Keep the block; bound it (:meth:`StressScreen.block`, sub-blocks of
-        :data:`SUB_SAMPLES`) for the nodes ``left_out``, and for the computed nodes to probe
-        (:meth:`decide`) their bound's variation per sample over this block (:attr:`rate`)."""
+        """Keep the block; bound it for the nodes ``left_out`` and, for their rate, the
+        candidates of :meth:`decide`."""
         F = np.asarray(F, dtype=float)
         Fe = F if self._prev is None else np.vstack([self._prev, F])
         self._prev = F[-1].copy()
@@ -575,29 +505,18 @@ class Screening:
         self.envelope(left_out, hi[:k], lo[:k])
         self.tv_r[left_out] += tv[:k]
 
-    @property
-    def rate(self) -> np.ndarray:
-        """Per node: its bound's variation per sample (Pa) over the blocks it was bounded
-        in (left out, or a candidate to be); NaN: never bounded yet."""
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(self.rate_n > 0, self.rate_tv / self.rate_n, np.nan)
-
     def decide(self, active: np.ndarray, eq_max: np.ndarray, eq_min: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
         """(computed nodes to leave out, left-out nodes to bring back) after a block
         (:meth:`settle` done for the computed nodes ``active``).
 
-        The threshold T = min(f D1, D10), D1 and D10 the largest and the tenth largest
-        closed-cycle damage of the computed nodes (lower bounds of the final ones), only
-        grows. A node may stay out while U < T and its envelope lies strictly inside the
-        computed nodes' extremes of the equivalent stress: then it is not the critical node,
-        not among the ten most damaged and below f of the largest damage, and the reported
-        extremes are computed ones. A computed node is left out when it qualifies with
-        U < DROP_MARGIN T (hysteresis: its bound grows faster once it is left out) and,
-        projected to the end of the run with its measured :attr:`rate` (probed while it
-        is a candidate, up to PROBE_SAMPLES), stays below PROJECTED_MARGIN times T grown in
-        proportion to the samples: a node brought back costs the replay of every block
-        since (efficiency only; what keeps a node out is the first rule)."""
+        The threshold T = min(f D1, D10) (the largest and the tenth largest closed damage of
+        the computed nodes) only grows. A node may stay out while U < T and its envelope lies
+        strictly inside the computed nodes' extremes (docs/live_fatigue.md, "Screening"). A
+        computed node is left out when U < DROP_MARGIN T and U projected to the end of the
+        run with its measured rate (probed up to PROBE_SAMPLES) stays below PROJECTED_MARGIN
+        T grown in proportion to the samples (efficiency only: a node brought back costs the
+        replay of every block since)."""
         n = self.hi.size
         Da = self.d0[active]
         if Da.size >= TOP_NODES:
@@ -614,10 +533,9 @@ class Screening:
         U[need] = self.bound(need)
         back = np.nonzero(~is_active & ~(inside & (U < T)))[0]
         cand = np.nonzero(is_active & inside & (U < DROP_MARGIN * T))[0]
-        # projected to the end of the run: left out only if it would likely stay out
-        # (a node brought back costs its replay: efficiency, never correctness)
         left = (self.total - self.samples) if self.total else self.samples
-        rate = self.rate[cand]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rate = np.where(self.rate_n > 0, self.rate_tv / self.rate_n, np.nan)[cand]
         drop = cand[~np.isnan(rate)]
         if left > 0 and drop.size:
             u_end = self.bound(drop, self.tv_r[drop] + rate[~np.isnan(rate)] * left)
