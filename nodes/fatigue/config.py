@@ -1,95 +1,7 @@
 """Fatigue worker configuration: the ``[fatigue]`` section of a scenario, validated.
 
-Keys (all optional; SI units):
-
-=====================  ===================  =================================================
-key                    default              meaning
-=====================  ===================  =================================================
-influence              "builtin"            "builtin" (the CAD lower arm's part file,
-                                            parts/data/lower_arm.toml, and its shipped
-                                            results), a part file (*.toml, docs/parts.md)
-                                            or path to the imported CSV folder (relative
-                                            to the scenario's folder)
-mapping                {}                   imported only: channel -> file or
-                                            {file = "...", scale = -1.0}
-stress_scale           1.0                  imported only: multiplies table stresses (1e6 if MPa)
-equivalent             "abs_max_principal"  or "signed_von_mises"; or "findley": critical
-                                            planes at the abs-max principal pass's hot
-                                            spots (`critical_plane`, docs/fatigue.md)
-method                 "stress_life"        or "strain_life" (Coffin-Manson-Basquin + Neuber)
-mean_stress            "goodman"            "none", "goodman", "gerber", "morrow", "swt",
-                                            "fkm": the Shigley method's (and a data
-                                            curve's) rule; the FKM method always uses
-                                            "fkm", its Haigh diagram (`mean_stress_rule`)
-residue                "repeated"           "repeated" (track driven again and again) or
-                                            "half_cycles" (ASTM E1049)
-endurance              "haibach"            below the S-N curve's Se: "haibach" (modified
-                                            Miner, slope 2k-1), "elementary" (no damage) or
-                                            "none"; tested on the mean-corrected amplitude
-endurance_limit        (old key)            true = "elementary", false = "none"
-material               {}                   name = a material of the shipped database
-                                            (materials/materials.toml, default "817M40");
-                                            overrides: E, nu, rho, Su, Sy, sf', b, ef', c,
-                                            K', n', Se (Pa; primes optional); and
-                                            cyclic = "uml" | "table_6_2" | "compatible"
-component              {}                   the arm's S-N curve (Shigley or FKM), below
-sn_curve               none                 an S-N curve as data (replaces the component
-                                            curve): type = "points" (points = [[N, S], ..],
-                                            stress = "amplitude" | "range") or "segments"
-                                            (nCode: sri1_pa (range at 1 cycle), b1, nc1,
-                                            b2); name, source (text); `sn_data`
-mesh_size_m            none                 element size (m): a part's global size in
-                                            place of its file's recipe (a new solve:
-                                            minutes)
-nodes                  "surface"            "surface" or "all" nodes analysed
-track_length_m         none                 length of one pass (m); else from the road/run
-repeats_basis_m        none                 also give life in repeats of this length (m)
-block_samples          500                  live: samples per update block
-screen                 0.1                  live: screening fraction f in [0, 1) (0: off):
-                                            nodes whose damage bound cannot reach f of the
-                                            largest report that bound (docs/live_fatigue.md)
-live                   "auto"               run the fatigue node during the run (true /
-                                            false; "auto": when the plant reports arm loads)
-corner                 none                 the four-corner vehicle: whose lower arm ("FL",
-                                            "FR", "RL", "RR": plant/arm_<corner>); none:
-                                            plant/arm (a quarter car's; the vehicle's FL)
-parts                  []                   more parts assessed beside the primary one
-                                            (``influence``), each under its own load
-                                            channel, with the same settings: a shipped
-                                            part's name ("upper_arm": parts/data/
-                                            upper_arm.toml) or a part file (*.toml, relative
-                                            to the scenario's folder); results in
-                                            fatigue/<part name>/ (docs/parts.md)
-=====================  ===================  =================================================
-
-``[fatigue.component]`` (Shigley's Marin factors, `material.ComponentSpec`; SI units):
-
-=====================  ===================  =================================================
-key                    default              meaning
-=====================  ===================  =================================================
-enabled                true                 false: the material's polished-specimen Basquin
-                                            line (σ'f, b, knee at Se = material Se)
-surface                "forged"             "forged", "hot_rolled", "machined", "cold_drawn",
-                                            "ground", "polished" (ka = a Sut^b)
-section_h_m            0.042                depth h of the critical section (m) ...
-section_b_m            0.022                ... and width b: d_e = 0.808 sqrt(h b) for kb
-equivalent_diameter_m  none                 d_e (m) given directly (then h, b are not used)
-loading                "bending"            or "axial" (kc = 0.85, kb = 1)
-reliability            0.5                  R of the curve: ke = 1 - 0.08 z_a (0.5 -> 1)
-temperature_c          20.0                 operating temperature (°C): Shigley's kd,
-                                            FKM's K_T,D (FKM: steel, -40 to 500 °C)
-kf                     1.0                  miscellaneous-effects factor (peening, ...)
-knee_cycles            1e6                  cycles Ne at the knee (Se)
-method                 "shigley"            the primary curve: "shigley" (Marin chain) or
-                                            "fkm" (FKM guideline, `fkm`); batch results give
-                                            the life under both (``sn_methods`` in summary)
-survival_probability   0.975                the second probability the lives are given at
-fkm                    {}                   FKM inputs (`fkm.FKMSpec`): rz_um 200,
-                                            f_w_sigma 0.45, a_r_sigma 0.22, rm_n_min_pa 4e8,
-                                            a_m 0.35, b_m -0.1, k_slope 5, support_factor 1,
-                                            k_v 1, k_s 1, k_a 1, d_eff_m none, a_dm 0.3,
-                                            d_eff_n_m 0.016 (knee_cycles shared)
-=====================  ===================  =================================================
+The keys, their defaults and units: docs/fatigue_keys.md (user reference; an unknown key or a
+bad value is a :class:`~cosim.errors.ScenarioError` naming the key).
 """
 
 from __future__ import annotations
@@ -135,7 +47,7 @@ RESIDUES = ("repeated", "half_cycles")
 
 @dataclass(frozen=True)
 class FatigueConfig:
-    """Validated fatigue settings (see module docstring for keys and defaults)."""
+    """Validated fatigue settings (keys and defaults: docs/fatigue_keys.md)."""
 
     influence: str = "builtin"
     mapping: tuple[tuple[str, str, float], ...] = ()
@@ -343,7 +255,7 @@ FATIGUE_KEYS = ("influence", "mapping", "stress_scale", "equivalent", "method", 
                 "residue", "endurance", "endurance_limit", "material", "component", "sn_curve",
                 "mesh_size_m", "nodes", "track_length_m", "repeats_basis_m", "block_samples",
                 "screen", "live", "corner", "parts")
-"""The keys of ``[fatigue]`` (module docstring)."""
+"""The keys of ``[fatigue]`` (docs/fatigue_keys.md)."""
 CORNERS = ("FL", "FR", "RL", "RR")
 """``corner``: whose lower arm, on the four-corner vehicle (its plant/arm_<corner>)."""
 

@@ -203,3 +203,16 @@ def test_run_dir_and_cli(tmp_path, capsys):
     assert main([str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and err.count("\n") == 3
+
+
+def test_every_fatigue_key_is_documented_in_docs_fatigue_keys():
+    """The user reference of the keys (docs/fatigue_keys.md) names every key the config reads."""
+    from pathlib import Path
+
+    from nodes.fatigue.config import FATIGUE_KEYS
+    from nodes.fatigue.strength_sections import COMPONENT_KEYS, FKM_KEYS
+
+    text = (Path(__file__).parents[2] / "docs" / "fatigue_keys.md").read_text()
+    rows = {line.split("|")[1].strip() for line in text.splitlines() if line.startswith("| `")}
+    assert {f"`{k}`" for k in FATIGUE_KEYS + COMPONENT_KEYS} <= rows
+    assert all(f"`{k}`" in text for k in FKM_KEYS)
