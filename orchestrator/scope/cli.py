@@ -18,8 +18,7 @@ from cosim.wire import decode
 from cosim.zenoh_options import SessionOpenError, add_zenoh_arguments, open_session
 
 from ..cli_util import add_pace_arguments, fail, pace_factor, parse_args
-from .selection import DEFAULT_CHANNELS, ScopeInputError, Selection
-from .state import ScopeState
+from .state import DEFAULT_CHANNELS, ScopeInputError, ScopeState, Selection
 
 _fail = partial(fail, "suscosim scope")
 

@@ -16,9 +16,8 @@ from pathlib import Path
 import pytest
 
 from cosim.wire import Message
-from orchestrator.scope.selection import Selection
 from orchestrator.scope.server import ScopeServer
-from orchestrator.scope.state import ScopeState
+from orchestrator.scope.state import ScopeState, Selection
 
 from ..conftest import CH3_STEP, suscosim
 

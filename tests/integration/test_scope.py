@@ -429,8 +429,7 @@ def test_a_finished_run_without_journal_and_a_busy_port(tmp_path, unwatched) -> 
 # ---- the state behind /data (no processes) -------------------------------------------------
 def test_state_gives_the_samples_after_since_and_the_node_states() -> None:
     from cosim.wire import Message
-    from orchestrator.scope.selection import Selection
-    from orchestrator.scope.state import ScopeState
+    from orchestrator.scope.state import ScopeState, Selection
 
     st = ScopeState("r1", Selection(["plant/state/z_*", "tyre_road/force"]), n_steps=9,
                     nodes=["plant", "tyre_road"], max_samples=5)
@@ -464,7 +463,7 @@ def test_state_gives_the_samples_after_since_and_the_node_states() -> None:
 
 
 def test_channel_patterns() -> None:
-    from orchestrator.scope.selection import ScopeInputError, Selection, parse_pattern
+    from orchestrator.scope.state import ScopeInputError, Selection, parse_pattern
 
     sel = Selection(["*/force/F_*", "plant/arm"])
     assert sel.keyexprs("r1") == ["suscosim/r1/*/force", "suscosim/r1/plant/arm"]
@@ -512,9 +511,8 @@ def _get_with_host(port: int, host: str | None) -> int:
 
 
 def test_the_scope_answers_only_to_loopback_host_names() -> None:
-    from orchestrator.scope.selection import Selection
     from orchestrator.scope.server import ScopeServer, allowed_hosts, host_header_ok
-    from orchestrator.scope.state import ScopeState
+    from orchestrator.scope.state import ScopeState, Selection
 
     server = ScopeServer(ScopeState("r1", Selection(["plant/state"])), "127.0.0.1", 0)
     server.start()

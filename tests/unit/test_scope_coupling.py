@@ -25,10 +25,9 @@ from cosim import keys
 from cosim.coupling_stream import LiveResidual
 from cosim.table_writer import TableWriter
 from cosim.wire import encode
-from orchestrator.scope.selection import Selection
 from orchestrator.scope.server import ScopeServer
 from orchestrator.scope.sources import JournalSource, LiveSource
-from orchestrator.scope.state import ScopeState
+from orchestrator.scope.state import ScopeState, Selection
 from tests.memory_bus import MemoryBus
 
 from ..cosim.test_coupling_live import CHANNELS, _messages
