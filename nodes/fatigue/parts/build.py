@@ -5,8 +5,8 @@ joint's nodes, adds its hardware mass; :func:`solve_part` solves every load chan
 case on inertia relief and returns the `InfluenceSet` of **the assessed surface nodes only**
 (the fatigue node evaluates every one of them every step) with the part's mass, modes and
 mesh in ``meta``; :func:`part_influence` caches that on disk (``$SUSCOSIM_CACHE/parts``,
-key: the part file's and geometry's bytes, the mesh sizes, the code version), written aside
-and renamed.
+key: the part file's and geometry's bytes, the mesh sizes, the code version) in the form of
+the shipped results (:func:`save_npz`, :func:`from_npz`; :mod:`.results_file`).
 
 Assessment rule (printed by ``suscosim part check``): a surface node is assessed unless it
 lies within its joint's ``zone`` [m] of any node of that joint's coupling: there the stress is
@@ -203,18 +203,33 @@ def part_influence(part: Part, mesh_size: float | None = None, use_cache: bool =
     if use_cache and path.exists():
         try:
             with np.load(path, allow_pickle=False) as z:
-                return InfluenceSet(json.loads(str(z["case_names"])), z["coefficients"],
-                                    z["node_xyz"], z["node_ids"], z["surface"],
-                                    json.loads(str(z["meta"])))
+                return from_npz(z)
         except (OSError, KeyError, ValueError):
             pass  # unreadable cache: rebuild
     inf, _ = solve_part(part_model(part, size, fsize))
     if use_cache:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.stem + f".{os.getpid()}.tmp.npz")
-        assert inf.node_xyz is not None
-        np.savez(tmp, case_names=json.dumps(inf.case_names), coefficients=inf.coefficients,
-                 node_xyz=inf.node_xyz, node_ids=inf.node_ids, surface=inf.surface,
-                 meta=json.dumps(inf.meta))
-        os.replace(tmp, path)
+        save_npz(path, inf)
     return inf
+
+
+def save_npz(path: Path, inf: InfluenceSet, meta: dict | None = None, compressed: bool = False,
+             **head: Any) -> None:
+    """Write ``inf`` (its ``meta`` replaced by ``meta`` when given) and the ``head`` entries as
+    an ``.npz`` (no pickles; names and meta as JSON), aside then renamed into place."""
+    assert inf.node_xyz is not None, "a part's FE always has its node coordinates"
+    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+    with open(tmp, "wb") as fh:
+        (np.savez_compressed if compressed else np.savez)(
+            fh, **head, case_names=json.dumps(inf.case_names), coefficients=inf.coefficients,
+            node_xyz=inf.node_xyz, node_ids=inf.node_ids, surface=inf.surface,
+            meta=json.dumps(inf.meta if meta is None else meta))
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+
+
+def from_npz(z: Any) -> InfluenceSet:
+    """The influence set of an open ``.npz`` written by :func:`save_npz`."""
+    return InfluenceSet(json.loads(str(z["case_names"])), z["coefficients"], z["node_xyz"],
+                        z["node_ids"], z["surface"], json.loads(str(z["meta"])))

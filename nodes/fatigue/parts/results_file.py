@@ -35,7 +35,6 @@ A damaged or foreign file is an `InputFileError` naming it, never a silent re-so
 
 from __future__ import annotations
 
-import json
 import os
 import zipfile
 from collections.abc import Callable
@@ -46,7 +45,7 @@ import numpy as np
 from cosim.errors import InputFileError
 
 from ..lib.influence_set import InfluenceSet
-from .build import part_influence, part_key, part_names
+from .build import from_npz, part_influence, part_key, part_names, save_npz
 from .schema import Part
 
 FORMAT = "suscosim-part-results"
@@ -68,19 +67,10 @@ def current_key(part: Part, mesh_size: float | None = None) -> str:
 def write_results(part: Part, inf: InfluenceSet, key: str, path: Path | None = None) -> Path:
     """Write ``inf`` as the part's results file (aside, then renamed into place)."""
     path = results_path(part) if path is None else path
-    assert inf.node_xyz is not None, "a part's FE always has its node coordinates"
     meta = {**inf.meta, **part_names(part),  # the part file relative to this file
             "part": Path(os.path.relpath(part.path.resolve(), path.resolve().parent)).as_posix()}
-    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
-    with open(tmp, "wb") as fh:
-        np.savez_compressed(
-            fh, format=FORMAT, version=VERSION, key=key, part=part.name,
-            case_names=json.dumps(inf.case_names), coefficients=inf.coefficients,
-            node_xyz=inf.node_xyz, node_ids=inf.node_ids, surface=inf.surface,
-            meta=json.dumps(meta))
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    save_npz(path, inf, meta, compressed=True, format=FORMAT, version=VERSION, key=key,
+             part=part.name)
     return path
 
 
@@ -94,10 +84,7 @@ def read_results(path: Path) -> tuple[str, InfluenceSet]:
             if int(z["version"]) != VERSION:
                 raise InputFileError(str(path), f"{FORMAT} version {int(z['version'])}: this "
                                            f"suscosim reads version {VERSION}")
-            key = str(z["key"])
-            inf = InfluenceSet(json.loads(str(z["case_names"])), z["coefficients"],
-                               z["node_xyz"], z["node_ids"], z["surface"],
-                               json.loads(str(z["meta"])))
+            key, inf = str(z["key"]), from_npz(z)
     except InputFileError:
         raise
     except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
