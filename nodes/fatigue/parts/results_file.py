@@ -1,35 +1,18 @@
 """A part's solved unit-load results, shipped beside its part file (``PART.influence.npz``).
 
-A durability group keeps the FE results of a part with the part: solving the CAD arm takes
-minutes (meshing with gmsh, the P2 solve of every unit case), a fatigue run needs them in a
-second, and a reviewer wants to know which mesh they came from. So a part file
-``lower_arm.toml`` may have ``lower_arm.influence.npz`` beside it, written by
-``suscosim part solve lower_arm.toml``; :func:`part_results` takes it when its ``key`` is the
-part's own (:func:`nodes.fatigue.parts.build.part_key`: the part file's parsed content and
-its geometry's bytes, the mesh sizes, the FE code's version) and otherwise solves (and
-caches) as before. A results file for another version of the part is never used: change the
-part file (its mesh recipe, a joint, the CAD parameters; not a comment) and the old results
-stop matching.
+Solving the CAD arm takes minutes (gmsh, the P2 solve of every unit case); a fatigue run needs
+the results in a second. So a part file ``lower_arm.toml`` may have ``lower_arm.influence.npz``
+beside it, written by ``suscosim part solve lower_arm.toml``; :func:`part_results` takes it when
+its ``key`` is the part's own (:func:`nodes.fatigue.parts.build.part_key`: the part file's
+parsed content and its geometry's bytes, the mesh sizes, the FE code's version) and otherwise
+solves (and caches). A results file for another version of the part is never used.
 
-The file (NumPy ``.npz``, compressed, no pickles):
-
-==================  ====================================================================
-array               meaning
-==================  ====================================================================
-``format``          ``"suscosim-part-results"``
-``version``         1
-``key``             the part key the results were solved for (16 hex digits)
-``part``            the part's name
-``case_names``      JSON list of the unit cases (the load channels)
-``coefficients``    (cases, nodes, 6) float64 unit-load stresses [Pa per N or N m], Voigt
-                    order xx, yy, zz, xy, yz, zx, of the assessed surface nodes
-``node_xyz``        (nodes, 3) float64 [m]; ``node_ids`` (nodes,) FE node numbers;
-                    ``surface`` (nodes,) bool
-``meta``            JSON: mass, modes, mesh, assessment rule (as ``part_influence``'s);
-                    the part as :func:`.build.part_names` names it: its file's name
-                    (beside this file), SHA-256 and geometry, no absolute path
-==================  ====================================================================
-
+The file (NumPy ``.npz``, compressed, no pickles; docs/parts.md, "Shipped results"):
+``format`` ``"suscosim-part-results"``, ``version`` 1, ``key`` (16 hex digits), ``part`` (its
+name), ``case_names`` (JSON), ``coefficients`` (cases, nodes, 6) [Pa per N or N m] (Voigt
+xx, yy, zz, xy, yz, zx) of the assessed surface nodes, ``node_xyz`` (nodes, 3) [m],
+``node_ids``, ``surface`` and ``meta`` (JSON: mass, modes, mesh, assessment rule; the part as
+:func:`.build.part_names` names it: its file's name beside this file, SHA-256, geometry).
 A damaged or foreign file is an `InputFileError` naming it, never a silent re-solve.
 """
 

@@ -1,33 +1,5 @@
-"""A part file (TOML): geometry, material card, joints. Schema in docs/parts.md.
-
-```toml
-[part]
-name = "lower_arm"
-geometry = "lower_arm.step"       # STEP (gmsh) or a mesh (.msh/.inp/.bdf, meshio), relative
-                                  # to this file; "builtin:lower_arm" = the parametric CAD
-length_unit = "m"                 # of the geometry file: "m" or "mm"
-material = "817M40"               # a card by name, or an inline table [part.material]
-
-[mesh]                            # gmsh only
-size = 0.012                      # element size [m]
-fillet_size = 0.004               # on fillet faces and sharp re-entrant edges [m]
-convergence = [0.016, 0.012, 0.009]   # sizes of the convergence table (fillet size scaled)
-convergence_local = [0.004, 0.003]    # optional: local sizes at the hot spots instead (on the
-convergence_radius = 0.02             # finest global mesh; balls of this radius), card.py
-
-[[joint]]
-name = "ball_joint"
-centre = [0.025, 0.294, 0.0]      # [m], or "hardpoint:ball_joint" (cosim.lower_arm)
-radius = 0.0195                   # nodes within this distance of the centre (or of the
-axis = [0, 0, 1]                  # axis through it, if given), and within length/2 along it
-length = 0.040
-node_set = "BJ"                   # instead of centre/radius: a named node set of the mesh
-coupling = "distributing"         # or "rigid"
-mass_kg = 0.35                    # joint hardware, spread over the joint's nodes
-zone = 0.012                      # nodes within this distance of the joint's nodes: not assessed
-forces = { x = "ball_joint_x", y = "ball_joint_y", z = "ball_joint_z" }   # unit force cases
-moments = {}                      # unit moments about the centre, e.g. { x = "torsion_bar_mx" }
-```
+"""A part file (TOML): geometry, material card, joints; its keys, with an example, in
+docs/parts.md, "The part file".
 
 A load channel named at several joints is divided equally between them (the torsion bar's
 moment, half at each bush eye). Every error is an `InputFileError` naming the file and key.
