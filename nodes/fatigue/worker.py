@@ -25,11 +25,11 @@ from .config import BUILTIN_PART, FatigueConfig
 from .influence import import_influence
 from .lib import counting, screening, superposition, turning_eq
 from .lib.counting import Cycles, StreamingRainflow
-from .lib.damage import cycle_damage
+from .lib.damage import cycle_damage, per_range_unsupported
 from .lib.equivalent_stress import equivalent_of
 from .lib.influence_set import InfluenceSet, short_channel
 from .lib.result import FatigueResult
-from .lib.screening import Screening, unsupported
+from .lib.screening import Screening
 from .lib.superposition import ROWS, components_buffer, node_major
 from .lib.turning_eq import kept_equivalent, superpose_gather
 
@@ -125,7 +125,8 @@ class _Engine:
         self.eq_min = np.full(n, np.inf)
         self.n_samples = 0
         self.block = max(1, int(cfg.block_samples))
-        why = None if not screen else unsupported(self.mat, cfg.method, cfg.mean_stress_rule)
+        why = None if not screen else per_range_unsupported(self.mat, cfg.method,
+                                                          cfg.mean_stress_rule)
         self.screen_note = "off" if not screen else (why or "")
         self.scr: Screening | None = None
         self.parked: list[_Parked] = []

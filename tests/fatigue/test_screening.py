@@ -9,9 +9,9 @@ import pytest
 
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.lib.counting import count_series
-from nodes.fatigue.lib.damage import miner_per_node
+from nodes.fatigue.lib.damage import miner_per_node, per_range_unsupported
 from nodes.fatigue.lib.equivalent_stress import equivalent
-from nodes.fatigue.lib.screening import StressScreen, damage_bound, unsupported
+from nodes.fatigue.lib.screening import StressScreen, damage_bound
 from nodes.fatigue.lib.superposition import stress_history
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import analyse, load_influence
@@ -74,7 +74,7 @@ def test_screened_reported_quantities_are_the_unscreened_bit_for_bit():
 
 def test_screening_is_off_where_the_bound_is_not_proven():
     cfg = FatigueConfig.from_dict({**COARSE, "method": "strain_life"})
-    assert "strain_life" in unsupported(cfg.material, cfg.method, cfg.mean_stress)
+    assert "strain_life" in per_range_unsupported(cfg.material, cfg.method, cfg.mean_stress)
     t, loads = pave_like_loads(0.5, seed=1)
     r = analyse(t, loads, cfg, 5.0, screen=0.01)
     assert not r.screened.any() and "strain_life" in r.screening["note"]

@@ -1,4 +1,4 @@
-"""Cycle damage and Palmgren-Miner summation per node.
+"""Cycle damage and Palmgren-Miner summation per node; a law's damage per unit of range.
 
 Miner (thesis Eq 2.6): D = Σ n_i / N_f,i, with n_i the count of cycle i (1 or 0.5) and N_f,i
 its cycles to failure from the stress-life or strain-life model with the chosen mean-stress
@@ -38,6 +38,8 @@ TIME_METHODS = ("stress_life", "strain_life")
 """The rainflow methods (this module); the spectral ones (:mod:`.spectral`: the PSD of the
 whole history, after a run: ``suscosim fatigue RUN``) take the stress-life curve."""
 SPECTRAL_METHODS = ("dirlik", "tovo_benasciutti")
+GRID = 8
+"""Amplitude intervals of :func:`damage_per_range`'s bound."""
 METHODS = TIME_METHODS + SPECTRAL_METHODS
 
 
@@ -145,3 +147,52 @@ def miner_per_node(cycles: Cycles, n_nodes: int, mat: Material, method: str,
     """Palmgren-Miner damage D per node (sum of cycle damages)."""
     d = cycle_damage(cycles, mat, method, mean_stress, endurance_limit)
     return np.bincount(cycles.series, weights=d, minlength=n_nodes).astype(float)
+
+
+def per_range_unsupported(mat: Material, method: str, mean_stress: str) -> str | None:
+    """Why :func:`damage_per_range` is no proven bound for these settings (None: it is, and
+    :mod:`.screening` may run): stress-life, a mean-stress correction linear in σa at a given
+    σm (or SWT), S-N slopes k >= 1 (2 for SWT) on every segment, so that a cycle's damage per
+    unit of range grows with its range (docs/live_fatigue.md, "The screening bound")."""
+    if method != "stress_life":
+        return f"method {method!r} (the bound is proven for stress_life)"
+    if mean_stress not in ("none", "goodman", "gerber", "morrow", "swt"):
+        return f"mean_stress {mean_stress!r} (the bound is proven for none, goodman, " \
+               "gerber, morrow, swt)"
+    curve = sn_curve(mat)
+    if isinstance(curve, SNCurve):
+        slopes = [curve.k]
+        if curve.lcf_Su is not None:
+            b_lcf = np.log(curve.lcf_stress / curve.lcf_Su) / np.log(curve.lcf_reversals / 2.0)
+            slopes.append(-1.0 / b_lcf)
+    elif hasattr(curve, "n_cycles") and hasattr(curve, "s_amp"):  # a tabulated curve
+        logn, logs = np.log(np.asarray(curve.n_cycles)), np.log(np.asarray(curve.s_amp))
+        slopes = list(-np.diff(logn) / np.diff(logs))
+        tail = getattr(curve, "tail_b", None)
+        if tail is not None and tail < 0.0:
+            slopes.append(-1.0 / tail)
+    else:
+        return f"an S-N curve of type {type(curve).__name__}"
+    need = 2.0 if mean_stress == "swt" else 1.0
+    if min(slopes) < need:
+        return f"an S-N slope k = {min(slopes):.3g} < {need:g} (damage per range must grow)"
+    return None
+
+
+def damage_per_range(hi: np.ndarray, lo: np.ndarray, mat: Material, method: str,
+                     mean_stress: str, endurance: str | bool | None) -> np.ndarray:
+    """g (1/Pa): every cycle with both extremes in [lo, hi] (Pa) has damage <= g · its range."""
+    hi = np.asarray(hi, dtype=float)
+    lo = np.asarray(lo, dtype=float)
+    A = np.maximum(0.5 * (hi - lo), 0.0)
+    j = np.arange(GRID, dtype=float)
+    a0 = A[:, None] * (j / GRID)
+    a1 = A[:, None] * ((j + 1.0) / GRID)
+    m = hi[:, None] - a0
+    finite = np.isfinite(a1) & np.isfinite(m)
+    a1f, mf = np.where(finite, a1, 0.0), np.where(finite, m, 0.0)
+    rev = cycle_reversals(mf + a1f, mf - a1f, mat, method, mean_stress, endurance)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.where(a1f > 0.0, (2.0 / rev) / (2.0 * a1f), 0.0)
+    g = np.where(finite, g, np.inf)
+    return g.max(axis=1) if g.size else np.zeros(hi.shape)

@@ -1,7 +1,7 @@
 """Screening: an upper bound of each node's Miner damage from the loads' block statistics.
 
 Computing a node's damage exactly costs its stresses at every sample (superposition, the
-equivalent stress, rainflow). This module bounds it from what a block of loads gives for all
+equivalent stress, rainflow); this module bounds it from what a block of loads gives for all
 nodes at once, so that a node whose bound stays below a stated fraction of the damage already
 reached need not be computed (:mod:`.worker`). Symbols: A_c a node's influence coefficients
 (σx σy σz τxy τyz τzx, Pa per N or N m) of load case c, F_c the loads (N, N m), stress
@@ -9,19 +9,16 @@ reached need not be computed (:mod:`.worker`). Symbols: A_c a node's influence c
 sample k. Per block and node (:class:`StressScreen`, per sub-block of :data:`SUB_SAMPLES`
 loads): the envelope [lo, hi] of e and a bound of its total variation TV = Σ_k |e_k - e_(k-1)|
 (Pa). Over the history (envelope [LO, HI]) the damage D <= g (TV + (HI - LO)/2)
-(:func:`damage_bound`), g (1/Pa) the largest damage per unit of range of a cycle inside
-[LO, HI] (:func:`damage_per_range`), for the laws :func:`unsupported` accepts. Source: derived
-for this project from Weyl's inequality, Perron-Frobenius and rainflow's four-point rule;
-the derivation, and the rounding margins (:data:`BRACKET_REL`, :data:`BRACKET_ABS`,
-:data:`ROUNDING_MARGIN`) that keep it above the true principal stresses of the computed
-tensors, are in docs/live_fatigue.md, "The screening bound". It holds for every history
-(tests/fatigue/test_screening.py checks it against exact counts; a non-finite tensor gives
-the node (+inf, -inf, +inf): never left out); it is not tight, which only costs how many
-nodes are screened out, never a wrong result.
-
-The bound is numba kernels (:func:`_bound_chunk`): the loads' statistics per sub-block once in
-numpy (:func:`load_stats`), then ~550 flops per node and sub-block, :data:`CHUNK` nodes at a
-time, written for LLVM's vectoriser (~1.8 ns per node-sample against 11-14 for the exact path).
+(:func:`damage_bound`; g (1/Pa) :func:`.damage.damage_per_range`, for the laws it accepts).
+Source: derived for this project from Weyl's inequality, Perron-Frobenius and rainflow's
+four-point rule: docs/live_fatigue.md, "The screening bound", with the rounding margins
+(:data:`BRACKET_REL`, :data:`BRACKET_ABS`, :data:`ROUNDING_MARGIN`) that keep it above the
+true principal stresses of the computed tensors. It holds for every history (tested against
+exact counts; a non-finite tensor gives (+inf, -inf, +inf): never left out); it is not tight,
+which only costs how many nodes are screened out, never a wrong result. The kernels
+(:func:`_bound_chunk`, after :func:`load_stats` in numpy) take ~550 flops per node and
+sub-block, :data:`CHUNK` nodes at a time, written for LLVM's vectoriser (~1.8 ns per
+node-sample against 11-14 for the exact path).
 """
 
 from __future__ import annotations
@@ -30,8 +27,7 @@ import numpy as np
 
 from . import turning_eq
 from .counting import compile_kernels
-from .damage import cycle_reversals, sn_curve
-from .life_models import SNCurve
+from .damage import damage_per_range
 from .material import Material
 from .turning_eq import _root1  # noqa: F401  (compiled with this module's kernels)
 
@@ -39,17 +35,13 @@ TOP_NODES = 10
 """The reported most damaged nodes (``summary.json`` ``top_nodes``): never screened out."""
 ROUNDING_MARGIN = 1e-9
 SUB_SAMPLES = 25
-GRID = 8
-"""Amplitude intervals of the damage-per-range bound g."""
 BRACKET_REL = 1e-6
 """Half-width of a principal stress's bracket per unit of 2p (covers r's rounding)."""
 BRACKET_ABS = 1e-12
 """Half-width of a principal stress's bracket per unit of |q| (rounding of q, deviator)."""
 _FROB = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
 """Frobenius norm² of a symmetric tensor from its 6 components (σx σy σz τxy τyz τzx)."""
-_VM = np.array([[1.0, -0.5, -0.5, 0, 0, 0], [-0.5, 1.0, -0.5, 0, 0, 0],
-                [-0.5, -0.5, 1.0, 0, 0, 0], [0, 0, 0, 3.0, 0, 0], [0, 0, 0, 0, 3.0, 0],
-                [0, 0, 0, 0, 0, 3.0]])
+_VM = np.diag([1.5, 1.5, 1.5, 3.0, 3.0, 3.0]) - 0.5 * np.pad(np.ones((3, 3)), (0, 3))
 """vm² = sᵀ Q s (von Mises, 6 components)."""
 
 
@@ -187,8 +179,7 @@ def _bound_slots(Xs, m, M, H, ZH, Mmax, tvF, tvZ, nin, vm, o, w, hi_out, lo_out,
         for b in range(B):
             hb = w[_HB * C + b]
             lb = w[_LB * C + b]
-            ok = w[_BAD * C + b] == 0.0 and hb - hb == 0.0 and lb - lb == 0.0 \
-                and tv[b] - tv[b] == 0.0
+            ok = w[_BAD * C + b] == 0.0 and (hb - hb) + (lb - lb) + (tv[b] - tv[b]) == 0.0
             hi_out[k0 + b] = hb if ok else np.inf
             lo_out[k0 + b] = lb if ok else -np.inf
             tv_out[k0 + b] = tv[b] * (1.0 + ROUNDING_MARGIN) if ok else np.inf
@@ -201,8 +192,7 @@ _STATS = f"{_A2}, {_A2}, {_A2}, {_F1}, {_A2}, {_A2}, {_F1}, i8, i8[::1]"
 KERNELS = (("_bound_chunk", f"void({_A2}, {_STATS}, {_F1}, {_F1})"),
            ("_bound_slots", f"void(f8[:, :, ::1], i8, {_STATS}, {_F1}, {_F1}, {_F1}, {_F1})"))
 INLINE = ("_root1", "_sel", "_principal")
-"""Helpers inlined into the kernels (numba ``inline="always"``: the node loops stay
-straight-line code that LLVM vectorises; a call per node-sub-block would not)."""
+"""Helpers inlined into the kernels: the node loops stay straight code LLVM vectorises."""
 
 
 def build() -> None:
@@ -216,11 +206,9 @@ LoadStats = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np
 
 
 def load_stats(Fe: np.ndarray, V: np.ndarray, sub_samples: int) -> LoadStats:
-    """The loads' statistics per sub-block of ``sub_samples`` increments (N, N m): middle M,
-    half range H, the half range ZH along the principal axes V about M, max |M|, the
-    increments' absolute sums tvF and tvZ and the number of increments nin (the kernels'
-    arguments in that order). ``Fe`` (n_e, cases): the block with the previous block's last
-    sample first."""
+    """Per sub-block of ``sub_samples`` increments of ``Fe`` (n_e, cases; N, N m): middle M,
+    half range H, half range ZH along the principal axes V about M, max |M|, the increments'
+    absolute sums tvF, tvZ and their number nin (the kernels' arguments in that order)."""
     n_e, nc = Fe.shape
     L = max(1, int(sub_samples))
     starts = np.arange(0, max(n_e - 1, 1), L)
@@ -244,54 +232,6 @@ def load_stats(Fe: np.ndarray, V: np.ndarray, sub_samples: int) -> LoadStats:
     return M, H, np.ascontiguousarray(ZH), np.abs(M).max(axis=1), tvF, tvZ, nin
 
 
-def unsupported(mat: Material, method: str, mean_stress: str) -> str | None:
-    """Why the damage bound does not hold for these settings (None: it does): stress-life,
-    a mean-stress correction linear in σa at a given σm (or SWT), S-N slopes k >= 1 (2 for
-    SWT) on every segment, so that a cycle's damage per unit of range grows with its range."""
-    if method != "stress_life":
-        return f"method {method!r} (the bound is proven for stress_life)"
-    if mean_stress not in ("none", "goodman", "gerber", "morrow", "swt"):
-        return f"mean_stress {mean_stress!r} (the bound is proven for none, goodman, " \
-               "gerber, morrow, swt)"
-    curve = sn_curve(mat)
-    if isinstance(curve, SNCurve):
-        slopes = [curve.k]
-        if curve.lcf_Su is not None:
-            b_lcf = np.log(curve.lcf_stress / curve.lcf_Su) / np.log(curve.lcf_reversals / 2.0)
-            slopes.append(-1.0 / b_lcf)
-    elif hasattr(curve, "n_cycles") and hasattr(curve, "s_amp"):  # a tabulated curve
-        logn, logs = np.log(np.asarray(curve.n_cycles)), np.log(np.asarray(curve.s_amp))
-        slopes = list(-np.diff(logn) / np.diff(logs))
-        tail = getattr(curve, "tail_b", None)
-        if tail is not None and tail < 0.0:
-            slopes.append(-1.0 / tail)
-    else:
-        return f"an S-N curve of type {type(curve).__name__}"
-    need = 2.0 if mean_stress == "swt" else 1.0
-    if min(slopes) < need:
-        return f"an S-N slope k = {min(slopes):.3g} < {need:g} (damage per range must grow)"
-    return None
-
-
-def damage_per_range(hi: np.ndarray, lo: np.ndarray, mat: Material, method: str,
-                     mean_stress: str, endurance: str | bool | None) -> np.ndarray:
-    """g (1/Pa): every cycle with both extremes in [lo, hi] (Pa) has damage <= g · its range."""
-    hi = np.asarray(hi, dtype=float)
-    lo = np.asarray(lo, dtype=float)
-    A = np.maximum(0.5 * (hi - lo), 0.0)
-    j = np.arange(GRID, dtype=float)
-    a0 = A[:, None] * (j / GRID)
-    a1 = A[:, None] * ((j + 1.0) / GRID)
-    m = hi[:, None] - a0
-    finite = np.isfinite(a1) & np.isfinite(m)
-    a1f, mf = np.where(finite, a1, 0.0), np.where(finite, m, 0.0)
-    rev = cycle_reversals(mf + a1f, mf - a1f, mat, method, mean_stress, endurance)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        g = np.where(a1f > 0.0, (2.0 / rev) / (2.0 * a1f), 0.0)
-    g = np.where(finite, g, np.inf)
-    return g.max(axis=1) if g.size else np.zeros(hi.shape)
-
-
 class StressScreen:
     """The envelope [lo, hi] and total variation TV of the equivalent stress of any set of
     nodes over a block of loads, from the loads alone. The kernels' per-node table :attr:`T`,
@@ -313,8 +253,7 @@ class StressScreen:
                 np.abs(Cn).sum(axis=1)[:, None]]
         self.T = np.concatenate(cols, axis=1)
         self.offsets = np.cumsum([0] + [c.shape[1] for c in cols[:-1]]).astype(np.int64)
-        self.slot_node = np.zeros(0, dtype=np.int64)
-        """The node in each kept slot (:meth:`bounds_kept`)."""
+        self.slot_node = np.zeros(0, dtype=np.int64)  # the node in each kept slot
         self.node_slot = np.full(n, -1, dtype=np.int64)
         self.Xs = np.zeros((-(-n // CHUNK), self.T.shape[1], CHUNK))
         """Kept nodes' table columns, CHUNK nodes a chunk (node-innermost; room for all)."""
@@ -394,9 +333,8 @@ def damage_bound(hi: np.ndarray, lo: np.ndarray, tv: np.ndarray, mat: Material, 
                  mean_stress: str, endurance: str | bool | None,
                  g: np.ndarray | None = None) -> np.ndarray:
     """Upper bound of each node's damage (residue closed, either mode) from its envelope
-    [lo, hi] and total variation tv (Pa) over the history: g (TV + (HI - LO)/2), raised by the
-    rounding margin; inf where the envelope is not finite. ``g``: :func:`damage_per_range`
-    of this envelope when already known (1/Pa, per node)."""
+    [lo, hi] and variation tv (Pa) over the history, raised by the rounding margin; inf where
+    the envelope is not finite. ``g`` (1/Pa): :func:`_per_range` of it, when known."""
     hi = np.asarray(hi, dtype=float)
     lo = np.asarray(lo, dtype=float)
     if g is None:
@@ -442,20 +380,16 @@ class Screening:
         self.d0 = np.zeros(n)
         self.tv_r = np.zeros(n)
         self.threshold = 0.0
-        self.total: int | None = None
-        """Samples the whole history will have, when known (batch, or the run's steps)."""
+        self.total: int | None = None  # the history's samples, when known
         self.samples = 0
         self.history: list[np.ndarray] = []
         self._prev: np.ndarray | None = None
-        self.caught_up = 0
-        """Nodes brought back so far (each recomputed from where it was left out)."""
+        self.caught_up = 0  # nodes brought back so far
         self.g = np.zeros(n)
-        self.g_at = np.full((2, n), np.nan)
-        """The envelopes (hi, lo) at which :attr:`g` was computed (NaN: not yet)."""
+        self.g_at = np.full((2, n), np.nan)  # the (hi, lo) g was computed at
         self.rate_tv = np.zeros(n)
         self.rate_n = np.zeros(n)
-        """Per node: its bound's variation (Pa) over the blocks it was bounded in (left out,
-        or a candidate to be), and their samples: the rate rate_tv / rate_n."""
+        """Per node: its bound's variation (Pa) and samples while bounded: rate_tv / rate_n."""
         self.probe = np.arange(n)
         """Computed nodes whose rate the next block measures (the candidates)."""
 
