@@ -93,7 +93,6 @@ class PartFE:
     """Linear elastic P2-tet solid (m, Pa, kg/m^3) with point masses at joint nodes."""
 
     def __init__(self, mesh: TetMesh, E: float, nu: float, rho: float) -> None:
-        self.tet = mesh
         self.mesh = MeshTet(mesh.p.T.copy(), mesh.t.T.copy())
         self.E, self.nu, self.rho = E, nu, rho
         self.elem = ElementTetP2()
