@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
-from cosim.table_batches import parquet_errors
+from cosim.table_batches import arrow_column, parquet_errors
 
 Table = dict[str, np.ndarray]
 
@@ -34,7 +34,7 @@ def write_parquet(table: Table, path: str | Path) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    pq.write_table(pa.table({c: pa.array(v) for c, v in table.items()}), path)
+    pq.write_table(pa.table({c: arrow_column(v) for c, v in table.items()}), path)
 
 
 def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> Table:

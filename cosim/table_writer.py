@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from .errors import WireError
+from .table_batches import arrow_column
 from .wire import decode
 
 Layout = tuple[tuple[str, int | None], ...]
@@ -231,7 +232,7 @@ class TableWriter:
 
         assert self.columns is not None
         group, self._group, self._group_n = self._group, [], 0
-        tbl = pa.table({c: pa.array(np.concatenate([g[c] for g in group]))
+        tbl = pa.table({c: arrow_column(np.concatenate([g[c] for g in group]))
                         for c in self.columns})
         if self._pq is None:
             self._pq = pq.ParquetWriter(self._tmp["parquet"], tbl.schema)

@@ -21,7 +21,7 @@ import numpy as np
 
 from cosim.errors import InputFileError
 from cosim.safe_open import open_user_text
-from cosim.table_batches import parquet_errors
+from cosim.table_batches import arrow_column, parquet_errors
 
 from .channel_set import ChannelSet
 
@@ -151,7 +151,7 @@ def write_chunks(path: str | Path, fmt: str, names: list[str], units: Mapping[st
     writer: Any = pq.ParquetWriter(str(path), schema)
     try:
         for chunk in chunks:
-            arrays = [pa.array(np.asarray(chunk[c], dtype=float)) for c in cols]
+            arrays = [arrow_column(np.asarray(chunk[c], dtype=float)) for c in cols]
             writer.write_table(pa.Table.from_arrays(arrays, schema=schema))
             rows += len(chunk["t"])
     finally:

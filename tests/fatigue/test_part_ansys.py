@@ -17,8 +17,8 @@ from cosim.errors import InputFileError
 from nodes.fatigue import worker
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.lib.equivalent_stress import von_mises
-from nodes.fatigue.parts import ansys_rst, rst_influence
-from nodes.fatigue.parts.ansys_rst import rst_header
+from nodes.fatigue.parts import ansys_rst
+from nodes.fatigue.parts.ansys_rst import rst_header, rst_influence
 
 pytestmark = pytest.mark.filterwarnings("ignore:`UnstructuredGrid.offset` is deprecated")
 RST = Path(examples.rstfile)

@@ -67,7 +67,8 @@ def _coarse_upper_arm(folder: Path) -> Path:
 
 @pytest.mark.integration
 def test_two_parts_live_equal_batch_and_a_users_upper_arm_part(tmp_path, monkeypatch):
-    from nodes.fatigue.parts import load_part, part_influence
+    from nodes.fatigue.parts import load_part
+    from nodes.fatigue.parts.build import part_influence
 
     # the processes the test starts inherit the cache
     monkeypatch.setenv("SUSCOSIM_CACHE", str(tmp_path / "cache"))

@@ -25,7 +25,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from cosim.errors import InputFileError
 
@@ -117,6 +116,8 @@ def part_model(part: Part, mesh_size: float | None = None,
     for j in part.joints:
         if j.mass_kg > 0.0:
             fe.add_point_mass(joint_nodes[j.name], j.mass_kg)
+    from scipy.spatial import cKDTree  # here: every run's preflight imports this module
+
     zone = np.zeros(fe.n_nodes, dtype=bool)
     for j in part.joints:
         d, _ = cKDTree(fe.node_xyz[joint_nodes[j.name]]).query(fe.node_xyz)
