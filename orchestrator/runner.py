@@ -29,6 +29,7 @@ from cosim import scenario as sc
 from cosim.bus import free_loopback_endpoint
 from cosim.errors import InputFileError, RunError, ScenarioError, SuscosimError
 from cosim.run_lock import RunLock
+from cosim.table_batches import warm_pyarrow
 
 from . import run_modes
 from .clock import Clock, ClockResult, NodeStatus
@@ -302,6 +303,7 @@ def _run_locked(scenario: dict[str, Any], connect: list[str] | None,
         return _run_inprocess(scenario, bar, started, t0)
     nodes = run_modes.distributed(run, folder, connect, external, listen or [], lowlatency,
                                   zenoh_config_file, pin_mode, run_key, as_client)
+    warm_pyarrow()  # the coupling summary reads the table after the last step
     clock: Clock | None = None
     try:  # from here on every error path stops the nodes and closes the bus
         clock = Clock(nodes.bus, run["id"], list(run["nodes"]), scenario, on_progress=bar,

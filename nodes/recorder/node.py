@@ -36,6 +36,7 @@ from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
 from cosim.participant import Participant
 from cosim.run_checkpoint import NodeCheckpoints
+from cosim.table_batches import warm_pyarrow
 from cosim.table_writer import table_of_journal
 from cosim.wire import decode
 
@@ -78,8 +79,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                        f"(run.resume.journal = {plan.journal}), not {journal_path}")
     journal = JournalWriter(journal_path, part.run)
     ckpt_due = sorted(plan.due)
-    warm = threading.Thread(target=_import_pyarrow, name="pyarrow-import", daemon=True)
-    warm.start()  # the table's first row group needs it; importing takes seconds when loaded
+    warm_pyarrow()  # the table's first row group needs it
     producers = [n for n in run_cfg["nodes"] if n in nk.producers() and n != part.node]
     part.output(ch.COUPLING)  # before the handshake: its hello proves the path live
     listener = Listener(part, run_cfg["start_timeout_s"])
@@ -208,13 +208,6 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             rec.table.abandon()
         raise write_error(exc, folder) from None
     part.finish(n_steps, t_last, **result)
-
-
-def _import_pyarrow() -> None:
-    try:
-        import pyarrow.parquet  # noqa: F401
-    except ImportError:  # the table's writer says so when it needs it
-        pass
 
 
 def _with_heartbeat(part: Participant, k: int, t: float, work: Any,
