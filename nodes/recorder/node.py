@@ -77,7 +77,10 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                           journal_path.resolve()):
         raise RunError(f"recorder: a resumed run needs the old journal set aside "
                        f"(run.resume.journal = {plan.journal}), not {journal_path}")
-    journal = JournalWriter(journal_path, part.run)
+    try:
+        journal = JournalWriter(journal_path, part.run)
+    except OSError as exc:
+        raise write_error(exc, folder) from None
     ckpt_due = sorted(plan.due)
     warm_pyarrow()  # the table's first row group needs it
     producers = [n for n in run_cfg["nodes"] if n in nk.producers() and n != part.node]
@@ -179,10 +182,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
                 part.progress(k, k * run_cfg["h"])
                 if rec.complete:
                     break
+        journal.close()  # its last segment: a full disk here is said as below
     except RunError:
-        for batch in listener.drain():  # the other nodes' last batches, sent as they stop
-            feed(batch)
-        journal.close()
+        try:  # the other nodes' last batches, sent as they stop
+            for batch in listener.drain():
+                feed(batch)
+            journal.close()
+        except OSError as exc:  # a full disk: the run's error stays the one to say
+            log.warning("recorder: the journal's last records not written: %s", exc)
         if rec.table is not None:
             try:
                 rec.table.close()  # the rows that are complete, in place
@@ -196,7 +203,6 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         with contextlib.suppress(OSError):
             journal.close()
         raise write_error(exc, folder) from None
-    journal.close()
     publish_live()  # the last rows' residual, before done (the orchestrator then closes)
     assert rec.last is not None
     n_steps, t_last = rec.last  # N and t_N (for an adaptive step: known when it got there)
