@@ -17,10 +17,16 @@ SHARP_SHARE = 0.60
 with its faces are tangent, share 0.5; a 90° notch 0.75; a 150° notch 0.58 is let pass, being
 a mild kink that a mesh of a few mm resolves)."""
 N_SAMPLES = 24
+_ORDER = [i + j for i in (0, 12, 6, 18, 3, 15, 9, 21) for j in (0, 1, 2)]
+"""The samples' order round the circle, spread (each point costs OCC ~4 ms): a convex edge's
+~3/4 of outside points show within the first dozen and stop the count (``above``)."""
 
 
-def edge_share(curve: int, volume: int, delta: float) -> tuple[float, np.ndarray]:
-    """(material share on the circle round the edge's midpoint, midpoint xyz [m])."""
+def edge_share(curve: int, volume: int, delta: float,
+               above: float | None = None) -> tuple[float, np.ndarray]:
+    """(material share on the circle round the edge's midpoint, midpoint xyz [m]). With
+    ``above``: exact only where it exceeds ``above``; else the count stops once it cannot, and
+    the share returned is its bound then, <= ``above`` (the classification is the same)."""
     from gmsh import model  # type: ignore[import-untyped]
 
     lo, hi = model.getParametrizationBounds(1, curve)
@@ -36,8 +42,15 @@ def edge_share(curve: int, volume: int, delta: float) -> tuple[float, np.ndarray
     b = np.cross(t, a)
     ang = np.linspace(0.0, 2 * np.pi, N_SAMPLES, endpoint=False)
     pts = p + delta * (np.cos(ang)[:, None] * a + np.sin(ang)[:, None] * b)
-    inside = [model.isInside(3, volume, list(q)) > 0 for q in pts]
-    return float(np.mean(inside)), p
+    inside = outside = 0
+    for i in _ORDER:
+        if model.isInside(3, volume, list(pts[i])) > 0:
+            inside += 1
+        else:
+            outside += 1
+            if above is not None and N_SAMPLES - outside <= above * N_SAMPLES:
+                return (N_SAMPLES - outside) / N_SAMPLES, p
+    return inside / N_SAMPLES, p
 
 
 def sharp_reentrant_edges(volume: int, delta: float = 0.5e-3,
@@ -51,7 +64,7 @@ def sharp_reentrant_edges(volume: int, delta: float = 0.5e-3,
                                                    oriented=False)
               for _, c in model.getBoundary([face], combined=False, oriented=False)}
     for c in sorted(curves):
-        s, mid = edge_share(c, volume, delta)
+        s, mid = edge_share(c, volume, delta, above=share)
         if s > share:
             lo, hi = model.getParametrizationBounds(1, c)
             us = np.linspace(lo[0], hi[0], 21)
