@@ -63,10 +63,9 @@ CALLBACK_DRAIN_TIMEOUT = 5.0
 CLIENT_CONNECT_TIMEOUT_MS = 30000
 """How long a client session keeps trying to reach its router before giving up [ms]."""
 
-CONNECT_RETRY = {"period_init_ms": 25, "period_max_ms": 250, "period_increase_factor": 1.25}
-"""How often a session retries an endpoint it could not reach: 25 ms growing to 250 ms (Zenoh's
-own, 1 s doubling to 4 s, left a tap opened just before its run unconnected for seconds; a
-run's nodes start together and link to sockets that appear within a few hundred ms)."""
+CONNECT_RETRY = {"period_init_ms": 100, "period_max_ms": 500, "period_increase_factor": 1.5}
+"""How often a session retries an endpoint it could not reach (Zenoh's own, 1 s doubling to
+4 s, left a tap opened just before its run unconnected for seconds)."""
 
 
 def _unset(conf: Any, key: str) -> bool:
