@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from cosim.errors import WireError
+from cosim.table_writer import _shape_verdicts  # the shape rule: one definition
 from cosim.wire import Message, decode
 
 Table = dict[str, np.ndarray]
@@ -61,20 +62,3 @@ def build_table(records: Iterable[tuple[str, bytes]]) -> tuple[Table, int]:
             else:
                 table[f"{channel}/{name}"] = arr
     return table, bad
-
-
-_Shape = tuple[tuple[str, ...], tuple[type, ...]]
-
-
-def _shape_verdicts(counts: Counter[_Shape], fields: tuple[str, ...]) -> dict[_Shape, bool]:
-    """Whether a message of each shape goes in the table: it carries every one of the
-    channel's ``fields``, each a list or not as in the channel's most common such shape."""
-    def listness(shape: _Shape) -> dict[str, bool] | None:
-        kinds = dict(zip(*shape, strict=True))
-        if not all(f in kinds for f in fields):
-            return None
-        return {f: kinds[f] is list for f in fields}
-
-    complete = [(n, shape) for shape, n in counts.items() if listness(shape) is not None]
-    ref = listness(max(complete, key=lambda c: c[0])[1]) if complete else None
-    return {shape: ref is not None and listness(shape) == ref for shape in counts}
