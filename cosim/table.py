@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from cosim.errors import InputFileError
-from cosim.table_batches import arrow_column, parquet_errors
+from cosim.table_batches import arrow_column, numpy_column, parquet_errors
 
 Table = dict[str, np.ndarray]
 
@@ -49,9 +49,9 @@ def read_table(path: str | Path, keep: Callable[[str], bool] | None = None) -> T
         import pyarrow.parquet as pq
 
         with parquet_errors(path, pass_missing=True):
-            names = [n for n in pq.ParquetFile(path).schema_arrow.names if wanted(n)]
-            t = pq.read_table(path, columns=names)
-            return {c: t.column(c).to_numpy() for c in t.column_names}
+            f = pq.ParquetFile(path)
+            t = f.read(columns=[n for n in f.schema_arrow.names if wanted(n)])
+            return {c: numpy_column(t.column(c)) for c in t.column_names}
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
     if not rows or not rows[0]:

@@ -42,6 +42,28 @@ def arrow_column(x: np.ndarray) -> Any:
     return pa.Array.from_buffers(pa.from_numpy_dtype(x.dtype), x.size, [None, pa.py_buffer(x)])
 
 
+def numpy_column(col: Any) -> np.ndarray:
+    """A pyarrow Array or ChunkedArray as numpy, the same array as its ``to_numpy()`` (a
+    column of one chunk: a read-only view) without its first call's pandas import (0.2-0.5
+    s of a run's end): a numeric chunk without nulls is read from its buffer; other columns
+    (text, nulls) go through pyarrow."""
+    import pyarrow as pa
+
+    if not isinstance(col, pa.ChunkedArray):
+        col = pa.chunked_array([col])
+    parts: list[np.ndarray] = []
+    for c in col.chunks:
+        kind = ("f" if pa.types.is_floating(c.type) else "i" if pa.types.is_signed_integer(
+            c.type) else "u" if pa.types.is_unsigned_integer(c.type) else None)
+        if kind is None or c.null_count:
+            return np.asarray(col.to_numpy())
+        dt = np.dtype(f"{kind}{c.type.bit_width // 8}")
+        parts.append(np.frombuffer(c.buffers()[1], dt, len(c), c.offset * dt.itemsize))
+    if len(parts) == 1:
+        return parts[0]
+    return np.concatenate(parts) if parts else np.asarray(col.to_numpy())
+
+
 @contextmanager
 def parquet_errors(path: str | Path, pass_missing: bool = False) -> Iterator[None]:
     """pyarrow's errors on a file that is not a readable Parquet table as an InputFileError
@@ -69,12 +91,13 @@ def parquet_batches(path: Path, columns: Sequence[str], rows: int = BATCH_ROWS
     if md.num_row_groups and max(md.row_group(i).num_rows
                                  for i in range(md.num_row_groups)) > 4 * rows:
         for b in f.iter_batches(rows, columns=cols, use_threads=False):
-            yield {c: b.column(i).to_numpy().astype(float, copy=False)
+            yield {c: numpy_column(b.column(i)).astype(float, copy=False)
                    for i, c in enumerate(cols)}
         return
     for g in range(md.num_row_groups):
         tab = f.read_row_group(g, columns=cols, use_threads=False)
-        arrs = [tab.column(i).to_numpy().astype(float, copy=False) for i in range(len(cols))]
+        arrs = [numpy_column(tab.column(i)).astype(float, copy=False)
+                for i in range(len(cols))]
         del tab
         for i in range(0, arrs[0].size if arrs else 0, rows):
             yield {c: a[i:i + rows] for c, a in zip(cols, arrs, strict=True)}

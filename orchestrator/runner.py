@@ -156,8 +156,10 @@ def _adaptive_summary(scenario: dict[str, Any], rec: dict[str, Any]) -> dict[str
         import numpy as np
         import pyarrow.parquet as pq
 
+        from cosim.table_batches import numpy_column
+
         try:
-            t = pq.read_table(parquet, columns=["t"]).column("t").to_numpy()
+            t = numpy_column(pq.ParquetFile(parquet).read(columns=["t"]).column("t"))
         except (OSError, KeyError, ValueError):
             return {"adaptive_step": out}
         if t.size > 1:

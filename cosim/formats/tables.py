@@ -21,7 +21,7 @@ import numpy as np
 
 from cosim.errors import InputFileError
 from cosim.safe_open import open_user_text
-from cosim.table_batches import arrow_column, parquet_errors
+from cosim.table_batches import arrow_column, numpy_column, parquet_errors
 
 from .channel_set import ChannelSet
 
@@ -179,7 +179,7 @@ def read_parquet(path: str | Path) -> ChannelSet:
 
     path = str(path)
     with parquet_errors(path):
-        tab = pq.read_table(path)
+        tab = pq.ParquetFile(path).read()
     names = tab.column_names
     it = _time_column(names, path)
     chans: dict[str, np.ndarray] = {}
@@ -189,7 +189,7 @@ def read_parquet(path: str | Path) -> ChannelSet:
             continue
         col = tab.column(n)
         try:
-            chans[n] = col.to_numpy(zero_copy_only=False).astype(float)
+            chans[n] = numpy_column(col).astype(float)
         except (TypeError, ValueError):
             continue  # a text column: not a channel
         md = tab.schema.field(n).metadata or {}
@@ -198,7 +198,7 @@ def read_parquet(path: str | Path) -> ChannelSet:
         except UnicodeDecodeError:
             raise InputFileError(path, f"column {n!r}: its unit is not UTF-8 text") from None
     try:
-        t = tab.column(names[it]).to_numpy(zero_copy_only=False).astype(float)
+        t = numpy_column(tab.column(names[it])).astype(float)
     except (TypeError, ValueError):
         raise InputFileError(path, f"the time column {names[it]!r} is not numeric") from None
     return ChannelSet(t=t, channels=chans, units=units)
