@@ -273,9 +273,9 @@ def test_local_convergence_table_on_the_link(link):
     _, path, _ = link
     part = load_part(path)
     loads = {"a_z": 1000.0, "b_z": -1000.0, "a_my": 20.0}
-    cv = convergence(part, [0.02], loads, local_sizes=[0.004, 0.006], radius=0.01)
+    cv = convergence(part, [0.02], loads, local_sizes=[0.005, 0.008], radius=0.01)
     rows = cv["rows"]
-    assert [r["local_size_m"] for r in rows] == [None, 0.006, 0.004]
+    assert [r["local_size_m"] for r in rows] == [None, 0.008, 0.005]
     assert rows[0]["n_nodes"] < rows[1]["n_nodes"] < rows[2]["n_nodes"]
     hot = [h["von_mises_mpa"] for h in cv["hot_spots"]]
     np.testing.assert_allclose(rows[-1]["static_at_spots_mpa"], hot, rtol=1e-9)
