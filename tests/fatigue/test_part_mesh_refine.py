@@ -118,7 +118,7 @@ def test_convergence_refines_round_the_most_damaged_nodes_too(link):
     rf0 = static_only["refinement"]
     assert not rf0["capped"]
     assert np.min(np.linalg.norm(np.array(rf0["centres_m"]) - x0, axis=1)) > 0.02
-    cv = convergence(part, [0.02], loads, local_sizes=[0.008, 0.006], radius=0.02,
+    cv = convergence(part, [0.02], loads, local_sizes=[0.01, 0.008], radius=0.02,
                      damage=damage)
     dm = cv["damaged"]
     d = [x["damage"] for x in dm]
