@@ -7,12 +7,12 @@ measured here, never asserted in tests.
 ``null-chain`` (issue #16): the floor of the architecture. The run's nodes (plant, tyre_road,
 controller, recorder, fatigue: the first 2-5), each its own process started, linked (the run's
 explicit mesh, :class:`orchestrator.local_mesh.LocalMesh`), pinned (``orchestrator.placement``,
-recorder and fatigue in ``SCHED_IDLE``, fatigue at nice +10) and polling
-(``PINNED_SPIN_US``) as the orchestrator does (the node side: ``python -m bench.null_chain nodes
-NAME --connect EP``, bench/null_chain_nodes.py); this process is the orchestrator, with the
-run's own :class:`orchestrator.clock.Clock` (steps/s = ``n_steps / step_wall_s``, as
-summary.json). Per
-step, as the node shells do with the Chapter 6 corner's message sizes: the plant puts ONE
+recorder and fatigue in ``SCHED_IDLE``, fatigue at nice +10, coupled nodes sharing a core in
+``SCHED_BATCH``) and polling (each kind's ``spin_us``) as the orchestrator does (the node
+side: ``python -m bench.null_chain nodes NAME --connect EP``, bench/null_chain_nodes.py);
+this process is the orchestrator, with the run's own :class:`orchestrator.clock.Clock`
+(steps/s = ``n_steps / step_wall_s``, as summary.json). Per step, as the node shells do
+with the Chapter 6 corner's message sizes: the plant puts ONE
 message a step (``state`` of step k with ``response`` and ``arm`` of k - 2, #28 item 2) and
 waits for each force node's ``force``; tyre_road and the controller wait for ``state`` of step
 k (sequential) or k - 1 (parallel); every producer sends its records in batches (64 messages or
@@ -82,32 +82,32 @@ class Chain:
     pinned and connected to this process's Zenoh session as the orchestrator does it."""
 
     def __init__(self, bus: Any, mesh: Any, count: int, pin: bool) -> None:
-        from orchestrator.placement import background, core_layout, usable_cores
-        from orchestrator.placement import pin as pin_to
-
-        spin_us, _ = _orchestrator_defaults()
+        from cosim import node_kinds as nk
+        from orchestrator import placement as pl
 
         self.names = list(ROLES[:count])
-        cores = core_layout(self.names, usable_cores()) if pin else {}
+        cores = pl.core_layout(self.names, pl.usable_cores()) if pin else {}
+        shared = pl.sharing_a_core(cores)
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}
         for name in self.names:
-            spin = spin_us if name in cores else 0
+            spin = nk.spin_us(name) if name in cores else 0
             links = [a for ep in mesh.connect(name) for a in ("--connect", ep)]
             self.procs[name] = p = subprocess.Popen(
                 [*NODE_CMD, name, *links, "--listen", mesh.listen(name),
                  "--spin-us", str(spin)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                 text=True, cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)))
-            if name in cores and pin_to(p.pid, cores[name]):
+            if name in cores and pl.pin(p.pid, cores[name]):
                 self.cores[name] = cores[name]
+                if name in shared:
+                    pl.batch(p.pid)
         for name, p in self.procs.items():
             line = _line(p)
             if line != "up":
                 raise RuntimeError(f"null node {name} did not start ({line!r})")
-        from cosim import node_kinds as nk
         for name in self.cores:  # as a run does once it has started
             if nk.off_critical_path(name):
-                background(self.procs[name].pid)
+                pl.background(self.procs[name].pid)
         self.bus = bus
 
     def trial(self, i: int, n: int, exchange: str, wire: str,

@@ -161,6 +161,7 @@ def plant(part: Any, cmd: dict) -> None:
         else:  # as the plant: last step's response and loads encoded while it waits,
             part.publish("state", k, t, STATE)  # in the next step's message
             part.send()
+            os.sched_yield()  # as the plant node: a force node on its core first
             for c, kk, tt, d in later:
                 part.publish(c, kk, tt, d, hold=True)
             part.wait({tag: k for tag in tags})

@@ -62,6 +62,8 @@ class NodeKind:
     path_keys: tuple[str, ...] = ()  # dotted scenario keys holding file paths
     cores: tuple[int, int, int] = (1, 0, 3)
     """Its core with 2, 3 and >= 4 usable cores (index into the usable cores)."""
+    spin_us: int = 200
+    """How long a pinned node of this kind polls its input before it blocks [us]."""
     run_folder: bool = False  # writes into the run folder (its container mounts it)
     alternatives: Mapping[str, Impl] = field(default_factory=dict)  # [nodes] <name> = "<alt>"
 
@@ -71,7 +73,8 @@ _CONTROLLER_CHECK = Check("nodes.controller.node:static_check", takes=("n_corner
 KINDS: tuple[NodeKind, ...] = (
     NodeKind("plant", COUPLED, Impl("nodes.plant.node:run", Check("nodes.plant.node:preflight")),
              reads=(("*", "force"),), writes=(*schema.writes("plant"), "step", "records"),
-             path_keys=("vehicle.corner", "vehicle.front", "vehicle.rear"), cores=(0, 0, 0)),
+             path_keys=("vehicle.corner", "vehicle.front", "vehicle.rear"), cores=(0, 0, 0),
+             spin_us=1000),  # it waits one force round trip a step: 150-300 us on 2 cores
     NodeKind("tyre_road", COUPLED,
              Impl("nodes.tyre_road.node:TyreRoad",
                   Check("nodes.tyre_road.node:static_check", gives="duration_s")),
@@ -152,6 +155,11 @@ def core_index(name: str, n_cores: int) -> int:
     """Node ``name``'s core (index into ``n_cores`` >= 2 usable ones); no kind: a listener's."""
     cores = BY_NAME[name].cores if name in BY_NAME else NodeKind.cores
     return cores[min(n_cores, 4) - 2]
+
+
+def spin_us(name: str) -> int:
+    """How long node ``name`` polls its input before it blocks when pinned [us]."""
+    return (BY_NAME[name] if name in BY_NAME else NodeKind).spin_us
 
 
 def off_critical_path(name: str) -> bool:

@@ -14,11 +14,12 @@ from cosim import node_kinds as nk
 from cosim.orchestrator_presence import ENV_PARENT_PID
 
 from .local_mesh import LocalMesh
-from .placement import BackgroundGuard, background, pin
+from .placement import BackgroundGuard, background, batch, pin, sharing_a_core
 
-PINNED_SPIN_US = 200
-"""How long a pinned node polls its input before blocking [us] (Participant.spin_s): +15 %
-coupled steps/s on the 2-core VM (docs/cosim.md); unpinned runs side by side got nothing."""
+PINNED_SPIN_US = nk.NodeKind.spin_us
+"""How long a pinned node polls its input before blocking [us] (Participant.spin_s; the
+plant's is longer, :func:`cosim.node_kinds.spin_us`): +15 % coupled steps/s on the 2-core VM
+(docs/cosim.md); unpinned runs side by side got nothing."""
 
 
 def local_lease_ms(stall_timeout_s: float) -> int:
@@ -37,6 +38,8 @@ class LocalNodes:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}  # the core each node was pinned to
         self.background: list[str] = []  # the nodes put in SCHED_IDLE (go_background)
+        self.batch: list[str] = []  # the coupled nodes sharing a core: SCHED_BATCH
+        shared = sharing_a_core(cores or {})
         self.guard = BackgroundGuard()
         log_dir.mkdir(parents=True, exist_ok=True)
         # their parent's PID: a node ends at once when this process is gone
@@ -57,7 +60,7 @@ class LocalNodes:
             cmd += ["--lease-ms", str(int(lease_ms))]
             core = (cores or {}).get(name)
             if core is not None:
-                cmd += ["--spin-us", str(PINNED_SPIN_US)]
+                cmd += ["--spin-us", str(nk.spin_us(name))]
             log = open(log_dir / f"{name}.log", "wb")
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)
@@ -65,6 +68,8 @@ class LocalNodes:
             # before its interpreter has started any thread: they all inherit the core
             if core is not None and pin(self.procs[name].pid, core):
                 self.cores[name] = core
+                if name in shared and batch(self.procs[name].pid):
+                    self.batch.append(name)
 
     def go_background(self) -> None:
         """Once started: pinned nodes off the critical path to ``SCHED_IDLE``."""

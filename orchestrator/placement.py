@@ -14,7 +14,12 @@ n cores     plant  tyre_road  controller  recorder, fatigue (and any other node)
 >= 4        c0     c1         c2          c3
 ==========  =====  =========  ==========  =========================================
 
-A pinned node polls its input briefly before it blocks (``--spin-us``). A node off the
+A pinned node polls its input before it blocks (``--spin-us``, each kind's ``spin_us``: the
+plant 1 ms, as long as a force round trip can take; the others 200 us). Coupled nodes that
+share a core (the plant and the controller on 2 cores) run in ``SCHED_BATCH``: a message that
+wakes one does not preempt the other in the middle of its step (the controller woken by the
+plant's state used to preempt the plant's put before it had reached the tyre/road node's
+link); they hand the core over where the one running polls (``sched_yield``). A node off the
 critical path (:func:`cosim.node_kinds.off_critical_path`) runs in ``SCHED_IDLE`` once the run
 has started (its inputs are buffered: results do not depend on when it runs); a starved one
 goes back to the normal class (:class:`BackgroundGuard`). ``auto`` pins on 2 to
@@ -25,7 +30,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 
 from cosim import node_kinds as nk
 
@@ -53,6 +58,22 @@ def should_pin(mode: str, cores: list[int]) -> bool:
     if mode == "off" or len(cores) < 2:
         return False
     return mode == "on" or len(cores) <= AUTO_MAX_CORES
+
+
+def sharing_a_core(layout: Mapping[str, int]) -> list[str]:
+    """The coupled nodes of ``layout`` (node -> core) whose core holds another coupled node."""
+    chain = [n for n in layout if not nk.off_critical_path(n)]
+    return [n for n in chain if sum(layout[m] == layout[n] for m in chain) > 1]
+
+
+def batch(pid: int) -> bool:
+    """``pid`` (before it has started a thread: they inherit it) to ``SCHED_BATCH``: its
+    wake-ups do not preempt the task running on its core (see the module's docstring)."""
+    try:
+        os.sched_setscheduler(pid, os.SCHED_BATCH, os.sched_param(0))
+        return True
+    except (AttributeError, OSError):
+        return False
 
 
 def _threads(pid: int) -> list[int]:

@@ -441,6 +441,6 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
     if local is None:
         return {}
     return {"lowlatency": bool(lowlatency), "cores": dict(local.cores),
-            "background": list(local.background),
+            "background": list(local.background), "batch": list(local.batch),
             "background_starved": list(local.guard.moved)}
 

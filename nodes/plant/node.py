@@ -10,6 +10,7 @@ k are encoded while the force nodes compute step k + 1 and go out with state k +
 
 from __future__ import annotations
 
+import os
 from typing import Any, cast
 
 from cosim import channels as ch
@@ -22,6 +23,8 @@ from cosim.sink_window import SinkWindow, window_steps
 
 from .models import build_plant_model
 from .stepper import PlantStepper
+
+_yield = getattr(os, "sched_yield", lambda: None)
 
 
 def run(part: Participant, scenario: dict[str, Any]) -> None:
@@ -60,6 +63,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             sinks.hold(k)  # a sink more than run.sink_window_s behind: wait for it
             part.publish(ch.STATE, k, t, st)
             part.send()  # one message a step (#28): state k, the response and loads of k - 1
+            _yield()  # a force node on this core takes it first (orchestrator/placement.py)
             # last step's response and loads: encoded while the force nodes compute, off the
             # coupled chain's critical path; they go out with state k + 1
             for name, kk, tt, values in later:

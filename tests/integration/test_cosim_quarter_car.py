@@ -15,13 +15,14 @@ import numpy as np
 import pytest
 
 from cosim import channels as ch
+from cosim import node_kinds as nk
 from cosim.bus import free_loopback_endpoint
 from cosim.journal import read_journal
 from cosim.table import read_table
 from cosim.table_writer import journal_table
 from cosim.wire import encode, encode_step
 from orchestrator.accuracy import peak_errors, worst
-from orchestrator.placement import core_layout, usable_cores
+from orchestrator.placement import core_layout, sharing_a_core, usable_cores
 from orchestrator.reference import reference_solution
 
 from ..conftest import node_pids, popen_suscosim, run_client, suscosim
@@ -287,15 +288,21 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
         _wait_until_recording(out)
         want = core_layout(ch.NODES, cores)
         assert want["tyre_road"] != want["controller"]  # the two force nodes work at once
+        batch = sharing_a_core(want)  # on 2 cores: the plant and the controller
+        assert batch == ([ch.PLANT, ch.CONTROLLER] if len(cores) == 2 else []), batch
+        assert nk.spin_us(ch.PLANT) > nk.spin_us(ch.CONTROLLER)
         for node in ch.NODES:
             (pid,) = node_pids("pintest", node)
             assert _cores_of_every_thread(pid) == {str(want[node])}, node
             argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
-            assert "--spin-us" in argv, argv  # a pinned node polls before it blocks
+            # a pinned node polls before it blocks, the plant longer than the others
+            assert argv[argv.index("--spin-us") + 1] == str(nk.spin_us(node)), argv
             # the recorder, off the coupled chain's critical path, in SCHED_IDLE (every
-            # thread); the coupled nodes in the normal class. Zenoh's two shared-memory
-            # watchdog threads put themselves in SCHED_FIFO where they may (as root)
-            want_policy = os.SCHED_IDLE if node == "recorder" else os.SCHED_OTHER
+            # thread); coupled nodes sharing a core in SCHED_BATCH, the others in the normal
+            # class. Zenoh's two shared-memory watchdog threads put themselves in
+            # SCHED_FIFO where they may (as root)
+            want_policy = (os.SCHED_IDLE if node == "recorder" else os.SCHED_BATCH
+                           if node in batch else os.SCHED_OTHER)
             policies = _policies_of_every_thread(pid)
             assert os.sched_getscheduler(pid) == want_policy, node
             assert policies - {os.SCHED_FIFO} == {want_policy}, (node, policies)
@@ -304,6 +311,7 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
         proc.wait(timeout=30)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["cores"] == want and summary["background"] == ["recorder"]
+    assert summary["batch"] == batch
 
 
 @pytest.mark.long  # a load test: a busy loop on every core for the whole run
