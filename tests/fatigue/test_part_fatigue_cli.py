@@ -11,7 +11,7 @@ import numpy as np
 
 from orchestrator.cli import main as cli
 
-from .test_part_user import make_link, write_part
+from .test_part_user import LINK_MESH, make_link, write_part
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
 JOINTS = """
@@ -39,7 +39,7 @@ def test_fatigue_of_a_run_on_a_users_part(tmp_path: Path, monkeypatch) -> None:
     assert cli(["run", str(SCENARIO), "--mode", "monolithic", "--quiet", "--out", str(run),
                 "--set", "road.length_m=3", "--set", "fatigue.live=false"]) == 0
     make_link(tmp_path)
-    part = write_part(tmp_path, extra=JOINTS)
+    part = write_part(tmp_path, extra=JOINTS, mesh=LINK_MESH)
     assert cli(["fatigue", str(run), "--part", str(part), "--quiet"]) == 0
     folders = sorted(run.glob("fatigue-*"))
     assert len(folders) == 1 and not (run / "fatigue").exists()  # a what-if, aside

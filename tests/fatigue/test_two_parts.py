@@ -14,7 +14,7 @@ import pytest
 
 from tests.conftest import ROOT, suscosim
 
-from .test_part_user import make_link, write_part
+from .test_part_user import LINK_MESH, make_link, write_part
 
 SCENARIO = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
 UPPER = ROOT / "nodes" / "fatigue" / "parts" / "data" / "upper_arm.toml"
@@ -52,9 +52,6 @@ radius = 0.0105
 length = 0.05
 forces = { x = "upper_bush_front_x", y = "upper_bush_front_y" }
 """
-LINK_MESH = "size = 0.02\nfillet_size = 0.01"
-"""The made link's mesh: 20 mm on its 20 x 40 mm bar (~800 assessed nodes, a 1.3 s solve; the
-test's claims are about which parts and channels reach which results, not the link's stress)."""
 
 
 def _coarse_upper_arm(folder: Path) -> Path:
