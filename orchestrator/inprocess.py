@@ -187,7 +187,7 @@ class Engine:
                         msg = self.emit(s.name, channel, k, ts, fields)
                         if channel == ch.FORCE:
                             forces[s.name] = msg
-                for channel, values in plant.couple(forces):
+                for channel, values in plant.couple(forces)():
                     self.emit(ch.PLANT, channel, k, t, values)
                 now = time.monotonic()
                 if now - last_progress >= PROGRESS_PERIOD_S:

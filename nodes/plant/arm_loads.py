@@ -3,7 +3,7 @@ from PyBullet's joint sensors and the forces the corner applied (the ``arm`` cha
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -48,10 +48,17 @@ def arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
     sum F + m g = m a_com, sum (r x F) + M_x e_x = dH/dt (tests/vehicles/test_double_wishbone.py,
     static and in bumper contact).
     """
-    return arm_loads_at(model._w_pivot,
-                        p.getJointStateMultiDof(model.body, HUB, physicsClientId=model.client)[2],
-                        model.geom.arm_rotation, model._applied_pose, model._arm_r_com,
-                        model._F_d, (0.0, 0.0, -model._F_bs), model.geom.bush_spacing)
+    return arm_loads_later(model)()
+
+
+def arm_loads_later(model: DoubleWishboneCorner) -> Callable[[], dict[str, float]]:
+    """:func:`arm_loads` with PyBullet's sensors read now (before the next substep) and the
+    arithmetic left to the call of the function returned."""
+    args = (model._w_pivot,
+            p.getJointStateMultiDof(model.body, HUB, physicsClientId=model.client)[2],
+            model.geom.arm_rotation, model._applied_pose, model._arm_r_com,
+            model._F_d, (0.0, 0.0, -model._F_bs), model.geom.bush_spacing)
+    return lambda: arm_loads_at(*args)
 
 
 def bush_split(w: Sequence[float], r_com: Sequence[float], R_f: Sequence[Sequence[float]],

@@ -29,7 +29,7 @@ CG height h_cg = 0.55 m (ours: a small MPV's unladen CG, the thesis gives none).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -392,25 +392,44 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
         vehicle axes), where a force's components and a moment's (M_x: the torsion bar's
         and the anti-roll bar's, sign flipped: a moment is a pseudovector) are those of the
         left part under the mirrored load: the left part's FE unit cases give its stresses."""
-        out: dict[str, dict[str, float]] = {}
-        for i, (g, lk, name) in enumerate(zip(self.geoms, self.link, CORNERS, strict=True)):
+        return self._corner_arm_loads_later()()
+
+    def _corner_arm_loads_later(self) -> Callable[[], dict[str, dict[str, float]]]:
+        """:meth:`corner_arm_loads` with the joint sensors read now, the rest at the call."""
+        args = []
+        for i, (g, lk) in enumerate(zip(self.geoms, self.link, strict=True)):
             R_arm, hub_q, u, F_d, bump = self._applied[i]
-            loads = arm_loads_at(
+            args.append((
                 p.getJointState(self.body, lk["lower_arm"], physicsClientId=self.client)[2],
                 p.getJointStateMultiDof(self.body, lk["hub"], physicsClientId=self.client)[2],
                 g.arm_rotation, (R_arm, hub_q, u), self._arm_r_com[i], F_d, bump,
-                g.bush_spacing)
-            if self.side[i] < 0:  # proper frame (x, y out, z down) -> mirrored (z up)
-                loads = {k: (-v if k.endswith("_z") or k == "torsion_bar_mx" else v)
-                         for k, v in loads.items()}
-            out[name] = loads
-        return out
+                g.bush_spacing))
+
+        def loads() -> dict[str, dict[str, float]]:
+            out: dict[str, dict[str, float]] = {}
+            for a, side, name in zip(args, self.side, CORNERS, strict=True):
+                one = arm_loads_at(*a)
+                if side < 0:  # proper frame (x, y out, z down) -> mirrored (z up)
+                    one = {k: (-v if k.endswith("_z") or k == "torsion_bar_mx" else v)
+                           for k, v in one.items()}
+                out[name] = one
+            return out
+
+        return loads
 
     def loads(self) -> dict[str, dict[str, float]]:
         """Every corner's lower-arm loads on its channel ``arm_FL`` .. ``arm_RR``
         (:meth:`corner_arm_loads`), and ``arm`` = the front-left's (docs/corners.md)."""
-        al = self.corner_arm_loads()
-        return {"arm": al["FL"], **{f"arm_{c}": al[c] for c in CORNERS}}
+        return self.loads_later()()
+
+    def loads_later(self) -> Callable[[], dict[str, dict[str, float]]]:
+        corner = self._corner_arm_loads_later()
+
+        def loads() -> dict[str, dict[str, float]]:
+            al = corner()
+            return {"arm": al["FL"], **{f"arm_{c}": al[c] for c in CORNERS}}
+
+        return loads
 
     def info(self) -> dict[str, object]:
         d = super().info()

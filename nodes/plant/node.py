@@ -22,7 +22,7 @@ from cosim.run_settings import RunSettings
 from cosim.sink_window import SinkWindow, window_steps
 
 from .models import build_plant_model
-from .stepper import PlantStepper
+from .stepper import Outputs, PlantStepper
 
 _yield = getattr(os, "sched_yield", lambda: None)
 
@@ -50,7 +50,14 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
         sinks = SinkWindow(part, [n for n in scenario["run"]["nodes"]
                                   if nk.off_critical_path(n)],
                            window_steps(window_s, settings.h), plan.start_k)
-        later: list[tuple[str, int, float, dict]] = []
+        later: tuple[int, float, Outputs] | None = None  # last step's, not yet published
+
+        def publish_later(hold: bool = False) -> None:
+            if later is not None:
+                kk, tt, outputs = later
+                for name, values in outputs():
+                    part.publish(name, kk, tt, values, hold=hold)
+
         saved = plan.restored()
         if saved is not None:  # a resumed run: the state at the start of step start_k
             with plan.restoring():  # a state that does not fit: exit 2 named (#43)
@@ -64,24 +71,19 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
             part.publish(ch.STATE, k, t, st)
             part.send()  # one message a step (#28): state k, the response and loads of k - 1
             _yield()  # a force node on this core takes it first (orchestrator/placement.py)
-            # last step's response and loads: encoded while the force nodes compute, off the
-            # coupled chain's critical path; they go out with state k + 1
-            for name, kk, tt, values in later:
-                part.publish(name, kk, tt, values, hold=True)
-            later.clear()
+            # last step's response and loads: computed and encoded while the force nodes
+            # compute, off the coupled chain's critical path; they go out with state k + 1
+            publish_later(hold=True)
             msgs = part.wait({tag: k for tag in sources})
-            later.extend((name, k, t, values)
-                         for name, values in plant.couple({tag[0]: m for tag, m in msgs.items()}))
+            later = (k, t, plant.couple({tag[0]: m for tag, m in msgs.items()}))
             part.progress(k, t)
             if plant.is_last():
-                for name, kk, tt, values in later:
-                    part.publish(name, kk, tt, values)
+                publish_later()
                 break
             plant.advance()
             if plant.k in plan.due:  # checkpoint k + 1: steps <= k sent, then the state
-                for name, kk, tt, values in later:
-                    part.publish(name, kk, tt, values)
-                later.clear()
+                publish_later()
+                later = None
                 part.flush_records()
                 plan.save(part, plant.k, plant.checkpoint())
         part.finish(k, t, sink_held_s=sinks.held_s)

@@ -18,7 +18,7 @@ first-order error (all of it, for a linear tyre and damper).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from cosim import channels as ch
@@ -29,6 +29,10 @@ from cosim.step_size import step_residual
 from cosim.wire import Message
 
 from .coupling import StepInputs, substep_forces
+
+Outputs = Callable[[], list[tuple[str, dict[str, Any]]]]
+"""A coupled step's outputs [(channel, fields)], computed when called (:meth:`PlantStepper.
+couple`)."""
 
 
 class PlantStepper:
@@ -79,9 +83,12 @@ class PlantStepper:
         """Whether the step begun is the run's last."""
         return self.settings.is_last(self.k, self.t)
 
-    def couple(self, msgs: Mapping[str, Message]) -> list[tuple[str, dict[str, Any]]]:
+    def couple(self, msgs: Mapping[str, Message]) -> Outputs:
         """Apply the forces of step k (``msgs``: force node -> its ``force`` message), take
-        the first substep; the step's outputs [(channel, fields)]: ``response``, loads."""
+        the first substep; the step's outputs [(channel, fields)] (``response``, loads) as a
+        function that gives them, also after :meth:`advance`: what only the engine's present
+        state holds is read now, the arithmetic at the call (the plant node sends the next
+        state first: off the coupled chain's critical path, #41)."""
         model, st, ctrl = self.model, self.st, self.ctrl
         seen = self.prev if self.settings.lag else st  # what the forces were computed from
         forces = {f: m.array(f) for node, m in msgs.items() for f in self.provides[node]}
@@ -108,12 +115,17 @@ class PlantStepper:
         model.substep(dt, F_t, F_d)
         after = model.state()
         vel1 = model.response_velocities()
+        loads = model.loads_later()
         self._now, self._after = now, after
-        response = {"a_b": (after["v_b"] - st["v_b"]) / dt,
-                    "a_w": (after["v_w"] - st["v_w"]) / dt,
-                    "F_t": F_t, "F_d": F_d, "F_s": F_s, **extra,
-                    **{key: (vel1[key] - v) / dt for key, v in vel0.items()}}
-        return [(ch.RESPONSE, response), *model.loads().items()]
+
+        def outputs() -> list[tuple[str, dict[str, Any]]]:
+            response = {"a_b": (after["v_b"] - st["v_b"]) / dt,
+                        "a_w": (after["v_w"] - st["v_w"]) / dt,
+                        "F_t": F_t, "F_d": F_d, "F_s": F_s, **extra,
+                        **{key: (vel1[key] - v) / dt for key, v in vel0.items()}}
+            return [(ch.RESPONSE, response), *loads().items()]
+
+        return outputs
 
     def advance(self) -> None:
         """The remaining substeps of step k to t_{k+1}; then step k + 1 is next."""

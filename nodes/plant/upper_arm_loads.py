@@ -15,6 +15,7 @@ arm's points, read by the same functions): one definition of each hardpoint.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -77,14 +78,24 @@ def upper_arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
 
     With the arm's weight they balance its inertia: sum F + m g = m a_com and the moments
     (tested in tests/vehicles/test_double_wishbone.py)."""
+    return upper_arm_loads_later(model)()
+
+
+def upper_arm_loads_later(model: DoubleWishboneCorner) -> Callable[[], dict[str, float]]:
+    """:func:`upper_arm_loads` with PyBullet's sensors read now (before the next substep) and
+    the arithmetic left to the call of the function returned."""
     c, b = model.client, model.body
     w = p.getJointState(b, UPPER_ARM, physicsClientId=c)[2]
-    _M0, front, rear = bush_split(w, model._ua_r_com, model._ua_frame_rows, model._ua_spacing)
     h = p.getConstraintState(model._c_upper, physicsClientId=c)  # on the hub, world axes
-    # in the frame at the start of the substep (the arm link's rotation then)
-    ball = to_frame(model._ua_frame_rows, p.getMatrixFromQuaternion(model._ua_quat_applied),
-                    (-h[0], -h[1], -h[2]))
-    out: dict[str, float] = {}
-    for i, f in enumerate((ball, front, rear)):
-        out[FIELDS[3 * i]], out[FIELDS[3 * i + 1]], out[FIELDS[3 * i + 2]] = f
-    return out
+    rows, r_com, d = model._ua_frame_rows, model._ua_r_com, model._ua_spacing
+    quat = model._ua_quat_applied  # the arm link's rotation at the start of the substep
+
+    def loads() -> dict[str, float]:
+        _M0, front, rear = bush_split(w, r_com, rows, d)
+        ball = to_frame(rows, p.getMatrixFromQuaternion(quat), (-h[0], -h[1], -h[2]))
+        out: dict[str, float] = {}
+        for i, f in enumerate((ball, front, rear)):
+            out[FIELDS[3 * i]], out[FIELDS[3 * i + 1]], out[FIELDS[3 * i + 2]] = f
+        return out
+
+    return loads
