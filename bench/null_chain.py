@@ -91,7 +91,7 @@ class Chain:
         self.procs: dict[str, subprocess.Popen] = {}
         self.cores: dict[str, int] = {}
         for name in self.names:
-            spin = nk.spin_us(name) if name in cores else 0
+            spin = pl.spin_us(name, cores) if name in cores else 0
             links = [a for ep in mesh.connect(name) for a in ("--connect", ep)]
             self.procs[name] = p = subprocess.Popen(
                 [*NODE_CMD, name, *links, "--listen", mesh.listen(name),

@@ -14,7 +14,7 @@ from cosim import node_kinds as nk
 from cosim.orchestrator_presence import ENV_PARENT_PID
 
 from .local_mesh import LocalMesh
-from .placement import BackgroundGuard, background, batch, pin, sharing_a_core
+from .placement import BackgroundGuard, background, batch, pin, sharing_a_core, spin_us
 
 PINNED_SPIN_US = nk.NodeKind.spin_us
 """How long a pinned node polls its input before blocking [us] (Participant.spin_s; the
@@ -60,7 +60,7 @@ class LocalNodes:
             cmd += ["--lease-ms", str(int(lease_ms))]
             core = (cores or {}).get(name)
             if core is not None:
-                cmd += ["--spin-us", str(nk.spin_us(name))]
+                cmd += ["--spin-us", str(spin_us(name, cores or {}))]
             log = open(log_dir / f"{name}.log", "wb")
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)

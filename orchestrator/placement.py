@@ -14,8 +14,9 @@ n cores     plant  tyre_road  controller  recorder, fatigue (and any other node)
 >= 4        c0     c1         c2          c3
 ==========  =====  =========  ==========  =========================================
 
-A pinned node polls its input before it blocks (``--spin-us``, each kind's ``spin_us``: the
-plant 1 ms, as long as a force round trip can take; the others 200 us). Coupled nodes that
+A pinned node polls its input before it blocks (``--spin-us``, :func:`spin_us`: the plant 1
+ms, as long as a force round trip can take, unless a sink shares its core; the others 200
+us). Coupled nodes that
 share a core (the plant and the controller on 2 cores) run in ``SCHED_BATCH``: a message that
 wakes one does not preempt the other in the middle of its step (the controller woken by the
 plant's state used to preempt the plant's put before it had reached the tyre/road node's
@@ -64,6 +65,16 @@ def sharing_a_core(layout: Mapping[str, int]) -> list[str]:
     """The coupled nodes of ``layout`` (node -> core) whose core holds another coupled node."""
     chain = [n for n in layout if not nk.off_critical_path(n)]
     return [n for n in chain if sum(layout[m] == layout[n] for m in chain) > 1]
+
+
+def spin_us(name: str, layout: Mapping[str, int]) -> int:
+    """How long pinned node ``name`` polls its input before it blocks [us]: its kind's
+    ``spin_us``, at most :data:`cosim.node_kinds.NodeKind.spin_us` on a core it shares with a
+    node off the critical path (polling longer would starve it: 3 cores put the sinks on
+    the plant's)."""
+    core = layout.get(name)
+    shared = any(layout[n] == core for n in layout if n != name and nk.off_critical_path(n))
+    return min(nk.spin_us(name), nk.NodeKind.spin_us) if shared else nk.spin_us(name)
 
 
 def batch(pid: int) -> bool:

@@ -22,7 +22,7 @@ from cosim.table import read_table
 from cosim.table_writer import journal_table
 from cosim.wire import encode, encode_step
 from orchestrator.accuracy import peak_errors, worst
-from orchestrator.placement import core_layout, sharing_a_core, usable_cores
+from orchestrator.placement import core_layout, sharing_a_core, spin_us, usable_cores
 from orchestrator.reference import reference_solution
 
 from ..conftest import node_pids, popen_suscosim, run_client, suscosim
@@ -296,7 +296,7 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
             assert _cores_of_every_thread(pid) == {str(want[node])}, node
             argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
             # a pinned node polls before it blocks, the plant longer than the others
-            assert argv[argv.index("--spin-us") + 1] == str(nk.spin_us(node)), argv
+            assert argv[argv.index("--spin-us") + 1] == str(spin_us(node, want)), argv
             # the recorder, off the coupled chain's critical path, in SCHED_IDLE (every
             # thread); coupled nodes sharing a core in SCHED_BATCH, the others in the normal
             # class. Zenoh's two shared-memory watchdog threads put themselves in

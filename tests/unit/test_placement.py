@@ -18,7 +18,9 @@ from orchestrator.placement import (
     background,
     core_layout,
     foreground,
+    sharing_a_core,
     should_pin,
+    spin_us,
     starved,
 )
 
@@ -28,6 +30,19 @@ NODES = [*ch.NODES, ch.FATIGUE]
 def test_two_cores_split_the_force_nodes_and_put_the_plant_with_the_controller() -> None:
     lay = core_layout(NODES, [4, 7])
     assert lay == {"plant": 4, "controller": 4, "tyre_road": 7, "recorder": 7, "fatigue": 7}
+
+
+@pytest.mark.parametrize("cores", [[4, 7], [0, 1, 2], [0, 1, 2, 3]])
+def test_batch_for_coupled_nodes_sharing_a_core_and_the_plant_polls_longest_alone(
+        cores: list[int]) -> None:
+    """2 cores: the plant and the controller share one (SCHED_BATCH); the plant polls 1 ms
+    for its forces, but never longer than the others on a core a sink shares (3 cores)."""
+    lay = core_layout(NODES, cores)
+    assert sharing_a_core(lay) == (["plant", "controller"] if len(cores) == 2 else [])
+    with_sink = any(lay[n] == lay["plant"] for n in ("recorder", "fatigue"))
+    assert spin_us("plant", lay) == (200 if with_sink else 1000)
+    assert {spin_us(n, lay) for n in NODES if n != "plant"} == {200}
+    assert with_sink == (len(cores) == 3)
 
 
 @pytest.mark.parametrize("cores", [[0, 1, 2], [0, 1, 2, 3], list(range(16))])
