@@ -16,7 +16,7 @@ import pytest
 from cosim.journal import last_step
 from orchestrator.sweep import load_sweep, point_id, toml_value
 
-from ..conftest import CH3_STEP, ROOT, popen_suscosim, suscosim
+from ..conftest import CH3_STEP, COARSE_ARM, ROOT, popen_suscosim, suscosim
 
 GRID_2X2 = f"""
 [sweep]
@@ -235,6 +235,7 @@ fatigue = true
 [sweep.set]
 "run.t_end" = 0.4
 "run.stall_timeout_s" = 30.0
+"fatigue.influence" = "{COARSE_ARM}"
 """
 
 
