@@ -16,7 +16,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from ..conftest import ROOT, suscosim
+from ..conftest import COARSE_ARM, ROOT, suscosim
 
 CH3 = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
 T, H, T_END = 1.0, 0.001, 1.5
@@ -195,6 +195,7 @@ fork_at = 0.25
 [sweep.set]
 "road.length_m" = 5.0
 "run.mode" = "distributed"
+"fatigue.influence" = "{COARSE_ARM}"
 [sweep.grid.strategy]
 passive = {{ controller = {{ law = "passive", c = 3800.0, velocity = "damper" }} }}
 firm = {{ controller = {{ law = "passive", c = 6000.0, velocity = "damper" }} }}
