@@ -17,7 +17,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from ..conftest import ROOT, node_pids, popen_suscosim, suscosim
+from ..conftest import COARSE_ARM, ROOT, node_pids, popen_suscosim, suscosim
 
 CH3 = ROOT / "scenarios" / "ch3_step_quarter_car.toml"
 CH6 = ROOT / "scenarios" / "thesis" / "ch6_realistic_qvm.toml"
@@ -147,7 +147,8 @@ def test_a_killed_distributed_run_resumes_bit_for_bit(tmp_path):
     """The realistic corner with the live fatigue node, distributed: the plant is killed
     (SIGKILL) after a checkpoint; ``--resume`` ends with the uninterrupted run's table and
     fatigue results, byte for byte."""
-    common = ("--set", "road.length_m=10", "--quiet")  # ~2 100 steps of 0.5 ms
+    common = ("--set", "road.length_m=10", "--quiet",  # ~2 100 steps of 0.5 ms
+              "--set", f'fatigue.influence="{COARSE_ARM}"')  # it screens too: a light node
     ref, run = tmp_path / "ref", tmp_path / "run"
     _ok("run", str(CH6), "--out", str(ref), *common)
     proc = popen_suscosim("run", str(CH6), "--out", str(run), *common,
