@@ -20,7 +20,7 @@ from nodes.fatigue.lib.duty_cycle import (
     schedule_damage,
 )
 
-from ..conftest import suscosim
+from ..conftest import COARSE_ARM, suscosim
 from .conftest import BUMP_POTHOLE, REALISTIC, cli
 
 
@@ -80,7 +80,7 @@ distance_km = 1.5
 [[events]]
 name = "pave_again"
 scenario = "{REALISTIC}"
-set = ["run.t_end=0.2", "fatigue.live=false"]
+set = ["run.t_end=0.2", "fatigue.live=false", 'fatigue.influence="{COARSE_ARM}"']
 repeats = 7
 """)
     out = tmp_path / "out"
