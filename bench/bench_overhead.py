@@ -3,9 +3,10 @@ the coupled steps/s of the distributed run (a process per node over Zenoh), the 
 the one-process engine (``--inprocess``: the same node models, one thread, no bus,
 orchestrator/inprocess.py) and their ratio (distributed / in-process), the bare Zenoh round
 trip and the load average, all in one run of this script, so that the ratios compare runs on
-the same machine under the same load.
+the same machine under the same load. ``--trace`` adds one traced distributed run of each row
+but ``lumped`` (:func:`step_trace`): the median timeline of a coupled step.
 
-    python bench/bench_overhead.py [--json] [--repeats 1] [--rows lumped,corner,...]
+    python bench/bench_overhead.py [--json] [--repeats 1] [--rows lumped,corner,...] [--trace]
 
 Workloads (bench/workloads.py's): ``lumped`` the Ch 3 quarter car (h 1 ms), ``corner`` the Ch
 6 realistic corner (h 0.5 ms) without live fatigue, ``corner_fatigue`` with it, ``full`` the
@@ -69,6 +70,75 @@ def steps_per_s(scenario: str, fatigue: bool | None, t_end: float,
                 summary["n_steps"] / cpu if cpu > 0 else 0.0)
 
 
+_TRACE_HOOK = r'''
+import os, time
+if os.environ.get("SUSCOSIM_STEP_TRACE"):  # bench_overhead --trace: a timestamp at each
+    import json                             # wait's end and each step message's put
+    from cosim import outbox, participant
+    _clock, _waits, _puts = time.perf_counter, [], []
+    _wait, _send, _finish = (participant.Participant.wait, outbox.Outbox.send,
+                             participant.Participant.finish)
+
+    def wait(self, needs):
+        got = _wait(self, needs)
+        _waits.append((max(needs.values()), _clock()))
+        return got
+
+    def send(self, held=False):
+        k, sends = self._step_kt[0], bool(self._step or (held and self._held))
+        t0 = _clock()
+        _send(self, held)
+        if sends:
+            _puts.append((k, t0, _clock()))
+
+    def finish(self, *a, **kw):
+        with open(os.path.join(os.environ["SUSCOSIM_STEP_TRACE"], self.node + ".json"), "w") as f:
+            json.dump({"waits": _waits, "puts": _puts}, f)
+        return _finish(self, *a, **kw)
+
+    participant.Participant.wait, participant.Participant.finish = wait, finish
+    outbox.Outbox.send = send
+'''
+
+TRACED = ("plant", "tyre_road", "controller")
+
+
+def step_trace(scenario: str, fatigue: bool | None, t_end: float) -> dict[str, float]:
+    """One distributed run with a timestamp at the end of each node's wait for a step and
+    around each step message's put (a ``sitecustomize`` on the nodes' path patches
+    :class:`cosim.participant.Participant`; no product code is changed): the median of each
+    part of a coupled step [us], from the plant's put of state k."""
+    import numpy as np
+
+    with tempfile.TemporaryDirectory() as tmp:
+        hook = Path(tmp) / "hook"
+        hook.mkdir()
+        (hook / "sitecustomize.py").write_text(_TRACE_HOOK)
+        cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out",
+               str(Path(tmp) / "run"), "--quiet", "--set", f"run.t_end={t_end}"]
+        if fatigue is not None:
+            cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
+        subprocess.run(cmd, cwd=ROOT, capture_output=True, check=True, env=dict(
+            os.environ, PYTHONPATH=f"{hook}{os.pathsep}{ROOT}", SUSCOSIM_STEP_TRACE=tmp))
+        tr = {n: json.loads((Path(tmp) / f"{n}.json").read_text()) for n in TRACED}
+    got = {n: {int(k): t for k, t in tr[n]["waits"]} for n in TRACED}
+    put = {n: {int(k): (t0, t1) for k, t0, t1 in tr[n]["puts"]} for n in TRACED}
+    rows = []
+    for k in sorted(put["plant"])[200:-2]:  # warm; the plant's step k + 1 put ends step k
+        if all(k in got[n] and k in put[n] for n in TRACED) and k + 1 in put["plant"]:
+            p0, p1 = put["plant"][k]
+            forces = max(put[n][k][1] for n in TRACED[1:])
+            rows.append([p1 - p0, *(got[n][k] - p0 for n in TRACED[1:]),
+                         *(put[n][k][0] - got[n][k] for n in TRACED[1:]),
+                         got["plant"][k] - forces, put["plant"][k + 1][0] - got["plant"][k],
+                         put["plant"][k + 1][0] - p0])
+    med = np.median(np.array(rows) * 1e6, axis=0)
+    names = ("plant's put", "tyre_road has the state", "controller has the state",
+             "tyre_road's step", "controller's step", "the plant has the forces after the "
+             "last put", "the plant's step to its next put", "a coupled step")
+    return dict(zip(names, (float(x) for x in med), strict=True))
+
+
 def main(argv: list[str] | None = None) -> int:
     from bench.bench_zenoh_pingpong import one as pingpong
     from bench.workloads import WORKLOADS
@@ -77,6 +147,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="one JSON object on the last line")
     ap.add_argument("--repeats", type=int, default=1, help="runs of each kind per workload")
     ap.add_argument("--rows", default="lumped,corner,corner_fatigue,full")
+    ap.add_argument("--trace", action="store_true",
+                    help="then one traced distributed run of each row: a step's timeline")
     args = ap.parse_args(argv)
     rows = [r for r in args.rows.split(",") if r]
     known = [w[0] for w in WORKLOADS]
@@ -111,6 +183,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {label} | {d:.0f} | {i:.0f} | {d / i:.2f} | {c:.0f} | "
               f"{d / c if c > 0 else float('nan'):.2f} | {u:.0f} | {loads[-1]:.2f} |",
               flush=True)
+    for key, label, scenario, fatigue in WORKLOADS if args.trace else ():
+        if key in rows and key != "lumped":  # (the lumped car has no ``controller`` step)
+            parts = step_trace(scenario, fatigue, T_END[key])
+            out[f"{key}_trace_us"] = {n: round(v, 1) for n, v in parts.items()}
+            print(f"\n{label}, median [us] from the start of the plant's put of state k:\n"
+                  + "\n".join(f"  {n}: {v:.0f}" for n, v in parts.items()), flush=True)
     out["zenoh_rtt_us"] = round(rtt, 1)
     out["load"] = [round(x, 2) for x in loads]
     if args.json:
