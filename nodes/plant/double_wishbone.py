@@ -42,7 +42,7 @@ from cosim import corner as corner_file
 from cosim import lower_arm as la
 from cosim.corner import Corner
 
-from .arm_loads import arm_loads, arm_loads_later
+from .arm_loads import arm_loads_later
 from .bump_stop import BumpStopParams, bump_stop_force, compression
 from .double_wishbone_geometry import BODY, HUB, LOWER_ARM, TIE_ROD, UPPER_ARM, CornerGeometry
 from .model import GRAVITY, PlantModel
@@ -50,7 +50,7 @@ from .point_kinematics import point_velocity
 from .quarter_car_lumped import load_urdf_text, new_direct_client, release_joint
 from .quarter_car_lumped import quat_matrix as _rot
 from .quiet_pybullet import p
-from .upper_arm_loads import upper_arm_frame, upper_arm_loads, upper_arm_loads_later
+from .upper_arm_loads import upper_arm_frame, upper_arm_loads_later
 
 _BS = BumpStopParams()
 _READ_LINKS = [HUB, BODY, LOWER_ARM, UPPER_ARM]
@@ -329,12 +329,9 @@ class DoubleWishboneCorner(PlantModel):
         p.stepSimulation(physicsClientId=self.client)
         self._read()
 
-    def loads(self) -> dict[str, dict[str, float]]:
-        """``arm``: the lower arm's loads (:func:`.arm_loads.arm_loads`); ``upper_arm``: the
-        upper arm's (:func:`.upper_arm_loads.upper_arm_loads`)."""
-        return {"arm": arm_loads(self), "upper_arm": upper_arm_loads(self)}
-
     def loads_later(self) -> Callable[[], dict[str, dict[str, float]]]:
+        """``arm``: the lower arm's loads (:func:`.arm_loads.arm_loads`); ``upper_arm``: the
+        upper arm's (:func:`.upper_arm_loads.upper_arm_loads_later`)."""
         lower, upper = arm_loads_later(self), upper_arm_loads_later(self)
         return lambda: {"arm": lower(), "upper_arm": upper()}
 

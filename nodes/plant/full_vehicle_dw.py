@@ -417,12 +417,9 @@ class FullVehicleDoubleWishbone(WheelsAndDriver, PlantModel):
 
         return loads
 
-    def loads(self) -> dict[str, dict[str, float]]:
+    def loads_later(self) -> Callable[[], dict[str, dict[str, float]]]:
         """Every corner's lower-arm loads on its channel ``arm_FL`` .. ``arm_RR``
         (:meth:`corner_arm_loads`), and ``arm`` = the front-left's (docs/corners.md)."""
-        return self.loads_later()()
-
-    def loads_later(self) -> Callable[[], dict[str, dict[str, float]]]:
         corner = self._corner_arm_loads_later()
 
         def loads() -> dict[str, dict[str, float]]:

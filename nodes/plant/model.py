@@ -73,14 +73,13 @@ class PlantModel(ABC):
 
     def loads(self) -> dict[str, dict[str, float]]:
         """Component loads after the latest substep, by channel, e.g. ``{"arm": {...}}``."""
-        return {}
+        return self.loads_later()()
 
     def loads_later(self) -> Callable[[], dict[str, dict[str, float]]]:
         """:meth:`loads` as a function to call after more substeps: what only the physics
         engine's present state holds is read now, the rest is computed at the call (the
-        plant node publishes the next state first, off its critical path: #41)."""
-        loads = self.loads()
-        return lambda: loads
+        plant node publishes the next state first, off its critical path: #41). None here."""
+        return dict
 
     def info(self) -> dict[str, object]:
         """Static facts other nodes need at start (sent in the ready handshake)."""

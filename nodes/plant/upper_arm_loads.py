@@ -62,7 +62,7 @@ def upper_hardpoints(c: Corner) -> dict[str, np.ndarray]:
     return {UPPER_POINTS[k]: v for k, v in hp.items()}
 
 
-def upper_arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
+def upper_arm_loads_later(model: DoubleWishboneCorner) -> Callable[[], dict[str, float]]:
     """Loads ON the upper arm during the latest substep, in the upper-arm frame at the start
     of that substep, t_k [N]:
 
@@ -77,13 +77,8 @@ def upper_arm_loads(model: DoubleWishboneCorner) -> dict[str, float]:
       (a free revolute joint: no spring on the upper arm).
 
     With the arm's weight they balance its inertia: sum F + m g = m a_com and the moments
-    (tested in tests/vehicles/test_double_wishbone.py)."""
-    return upper_arm_loads_later(model)()
-
-
-def upper_arm_loads_later(model: DoubleWishboneCorner) -> Callable[[], dict[str, float]]:
-    """:func:`upper_arm_loads` with PyBullet's sensors read now (before the next substep) and
-    the arithmetic left to the call of the function returned."""
+    (tested in tests/vehicles/test_double_wishbone.py). As a function to call later:
+    PyBullet's sensors are read now (before the next substep), the arithmetic at the call."""
     c, b = model.client, model.body
     w = p.getJointState(b, UPPER_ARM, physicsClientId=c)[2]
     h = p.getConstraintState(model._c_upper, physicsClientId=c)  # on the hub, world axes

@@ -8,6 +8,7 @@ import numpy as np
 from nodes.plant import double_wishbone as dw
 from nodes.plant import double_wishbone_geometry as geo
 from nodes.plant import point_kinematics as pk
+from nodes.plant.arm_loads import arm_loads
 
 
 def _vectors(n: int, seed: int) -> np.ndarray:
@@ -125,7 +126,7 @@ def test_arm_loads_and_rates_are_the_array_versions():
             F_t = W * (1.0 + 2.5 * np.sin(np.pi * i / 300.0) ** 2)
             m.substep(2.5e-4, F_t, np.array([800.0 * np.cos(i / 40.0)]))
             bumped += m._F_bs > 0.0
-            got, want = dw.arm_loads(m), _arm_loads_numpy(m)
+            got, want = arm_loads(m), _arm_loads_numpy(m)
             assert got.keys() == want.keys()
             g, w = np.array(list(got.values())), np.array(list(want.values()))
             assert np.abs(g - w).max() <= 1e-15 * np.abs(w).max(), i
@@ -142,7 +143,7 @@ def test_floats_keep_the_arm_loads_and_response_types():
     m = dw.DoubleWishboneCorner()
     try:
         m.substep(2.5e-4, m.static_tyre_load() * 1.5, np.array([300.0]))
-        loads = dw.arm_loads(m)
+        loads = arm_loads(m)
         assert all(type(v) is float for v in loads.values())
         assert len(loads) == 15
         rates = m.response_velocities()
