@@ -6,7 +6,8 @@ what the summary says; FKM's temperature factor K_T,D; no path of this machine i
 data or in a run's summary.
 
 The property test draws settings the CLI accepts on a short synthetic history (200 samples,
-the shipped CAD arm), runs the CLI in this process and checks each; the critical node's
+the coarse test arm: on it, as on the CAD arm, some cycles pass Shigley's knee and none FKM's
+at the default settings), runs the CLI in this process and checks each; the critical node's
 damage is recomputed outside the engine (superposition, equivalent stress, whole-history
 rainflow, Miner with the rule the method must use)."""
 
@@ -38,6 +39,7 @@ from nodes.fatigue.lib.mean_stress import MEAN_STRESS_METHODS
 from nodes.fatigue.lib.superposition import stress_history
 from nodes.fatigue.worker import load_influence
 from orchestrator.fatigue_cli import main
+from tests.conftest import COARSE_ARM
 
 REPO = Path(__file__).resolve().parents[2]
 TRACK_M = 4.0
@@ -66,7 +68,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
             fh.write(",".join([repr(float(t[i]))] + [repr(float(v[i])) for v in cols.values()])
                      + "\n")
     (d / "scenario.json").write_text(json.dumps({"road": {"length_m": TRACK_M},
-                                                 "fatigue": {}}))
+                                                 "fatigue": {"influence": str(COARSE_ARM)}}))
     return d
 
 
@@ -89,7 +91,7 @@ def _node_damage(sets: dict, node_id: int, rule: str) -> float:
     """The damage per pass of one node, outside the engine: its stresses by superposition of
     the loads, the equivalent stress, the whole history rainflow-counted, Miner with the
     method's curve and the mean-stress rule ``rule`` given here, not taken from the config."""
-    section: dict = {}
+    section: dict = {"influence": str(COARSE_ARM)}  # the run's
     for k, v in sets.items():
         *head, last = k.split(".")
         node = section
@@ -220,7 +222,7 @@ def test_no_path_of_this_machine_in_shipped_data_or_a_summary(run: Path) -> None
     assert meta["part"] == "lower_arm.toml"
     assert meta["part_sha256"] == hashlib.sha256(BUILTIN_PART.read_bytes()).hexdigest()
     # a run's summary: the same names, no path
-    code, _, out = _cli(run, {"component.method": "fkm"})
+    code, _, out = _cli(run, {"component.method": "fkm", "influence": "builtin"})
     assert code == 0
     text = (out / "summary.json").read_text()
     assert not [b for b in bad if b in text], text
