@@ -118,9 +118,7 @@ class DamageMap:
 
     def _backfill(self) -> bool:
         """The steps before the scope joined, from the journal: True when in (or given up)."""
-        from cosim.errors import WireError
         from cosim.journal import iter_records
-        from cosim.wire import decode
 
         assert self.journal is not None, "backfill without a journal (its tries start used up)"
         self._backfill_tries += 1
