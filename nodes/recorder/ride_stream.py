@@ -380,9 +380,3 @@ def streamed_metric_values(
         m[f"f_d{lab}_rms"] = (plain[col].rms(), "N", f"F_d{lab} RMS [N]")
     return m
 
-
-def streamed_run_metrics(names: Sequence[str], n_rows: int, batches: Batches,
-                         band_hz: tuple[float, float] = rm.THESIS_BAND) -> dict[str, float]:
-    """:func:`.ride_metrics.run_metrics` (``{label: value}``) of a table read in batches."""
-    return {label: value for value, _u, label
-            in streamed_metric_values(names, n_rows, batches, band_hz).values()}

@@ -174,21 +174,12 @@ def time_section(r: RunData) -> str:
 
 def _stream_rate(src: stream.TableSource) -> float | None:
     """Sampling rate [Hz] (median step), None if a step is > 1 % off (ride_metrics' rule)."""
-    step = None
-    last = None
-    for b in src.batches(["t"]):
-        t = b["t"] if last is None else np.r_[last, b["t"]]
-        if t.size < 2:
-            continue
-        dt = np.diff(t)
-        if step is None:
-            step = float(np.median(dt))
-            if step <= 0.0:
-                return None
-        if np.max(np.abs(dt - step)) > 0.01 * step:
-            return None
-        last = t[-1:]
-    return None if step is None else 1.0 / step
+    from nodes.recorder.ride_stream import stream_rate
+
+    try:
+        return stream_rate(src.batches(["t"]))
+    except ValueError:
+        return None
 
 
 def psd_section(r: RunData) -> str:
@@ -261,9 +252,10 @@ def stats_section(r: RunData) -> str:
 
 def streamed_ride_metrics(src: stream.TableSource) -> dict[str, float]:
     """:func:`nodes.recorder.ride_metrics.run_metrics` of the table read in batches."""
-    from nodes.recorder.ride_stream import streamed_run_metrics
+    from nodes.recorder.ride_stream import streamed_metric_values
 
-    return streamed_run_metrics(src.names, src.n_rows, lambda cols: src.batches(cols))
+    m = streamed_metric_values(src.names, src.n_rows, lambda cols: src.batches(cols))
+    return {label: value for value, _u, label in m.values()}
 
 
 def ride_section(r: RunData) -> str:

@@ -11,6 +11,7 @@ import json
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -213,16 +214,10 @@ class RunData:
                 return str(src.get("run_id") or src.get("id"))
         return self.path.name
 
-    @property
+    @cached_property
     def table(self) -> dict[str, np.ndarray] | None:
         """Every column whole, read on first use (the sweep pages' short runs)."""
-        if self.source is None:
-            return None
-        if self._whole is None:
-            self._whole = self.source.whole()
-        return self._whole
-
-    _whole: dict[str, np.ndarray] | None = field(default=None, repr=False)
+        return None if self.source is None else self.source.whole()
 
     def has_arm(self) -> bool:
         return self.source is not None and any(c.startswith("plant/arm/")
