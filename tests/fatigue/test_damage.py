@@ -66,7 +66,7 @@ def test_miner_half_cycle_residue_and_endurance_limit():
     # a sine from 0 up: n-1 full cycles closed + 3 half cycles (0->+sa, ..., -sa->~0):
     D = miner_per_node(c, 1, MAT, "stress_life", "none")[0]
     assert D == pytest.approx((n - 0.5) / Nf + 0.5 * _half_damage(x, c), rel=1e-6)
-    assert miner_per_node(c, 1, MAT, "stress_life", "none", endurance_limit=True)[0] == 0.0
+    assert miner_per_node(c, 1, MAT, "stress_life", "none", endurance_limit="elementary")[0] == 0.0
 
 
 def _half_damage(x, c):

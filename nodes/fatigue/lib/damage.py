@@ -43,17 +43,12 @@ GRID = 8
 METHODS = TIME_METHODS + SPECTRAL_METHODS
 
 
-def _endurance(curve: SNCurve | TabulatedSN, endurance_limit: bool | str | None) -> str:
-    """The endurance treatment: the curve's, or the argument (True = "elementary",
-    False = "none", or a mode name)."""
+def _endurance(curve: SNCurve | TabulatedSN, endurance_limit: str | None) -> str:
+    """The endurance treatment: the curve's, or the argument's (a mode name)."""
     if endurance_limit is None:
         return curve.endurance
-    if endurance_limit is True:
-        return "elementary"
-    if endurance_limit is False:
-        return "none"
     if endurance_limit not in ENDURANCE_MODES:
-        raise ValueError(f"endurance_limit must be a bool or one of {ENDURANCE_MODES}, "
+        raise ValueError(f"endurance_limit must be one of {ENDURANCE_MODES}, "
                          f"got {endurance_limit!r}")
     return endurance_limit
 
@@ -69,7 +64,7 @@ def cycle_reversals(
     mat: Material,
     method: str = "stress_life",
     mean_stress: str = "goodman",
-    endurance_limit: bool | str | None = None,
+    endurance_limit: str | None = None,
 ) -> np.ndarray:
     """Reversals to failure 2Nf of cycles between turning points s1, s2 (elastic stress, Pa).
 
@@ -84,7 +79,7 @@ def cycle_reversals(
     strain-life constants are the material's (σ'f, b, ε'f, c, K', n').
 
     Both: the endurance rule of the module docstring, with Se of `sn_curve` (``endurance_limit``
-    None = the curve's own treatment; True/False = "elementary"/"none", as before).
+    None = the curve's own treatment).
     """
     s1 = np.asarray(s1, dtype=float)
     s2 = np.asarray(s2, dtype=float)
@@ -133,7 +128,7 @@ def strain_life_knee(Se: float, mat: Material, mean_stress: str) -> float:
 
 
 def cycle_damage(cycles: Cycles, mat: Material, method: str, mean_stress: str,
-                 endurance_limit: bool | str | None = None) -> np.ndarray:
+                 endurance_limit: str | None = None) -> np.ndarray:
     """Miner damage of each cycle, n / Nf (Nf = 2Nf / 2)."""
     if len(cycles) == 0:
         return np.zeros(0)
@@ -143,7 +138,7 @@ def cycle_damage(cycles: Cycles, mat: Material, method: str, mean_stress: str,
 
 
 def miner_per_node(cycles: Cycles, n_nodes: int, mat: Material, method: str,
-                   mean_stress: str, endurance_limit: bool | str | None = None) -> np.ndarray:
+                   mean_stress: str, endurance_limit: str | None = None) -> np.ndarray:
     """Palmgren-Miner damage D per node (sum of cycle damages)."""
     d = cycle_damage(cycles, mat, method, mean_stress, endurance_limit)
     return np.bincount(cycles.series, weights=d, minlength=n_nodes).astype(float)
@@ -180,7 +175,7 @@ def per_range_unsupported(mat: Material, method: str, mean_stress: str) -> str |
 
 
 def damage_per_range(hi: np.ndarray, lo: np.ndarray, mat: Material, method: str,
-                     mean_stress: str, endurance: str | bool | None) -> np.ndarray:
+                     mean_stress: str, endurance: str | None) -> np.ndarray:
     """g (1/Pa): every cycle with both extremes in [lo, hi] (Pa) has damage <= g · its range."""
     hi = np.asarray(hi, dtype=float)
     lo = np.asarray(lo, dtype=float)
