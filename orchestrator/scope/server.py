@@ -72,10 +72,7 @@ def host_header_ok(value: str | None, names: set[str], any_ip: bool, port: int) 
         if not sep:
             name, given_s = value, ""
         given = given_s if sep else None
-    if given is None:
-        if port != 80:
-            return False
-    elif given != str(port):
+    if (given if given is not None else "80") != str(port):
         return False
     if name in names:
         return True

@@ -292,13 +292,10 @@ class ScopeState:
                 "fatigue": dict(self.fatigue) if self.fatigue else None,
                 "coupling": self._coupling.since(coupling_since),
             }
-            dm = self.damage_map
-            if dm is not None:
-                # the per-node damage only when it changed after step K (it is the big part)
-                out["damage_map"] = dm if dm["k"] > since else \
-                    {n: v for n, v in dm.items() if n != "log10_damage"}
-            else:
-                out["damage_map"] = None
+            dm = self.damage_map  # its per-node damage (the big part) only if newer than K
+            if dm is not None and dm["k"] <= since:
+                dm = {n: v for n, v in dm.items() if n != "log10_damage"}
+            out["damage_map"] = dm
             out["map_geometry"] = self.map_geometry if since < 0 else None
             return out
 
