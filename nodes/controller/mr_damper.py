@@ -103,21 +103,18 @@ def yield_force(I: np.ndarray | float, p: MRParams = MRParams()) -> np.ndarray:
     return np.polyval(p.F_y_poly, np.asarray(I, dtype=float))
 
 
-def yield_velocity(I: np.ndarray | float, p: MRParams = MRParams()) -> np.ndarray:
-    """Knee velocity v_y = F_y / (c_pre - c_post) (m/s), damper frame."""
-    return yield_force(I, p) / (p.c_pre - c_post(I, p))
-
-
 def bi_viscous_force(v: np.ndarray | float, I: np.ndarray | float,
                      p: MRParams = MRParams()) -> np.ndarray:
     """Static bi-viscous force F_bv(v, I) (N) at damper velocity v (m/s), damper frame."""
     v = np.asarray(v, dtype=float)
-    cp, Fy, vy = _knee(I, p)
+    cp, Fy, vy = knee(I, p)
     return np.where(np.abs(v) <= vy, p.c_pre * v, Fy * np.sign(v) + cp * v)
 
 
-def _knee(I: np.ndarray | float, p: MRParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(c_post in N·s/m, F_y in N, v_y in m/s) at the current I (A)."""
+def knee(I: np.ndarray | float, p: MRParams = MRParams()
+         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(c_post in N·s/m, F_y in N, knee velocity v_y = F_y / (c_pre - c_post) in m/s) at the
+    current I (A), damper frame."""
     cp, Fy = c_post(I, p), yield_force(I, p)
     return cp, Fy, Fy / (p.c_pre - cp)
 
@@ -186,7 +183,7 @@ class MRDamper:
             frac = j / m
             I = self._current(current, frac, self.force)
             v_d = r * (v_rel0 + frac * (v_rel1 - v_rel0))
-            cp, Fy, vy = _knee(I, p)
+            cp, Fy, vy = knee(I, p)
             rhs = p.M_f / dt * self.v_f + p.K_f * (self.s + dt * v_d)
             v_pre = rhs / (a + p.c_pre)
             v_post = (rhs - Fy * np.sign(rhs)) / (a + cp)

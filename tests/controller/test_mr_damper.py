@@ -12,8 +12,8 @@ from nodes.controller.mr_damper import (
     MRParams,
     bi_viscous_force,
     c_post,
+    knee,
     yield_force,
-    yield_velocity,
 )
 
 # Hand evaluation of Table 5.1 (written out, not computed with the module's polynomials):
@@ -50,7 +50,7 @@ def test_static_force_at_table_points(I, v, F):
 
 def test_bi_viscous_is_continuous_at_the_knee_and_monotonic_in_current():
     for I in (0.1, 0.3, 0.6):
-        vy = float(yield_velocity(I))
+        vy = float(knee(I)[2])
         below = bi_viscous_force(vy * (1 - 1e-9), I)
         above = bi_viscous_force(vy * (1 + 1e-9), I)
         assert above == pytest.approx(below, rel=1e-6)
