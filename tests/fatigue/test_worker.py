@@ -129,7 +129,7 @@ def test_life_scales_and_critical_node_at_notch():
     assert np.any(np.all(inf.node_xyz == r.critical_xyz, axis=1))
     for j in load_part(COARSE_ARM).joints:
         assert np.hypot(*(np.asarray(r.critical_xyz) - j.centre)[:2]) > j.radius
-    json.loads(r.to_json())
+    json.loads(json.dumps(r.summary()))
 
 
 def _write_case(path, stresses, header=True):

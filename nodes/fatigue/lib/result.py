@@ -4,7 +4,6 @@ JSON summary. Made by :mod:`.worker` (batch or live), written by :mod:`.outputs`
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -107,6 +106,3 @@ class FatigueResult:
             "source": self.source,
             **({"screening": self.screening} if self.screening else {}),
         }
-
-    def to_json(self) -> str:
-        return json.dumps(self.summary(), indent=2)
