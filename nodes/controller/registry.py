@@ -193,12 +193,10 @@ def read_settings(params: Mapping[str, ParamInfo], r: ConfigReader) -> dict[str,
         elif isinstance(p.default, str):
             values[name] = r.string(name, p.default)
         else:
-            if p.required:
-                values[name] = r.number(name, lo=p.lo, hi=p.hi, lo_open=p.lo_open, unit=p.unit)
-            else:
-                default = soft_hard[p.preset == "hard"] if p.preset else p.default
-                values[name] = r.number(name, default, lo=p.lo, hi=p.hi, lo_open=p.lo_open,
-                                        unit=p.unit)
+            default = () if p.required else \
+                (soft_hard[p.preset == "hard"] if p.preset else p.default,)
+            values[name] = r.number(name, *default, lo=p.lo, hi=p.hi, lo_open=p.lo_open,
+                                    unit=p.unit)
     soft = [n for n, p in params.items() if p.preset == "soft"]
     hard = [n for n, p in params.items() if p.preset == "hard"]
     if soft and hard and values[hard[0]] < values[soft[0]]:
