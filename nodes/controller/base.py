@@ -136,10 +136,7 @@ def corner_array(state: Mapping[str, Any], key: str, n: int) -> np.ndarray:
         raw = state[key]
     except KeyError:
         raise ValueError(f"controller state has no '{key}' (keys: {sorted(state)})") from None
-    arr = np.asarray(raw, dtype=float)
-    if arr.ndim == 0:
-        return np.full(n, float(arr))
-    arr = arr.reshape(-1)
+    arr = np.asarray(raw, dtype=float).reshape(-1)
     if arr.size == 1 and n != 1:
         return np.full(n, float(arr[0]))
     if arr.size != n:
