@@ -141,7 +141,6 @@ class _Channel:
     rf: StreamingRainflow = field(default_factory=lambda: StreamingRainflow(1))
     cycles: float = 0.0
     max_range: float = 0.0
-    r_hi: float = -np.inf
     m_lo: float = np.inf
     m_hi: float = -np.inf
     pd_sum: float = 0.0
@@ -172,7 +171,6 @@ def _cycles_done(ch: _Channel, cyc: Cycles) -> None:
     ch.n_cyc += len(cyc)
     ch.cycles += float(cyc.count.sum())
     ch.max_range = max(ch.max_range, float(r.max()))
-    ch.r_hi = max(ch.r_hi, float(r.max()))
     ch.m_lo, ch.m_hi = min(ch.m_lo, float(m.min())), max(ch.m_hi, float(m.max()))
     ch.pd_sum += float(np.sum(cyc.count * (r / reference_range("")) ** K_REF))  # 1 kN (m)
 
@@ -248,7 +246,7 @@ class _Matrix:
 
     def __init__(self, ch: _Channel, residue: str) -> None:
         self.axes = None if ch.n_cyc == 0 else (
-            ch.r_hi or 1.0, *((ch.m_lo, ch.m_hi) if ch.m_hi > ch.m_lo
+            ch.max_range or 1.0, *((ch.m_lo, ch.m_hi) if ch.m_hi > ch.m_lo
                               else (ch.m_lo - 0.5, ch.m_hi + 0.5)))
         self.residue = residue
         self.rf = StreamingRainflow(1)
