@@ -24,12 +24,7 @@ from cosim.load_blocks import StepBlocks
 from cosim.run_settings import RunSettings
 
 from .config import FatigueConfig
-from .more_parts import (
-    column_names,
-    load_channel,
-    more_parts,
-    part_channels,
-)
+from .more_parts import column_names, load_channel, more_parts, part_channels
 from .run_dir import part_entry, parts_summary, track_length, with_parts, write_results
 from .worker import FatigueResult, LiveFatigue, load_influence
 
