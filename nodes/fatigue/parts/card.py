@@ -55,16 +55,11 @@ ZONE_RULE = ("a surface node is assessed unless it lies within its joint's zone 
              "the idealised load introduction's, not the pressed-in sleeve's or cartridge's")
 
 
-def principal_axes(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(long, transverse, normal) unit axes: smallest, middle, largest principal moment."""
-    w, v = np.linalg.eigh(np.asarray(inertia))
-    return v[:, 0], v[:, 1], v[:, 2]
-
-
 def label_mode(xyz: np.ndarray, u: np.ndarray, inertia: np.ndarray,
                com: np.ndarray) -> str:
     """Shape label of a mode (displacements u (n, 3) at nodes xyz (n, 3))."""
-    a_ax, b_ax, n_ax = principal_axes(inertia)
+    # the long, transverse, normal unit axes: smallest, middle, largest principal moment
+    a_ax, b_ax, n_ax = np.linalg.eigh(np.asarray(inertia))[1].T
     r = xyz - com
     a, b = r @ a_ax, r @ b_ax
     a, b = a / np.abs(a).max(), b / np.abs(b).max()
