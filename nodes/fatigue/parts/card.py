@@ -290,8 +290,7 @@ def convergence(part: Part, sizes: Sequence[float], loads: Mapping[str, float],
                 + f"; mesh {t1 - t0:.0f} s, solve {t2 - t1:.0f} s"
                 + ("" if dmg is None else f", damage {time.perf_counter() - t2:.0f} s")
                 + (f"; {len(balls)} balls" if balls else ""))
-    pm_f, inf_f, ex_f, vm_f, _, _, dmg_f = runs[-1]
-    f = np.array([loads.get(n, 0.0) for n in names])
+    pm_f, inf_f, ex_f, vm_f, _, _, dmg_f = runs[-1]  # f: the finest mesh's loads
     hot, _ = _hot_spots(pm_f, ex_f["coef"], f, ex_f["labels"])
     spots = np.array([h["xyz_m"] for h in hot])
     dspots = None
@@ -326,7 +325,6 @@ def convergence(part: Part, sizes: Sequence[float], loads: Mapping[str, float],
                            else max(change)}
     if dspots is not None and dmg_f is not None:
         ch_d = _change(per_mesh_d)
-        di = np.argsort(np.where(pm_f.assessed, dmg_f, -1.0))[::-1][:N_HOT]
         out["damaged"] = [{"node": int(ex_f["labels"][i]), "index": int(i),
                            "xyz_m": [float(v) for v in pm_f.fe.node_xyz[i]],
                            "damage": float(dmg_f[i]),
