@@ -38,7 +38,7 @@ from . import iso8608 as rr
 from .cobblestone import DEFAULTS as PAVE_DEFAULTS
 from .cobblestone import PaveParameters, pave_road
 from .iso8608 import DEFAULT_N_MAX, DEFAULT_N_MIN, DEFAULT_WAVINESS, GD_N0, random_road
-from .measured import VEHICLE_TRACK_M, csv_road, mdf_road, opencrg_road
+from .measured import VEHICLE_TRACK_M, measured_road
 from .roads import KMH, EventRoad, Road, RoadEvent
 from .tyres import FixedFootprint, PointContact, Tyre
 
@@ -172,22 +172,24 @@ def _measured_road(r: ConfigReader, kind: str, speed: float, length: float | Non
     path = r.string("path", expected="a file path")
     zero_start = r.boolean("zero_start", True)
     if kind == "csv":
-        return csv_road(path, speed, length, zero_start)
+        return measured_road(kind, path, speed, length, zero_start)
     if kind == "opencrg":
         reference = r.choice("reference", ("grid", "full"), "grid")
         u_start = r.optional_number("u_start")
-        return opencrg_road(path, speed, length,
-                            r.number("track_width", VEHICLE_TRACK_M, positive=True),
-                            r.number("v_offset", 0.0), u_start, reference, zero_start)
+        return measured_road(kind, path, speed, length, zero_start,
+                             track_width=r.number("track_width", VEHICLE_TRACK_M, positive=True),
+                             v_offset=r.number("v_offset", 0.0), u_start=u_start,
+                             reference=reference)
     if r.has("distance") == r.has("recorded_speed_kmh"):
         raise r.error("distance", r.value("distance"),
                       "either distance (a channel in m) or recorded_speed_kmh")
     channel = "a channel name"
     rec = r.optional_number("recorded_speed_kmh", positive=True)
-    return mdf_road(path, speed, r.string("left", expected=channel),
-                    r.optional_string("right", expected=channel),
-                    r.optional_string("distance", expected=channel),
-                    rec, length, zero_start)
+    return measured_road(kind, path, speed, length, zero_start,
+                         left=r.string("left", expected=channel),
+                         right=r.optional_string("right", expected=channel),
+                         distance=r.optional_string("distance", expected=channel),
+                         recorded_speed_kmh=rec)
 
 
 def build_tyre(cfg: Mapping[str, Any], key_prefix: str = "tyre") -> Tyre:

@@ -37,7 +37,9 @@ from __future__ import annotations
 
 import math
 from array import array
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -163,12 +165,6 @@ def _check_physical(path: str | Path, z: np.ndarray, column: int | str) -> None:
             raise InputFileError(str(path), f"column {column}: {what(i)}; heights are in metres)")
 
 
-def csv_road(path: str | Path, speed: float, length: float | None = None,
-             zero_start: bool = True) -> SampledRoad:
-    """A :class:`SampledRoad` from a CSV profile."""
-    return _road(path, "csv", *read_profile_csv(path), speed, length, zero_start)
-
-
 # ------------------------------------------------------------------------------------ MDF 4
 
 
@@ -212,14 +208,6 @@ def read_profile_mdf(path: str | Path, left: str, right: str | None = None,
         if name:
             _check_physical(path, z, repr(name))
     return x, zl, zr
-
-
-def mdf_road(path: str | Path, speed: float, left: str, right: str | None = None,
-             distance: str | None = None, recorded_speed_kmh: float | None = None,
-             length: float | None = None, zero_start: bool = True) -> SampledRoad:
-    """A :class:`SampledRoad` from an MDF 4 profile."""
-    return _road(path, "mdf4", *read_profile_mdf(path, left, right, distance, recorded_speed_kmh),
-                 speed, length, zero_start, "profile")
 
 
 # ---------------------------------------------------------------------------------- OpenCRG
@@ -307,10 +295,12 @@ def crg_tracks(path: str | Path, track_width: float = VEHICLE_TRACK_M, v_offset:
     return u - u[0], tracks[0], tracks[1]
 
 
-def opencrg_road(path: str | Path, speed: float, length: float | None = None,
-                 track_width: float = VEHICLE_TRACK_M, v_offset: float = 0.0,
-                 u_start: float | None = None, reference: str = "grid",
-                 zero_start: bool = True) -> SampledRoad:
-    """A :class:`SampledRoad` of the two wheel tracks of an OpenCRG road."""
-    return _road(path, "opencrg", *crg_tracks(path, track_width, v_offset, u_start, reference),
-                 speed, length, zero_start, "road from u_start")
+def measured_road(kind: str, path: str | Path, speed: float, length: float | None = None,
+                  zero_start: bool = True, **reader: Any) -> SampledRoad:
+    """A :class:`SampledRoad` of a ``kind`` ("csv", "mdf4", "opencrg") profile read by
+    :func:`read_profile_csv`, :func:`read_profile_mdf` or :func:`crg_tracks` (``reader``: its
+    keywords); a ``length`` beyond an MDF profile or a CRG road is an error."""
+    read: dict[str, Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]] = {
+        "csv": read_profile_csv, "mdf4": read_profile_mdf, "opencrg": crg_tracks}
+    extent = {"mdf4": "profile", "opencrg": "road from u_start"}.get(kind)
+    return _road(path, kind, *read[kind](path, **reader), speed, length, zero_start, extent)

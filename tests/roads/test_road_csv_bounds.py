@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cosim.errors import InputFileError
-from nodes.tyre_road.measured import MAX_STEP_M, csv_road, read_profile_csv
+from nodes.tyre_road.measured import MAX_STEP_M, measured_road, read_profile_csv
 
 
 def _write(tmp_path: Path, z: np.ndarray) -> Path:
@@ -40,5 +40,5 @@ def test_a_jump_between_samples_is_refused_a_kerb_is_not(tmp_path: Path) -> None
 def test_a_measured_pave_profile_passes(tmp_path: Path) -> None:
     rng = np.random.default_rng(3)
     z = 0.3 + np.cumsum(rng.normal(0, 0.002, 2000))  # not detrended, not zero at the start
-    road = csv_road(_write(tmp_path, z), speed=9.44)
+    road = measured_road("csv", _write(tmp_path, z), speed=9.44)
     assert road.length == pytest.approx(1999 * 0.05)
