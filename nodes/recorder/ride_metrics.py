@@ -30,14 +30,6 @@ WK_F3, WK_F4, WK_Q4 = 12.5, 12.5, 0.63  # acceleration-velocity transition
 WK_F5, WK_Q5, WK_F6, WK_Q6 = 2.37, 0.91, 3.35, 0.91  # upward step
 
 
-def rms(x: np.ndarray) -> float:
-    """Root mean square of ``x`` (same unit as x)."""
-    x = np.asarray(x, dtype=float)
-    if x.size == 0:
-        raise ValueError("rms of an empty signal")
-    return float(np.sqrt(np.mean(x * x)))
-
-
 def sample_rate(t: np.ndarray) -> float:
     """Sampling frequency (Hz) of a uniformly sampled time column ``t`` (s)."""
     from .ride_stream import stream_rate

@@ -14,6 +14,14 @@ from scipy.signal import periodogram, resample_poly
 from nodes.recorder import ride_metrics as rm
 
 
+def rms(x: np.ndarray) -> float:
+    """Root mean square of ``x`` (same unit as x)."""
+    x = np.asarray(x, dtype=float)
+    if x.size == 0:
+        raise ValueError("rms of an empty signal")
+    return float(np.sqrt(np.mean(x * x)))
+
+
 def resample_to(t: np.ndarray, x: np.ndarray, fs_out: float = rm.THESIS_FS) -> np.ndarray:
     """``scipy.signal.resample_poly`` to ``fs_out`` (Hz), Kaiser beta 8; a copy at fs_out."""
     from fractions import Fraction
@@ -52,7 +60,7 @@ def iso2631_wk(a: np.ndarray, fs: float) -> np.ndarray:
 
 
 def iso2631_wk_weighted_rms(a: np.ndarray, fs: float) -> float:
-    return rm.rms(iso2631_wk(a, fs))
+    return rms(iso2631_wk(a, fs))
 
 
 def jerk(a: np.ndarray, fs: float) -> np.ndarray:
@@ -88,11 +96,11 @@ def metric_values(table: Mapping[str, np.ndarray], band_hz: tuple[float, float] 
                 m[f"{key}_rms_0_16"] = (periodogram_band_rms(a5, fs_out, rm.BAND_16), unit,
                                         f"{key} RMS 0-16 Hz {u}")
             if full:
-                m[f"{key}_rms_full"] = (rm.rms(a), unit, f"{key} RMS full band {u}")
+                m[f"{key}_rms_full"] = (rms(a), unit, f"{key} RMS full band {u}")
             if body:
                 m[f"{key}_wk_rms"] = (iso2631_wk_weighted_rms(a5, fs_out), unit,
                                       f"{key} Wk RMS {u}")
-                m[f"jerk_b{lab}_rms"] = (rm.rms(jerk(a5, fs_out)), "m/s3",
+                m[f"jerk_b{lab}_rms"] = (rms(jerk(a5, fs_out)), "m/s3",
                                          f"jerk_b{lab} RMS [m/s3]")
 
     banded("a_b", "m/s2", True, True, True)
@@ -104,9 +112,9 @@ def metric_values(table: Mapping[str, np.ndarray], band_hz: tuple[float, float] 
     zb, zw = rm.columns(table, "plant/state/z_b"), rm.columns(table, "plant/state/z_w")
     for (lab, b), (_, w) in zip(zb, zw, strict=False):
         m[f"sws{lab}"] = (1e3 * working_space(b, w), "mm", f"SWS{lab} [mm]")
-        m[f"defl{lab}_rms"] = (1e3 * rm.rms(w - b), "mm", f"defl{lab} RMS [mm]")
+        m[f"defl{lab}_rms"] = (1e3 * rms(w - b), "mm", f"defl{lab} RMS [mm]")
     for lab, F in rm.columns(table, "tyre_road/force/F_t"):
-        m[f"dtl{lab}_rms"] = (rm.rms(dynamic_tyre_load(F)), "N", f"DTL{lab} RMS [N]")
+        m[f"dtl{lab}_rms"] = (rms(dynamic_tyre_load(F)), "N", f"DTL{lab} RMS [N]")
     for lab, F in rm.columns(table, "controller/force/F_d"):
-        m[f"f_d{lab}_rms"] = (rm.rms(F), "N", f"F_d{lab} RMS [N]")
+        m[f"f_d{lab}_rms"] = (rms(F), "N", f"F_d{lab} RMS [N]")
     return m

@@ -13,14 +13,13 @@ from nodes.recorder.ride_metrics import (
     resample_to,
     ride_summary,
     ride_table,
-    rms,
     run_metrics,
     sample_rate,
     thesis_band_rms,
     wk_response,
 )
 
-from .ride_oracle import jerk, matlab_periodogram
+from .ride_oracle import jerk, matlab_periodogram, rms
 
 # ISO 2631-1:1997 Table 3, weighting Wk (factor x 1000) at nominal one-third-octave frequencies
 ISO_WK = {

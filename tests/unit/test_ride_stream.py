@@ -96,7 +96,7 @@ def test_jerk_equals_gradient():
     j = StreamJerk(500.0)
     for p in _pieces(a, 1):  # single samples: the ends' and the interior's differences
         j.add(p)
-    assert _rel(j.rms(), rm.rms(oracle.jerk(a, 500.0))) < 1e-13
+    assert _rel(j.rms(), oracle.rms(oracle.jerk(a, 500.0))) < 1e-13
 
 
 def _table(n: int, h: float, corners: int = 0, seed: int = 0) -> dict[str, np.ndarray]:
