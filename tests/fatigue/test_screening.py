@@ -9,13 +9,15 @@ import pytest
 
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.lib.counting import count_series
-from nodes.fatigue.lib.damage import miner_per_node, per_range_unsupported
+from nodes.fatigue.lib.damage import per_range_unsupported
 from nodes.fatigue.lib.equivalent_stress import equivalent
 from nodes.fatigue.lib.screening import StressScreen, damage_bound
 from nodes.fatigue.lib.superposition import stress_history
 from nodes.fatigue.synthetic import pave_like_loads
 from nodes.fatigue.worker import analyse, load_influence
 from tests.conftest import COARSE_ARM
+
+from .oracle_miner import miner_per_node
 
 COARSE = {"influence": str(COARSE_ARM)}  # a cheap arm, results shipped
 

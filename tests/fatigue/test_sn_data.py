@@ -11,7 +11,6 @@ import pytest
 from cosim.errors import ScenarioError
 from nodes.fatigue.config import FatigueConfig
 from nodes.fatigue.lib.counting import Cycles
-from nodes.fatigue.lib.damage import miner_per_node
 from nodes.fatigue.lib.fkm import FKMSpec, fkm_factors, fkm_sn_curve, roughness_factor
 from nodes.fatigue.lib.material import (
     component_sn_curve,
@@ -20,6 +19,8 @@ from nodes.fatigue.lib.material import (
 from nodes.fatigue.lib.mean_stress import equivalent_amplitude
 from nodes.fatigue.lib.sn_data import ncode_curve, points_curve
 from nodes.fatigue.materials import database_material, steel_817M40
+
+from .oracle_miner import miner_per_node
 
 
 def random_cycles(n: int = 4000, seed: int = 2) -> Cycles:

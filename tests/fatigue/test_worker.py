@@ -158,8 +158,9 @@ def test_imported_tables_appendix_v_mapping(tmp_path):
                     "plant/arm/ball_joint_z": FZ}, cfg, 10.0)
     # independent: App V loop, Sxt(:, i) = SxLC1(i) FY + SxLC2(i) FX + SxLC3(i) FZ
     from nodes.fatigue.lib.counting import count_series
-    from nodes.fatigue.lib.damage import miner_per_node
     from nodes.fatigue.lib.equivalent_stress import signed_von_mises
+
+    from .oracle_miner import miner_per_node
     node = 5
     s = c[0, node] * FY[:, None] + c[1, node] * FX[:, None] + c[2, node] * FZ[:, None]
     cyc = count_series(signed_von_mises(s), "repeated")

@@ -137,13 +137,6 @@ def cycle_damage(cycles: Cycles, mat: Material, method: str, mean_stress: str,
         return cycles.count / (0.5 * rev)
 
 
-def miner_per_node(cycles: Cycles, n_nodes: int, mat: Material, method: str,
-                   mean_stress: str, endurance_limit: str | None = None) -> np.ndarray:
-    """Palmgren-Miner damage D per node (sum of cycle damages)."""
-    d = cycle_damage(cycles, mat, method, mean_stress, endurance_limit)
-    return np.bincount(cycles.series, weights=d, minlength=n_nodes).astype(float)
-
-
 def per_range_unsupported(mat: Material, method: str, mean_stress: str) -> str | None:
     """Why :func:`damage_per_range` is no proven bound for these settings (None: it is, and
     :mod:`.screening` may run): stress-life, a mean-stress correction linear in σa at a given
