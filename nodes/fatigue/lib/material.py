@@ -164,33 +164,29 @@ def material_from_entry(name: str, entry: Mapping[str, Any], cyclic: str = "uml"
     Su, E = float(e["Su"]), float(e["E"])
     uml = uniform_material_law(Su, E)
     est = "Uniform Material Law (Bäumel & Seeger 1990)"
+
+    def given(k: str) -> str:  # the source of a value the entry gives
+        return str(src_file.get(k, f"material database [{name}]"))
+
     vals: dict[str, float] = {}
     source: dict[str, str] = {}
     for k in ("E", "nu", "rho", "Su", "Sy"):
-        vals[k] = float(e[k])
-        source[k] = str(src_file.get(k, f"material database [{name}]"))
-    for k in ("sf", "b", "ef", "c"):
-        vals[k] = float(e[k]) if k in e else uml[k]
-        source[k] = str(src_file.get(k, f"material database [{name}]")) if k in e else est
-    if cyclic == "uml":
-        for k in ("K", "n"):
-            vals[k] = float(e[k]) if k in e else uml[k]
-            source[k] = str(src_file.get(k, f"material database [{name}]")) if k in e \
-                else est
-    elif cyclic == "table_6_2":
+        vals[k], source[k] = float(e[k]), given(k)
+    for k in ("sf", "b", "ef", "c", *(("K", "n") if cyclic == "uml" else ())):
+        vals[k], source[k] = (float(e[k]), given(k)) if k in e else (uml[k], est)
+    if cyclic == "table_6_2":
         if "K_table" not in e or "n_table" not in e:
             raise ValueError(f"material {name!r} has no K_table, n_table for "
                              'cyclic = "table_6_2"')
         vals["K"], vals["n"] = float(e["K_table"]), float(e["n_table"])
         source["K"] = str(src_file.get("K_table", "material database"))
         source["n"] = str(src_file.get("n_table", "material database"))
-    else:
+    elif cyclic == "compatible":
         vals["n"] = vals["b"] / vals["c"]
         vals["K"] = vals["sf"] / vals["ef"] ** vals["n"]
         source["K"] = source["n"] = "compatible with σ'f, ε'f, b, c (Eq 6.7, 6.8)"
     if "Se" in e:
-        vals["Se"] = float(e["Se"])
-        source["Se"] = str(src_file.get("Se", f"material database [{name}]"))
+        vals["Se"], source["Se"] = float(e["Se"]), given("Se")
     else:
         vals["Se"] = specimen_endurance_limit(Su)
         source["Se"] = ("Se' = 0.5 Su (Shigley 9th ed. Eq 6-8, Su <= 1400 MPa)"
