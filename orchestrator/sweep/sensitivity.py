@@ -18,11 +18,10 @@ from .spec import AXIS, Sweep
 
 COLUMNS = ("output", "parameter", "n", "spearman", "spearman_p", "prcc", "S1", "S1_conf",
            "ST", "ST_conf")
+_RANKS = ("Spearman and partial rank correlations (monotonic association, not variance shares); "
+          "Sobol' indices need method = \"saltelli\" and are not given.")
 VALIDITY = {
-    "lhs": "Latin hypercube: Spearman and partial rank correlations (monotonic association, "
-           "not variance shares); Sobol' indices need method = \"saltelli\" and are not given.",
-    "sobol": "Sobol' sequence: Spearman and partial rank correlations (monotonic association, "
-             "not variance shares); Sobol' indices need method = \"saltelli\" and are not given.",
+    "lhs": "Latin hypercube: " + _RANKS, "sobol": "Sobol' sequence: " + _RANKS,
     "saltelli": "Saltelli's design: Sobol' indices S1/ST (variance shares, SALib) and, on the "
                 "same points, rank correlations (Saltelli's points are not independent "
                 "samples: their p-values are indicative only).",
