@@ -103,7 +103,5 @@ def matrix_rows(series: str, unit: str, mat: dict) -> list[list]:
     """Long-form rows (series, unit, range_lo, range_hi, mean_lo, mean_hi, cycles) of the
     non-empty bins of a `rainflow_matrix`."""
     re, me, H = mat["range_edges"], mat["mean_edges"], np.asarray(mat["counts"])
-    rows = []
-    for i, j in zip(*np.nonzero(H), strict=True):
-        rows.append([series, unit, re[i], re[i + 1], me[j], me[j + 1], float(H[i, j])])
-    return rows
+    return [[series, unit, re[i], re[i + 1], me[j], me[j + 1], float(H[i, j])]
+            for i, j in zip(*np.nonzero(H), strict=True)]
