@@ -117,14 +117,9 @@ class TabulatedSN:
         b0 = (ls[1] - ls[0]) / (ln[1] - ln[0])
         s = np.where(y < ln[0], ls[0] + b0 * (y - ln[0]), np.interp(y, ln, ls))
         beyond = y > ln[-1]
-        if self.tail_b is not None:
-            tb = self.tail_b
-        elif self.endurance == "haibach":
-            tb = -1.0 / (2.0 * self.k - 1.0)
-        elif self.endurance == "elementary":
-            tb = 0.0
-        else:
-            tb = self.b
+        tb = (self.tail_b if self.tail_b is not None  # the slope beyond the last point
+              else -1.0 / (2.0 * self.k - 1.0) if self.endurance == "haibach"
+              else 0.0 if self.endurance == "elementary" else self.b)
         s = np.where(beyond, ls[-1] + tb * (y - ln[-1]), s)
         return np.exp(s)
 
