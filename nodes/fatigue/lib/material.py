@@ -57,7 +57,7 @@ from dataclasses import dataclass, field, fields, replace
 from statistics import NormalDist
 from typing import TYPE_CHECKING, Any
 
-from .life_models import ENDURANCE_MODES, SNCurve
+from .life_models import SNCurve
 
 if TYPE_CHECKING:
     from .sn_data import TabulatedSN
@@ -407,8 +407,6 @@ def component_sn_curve(mat: Material, spec: ComponentSpec | None = None,
     treatment below the knee (see `SNCurve`).
     """
     spec = spec or ComponentSpec()
-    if endurance not in ENDURANCE_MODES:
-        raise ValueError(f"endurance must be one of {ENDURANCE_MODES}, got {endurance!r}")
     m = marin_factors(mat, spec)
     f = fatigue_strength_fraction(mat.Su, mat.Se, spec.knee_cycles)
     S3 = f * mat.Su
@@ -437,8 +435,6 @@ def component_sn_curve(mat: Material, spec: ComponentSpec | None = None,
 def material_sn_curve(mat: Material, endurance: str = "none") -> SNCurve:
     """The material's own (polished specimen) Basquin line σ'f (2Nf)^b, knee where it meets
     Se (mat.Se), no low-cycle segment."""
-    if endurance not in ENDURANCE_MODES:
-        raise ValueError(f"endurance must be one of {ENDURANCE_MODES}, got {endurance!r}")
     return SNCurve(sf=mat.sf, b=mat.b, Se=mat.Se, knee_reversals=(mat.Se / mat.sf) ** (1 / mat.b),
                    endurance=endurance, name="material (UML Basquin, polished specimen)",
                    meta={"method": "material Basquin line σ'f (2N)^b, knee at Se"})
