@@ -140,11 +140,9 @@ def _mesh_current_model(size: float, fillet_size: float, fillets: list[int],
             fld.setNumbers(d, "CurvesList", sharp_curves)
         fld.setNumber(d, "Sampling", 40)
         th = fld.add("Threshold")
-        fld.setNumber(th, "InField", d)
-        fld.setNumber(th, "SizeMin", fillet_size)
-        fld.setNumber(th, "SizeMax", size)
-        fld.setNumber(th, "DistMin", 0.25 * fillet_size)
-        fld.setNumber(th, "DistMax", 4.0 * fillet_size + size)
+        for k, v in (("InField", d), ("SizeMin", fillet_size), ("SizeMax", size),
+                     ("DistMin", 0.25 * fillet_size), ("DistMax", 4.0 * fillet_size + size)):
+            fld.setNumber(th, k, v)
         fields.append(th)
     for x, y, z, r, h in refine:
         b = fld.add("Ball")
