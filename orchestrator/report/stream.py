@@ -288,8 +288,6 @@ def load_run(d: Path) -> RunData:
         r.source = None
     fs = _read_json(d / "fatigue" / "summary.json", r.problems)
     r.fatigue = fs if isinstance(fs, dict) else None
-    if (d / "fatigue" / "damage_map.png").is_file():
-        r.damage_map = d / "fatigue" / "damage_map.png"
-    if (d / "fatigue" / "sn_plot.png").is_file():
-        r.sn_plot = d / "fatigue" / "sn_plot.png"
+    pngs = (d / "fatigue" / "damage_map.png", d / "fatigue" / "sn_plot.png")
+    r.damage_map, r.sn_plot = (p if p.is_file() else None for p in pngs)
     return r

@@ -13,7 +13,7 @@ from typing import Any, Protocol, TextIO
 from cosim.run_folder import read_json
 
 from .phases import point_state
-from .spec import Point, Sweep
+from .spec import FATIGUE_COLUMNS, Point, Sweep
 
 
 def _fmt(v: Any) -> str:
@@ -48,10 +48,9 @@ def result_rows(sweep: Sweep, out: Path, status: dict[str, tuple[str, str]]) -> 
                 row[f"{c} rms"] = stats.get("rms")
         if sweep.fatigue:
             fat = fat if isinstance(fat, dict) and st == "ok" else {}  # not of a partial run
-            row["life_repeats"] = fat.get("min_life_repeats")
-            row["life_km"] = fat.get("min_life_km")
-            row["max_damage"] = fat.get("max_damage_per_pass")
-            row["critical_node"] = fat.get("critical_node_id")
+            row.update(zip(FATIGUE_COLUMNS, (fat.get(k) for k in (
+                "min_life_repeats", "min_life_km", "max_damage_per_pass", "critical_node_id")),
+                strict=True))
         if sweep.design is not None:
             row.update(ride_columns(d) if st == "ok" else {})
         if sweep.fork is not None:  # [sweep] fork_at: its law acts from fork_at on
