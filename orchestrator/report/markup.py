@@ -77,8 +77,7 @@ def flatten(d: Any, prefix: str = "") -> list[tuple[str, Any]]:
         if isinstance(v, dict) and v:
             out += flatten(v, key)
         elif isinstance(v, list) and v and all(isinstance(i, dict) for i in v):
-            for i, item in enumerate(v):
-                out.append((f"{key}[{i}]", item))
+            out += [(f"{key}[{i}]", item) for i, item in enumerate(v)]
         else:
             out.append((key, v))
     return out

@@ -199,10 +199,8 @@ class ScopeState:
     def run_event(self, state: str, n_steps: int | None = None, h: float | None = None,
                   reason: str = "") -> None:
         with self._lock:
-            if n_steps is not None:
-                self.n_steps = int(n_steps)
-            if h is not None:
-                self.h = float(h)
+            self.n_steps = self.n_steps if n_steps is None else int(n_steps)
+            self.h = self.h if h is None else float(h)
             if self.run_state not in ("done", "failed") or state == "failed":
                 self.run_state = state
             self.reason = reason or self.reason
