@@ -125,12 +125,9 @@ class StreamDecimator:
 
         if self.whole:
             return self.held_t, self.held_x
-        if self.held_x.size:
-            tt, xx = decimate(self.held_t, self.held_x, 2, bucket=self.b)
-            self.t_parts.append(tt)
-            self.x_parts.append(xx)
-            self.held_t, self.held_x = np.zeros(0), np.zeros(0)
-        return np.concatenate(self.t_parts), np.concatenate(self.x_parts)
+        tt, xx = decimate(self.held_t, self.held_x, 2, bucket=self.b) if self.held_x.size \
+            else (np.zeros(0), np.zeros(0))  # the last, partial bucket
+        return np.concatenate([*self.t_parts, tt]), np.concatenate([*self.x_parts, xx])
 
 
 def psd_nperseg(n: int) -> int:
