@@ -15,8 +15,8 @@ n cores     plant  tyre_road  controller  recorder, fatigue (and any other node)
 ==========  =====  =========  ==========  =========================================
 
 A pinned node polls its input before it blocks (``--spin-us``, :func:`spin_us`: the plant 1
-ms, as long as a force round trip can take, unless a sink shares its core; the others 200
-us). Coupled nodes that
+ms, as long as a force round trip can take, a force node 600 us, one plant step; 200 us on a
+core a sink shares, and for the sinks). Coupled nodes that
 share a core (the plant and the controller on 2 cores) run in ``SCHED_BATCH``: a message that
 wakes one does not preempt the other in the middle of its step (the controller woken by the
 plant's state used to preempt the plant's put before it had reached the tyre/road node's
