@@ -175,7 +175,17 @@ def _serve(args: argparse.Namespace, server: Any, source: Any, state: ScopeState
     def on_term(_signum: int, _frame: Any) -> None:
         stop.set()
 
+    def tell(serving: bool) -> bool:
+        """Say once on stderr that the run ended (also when the scope stops right after)."""
+        if state.run_state not in ("done", "failed"):
+            return False
+        print(f"suscosim scope: run {state.run_id} {state.run_state} at step {state.k}"
+              + (f" (still serving {server.url}; Ctrl-C to stop)" if serving else ""),
+              file=sys.stderr, flush=True)
+        return True
+
     old_term = signal.signal(signal.SIGTERM, on_term)
+    told = False
     try:
         server.start()
         source.start()
@@ -186,21 +196,18 @@ def _serve(args: argparse.Namespace, server: Any, source: Any, state: ScopeState
             if not webbrowser.open(server.url):
                 print(f"suscosim scope: no browser found; open {server.url}", file=sys.stderr)
         end = time.monotonic() + args.duration if args.duration else float("inf")
-        told = False
         next_ask = time.monotonic()
         while not stop.wait(0.2) and time.monotonic() < end:
             if ask is not None and time.monotonic() >= next_ask:
                 ask = None if ask() else ask
                 next_ask = time.monotonic() + 2.0
-            if not told and state.run_state in ("done", "failed"):
-                told = True
-                print(f"suscosim scope: run {state.run_id} {state.run_state} at step "
-                      f"{state.k} (still serving {server.url}; Ctrl-C to stop)",
-                      file=sys.stderr, flush=True)
+            told = told or tell(serving=True)
     except KeyboardInterrupt:
         pass
     finally:
         signal.signal(signal.SIGTERM, old_term)
+        if not told:  # the run ended since the last look
+            tell(serving=False)
         source.close()
         server.close()
         if bus is not None:
