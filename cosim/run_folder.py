@@ -24,8 +24,10 @@ import datetime as _dt
 import json
 import os
 import socket
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from .journal import last_step, scan_journal
 
@@ -48,18 +50,26 @@ def _dict(obj: Any) -> dict[str, Any] | None:
     return obj if isinstance(obj, dict) else None
 
 
-def write_json(obj: object, path: str | Path) -> None:
-    """Write ``obj`` as strict JSON (NaN: a ValueError) to a file beside ``path``, then
-    renamed over it: a reader sees the old file or the new one, never half of one."""
+@contextmanager
+def replaced(path: str | Path, newline: str | None = None) -> Iterator[TextIO]:
+    """A text file opened beside ``path`` (UTF-8), renamed over it when the block ends: a
+    reader sees the old file or the new one, never half of one; removed on an error."""
     path = Path(path)
-    text = json.dumps(obj, indent=2, sort_keys=True, allow_nan=False) + "\n"
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        tmp.write_text(text)
+        with open(tmp, "w", encoding="utf-8", newline=newline) as fh:
+            yield fh
         os.replace(tmp, path)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def write_json(obj: object, path: str | Path) -> None:
+    """Write ``obj`` as strict JSON (NaN: a ValueError) through :func:`replaced`."""
+    text = json.dumps(obj, indent=2, sort_keys=True, allow_nan=False) + "\n"
+    with replaced(path) as fh:
+        fh.write(text)
 
 
 # ---- run.json (written by the runner) ------------------------------------------------------

@@ -20,7 +20,7 @@ from typing import Any
 from cosim.config import ConfigReader
 from cosim.errors import InputFileError, ScenarioError, SuscosimError
 from cosim.keys import check_name
-from cosim.run_folder import read_json
+from cosim.run_folder import read_json, replaced
 from cosim.safe_open import open_user_text, read_user_text, read_user_toml
 
 from .cli_util import fail, num
@@ -238,7 +238,7 @@ def _compare_laws(done: list, first: dict) -> dict[str, Any]:
 
 
 def _write_laws(out: Path, laws: dict[str, Any]) -> None:
-    with open(out / "laws.csv", "w", newline="") as fh:
+    with replaced(out / "laws.csv", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["law", "event", "max_damage_per_pass", "damage_per_schedule_at_node",
                     "node_id", "ratio_to_reference"])
@@ -329,8 +329,9 @@ def _schedule(duty: dict[str, Any], out: Path, runs: Path, mode: str | None, rer
 
 
 def _write(out: Path, result: dict, res, first: dict) -> None:
-    (out / "duty.json").write_text(json.dumps(result, indent=2) + "\n")
-    with open(out / "events.csv", "w", newline="") as fh:
+    with replaced(out / "duty.json") as fh:
+        fh.write(json.dumps(result, indent=2) + "\n")
+    with replaced(out / "events.csv", newline="") as fh:
         w = csv.writer(fh)
         cols = ["name", "repeats", "pass_length_m", "distance_km", "max_damage_per_pass",
                 "own_critical_node_id", "damage_per_schedule_at_critical", "share_at_critical",
@@ -338,7 +339,7 @@ def _write(out: Path, result: dict, res, first: dict) -> None:
         w.writerow(cols)
         for e in result["events"]:
             w.writerow([e[k] for k in cols])
-    with open(out / "damage_per_node.csv", "w", newline="") as fh:
+    with replaced(out / "damage_per_node.csv", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["node_id", "x_m", "y_m", "z_m", *(f"damage_{n}" for n in res.names),
                     "damage_per_schedule", "life_schedules", "life_km"])

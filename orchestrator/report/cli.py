@@ -7,6 +7,8 @@ import sys
 from functools import partial
 from pathlib import Path
 
+from cosim.run_folder import replaced
+
 from ..cli_util import fail, parse_args
 from .duty_page import render_duty
 from .run_page import render_run
@@ -56,7 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out) if args.out else d / "report.html"
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(text, encoding="utf-8")
+        with replaced(out) as fh:
+            fh.write(text)
     except OSError as exc:
         return _fail(f"{out}: cannot write ({exc.strerror or exc})")
     print(f"suscosim report: {kind} {d} -> {out} ({len(text) / 1e6:.2f} MB)")

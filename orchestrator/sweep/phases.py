@@ -18,7 +18,7 @@ from contextlib import suppress
 from pathlib import Path
 from typing import Any
 
-from cosim.run_folder import read_json
+from cosim.run_folder import read_json, replaced
 
 from .spec import Point
 
@@ -86,7 +86,8 @@ def prepare_run_dir(run_dir: Path, meta: dict[str, Any], worker: dict[str, Any])
 
 
 def write_point_json(run_dir: Path, doc: dict[str, Any]) -> None:
-    (run_dir / "point.json").write_text(json.dumps(doc, indent=2, default=str))
+    with replaced(run_dir / "point.json") as fh:
+        fh.write(json.dumps(doc, indent=2, default=str))
 
 
 def run_command(source: list[str], run_dir: Path, set_args: list[str], pin_off: bool,

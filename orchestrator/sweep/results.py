@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Protocol, TextIO
 
-from cosim.run_folder import read_json
+from cosim.run_folder import read_json, replaced
 
 from .phases import point_state
 from .spec import FATIGUE_COLUMNS, Point, Sweep
@@ -94,12 +94,13 @@ def write_results(out: Path, rows: list[dict]) -> None:
     columns = [c for c in dict.fromkeys(c for r in rows for c in r)  # not a channel no run has
                if not c.endswith((" peak", " rms")) or any(r.get(c) is not None for r in rows)]
     rows = [{c: r.get(c) for c in columns} for r in rows]
-    with open(out / "results.csv", "w", newline="") as fh:
+    with replaced(out / "results.csv", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=columns)
         w.writeheader()
         for r in rows:
             w.writerow({c: "" if r.get(c) is None else r.get(c) for c in columns})
-    (out / "results.json").write_text(json.dumps(rows, indent=2, default=str))
+    with replaced(out / "results.json") as fh:
+        fh.write(json.dumps(rows, indent=2, default=str))
 
 
 def results_table(sweep: Sweep, rows: list[dict]) -> str:
@@ -154,7 +155,8 @@ def write_sweep_json(sweep: Sweep, out: Path) -> None:
                          "ranges": [{"key": r.key, "low": r.low, "high": r.high,
                                      "scale": r.scale} for r in d.ranges],
                          "sensitivity": "sensitivity.json"}
-    (out / "sweep.json").write_text(json.dumps(doc, indent=2, default=str))
+    with replaced(out / "sweep.json") as fh:
+        fh.write(json.dumps(doc, indent=2, default=str))
 
 
 class Job(Protocol):

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from cosim.run_folder import replaced
+
 from .spec import AXIS, Sweep
 
 COLUMNS = ("output", "parameter", "n", "spearman", "spearman_p", "prcc", "S1", "S1_conf",
@@ -113,9 +115,10 @@ def write_sensitivity(out: Path, sens: dict[str, Any]) -> None:
     from ..runner import strict_json
 
     rows = strict_json(sens["rows"])
-    (out / "sensitivity.json").write_text(json.dumps({**sens, "rows": rows}, indent=2))
+    with replaced(out / "sensitivity.json") as fh:
+        fh.write(json.dumps({**sens, "rows": rows}, indent=2))
     columns = [*sens["group_axes"], *COLUMNS]
-    with open(out / "sensitivity.csv", "w", newline="") as fh:
+    with replaced(out / "sensitivity.csv", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=columns, extrasaction="ignore")
         w.writeheader()
         for r in rows:

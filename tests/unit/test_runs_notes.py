@@ -8,6 +8,8 @@ import json
 import os
 from pathlib import Path
 
+import pytest
+
 from cosim import run_folder
 from cosim.journal import JournalWriter
 from cosim.wire import encode
@@ -79,3 +81,19 @@ def test_an_export_of_some_channels_does_not_replace_another(tmp_path: Path, cap
     assert Path(first).read_text().splitlines()[0] == "t,plant/arm/a [N]"
     assert export_main([str(folder), "--format", "csv"]) == 0  # all: table.csv
     assert json.loads(capsys.readouterr().out)["files"]["csv"].endswith("export/table.csv")
+
+
+def test_a_result_file_is_replaced_whole_or_not_at_all(tmp_path) -> None:
+    """cosim.run_folder.replaced: the new file appears only when its block ends; an error in
+    the block leaves the old file as it was and no temporary file beside it."""
+    path = tmp_path / "results.csv"
+    path.write_text("old\n")
+    with run_folder.replaced(path, newline="") as fh:
+        fh.write("new,1\r\n")
+        assert path.read_text() == "old\n"  # not yet
+    assert path.read_bytes() == b"new,1\r\n"
+    with pytest.raises(RuntimeError), run_folder.replaced(path) as fh:
+        fh.write("half")
+        raise RuntimeError("a writer failed")
+    assert path.read_bytes() == b"new,1\r\n" and sorted(p.name for p in tmp_path.iterdir()) == [
+        "results.csv"]
