@@ -9,12 +9,13 @@ schema or its bounded mailbox is rejected: logged, counted, never a crash.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import queue
 import threading
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from typing import Any
 
 from . import keys
@@ -393,6 +394,31 @@ class Participant:
             self._token.undeclare()
         except Exception:
             pass
+
+
+@contextlib.contextmanager
+def alive_while_busy(part: Participant, k: int, t: float,
+                     period_s: float = 1.0) -> Iterator[None]:
+    """Tell the orchestrator every ``period_s`` [s] that this node is working on step ``k``
+    while the block inside runs (a fatigue block, the recorder's table export: seconds on a
+    loaded machine, more than a short run's stall timeout). Only then: a node stuck anywhere
+    else is still seen as stalled."""
+    done = threading.Event()
+
+    def beat() -> None:
+        while not done.wait(period_s):
+            try:
+                part.ctl("progress", k, t, rejected=part.rejected)
+            except Exception:  # the session is closing: the main thread will say why
+                return
+
+    th = threading.Thread(target=beat, daemon=True, name=f"{part.node}-heartbeat")
+    th.start()
+    try:
+        yield
+    finally:
+        done.set()
+        th.join()
 
 
 class StartBarrier:

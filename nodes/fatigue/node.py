@@ -13,9 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import threading
 import time
-from collections.abc import Iterator
 from typing import Any
 
 from cosim import channels as ch
@@ -23,7 +21,7 @@ from cosim import keys
 from cosim.errors import RunError, ScenarioError, WireError
 from cosim.listener import Listener, Received
 from cosim.load_blocks import StepBlocks
-from cosim.participant import Participant
+from cosim.participant import Participant, alive_while_busy
 from cosim.run_checkpoint import NodeCheckpoints
 from cosim.safe_open import check_user_file
 from cosim.wire import codec, inner
@@ -88,7 +86,7 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     last_report = 0.0
 
     def busy(k: int, t: float) -> contextlib.AbstractContextManager[None]:
-        return alive_while_busy(part, k, t)
+        return alive_while_busy(part, k, t, HEARTBEAT_S)
 
     def take(tr: Track, k: int, t: float, d: dict[str, Any], now: float) -> None:
         """One load step of ``tr``'s channel, in step order."""
@@ -134,31 +132,6 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     result, facts = sink.finish()
     _report(part, result, main.next_k - 1, main.t_last, sink.length_m)
     part.finish(main.next_k - 1, main.t_last, **facts)
-
-
-@contextlib.contextmanager
-def alive_while_busy(part: Participant, k: int, t: float,
-                     period_s: float = HEARTBEAT_S) -> Iterator[None]:
-    """Tell the orchestrator every ``period_s`` that this node is working on load step ``k``
-    while the block inside runs: a block can outlast a short run's stall timeout (5 s) at
-    nice +10 on a loaded machine (a CAD-arm block that starts at rest keeps nearly every
-    sample: ~4 ms a step). Only then: a node stuck anywhere else is still seen as stalled."""
-    done = threading.Event()
-
-    def beat() -> None:
-        while not done.wait(period_s):
-            try:
-                part.ctl("progress", k, t, rejected=part.rejected)
-            except Exception:  # the session is closing: the main thread will say why
-                return
-
-    th = threading.Thread(target=beat, daemon=True, name="fatigue-heartbeat")
-    th.start()
-    try:
-        yield
-    finally:
-        done.set()
-        th.join()
 
 
 def _report(part: Participant, res: FatigueResult, k: int, t: float, distance_m: float) -> None:

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -34,7 +33,7 @@ from cosim import node_kinds as nk
 from cosim.errors import RunError, WireError
 from cosim.journal import JournalReader, JournalWriter
 from cosim.listener import Listener, Received
-from cosim.participant import Participant
+from cosim.participant import Participant, alive_while_busy
 from cosim.run_checkpoint import NodeCheckpoints
 from cosim.table_batches import warm_pyarrow
 from cosim.table_writer import table_of_journal
@@ -207,29 +206,12 @@ def run(part: Participant, scenario: dict[str, Any]) -> None:
     assert rec.last is not None
     n_steps, t_last = rec.last  # N and t_N (for an adaptive step: known when it got there)
     try:
-        result = _with_heartbeat(part, n_steps, t_last, rec.finish_table,
-                                 min(1.0, part.stall_timeout_s / 4))
+        # exporting the table (pyarrow's first import alone takes seconds on a loaded
+        # machine) is not a stall
+        with alive_while_busy(part, n_steps, t_last, min(1.0, part.stall_timeout_s / 4)):
+            result = rec.finish_table()
     except OSError as exc:
         if rec.table is not None:
             rec.table.abandon()
         raise write_error(exc, folder) from None
     part.finish(n_steps, t_last, **result)
-
-
-def _with_heartbeat(part: Participant, k: int, t: float, work: Any,
-                    period_s: float = 1.0) -> Any:
-    """``work()`` while a thread says ``progress`` every ``period_s``: exporting the table
-    (pyarrow's first import alone takes seconds on a loaded machine) is not a stall."""
-    stop = threading.Event()
-
-    def beat() -> None:
-        while not stop.wait(period_s):
-            part.ctl("progress", k, t, rejected=part.rejected)
-
-    th = threading.Thread(target=beat, name="recorder-heartbeat", daemon=True)
-    th.start()
-    try:
-        return work()
-    finally:
-        stop.set()
-        th.join()

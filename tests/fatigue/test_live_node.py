@@ -88,12 +88,13 @@ def test_a_node_computing_a_long_block_keeps_telling_the_orchestrator() -> None:
     import threading
     import time
 
-    from nodes.fatigue.node import alive_while_busy
+    from cosim.participant import alive_while_busy
 
     sent: list[tuple[str, int]] = []
 
     class Part:
         rejected = 0
+        node = "fatigue"
 
         def ctl(self, kind: str, k: int = -1, t: float = 0.0, **d: object) -> None:
             sent.append((kind, k))
