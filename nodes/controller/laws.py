@@ -53,8 +53,10 @@ def pnr_select(v_rel: np.ndarray, c_soft: float, c_hard: float, theta_dd: float,
     left-up (rad/s²); ties: the lowest MP, so no angular acceleration: all soft."""
     forces = np.where(COMBINATIONS, c_hard, c_soft) * np.asarray(v_rel, dtype=float).reshape(4)
     fl, fr, rl, rr = forces.T
-    products = ((fl + fr - rl - rr) * theta_dd if abs(theta_dd) > abs(phi_dd)
-                else (fl + rl - fr - rr) * phi_dd)
+    if abs(theta_dd) > abs(phi_dd):
+        products = (fl + fr - rl - rr) * theta_dd
+    else:
+        products = (fl + rl - fr - rr) * phi_dd
     n = int(np.argmin(products))
     return n, forces[n].copy(), np.where(COMBINATIONS[n], c_hard, c_soft).astype(float)
 

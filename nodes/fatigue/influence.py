@@ -97,8 +97,10 @@ def import_influence(base: Path, mapping: Mapping[str, str | Mapping[str, Any]],
     coefs: list[np.ndarray] = []
     ids_ref = xyz_ref = None
     for channel, spec in mapping.items():
-        fname, scale = (spec, 1.0) if isinstance(spec, str) else \
-            (spec["file"], float(spec.get("scale", 1.0)))
+        if isinstance(spec, str):
+            fname, scale = spec, 1.0
+        else:
+            fname, scale = spec["file"], float(spec.get("scale", 1.0))
         path = folder / fname
         ids, xyz, s = read_prnsol(path) if looks_like_prnsol(path) else read_case_csv(path)
         if ids_ref is None:

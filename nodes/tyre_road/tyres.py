@@ -78,8 +78,11 @@ class FixedFootprint(Tyre):
     def __post_init__(self) -> None:
         if self.n < 1:
             raise ValueError(f"n must be >= 1, got {self.n}")
-        self.contact_offsets = np.zeros(1) if self.n == 1 else np.linspace(
-            0.5 * self.contact_length, -0.5 * self.contact_length, self.n)
+        if self.n == 1:
+            self.contact_offsets = np.zeros(1)
+        else:
+            self.contact_offsets = np.linspace(0.5 * self.contact_length,
+                                               -0.5 * self.contact_length, self.n)
 
     def force(self, z_w, z_g, static_load):
         """(F_t, k_eff) per corner; ``z_g`` has shape (..., n) in the order of the offsets."""

@@ -132,9 +132,11 @@ def parts_block(r: RunData, fs: dict) -> str:
 def fatigue_section(r: RunData) -> str:
     d = cmd(f"suscosim fatigue {r.path}")
     if r.fatigue is None:
-        text = ("no fatigue results: this run has no lower-arm loads (the fatigue analysis "
-                "needs the double-wishbone corner)." if r.source is not None and not r.has_arm()
-                else f"no fatigue results: run {d}")
+        if r.source is not None and not r.has_arm():
+            text = ("no fatigue results: this run has no lower-arm loads (the fatigue analysis "
+                    "needs the double-wishbone corner).")
+        else:
+            text = f"no fatigue results: run {d}"
         return section("fatigue", "Fatigue of the lower arm", note(text))
     fs = r.fatigue
     blocks = [kv_table(fatigue_numbers(fs), "Results")]
