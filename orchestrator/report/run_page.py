@@ -323,9 +323,12 @@ def run_body(r: RunData) -> str:
     parts: list[str] = []
     if r.source is None:
         j = r.path / "journal.msgpack"
-        hint = (mk.esc(r.table_note) if r.table_note
-                else f"run {mk.cmd(f'suscosim export {j}')}" if j.is_file()
-                else "the run recorded nothing (no journal.msgpack)")
+        if r.table_note:
+            hint = mk.esc(r.table_note)
+        elif j.is_file():
+            hint = f"run {mk.cmd(f'suscosim export {j}')}"
+        else:
+            hint = "the run recorded nothing (no journal.msgpack)"
         parts.append(mk.section("time", "Time histories",
                              mk.note(f"no table (table.parquet / table.csv): {hint}.")))
         parts.append(stats_section(r))
