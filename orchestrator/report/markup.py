@@ -51,8 +51,12 @@ def table_html(header: Sequence[str], rows: Iterable[Sequence[Any]], cls: str = 
     out.append("</tr>")
     for row in rows:
         out.append("<tr>")
-        out += [f"<td>{v}</td>" if i in raw_cols else f'<td class="num">{esc(fmt(v))}</td>'
-                if is_num(v) else f"<td>{esc(fmt(v))}</td>" for i, v in enumerate(row)]
+        for i, v in enumerate(row):
+            if i in raw_cols:
+                out.append(f"<td>{v}</td>")
+            else:
+                out.append(f'<td class="num">{esc(fmt(v))}</td>' if is_num(v)
+                           else f"<td>{esc(fmt(v))}</td>")
         out.append("</tr>")
     out.append("</table></div>")
     return "".join(out)

@@ -142,9 +142,10 @@ def point_section(p: Point, d: Path) -> str:
     except ValueError:
         rel = p.run_dir
     parts.append(f'<p class="meta">run folder {cmd(str(rel))}')
-    parts.append(f' · <a href="{esc((rel / "report.html").as_posix())}">its own report</a>'
-                 if (p.run_dir / "report.html").is_file()
-                 else f" · its own report: {cmd(f'suscosim report {p.run_dir}')}")
+    if (p.run_dir / "report.html").is_file():
+        parts.append(f' · <a href="{esc((rel / "report.html").as_posix())}">its own report</a>')
+    else:
+        parts.append(f" · its own report: {cmd(f'suscosim report {p.run_dir}')}")
     parts.append("</p>")
     if p.run is None:
         parts.append(note("not run yet (no run folder)."))
