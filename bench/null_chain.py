@@ -48,7 +48,6 @@ from bench.null_chain_nodes import (  # noqa: E402
     STALL_S,
     WIRES,
     H,
-    _orchestrator_defaults,
     _sizes,
     node_main,
 )
@@ -170,9 +169,8 @@ def pingpongs(repeats: int, n: int) -> dict[str, list[float]]:
 def null_chain(args: argparse.Namespace) -> int:
     """``null-chain``: steps/s of the null chain against the bare round trip."""
     from cosim.bus import ZenohBus, free_loopback_endpoint, zenoh_config
+    from orchestrator.local_nodes import local_lease_ms
     from orchestrator.placement import should_pin, usable_cores
-
-    _, local_lease_ms = _orchestrator_defaults()
 
     counts = [int(c) for c in args.counts.split(",")]
     if not all(2 <= c <= len(ROLES) for c in counts):

@@ -65,16 +65,6 @@ def _sizes(key_bytes: bytes) -> dict[str, int]:
     return out
 
 
-def _orchestrator_defaults() -> tuple[float, Any]:
-    """(the polling of a pinned node [us], the link lease of a stall timeout) as the
-    orchestrator sets them for its local nodes."""
-    try:
-        from orchestrator.local_nodes import PINNED_SPIN_US, local_lease_ms
-    except ImportError:  # before the local nodes had a module of their own
-        from orchestrator.runner import PINNED_SPIN_US, local_lease_ms  # type: ignore
-    return float(PINNED_SPIN_US), local_lease_ms
-
-
 # ---- null chain: node side ------------------------------------------------------------------
 class RawOut:
     """The raw twin of a participant's outputs: unsigned puts of fixed-size bytes on
@@ -288,8 +278,7 @@ def node_main(name: str, connect: list[str], spin_us: float, listen: str | None 
     """A node process: one trial per command line on stdin, its result on stdout."""
     from cosim.bus import ZenohBus, zenoh_config
     from cosim.participant import Participant
-
-    _, local_lease_ms = _orchestrator_defaults()
+    from orchestrator.local_nodes import local_lease_ms
 
     if name == "fatigue":
         os.nice(10)

@@ -16,11 +16,6 @@ from cosim.orchestrator_presence import ENV_PARENT_PID
 from .local_mesh import LocalMesh
 from .placement import BackgroundGuard, background, batch, pin, sharing_a_core, spin_us
 
-PINNED_SPIN_US = nk.NodeKind.spin_us
-"""How long a pinned node polls its input before blocking [us] (Participant.spin_s; the
-plant's is longer, :func:`cosim.node_kinds.spin_us`): +15 % coupled steps/s on the 2-core VM
-(docs/cosim.md); unpinned runs side by side got nothing."""
-
 
 def local_lease_ms(stall_timeout_s: float) -> int:
     """Zenoh link lease [ms] of the orchestrator and its nodes: the stall timeout clamped to

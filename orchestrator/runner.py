@@ -33,7 +33,7 @@ from cosim.table_batches import warm_pyarrow
 
 from . import run_modes
 from .clock import Clock, ClockResult, NodeStatus
-from .local_nodes import PINNED_SPIN_US, LocalNodes, local_lease_ms  # noqa: F401 (re-exported)
+from .local_nodes import LocalNodes
 from .progress import ProgressBar
 from .run_recovery import recover_table
 
