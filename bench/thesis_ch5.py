@@ -58,6 +58,7 @@ sys.path.insert(0, str(ROOT))
 from cosim.channels import CORNERS  # noqa: E402
 from nodes.controller import mr_damper as mr  # noqa: E402
 from nodes.controller.laws import build_controller  # noqa: E402
+from nodes.plant.equivalent_lumped import TABLE_4_3  # noqa: E402
 
 # ---- ch5-compare ----------------------------------------------------------------------------
 _COMPARE_LAWS = ("passive", "tss1", "tss2", "tss3", "pnr")
@@ -238,12 +239,12 @@ THESIS_FREQUENCIES = (1.0, 1.5, 5.0, 10.0, 12.0, 15.0)
 
 @dataclass(frozen=True)
 class QuarterCar:
-    """Lumped 2-DOF QVM, Table 4.3 (SI units)."""
+    """Lumped 2-DOF QVM, Table 4.3 (SI units: :data:`nodes.plant.equivalent_lumped.TABLE_4_3`)."""
 
-    m_b: float = 535.0
-    m_w: float = 47.75
-    k_s: float = 31000.0
-    k_t: float = 239000.0
+    m_b: float = TABLE_4_3["m_b"]
+    m_w: float = TABLE_4_3["m_w"]
+    k_s: float = TABLE_4_3["k_s"]
+    k_t: float = TABLE_4_3["k_t"]
 
 
 CAR = QuarterCar()
