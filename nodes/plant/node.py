@@ -2,10 +2,10 @@
 PlantStepper` (the same one the one-process engine steps, :mod:`orchestrator.inprocess`).
 
 Every step k: publish ``state`` at t_k; wait for ``tyre_road/force`` and ``controller/force``
-of step k (the step barrier); take the first substep (:meth:`PlantStepper.couple`) and
-publish ``response`` and, for realistic models, the component loads (``arm``); integrate the
-remaining substeps to t_{k+1} (:meth:`PlantStepper.advance`). The response and loads of step
-k are encoded while the force nodes compute step k + 1 and go out with state k + 1 (#28).
+of step k (the step barrier); take the first substep (:meth:`PlantStepper.couple`); integrate
+the remaining substeps to t_{k+1} (:meth:`PlantStepper.advance`). The step's ``response`` and,
+for realistic models, component loads (``arm``) are computed and encoded after state k + 1 has
+gone out, while the force nodes compute step k + 1, and go out with state k + 2 (#28, #41).
 """
 
 from __future__ import annotations

@@ -4,11 +4,12 @@
 
 Every step k (DESIGN.md "Lock-step co-simulation"): :meth:`PlantStepper.begin` gives the
 time t_k and the state to publish; the force nodes answer with their forces of step k;
-:meth:`PlantStepper.couple` applies them, takes the first substep and returns the step's
-``response`` (accelerations at t_k from PyBullet's forward dynamics, the applied forces, the
-model's extra fields such as the bump-stop force ``F_bs``, and the rates of the model's
-:meth:`~.model.PlantModel.response_velocities`) and, for realistic models, its component
-loads; :meth:`PlantStepper.advance` integrates the remaining substeps to t_{k+1}.
+:meth:`PlantStepper.couple` applies them, takes the first substep and returns, as a function
+to call later, the step's ``response`` (accelerations at t_k from PyBullet's forward
+dynamics, the applied forces, the model's extra fields such as the bump-stop force ``F_bs``,
+and the rates of the model's :meth:`~.model.PlantModel.response_velocities`) and, for
+realistic models, its component loads; :meth:`PlantStepper.advance` integrates the remaining
+substeps to t_{k+1}.
 
 In the ``parallel`` exchange the forces of step k were computed from the state of step k-1
 (one step of delay). With the ``jacobian`` coupling the plant linearises them about the state
