@@ -12,7 +12,7 @@ import time
 import pytest
 
 from cosim.table import read_table
-from orchestrator.runner import local_lease_ms
+from orchestrator.local_nodes import local_lease_ms
 
 from ..conftest import node_pids, popen_suscosim
 
