@@ -63,6 +63,14 @@ CALLBACK_DRAIN_TIMEOUT = 5.0
 CLIENT_CONNECT_TIMEOUT_MS = 30000
 """How long a client session keeps trying to reach its router before giving up [ms]."""
 
+NODE_RUNTIME = "(rx: (handover: net), acc: (handover: net))"
+"""Zenoh's runtimes in a run's local node processes (the ``ZENOH_RUNTIME`` the orchestrator
+gives them; one set in its own environment wins): the receive and accept runtimes handed
+over to the network runtime's one worker. A message is then read and delivered by the thread
+its socket woke; with Zenoh's default (separate runtimes, two receive workers) each message
+woke two or three threads in turn, on the receiver's core (#41: a traced Ch 6 step, 4 -> 1
+wake-ups a message; ``python -m bench overhead``: corner + live fatigue +9 %)."""
+
 CONNECT_RETRY = {"period_init_ms": 100, "period_max_ms": 500, "period_increase_factor": 1.5}
 """How often a session retries an endpoint it could not reach (Zenoh's own, 1 s doubling to
 4 s, left a tap opened just before its run unconnected for seconds)."""
@@ -123,6 +131,11 @@ def zenoh_config(
     elif not config_file:  # a user's config file decides for itself
         # one priority only: one lane instead of eight saves CPU (negotiated per link)
         conf.insert_json5("transport/unicast/qos/enabled", "false")
+    if not config_file:
+        # no shared-memory transport: suscosim puts no SHM buffers, and with it on every
+        # session runs Zenoh's real-time SHM watchdog threads, ~20 us each on a node's core
+        # about 60 times a second (#41)
+        conf.insert_json5("transport/shared_memory/enabled", "false")
     return conf
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from cosim import auth as au
 from cosim import node_kinds as nk
+from cosim.bus import NODE_RUNTIME
 from cosim.orchestrator_presence import ENV_PARENT_PID
 
 from .local_mesh import LocalMesh
@@ -39,6 +40,7 @@ class LocalNodes:
         log_dir.mkdir(parents=True, exist_ok=True)
         # their parent's PID: a node ends at once when this process is gone
         env = dict(os.environ, PYTHONUNBUFFERED="1", **{ENV_PARENT_PID: str(os.getpid())})
+        env.setdefault("ZENOH_RUNTIME", NODE_RUNTIME)  # Zenoh's threads (cosim/bus.py)
         if run_key is not None:  # the run key, in the environment (readable by this user only)
             env[au.ENV_RUN_KEY] = run_key.hex()
         for name in names:
