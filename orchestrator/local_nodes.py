@@ -14,8 +14,8 @@ from cosim import node_kinds as nk
 from cosim.bus import NODE_RUNTIME
 from cosim.orchestrator_presence import ENV_PARENT_PID
 
+from . import placement as pl
 from .local_mesh import LocalMesh
-from .placement import BackgroundGuard, background, batch, pin, sharing_a_core, spin_us
 
 
 def local_lease_ms(stall_timeout_s: float) -> int:
@@ -35,8 +35,9 @@ class LocalNodes:
         self.cores: dict[str, int] = {}  # the core each node was pinned to
         self.background: list[str] = []  # the nodes put in SCHED_IDLE (go_background)
         self.batch: list[str] = []  # the coupled nodes sharing a core: SCHED_BATCH
-        shared = sharing_a_core(cores or {})
-        self.guard = BackgroundGuard()
+        self.zenoh_cores: dict[str, int] = {}  # where their Zenoh threads went (go_background)
+        shared = pl.sharing_a_core(cores or {})
+        self.guard = pl.BackgroundGuard()
         log_dir.mkdir(parents=True, exist_ok=True)
         # their parent's PID: a node ends at once when this process is gone
         env = dict(os.environ, PYTHONUNBUFFERED="1", **{ENV_PARENT_PID: str(os.getpid())})
@@ -57,23 +58,29 @@ class LocalNodes:
             cmd += ["--lease-ms", str(int(lease_ms))]
             core = (cores or {}).get(name)
             if core is not None:
-                cmd += ["--spin-us", str(spin_us(name, cores or {}))]
+                cmd += ["--spin-us", str(pl.spin_us(name, cores or {}))]
             log = open(log_dir / f"{name}.log", "wb")
             self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                 stdin=subprocess.DEVNULL, env=env)
             log.close()
             # before its interpreter has started any thread: they all inherit the core
-            if core is not None and pin(self.procs[name].pid, core):
+            if core is not None and pl.pin(self.procs[name].pid, core):
                 self.cores[name] = core
-                if name in shared and batch(self.procs[name].pid):
+                if name in shared and pl.batch(self.procs[name].pid):
                     self.batch.append(name)
 
     def go_background(self) -> None:
-        """Once started: pinned nodes off the critical path to ``SCHED_IDLE``."""
+        """Once started: pinned nodes off the critical path to ``SCHED_IDLE``; the Zenoh
+        threads of coupled nodes sharing a core to another (:func:`.placement.zenoh_core`)."""
         for name in self.cores:
             if nk.off_critical_path(name) and self.procs[name].poll() is None \
-                    and background(self.procs[name].pid):
+                    and pl.background(self.procs[name].pid):
                 self.background.append(name)
+        for name in self.batch:
+            core = pl.zenoh_core(name, self.cores)
+            if core is not None and self.procs[name].poll() is None \
+                    and pl.move_zenoh_threads(self.procs[name].pid, core):
+                self.zenoh_cores[name] = core
 
     def check(self) -> str | None:
         """Every clock tick: a starved background node back to normal (said), then :meth:`dead`."""

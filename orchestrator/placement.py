@@ -20,7 +20,8 @@ us; a coupled node on a core a sink shares does not poll). Coupled nodes that
 share a core (the plant and the controller on 2 cores) run in ``SCHED_BATCH``: a message that
 wakes one does not preempt the other in the middle of its step (the controller woken by the
 plant's state used to preempt the plant's put before it had reached the tyre/road node's
-link); they hand the core over where the one running polls (``sched_yield``). A node off the
+link); they hand the core over where the one running polls (``sched_yield``), and their Zenoh
+threads run on the other core once the run has started (:func:`zenoh_core`). A node off the
 critical path (:func:`cosim.node_kinds.off_critical_path`) runs in ``SCHED_IDLE`` once the run
 has started (its inputs are buffered: results do not depend on when it runs); a starved one
 goes back to the normal class (:class:`BackgroundGuard`). ``auto`` pins on 2 to
@@ -77,6 +78,42 @@ def spin_us(name: str, layout: Mapping[str, int]) -> int:
     core = layout.get(name)
     shared = any(layout[n] == core for n in layout if n != name and nk.off_critical_path(n))
     return 0 if shared and not nk.off_critical_path(name) else nk.spin_us(name)
+
+
+ZENOH_THREADS = ("net-", "app-", "tx-", "rx-", "acc-")
+"""The name prefixes of Zenoh's runtime threads (its network, application, transmit, receive
+and accept runtimes' workers and their blocking pools)."""
+
+
+def zenoh_core(name: str, layout: Mapping[str, int]) -> int | None:
+    """The core for the Zenoh threads of a coupled node that shares its core with another
+    coupled node (the plant and the controller on 2 cores): the first other core of the
+    layout. Their socket reads and wake-ups then run there, while the two Python threads hand
+    the shared core to each other; a wake-up on that core no longer preempts the plant in
+    the middle of its put, before the state has reached the tyre/road node (a traced Ch 6
+    run: 0-95 % of the puts, by run). None: they stay on the node's core."""
+    if name not in sharing_a_core(layout):
+        return None
+    return next((c for c in sorted(set(layout.values())) if c != layout[name]), None)
+
+
+def move_zenoh_threads(pid: int, core: int) -> bool:
+    """Pin the Zenoh threads of ``pid`` (:data:`ZENOH_THREADS`, once its session is open; the
+    threads they start inherit it) to ``core``; False if refused or there were none."""
+    moved = False
+    try:
+        for tid in _threads(pid):
+            try:
+                with open(f"/proc/{pid}/task/{tid}/comm") as f:
+                    if not f.read().startswith(ZENOH_THREADS):
+                        continue
+                os.sched_setaffinity(tid, {core})
+                moved = True
+            except (ProcessLookupError, FileNotFoundError):  # a thread that ended meanwhile
+                continue
+    except (AttributeError, OSError):
+        return False
+    return moved
 
 
 def batch(pid: int) -> bool:

@@ -442,5 +442,6 @@ def _transport(local: LocalNodes | None, lowlatency: bool) -> dict[str, Any]:
         return {}
     return {"lowlatency": bool(lowlatency), "cores": dict(local.cores),
             "background": list(local.background), "batch": list(local.batch),
+            "zenoh_cores": dict(local.zenoh_cores),
             "background_starved": list(local.guard.moved)}
 

@@ -22,7 +22,14 @@ from cosim.table import read_table
 from cosim.table_writer import journal_table
 from cosim.wire import encode, encode_step
 from orchestrator.accuracy import peak_errors, worst
-from orchestrator.placement import core_layout, sharing_a_core, spin_us, usable_cores
+from orchestrator.placement import (
+    ZENOH_THREADS,
+    core_layout,
+    sharing_a_core,
+    spin_us,
+    usable_cores,
+    zenoh_core,
+)
 from orchestrator.reference import reference_solution
 
 from ..conftest import node_pids, popen_suscosim, run_client, suscosim
@@ -267,10 +274,13 @@ def _policies_of_every_thread(pid: int) -> set[int]:
             for task in Path(f"/proc/{pid}/task").iterdir()}
 
 
-def _cores_of_every_thread(pid: int) -> set[str]:
-    """The Cpus_allowed_list of each thread of a process (Zenoh's threads included)."""
+def _cores_of_every_thread(pid: int, zenoh: bool = False) -> set[str]:
+    """The Cpus_allowed_list of each thread of a process: its Zenoh threads' (``zenoh``,
+    ``placement.ZENOH_THREADS``) or the others'."""
     out = set()
     for task in Path(f"/proc/{pid}/task").iterdir():
+        if (task / "comm").read_text().startswith(ZENOH_THREADS) != zenoh:
+            continue
         for line in (task / "status").read_text().splitlines():
             if line.startswith("Cpus_allowed_list:"):
                 out.add(line.split(":", 1)[1].strip())
@@ -294,6 +304,11 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
         for node in ch.NODES:
             (pid,) = node_pids("pintest", node)
             assert _cores_of_every_thread(pid) == {str(want[node])}, node
+            # the Zenoh threads of the two nodes sharing a core on the other one (on 2 cores)
+            zenoh = zenoh_core(node, want)
+            assert (zenoh is not None) == (node in batch)
+            assert _cores_of_every_thread(pid, zenoh=True) == {
+                str(want[node] if zenoh is None else zenoh)}, node
             argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
             # a pinned node polls before it blocks, the plant longer than the others
             assert argv[argv.index("--spin-us") + 1] == str(spin_us(node, want)), argv
@@ -317,6 +332,7 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
     summary = json.loads((out / "summary.json").read_text())
     assert summary["cores"] == want and summary["background"] == ["recorder"]
     assert summary["batch"] == batch
+    assert summary["zenoh_cores"] == {n: zenoh_core(n, want) for n in batch}
 
 
 @pytest.mark.long  # a load test: a busy loop on every core for the whole run

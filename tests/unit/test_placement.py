@@ -22,6 +22,7 @@ from orchestrator.placement import (
     should_pin,
     spin_us,
     starved,
+    zenoh_core,
 )
 
 NODES = [*ch.NODES, ch.FATIGUE]
@@ -46,6 +47,15 @@ def test_batch_for_coupled_nodes_sharing_a_core_and_the_plant_polls_longest_alon
         coupled = node not in ("recorder", "fatigue")
         assert spin_us(node, lay) == (0 if with_sink and coupled else own[node]), node
     assert lay["recorder"] == lay[{2: "tyre_road", 3: "plant"}.get(len(cores), "recorder")]
+
+
+@pytest.mark.parametrize("cores", [[4, 7], [0, 1, 2], [0, 1, 2, 3]])
+def test_the_zenoh_threads_of_nodes_sharing_a_core_go_to_the_other(cores: list[int]) -> None:
+    """2 cores: the plant's and the controller's Zenoh threads on the tyre/road node's core;
+    from 3 cores no coupled node shares one, and every node's threads stay with it."""
+    lay = core_layout(NODES, cores)
+    want = {"plant": 7, "controller": 7} if len(cores) == 2 else {}
+    assert {n: c for n in NODES if (c := zenoh_core(n, lay)) is not None} == want
 
 
 @pytest.mark.parametrize("cores", [[0, 1, 2], [0, 1, 2, 3], list(range(16))])
