@@ -99,7 +99,8 @@ def zenoh_core(name: str, layout: Mapping[str, int]) -> int | None:
 
 def move_zenoh_threads(pid: int, core: int) -> bool:
     """Pin the Zenoh threads of ``pid`` (:data:`ZENOH_THREADS`, once its session is open; the
-    threads they start inherit it) to ``core``; False if refused or there were none."""
+    threads they start inherit it) to ``core``, in the normal class (a ``SCHED_BATCH`` one
+    woken there waited behind the node that core runs); False if refused or none."""
     moved = False
     try:
         for tid in _threads(pid):
@@ -108,6 +109,8 @@ def move_zenoh_threads(pid: int, core: int) -> bool:
                     if not f.read().startswith(ZENOH_THREADS):
                         continue
                 os.sched_setaffinity(tid, {core})
+                if os.sched_getscheduler(tid) == os.SCHED_BATCH:
+                    os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
                 moved = True
             except (ProcessLookupError, FileNotFoundError):  # a thread that ended meanwhile
                 continue

@@ -268,10 +268,11 @@ def test_killed_orchestrator_ends_its_nodes(tmp_path, ch3_step):
     assert table is None or len(table["t"]) > 0
 
 
-def _policies_of_every_thread(pid: int) -> set[int]:
-    """The scheduling policy of each thread of a process (os.SCHED_*)."""
-    return {os.sched_getscheduler(int(task.name))
-            for task in Path(f"/proc/{pid}/task").iterdir()}
+def _policies_of_every_thread(pid: int, zenoh: bool = False) -> set[int]:
+    """The scheduling policy (os.SCHED_*) of each thread of a process: its Zenoh threads'
+    (``zenoh``) or the others'."""
+    return {os.sched_getscheduler(int(task.name)) for task in Path(f"/proc/{pid}/task").iterdir()
+            if (task / "comm").read_text().startswith(ZENOH_THREADS) == zenoh}
 
 
 def _cores_of_every_thread(pid: int, zenoh: bool = False) -> set[str]:
@@ -320,6 +321,9 @@ def test_pinned_nodes_run_with_all_their_threads_on_their_core(tmp_path, ch3_ste
                            if node in batch else os.SCHED_OTHER)
             assert os.sched_getscheduler(pid) == want_policy, node
             assert _policies_of_every_thread(pid) == {want_policy}, node
+            # moved to the other core, the Zenoh threads of the SCHED_BATCH pair are normal
+            assert _policies_of_every_thread(pid, zenoh=True) == {
+                os.SCHED_OTHER if node in batch else want_policy}, node
             # Zenoh's receive and accept runtimes handed over to its network runtime
             # (cosim.bus.NODE_RUNTIME): none of their worker threads
             threads = [(task / "comm").read_text().strip()
