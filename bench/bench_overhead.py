@@ -7,6 +7,7 @@ the same machine under the same load. ``--trace`` adds one traced distributed ru
 but ``lumped`` (:func:`step_trace`): the median timeline of a coupled step.
 
     python bench/bench_overhead.py [--json] [--repeats 1] [--rows lumped,corner,...] [--trace]
+                                   [--helics] [--sched]
 
 Workloads (bench/workloads.py's): ``lumped`` the Ch 3 quarter car (h 1 ms), ``corner`` the Ch
 6 realistic corner (h 0.5 ms) without live fatigue, ``corner_fatigue`` with it, ``full`` the
@@ -21,7 +22,12 @@ is the engine's with the time its sinks (recorder, live fatigue) took removed (s
 ``inprocess``): the distributed run's sinks work on other cores. On a shared machine
 wall-clock rates favour the distributed run (the scheduler gives each of its 5 processes a
 share, the engine's one process one share): the in-process steps per second of CPU time is
-the engine's work alone. Timing is measured here, never asserted in tests.
+the engine's work alone. ``--helics`` (``pip install -e ".[bench]"``): the lumped car as 4
+HELICS federates (:func:`helics_split`), its steps/s over each HELICS core and the distributed
+lumped run's rate over the best (issue #41's goal: >= 5), its last row checked bit for bit
+against the one-process run with the same zero-order hold. ``--sched`` (root): each core's
+time per coupled step by node and thread from the kernel's scheduler events
+(:func:`sched_profile`). Timing is measured here, never asserted in tests.
 """
 
 from __future__ import annotations
@@ -29,12 +35,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
+from typing import Any, cast
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -139,6 +148,183 @@ def step_trace(scenario: str, fatigue: bool | None, t_end: float) -> dict[str, f
     return dict(zip(names, (float(x) for x in med), strict=True))
 
 
+_HELICS_FEDERATE = r'''
+import json, sys, time
+import helics as h
+import numpy as np
+
+o = json.loads(sys.argv[1])
+role, H, n, eps = o["role"], o["h"], o["n"], o["h"] / 10
+fi = h.helicsCreateFederateInfo()
+h.helicsFederateInfoSetCoreTypeFromString(fi, o["core"])
+h.helicsFederateInfoSetCoreInitString(fi, "--federates=1")
+h.helicsFederateInfoSetFlagOption(fi, h.HELICS_FLAG_UNINTERRUPTIBLE, True)
+fed = h.helicsCreateValueFederate(role, fi)
+def pub(key):
+    return h.helicsFederateRegisterGlobalPublication(fed, key, h.HELICS_DATA_TYPE_VECTOR, "")
+def sub(key):
+    return h.helicsFederateRegisterSubscription(fed, key, "")
+if role == "plant":
+    from nodes.plant.quarter_car_lumped import LumpedQuarterCar, LumpedQuarterCarParams
+    car = LumpedQuarterCar(LumpedQuarterCarParams(**o["vehicle"]))
+    out, ins = pub("plant/state"), [sub("tyre_road/force"), sub("controller/force")]
+elif role == "tyre_road":
+    from nodes.tyre_road.tyres import point_contact_force
+    out, ins = pub("tyre_road/force"), [sub("plant/state")]
+elif role == "controller":
+    out, ins = pub("controller/force"), [sub("plant/state")]
+else:
+    out, ins = None, [sub("plant/state"), sub("tyre_road/force"), sub("controller/force")]
+h.helicsFederateEnterExecutingMode(fed)
+last, t0 = None, time.perf_counter()
+for k in range(n):
+    t = k * H
+    if role == "plant":  # state at t_k; the forces at t_k + 2 eps; the substeps to t_k+1
+        h.helicsFederateRequestTime(fed, t)
+        st = car.state()
+        h.helicsPublicationPublishVector(out, [float(st[c][0]) for c in ("z_b", "v_b", "z_w",
+                                                                         "v_w")])
+        h.helicsFederateRequestTime(fed, t + 2 * eps)
+        f_t, f_d = (h.helicsInputGetVector(i)[0] for i in ins)
+        for _ in range(o["substeps"]):
+            car.substep(H / o["substeps"], np.array((f_t,)), np.array((f_d,)))
+        continue
+    h.helicsFederateRequestTime(fed, t + (3 if out is None else 1) * eps)
+    z_b, v_b, z_w, v_w = h.helicsInputGetVector(ins[0])
+    if role == "tyre_road":  # the step road, the point-contact tyre
+        z_g = o["height"] if t >= o["t_start"] else 0.0
+        h.helicsPublicationPublishVector(out, [float(point_contact_force(
+            z_w, z_g, o["k_t"], o["static"])[0])])
+    elif role == "controller":  # the passive damper
+        h.helicsPublicationPublishVector(out, [-o["c"] * (v_b - v_w)])
+    else:
+        last = (t, z_b, z_w, *(h.helicsInputGetVector(i)[0] for i in ins[1:]))
+wall = time.perf_counter() - t0
+h.helicsFederateDisconnect(fed)
+if last is not None:
+    print(json.dumps({"steps_per_s": n / wall, "last": last}))
+'''
+
+
+def helics_split(t_end: float, core: str = "zmq") -> dict[str, Any]:
+    """The Ch 3 lumped car split into 4 HELICS federates (plant, tyre/road, controller,
+    recorder; ``pip install helics``), one process each and a broker in this one, exchanging
+    sequentially as suscosim's run does: the plant publishes the state at t_k, the force
+    federates answer at t_k + h/10, the plant takes the forces at t_k + h/5 and integrates 4
+    substeps to t_k+1 (``LumpedQuarterCar``, the point-contact tyre and the passive damper of
+    scenarios/ch3_step_quarter_car.toml; zero-order hold); uninterruptible time grants. The
+    recorder's steps/s (from executing mode to its last step) and its last row (t, z_b, z_w,
+    F_t, F_d), to check the physics against the distributed run's table."""
+    import helics as h  # type: ignore[import-untyped]
+
+    sc = tomllib.loads((ROOT / "scenarios/ch3_step_quarter_car.toml").read_text())
+    veh = {k: sc["vehicle"][k] for k in ("sprung_mass", "unsprung_mass", "spring_stiffness")}
+    base = {"h": sc["run"]["h"], "n": int(round(t_end / sc["run"]["h"])), "core": core,
+            "substeps": sc["run"]["substeps"], "vehicle": veh, "k_t": sc["tyre"]["stiffness"],
+            "c": sc["controller"]["c"], "height": sc["road"]["height"],
+            "t_start": sc["road"]["t_start"],
+            "static": (veh["sprung_mass"] + veh["unsprung_mass"]) * 9.81}
+    broker = h.helicsCreateBroker(core, "", "-f 4")
+    procs = [subprocess.Popen([sys.executable, "-c", _HELICS_FEDERATE,
+                               json.dumps(dict(base, role=role))], cwd=ROOT,
+                              stdout=subprocess.PIPE, text=True,
+                              env=dict(os.environ, PYTHONPATH=str(ROOT)))
+             for role in ("plant", "tyre_road", "controller", "recorder")]
+    out = procs[-1].communicate(timeout=600)[0]
+    for proc in procs:
+        proc.wait(timeout=60)
+    h.helicsBrokerWaitForDisconnect(broker, 10000)
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def _last_row_of_hold_run(t_end: float) -> list[float]:
+    """(t, z_b, z_w, F_t, F_d) of the one-process Ch 3 run with ``coupling = "hold"`` at the
+    HELICS split's last step (the split's zero-order hold)."""
+    import csv
+
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, "-m", "orchestrator", "run",
+                        str(ROOT / "scenarios/ch3_step_quarter_car.toml"), "--inprocess",
+                        "--out", tmp, "--quiet", "--set", f"run.t_end={t_end}", "--set",
+                        'run.coupling="hold"'], cwd=ROOT, check=True, capture_output=True)
+        with open(Path(tmp) / "table.csv") as f:
+            rows = list(csv.DictReader(f))
+    row = rows[-2]  # the split's last step is n - 1
+    return [float(row[c]) for c in ("t", "plant/state/z_b", "plant/state/z_w",
+                                    "tyre_road/force/F_t", "controller/force/F_d")]
+
+
+TRACEFS = Path("/sys/kernel/tracing")
+_SWITCH = re.compile(r"\[(\d+)\]\S*\s+\S+\s+([\d.]+): sched_switch: .*?prev_pid=(\d+) .*"
+                     r"next_pid=(\d+) ")
+
+
+def _tracefs(setting: str, value: str) -> None:
+    (TRACEFS / setting).write_text(value)
+
+
+def sched_profile(scenario: str, fatigue: bool | None, t_end: float,
+                  window_s: float = 0.3) -> dict[str, dict[str, float]]:
+    """One distributed run with the kernel's ``sched_switch`` events recorded for
+    ``window_s`` of its stepping (root and tracefs): each core's time per coupled step [us]
+    by node and thread (``main``: its Python threads, ``zenoh``: Zenoh's runtime threads,
+    :data:`orchestrator.placement.ZENOH_THREADS`), ``idle`` and ``other`` (other programs,
+    the orchestrator). Where a core's time goes, not only how long a step takes."""
+    from orchestrator.placement import ZENOH_THREADS
+
+    if not (TRACEFS / "trace").exists():
+        subprocess.run(["mount", "-t", "tracefs", "nodev", str(TRACEFS)], check=True)
+    _tracefs("tracing_on", "0")
+    _tracefs("trace", "")
+    _tracefs("buffer_size_kb", "65536")
+    _tracefs("events/enable", "0")
+    _tracefs("events/sched/sched_switch/enable", "1")
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out",
+               str(Path(tmp) / "run"), "--quiet", "--set", f"run.t_end={t_end}"]
+        if fatigue is not None:
+            cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
+        run = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL,
+                               env=dict(os.environ, PYTHONPATH=str(ROOT)))
+        journal = Path(tmp) / "run" / "journal.msgpack"
+        while run.poll() is None and not (journal.exists() and journal.stat().st_size > 0):
+            time.sleep(0.05)
+        time.sleep(0.3)  # the chain's first steps
+        role: dict[int, str] = {}  # thread id -> "node main|zenoh"
+        for proc in Path("/proc").glob("[0-9]*"):
+            try:
+                argv = (proc / "cmdline").read_bytes().split(b"\0")
+                if b"node" not in argv or b"--run" not in argv:
+                    continue
+                node = argv[argv.index(b"node") + 1].decode()
+                for task in (proc / "task").iterdir():
+                    kind = ("zenoh" if (task / "comm").read_text().startswith(ZENOH_THREADS)
+                            else "main")
+                    role[int(task.name)] = f"{node} {kind}"
+            except (OSError, ValueError, IndexError):
+                continue
+        _tracefs("tracing_on", "1")
+        time.sleep(window_s)
+        _tracefs("tracing_on", "0")
+        run.wait()
+        trace = (TRACEFS / "trace").read_text()
+        _tracefs("events/enable", "0")
+        steps_per_s = json.loads((Path(tmp) / "run" / "summary.json").read_text())["steps_per_s"]
+    busy: dict[int, dict[str, float]] = {}
+    last: dict[int, tuple[str, float]] = {}  # core -> (who runs, since)
+    for m in _SWITCH.finditer(trace):
+        core, t, nxt = int(m.group(1)), float(m.group(2)), int(m.group(4))
+        if core in last:
+            who, since = last[core]
+            busy.setdefault(core, {})[who] = busy.get(core, {}).get(who, 0.0) + t - since
+        last[core] = ("idle" if nxt == 0 else role.get(nxt, "other"), t)
+    steps = window_s * steps_per_s
+    return {f"core {c}": {w: round(1e6 * v / steps, 1) for w, v in sorted(
+        per.items(), key=lambda kv: -kv[1]) if 1e6 * v / steps >= 0.5}
+        for c, per in sorted(busy.items())}
+
+
 def main(argv: list[str] | None = None) -> int:
     from bench.bench_zenoh_pingpong import one as pingpong
     from bench.workloads import WORKLOADS
@@ -149,6 +335,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rows", default="lumped,corner,corner_fatigue,full")
     ap.add_argument("--trace", action="store_true",
                     help="then one traced distributed run of each row: a step's timeline")
+    ap.add_argument("--helics", action="store_true",
+                    help="with the lumped row: the same car as 4 HELICS federates "
+                         "(pip install helics), over its zmq, tcp_ss and ipc cores")
+    ap.add_argument("--sched", action="store_true",
+                    help="then one distributed run of each row with the kernel's scheduler "
+                         "events (root): each core's time per step by node and thread")
     args = ap.parse_args(argv)
     rows = [r for r in args.rows.split(",") if r]
     known = [w[0] for w in WORKLOADS]
@@ -189,6 +381,26 @@ def main(argv: list[str] | None = None) -> int:
             out[f"{key}_trace_us"] = {n: round(v, 1) for n, v in parts.items()}
             print(f"\n{label}, median [us] from the start of the plant's put of state k:\n"
                   + "\n".join(f"  {n}: {v:.0f}" for n, v in parts.items()), flush=True)
+    if args.helics and "lumped" in out:
+        split = {core: helics_split(T_END["lumped"], core) for core in ("zmq", "tcp_ss", "ipc")}
+        best = max(split, key=lambda c: split[c]["steps_per_s"])
+        lumped = cast(dict[str, float], out["lumped"])["coupled_steps_s"]
+        same = _last_row_of_hold_run(T_END["lumped"]) == split[best]["last"]
+        out["helics"] = {**{c: round(r["steps_per_s"], 1) for c, r in split.items()},
+                         "lumped_over_best": round(lumped / split[best]["steps_per_s"], 2),
+                         "same_bits_as_hold_run": same}
+        print("\nlumped quarter car as 4 HELICS federates, steps/s: " + ", ".join(
+            f"{c} {r['steps_per_s']:.0f}" for c, r in split.items())
+            + f"; suscosim's distributed run {lumped / split[best]['steps_per_s']:.1f}x the "
+            f"best ({best}); its last row {'=' if same else '!='} suscosim's (coupling hold)",
+            flush=True)
+    for key, label, scenario, fatigue in WORKLOADS if args.sched else ():
+        if key in rows:
+            cores = sched_profile(scenario, fatigue, 4 * T_END[key])
+            out[f"{key}_sched_us"] = cores
+            print(f"\n{label}, each core's time per coupled step [us] (sched_switch):\n"
+                  + "\n".join(f"  {c}: " + ", ".join(f"{w} {v:.0f}" for w, v in per.items())
+                               for c, per in cores.items()), flush=True)
     out["zenoh_rtt_us"] = round(rtt, 1)
     out["load"] = [round(x, 2) for x in loads]
     if args.json:
