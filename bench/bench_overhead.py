@@ -263,6 +263,21 @@ def _tracefs(setting: str, value: str) -> None:
     (TRACEFS / setting).write_text(value)
 
 
+def _stepping(node: str, over_s: float = 0.1) -> bool:
+    """Whether node process ``node`` of a run used over half a core for ``over_s``."""
+    for proc in Path("/proc").glob("[0-9]*"):
+        try:
+            argv = (proc / "cmdline").read_bytes().split(b"\0")
+            if argv[argv.index(b"node") + 1] != node.encode():
+                continue
+            cpu = [sum(int(x) for x in (proc / "stat").read_text().split(")")[1].split()[11:13])
+                   for _ in range(2) if not time.sleep(over_s if _ else 0)]
+            return (cpu[1] - cpu[0]) / os.sysconf("SC_CLK_TCK") > 0.5 * over_s
+        except (OSError, ValueError, IndexError):
+            continue
+    return False
+
+
 def sched_profile(scenario: str, fatigue: bool | None, t_end: float,
                   window_s: float = 0.3) -> dict[str, dict[str, float]]:
     """One distributed run with the kernel's ``sched_switch`` events recorded for
@@ -287,10 +302,9 @@ def sched_profile(scenario: str, fatigue: bool | None, t_end: float,
         run = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL,
                                env=dict(os.environ, PYTHONPATH=str(ROOT)))
-        journal = Path(tmp) / "run" / "journal.msgpack"
-        while run.poll() is None and not (journal.exists() and journal.stat().st_size > 0):
+        while run.poll() is None and not _stepping("plant"):
             time.sleep(0.05)
-        time.sleep(0.3)  # the chain's first steps
+        time.sleep(1.5)  # past the plant's start-up (its model build keeps it busy too)
         role: dict[int, str] = {}  # thread id -> "node main|zenoh"
         for proc in Path("/proc").glob("[0-9]*"):
             try:
@@ -396,7 +410,7 @@ def main(argv: list[str] | None = None) -> int:
             flush=True)
     for key, label, scenario, fatigue in WORKLOADS if args.sched else ():
         if key in rows:
-            cores = sched_profile(scenario, fatigue, 4 * T_END[key])
+            cores = sched_profile(scenario, fatigue, 10 * T_END[key])
             out[f"{key}_sched_us"] = cores
             print(f"\n{label}, each core's time per coupled step [us] (sched_switch):\n"
                   + "\n".join(f"  {c}: " + ", ".join(f"{w} {v:.0f}" for w, v in per.items())

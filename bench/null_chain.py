@@ -8,7 +8,8 @@ measured here, never asserted in tests.
 controller, recorder, fatigue: the first 2-5), each its own process started, linked (the run's
 explicit mesh, :class:`orchestrator.local_mesh.LocalMesh`), pinned (``orchestrator.placement``,
 recorder and fatigue in ``SCHED_IDLE``, fatigue at nice +10, coupled nodes sharing a core in
-``SCHED_BATCH``) and polling (each kind's ``spin_us``) as the orchestrator does (the node
+``SCHED_BATCH`` with their Zenoh threads on the other core, Zenoh's runtimes as
+``cosim.bus.NODE_RUNTIME``) and polling (each kind's ``spin_us``) as the orchestrator does (the node
 side: ``python -m bench.null_chain nodes NAME --connect EP``, bench/null_chain_nodes.py);
 this process is the orchestrator, with the run's own :class:`orchestrator.clock.Clock`
 (steps/s = ``n_steps / step_wall_s``, as summary.json). Per step, as the node shells do
@@ -82,6 +83,7 @@ class Chain:
 
     def __init__(self, bus: Any, mesh: Any, count: int, pin: bool) -> None:
         from cosim import node_kinds as nk
+        from cosim.bus import NODE_RUNTIME
         from orchestrator import placement as pl
 
         self.names = list(ROLES[:count])
@@ -95,7 +97,8 @@ class Chain:
             self.procs[name] = p = subprocess.Popen(
                 [*NODE_CMD, name, *links, "--listen", mesh.listen(name),
                  "--spin-us", str(spin)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                text=True, cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+                text=True, cwd=ROOT, env={"ZENOH_RUNTIME": NODE_RUNTIME, **os.environ,
+                                          "PYTHONPATH": str(ROOT)})
             if name in cores and pl.pin(p.pid, cores[name]):
                 self.cores[name] = cores[name]
                 if name in shared:
@@ -107,6 +110,8 @@ class Chain:
         for name in self.cores:  # as a run does once it has started
             if nk.off_critical_path(name):
                 pl.background(self.procs[name].pid)
+            elif (core := pl.zenoh_core(name, self.cores)) is not None:
+                pl.move_zenoh_threads(self.procs[name].pid, core)
         self.bus = bus
 
     def trial(self, i: int, n: int, exchange: str, wire: str,
