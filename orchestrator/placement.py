@@ -21,7 +21,8 @@ share a core (the plant and the controller on 2 cores) run in ``SCHED_BATCH``: a
 wakes one does not preempt the other in the middle of its step (the controller woken by the
 plant's state used to preempt the plant's put before it had reached the tyre/road node's
 link); they hand the core over where the one running polls (``sched_yield``), and their Zenoh
-threads run on the other core once the run has started (:func:`zenoh_core`). A node off the
+threads run on the other core, in real time, once the run has started (:func:`zenoh_core`,
+:data:`ZENOH_RT_PRIORITY`). A node off the
 critical path (:func:`cosim.node_kinds.off_critical_path`) runs in ``SCHED_IDLE`` once the run
 has started (its inputs are buffered: results do not depend on when it runs); a starved one
 goes back to the normal class (:class:`BackgroundGuard`). ``auto`` pins on 2 to
@@ -97,10 +98,19 @@ def zenoh_core(name: str, layout: Mapping[str, int]) -> int | None:
     return next((c for c in sorted(set(layout.values())) if c != layout[name]), None)
 
 
+ZENOH_RT_PRIORITY = 1
+"""``SCHED_FIFO`` priority of the Zenoh threads moved off a shared core (:func:`zenoh_core`):
+woken by a message they preempt the node that core runs and hand the message over in
+~10 us; in the normal class the controller's state waited in its socket behind the tyre/road
+node's whole step (corner + live fatigue +18 %, lumped +8 %, 7-DOF +6 % in alternating runs).
+They only read sockets; the kernel's real-time throttling leaves others 5 % in any case, and
+Zenoh puts its own shared-memory watchdogs in ``SCHED_FIFO`` likewise."""
+
+
 def move_zenoh_threads(pid: int, core: int) -> bool:
     """Pin the Zenoh threads of ``pid`` (:data:`ZENOH_THREADS`, once its session is open; the
-    threads they start inherit it) to ``core``, in the normal class (a ``SCHED_BATCH`` one
-    woken there waited behind the node that core runs); False if refused or none."""
+    threads they start inherit it) to ``core`` in ``SCHED_FIFO`` at :data:`ZENOH_RT_PRIORITY`
+    (in the normal class where that is not permitted); False if refused or none."""
     moved = False
     try:
         for tid in _threads(pid):
@@ -109,7 +119,9 @@ def move_zenoh_threads(pid: int, core: int) -> bool:
                     if not f.read().startswith(ZENOH_THREADS):
                         continue
                 os.sched_setaffinity(tid, {core})
-                if os.sched_getscheduler(tid) == os.SCHED_BATCH:
+                try:
+                    os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(ZENOH_RT_PRIORITY))
+                except PermissionError:  # not root (no CAP_SYS_NICE)
                     os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
                 moved = True
             except (ProcessLookupError, FileNotFoundError):  # a thread that ended meanwhile
