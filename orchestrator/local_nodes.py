@@ -35,7 +35,7 @@ class LocalNodes:
         self.cores: dict[str, int] = {}  # the core each node was pinned to
         self.background: list[str] = []  # the nodes put in SCHED_IDLE (go_background)
         self.batch: list[str] = []  # the coupled nodes sharing a core: SCHED_BATCH
-        self.zenoh_cores: dict[str, int] = {}  # where their Zenoh threads went (go_background)
+        self.zenoh_cores: dict[str, int] = {}  # coupled node -> its Zenoh threads' core
         shared = pl.sharing_a_core(cores or {})
         self.guard = pl.BackgroundGuard()
         log_dir.mkdir(parents=True, exist_ok=True)
@@ -71,14 +71,16 @@ class LocalNodes:
 
     def go_background(self) -> None:
         """Once started: pinned nodes off the critical path to ``SCHED_IDLE``; the Zenoh
-        threads of coupled nodes sharing a core to another (:func:`.placement.zenoh_core`)."""
+        threads of coupled nodes to real time, of those sharing a core on another
+        (:func:`.placement.zenoh_core`, :func:`.placement.move_zenoh_threads`)."""
         for name in self.cores:
             if nk.off_critical_path(name) and self.procs[name].poll() is None \
                     and pl.background(self.procs[name].pid):
                 self.background.append(name)
-        for name in self.batch:
+        for name, own in self.cores.items():
             core = pl.zenoh_core(name, self.cores)
-            if core is not None and self.procs[name].poll() is None \
+            core = own if core is None else core
+            if not nk.off_critical_path(name) and self.procs[name].poll() is None \
                     and pl.move_zenoh_threads(self.procs[name].pid, core):
                 self.zenoh_cores[name] = core
 

@@ -21,8 +21,8 @@ share a core (the plant and the controller on 2 cores) run in ``SCHED_BATCH``: a
 wakes one does not preempt the other in the middle of its step (the controller woken by the
 plant's state used to preempt the plant's put before it had reached the tyre/road node's
 link); they hand the core over where the one running polls (``sched_yield``), and their Zenoh
-threads run on the other core, in real time, once the run has started (:func:`zenoh_core`,
-:data:`ZENOH_RT_PRIORITY`). A node off the
+threads run on the other core (:func:`zenoh_core`). Once the run has started every coupled
+node's Zenoh threads run in real time (:data:`ZENOH_RT_PRIORITY`). A node off the
 critical path (:func:`cosim.node_kinds.off_critical_path`) runs in ``SCHED_IDLE`` once the run
 has started (its inputs are buffered: results do not depend on when it runs); a starved one
 goes back to the normal class (:class:`BackgroundGuard`). ``auto`` pins on 2 to
@@ -99,10 +99,11 @@ def zenoh_core(name: str, layout: Mapping[str, int]) -> int | None:
 
 
 ZENOH_RT_PRIORITY = 1
-"""``SCHED_FIFO`` priority of the Zenoh threads moved off a shared core (:func:`zenoh_core`):
-woken by a message they preempt the node that core runs and hand the message over in
-~10 us; in the normal class the controller's state waited in its socket behind the tyre/road
-node's whole step (corner + live fatigue +18 %, lumped +8 %, 7-DOF +6 % in alternating runs).
+"""``SCHED_FIFO`` priority of the coupled nodes' Zenoh threads once a run has started: woken
+by a message they preempt what their core runs and hand the message over in ~10 us; in the
+normal class the controller's state, its threads moved to the tyre/road node's core
+(:func:`zenoh_core`), waited in its socket behind that node's whole step (in alternating runs
+corner + live fatigue +18 %, lumped +8 %, 7-DOF +6 %; the tyre/road node's own, lumped +4 %).
 They only read sockets; the kernel's real-time throttling leaves others 5 % in any case, and
 Zenoh puts its own shared-memory watchdogs in ``SCHED_FIFO`` likewise."""
 
