@@ -15,8 +15,8 @@ n cores     plant  tyre_road  controller  recorder, fatigue (and any other node)
 ==========  =====  =========  ==========  =========================================
 
 A pinned node polls its input before it blocks (``--spin-us``, :func:`spin_us`: the plant 1
-ms, as long as a force round trip can take, a force node 600 us, one plant step, a sink 200
-us; a coupled node on a core a sink shares does not poll). Coupled nodes that
+ms, as long as a force round trip can take, a force node 600 us, one plant step; 200 us on a
+core a sink shares, and for the sinks). Coupled nodes that
 share a core (the plant and the controller on 2 cores) run in ``SCHED_BATCH``: a message that
 wakes one does not preempt the other in the middle of its step (the controller woken by the
 plant's state used to preempt the plant's put before it had reached the tyre/road node's
@@ -71,14 +71,13 @@ def sharing_a_core(layout: Mapping[str, int]) -> list[str]:
 
 def spin_us(name: str, layout: Mapping[str, int]) -> int:
     """How long pinned node ``name`` polls its input before it blocks [us]: its kind's
-    ``spin_us``; 0 for a coupled node on a core that a node off the critical path shares (the
-    tyre/road node on 2 cores, the plant on 3). A poll yields the core, and a yield can hand
-    it to the ``SCHED_IDLE`` sink, which then keeps it till the next tick (4 ms at 250 Hz):
-    the poller is runnable, not woken, so nothing preempts the sink. A blocked node's wake-up
-    preempts it at once (#41: corner + live fatigue +5 %, fewer 1-4 ms steps)."""
+    ``spin_us``, at most :data:`cosim.node_kinds.NodeKind.spin_us` on a core it shares with a
+    node off the critical path (polling longer would starve it: 3 cores put the sinks on
+    the plant's). Blocking at once there instead was better only while Zenoh's threads ran
+    in the normal class (#41: then lumped -13 %, corner + live fatigue -3 %)."""
     core = layout.get(name)
     shared = any(layout[n] == core for n in layout if n != name and nk.off_critical_path(n))
-    return 0 if shared and not nk.off_critical_path(name) else nk.spin_us(name)
+    return min(nk.spin_us(name), nk.NodeKind.spin_us) if shared else nk.spin_us(name)
 
 
 ZENOH_THREADS = ("net-", "app-", "tx-", "rx-", "acc-")

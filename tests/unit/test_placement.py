@@ -37,15 +37,14 @@ def test_two_cores_split_the_force_nodes_and_put_the_plant_with_the_controller()
 def test_batch_for_coupled_nodes_sharing_a_core_and_the_plant_polls_longest_alone(
         cores: list[int]) -> None:
     """2 cores: the plant and the controller share one (SCHED_BATCH); the plant polls 1 ms
-    for its forces, a force node 600 us, the sinks 200 us, but a coupled node on a core a
-    sink shares (the tyre/road node on 2 cores, the plant on 3) does not poll."""
+    for its forces, a force node 600 us, but a node on a core a sink shares (the tyre/road
+    node on 2 cores, the plant on 3) and the sinks only 200 us."""
     lay = core_layout(NODES, cores)
     assert sharing_a_core(lay) == (["plant", "controller"] if len(cores) == 2 else [])
     own = {"plant": 1000, "tyre_road": 600, "controller": 600, "recorder": 200, "fatigue": 200}
     for node in NODES:
         with_sink = any(lay[n] == lay[node] for n in ("recorder", "fatigue") if n != node)
-        coupled = node not in ("recorder", "fatigue")
-        assert spin_us(node, lay) == (0 if with_sink and coupled else own[node]), node
+        assert spin_us(node, lay) == (200 if with_sink else own[node]), node
     assert lay["recorder"] == lay[{2: "tyre_road", 3: "plant"}.get(len(cores), "recorder")]
 
 
