@@ -77,9 +77,8 @@ class LocalNodes:
             if nk.off_critical_path(name) and self.procs[name].poll() is None \
                     and pl.background(self.procs[name].pid):
                 self.background.append(name)
-        for name, own in self.cores.items():
+        for name in self.cores:
             core = pl.zenoh_core(name, self.cores)
-            core = own if core is None else core
             if not nk.off_critical_path(name) and self.procs[name].poll() is None \
                     and pl.move_zenoh_threads(self.procs[name].pid, core):
                 self.zenoh_cores[name] = core

@@ -85,16 +85,15 @@ ZENOH_THREADS = ("net-", "app-", "tx-", "rx-", "acc-")
 and accept runtimes' workers and their blocking pools)."""
 
 
-def zenoh_core(name: str, layout: Mapping[str, int]) -> int | None:
-    """The core for the Zenoh threads of a coupled node that shares its core with another
-    coupled node (the plant and the controller on 2 cores): the first other core of the
-    layout. Their socket reads and wake-ups then run there, while the two Python threads hand
-    the shared core to each other; a wake-up on that core no longer preempts the plant in
-    the middle of its put, before the state has reached the tyre/road node (a traced Ch 6
-    run: 0-95 % of the puts, by run). None: they stay on the node's core."""
-    if name not in sharing_a_core(layout):
-        return None
-    return next((c for c in sorted(set(layout.values())) if c != layout[name]), None)
+def zenoh_core(name: str, layout: Mapping[str, int]) -> int:
+    """The core for the Zenoh threads of pinned node ``name``: its own, but for a coupled node
+    that shares its core with another (the plant and the controller on 2 cores) the first
+    other core. Their socket reads and wake-ups then run there while the two Python threads
+    hand the shared core to each other; a wake-up on it no longer preempts the plant in the
+    middle of its put, before the state has reached the tyre/road node (a traced Ch 6 run:
+    0-95 % of the puts, by run)."""
+    others = [c for c in sorted(set(layout.values())) if c != layout[name]]
+    return others[0] if name in sharing_a_core(layout) and others else layout[name]
 
 
 ZENOH_RT_PRIORITY = 1
