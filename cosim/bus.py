@@ -131,10 +131,12 @@ def zenoh_config(
     elif not config_file:  # a user's config file decides for itself
         # one priority only: one lane instead of eight saves CPU (negotiated per link)
         conf.insert_json5("transport/unicast/qos/enabled", "false")
-    if not config_file:
-        # no shared-memory transport: suscosim puts no SHM buffers, and with it on every
-        # session runs Zenoh's real-time SHM watchdog threads, ~20 us each on a node's core
-        # about 60 times a second (#41)
+    if lowlatency and not config_file:
+        # no shared-memory transport for a node's low-latency session: suscosim puts no SHM
+        # buffers, and with it on each session runs Zenoh's real-time SHM watchdog threads,
+        # waking on the nodes' cores ~130 times a second (#41). Not for universal sessions:
+        # without SHM a client's burst put right before its close lost its tail through a
+        # router (tests/test_bus_flush.py; a low-latency put is in the socket when it returns)
         conf.insert_json5("transport/shared_memory/enabled", "false")
     return conf
 
