@@ -105,9 +105,11 @@ def test_only_nodes_that_are_no_coupled_kind_are_off_the_critical_path() -> None
         ["recorder", "fatigue", "probe"]
 
 
-def test_starved_is_waiting_on_the_run_queue_for_more_than_half_the_window() -> None:
-    assert starved(1.1, 2.0) and not starved(0.9, 2.0) and not starved(0.0, 0.0)
-    assert starved(0.3, 1.0, fraction=0.2)
+def test_starved_is_waiting_on_the_run_queue_for_more_than_nine_tenths_of_the_window() -> None:
+    """A sink the coupled chain keeps waiting half the time is behind, not starved: its lag is
+    bounded by the sink window (#41); one that other programs starve waits nearly always."""
+    assert starved(1.85, 2.0) and not starved(1.75, 2.0) and not starved(1.1, 2.0)
+    assert not starved(0.0, 0.0) and starved(0.3, 1.0, fraction=0.2)
 
 
 def _busy(core: int) -> subprocess.Popen:
