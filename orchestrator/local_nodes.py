@@ -74,13 +74,13 @@ class LocalNodes:
         threads of coupled nodes to real time, of those sharing a core on another
         (:func:`.placement.zenoh_core`, :func:`.placement.move_zenoh_threads`)."""
         for name in self.cores:
-            if nk.off_critical_path(name) and self.procs[name].poll() is None \
-                    and pl.background(self.procs[name].pid):
-                self.background.append(name)
-        for name in self.cores:
-            core = pl.zenoh_core(name, self.cores)
-            if not nk.off_critical_path(name) and self.procs[name].poll() is None \
-                    and pl.move_zenoh_threads(self.procs[name].pid, core):
+            pid = self.procs[name].pid
+            if self.procs[name].poll() is not None:
+                continue
+            if nk.off_critical_path(name):
+                if pl.background(pid):
+                    self.background.append(name)
+            elif pl.move_zenoh_threads(pid, core := pl.zenoh_core(name, self.cores)):
                 self.zenoh_cores[name] = core
 
     def check(self) -> str | None:
