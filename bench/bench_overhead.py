@@ -52,6 +52,17 @@ T_END = {"lumped": 3.0, "corner": 1.0, "corner_fatigue": 1.0, "full": 2.0}
 """Simulated time per workload [s]: 1.5-3 s of wall time each on this machine."""
 
 
+def run_command(scenario: str, fatigue: bool | None, t_end: float, out: str | Path,
+                *extra: str) -> list[str]:
+    """``suscosim run`` of ``scenario`` for ``t_end`` [s] into ``out`` (``fatigue``: live
+    fatigue on/off, None: the scenario's), with ``extra`` arguments."""
+    cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out", str(out),
+           "--quiet", "--set", f"run.t_end={t_end}", *extra]
+    if fatigue is not None:
+        cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
+    return cmd
+
+
 def load_average() -> float:
     return float(Path("/proc/loadavg").read_text().split()[0])
 
@@ -62,11 +73,8 @@ def steps_per_s(scenario: str, fatigue: bool | None, t_end: float,
     time taken out: what the distributed run does on other cores) and the steps per second
     of the engine's CPU time (the work, whatever else the machine runs)."""
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out", tmp,
-               "--quiet", "--set", f"run.t_end={t_end}",
-               *(["--inprocess"] if inprocess else ["--mode", "distributed"])]
-        if fatigue is not None:
-            cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
+        cmd = run_command(scenario, fatigue, t_end, tmp,
+                          *(["--inprocess"] if inprocess else ["--mode", "distributed"]))
         res = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
                              env=dict(os.environ, PYTHONPATH=str(ROOT)))
         if res.returncode != 0:
@@ -123,10 +131,7 @@ def step_trace(scenario: str, fatigue: bool | None, t_end: float) -> dict[str, f
         hook = Path(tmp) / "hook"
         hook.mkdir()
         (hook / "sitecustomize.py").write_text(_TRACE_HOOK)
-        cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out",
-               str(Path(tmp) / "run"), "--quiet", "--set", f"run.t_end={t_end}"]
-        if fatigue is not None:
-            cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
+        cmd = run_command(scenario, fatigue, t_end, Path(tmp) / "run")
         subprocess.run(cmd, cwd=ROOT, capture_output=True, check=True, env=dict(
             os.environ, PYTHONPATH=f"{hook}{os.pathsep}{ROOT}", SUSCOSIM_STEP_TRACE=tmp))
         tr = {n: json.loads((Path(tmp) / f"{n}.json").read_text()) for n in TRACED}
@@ -243,10 +248,9 @@ def _last_row_of_hold_run(t_end: float) -> list[float]:
     import csv
 
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([sys.executable, "-m", "orchestrator", "run",
-                        str(ROOT / "scenarios/ch3_step_quarter_car.toml"), "--inprocess",
-                        "--out", tmp, "--quiet", "--set", f"run.t_end={t_end}", "--set",
-                        'run.coupling="hold"'], cwd=ROOT, check=True, capture_output=True)
+        subprocess.run(run_command("scenarios/ch3_step_quarter_car.toml", None, t_end, tmp,
+                                   "--inprocess", "--set", 'run.coupling="hold"'),
+                       cwd=ROOT, check=True, capture_output=True)
         with open(Path(tmp) / "table.csv") as f:
             rows = list(csv.DictReader(f))
     row = rows[-2]  # the split's last step is n - 1
@@ -263,19 +267,36 @@ def _tracefs(setting: str, value: str) -> None:
     (TRACEFS / setting).write_text(value)
 
 
-def _stepping(node: str, over_s: float = 0.1) -> bool:
-    """Whether node process ``node`` of a run used over half a core for ``over_s``."""
+def _node_pids() -> dict[str, int]:
+    """The running ``suscosim node NAME --run ...`` processes: name -> pid."""
+    pids = {}
     for proc in Path("/proc").glob("[0-9]*"):
         try:
             argv = (proc / "cmdline").read_bytes().split(b"\0")
-            if argv[argv.index(b"node") + 1] != node.encode():
-                continue
-            cpu = [sum(int(x) for x in (proc / "stat").read_text().split(")")[1].split()[11:13])
-                   for _ in range(2) if not time.sleep(over_s if _ else 0)]
-            return (cpu[1] - cpu[0]) / os.sysconf("SC_CLK_TCK") > 0.5 * over_s
+            if b"node" in argv and b"--run" in argv:
+                pids[argv[argv.index(b"node") + 1].decode()] = int(proc.name)
         except (OSError, ValueError, IndexError):
             continue
-    return False
+    return pids
+
+
+def _cpu_s(pid: int) -> float:
+    """User + system CPU time of process ``pid`` so far [s]."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _stepping(node: str, over_s: float = 0.1) -> bool:
+    """Whether node process ``node`` of a run used over half a core for ``over_s``."""
+    pid = _node_pids().get(node)
+    if pid is None:
+        return False
+    try:
+        before = _cpu_s(pid)
+        time.sleep(over_s)
+        return _cpu_s(pid) - before > 0.5 * over_s
+    except OSError:  # it ended meanwhile
+        return False
 
 
 def sched_profile(scenario: str, fatigue: bool | None, t_end: float,
@@ -295,10 +316,7 @@ def sched_profile(scenario: str, fatigue: bool | None, t_end: float,
     _tracefs("events/enable", "0")
     _tracefs("events/sched/sched_switch/enable", "1")
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [sys.executable, "-m", "orchestrator", "run", str(ROOT / scenario), "--out",
-               str(Path(tmp) / "run"), "--quiet", "--set", f"run.t_end={t_end}"]
-        if fatigue is not None:
-            cmd += ["--set", f"fatigue.live={'true' if fatigue else 'false'}"]
+        cmd = run_command(scenario, fatigue, t_end, Path(tmp) / "run")
         run = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL,
                                env=dict(os.environ, PYTHONPATH=str(ROOT)))
@@ -306,17 +324,13 @@ def sched_profile(scenario: str, fatigue: bool | None, t_end: float,
             time.sleep(0.05)
         time.sleep(1.5)  # past the plant's start-up (its model build keeps it busy too)
         role: dict[int, str] = {}  # thread id -> "node main|zenoh"
-        for proc in Path("/proc").glob("[0-9]*"):
+        for node, pid in _node_pids().items():
             try:
-                argv = (proc / "cmdline").read_bytes().split(b"\0")
-                if b"node" not in argv or b"--run" not in argv:
-                    continue
-                node = argv[argv.index(b"node") + 1].decode()
-                for task in (proc / "task").iterdir():
+                for task in Path(f"/proc/{pid}/task").iterdir():
                     kind = ("zenoh" if (task / "comm").read_text().startswith(ZENOH_THREADS)
                             else "main")
                     role[int(task.name)] = f"{node} {kind}"
-            except (OSError, ValueError, IndexError):
+            except OSError:
                 continue
         _tracefs("tracing_on", "1")
         time.sleep(window_s)
