@@ -8,9 +8,10 @@ measured here, never asserted in tests.
 controller, recorder, fatigue: the first 2-5), each its own process started, linked (the run's
 explicit mesh, :class:`orchestrator.local_mesh.LocalMesh`), pinned (``orchestrator.placement``,
 recorder and fatigue in ``SCHED_IDLE``, fatigue at nice +10, coupled nodes sharing a core in
-``SCHED_BATCH`` with their Zenoh threads on the other core, Zenoh's runtimes as
-``cosim.bus.NODE_RUNTIME``) and polling (each kind's ``spin_us``) as the orchestrator does (the node
-side: ``python -m bench.null_chain nodes NAME --connect EP``, bench/null_chain_nodes.py);
+``SCHED_BATCH`` with their Zenoh threads on the other core, every coupled node's Zenoh threads
+in real time, Zenoh's runtimes as ``cosim.bus.NODE_RUNTIME``) and polling (each kind's
+``spin_us``) as the orchestrator does (the node side: ``python -m bench.null_chain nodes
+NAME --connect EP``, bench/null_chain_nodes.py);
 this process is the orchestrator, with the run's own :class:`orchestrator.clock.Clock`
 (steps/s = ``n_steps / step_wall_s``, as summary.json). Per step, as the node shells do
 with the Chapter 6 corner's message sizes: the plant puts ONE
@@ -110,8 +111,8 @@ class Chain:
         for name in self.cores:  # as a run does once it has started
             if nk.off_critical_path(name):
                 pl.background(self.procs[name].pid)
-            elif (core := pl.zenoh_core(name, self.cores)) is not None:
-                pl.move_zenoh_threads(self.procs[name].pid, core)
+            else:
+                pl.move_zenoh_threads(self.procs[name].pid, pl.zenoh_core(name, self.cores))
         self.bus = bus
 
     def trial(self, i: int, n: int, exchange: str, wire: str,
